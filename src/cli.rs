@@ -1,0 +1,86 @@
+//! Command-line arguments as typed; [`crate::config`] validates them.
+
+use std::time::Duration;
+
+use clap::{ArgAction, Parser};
+
+/// Parses "250ms", "2s", "1m30s", or a plain number of seconds ("0.2").
+pub fn parse_duration(s: &str) -> Result<Duration, String> {
+    if let Ok(secs) = s.parse::<f64>() {
+        return Duration::try_from_secs_f64(secs)
+            .map_err(|_| format!("'{s}' is not a duration of zero or more seconds"));
+    }
+    humantime::parse_duration(s).map_err(|e| format!("'{s}': {e} (e.g. 250ms, 2s, 1m)"))
+}
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "mavping",
+    version,
+    about = "Measure MAVLink link latency and loss: ping for drones and radios",
+    long_about = "Measure MAVLink link latency and loss: ping for drones and radios.\n\n\
+        Sends MAVLink PING requests on a schedule over UDP, TCP, serial or a simulated link, \
+        matches each reply to its request by sequence and responder, and reports per-responder \
+        RTT, loss, late and duplicate replies.",
+    after_help = "Connection strings: udpin:HOST:PORT (also udp:HOST:PORT or HOST:PORT) listens and \
+        pings every peer heard; udpout:HOST:PORT sends to one address; sim:[?key=value&...] is the \
+        built-in simulated link (see the README).\n\n\
+        Exit status: 0 when a responder answered, 1 when none did, 2 on usage or link errors."
+)]
+pub struct Cli {
+    /// Where to ping: udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, sim:[?...]
+    #[arg(value_name = "CONNECTION", env = "MAVPING_LINK")]
+    pub link: String,
+
+    /// Stop after sending COUNT requests (and waiting for their replies)
+    #[arg(short = 'c', long, value_name = "COUNT", env = "MAVPING_COUNT")]
+    pub count: Option<u64>,
+
+    /// Time between requests, e.g. 1s, 100ms, 0.01
+    #[arg(short = 'i', long, value_name = "DURATION", value_parser = parse_duration,
+          conflicts_with = "rate", env = "MAVPING_INTERVAL")]
+    pub interval: Option<Duration>,
+
+    /// Requests per second (instead of --interval)
+    #[arg(long, value_name = "HZ", env = "MAVPING_RATE")]
+    pub rate: Option<f64>,
+
+    /// Stop after this long, whatever is still in flight
+    #[arg(short = 'w', long, value_name = "DURATION", value_parser = parse_duration,
+          env = "MAVPING_DEADLINE")]
+    pub deadline: Option<Duration>,
+
+    /// How long to wait for each reply before counting it lost
+    #[arg(short = 'W', long, value_name = "DURATION", value_parser = parse_duration,
+          default_value = "2s", env = "MAVPING_TIMEOUT")]
+    pub timeout: Duration,
+
+    /// Print only the summary
+    #[arg(short = 'q', long)]
+    pub quiet: bool,
+
+    /// Our MAVLink system id (the header of our requests)
+    #[arg(long, value_name = "ID", default_value_t = 255, env = "MAVPING_SYSID")]
+    pub sysid: u8,
+
+    /// Our MAVLink component id
+    #[arg(long, value_name = "ID", default_value_t = 190, env = "MAVPING_COMPID")]
+    pub compid: u8,
+
+    /// MAVLink version of our requests (replies of either version are accepted)
+    #[arg(long = "mavlink", value_name = "1|2", default_value_t = 2,
+          value_parser = clap::value_parser!(u8).range(1..=2))]
+    pub mavlink_version: u8,
+
+    /// Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)
+    #[arg(long)]
+    pub no_heartbeat: bool,
+
+    /// Sequence number of the first request (to test wrap-around)
+    #[arg(long, value_name = "SEQ", default_value_t = 0, hide = true)]
+    pub first_seq: u32,
+
+    /// More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG
+    #[arg(short = 'v', long, action = ArgAction::Count)]
+    pub verbose: u8,
+}

@@ -1,0 +1,193 @@
+//! The validated run configuration: nothing downstream sees raw flags.
+
+use std::time::Duration;
+
+use thiserror::Error;
+
+use crate::cli::Cli;
+use crate::engine::session::SessionConfig;
+use crate::frame::{SysComp, Version};
+use crate::transport::address::{AddressError, LinkSpec};
+
+#[derive(Debug, Error)]
+pub enum ConfigError {
+    #[error(transparent)]
+    Address(#[from] AddressError),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+fn invalid(msg: impl Into<String>) -> ConfigError {
+    ConfigError::Invalid(msg.into())
+}
+
+/// More requests than this in flight at once would need an unreasonably
+/// large pending table: lower the rate or the timeout.
+pub const MAX_IN_FLIGHT: u64 = 1 << 21;
+const MAX_RATE: f64 = 1_000_000.0;
+const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
+
+#[derive(Debug, Clone)]
+pub struct Config {
+    pub link: LinkSpec,
+    pub session: SessionConfig,
+    pub quiet: bool,
+    pub verbose: u8,
+}
+
+impl Config {
+    /// True when the run should use tokio's paused, virtual clock.
+    pub fn virtual_clock(&self) -> bool {
+        matches!(&self.link, LinkSpec::Sim(p) if p.virtual_clock)
+    }
+}
+
+fn validate_interval(cli: &Cli) -> Result<Duration, ConfigError> {
+    let interval = match (cli.rate, cli.interval) {
+        (Some(rate), _) => {
+            if !rate.is_finite() || rate <= 0.0 || rate > MAX_RATE {
+                return Err(invalid(format!(
+                    "--rate {rate}: expected more than 0 and at most {MAX_RATE} requests per second"
+                )));
+            }
+            Duration::from_secs_f64(1.0 / rate)
+        }
+        (None, Some(interval)) => interval,
+        (None, None) => Duration::from_secs(1),
+    };
+    if interval < Duration::from_micros(1) {
+        return Err(invalid(format!(
+            "--interval {}: at least 1us (1,000,000 requests per second)",
+            humantime::format_duration(interval)
+        )));
+    }
+    Ok(interval)
+}
+
+fn validate_ids(sysid: u8, compid: u8) -> Result<SysComp, ConfigError> {
+    if sysid == 0 {
+        return Err(invalid(
+            "--sysid 0: 0 means 'broadcast'; use 1-255 (255 is a GCS)",
+        ));
+    }
+    if compid == 0 {
+        return Err(invalid(
+            "--compid 0: 0 means 'all components'; use 1-255 (190 is a GCS)",
+        ));
+    }
+    Ok(SysComp::new(sysid, compid))
+}
+
+/// Ring size: twice the requests that can be in flight within one
+/// timeout, so a late reply is still recognised for about one more timeout.
+fn pending_capacity(interval: Duration, timeout: Duration) -> Result<usize, ConfigError> {
+    let in_flight = (timeout.as_nanos() / interval.as_nanos()) as u64 + 1;
+    if in_flight > MAX_IN_FLIGHT {
+        return Err(invalid(format!(
+            "--timeout {} at one request every {} keeps {in_flight} requests in flight \
+             (at most {MAX_IN_FLIGHT}): lower the rate or the timeout",
+            humantime::format_duration(timeout),
+            humantime::format_duration(interval)
+        )));
+    }
+    Ok(((in_flight * 2 + 16) as usize).next_power_of_two().max(64))
+}
+
+impl TryFrom<&Cli> for Config {
+    type Error = ConfigError;
+
+    fn try_from(cli: &Cli) -> Result<Self, ConfigError> {
+        let link: LinkSpec = cli.link.parse()?;
+        let interval = validate_interval(cli)?;
+        if cli.count == Some(0) {
+            return Err(invalid("--count 0: expected at least 1"));
+        }
+        if cli.timeout.is_zero() || cli.timeout > MAX_TIMEOUT {
+            return Err(invalid(format!(
+                "--timeout {}: expected more than 0 and at most 1h",
+                humantime::format_duration(cli.timeout)
+            )));
+        }
+        if cli.deadline.is_some_and(|d| d.is_zero()) {
+            return Err(invalid("--deadline 0: expected more than 0"));
+        }
+        let ours = validate_ids(cli.sysid, cli.compid)?;
+        Ok(Config {
+            session: SessionConfig {
+                link_name: link.to_string(),
+                ours,
+                interval,
+                count: cli.count,
+                deadline: cli.deadline,
+                timeout: cli.timeout,
+                version: if cli.mavlink_version == 1 {
+                    Version::V1
+                } else {
+                    Version::V2
+                },
+                heartbeat: !cli.no_heartbeat,
+                capacity: pending_capacity(interval, cli.timeout)?,
+                first_seq: cli.first_seq,
+            },
+            link,
+            quiet: cli.quiet,
+            verbose: cli.verbose,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::*;
+
+    fn config(args: &str) -> Result<Config, String> {
+        let cli = Cli::try_parse_from(std::iter::once("mavping").chain(args.split_whitespace()))
+            .map_err(|e| e.to_string())?;
+        Config::try_from(&cli).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn good_argument_lines() {
+        let c = config("sim:").unwrap();
+        assert_eq!(c.session.interval, Duration::from_secs(1));
+        assert_eq!(c.session.timeout, Duration::from_secs(2));
+        assert_eq!(c.session.ours, SysComp::new(255, 190));
+        assert_eq!(c.session.capacity, 64);
+        let c =
+            config("-c 5 -i 0.2 -W 500ms --sysid 200 --compid 1 udpout:127.0.0.1:14550").unwrap();
+        assert_eq!(c.session.count, Some(5));
+        assert_eq!(c.session.interval, Duration::from_millis(200));
+        assert_eq!(c.session.timeout, Duration::from_millis(500));
+        let c = config("--rate 1000 -W 1s sim:").unwrap();
+        assert_eq!(c.session.interval, Duration::from_millis(1));
+        assert_eq!(c.session.capacity, 2048);
+        assert!(config("sim:?clock=virtual").unwrap().virtual_clock());
+    }
+
+    #[test]
+    fn bad_argument_lines_say_why() {
+        for (args, needle) in [
+            ("--sysid 0 sim:", "--sysid 0"),
+            ("--compid 0 sim:", "--compid 0"),
+            ("--sysid 256 sim:", "256"),
+            ("-c 0 sim:", "--count 0"),
+            ("--rate 0 sim:", "--rate 0"),
+            ("--rate -5 sim:", "-5"),
+            ("--rate 1e9 sim:", "at most"),
+            ("-i 0 sim:", "at least 1us"),
+            ("-W 0 sim:", "--timeout"),
+            ("-W 2h sim:", "at most 1h"),
+            ("-w 0 sim:", "--deadline 0"),
+            ("-i soon sim:", "soon"),
+            ("--rate 100000 -W 1h sim:", "in flight"),
+            ("-i 1s --rate 5 sim:", "cannot be used with"),
+            ("udpout:nowhere", "accepted forms"),
+            ("--mavlink 3 sim:", "3"),
+        ] {
+            let err = config(args).unwrap_err();
+            assert!(err.contains(needle), "{args}: {err}");
+        }
+    }
+}

@@ -1,0 +1,439 @@
+//! Matches replies to requests and keeps exact per-responder counts.
+//!
+//! Pure and synchronous: every call takes the time as an argument, so tests
+//! drive it with exact timestamps. Memory is fixed at construction: requests
+//! live in a ring of `capacity` slots, and each responder keeps one tag per
+//! slot saying which request it last answered there.
+//!
+//! Rules (from the MAVLink PING protocol and mavping's spec):
+//! - A responder's accounting window starts at the first request it answered
+//!   in time (the seed: "do not start detecting dropped packets until after
+//!   the first responses"). Requests before it are not counted for it.
+//! - When a request's timeout passes, every responder whose window includes
+//!   it and that has not answered it gets it counted as lost.
+//! - A first reply after the timeout is late (the request stays lost); a
+//!   second reply to the same request is a duplicate; a reply whose request
+//!   is unknown, overwritten, or whose echoed token differs is stale.
+//! - For each responder, `sent = received + lost` once requests are decided.
+
+use std::collections::HashMap;
+
+use serde::Serialize;
+
+use super::stats::RttStats;
+use super::Nanos;
+use crate::frame::SysComp;
+
+/// How a reply names the request it answers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Lookup {
+    /// By wire sequence number, and the token must equal what was sent
+    /// (PING: seq, with time_usec as token).
+    Seq { seq: u32, token: u64 },
+    /// By token alone (TIMESYNC: ts1).
+    Token(u64),
+}
+
+/// What the matcher decided, in the order it decided it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MatchEvent {
+    Reply {
+        responder: SysComp,
+        seq: u32,
+        rtt: Nanos,
+        sent_at: Nanos,
+        at: Nanos,
+        out_of_order: bool,
+        first_from_responder: bool,
+    },
+    Late {
+        responder: SysComp,
+        seq: u32,
+        rtt: Nanos,
+        at: Nanos,
+    },
+    Duplicate {
+        responder: SysComp,
+        seq: u32,
+        rtt: Nanos,
+        at: Nanos,
+    },
+    Lost {
+        responder: SysComp,
+        seq: u32,
+        sent_at: Nanos,
+        at: Nanos,
+    },
+    Stale {
+        responder: SysComp,
+        at: Nanos,
+    },
+}
+
+/// Exact per-responder counts.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct Counts {
+    /// Requests in this responder's window whose fate is decided.
+    pub sent: u64,
+    pub received: u64,
+    pub lost: u64,
+    /// First replies that came after the timeout (each also counted lost).
+    pub late: u64,
+    pub duplicate: u64,
+    /// In-time replies to a request older than one already answered.
+    pub out_of_order: u64,
+    /// Replies addressed to us that match no request we hold.
+    pub stale: u64,
+}
+
+impl Counts {
+    /// Lost share of sent, 0 when nothing was sent.
+    pub fn loss_ratio(&self) -> f64 {
+        if self.sent == 0 {
+            0.0
+        } else {
+            self.lost as f64 / self.sent as f64
+        }
+    }
+}
+
+/// One responder's state.
+pub struct Responder {
+    pub id: SysComp,
+    pub counts: Counts,
+    pub rtt: RttStats,
+    /// Per ring slot: n + 1 of the request this responder answered there.
+    /// Empty until its first matched reply, so spoofed ids cost little.
+    answered: Vec<u64>,
+    window_start: Option<u64>,
+    highest: Option<u64>,
+}
+
+impl Responder {
+    fn new(id: SysComp) -> Self {
+        Responder {
+            id,
+            counts: Counts::default(),
+            rtt: RttStats::new(),
+            answered: Vec::new(),
+            window_start: Option::None,
+            highest: Option::None,
+        }
+    }
+
+    fn in_window(&self, n: u64) -> bool {
+        self.window_start.is_some_and(|start| start <= n)
+    }
+
+    fn has_answered(&self, idx: usize, n: u64) -> bool {
+        self.answered.get(idx) == Some(&(n + 1))
+    }
+}
+
+#[derive(Debug, Clone, Copy, Default)]
+struct Slot {
+    /// n + 1 of the request held here; 0 when never used.
+    n1: u64,
+    token: u64,
+    sent_at: Nanos,
+}
+
+/// A request as the matcher issued it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Issued {
+    pub n: u64,
+    pub seq: u32,
+}
+
+/// At most this many distinct responders are tracked; replies from more
+/// (a spoofing flood) are counted in `untracked` instead of growing memory.
+pub const MAX_RESPONDERS: usize = 4096;
+
+pub struct Matcher {
+    timeout: Nanos,
+    first_seq: u32,
+    slots: Vec<Slot>,
+    mask: u64,
+    next_n: u64,
+    /// Oldest request whose timeout has not been processed.
+    next_expiry: u64,
+    responders: Vec<Responder>,
+    index: HashMap<SysComp, usize>,
+    untracked: u64,
+}
+
+impl Matcher {
+    /// `capacity` is rounded up to a power of two; it must exceed the number
+    /// of requests sent within one timeout (the engine sizes it as twice
+    /// that, so late replies are recognised for about one more timeout).
+    pub fn new(timeout: Nanos, capacity: usize, first_seq: u32) -> Self {
+        let capacity = capacity.max(2).next_power_of_two();
+        Matcher {
+            timeout,
+            first_seq,
+            slots: vec![Slot::default(); capacity],
+            mask: capacity as u64 - 1,
+            next_n: 0,
+            next_expiry: 0,
+            responders: Vec::new(),
+            index: HashMap::new(),
+            untracked: 0,
+        }
+    }
+
+    pub fn capacity(&self) -> usize {
+        self.slots.len()
+    }
+
+    fn idx(&self, n: u64) -> usize {
+        (n & self.mask) as usize
+    }
+
+    fn seq_of(&self, n: u64) -> u32 {
+        self.first_seq.wrapping_add(n as u32)
+    }
+
+    /// Records a request sent at `sent_at` carrying `token`. Tokens must
+    /// increase strictly when replies are looked up by token.
+    pub fn on_send(
+        &mut self,
+        token: u64,
+        sent_at: Nanos,
+        out: &mut impl FnMut(MatchEvent),
+    ) -> Issued {
+        let n = self.next_n;
+        let capacity = self.slots.len() as u64;
+        // The slot's previous request must be decided before it is reused.
+        // Sized correctly this never triggers; if it does, those requests
+        // are decided now (as at a timeout) rather than silently forgotten.
+        if n >= capacity && self.next_expiry <= n - capacity {
+            self.decide_through(n - capacity, sent_at, out);
+        }
+        let idx = self.idx(n);
+        self.slots[idx] = Slot {
+            n1: n + 1,
+            token,
+            sent_at,
+        };
+        self.next_n += 1;
+        Issued {
+            n,
+            seq: self.seq_of(n),
+        }
+    }
+
+    /// When the oldest undecided request times out.
+    pub fn next_deadline(&self) -> Option<Nanos> {
+        (self.next_expiry < self.next_n)
+            .then(|| self.slots[self.idx(self.next_expiry)].sent_at + self.timeout)
+    }
+
+    /// Decides every request whose timeout has passed at `now`.
+    pub fn expire(&mut self, now: Nanos, out: &mut impl FnMut(MatchEvent)) {
+        while let Some(deadline) = self.next_deadline() {
+            if deadline > now {
+                break;
+            }
+            self.decide(self.next_expiry, deadline, out);
+            self.next_expiry += 1;
+        }
+    }
+
+    fn decide_through(&mut self, last: u64, at: Nanos, out: &mut impl FnMut(MatchEvent)) {
+        while self.next_expiry <= last {
+            self.decide(self.next_expiry, at, out);
+            self.next_expiry += 1;
+        }
+    }
+
+    fn decide(&mut self, n: u64, at: Nanos, out: &mut impl FnMut(MatchEvent)) {
+        let idx = self.idx(n);
+        let seq = self.seq_of(n);
+        let sent_at = self.slots[idx].sent_at;
+        for r in self.responders.iter_mut().filter(|r| r.in_window(n)) {
+            r.counts.sent += 1;
+            if !r.has_answered(idx, n) {
+                r.counts.lost += 1;
+                out(MatchEvent::Lost {
+                    responder: r.id,
+                    seq,
+                    sent_at,
+                    at,
+                });
+            }
+        }
+    }
+
+    fn find(&self, lookup: Lookup) -> Option<u64> {
+        match lookup {
+            Lookup::Seq { seq, token } => {
+                let n_low = u64::from(seq.wrapping_sub(self.first_seq));
+                let slot = self.slots[self.idx(n_low)];
+                let n = slot.n1.checked_sub(1)?;
+                (n as u32 == n_low as u32 && slot.token == token).then_some(n)
+            }
+            Lookup::Token(token) => {
+                // Tokens rise with n: binary search the requests still held.
+                let (mut lo, mut hi) = (
+                    self.next_n.saturating_sub(self.slots.len() as u64),
+                    self.next_n,
+                );
+                while lo < hi {
+                    let mid = lo + (hi - lo) / 2;
+                    let slot = self.slots[self.idx(mid)];
+                    match slot.token.cmp(&token) {
+                        std::cmp::Ordering::Equal => return Some(mid),
+                        std::cmp::Ordering::Less => lo = mid + 1,
+                        std::cmp::Ordering::Greater => hi = mid,
+                    }
+                }
+                None
+            }
+        }
+    }
+
+    fn responder_index(&mut self, id: SysComp) -> Option<usize> {
+        if let Some(&i) = self.index.get(&id) {
+            return Some(i);
+        }
+        if self.responders.len() >= MAX_RESPONDERS {
+            self.untracked += 1;
+            return None;
+        }
+        self.responders.push(Responder::new(id));
+        self.index.insert(id, self.responders.len() - 1);
+        Some(self.responders.len() - 1)
+    }
+
+    /// Handles a reply addressed to us from `responder`, received at `at`.
+    pub fn on_reply(
+        &mut self,
+        responder: SysComp,
+        lookup: Lookup,
+        at: Nanos,
+        out: &mut impl FnMut(MatchEvent),
+    ) {
+        // Decide everything due by the reply's own timestamp first, so
+        // "late" means exactly "after the timeout".
+        self.expire(at, out);
+        let Some(ri) = self.responder_index(responder) else {
+            return;
+        };
+        let Some(n) = self.find(lookup) else {
+            self.responders[ri].counts.stale += 1;
+            out(MatchEvent::Stale { responder, at });
+            return;
+        };
+        let capacity = self.slots.len();
+        let idx = self.idx(n);
+        let seq = self.seq_of(n);
+        let sent_at = self.slots[idx].sent_at;
+        let rtt = at.saturating_sub(sent_at);
+        let expired = n < self.next_expiry;
+        let r = &mut self.responders[ri];
+        if r.answered.is_empty() {
+            r.answered = vec![0; capacity];
+        }
+        if r.has_answered(idx, n) {
+            r.counts.duplicate += 1;
+            out(MatchEvent::Duplicate {
+                responder,
+                seq,
+                rtt,
+                at,
+            });
+            return;
+        }
+        r.answered[idx] = n + 1;
+        if expired {
+            r.counts.late += 1;
+            out(MatchEvent::Late {
+                responder,
+                seq,
+                rtt,
+                at,
+            });
+            return;
+        }
+        let first = r.window_start.is_none();
+        // A reordered reply to an older, still undecided request moves the
+        // window back: nothing from it on has been decided yet.
+        if r.window_start.is_none_or(|start| n < start) {
+            r.window_start = Some(n);
+        }
+        let out_of_order = r.highest.is_some_and(|h| n < h);
+        r.highest = Some(r.highest.map_or(n, |h| h.max(n)));
+        r.counts.received += 1;
+        r.counts.out_of_order += u64::from(out_of_order);
+        r.rtt.record(rtt);
+        out(MatchEvent::Reply {
+            responder,
+            seq,
+            rtt,
+            sent_at,
+            at,
+            out_of_order,
+            first_from_responder: first,
+        });
+    }
+
+    /// Ends the run: requests still within their timeout are counted for the
+    /// responders that already answered them, and otherwise left out (they
+    /// are neither received nor lost). Returns how many were in flight.
+    pub fn finish(&mut self) -> u64 {
+        let mut in_flight = 0;
+        for n in self.next_expiry..self.next_n {
+            let idx = self.idx(n);
+            let mut unanswered = false;
+            for r in self.responders.iter_mut().filter(|r| r.in_window(n)) {
+                if r.has_answered(idx, n) {
+                    r.counts.sent += 1;
+                } else {
+                    unanswered = true;
+                }
+            }
+            in_flight += u64::from(unanswered);
+        }
+        self.next_expiry = self.next_n;
+        in_flight
+    }
+
+    /// True when at least one responder is known and every undecided
+    /// request has been answered by every responder whose window covers it:
+    /// after the last request, there is nothing left to wait for.
+    pub fn all_answered(&self) -> bool {
+        let active: Vec<&Responder> = self
+            .responders
+            .iter()
+            .filter(|r| r.window_start.is_some())
+            .collect();
+        !active.is_empty()
+            && (self.next_expiry..self.next_n).all(|n| {
+                let idx = self.idx(n);
+                active
+                    .iter()
+                    .all(|r| !r.in_window(n) || r.has_answered(idx, n))
+            })
+    }
+
+    /// Requests issued so far.
+    pub fn issued(&self) -> u64 {
+        self.next_n
+    }
+
+    pub fn responders(&self) -> &[Responder] {
+        &self.responders
+    }
+
+    pub fn responder(&self, id: SysComp) -> Option<&Responder> {
+        self.index.get(&id).map(|&i| &self.responders[i])
+    }
+
+    /// Replies from responders beyond [`MAX_RESPONDERS`].
+    pub fn untracked(&self) -> u64 {
+        self.untracked
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,277 @@
+use proptest::prelude::*;
+
+use super::*;
+
+const MS: Nanos = 1_000_000;
+const A: SysComp = SysComp::new(1, 1);
+const B: SysComp = SysComp::new(2, 1);
+
+/// Drives a matcher and keeps every event it emits.
+struct Harness {
+    m: Matcher,
+    events: Vec<MatchEvent>,
+}
+
+impl Harness {
+    fn new(timeout: Nanos, capacity: usize, first_seq: u32) -> Self {
+        Harness {
+            m: Matcher::new(timeout, capacity, first_seq),
+            events: Vec::new(),
+        }
+    }
+    fn send(&mut self, at: Nanos) -> Issued {
+        let events = &mut self.events;
+        self.m.on_send(at / 1000, at, &mut |e| events.push(e))
+    }
+    fn reply(&mut self, who: SysComp, issued: Issued, sent_at: Nanos, at: Nanos) {
+        let events = &mut self.events;
+        let lookup = Lookup::Seq {
+            seq: issued.seq,
+            token: sent_at / 1000,
+        };
+        self.m.on_reply(who, lookup, at, &mut |e| events.push(e));
+    }
+    fn expire(&mut self, now: Nanos) {
+        let events = &mut self.events;
+        self.m.expire(now, &mut |e| events.push(e));
+    }
+    fn counts(&self, who: SysComp) -> Counts {
+        self.m.responder(who).unwrap().counts
+    }
+}
+
+#[test]
+fn replies_in_time_are_received_with_exact_rtt() {
+    let mut h = Harness::new(100 * MS, 64, 0);
+    let r = h.send(0);
+    h.reply(A, r, 0, 3 * MS);
+    assert!(matches!(
+        h.events[0],
+        MatchEvent::Reply { rtt, seq: 0, first_from_responder: true, .. } if rtt == 3 * MS
+    ));
+    h.expire(200 * MS);
+    let c = h.counts(A);
+    assert_eq!((c.sent, c.received, c.lost), (1, 1, 0));
+}
+
+#[test]
+fn window_starts_at_first_answered_request() {
+    let mut h = Harness::new(10 * MS, 64, 0);
+    let reqs: Vec<_> = (0..5).map(|i| h.send(i * 20 * MS)).collect();
+    // Requests 0 and 1 went unanswered before A was ever heard.
+    h.reply(A, reqs[2], 40 * MS, 41 * MS);
+    h.reply(A, reqs[4], 80 * MS, 81 * MS);
+    h.expire(1000 * MS);
+    let c = h.counts(A);
+    assert_eq!((c.sent, c.received, c.lost), (3, 2, 1));
+    let lost: Vec<u32> = h
+        .events
+        .iter()
+        .filter_map(|e| match e {
+            MatchEvent::Lost { seq, .. } => Some(*seq),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(lost, vec![3]);
+}
+
+#[test]
+fn late_duplicate_and_stale_are_told_apart() {
+    let mut h = Harness::new(10 * MS, 64, 0);
+    let r0 = h.send(0);
+    let r1 = h.send(MS);
+    h.reply(A, r0, 0, 2 * MS); // received
+    h.reply(A, r0, 0, 3 * MS); // duplicate
+    h.reply(A, r1, MS, 50 * MS); // late: r1 timed out at 11 ms
+    h.reply(A, r1, MS, 51 * MS); // duplicate of the late reply
+    h.reply(A, Issued { n: 99, seq: 99 }, 0, 52 * MS); // never sent
+    h.reply(A, r0, 12345, 53 * MS); // wrong echoed token
+    let c = h.counts(A);
+    assert_eq!(c.received, 1);
+    assert_eq!(c.lost, 1);
+    assert_eq!(c.late, 1);
+    assert_eq!(c.duplicate, 2);
+    assert_eq!(c.stale, 2);
+    assert_eq!(c.sent, 2);
+}
+
+#[test]
+fn several_responders_have_separate_windows_and_counts() {
+    let mut h = Harness::new(10 * MS, 64, 0);
+    let reqs: Vec<_> = (0..4).map(|i| h.send(i * 100 * MS)).collect();
+    for (i, r) in reqs.iter().enumerate() {
+        let t = i as u64 * 100 * MS;
+        h.reply(A, *r, t, t + MS);
+        if i >= 2 {
+            h.reply(B, *r, t, t + 2 * MS);
+        }
+    }
+    h.expire(10_000 * MS);
+    assert_eq!(h.counts(A).sent, 4);
+    assert_eq!(h.counts(B).sent, 2);
+    assert_eq!(h.counts(B).received, 2);
+    assert_eq!(h.m.responders().len(), 2);
+}
+
+#[test]
+fn reordered_reply_before_timeout_is_received_and_out_of_order() {
+    let mut h = Harness::new(100 * MS, 64, 0);
+    let r0 = h.send(0);
+    let r1 = h.send(MS);
+    h.reply(A, r1, MS, 2 * MS);
+    h.reply(A, r0, 0, 3 * MS);
+    h.expire(1000 * MS);
+    let c = h.counts(A);
+    assert_eq!((c.sent, c.received, c.lost, c.out_of_order), (2, 2, 0, 1));
+}
+
+#[test]
+fn sequence_wraps_at_u32_max() {
+    let mut h = Harness::new(10 * MS, 8, u32::MAX - 1);
+    let reqs: Vec<_> = (0..4).map(|i| h.send(i * MS)).collect();
+    assert_eq!(
+        reqs.iter().map(|r| r.seq).collect::<Vec<_>>(),
+        vec![u32::MAX - 1, u32::MAX, 0, 1]
+    );
+    for (i, r) in reqs.iter().enumerate() {
+        h.reply(A, *r, i as u64 * MS, i as u64 * MS + 500_000);
+    }
+    h.expire(100 * MS);
+    assert_eq!(h.counts(A).received, 4);
+    assert_eq!(h.counts(A).stale, 0);
+}
+
+#[test]
+fn finish_leaves_unanswered_in_flight_requests_out() {
+    let mut h = Harness::new(1000 * MS, 64, 0);
+    let r0 = h.send(0);
+    let _r1 = h.send(MS);
+    h.reply(A, r0, 0, MS);
+    assert!(!h.m.all_answered());
+    assert_eq!(h.m.finish(), 1);
+    let c = h.counts(A);
+    assert_eq!((c.sent, c.received, c.lost), (1, 1, 0));
+}
+
+#[test]
+fn lookup_by_token_finds_timesync_style_requests() {
+    let mut m = Matcher::new(10 * MS, 16, 0);
+    let mut sink = |_| {};
+    for i in 0..40u64 {
+        m.on_send(1_000 + i * 7, i * MS, &mut sink);
+    }
+    let mut events = Vec::new();
+    m.on_reply(A, Lookup::Token(1_000 + 39 * 7), 39 * MS + 1, &mut |e| {
+        events.push(e)
+    });
+    m.on_reply(
+        A,
+        Lookup::Token(1_000 + 39 * 7 + 1),
+        39 * MS + 2,
+        &mut |e| events.push(e),
+    );
+    m.on_reply(A, Lookup::Token(1_000), 39 * MS + 3, &mut |e| {
+        events.push(e)
+    });
+    assert!(matches!(
+        events[0],
+        MatchEvent::Reply {
+            seq: 39,
+            rtt: 1,
+            ..
+        }
+    ));
+    assert!(matches!(events[1], MatchEvent::Stale { .. }));
+    // Request 0 has been overwritten in the 16-slot ring.
+    assert!(matches!(events[2], MatchEvent::Stale { .. }));
+}
+
+#[test]
+fn overfull_ring_decides_old_requests_instead_of_forgetting_them() {
+    let mut h = Harness::new(1_000_000 * MS, 4, 0);
+    let r0 = h.send(0);
+    h.reply(A, r0, 0, 1);
+    for i in 1..10 {
+        h.send(i * MS);
+    }
+    assert_eq!(h.counts(A).lost, 5);
+    assert_eq!(h.counts(A).sent, 6);
+}
+
+#[derive(Debug, Clone)]
+enum Fate {
+    Lost,
+    Once { delay_us: u64 },
+    Twice { delay_us: u64, dup_after_us: u64 },
+    Late { extra_us: u64 },
+}
+
+fn fate() -> impl Strategy<Value = Fate> {
+    prop_oneof![
+        1 => Just(Fate::Lost),
+        6 => (0u64..30_000).prop_map(|delay_us| Fate::Once { delay_us }),
+        1 => (0u64..30_000, 0u64..5_000)
+            .prop_map(|(delay_us, dup_after_us)| Fate::Twice { delay_us, dup_after_us }),
+        1 => (1u64..50_000).prop_map(|extra_us| Fate::Late { extra_us }),
+    ]
+}
+
+proptest! {
+    /// Random loss, duplication, reordering (random delays across a 1 ms
+    /// send interval), late replies and a start near the u32 wrap: the
+    /// counts equal the ground truth exactly.
+    #[test]
+    fn counts_match_ground_truth(
+        fates in prop::collection::vec(fate(), 1..300),
+        first_seq in prop_oneof![Just(0u32), Just(u32::MAX - 50), any::<u32>()],
+    ) {
+        const TIMEOUT: Nanos = 40 * MS;
+        let mut h = Harness::new(TIMEOUT, 128, first_seq);
+        // Sends and replies in one timeline, as the engine sees them.
+        // Kind 0 (send) sorts before a reply at the same instant.
+        let mut timeline: Vec<(Nanos, u8, usize)> = Vec::new();
+        for (i, f) in fates.iter().enumerate() {
+            let sent_at = i as u64 * MS;
+            timeline.push((sent_at, 0, i));
+            match *f {
+                Fate::Lost => {}
+                Fate::Once { delay_us } => timeline.push((sent_at + delay_us * 1000, 1, i)),
+                Fate::Twice { delay_us, dup_after_us } => {
+                    timeline.push((sent_at + delay_us * 1000, 1, i));
+                    timeline.push((sent_at + (delay_us + dup_after_us) * 1000 + 1, 1, i));
+                }
+                Fate::Late { extra_us } => timeline.push((sent_at + TIMEOUT + extra_us * 1000, 1, i)),
+            }
+        }
+        timeline.sort();
+        for (at, kind, i) in timeline {
+            let sent_at = i as u64 * MS;
+            if kind == 0 {
+                h.expire(at);
+                h.send(sent_at);
+            } else {
+                let issued = Issued { n: i as u64, seq: first_seq.wrapping_add(i as u32) };
+                h.reply(A, issued, sent_at, at);
+            }
+        }
+        h.expire(u64::MAX / 2);
+
+        let first = fates.iter().position(|f| !matches!(f, Fate::Lost | Fate::Late { .. }));
+        let c = h.m.responder(A).map(|r| r.counts).unwrap_or_default();
+        let in_window = |i: usize| first.is_some_and(|f| i >= f);
+        let expect_received = fates.iter().filter(|f| matches!(f, Fate::Once { .. } | Fate::Twice { .. })).count() as u64;
+        let expect_dups = fates.iter().filter(|f| matches!(f, Fate::Twice { .. })).count() as u64;
+        let expect_late = fates.iter().filter(|f| matches!(f, Fate::Late { .. })).count() as u64;
+        let expect_sent = (0..fates.len()).filter(|&i| in_window(i)).count() as u64;
+        let expect_lost = fates.iter().enumerate()
+            .filter(|(i, f)| in_window(*i) && matches!(f, Fate::Lost | Fate::Late { .. }))
+            .count() as u64;
+        prop_assert_eq!(c.received, expect_received);
+        prop_assert_eq!(c.duplicate, expect_dups);
+        prop_assert_eq!(c.late, expect_late);
+        prop_assert_eq!(c.sent, expect_sent);
+        prop_assert_eq!(c.lost, expect_lost);
+        prop_assert_eq!(c.sent, c.received + c.lost);
+        prop_assert_eq!(c.stale, 0);
+    }
+}

@@ -1,0 +1,221 @@
+//! RTT statistics for one responder, in constant memory.
+
+use hdrhistogram::Histogram;
+use serde::Serialize;
+
+use super::Nanos;
+
+/// RTTs above this are recorded as this (one hour): keeps the histogram's
+/// memory bounded whatever a broken clock or a stuck link reports.
+const HIST_MAX_US: u64 = 3_600_000_000;
+
+/// Running RTT figures: exact min/max/mean/stddev from running sums,
+/// percentiles from an HDR histogram at µs resolution (3 significant digits),
+/// jitter as the mean absolute difference of consecutive RTTs (RFC 3550).
+#[derive(Clone)]
+pub struct RttStats {
+    hist: Histogram<u64>,
+    count: u64,
+    min: Nanos,
+    max: Nanos,
+    mean: f64,
+    m2: f64,
+    last: Option<Nanos>,
+    jitter_sum: f64,
+    jitter_count: u64,
+}
+
+impl Default for RttStats {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// One row of the RTT distribution: `count` samples in `[low_us, high_us)`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Bucket {
+    pub low_us: f64,
+    pub high_us: f64,
+    pub count: u64,
+}
+
+/// The figures a report shows, in µs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RttSummary {
+    pub min_us: f64,
+    pub mean_us: f64,
+    pub max_us: f64,
+    pub stddev_us: f64,
+    pub p50_us: f64,
+    pub p90_us: f64,
+    pub p99_us: f64,
+    pub p999_us: f64,
+    pub jitter_us: f64,
+}
+
+impl RttStats {
+    pub fn new() -> Self {
+        let mut hist = Histogram::new(3).expect("3 significant digits is a valid histogram");
+        // Grows with the largest RTT seen (capped at HIST_MAX_US), so a
+        // responder on loopback costs a few KiB, not the 1-hour worst case.
+        hist.auto(true);
+        RttStats {
+            hist,
+            count: 0,
+            min: Nanos::MAX,
+            max: 0,
+            mean: 0.0,
+            m2: 0.0,
+            last: None,
+            jitter_sum: 0.0,
+            jitter_count: 0,
+        }
+    }
+
+    pub fn record(&mut self, rtt: Nanos) {
+        let us = (rtt / 1_000).clamp(1, HIST_MAX_US);
+        // Cannot fail: the value is within the auto-resizing histogram's range.
+        let _ = self.hist.record(us);
+        self.count += 1;
+        self.min = self.min.min(rtt);
+        self.max = self.max.max(rtt);
+        let x = rtt as f64;
+        let delta = x - self.mean;
+        self.mean += delta / self.count as f64;
+        self.m2 += delta * (x - self.mean);
+        if let Some(last) = self.last {
+            self.jitter_sum += last.abs_diff(rtt) as f64;
+            self.jitter_count += 1;
+        }
+        self.last = Some(rtt);
+    }
+
+    pub fn count(&self) -> u64 {
+        self.count
+    }
+
+    pub fn last(&self) -> Option<Nanos> {
+        self.last
+    }
+
+    pub fn histogram(&self) -> &Histogram<u64> {
+        &self.hist
+    }
+
+    /// Value at a quantile in µs, kept inside the exact [min, max].
+    pub fn quantile_us(&self, q: f64) -> f64 {
+        let v = self.hist.value_at_quantile(q) as f64;
+        v.clamp(self.min as f64 / 1e3, self.max as f64 / 1e3)
+    }
+
+    pub fn summary(&self) -> Option<RttSummary> {
+        if self.count == 0 {
+            return None;
+        }
+        let variance = if self.count > 1 {
+            self.m2 / (self.count - 1) as f64
+        } else {
+            0.0
+        };
+        Some(RttSummary {
+            min_us: self.min as f64 / 1e3,
+            mean_us: self.mean / 1e3,
+            max_us: self.max as f64 / 1e3,
+            stddev_us: variance.sqrt() / 1e3,
+            p50_us: self.quantile_us(0.5),
+            p90_us: self.quantile_us(0.9),
+            p99_us: self.quantile_us(0.99),
+            p999_us: self.quantile_us(0.999),
+            jitter_us: if self.jitter_count == 0 {
+                0.0
+            } else {
+                self.jitter_sum / self.jitter_count as f64 / 1e3
+            },
+        })
+    }
+
+    /// The distribution in at most `rows` buckets between min and max:
+    /// log-spaced when the range spans more than a factor of 4, else linear.
+    pub fn distribution(&self, rows: usize) -> Vec<Bucket> {
+        if self.count == 0 || rows == 0 {
+            return Vec::new();
+        }
+        let lo = (self.min / 1_000).max(1) as f64;
+        let hi = ((self.max / 1_000).max(1) as f64).max(lo) + 1.0;
+        let log = hi / lo > 4.0;
+        let edge = |i: usize| {
+            let t = i as f64 / rows as f64;
+            if log {
+                lo * (hi / lo).powf(t)
+            } else {
+                lo + (hi - lo) * t
+            }
+        };
+        let mut buckets: Vec<Bucket> = (0..rows)
+            .map(|i| Bucket {
+                low_us: edge(i),
+                high_us: edge(i + 1),
+                count: 0,
+            })
+            .collect();
+        for v in self.hist.iter_recorded() {
+            let value = v.value_iterated_to() as f64;
+            let idx = buckets
+                .iter()
+                .position(|b| value < b.high_us)
+                .unwrap_or(rows - 1);
+            buckets[idx].count += v.count_at_value();
+        }
+        buckets
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exact_figures_for_known_samples() {
+        let mut s = RttStats::new();
+        for us in [100, 200, 300, 400] {
+            s.record(us * 1_000);
+        }
+        let r = s.summary().unwrap();
+        assert_eq!(r.min_us, 100.0);
+        assert_eq!(r.max_us, 400.0);
+        assert_eq!(r.mean_us, 250.0);
+        assert!((r.stddev_us - 129.099).abs() < 0.001);
+        assert_eq!(r.jitter_us, 100.0);
+        assert_eq!(r.p50_us, 200.0);
+        assert_eq!(r.p99_us, 400.0);
+    }
+
+    #[test]
+    fn outliers_saturate_instead_of_panicking() {
+        let mut s = RttStats::new();
+        s.record(1);
+        s.record(u64::MAX / 2);
+        let r = s.summary().unwrap();
+        // Exact figures keep the outlier; the histogram saturates at 1 h.
+        assert_eq!(r.max_us, (u64::MAX / 2) as f64 / 1e3);
+        assert!((r.p999_us / 3.6e9 - 1.0).abs() < 0.001, "{}", r.p999_us);
+        assert_eq!(s.count(), 2);
+    }
+
+    #[test]
+    fn distribution_accounts_for_every_sample() {
+        let mut s = RttStats::new();
+        for i in 1..=1000u64 {
+            s.record(i * 37_000);
+        }
+        let buckets = s.distribution(8);
+        assert_eq!(buckets.len(), 8);
+        assert_eq!(buckets.iter().map(|b| b.count).sum::<u64>(), 1000);
+    }
+
+    #[test]
+    fn no_samples_no_summary() {
+        assert!(RttStats::new().summary().is_none());
+        assert!(RttStats::new().distribution(5).is_empty());
+    }
+}

@@ -1,0 +1,100 @@
+//! The end-of-run figures, built from the matcher and the roster. Every
+//! report format renders this one structure.
+
+use serde::Serialize;
+
+use super::matcher::{Counts, Matcher};
+use super::roster::{Identity, Roster};
+use super::stats::{Bucket, RttSummary};
+use crate::frame::{ScanStats, SysComp};
+
+/// Rows in the ASCII/JSON RTT distribution.
+pub const HISTOGRAM_ROWS: usize = 8;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ResponderSummary {
+    pub id: SysComp,
+    pub counts: Counts,
+    pub loss_ratio: f64,
+    pub rtt: Option<RttSummary>,
+    pub histogram: Vec<Bucket>,
+    pub identity: Option<Identity>,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub link: String,
+    pub probe: &'static str,
+    pub ours: SysComp,
+    pub duration_s: f64,
+    /// Requests put on the wire.
+    pub requests: u64,
+    /// Requests still within their timeout when the run ended, unanswered
+    /// by at least one responder: counted neither received nor lost.
+    pub in_flight: u64,
+    pub responders: Vec<ResponderSummary>,
+    /// Replies addressed to another system.
+    pub foreign_replies: u64,
+    /// Replies from responders beyond the tracking limit.
+    pub untracked_replies: u64,
+    pub frames: ScanStats,
+    pub hints: Vec<String>,
+    pub interrupted: bool,
+    pub link_error: Option<String>,
+}
+
+impl Summary {
+    /// True when at least one responder answered in time.
+    pub fn any_reply(&self) -> bool {
+        self.responders.iter().any(|r| r.counts.received > 0)
+    }
+}
+
+pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderSummary> {
+    let mut out: Vec<ResponderSummary> = matcher
+        .responders()
+        .iter()
+        .map(|r| ResponderSummary {
+            id: r.id,
+            counts: r.counts,
+            loss_ratio: r.counts.loss_ratio(),
+            rtt: r.rtt.summary(),
+            histogram: r.rtt.distribution(HISTOGRAM_ROWS),
+            identity: roster.get(r.id).cloned(),
+        })
+        .collect();
+    out.sort_by_key(|r| r.id);
+    out
+}
+
+/// Systems that announce themselves but never answered this probe.
+pub fn silent_system_hints(
+    roster: &Roster,
+    responders: &[ResponderSummary],
+    ours: SysComp,
+    probe: &str,
+) -> Vec<String> {
+    roster
+        .iter()
+        .filter(|(id, identity)| **id != ours && identity.is_vehicle_like())
+        .filter(|(id, _)| {
+            !responders
+                .iter()
+                .any(|r| r.id == **id && (r.counts.received > 0 || r.counts.late > 0))
+        })
+        .map(|(id, identity)| {
+            let what = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_name);
+            if probe == "ping" {
+                format!(
+                    "{what} sends HEARTBEAT but never answered PING; ArduPilot answers only \
+                     TIMESYNC: try --probe timesync"
+                )
+            } else {
+                format!(
+                    "{what} sends HEARTBEAT but never answered {}",
+                    probe.to_uppercase()
+                )
+            }
+        })
+        .collect()
+}

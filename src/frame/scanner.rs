@@ -1,0 +1,355 @@
+//! Finds whole, CRC-valid MAVLink frames in bytes that may hold junk.
+//!
+//! Two entry points share one scanning rule:
+//! - [`scan_datagram`]: a UDP datagram is parsed on its own, so a junk or
+//!   truncated datagram can never swallow the next datagram's frame (the
+//!   pymavlink failure measured in FIELD-NOTES).
+//! - [`StreamScanner`]: serial and TCP carry a byte stream; a frame may be
+//!   split across reads, so the unfinished tail is kept for the next read.
+//!
+//! A candidate that fails (bad CRC, unsupported flags, unknown id that does
+//! not line up with a following frame) is rejected and the scan restarts one
+//! byte after its start byte, so a real frame that overlaps junk is found.
+
+use mavlink::dialects::ardupilotmega::MavMessage;
+use mavlink::Message;
+
+/// MAVLink 1 start-of-frame marker.
+pub const STX_V1: u8 = 0xFE;
+/// MAVLink 2 start-of-frame marker.
+pub const STX_V2: u8 = 0xFD;
+/// MAVLink 2 incompatibility flag: the frame carries a 13-byte signature.
+pub const IFLAG_SIGNED: u8 = 0x01;
+const SIGNATURE_LEN: usize = 13;
+const V1_HEADER: usize = 6; // STX, len, seq, sys, comp, msgid
+const V2_HEADER: usize = 10; // STX, len, incompat, compat, seq, sys, comp, msgid x3
+const CHECKSUM_LEN: usize = 2;
+/// The largest possible frame: v2 header, 255 payload bytes, CRC, signature.
+pub const MAX_FRAME_LEN: usize = V2_HEADER + 255 + CHECKSUM_LEN + SIGNATURE_LEN;
+
+/// What the scanner saw besides good frames. Every byte that is not part of
+/// a good frame or an unknown-but-aligned frame is counted in `skipped_bytes`.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct ScanStats {
+    /// Frames with a valid CRC.
+    pub frames: u64,
+    /// Candidates of a known message whose CRC did not match.
+    pub bad_crc: u64,
+    /// Well-aligned frames of a message id this build does not know.
+    pub unknown_id: u64,
+    /// Bytes dropped while resynchronising (junk, broken frames).
+    pub skipped_bytes: u64,
+    /// Datagrams (or stream ends) that stopped in the middle of a frame.
+    pub truncated: u64,
+}
+
+impl ScanStats {
+    pub fn add(&mut self, other: &ScanStats) {
+        self.frames += other.frames;
+        self.bad_crc += other.bad_crc;
+        self.unknown_id += other.unknown_id;
+        self.skipped_bytes += other.skipped_bytes;
+        self.truncated += other.truncated;
+    }
+}
+
+/// CRC_EXTRA for a message id, or `None` when the dialect does not know it.
+fn extra_crc(msgid: u32) -> Option<u8> {
+    let crc = MavMessage::extra_crc(msgid);
+    // The generated table answers 0 for unknown ids; 0 is also a legal value.
+    if crc != 0 || MavMessage::default_message_from_id(msgid).is_some() {
+        Some(crc)
+    } else {
+        None
+    }
+}
+
+/// Length of the frame starting at `buf[0]` once enough of its header is
+/// there, `Ok(None)` if more bytes are needed, `Err(())` if the header can
+/// never start a frame.
+fn frame_len(buf: &[u8]) -> Result<Option<usize>, ()> {
+    match buf[0] {
+        STX_V1 => Ok(buf
+            .get(1)
+            .map(|&len| V1_HEADER + usize::from(len) + CHECKSUM_LEN)),
+        STX_V2 => {
+            if buf.len() < 3 {
+                return Ok(None);
+            }
+            let incompat = buf[2];
+            if incompat & !IFLAG_SIGNED != 0 {
+                return Err(());
+            }
+            let signature = if incompat & IFLAG_SIGNED != 0 {
+                SIGNATURE_LEN
+            } else {
+                0
+            };
+            Ok(Some(
+                V2_HEADER + usize::from(buf[1]) + CHECKSUM_LEN + signature,
+            ))
+        }
+        _ => Err(()),
+    }
+}
+
+fn header_len(stx: u8) -> usize {
+    if stx == STX_V1 {
+        V1_HEADER
+    } else {
+        V2_HEADER
+    }
+}
+
+fn message_id(frame: &[u8]) -> u32 {
+    if frame[0] == STX_V1 {
+        u32::from(frame[5])
+    } else {
+        u32::from_le_bytes([frame[7], frame[8], frame[9], 0])
+    }
+}
+
+fn crc_matches(frame: &[u8], extra: u8) -> bool {
+    let end = header_len(frame[0]) + usize::from(frame[1]);
+    let expected = u16::from_le_bytes([frame[end], frame[end + 1]]);
+    mavlink::calculate_crc(&frame[1..end], extra) == expected
+}
+
+enum Step {
+    /// A good frame of this length starts here.
+    Frame(usize),
+    /// An unknown message that lines up with what follows: skip it whole.
+    Unknown(usize),
+    /// Not a frame: resume one byte later.
+    Reject { bad_crc: bool },
+    /// The candidate runs past the data we have.
+    NeedMore,
+}
+
+/// Judges the candidate at `buf[0]` (which is a start byte). `at_end` says
+/// no more bytes will follow `buf` (end of a datagram).
+fn judge(buf: &[u8], at_end: bool) -> Step {
+    let len = match frame_len(buf) {
+        Err(()) => return Step::Reject { bad_crc: false },
+        Ok(None) => return Step::NeedMore,
+        Ok(Some(len)) => len,
+    };
+    if buf.len() < len {
+        return Step::NeedMore;
+    }
+    let frame = &buf[..len];
+    match extra_crc(message_id(frame)) {
+        Some(extra) if crc_matches(frame, extra) => Step::Frame(len),
+        Some(_) => Step::Reject { bad_crc: true },
+        // An id we cannot check: believe its length only when the frame ends
+        // exactly where the data ends or another start byte follows.
+        None => match buf.get(len) {
+            Some(&next) if next == STX_V1 || next == STX_V2 => Step::Unknown(len),
+            Some(_) => Step::Reject { bad_crc: false },
+            None if at_end => Step::Unknown(len),
+            None => Step::NeedMore,
+        },
+    }
+}
+
+/// Scans `buf`, calling `on_frame` with each good frame. Returns how many
+/// leading bytes are finished with; with `at_end` that is all of them.
+fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) -> usize {
+    let mut pos = 0;
+    loop {
+        let Some(offset) = buf[pos..].iter().position(|&b| b == STX_V1 || b == STX_V2) else {
+            stats.skipped_bytes += (buf.len() - pos) as u64;
+            return buf.len();
+        };
+        stats.skipped_bytes += offset as u64;
+        pos += offset;
+        match judge(&buf[pos..], at_end) {
+            Step::Frame(len) => {
+                stats.frames += 1;
+                on_frame(&buf[pos..pos + len]);
+                pos += len;
+            }
+            Step::Unknown(len) => {
+                stats.unknown_id += 1;
+                pos += len;
+            }
+            Step::Reject { bad_crc } => {
+                stats.bad_crc += u64::from(bad_crc);
+                stats.skipped_bytes += 1;
+                pos += 1;
+            }
+            Step::NeedMore if at_end => {
+                // Nothing more will come; the rest may still hide a frame
+                // behind a false start byte, so reject this start only.
+                let rest = &buf[pos + 1..];
+                if !rest.iter().any(|&b| b == STX_V1 || b == STX_V2) {
+                    stats.truncated += 1;
+                    stats.skipped_bytes += (buf.len() - pos) as u64;
+                    return buf.len();
+                }
+                stats.skipped_bytes += 1;
+                pos += 1;
+            }
+            Step::NeedMore => return pos,
+        }
+    }
+}
+
+/// Scans one datagram on its own.
+pub fn scan_datagram(datagram: &[u8], stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) {
+    scan(datagram, true, stats, on_frame);
+}
+
+/// Scanner for a byte stream: keeps an unfinished frame between reads.
+/// Its buffer never grows past a few frames, whatever the input.
+pub struct StreamScanner {
+    buf: Vec<u8>,
+    pub stats: ScanStats,
+}
+
+impl Default for StreamScanner {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl StreamScanner {
+    pub fn new() -> Self {
+        StreamScanner {
+            buf: Vec::with_capacity(4 * MAX_FRAME_LEN),
+            stats: ScanStats::default(),
+        }
+    }
+
+    /// Feeds bytes read from the stream.
+    pub fn push(&mut self, data: &[u8], on_frame: &mut dyn FnMut(&[u8])) {
+        if self.buf.is_empty() {
+            // Fast path: no carried tail, scan the read in place.
+            let done = scan(data, false, &mut self.stats, on_frame);
+            self.buf.extend_from_slice(&data[done..]);
+        } else {
+            self.buf.extend_from_slice(data);
+            let done = scan(&self.buf, false, &mut self.stats, on_frame);
+            self.buf.drain(..done);
+        }
+        // The tail is one unfinished candidate, so it is at most one frame.
+        debug_assert!(self.buf.len() < MAX_FRAME_LEN);
+    }
+
+    /// Bytes held back waiting for the rest of a frame.
+    pub fn pending_bytes(&self) -> usize {
+        self.buf.len()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::codec::{encode, Header, Version};
+    use crate::frame::Msg;
+
+    fn ping_frame(version: Version, seq: u32) -> Vec<u8> {
+        let mut out = Vec::new();
+        encode(
+            &mut out,
+            version,
+            Header {
+                sysid: 1,
+                compid: 1,
+                seq: 7,
+            },
+            &Msg::Ping {
+                time_usec: 123_456,
+                seq,
+                target_system: 255,
+                target_component: 190,
+            },
+        );
+        out
+    }
+
+    fn collect_datagram(data: &[u8]) -> (Vec<Vec<u8>>, ScanStats) {
+        let mut stats = ScanStats::default();
+        let mut frames = Vec::new();
+        scan_datagram(data, &mut stats, &mut |f| frames.push(f.to_vec()));
+        (frames, stats)
+    }
+
+    #[test]
+    fn finds_v1_and_v2_frames_back_to_back() {
+        let mut data = ping_frame(Version::V1, 1);
+        data.extend(ping_frame(Version::V2, 2));
+        let (frames, stats) = collect_datagram(&data);
+        assert_eq!(frames.len(), 2);
+        assert_eq!(stats.frames, 2);
+        assert_eq!(stats.skipped_bytes, 0);
+    }
+
+    #[test]
+    fn junk_before_a_frame_is_counted_and_skipped() {
+        let mut data = vec![0x00, 0x11, 0x22];
+        data.extend(ping_frame(Version::V2, 1));
+        let (frames, stats) = collect_datagram(&data);
+        assert_eq!(frames.len(), 1);
+        assert_eq!(stats.skipped_bytes, 3);
+    }
+
+    #[test]
+    fn false_start_byte_overlapping_a_real_frame_does_not_hide_it() {
+        // A v1 start byte claiming a long payload swallows the real frame
+        // unless the scan restarts one byte after the false start.
+        let mut data = vec![STX_V1, 40, 0, 0, 0, 4];
+        data.extend(ping_frame(Version::V2, 9));
+        data.extend([0u8; 40]);
+        let (frames, stats) = collect_datagram(&data);
+        assert_eq!(frames.len(), 1, "{stats:?}");
+        assert_eq!(stats.bad_crc, 1);
+    }
+
+    #[test]
+    fn bad_crc_is_counted_not_fatal() {
+        let mut bad = ping_frame(Version::V2, 1);
+        let last = bad.len() - 1;
+        bad[last] ^= 0xFF;
+        bad.extend(ping_frame(Version::V2, 2));
+        let (frames, stats) = collect_datagram(&bad);
+        assert_eq!(frames.len(), 1);
+        assert_eq!(stats.bad_crc, 1);
+    }
+
+    #[test]
+    fn truncated_datagram_is_counted() {
+        let frame = ping_frame(Version::V2, 1);
+        let (frames, stats) = collect_datagram(&frame[..frame.len() - 3]);
+        assert!(frames.is_empty());
+        assert_eq!(stats.truncated, 1);
+        assert_eq!(stats.skipped_bytes as usize, frame.len() - 3);
+    }
+
+    #[test]
+    fn unknown_message_id_aligned_with_next_frame_is_skipped_whole() {
+        let mut unknown = vec![STX_V2, 2, 0, 0, 0, 1, 1, 0xEE, 0xEE, 0xEE, 0xAA, 0xBB, 0, 0];
+        unknown.extend(ping_frame(Version::V2, 3));
+        let (frames, stats) = collect_datagram(&unknown);
+        assert_eq!(frames.len(), 1);
+        assert_eq!(stats.unknown_id, 1);
+        assert_eq!(stats.skipped_bytes, 0);
+    }
+
+    #[test]
+    fn stream_reassembles_frames_split_at_every_byte() {
+        let mut data = ping_frame(Version::V2, 1);
+        data.extend([0x42, STX_V2, 0x01]);
+        data.extend(ping_frame(Version::V1, 2));
+        data.extend(ping_frame(Version::V2, 3));
+        for chunk in 1..data.len() {
+            let mut scanner = StreamScanner::new();
+            let mut count = 0;
+            for piece in data.chunks(chunk) {
+                scanner.push(piece, &mut |_| count += 1);
+            }
+            assert_eq!(count, 3, "chunk size {chunk}");
+            assert_eq!(scanner.stats.skipped_bytes, 3, "chunk size {chunk}");
+        }
+    }
+}

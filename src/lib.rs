@@ -1,0 +1,16 @@
+//! mavping: MAVLink link latency measurement.
+//!
+//! Data flows link -> frames -> probe -> matcher -> statistics -> report:
+//! [`transport`] reads bytes and yields CRC-checked [`frame`]s, a [`probe`]
+//! recognises replies, the pure [`engine::matcher`] counts them, and an
+//! [`output`] reporter prints events and the summary.
+
+pub mod app;
+pub mod cli;
+pub mod config;
+pub mod engine;
+pub mod frame;
+pub mod output;
+pub mod probe;
+pub mod responder;
+pub mod transport;

@@ -1,0 +1,223 @@
+//! Human output, modelled on ping: a line per reply as it happens, then a
+//! summary per responder with an ASCII histogram.
+
+use std::io::{self, Write};
+
+use super::{Event, Reporter, StartInfo};
+use crate::engine::matcher::MatchEvent;
+use crate::engine::summary::{ResponderSummary, Summary};
+use crate::engine::Nanos;
+
+pub struct TextReporter<W: Write> {
+    out: W,
+    /// Only the summary (`-q`).
+    quiet: bool,
+    timeout: std::time::Duration,
+}
+
+impl<W: Write> TextReporter<W> {
+    pub fn new(out: W, quiet: bool) -> Self {
+        TextReporter {
+            out,
+            quiet,
+            timeout: std::time::Duration::ZERO,
+        }
+    }
+
+    pub fn into_inner(self) -> W {
+        self.out
+    }
+}
+
+/// Milliseconds with µs resolution, as ping prints them.
+fn ms(ns: Nanos) -> String {
+    format!("{:.3}", ns as f64 / 1e6)
+}
+
+fn ms_us(us: f64) -> String {
+    format!("{:.3}", us / 1e3)
+}
+
+fn percent(ratio: f64) -> String {
+    let p = ratio * 100.0;
+    if p == 0.0 || p == 100.0 || p >= 10.0 {
+        format!("{p:.1}%")
+    } else {
+        format!("{p:.2}%")
+    }
+}
+
+fn rate(interval: std::time::Duration) -> String {
+    let per_s = 1.0 / interval.as_secs_f64();
+    if per_s >= 1.0 && per_s.fract() == 0.0 {
+        format!("{per_s}/s")
+    } else {
+        format!("every {}", humantime::format_duration(interval))
+    }
+}
+
+fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()> {
+    let c = &r.counts;
+    let who = match &r.identity {
+        Some(i) => format!("{} ({}, {})", r.id, i.vehicle, i.autopilot_name),
+        None => r.id.to_string(),
+    };
+    write!(
+        out,
+        "{who}: {} sent, {} received, {} lost ({}), {} late, {} duplicate, {} out of order",
+        c.sent,
+        c.received,
+        c.lost,
+        percent(r.loss_ratio),
+        c.late,
+        c.duplicate,
+        c.out_of_order
+    )?;
+    if c.stale > 0 {
+        write!(out, ", {} stale", c.stale)?;
+    }
+    writeln!(out)?;
+    let Some(rtt) = &r.rtt else {
+        return Ok(());
+    };
+    writeln!(
+        out,
+        "  rtt min/mean/max/stddev = {}/{}/{}/{} ms",
+        ms_us(rtt.min_us),
+        ms_us(rtt.mean_us),
+        ms_us(rtt.max_us),
+        ms_us(rtt.stddev_us)
+    )?;
+    writeln!(
+        out,
+        "  rtt p50/p90/p99/p99.9   = {}/{}/{}/{} ms, jitter {} ms",
+        ms_us(rtt.p50_us),
+        ms_us(rtt.p90_us),
+        ms_us(rtt.p99_us),
+        ms_us(rtt.p999_us),
+        ms_us(rtt.jitter_us)
+    )?;
+    let most = r
+        .histogram
+        .iter()
+        .map(|b| b.count)
+        .max()
+        .unwrap_or(0)
+        .max(1);
+    for b in &r.histogram {
+        const WIDTH: u64 = 40;
+        let bar = (b.count * WIDTH).div_ceil(most) as usize;
+        writeln!(
+            out,
+            "  {:>9} ms |{:<40}| {}",
+            ms_us(b.low_us),
+            "#".repeat(bar),
+            b.count
+        )?;
+    }
+    Ok(())
+}
+
+impl<W: Write> Reporter for TextReporter<W> {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        self.timeout = info.timeout;
+        if self.quiet {
+            return Ok(());
+        }
+        writeln!(
+            self.out,
+            "MAVPING {} from {}: {} {}, timeout {}",
+            info.link,
+            info.ours,
+            info.probe.to_uppercase(),
+            rate(info.interval),
+            humantime::format_duration(info.timeout)
+        )
+    }
+
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        if self.quiet {
+            return Ok(());
+        }
+        match *event {
+            Event::Match(MatchEvent::Reply {
+                responder,
+                seq,
+                rtt,
+                out_of_order,
+                ..
+            }) => writeln!(
+                self.out,
+                "reply from {responder}: seq={seq} time={} ms{}",
+                ms(rtt),
+                if out_of_order { " (out of order)" } else { "" }
+            ),
+            Event::Match(MatchEvent::Lost { responder, seq, .. }) => writeln!(
+                self.out,
+                "no reply from {responder}: seq={seq} (timeout {})",
+                humantime::format_duration(self.timeout)
+            ),
+            Event::Match(MatchEvent::Late {
+                responder,
+                seq,
+                rtt,
+                ..
+            }) => writeln!(
+                self.out,
+                "late reply from {responder}: seq={seq} time={} ms (after the timeout)",
+                ms(rtt)
+            ),
+            Event::Match(MatchEvent::Duplicate {
+                responder,
+                seq,
+                rtt,
+                ..
+            }) => writeln!(
+                self.out,
+                "reply from {responder}: seq={seq} time={} ms (DUP!)",
+                ms(rtt)
+            ),
+            Event::Match(MatchEvent::Stale { responder, .. }) => writeln!(
+                self.out,
+                "stale reply from {responder}: matches no request we hold"
+            ),
+            Event::Heard { id, identity } => writeln!(
+                self.out,
+                "heard {id}: {}, {}",
+                identity.vehicle, identity.autopilot_name
+            ),
+            Event::WaitingForPeer => writeln!(self.out, "waiting for a peer to send MAVLink..."),
+        }
+    }
+
+    fn summary(&mut self, s: &Summary) -> io::Result<()> {
+        let out = &mut self.out;
+        if !self.quiet {
+            writeln!(out)?;
+        }
+        writeln!(out, "--- {} mavping statistics ---", s.link)?;
+        write!(out, "{} requests sent in {:.3} s", s.requests, s.duration_s)?;
+        if s.in_flight > 0 {
+            write!(out, ", {} still in flight (not counted)", s.in_flight)?;
+        }
+        writeln!(out)?;
+        if s.responders.is_empty() {
+            writeln!(out, "no replies")?;
+        }
+        for r in &s.responders {
+            write_responder(out, r)?;
+        }
+        let f = &s.frames;
+        if f.bad_crc + f.skipped_bytes + f.unknown_id + f.truncated + s.foreign_replies > 0 {
+            writeln!(
+                out,
+                "link: {} bad CRC, {} bytes skipped, {} unknown messages, {} truncated, {} replies to others",
+                f.bad_crc, f.skipped_bytes, f.unknown_id, f.truncated, s.foreign_replies
+            )?;
+        }
+        for hint in &s.hints {
+            writeln!(out, "hint: {hint}")?;
+        }
+        out.flush()
+    }
+}

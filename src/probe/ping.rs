@@ -1,0 +1,134 @@
+//! The MAVLink PING protocol: request with targets 0/0, reply echoes
+//! `time_usec` and `seq` with the targets set to the pinger's ids.
+
+use super::{Classified, EchoProbe};
+use crate::engine::matcher::Lookup;
+use crate::frame::{Frame, Msg, SysComp};
+
+pub struct PingProbe {
+    /// Wall-clock µs at session start: time_usec is sent as wall time so a
+    /// peer's logs make sense, but advanced by the monotonic session clock
+    /// so a clock step cannot make two requests share a token.
+    wall_start_us: u64,
+}
+
+impl PingProbe {
+    pub fn new(wall_start_us: u64) -> Self {
+        PingProbe { wall_start_us }
+    }
+}
+
+impl EchoProbe for PingProbe {
+    fn name(&self) -> &'static str {
+        "ping"
+    }
+
+    fn token(&mut self, now_ns: u64) -> u64 {
+        self.wall_start_us + now_ns / 1_000
+    }
+
+    fn request(&self, seq: u32, token: u64) -> Msg {
+        Msg::Ping {
+            time_usec: token,
+            seq,
+            target_system: 0,
+            target_component: 0,
+        }
+    }
+
+    fn classify(&self, frame: &Frame, ours: SysComp) -> Classified {
+        match frame.msg {
+            Msg::Ping {
+                target_system: 0,
+                target_component: 0,
+                ..
+            } => Classified::NotAReply, // someone else's request
+            Msg::Ping {
+                time_usec,
+                seq,
+                target_system,
+                target_component,
+            } => {
+                if SysComp::new(target_system, target_component) == ours {
+                    Classified::Reply(Lookup::Seq {
+                        seq,
+                        token: time_usec,
+                    })
+                } else {
+                    Classified::ForeignReply
+                }
+            }
+            _ => Classified::NotAReply,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::Version;
+
+    fn frame(msg: Msg) -> Frame {
+        Frame {
+            version: Version::V2,
+            source: SysComp::new(1, 1),
+            packet_seq: 0,
+            msgid: 4,
+            signed: false,
+            msg,
+        }
+    }
+
+    fn ping(target_system: u8, target_component: u8) -> Msg {
+        Msg::Ping {
+            time_usec: 5,
+            seq: 9,
+            target_system,
+            target_component,
+        }
+    }
+
+    #[test]
+    fn only_replies_to_our_ids_are_ours() {
+        let probe = PingProbe::new(0);
+        let us = SysComp::new(255, 190);
+        assert_eq!(
+            probe.classify(&frame(ping(255, 190)), us),
+            Classified::Reply(Lookup::Seq { seq: 9, token: 5 })
+        );
+        assert_eq!(
+            probe.classify(&frame(ping(0, 0)), us),
+            Classified::NotAReply
+        );
+        assert_eq!(
+            probe.classify(&frame(ping(255, 1)), us),
+            Classified::ForeignReply
+        );
+        assert_eq!(
+            probe.classify(
+                &frame(Msg::Heartbeat {
+                    mav_type: 2,
+                    autopilot: 12
+                }),
+                us
+            ),
+            Classified::NotAReply
+        );
+    }
+
+    #[test]
+    fn requests_are_broadcast_with_targets_zero() {
+        let mut probe = PingProbe::new(1_000_000);
+        let token = probe.token(2_500);
+        assert_eq!(token, 1_000_002);
+        assert_eq!(
+            probe.request(7, token),
+            Msg::Ping {
+                time_usec: 1_000_002,
+                seq: 7,
+                target_system: 0,
+                target_component: 0
+            }
+        );
+    }
+}

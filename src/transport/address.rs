@@ -1,0 +1,279 @@
+//! Connection strings, as pymavlink, MAVProxy and rust-mavlink spell them.
+
+use std::fmt;
+
+use thiserror::Error;
+
+use super::sim::SimParams;
+
+/// Where to connect, before anything is opened.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LinkSpec {
+    /// Listen on a UDP address; ping every peer heard from.
+    UdpIn(HostPort),
+    /// Send to a UDP address from an ephemeral port.
+    UdpOut(HostPort),
+    /// Send to a broadcast address; hear replies from anyone.
+    UdpBcast(HostPort),
+    /// Connect to a TCP server.
+    TcpOut(HostPort),
+    /// Listen for TCP clients; each is a path to responders.
+    TcpIn(HostPort),
+    /// A serial device; `baud` None means "use --baud".
+    Serial { path: String, baud: Option<u32> },
+    /// The built-in simulated link.
+    Sim(SimParams),
+}
+
+/// A host (name, IPv4, or IPv6 without brackets) and a port.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct HostPort {
+    pub host: String,
+    pub port: u16,
+}
+
+impl fmt::Display for HostPort {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.host.contains(':') {
+            write!(f, "[{}]:{}", self.host, self.port)
+        } else {
+            write!(f, "{}:{}", self.host, self.port)
+        }
+    }
+}
+
+impl fmt::Display for LinkSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            LinkSpec::UdpIn(a) => write!(f, "udpin:{a}"),
+            LinkSpec::UdpOut(a) => write!(f, "udpout:{a}"),
+            LinkSpec::UdpBcast(a) => write!(f, "udpbcast:{a}"),
+            LinkSpec::TcpOut(a) => write!(f, "tcp:{a}"),
+            LinkSpec::TcpIn(a) => write!(f, "tcpin:{a}"),
+            LinkSpec::Serial { path, baud } => match baud {
+                Some(b) => write!(f, "serial:{path}:{b}"),
+                None => write!(f, "serial:{path}"),
+            },
+            LinkSpec::Sim(p) => write!(f, "{p}"),
+        }
+    }
+}
+
+/// Accepted forms, listed in every parse error.
+pub const ACCEPTED_FORMS: &str = "udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, \
+udpbcast:ADDR:PORT, tcp:HOST:PORT, tcpout:HOST:PORT, tcpin:HOST:PORT, serial:DEVICE[:BAUD], \
+/dev/DEVICE, sim:[?key=value&...] (IPv6 hosts in brackets: udpout:[::1]:14550)";
+
+#[derive(Debug, Error, PartialEq)]
+#[error("bad connection string '{input}': {reason}; accepted forms: {ACCEPTED_FORMS}")]
+pub struct AddressError {
+    pub input: String,
+    pub reason: String,
+}
+
+fn error(input: &str, reason: impl Into<String>) -> AddressError {
+    AddressError {
+        input: input.to_string(),
+        reason: reason.into(),
+    }
+}
+
+fn host_port(input: &str, rest: &str) -> Result<HostPort, AddressError> {
+    let (host, port) = if let Some(bracketed) = rest.strip_prefix('[') {
+        let (host, after) = bracketed
+            .split_once(']')
+            .ok_or_else(|| error(input, "missing ']' after IPv6 address"))?;
+        let port = after
+            .strip_prefix(':')
+            .ok_or_else(|| error(input, "missing ':PORT' after IPv6 address"))?;
+        (host, port)
+    } else {
+        let (host, port) = rest
+            .rsplit_once(':')
+            .ok_or_else(|| error(input, "missing ':PORT'"))?;
+        if host.contains(':') {
+            return Err(error(
+                input,
+                "IPv6 addresses need brackets, e.g. [::1]:14550",
+            ));
+        }
+        (host, port)
+    };
+    if host.is_empty() {
+        return Err(error(input, "missing host"));
+    }
+    let port: u16 = port
+        .parse()
+        .map_err(|_| error(input, format!("'{port}' is not a port number (0-65535)")))?;
+    Ok(HostPort {
+        host: host.to_string(),
+        port,
+    })
+}
+
+fn serial(input: &str, rest: &str) -> Result<LinkSpec, AddressError> {
+    if rest.is_empty() {
+        return Err(error(input, "missing serial device"));
+    }
+    // The baud is the part after the last ':' when it is all digits; device
+    // paths themselves do not end in ":digits".
+    match rest.rsplit_once(':') {
+        Some((path, baud)) if !baud.is_empty() && baud.bytes().all(|b| b.is_ascii_digit()) => {
+            let baud: u32 = baud
+                .parse()
+                .ok()
+                .filter(|&b| b > 0)
+                .ok_or_else(|| error(input, format!("'{baud}' is not a baud rate")))?;
+            Ok(LinkSpec::Serial {
+                path: path.to_string(),
+                baud: Some(baud),
+            })
+        }
+        _ => Ok(LinkSpec::Serial {
+            path: rest.to_string(),
+            baud: None,
+        }),
+    }
+}
+
+impl std::str::FromStr for LinkSpec {
+    type Err = AddressError;
+
+    fn from_str(input: &str) -> Result<Self, Self::Err> {
+        let input = input.trim();
+        if input.is_empty() {
+            return Err(error(input, "empty"));
+        }
+        if input == "sim" || input.starts_with("sim:") {
+            let query = input.strip_prefix("sim").unwrap_or_default();
+            let query = query.strip_prefix(':').unwrap_or(query);
+            return SimParams::parse(query)
+                .map(LinkSpec::Sim)
+                .map_err(|reason| error(input, reason));
+        }
+        if input.starts_with('/') || input.starts_with("COM") {
+            return serial(input, input);
+        }
+        if let Some((scheme, rest)) = input.split_once(':') {
+            let spec = match scheme.to_ascii_lowercase().as_str() {
+                "udpin" | "udp" => Some(LinkSpec::UdpIn(host_port(input, rest)?)),
+                "udpout" => Some(LinkSpec::UdpOut(host_port(input, rest)?)),
+                "udpbcast" => Some(LinkSpec::UdpBcast(host_port(input, rest)?)),
+                "tcp" | "tcpout" => Some(LinkSpec::TcpOut(host_port(input, rest)?)),
+                "tcpin" => Some(LinkSpec::TcpIn(host_port(input, rest)?)),
+                "serial" => Some(serial(input, rest)?),
+                _ => None,
+            };
+            if let Some(spec) = spec {
+                return Ok(spec);
+            }
+        }
+        // A bare HOST:PORT listens, as in pymavlink and MAVProxy.
+        match host_port(input, input) {
+            Ok(hp) if !hp.host.contains('/') => Ok(LinkSpec::UdpIn(hp)),
+            _ => Err(error(input, "unknown form")),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hp(host: &str, port: u16) -> HostPort {
+        HostPort {
+            host: host.into(),
+            port,
+        }
+    }
+
+    #[test]
+    fn accepted_forms_parse() {
+        let table: Vec<(&str, LinkSpec)> = vec![
+            ("udpin:0.0.0.0:14550", LinkSpec::UdpIn(hp("0.0.0.0", 14550))),
+            (
+                "udp:127.0.0.1:14550",
+                LinkSpec::UdpIn(hp("127.0.0.1", 14550)),
+            ),
+            ("127.0.0.1:14550", LinkSpec::UdpIn(hp("127.0.0.1", 14550))),
+            ("localhost:14550", LinkSpec::UdpIn(hp("localhost", 14550))),
+            (
+                "udpout:127.0.0.1:14550",
+                LinkSpec::UdpOut(hp("127.0.0.1", 14550)),
+            ),
+            ("udpout:[::1]:14550", LinkSpec::UdpOut(hp("::1", 14550))),
+            ("UDPOUT:[::1]:1", LinkSpec::UdpOut(hp("::1", 1))),
+            (
+                "udpbcast:127.255.255.255:14550",
+                LinkSpec::UdpBcast(hp("127.255.255.255", 14550)),
+            ),
+            (
+                "tcp:127.0.0.1:5760",
+                LinkSpec::TcpOut(hp("127.0.0.1", 5760)),
+            ),
+            (
+                "tcpout:127.0.0.1:5760",
+                LinkSpec::TcpOut(hp("127.0.0.1", 5760)),
+            ),
+            ("tcpin:[::]:5760", LinkSpec::TcpIn(hp("::", 5760))),
+            (
+                "serial:/dev/ttyUSB0:57600",
+                LinkSpec::Serial {
+                    path: "/dev/ttyUSB0".into(),
+                    baud: Some(57600),
+                },
+            ),
+            (
+                "/dev/ttyACM0",
+                LinkSpec::Serial {
+                    path: "/dev/ttyACM0".into(),
+                    baud: None,
+                },
+            ),
+            (
+                "serial:/dev/pts/3",
+                LinkSpec::Serial {
+                    path: "/dev/pts/3".into(),
+                    baud: None,
+                },
+            ),
+        ];
+        for (input, expected) in table {
+            assert_eq!(input.parse::<LinkSpec>(), Ok(expected), "{input}");
+        }
+    }
+
+    #[test]
+    fn bad_forms_name_the_accepted_ones() {
+        for input in [
+            "",
+            "udpout:127.0.0.1",
+            "udpout:127.0.0.1:99999",
+            "udpout::14550",
+            "udpout:::1:14550",
+            "udpout:[::1:14550",
+            "carrier-pigeon:1:2",
+            "14550",
+            "serial:",
+            "serial:/dev/ttyUSB0:0",
+            "sim:?bogus=1",
+        ] {
+            let err = input.parse::<LinkSpec>().unwrap_err().to_string();
+            assert!(
+                err.contains("accepted forms: udpin:HOST:PORT"),
+                "{input}: {err}"
+            );
+        }
+    }
+
+    #[test]
+    fn display_round_trips() {
+        for input in [
+            "udpout:[::1]:14550",
+            "tcpin:0.0.0.0:5760",
+            "serial:/dev/ttyUSB0:57600",
+        ] {
+            assert_eq!(input.parse::<LinkSpec>().unwrap().to_string(), input);
+        }
+    }
+}

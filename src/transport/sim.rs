@@ -1,0 +1,425 @@
+//! `sim:` — an in-process link with simulated responders and faults.
+//!
+//! Requests pass through the real encoder and scanner, are answered by the
+//! same responder logic as `mavping respond`, and come back after a seeded
+//! random delay, maybe dropped, duplicated or held back (reordered). With
+//! `clock=virtual` the run uses tokio's paused clock: output is identical on
+//! every run and a long simulation takes no wall time.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+use std::fmt;
+use std::time::Duration;
+
+use rand::rngs::SmallRng;
+use rand::{Rng, SeedableRng};
+use tokio::time::{sleep_until, Instant};
+
+use super::{push_datagram, Inbound, LinkError, Transport};
+use crate::frame::{self, Header, Msg, ScanStats, SysComp, Version};
+use crate::responder::ResponderCore;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimParams {
+    pub responders: u16,
+    /// sysid of the first responder; the others follow (1, 2, 3, ...).
+    pub first_sysid: u8,
+    pub compid: u8,
+    /// One-way delay.
+    pub delay: Duration,
+    /// Extra one-way delay, uniform in [0, jitter], drawn per direction.
+    pub jitter: Duration,
+    /// Share of exchanges lost, 0..=1.
+    pub loss: f64,
+    /// Share of replies delivered twice.
+    pub dup: f64,
+    /// Share of replies held back by `hold` (arrive after later replies).
+    pub reorder: f64,
+    pub hold: Duration,
+    pub seed: u64,
+    /// Paused tokio clock: deterministic output, no waiting.
+    pub virtual_clock: bool,
+    /// False: responders send HEARTBEAT but ignore PING (like ArduPilot).
+    pub answer_ping: bool,
+    pub heartbeat: bool,
+}
+
+impl Default for SimParams {
+    fn default() -> Self {
+        SimParams {
+            responders: 1,
+            first_sysid: 1,
+            compid: 1,
+            delay: Duration::from_millis(10),
+            jitter: Duration::from_millis(2),
+            loss: 0.0,
+            dup: 0.0,
+            reorder: 0.0,
+            hold: Duration::from_millis(50),
+            seed: 1,
+            virtual_clock: false,
+            answer_ping: true,
+            heartbeat: true,
+        }
+    }
+}
+
+/// The keys `sim:` accepts, for error messages and the README.
+pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURATION, \
+jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
+ping=on|off, heartbeat=on|off";
+
+fn percent(key: &str, value: &str) -> Result<f64, String> {
+    let number = value.strip_suffix('%').unwrap_or(value);
+    match number.parse::<f64>() {
+        Ok(p) if (0.0..=100.0).contains(&p) => Ok(p / 100.0),
+        _ => Err(format!(
+            "{key}={value}: expected a percentage from 0 to 100"
+        )),
+    }
+}
+
+fn duration(key: &str, value: &str) -> Result<Duration, String> {
+    let d = humantime::parse_duration(value)
+        .map_err(|e| format!("{key}={value}: {e} (e.g. 20ms, 1.5s)"))?;
+    if d > Duration::from_secs(3600) {
+        return Err(format!("{key}={value}: at most 1h"));
+    }
+    Ok(d)
+}
+
+fn switch(key: &str, value: &str) -> Result<bool, String> {
+    match value {
+        "on" | "1" | "true" | "yes" => Ok(true),
+        "off" | "0" | "false" | "no" => Ok(false),
+        _ => Err(format!("{key}={value}: expected on or off")),
+    }
+}
+
+fn number<T: std::str::FromStr>(key: &str, value: &str, range: &str) -> Result<T, String> {
+    value
+        .parse()
+        .map_err(|_| format!("{key}={value}: expected {range}"))
+}
+
+impl SimParams {
+    /// Parses the part after `sim:`: empty, or `?key=value&key=value`.
+    pub fn parse(query: &str) -> Result<Self, String> {
+        let mut p = SimParams::default();
+        let query = query.strip_prefix('?').unwrap_or(query);
+        for pair in query.split('&').filter(|s| !s.is_empty()) {
+            let (key, value) = pair
+                .split_once('=')
+                .ok_or_else(|| format!("'{pair}' is not key=value; keys: {SIM_KEYS}"))?;
+            match key {
+                "responders" => {
+                    p.responders = number(key, value, "1 to 1000")?;
+                    if !(1..=1000).contains(&p.responders) {
+                        return Err(format!("{key}={value}: expected 1 to 1000"));
+                    }
+                }
+                "sysid" => {
+                    p.first_sysid = number(key, value, "1 to 255")?;
+                    if p.first_sysid == 0 {
+                        return Err(format!("{key}={value}: expected 1 to 255"));
+                    }
+                }
+                "compid" => {
+                    p.compid = number(key, value, "1 to 255")?;
+                    if p.compid == 0 {
+                        return Err(format!("{key}={value}: expected 1 to 255"));
+                    }
+                }
+                "delay" => p.delay = duration(key, value)?,
+                "jitter" => p.jitter = duration(key, value)?,
+                "hold" => p.hold = duration(key, value)?,
+                "loss" => p.loss = percent(key, value)?,
+                "dup" => p.dup = percent(key, value)?,
+                "reorder" => p.reorder = percent(key, value)?,
+                "seed" => p.seed = number(key, value, "a whole number")?,
+                "clock" => {
+                    p.virtual_clock = match value {
+                        "virtual" => true,
+                        "real" => false,
+                        _ => return Err(format!("{key}={value}: expected real or virtual")),
+                    }
+                }
+                "ping" => p.answer_ping = switch(key, value)?,
+                "heartbeat" => p.heartbeat = switch(key, value)?,
+                _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
+            }
+        }
+        // Responders are numbered by sysid; the last one must still fit.
+        if usize::from(p.first_sysid) + usize::from(p.responders) - 1 > 255 * 255 {
+            return Err("too many responders for the sysid range".into());
+        }
+        Ok(p)
+    }
+
+    /// The ids of responder `i`: sysids count up from `first_sysid`, and
+    /// past 255 the component id counts up too, so 1,000 stay distinct.
+    pub fn responder_id(&self, i: u16) -> SysComp {
+        let slot = usize::from(self.first_sysid) - 1 + usize::from(i);
+        SysComp::new(
+            (slot % 255 + 1) as u8,
+            (usize::from(self.compid) - 1 + slot / 255) as u8 % 255 + 1,
+        )
+    }
+}
+
+impl fmt::Display for SimParams {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "sim:?responders={}&delay={}&jitter={}&loss={}%&dup={}%&reorder={}%&seed={}",
+            self.responders,
+            humantime::format_duration(self.delay),
+            humantime::format_duration(self.jitter),
+            self.loss * 100.0,
+            self.dup * 100.0,
+            self.reorder * 100.0,
+            self.seed
+        )
+    }
+}
+
+struct SimResponder {
+    core: ResponderCore,
+    packet_seq: u8,
+    next_heartbeat: Instant,
+}
+
+impl SimResponder {
+    fn header(&mut self) -> Header {
+        self.packet_seq = self.packet_seq.wrapping_add(1);
+        Header {
+            sysid: self.core.id.sysid,
+            compid: self.core.id.compid,
+            seq: self.packet_seq,
+        }
+    }
+}
+
+/// A delivery waiting in the simulated link, ordered by time then by the
+/// order it was queued (so equal times stay deterministic).
+#[derive(PartialEq, Eq, PartialOrd, Ord)]
+struct Delivery {
+    at: Instant,
+    order: u64,
+    bytes: Vec<u8>,
+}
+
+/// Queued deliveries are capped so an absurd rate x delay cannot grow
+/// memory without bound; past it, replies are dropped like a full queue.
+const MAX_QUEUED: usize = 1 << 20;
+
+pub struct SimLink {
+    params: SimParams,
+    responders: Vec<SimResponder>,
+    rng: SmallRng,
+    queue: BinaryHeap<Reverse<Delivery>>,
+    order: u64,
+    stats: ScanStats,
+    started: Instant,
+    scratch: Vec<Inbound>,
+}
+
+impl SimLink {
+    pub fn new(params: SimParams) -> Self {
+        let now = Instant::now();
+        let responders = (0..params.responders)
+            .map(|i| {
+                let mut core = ResponderCore::new(params.responder_id(i));
+                core.answer_ping = params.answer_ping;
+                SimResponder {
+                    core,
+                    packet_seq: 0,
+                    next_heartbeat: now,
+                }
+            })
+            .collect();
+        SimLink {
+            rng: SmallRng::seed_from_u64(params.seed),
+            params,
+            responders,
+            queue: BinaryHeap::new(),
+            order: 0,
+            stats: ScanStats::default(),
+            started: now,
+            scratch: Vec::new(),
+        }
+    }
+
+    fn one_way(&mut self) -> Duration {
+        let jitter = self.params.jitter.as_nanos() as u64;
+        let extra = if jitter == 0 {
+            0
+        } else {
+            self.rng.gen_range(0..=jitter)
+        };
+        self.params.delay + Duration::from_nanos(extra)
+    }
+
+    fn chance(&mut self, p: f64) -> bool {
+        p > 0.0 && self.rng.gen::<f64>() < p
+    }
+
+    fn enqueue(&mut self, at: Instant, bytes: Vec<u8>) {
+        if self.queue.len() < MAX_QUEUED {
+            self.order += 1;
+            self.queue.push(Reverse(Delivery {
+                at,
+                order: self.order,
+                bytes,
+            }));
+        }
+    }
+
+    fn queue_heartbeats(&mut self, now: Instant) {
+        if !self.params.heartbeat {
+            return;
+        }
+        for i in 0..self.responders.len() {
+            while self.responders[i].next_heartbeat <= now {
+                let sent = self.responders[i].next_heartbeat;
+                self.responders[i].next_heartbeat += Duration::from_secs(1);
+                let header = self.responders[i].header();
+                let mut bytes = Vec::new();
+                frame::encode(
+                    &mut bytes,
+                    Version::V2,
+                    header,
+                    &Msg::Heartbeat {
+                        mav_type: 2,   // quadrotor
+                        autopilot: 12, // PX4
+                    },
+                );
+                let at = sent + self.params.delay;
+                self.enqueue(at, bytes);
+            }
+        }
+    }
+
+    fn next_heartbeat(&self) -> Option<Instant> {
+        self.params
+            .heartbeat
+            .then(|| self.responders.iter().map(|r| r.next_heartbeat).min())
+            .flatten()
+    }
+}
+
+impl Transport for SimLink {
+    async fn send(&mut self, bytes: &[u8]) -> Result<Instant, LinkError> {
+        let now = Instant::now();
+        let mut requests = std::mem::take(&mut self.scratch);
+        requests.clear();
+        // Requests go through the real scanner, as on a wire.
+        let mut ignored = ScanStats::default();
+        push_datagram(bytes, now, &mut ignored, &mut requests);
+        let clock_ns = (now - self.started).as_nanos() as i64;
+        for request in &requests {
+            for i in 0..self.responders.len() {
+                let Some(reply) = self.responders[i].core.answer(&request.frame, clock_ns) else {
+                    continue;
+                };
+                // Loss is drawn once per exchange: request or reply leg.
+                if self.chance(self.params.loss) {
+                    continue;
+                }
+                let header = self.responders[i].header();
+                let mut out = Vec::new();
+                frame::encode(&mut out, request.frame.version, header, &reply);
+                let mut at = now + self.one_way() + self.one_way();
+                if self.chance(self.params.reorder) {
+                    at += self.params.hold;
+                }
+                if self.chance(self.params.dup) {
+                    let again = at + self.one_way();
+                    self.enqueue(again, out.clone());
+                }
+                self.enqueue(at, out);
+            }
+        }
+        self.scratch = requests;
+        Ok(now)
+    }
+
+    async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
+        loop {
+            let next_delivery = self.queue.peek().map(|d| d.0.at);
+            let wake = match (next_delivery, self.next_heartbeat()) {
+                (Some(a), Some(b)) => a.min(b),
+                (Some(a), None) | (None, Some(a)) => a,
+                (None, None) => return std::future::pending().await,
+            };
+            // The only await: everything after it runs to completion, so a
+            // cancelled recv loses nothing.
+            sleep_until(wake).await;
+            let now = Instant::now();
+            self.queue_heartbeats(now);
+            let before = out.len();
+            while self.queue.peek().is_some_and(|d| d.0.at <= now) {
+                let Reverse(d) = self.queue.pop().expect("peeked");
+                // Stamped with the simulated arrival time: the RTT is
+                // exactly the simulated delay, free of scheduler noise.
+                push_datagram(&d.bytes, d.at, &mut self.stats, out);
+            }
+            if out.len() > before {
+                return Ok(());
+            }
+        }
+    }
+
+    fn scan_stats(&self) -> ScanStats {
+        self.stats
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_every_key() {
+        let p = SimParams::parse(
+            "?responders=3&sysid=10&compid=2&delay=20ms&jitter=5ms&loss=2%&dup=1&reorder=0.5%\
+             &hold=30ms&seed=7&clock=virtual&ping=off&heartbeat=on",
+        )
+        .unwrap();
+        assert_eq!(p.responders, 3);
+        assert_eq!(p.responder_id(2), SysComp::new(12, 2));
+        assert_eq!(p.delay, Duration::from_millis(20));
+        assert_eq!(p.jitter, Duration::from_millis(5));
+        assert!((p.loss - 0.02).abs() < 1e-12);
+        assert!((p.dup - 0.01).abs() < 1e-12);
+        assert!((p.reorder - 0.005).abs() < 1e-12);
+        assert_eq!(p.seed, 7);
+        assert!(p.virtual_clock);
+        assert!(!p.answer_ping);
+        assert_eq!(SimParams::parse("").unwrap(), SimParams::default());
+    }
+
+    #[test]
+    fn rejects_bad_values_with_the_reason() {
+        for (q, needle) in [
+            ("?loss=120%", "percentage"),
+            ("?responders=0", "1 to 1000"),
+            ("?delay=soon", "delay=soon"),
+            ("?delay=2h", "at most 1h"),
+            ("?warp=9", "unknown key 'warp'"),
+            ("?loss", "not key=value"),
+            ("?clock=fast", "real or virtual"),
+        ] {
+            let err = SimParams::parse(q).unwrap_err();
+            assert!(err.contains(needle), "{q}: {err}");
+        }
+    }
+
+    #[test]
+    fn a_thousand_responders_have_distinct_ids() {
+        let p = SimParams::parse("?responders=1000").unwrap();
+        let ids: std::collections::HashSet<_> = (0..1000).map(|i| p.responder_id(i)).collect();
+        assert_eq!(ids.len(), 1000);
+        assert!(ids.iter().all(|id| id.sysid != 0 && id.compid != 0));
+    }
+}
