@@ -1,0 +1,178 @@
+//! The command line: exit codes, errors, signals, reproducible output.
+
+mod common;
+use std::net::UdpSocket;
+use std::process::Stdio;
+use std::time::Duration;
+
+use common::*;
+
+#[test]
+fn help_and_version_exit_zero() {
+    let (code, out, _) = run_mavping(&["--help"]);
+    assert_eq!(code, 0);
+    assert!(
+        out.contains("Usage: mavping [OPTIONS] <CONNECTION>"),
+        "{out}"
+    );
+    assert!(out.contains("--count"));
+    let (code, out, _) = run_mavping(&["--version"]);
+    assert_eq!(code, 0);
+    assert!(out.starts_with("mavping "));
+}
+
+#[test]
+fn bad_connection_strings_exit_2_with_one_line() {
+    for bad in [
+        "udpout:127.0.0.1",
+        "bogus:1:2",
+        "udpout:[::1:5",
+        "sim:?loss=200%",
+        "14550",
+    ] {
+        let (code, out, err) = run_mavping(&[bad]);
+        assert_eq!(code, 2, "{bad}");
+        assert!(out.is_empty(), "{bad}: {out}");
+        assert_eq!(err.lines().count(), 1, "{bad}: {err}");
+        assert!(err.starts_with("mavping: bad connection string"), "{err}");
+        assert!(err.contains("accepted forms"), "{err}");
+    }
+}
+
+#[test]
+fn usage_errors_exit_2() {
+    for args in [
+        &["--sysid", "0", "sim:"][..],
+        &["-c", "0", "sim:"],
+        &["--rate", "0", "sim:"],
+        &[],
+    ] {
+        let (code, _, err) = run_mavping(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn port_in_use_exits_2_with_the_os_reason() {
+    let taken = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port();
+    let (code, _, err) = run_mavping(&[&format!("udpin:127.0.0.1:{port}")]);
+    assert_eq!(code, 2);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("cannot listen on udp 127.0.0.1") && err.contains("in use"),
+        "{err}"
+    );
+}
+
+#[test]
+fn unknown_host_exits_2() {
+    let (code, _, err) = run_mavping(&["udpout:no-such-host.invalid:14550"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("cannot resolve no-such-host.invalid:14550"),
+        "{err}"
+    );
+}
+
+#[test]
+fn silent_peer_exits_1_and_counts_nothing() {
+    let silent = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let port = silent.local_addr().unwrap().port();
+    let (code, out, _) = run_mavping(&[
+        "-c",
+        "2",
+        "-i",
+        "0.05",
+        "-W",
+        "200ms",
+        &format!("udpout:127.0.0.1:{port}"),
+    ]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        out.contains("2 requests sent") && out.contains("no replies"),
+        "{out}"
+    );
+}
+
+#[test]
+fn closed_udp_port_is_a_link_failure_with_summary() {
+    let port = free_udp_port();
+    let (code, out, err) =
+        run_mavping(&["-c", "5", "-i", "0.05", &format!("udpout:127.0.0.1:{port}")]);
+    assert_eq!(code, 2, "{out}\n{err}");
+    assert!(err.contains("unreachable"), "{err}");
+    assert!(
+        out.contains("mavping statistics"),
+        "summary still printed: {out}"
+    );
+}
+
+#[test]
+fn sim_runs_exit_0_and_total_loss_exits_1() {
+    let (code, out, _) = run_mavping(&["-c", "3", "-i", "0.01", "-q", "sim:?clock=virtual"]);
+    assert_eq!(code, 0, "{out}");
+    assert_eq!(text_counts(&out, "1/1").unwrap().received, 3);
+    let (code, out, _) = run_mavping(&["-c", "3", "-i", "0.01", "sim:?clock=virtual&loss=100%"]);
+    assert_eq!(code, 1, "{out}");
+}
+
+#[test]
+fn seeded_virtual_sim_output_is_exactly_reproducible() {
+    let args = [
+        "-c",
+        "200",
+        "-i",
+        "0.01",
+        "-W",
+        "100ms",
+        "sim:?responders=2&loss=5%&dup=2%&reorder=3%&hold=15ms&jitter=4ms&seed=42&clock=virtual",
+    ];
+    let (code1, first, _) = run_mavping(&args);
+    let (code2, second, _) = run_mavping(&args);
+    assert_eq!((code1, code2), (0, 0));
+    assert_eq!(first, second);
+    let c = text_counts(&first, "2/1").unwrap();
+    assert_eq!(c.sent, c.received + c.lost);
+    assert!(
+        c.duplicate > 0 && c.lost > 0 && c.out_of_order > 0,
+        "{first}"
+    );
+}
+
+#[test]
+fn ctrl_c_prints_the_summary_and_exits_normally() {
+    let child = mavping()
+        .args(["-i", "0.05", "sim:?delay=1ms&jitter=0ms"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(600));
+    signal(child.id(), "INT");
+    let (code, out, err) = wait_output(child, Duration::from_secs(10));
+    assert_eq!(code, 0, "{out}\n{err}");
+    let c = text_counts(&out, "1/1").expect(&out);
+    assert!(c.received >= 5, "{out}");
+    assert_eq!(c.sent, c.received + c.lost);
+}
+
+#[test]
+fn closed_stdout_is_not_an_error() {
+    use std::io::Read;
+    let mut child = mavping()
+        .args(["-i", "0.01", "-c", "500", "sim:?delay=1ms&jitter=0ms"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Read the first line, then close the pipe, like `| head -1`.
+    let mut stdout = child.stdout.take().unwrap();
+    let mut first = [0u8; 8];
+    stdout.read_exact(&mut first).unwrap();
+    drop(stdout);
+    let (code, _, err) = wait_output(child, Duration::from_secs(30));
+    assert_eq!(code, 0, "{err}");
+    assert!(err.is_empty(), "{err}");
+}

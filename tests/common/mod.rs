@@ -1,0 +1,191 @@
+//! Shared by the integration tests: real peers (pymavlink processes),
+//! free loopback ports, and parsing of mavping's summary.
+#![allow(dead_code)] // each test binary uses a different part
+
+use std::io::{BufRead, BufReader};
+use std::net::UdpSocket;
+use std::path::PathBuf;
+use std::process::{Child, ChildStdout, Command, Stdio};
+use std::time::{Duration, Instant};
+
+/// The Python that has pymavlink: $MAVPING_PYTHON (set by scripts/test.sh)
+/// or .venv/bin/python. A missing peer fails the test loudly: interop
+/// tests never skip.
+pub fn python() -> PathBuf {
+    let path = std::env::var_os("MAVPING_PYTHON")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
+    let ok = Command::new(&path)
+        .args(["-c", "import pymavlink"])
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(
+        ok,
+        "pymavlink is not available at {} — run `bash scripts/test.sh` (it creates .venv with pymavlink)",
+        path.display()
+    );
+    path
+}
+
+pub fn peer_script(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/peers")
+        .join(name)
+}
+
+/// A free UDP port on 127.0.0.1 (bound then released).
+pub fn free_udp_port() -> u16 {
+    UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// A free TCP port on 127.0.0.1.
+pub fn free_tcp_port() -> u16 {
+    std::net::TcpListener::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port()
+}
+
+/// A running peer process; killed when dropped.
+pub struct Peer {
+    child: Child,
+    stdout: BufReader<ChildStdout>,
+}
+
+impl Peer {
+    /// Starts `tests/peers/<script>` with pymavlink and waits for "ready".
+    pub fn start(script: &str, args: &[&str]) -> Peer {
+        let mut child = Command::new(python())
+            .arg("-u")
+            .arg(peer_script(script))
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("start peer");
+        let mut stdout = BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        stdout.read_line(&mut line).unwrap();
+        assert_eq!(
+            line.trim(),
+            "ready",
+            "peer {script} did not start: {line:?}"
+        );
+        Peer { child, stdout }
+    }
+
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+
+    /// Stops the peer with SIGTERM and returns its ground-truth JSON line.
+    pub fn finish(mut self) -> serde_json::Value {
+        signal(self.child.id(), "TERM");
+        let mut line = String::new();
+        self.stdout.read_line(&mut line).unwrap();
+        let _ = self.child.wait();
+        serde_json::from_str(&line).unwrap_or_else(|e| panic!("peer truth {line:?}: {e}"))
+    }
+
+    /// Kills the peer at once (a vanishing responder).
+    pub fn kill(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+impl Drop for Peer {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+pub fn signal(pid: u32, name: &str) {
+    let status = Command::new("kill")
+        .arg(format!("-{name}"))
+        .arg(pid.to_string())
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+pub fn mavping() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_mavping"))
+}
+
+/// Runs mavping to completion with a generous guard against hangs.
+pub fn run_mavping(args: &[&str]) -> (i32, String, String) {
+    let child = mavping()
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_output(child, Duration::from_secs(60))
+}
+
+pub fn wait_output(mut child: Child, limit: Duration) -> (i32, String, String) {
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            break;
+        }
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            panic!("mavping did not finish within {limit:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// Counts from a text summary line "1/1 (...): 10 sent, 9 received, ...".
+#[derive(Debug, Default, PartialEq, Eq)]
+pub struct TextCounts {
+    pub sent: u64,
+    pub received: u64,
+    pub lost: u64,
+    pub late: u64,
+    pub duplicate: u64,
+    pub out_of_order: u64,
+    pub stale: u64,
+}
+
+pub fn text_counts(stdout: &str, responder: &str) -> Option<TextCounts> {
+    let summary = stdout.split("mavping statistics ---").nth(1)?;
+    let line = summary.lines().find(|l| {
+        l.starts_with(&format!("{responder}:")) || l.starts_with(&format!("{responder} ("))
+    })?;
+    let counts = line
+        .split("): ")
+        .nth(1)
+        .or_else(|| line.split(": ").nth(1))?;
+    let mut c = TextCounts::default();
+    for part in counts.split(", ") {
+        let mut words = part.split_whitespace();
+        let n: u64 = words.next()?.parse().ok()?;
+        match words.next()? {
+            "sent" => c.sent = n,
+            "received" => c.received = n,
+            "lost" => c.lost = n,
+            "late" => c.late = n,
+            "duplicate" => c.duplicate = n,
+            "out" => c.out_of_order = n,
+            "stale" => c.stale = n,
+            _ => {}
+        }
+    }
+    Some(c)
+}
