@@ -28,6 +28,13 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
         Exit status: 0 when a responder answered, 1 when none did, 2 on usage or link errors."
 )]
 pub struct Cli {
+    #[command(flatten)]
+    pub ping: PingArgs,
+}
+
+/// Options of a measurement run (the default command).
+#[derive(Debug, clap::Args)]
+pub struct PingArgs {
     /// Where to ping: udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, sim:[?...]
     #[arg(value_name = "CONNECTION", env = "MAVPING_LINK")]
     pub link: String,

@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use thiserror::Error;
 
-use crate::cli::Cli;
+use crate::cli::PingArgs;
 use crate::engine::session::SessionConfig;
 use crate::frame::{SysComp, Version};
 use crate::transport::address::{AddressError, LinkSpec};
@@ -42,7 +42,7 @@ impl Config {
     }
 }
 
-fn validate_interval(cli: &Cli) -> Result<Duration, ConfigError> {
+fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
     let interval = match (cli.rate, cli.interval) {
         (Some(rate), _) => {
             if !rate.is_finite() || rate <= 0.0 || rate > MAX_RATE {
@@ -93,10 +93,10 @@ fn pending_capacity(interval: Duration, timeout: Duration) -> Result<usize, Conf
     Ok(((in_flight * 2 + 16) as usize).next_power_of_two().max(64))
 }
 
-impl TryFrom<&Cli> for Config {
+impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
-    fn try_from(cli: &Cli) -> Result<Self, ConfigError> {
+    fn try_from(cli: &PingArgs) -> Result<Self, ConfigError> {
         let link: LinkSpec = cli.link.parse()?;
         let interval = validate_interval(cli)?;
         if cli.count == Some(0) {
@@ -141,11 +141,12 @@ mod tests {
     use clap::Parser;
 
     use super::*;
+    use crate::cli::Cli;
 
     fn config(args: &str) -> Result<Config, String> {
         let cli = Cli::try_parse_from(std::iter::once("mavping").chain(args.split_whitespace()))
             .map_err(|e| e.to_string())?;
-        Config::try_from(&cli).map_err(|e| e.to_string())
+        Config::try_from(&cli.ping).map_err(|e| e.to_string())
     }
 
     #[test]
