@@ -206,7 +206,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
                     link_error = Some(e);
                     break;
                 }
-                for Inbound { frame, at } in inbound.drain(..) {
+                for Inbound { frame, at, .. } in inbound.drain(..) {
                     let at = clock.ns(at);
                     if let Msg::Heartbeat { mav_type, autopilot } = frame.msg {
                         if roster.heard(frame.source, mav_type, autopilot, at) {

@@ -17,11 +17,16 @@ use tokio::time::Instant;
 use crate::frame::{self, Frame, ScanStats};
 pub use address::LinkSpec;
 
-/// One received frame and when it arrived.
+/// Which peer of a link a frame came from (a UDP peer address, a TCP
+/// client), so an answer can go back the same way. Links with one peer use 0.
+pub type PathId = u32;
+
+/// One received frame, when it arrived, and from which path.
 #[derive(Debug, Clone, Copy)]
 pub struct Inbound {
     pub frame: Frame,
     pub at: Instant,
+    pub path: PathId,
 }
 
 #[derive(Debug, Error)]
@@ -51,6 +56,8 @@ impl LinkError {
 pub trait Transport {
     /// Sends one frame to every peer; returns the time just after the write.
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError>;
+    /// Sends one frame to one path only (answers: never amplify).
+    async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError>;
     /// Waits for data and appends the frames in it to `out`.
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError>;
     /// False while there is nobody to send to (udpin before a peer is heard).
@@ -65,6 +72,7 @@ pub trait Transport {
 pub(crate) fn push_datagram(
     data: &[u8],
     at: Instant,
+    path: PathId,
     stats: &mut ScanStats,
     out: &mut Vec<Inbound>,
 ) {
@@ -72,6 +80,7 @@ pub(crate) fn push_datagram(
         out.push(Inbound {
             frame: frame::decode(raw),
             at,
+            path,
         })
     });
 }
@@ -101,6 +110,13 @@ impl Transport for Link {
         match self {
             Link::Udp(l) => l.send(frame).await,
             Link::Sim(l) => l.send(frame).await,
+        }
+    }
+
+    async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
+        match self {
+            Link::Udp(l) => l.send_to(path, frame).await,
+            Link::Sim(l) => l.send_to(path, frame).await,
         }
     }
 

@@ -15,7 +15,7 @@ use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use tokio::time::{sleep_until, Instant};
 
-use super::{push_datagram, Inbound, LinkError, Transport};
+use super::{push_datagram, Inbound, LinkError, PathId, Transport};
 use crate::frame::{self, Header, Msg, ScanStats, SysComp, Version};
 use crate::responder::ResponderCore;
 
@@ -315,7 +315,7 @@ impl Transport for SimLink {
         requests.clear();
         // Requests go through the real scanner, as on a wire.
         let mut ignored = ScanStats::default();
-        push_datagram(bytes, now, &mut ignored, &mut requests);
+        push_datagram(bytes, now, 0, &mut ignored, &mut requests);
         let clock_ns = (now - self.started).as_nanos() as i64;
         for request in &requests {
             for i in 0..self.responders.len() {
@@ -344,6 +344,11 @@ impl Transport for SimLink {
         Ok(now)
     }
 
+    /// The simulated link has one path: every responder hears everything.
+    async fn send_to(&mut self, _path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
+        self.send(frame).await
+    }
+
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
         loop {
             let next_delivery = self.queue.peek().map(|d| d.0.at);
@@ -362,7 +367,7 @@ impl Transport for SimLink {
                 let Reverse(d) = self.queue.pop().expect("peeked");
                 // Stamped with the simulated arrival time: the RTT is
                 // exactly the simulated delay, free of scheduler noise.
-                push_datagram(&d.bytes, d.at, &mut self.stats, out);
+                push_datagram(&d.bytes, d.at, 0, &mut self.stats, out);
             }
             if out.len() > before {
                 return Ok(());

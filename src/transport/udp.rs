@@ -8,7 +8,7 @@ use tokio::net::{lookup_host, UdpSocket};
 use tokio::time::Instant;
 
 use super::address::HostPort;
-use super::{push_datagram, Inbound, LinkError, Transport};
+use super::{push_datagram, Inbound, LinkError, PathId, Transport};
 use crate::frame::ScanStats;
 
 /// At most this many peers are remembered on a listening socket; more than
@@ -84,12 +84,20 @@ impl UdpLink {
         self.socket.local_addr()
     }
 
-    fn learn(&mut self, from: SocketAddr) {
-        if let Mode::Listen { peers } = &mut self.mode {
-            if !peers.contains(&from) && peers.len() < MAX_PEERS {
-                tracing::info!(%from, "new udp peer");
-                peers.push(from);
-            }
+    /// The path of a sender, learning it as a peer if it is new. Senders
+    /// beyond MAX_PEERS get a path that `send_to` ignores.
+    fn path_of(&mut self, from: SocketAddr) -> PathId {
+        match &mut self.mode {
+            Mode::Connected { .. } => 0,
+            Mode::Listen { peers } => match peers.iter().position(|p| *p == from) {
+                Some(i) => i as PathId,
+                None if peers.len() < MAX_PEERS => {
+                    tracing::info!(%from, "new udp peer");
+                    peers.push(from);
+                    (peers.len() - 1) as PathId
+                }
+                None => PathId::MAX,
+            },
         }
     }
 
@@ -122,10 +130,13 @@ impl UdpLink {
 
     fn take(&mut self, len: usize, from: SocketAddr, at: Instant, out: &mut Vec<Inbound>) {
         let before = out.len();
-        push_datagram(&self.buf[..len], at, &mut self.stats, out);
+        push_datagram(&self.buf[..len], at, PathId::MAX, &mut self.stats, out);
         // Only a sender of real MAVLink becomes a peer, not a port scanner.
         if out.len() > before {
-            self.learn(from);
+            let path = self.path_of(from);
+            for inbound in &mut out[before..] {
+                inbound.path = path;
+            }
         }
     }
 }
@@ -140,6 +151,22 @@ impl Transport for UdpLink {
                 for peer in peers {
                     if let Err(e) = self.socket.send_to(frame, peer).await {
                         // One vanished peer must not end a listening link.
+                        tracing::debug!(%peer, error = %e, "send failed");
+                    }
+                }
+            }
+        }
+        Ok(Instant::now())
+    }
+
+    async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
+        match &self.mode {
+            Mode::Connected { .. } => {
+                self.socket.send(frame).await.map_err(|e| self.failed(e))?;
+            }
+            Mode::Listen { peers } => {
+                if let Some(peer) = peers.get(path as usize) {
+                    if let Err(e) = self.socket.send_to(frame, peer).await {
                         tracing::debug!(%peer, error = %e, "send failed");
                     }
                 }
