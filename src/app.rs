@@ -1,34 +1,48 @@
 //! From a validated [`Config`] to an exit code: runtime, logging, signals,
-//! link, probe, report.
+//! link, probe, report, verdict, exports.
 
-use std::io::{self, Write};
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
 
+use clap::CommandFactory;
 use tokio::sync::Notify;
 
+use crate::cli::{Cli, Format, Generate};
 use crate::config::Config;
 use crate::engine::session::{self, Outcome};
+use crate::output::json::JsonReporter;
+use crate::output::samples::SampleLog;
 use crate::output::text::TextReporter;
+use crate::output::{hgrm, Fanout, Reporter, WallClock};
 use crate::probe::ping::PingProbe;
 use crate::transport::Link;
+use crate::verdict::{self, exit};
 
-/// Exit codes, as ping and fping use them.
-pub mod exit {
-    /// Every expectation held.
-    pub const OK: u8 = 0;
-    /// No reply at all (or, later, a threshold broken).
-    pub const NO_REPLY: u8 = 1;
-    /// Usage error, or the link could not be opened or failed.
-    pub const ERROR: u8 = 2;
-    /// A second Ctrl-C: leave at once, as shells expect (128 + SIGINT).
-    pub const INTERRUPTED_TWICE: i32 = 130;
-}
+/// A second Ctrl-C leaves at once, as shells expect (128 + SIGINT).
+const INTERRUPTED_TWICE: i32 = 130;
 
 /// Prints one error line on stderr, in the same form everywhere.
 pub fn print_error(error: &dyn std::fmt::Display) {
     let _ = writeln!(io::stderr(), "mavping: {error}");
+}
+
+/// `--generate`: completions and the man page, from the clap definition.
+pub fn generate(kind: Generate, out: &mut dyn Write) -> io::Result<()> {
+    use clap_complete::Shell;
+    let mut cmd = Cli::command();
+    let shell = match kind {
+        Generate::CompleteBash => Shell::Bash,
+        Generate::CompleteZsh => Shell::Zsh,
+        Generate::CompleteFish => Shell::Fish,
+        Generate::CompletePowershell => Shell::PowerShell,
+        Generate::CompleteElvish => Shell::Elvish,
+        Generate::Man => return clap_mangen::Man::new(cmd).render(out),
+    };
+    clap_complete::generate(shell, &mut cmd, "mavping", out);
+    Ok(())
 }
 
 fn init_logging(verbose: u8) {
@@ -71,25 +85,40 @@ fn watch_signals(stop: Arc<Notify>) {
             if round == 0 {
                 stop.notify_one();
             } else {
-                std::process::exit(exit::INTERRUPTED_TWICE);
+                std::process::exit(INTERRUPTED_TWICE);
             }
         }
     });
 }
 
-fn exit_code(outcome: &Outcome) -> u8 {
-    if outcome.summary.link_error.is_some() {
-        exit::ERROR
-    } else if outcome.output_closed || outcome.summary.any_reply() {
-        exit::OK
-    } else {
-        exit::NO_REPLY
+fn create(path: &std::path::Path, what: &str) -> Result<BufWriter<File>, String> {
+    File::create(path)
+        .map(BufWriter::new)
+        .map_err(|e| format!("cannot write {what} {}: {e}", path.display()))
+}
+
+fn write_hgrm(path: &std::path::Path, outcome: &Outcome) -> Result<(), String> {
+    let mut out = create(path, "--hgrm")?;
+    for (id, hist) in &outcome.histograms {
+        hgrm::write_section(&mut out, &outcome.summary.link, *id, hist)
+            .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))?;
     }
+    out.flush()
+        .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))
 }
 
 async fn run_ping(config: &Config) -> u8 {
     let stop = Arc::new(Notify::new());
     watch_signals(stop.clone());
+    // Exports are opened before the link, so a bad path fails before we ping.
+    let samples = match config.samples.as_deref().map(|p| create(p, "--samples")) {
+        Some(Err(e)) => {
+            print_error(&e);
+            return exit::ERROR;
+        }
+        Some(Ok(file)) => Some(file),
+        None => None,
+    };
     let mut link = match Link::open(&config.link).await {
         Ok(link) => link,
         Err(e) => {
@@ -97,24 +126,49 @@ async fn run_ping(config: &Config) -> u8 {
             return exit::ERROR;
         }
     };
-    let wall_start_us = SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_micros() as u64)
-        .unwrap_or(0);
+    let wall = WallClock {
+        start: if config.virtual_clock() {
+            UNIX_EPOCH
+        } else {
+            SystemTime::now()
+        },
+    };
     let stdout = io::stdout().lock();
-    let mut reporter = TextReporter::new(stdout, config.quiet);
+    let main: Box<dyn Reporter> = match config.format {
+        Format::Text => Box::new(TextReporter::new(stdout, config.quiet)),
+        Format::Json => Box::new(JsonReporter::new(stdout, config.quiet, wall)),
+    };
+    let mut reporters = vec![main];
+    if let Some(file) = samples {
+        reporters.push(Box::new(SampleLog::new(file)));
+    }
+    let mut report = Fanout { reporters };
     let outcome = session::run(
         &config.session,
         &mut link,
-        PingProbe::new(wall_start_us),
-        &mut reporter,
+        PingProbe::new(wall.micros_since_epoch()),
+        &mut report,
         stop,
     )
     .await;
+    let verdict = verdict::judge(&outcome.summary, &config.thresholds);
+    let output_closed =
+        outcome.output_closed || report.summary(&outcome.summary, &verdict).is_err();
     if let Some(e) = &outcome.summary.link_error {
         print_error(e);
     }
-    exit_code(&outcome)
+    if let Some(path) = &config.hgrm {
+        if let Err(e) = write_hgrm(path, &outcome) {
+            print_error(&e);
+            return exit::ERROR;
+        }
+    }
+    // A closed stdout (`| head`) is the reader's choice, not a failure.
+    if output_closed && verdict.exit_code != exit::ERROR {
+        exit::OK
+    } else {
+        verdict.exit_code
+    }
 }
 
 /// Runs mavping with a validated configuration.

@@ -1,8 +1,11 @@
 //! Command-line arguments as typed; [`crate::config`] validates them.
 
+use std::path::PathBuf;
 use std::time::Duration;
 
-use clap::{ArgAction, Parser};
+use clap::{ArgAction, Parser, ValueEnum};
+
+use crate::verdict::{Expected, RttLimit};
 
 /// Parses "250ms", "2s", "1m30s", or a plain number of seconds ("0.2").
 pub fn parse_duration(s: &str) -> Result<Duration, String> {
@@ -30,14 +33,82 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
 pub struct Cli {
     #[command(flatten)]
     pub ping: PingArgs,
+
+    /// Print shell completions or the man page (for packagers)
+    #[arg(long, value_enum, hide = true, value_name = "KIND")]
+    pub generate: Option<Generate>,
+}
+
+/// `--percent`-style values: "5%", "0.5%" or "5" (all percent) -> ratio.
+pub fn parse_percent(s: &str) -> Result<f64, String> {
+    let number = s.strip_suffix('%').unwrap_or(s);
+    match number.parse::<f64>() {
+        Ok(p) if (0.0..=100.0).contains(&p) => Ok(p / 100.0),
+        _ => Err(format!("'{s}' is not a percentage from 0 to 100")),
+    }
+}
+
+/// `[FIGURE=]DURATION`, e.g. `p99=50ms` or `200ms` (the maximum).
+pub fn parse_rtt_limit(s: &str) -> Result<RttLimit, String> {
+    let (figure, limit) = match s.split_once('=') {
+        Some((figure, limit)) => (figure.parse()?, limit),
+        None => (crate::verdict::RttFigure::Max, s),
+    };
+    Ok(RttLimit {
+        figure,
+        limit: parse_duration(limit)?,
+    })
+}
+
+/// `SYSID` or `SYSID/COMPID`, each 1-255.
+pub fn parse_expected(s: &str) -> Result<Expected, String> {
+    let id = |part: &str| -> Result<u8, String> {
+        part.parse::<u8>()
+            .ok()
+            .filter(|&v| v != 0)
+            .ok_or_else(|| format!("'{s}' is not SYSID or SYSID/COMPID (1-255)"))
+    };
+    Ok(match s.split_once('/') {
+        Some((sys, comp)) => Expected {
+            sysid: id(sys)?,
+            compid: Some(id(comp)?),
+        },
+        None => Expected {
+            sysid: id(s)?,
+            compid: None,
+        },
+    })
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Format {
+    /// Ping-like lines and a summary
+    Text,
+    /// Newline-delimited JSON events
+    Json,
+}
+
+/// What `--generate` writes to stdout.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Generate {
+    CompleteBash,
+    CompleteZsh,
+    CompleteFish,
+    CompletePowershell,
+    CompleteElvish,
+    Man,
 }
 
 /// Options of a measurement run (the default command).
 #[derive(Debug, clap::Args)]
 pub struct PingArgs {
     /// Where to ping: udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, sim:[?...]
-    #[arg(value_name = "CONNECTION", env = "MAVPING_LINK")]
-    pub link: String,
+    #[arg(
+        value_name = "CONNECTION",
+        env = "MAVPING_LINK",
+        required_unless_present = "generate"
+    )]
+    pub link: Option<String>,
 
     /// Stop after sending COUNT requests (and waiting for their replies)
     #[arg(short = 'c', long, value_name = "COUNT", env = "MAVPING_COUNT")]
@@ -90,4 +161,41 @@ pub struct PingArgs {
     /// More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG
     #[arg(short = 'v', long, action = ArgAction::Count)]
     pub verbose: u8,
+
+    /// Output format
+    #[arg(long, value_enum, default_value = "text", env = "MAVPING_FORMAT")]
+    pub format: Format,
+
+    /// Same as --format json: newline-delimited JSON events on stdout
+    #[arg(long)]
+    pub json: bool,
+
+    /// Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5
+    #[arg(long, value_name = "PCT", value_parser = parse_percent, env = "MAVPING_MAX_LOSS")]
+    pub max_loss: Option<f64>,
+
+    /// Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION
+    /// (default figure: max); repeatable, e.g. --max-rtt p99=50ms
+    #[arg(long, value_name = "[FIGURE=]DURATION", value_parser = parse_rtt_limit)]
+    pub max_rtt: Vec<RttLimit>,
+
+    /// Fail when a responder's jitter is above DURATION
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
+    pub max_jitter: Option<Duration>,
+
+    /// A responder that must answer: SYSID or SYSID/COMPID; repeatable
+    #[arg(long, value_name = "SYSID[/COMPID]", value_parser = parse_expected)]
+    pub expect: Vec<Expected>,
+
+    /// Fail unless at least N responders answer
+    #[arg(long, value_name = "N")]
+    pub min_responders: Option<usize>,
+
+    /// Write each responder's RTT distribution in HdrHistogram's .hgrm format
+    #[arg(long, value_name = "FILE")]
+    pub hgrm: Option<PathBuf>,
+
+    /// Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)
+    #[arg(long, value_name = "FILE")]
+    pub samples: Option<PathBuf>,
 }

@@ -4,10 +4,13 @@ use std::time::Duration;
 
 use thiserror::Error;
 
-use crate::cli::PingArgs;
+use std::path::PathBuf;
+
+use crate::cli::{Format, PingArgs};
 use crate::engine::session::SessionConfig;
 use crate::frame::{SysComp, Version};
 use crate::transport::address::{AddressError, LinkSpec};
+use crate::verdict::Thresholds;
 
 #[derive(Debug, Error)]
 pub enum ConfigError {
@@ -33,6 +36,10 @@ pub struct Config {
     pub session: SessionConfig,
     pub quiet: bool,
     pub verbose: u8,
+    pub format: Format,
+    pub thresholds: Thresholds,
+    pub hgrm: Option<PathBuf>,
+    pub samples: Option<PathBuf>,
 }
 
 impl Config {
@@ -97,7 +104,14 @@ impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
     fn try_from(cli: &PingArgs) -> Result<Self, ConfigError> {
-        let link: LinkSpec = cli.link.parse()?;
+        let link: LinkSpec = cli
+            .link
+            .as_deref()
+            .ok_or_else(|| invalid("missing CONNECTION (e.g. udpout:127.0.0.1:14550 or sim:)"))?
+            .parse()?;
+        if cli.min_responders == Some(0) {
+            return Err(invalid("--min-responders 0: expected at least 1"));
+        }
         let interval = validate_interval(cli)?;
         if cli.count == Some(0) {
             return Err(invalid("--count 0: expected at least 1"));
@@ -132,6 +146,16 @@ impl TryFrom<&PingArgs> for Config {
             link,
             quiet: cli.quiet,
             verbose: cli.verbose,
+            format: if cli.json { Format::Json } else { cli.format },
+            thresholds: Thresholds {
+                max_loss: cli.max_loss,
+                max_rtt: cli.max_rtt.clone(),
+                max_jitter: cli.max_jitter,
+                expect: cli.expect.clone(),
+                min_responders: cli.min_responders,
+            },
+            hgrm: cli.hgrm.clone(),
+            samples: cli.samples.clone(),
         })
     }
 }
@@ -165,6 +189,22 @@ mod tests {
         assert_eq!(c.session.interval, Duration::from_millis(1));
         assert_eq!(c.session.capacity, 2048);
         assert!(config("sim:?clock=virtual").unwrap().virtual_clock());
+        let c = config(
+            "--json --max-loss 5% --max-rtt p99=50ms --max-rtt 1s --expect 1 --expect 2/1 sim:",
+        )
+        .unwrap();
+        assert_eq!(c.format, Format::Json);
+        let t = &c.thresholds;
+        assert_eq!(t.max_loss, Some(0.05));
+        assert_eq!(t.max_rtt.len(), 2);
+        assert_eq!(t.max_rtt[1].figure, crate::verdict::RttFigure::Max);
+        assert_eq!(
+            t.expect[1],
+            crate::verdict::Expected {
+                sysid: 2,
+                compid: Some(1)
+            }
+        );
     }
 
     #[test]
@@ -186,6 +226,13 @@ mod tests {
             ("-i 1s --rate 5 sim:", "cannot be used with"),
             ("udpout:nowhere", "accepted forms"),
             ("--mavlink 3 sim:", "3"),
+            ("--max-loss 101% sim:", "percentage"),
+            ("--max-rtt p42=1ms sim:", "p42"),
+            ("--max-rtt p99=fast sim:", "fast"),
+            ("--expect 0 sim:", "SYSID"),
+            ("--expect 1/300 sim:", "SYSID"),
+            ("--min-responders 0 sim:", "--min-responders 0"),
+            ("--format xml sim:", "xml"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");

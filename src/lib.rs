@@ -14,3 +14,4 @@ pub mod output;
 pub mod probe;
 pub mod responder;
 pub mod transport;
+pub mod verdict;

@@ -50,12 +50,14 @@ pub enum MatchEvent {
         responder: SysComp,
         seq: u32,
         rtt: Nanos,
+        sent_at: Nanos,
         at: Nanos,
     },
     Duplicate {
         responder: SysComp,
         seq: u32,
         rtt: Nanos,
+        sent_at: Nanos,
         at: Nanos,
     },
     Lost {
@@ -340,6 +342,7 @@ impl Matcher {
                 responder,
                 seq,
                 rtt,
+                sent_at,
                 at,
             });
             return;
@@ -351,6 +354,7 @@ impl Matcher {
                 responder,
                 seq,
                 rtt,
+                sent_at,
                 at,
             });
             return;

@@ -8,6 +8,7 @@ use std::io;
 use std::sync::Arc;
 use std::time::Duration;
 
+use hdrhistogram::Histogram;
 use tokio::sync::Notify;
 use tokio::time::{sleep_until, Instant};
 
@@ -38,9 +39,11 @@ pub struct SessionConfig {
     pub first_seq: u32,
 }
 
-/// How the run ended.
+/// How the run ended. The caller judges it and reports the summary.
 pub struct Outcome {
     pub summary: Summary,
+    /// Each responder's RTT histogram (µs), for exports.
+    pub histograms: Vec<(SysComp, Histogram<u64>)>,
     /// The report's output went away (closed pipe): stop quietly.
     pub output_closed: bool,
 }
@@ -90,7 +93,7 @@ impl Sender {
     }
 }
 
-/// Runs the measurement until it ends, then reports the summary.
+/// Runs the measurement until it ends and returns what it measured.
 pub async fn run<T: Transport, P: EchoProbe>(
     cfg: &SessionConfig,
     link: &mut T,
@@ -252,11 +255,14 @@ pub async fn run<T: Transport, P: EchoProbe>(
         interrupted,
         link_error: link_error.map(|e| e.to_string()),
     };
-    if output.is_ok() {
-        output = report.summary(&summary);
-    }
+    let histograms = matcher
+        .responders()
+        .iter()
+        .map(|r| (r.id, r.rtt.histogram().clone()))
+        .collect();
     Outcome {
         summary,
+        histograms,
         output_closed: output.is_err(),
     }
 }

@@ -1,15 +1,20 @@
 //! Reports: the engine hands events and the summary to one [`Reporter`];
 //! each output format is one implementation.
 
+pub mod hgrm;
+pub mod json;
+pub mod samples;
 pub mod text;
 
 use std::io;
-use std::time::Duration;
+use std::time::{Duration, SystemTime};
 
 use crate::engine::matcher::MatchEvent;
 use crate::engine::roster::Identity;
 use crate::engine::summary::Summary;
+use crate::engine::Nanos;
 use crate::frame::SysComp;
+use crate::verdict::Verdict;
 
 /// What a run is doing, printed first.
 #[derive(Debug, Clone)]
@@ -39,5 +44,49 @@ pub enum Event<'a> {
 pub trait Reporter {
     fn start(&mut self, info: &StartInfo) -> io::Result<()>;
     fn event(&mut self, event: &Event<'_>) -> io::Result<()>;
-    fn summary(&mut self, summary: &Summary) -> io::Result<()>;
+    fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()>;
+}
+
+/// Session time to wall-clock time. The wall clock is read once at the
+/// start (the UNIX epoch under the virtual clock, so output is reproducible)
+/// and advanced by the monotonic session clock.
+#[derive(Debug, Clone, Copy)]
+pub struct WallClock {
+    pub start: SystemTime,
+}
+
+impl WallClock {
+    pub fn at(&self, t: Nanos) -> SystemTime {
+        self.start + Duration::from_nanos(t)
+    }
+
+    pub fn rfc3339(&self, t: Nanos) -> String {
+        humantime::format_rfc3339_micros(self.at(t)).to_string()
+    }
+
+    pub fn micros_since_epoch(&self) -> u64 {
+        self.start
+            .duration_since(SystemTime::UNIX_EPOCH)
+            .map(|d| d.as_micros() as u64)
+            .unwrap_or(0)
+    }
+}
+
+/// Several reporters fed the same run (the chosen format plus a sample log).
+pub struct Fanout<'a> {
+    pub reporters: Vec<Box<dyn Reporter + 'a>>,
+}
+
+impl Reporter for Fanout<'_> {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        self.reporters.iter_mut().try_for_each(|r| r.start(info))
+    }
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        self.reporters.iter_mut().try_for_each(|r| r.event(event))
+    }
+    fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()> {
+        self.reporters
+            .iter_mut()
+            .try_for_each(|r| r.summary(summary, verdict))
+    }
 }

@@ -7,6 +7,7 @@ use super::{Event, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::{ResponderSummary, Summary};
 use crate::engine::Nanos;
+use crate::verdict::Verdict;
 
 pub struct TextReporter<W: Write> {
     out: W,
@@ -190,7 +191,7 @@ impl<W: Write> Reporter for TextReporter<W> {
         }
     }
 
-    fn summary(&mut self, s: &Summary) -> io::Result<()> {
+    fn summary(&mut self, s: &Summary, verdict: &Verdict) -> io::Result<()> {
         let out = &mut self.out;
         if !self.quiet {
             writeln!(out)?;
@@ -217,6 +218,10 @@ impl<W: Write> Reporter for TextReporter<W> {
         }
         for hint in &s.hints {
             writeln!(out, "hint: {hint}")?;
+        }
+        // Threshold failures; "no reply at all" is already plain above.
+        for f in verdict.failures.iter().filter(|f| f.check != "reply") {
+            writeln!(out, "FAILED {}: {}", f.check, f.message)?;
         }
         out.flush()
     }

@@ -1,0 +1,56 @@
+
+use builtin;
+use str;
+
+set edit:completion:arg-completer[mavping] = {|@words|
+    fn spaces {|n|
+        builtin:repeat $n ' ' | str:join ''
+    }
+    fn cand {|text desc|
+        edit:complex-candidate $text &display=$text' '(spaces (- 14 (wcswidth $text)))$desc
+    }
+    var command = 'mavping'
+    for word $words[1..-1] {
+        if (str:has-prefix $word '-') {
+            break
+        }
+        set command = $command';'$word
+    }
+    var completions = [
+        &'mavping'= {
+            cand -c 'Stop after sending COUNT requests (and waiting for their replies)'
+            cand --count 'Stop after sending COUNT requests (and waiting for their replies)'
+            cand -i 'Time between requests, e.g. 1s, 100ms, 0.01'
+            cand --interval 'Time between requests, e.g. 1s, 100ms, 0.01'
+            cand --rate 'Requests per second (instead of --interval)'
+            cand -w 'Stop after this long, whatever is still in flight'
+            cand --deadline 'Stop after this long, whatever is still in flight'
+            cand -W 'How long to wait for each reply before counting it lost'
+            cand --timeout 'How long to wait for each reply before counting it lost'
+            cand --sysid 'Our MAVLink system id (the header of our requests)'
+            cand --compid 'Our MAVLink component id'
+            cand --mavlink 'MAVLink version of our requests (replies of either version are accepted)'
+            cand --first-seq 'Sequence number of the first request (to test wrap-around)'
+            cand --format 'Output format'
+            cand --max-loss 'Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5'
+            cand --max-rtt 'Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION (default figure: max); repeatable, e.g. --max-rtt p99=50ms'
+            cand --max-jitter 'Fail when a responder''s jitter is above DURATION'
+            cand --expect 'A responder that must answer: SYSID or SYSID/COMPID; repeatable'
+            cand --min-responders 'Fail unless at least N responders answer'
+            cand --hgrm 'Write each responder''s RTT distribution in HdrHistogram''s .hgrm format'
+            cand --samples 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)'
+            cand --generate 'Print shell completions or the man page (for packagers)'
+            cand -q 'Print only the summary'
+            cand --quiet 'Print only the summary'
+            cand --no-heartbeat 'Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)'
+            cand -v 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
+            cand --verbose 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
+            cand --json 'Same as --format json: newline-delimited JSON events on stdout'
+            cand -h 'Print help (see more with ''--help'')'
+            cand --help 'Print help (see more with ''--help'')'
+            cand -V 'Print version'
+            cand --version 'Print version'
+        }
+    ]
+    $completions[$command]
+}

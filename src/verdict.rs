@@ -1,0 +1,405 @@
+//! Thresholds and the exit code: pure judgement of a finished run.
+
+use std::fmt;
+use std::time::Duration;
+
+use serde::Serialize;
+
+use crate::engine::stats::RttSummary;
+use crate::engine::summary::{ResponderSummary, Summary};
+use crate::frame::SysComp;
+
+/// Exit codes, as ping and fping use them.
+pub mod exit {
+    /// Every expectation held.
+    pub const OK: u8 = 0;
+    /// No reply at all, an expected responder missing, or a threshold broken.
+    pub const FAILED: u8 = 1;
+    /// Usage error, or the link could not be opened or failed.
+    pub const ERROR: u8 = 2;
+}
+
+/// Which RTT figure a `--max-rtt` limit applies to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RttFigure {
+    Mean,
+    Max,
+    P50,
+    P90,
+    P99,
+    P999,
+}
+
+impl RttFigure {
+    pub const NAMES: &'static str = "p50, p90, p99, p99.9, mean, max";
+
+    fn of(self, rtt: &RttSummary) -> f64 {
+        match self {
+            RttFigure::Mean => rtt.mean_us,
+            RttFigure::Max => rtt.max_us,
+            RttFigure::P50 => rtt.p50_us,
+            RttFigure::P90 => rtt.p90_us,
+            RttFigure::P99 => rtt.p99_us,
+            RttFigure::P999 => rtt.p999_us,
+        }
+    }
+}
+
+impl std::str::FromStr for RttFigure {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "mean" => Ok(RttFigure::Mean),
+            "max" => Ok(RttFigure::Max),
+            "p50" => Ok(RttFigure::P50),
+            "p90" => Ok(RttFigure::P90),
+            "p99" => Ok(RttFigure::P99),
+            "p99.9" | "p999" => Ok(RttFigure::P999),
+            _ => Err(format!(
+                "'{s}' is not an RTT figure; use one of {}",
+                Self::NAMES
+            )),
+        }
+    }
+}
+
+impl fmt::Display for RttFigure {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            RttFigure::Mean => "mean",
+            RttFigure::Max => "max",
+            RttFigure::P50 => "p50",
+            RttFigure::P90 => "p90",
+            RttFigure::P99 => "p99",
+            RttFigure::P999 => "p99.9",
+        })
+    }
+}
+
+/// `--max-rtt [FIGURE=]DURATION`
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RttLimit {
+    pub figure: RttFigure,
+    pub limit: Duration,
+}
+
+/// `--expect SYSID[/COMPID]`
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Expected {
+    pub sysid: u8,
+    pub compid: Option<u8>,
+}
+
+impl Expected {
+    fn matches(&self, id: SysComp) -> bool {
+        id.sysid == self.sysid && self.compid.is_none_or(|c| c == id.compid)
+    }
+}
+
+impl fmt::Display for Expected {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self.compid {
+            Some(c) => write!(f, "{}/{c}", self.sysid),
+            None => write!(f, "{}", self.sysid),
+        }
+    }
+}
+
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Thresholds {
+    /// Largest allowed loss ratio (0..=1) per responder.
+    pub max_loss: Option<f64>,
+    pub max_rtt: Vec<RttLimit>,
+    pub max_jitter: Option<Duration>,
+    pub expect: Vec<Expected>,
+    pub min_responders: Option<usize>,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Failure {
+    /// The responder it concerns, when it concerns one.
+    pub responder: Option<SysComp>,
+    /// The option that was broken ("max-loss", "expect", ...).
+    pub check: &'static str,
+    pub message: String,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Verdict {
+    pub ok: bool,
+    pub exit_code: u8,
+    pub failures: Vec<Failure>,
+}
+
+fn ms(us: f64) -> String {
+    format!("{:.3} ms", us / 1e3)
+}
+
+fn judge_responder(r: &ResponderSummary, t: &Thresholds, out: &mut Vec<Failure>) {
+    let mut fail = |check, message: String| {
+        out.push(Failure {
+            responder: Some(r.id),
+            check,
+            message: format!("{}: {message}", r.id),
+        })
+    };
+    if let Some(max) = t.max_loss {
+        if r.loss_ratio > max {
+            fail(
+                "max-loss",
+                format!(
+                    "loss {:.2}% is above --max-loss {:.2}%",
+                    r.loss_ratio * 100.0,
+                    max * 100.0
+                ),
+            );
+        }
+    }
+    let Some(rtt) = &r.rtt else {
+        return;
+    };
+    for limit in &t.max_rtt {
+        let value = limit.figure.of(rtt);
+        let max_us = limit.limit.as_secs_f64() * 1e6;
+        if value > max_us {
+            fail(
+                "max-rtt",
+                format!(
+                    "rtt {} {} is above --max-rtt {}={}",
+                    limit.figure,
+                    ms(value),
+                    limit.figure,
+                    ms(max_us)
+                ),
+            );
+        }
+    }
+    if let Some(max) = t.max_jitter {
+        let max_us = max.as_secs_f64() * 1e6;
+        if rtt.jitter_us > max_us {
+            fail(
+                "max-jitter",
+                format!(
+                    "jitter {} is above --max-jitter {}",
+                    ms(rtt.jitter_us),
+                    ms(max_us)
+                ),
+            );
+        }
+    }
+}
+
+/// Judges a finished run. A link failure is exit 2 whatever else held.
+pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
+    let mut failures = Vec::new();
+    let answering: Vec<&ResponderSummary> = summary
+        .responders
+        .iter()
+        .filter(|r| r.counts.received > 0)
+        .collect();
+    if answering.is_empty() {
+        failures.push(Failure {
+            responder: None,
+            check: "reply",
+            message: "no reply at all".into(),
+        });
+    }
+    for r in &answering {
+        judge_responder(r, t, &mut failures);
+    }
+    for e in &t.expect {
+        if !answering.iter().any(|r| e.matches(r.id)) {
+            failures.push(Failure {
+                responder: e.compid.map(|c| SysComp::new(e.sysid, c)),
+                check: "expect",
+                message: format!("expected responder {e} did not answer"),
+            });
+        }
+    }
+    if let Some(min) = t.min_responders {
+        if answering.len() < min {
+            failures.push(Failure {
+                responder: None,
+                check: "min-responders",
+                message: format!(
+                    "{} responders answered, --min-responders is {min}",
+                    answering.len()
+                ),
+            });
+        }
+    }
+    let exit_code = if summary.link_error.is_some() {
+        exit::ERROR
+    } else if failures.is_empty() {
+        exit::OK
+    } else {
+        exit::FAILED
+    };
+    Verdict {
+        ok: exit_code == exit::OK,
+        exit_code,
+        failures,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::matcher::Counts;
+
+    fn responder(
+        sysid: u8,
+        received: u64,
+        lost: u64,
+        p99_us: f64,
+        jitter_us: f64,
+    ) -> ResponderSummary {
+        let sent = received + lost;
+        ResponderSummary {
+            id: SysComp::new(sysid, 1),
+            counts: Counts {
+                sent,
+                received,
+                lost,
+                ..Counts::default()
+            },
+            loss_ratio: lost as f64 / sent.max(1) as f64,
+            rtt: (received > 0).then_some(RttSummary {
+                min_us: 1.0,
+                mean_us: p99_us / 2.0,
+                max_us: p99_us * 2.0,
+                stddev_us: 1.0,
+                p50_us: p99_us / 2.0,
+                p90_us: p99_us / 1.5,
+                p99_us,
+                p999_us: p99_us,
+                jitter_us,
+            }),
+            histogram: vec![],
+            identity: None,
+        }
+    }
+
+    fn summary(responders: Vec<ResponderSummary>) -> Summary {
+        Summary {
+            link: "sim:".into(),
+            probe: "ping",
+            ours: SysComp::new(255, 190),
+            duration_s: 1.0,
+            requests: 10,
+            in_flight: 0,
+            responders,
+            foreign_replies: 0,
+            untracked_replies: 0,
+            frames: Default::default(),
+            hints: vec![],
+            interrupted: false,
+            link_error: None,
+        }
+    }
+
+    fn checks(v: &Verdict) -> Vec<&'static str> {
+        v.failures.iter().map(|f| f.check).collect()
+    }
+
+    #[test]
+    fn each_threshold_fails_alone() {
+        let s = summary(vec![responder(1, 90, 10, 40_000.0, 3_000.0)]);
+        let ok = judge(&s, &Thresholds::default());
+        assert_eq!((ok.ok, ok.exit_code), (true, 0));
+        let table: Vec<(Thresholds, &str)> = vec![
+            (
+                Thresholds {
+                    max_loss: Some(0.05),
+                    ..Default::default()
+                },
+                "max-loss",
+            ),
+            (
+                Thresholds {
+                    max_rtt: vec![RttLimit {
+                        figure: RttFigure::P99,
+                        limit: Duration::from_millis(30),
+                    }],
+                    ..Default::default()
+                },
+                "max-rtt",
+            ),
+            (
+                Thresholds {
+                    max_jitter: Some(Duration::from_millis(2)),
+                    ..Default::default()
+                },
+                "max-jitter",
+            ),
+            (
+                Thresholds {
+                    expect: vec![Expected {
+                        sysid: 2,
+                        compid: None,
+                    }],
+                    ..Default::default()
+                },
+                "expect",
+            ),
+            (
+                Thresholds {
+                    min_responders: Some(2),
+                    ..Default::default()
+                },
+                "min-responders",
+            ),
+        ];
+        for (t, check) in table {
+            let v = judge(&s, &t);
+            assert_eq!(checks(&v), vec![check]);
+            assert_eq!(v.exit_code, exit::FAILED);
+        }
+        // The same limits, loose enough, hold.
+        let loose = Thresholds {
+            max_loss: Some(0.10),
+            max_rtt: vec![RttLimit {
+                figure: RttFigure::P99,
+                limit: Duration::from_millis(40),
+            }],
+            max_jitter: Some(Duration::from_millis(3)),
+            expect: vec![Expected {
+                sysid: 1,
+                compid: Some(1),
+            }],
+            min_responders: Some(1),
+        };
+        assert!(judge(&s, &loose).ok);
+    }
+
+    #[test]
+    fn no_reply_fails_and_link_error_is_exit_2() {
+        let mut s = summary(vec![]);
+        assert_eq!(checks(&judge(&s, &Thresholds::default())), vec!["reply"]);
+        s.responders.push(responder(1, 5, 0, 1.0, 0.0));
+        s.link_error = Some("gone".into());
+        assert_eq!(judge(&s, &Thresholds::default()).exit_code, exit::ERROR);
+    }
+
+    #[test]
+    fn failures_name_the_responder() {
+        let s = summary(vec![
+            responder(1, 10, 0, 1.0, 0.0),
+            responder(7, 5, 5, 1.0, 0.0),
+        ]);
+        let v = judge(
+            &s,
+            &Thresholds {
+                max_loss: Some(0.1),
+                ..Default::default()
+            },
+        );
+        assert_eq!(v.failures.len(), 1);
+        assert_eq!(v.failures[0].responder, Some(SysComp::new(7, 1)));
+        assert!(
+            v.failures[0].message.starts_with("7/1: loss 50.00%"),
+            "{}",
+            v.failures[0].message
+        );
+    }
+}
