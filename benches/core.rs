@@ -1,0 +1,147 @@
+//! Per-packet costs of mavping's hot path, each beside a baseline measured
+//! in the same run:
+//! - frame scanning: mavping's scanner vs the `mavlink` crate's own reader
+//!   on the same bytes (the crate mavping would otherwise use);
+//! - matching and statistics per reply, the work done for every PING.
+//!
+//! Run: `cargo bench --bench core` (or `bash scripts/bench.sh` for the
+//! end-to-end comparison with irtt and pymavlink).
+
+use std::hint::black_box;
+
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
+use mavping::engine::matcher::{Lookup, Matcher};
+use mavping::engine::stats::RttStats;
+use mavping::frame::{self, Header, Msg, ScanStats, StreamScanner, SysComp, Version};
+
+/// 1,000 PING replies, as a responder sends them, in one byte stream.
+fn ping_stream(count: u32) -> Vec<u8> {
+    let mut bytes = Vec::new();
+    for seq in 0..count {
+        frame::encode(
+            &mut bytes,
+            Version::V2,
+            Header {
+                sysid: 1,
+                compid: 1,
+                seq: seq as u8,
+            },
+            &Msg::Ping {
+                time_usec: 1_700_000_000_000_000 + u64::from(seq),
+                seq,
+                target_system: 255,
+                target_component: 190,
+            },
+        );
+    }
+    bytes
+}
+
+fn frames(c: &mut Criterion) {
+    const N: u32 = 1000;
+    let stream = ping_stream(N);
+    let one = ping_stream(1);
+    let mut g = c.benchmark_group("parse");
+    g.throughput(Throughput::Elements(u64::from(N)));
+    g.bench_function("mavping StreamScanner + decode (1000 frames)", |b| {
+        b.iter(|| {
+            let mut scanner = StreamScanner::new();
+            let mut n = 0u32;
+            scanner.push(black_box(&stream), &mut |raw| {
+                black_box(frame::decode(raw));
+                n += 1;
+            });
+            assert_eq!(n, N);
+        })
+    });
+    g.bench_function("baseline: mavlink crate MavlinkReader (1000 frames)", |b| {
+        b.iter(|| {
+            let mut reader = mavlink::MavlinkReader::new(black_box(&stream[..]));
+            for _ in 0..N {
+                let msg = reader
+                    .read_any_message::<mavlink::dialects::ardupilotmega::MavMessage>()
+                    .unwrap();
+                black_box(msg);
+            }
+        })
+    });
+    g.finish();
+    let mut g = c.benchmark_group("datagram");
+    g.throughput(Throughput::Elements(1));
+    g.bench_function("mavping scan_datagram + decode (1 frame)", |b| {
+        let mut stats = ScanStats::default();
+        b.iter(|| {
+            frame::scan_datagram(black_box(&one), &mut stats, &mut |raw| {
+                black_box(frame::decode(raw));
+            })
+        })
+    });
+    g.bench_function("encode one PING request", |b| {
+        let mut out = Vec::with_capacity(64);
+        b.iter(|| {
+            out.clear();
+            frame::encode(
+                &mut out,
+                Version::V2,
+                Header {
+                    sysid: 255,
+                    compid: 190,
+                    seq: 0,
+                },
+                black_box(&Msg::Ping {
+                    time_usec: 1,
+                    seq: 2,
+                    target_system: 0,
+                    target_component: 0,
+                }),
+            );
+            black_box(&out);
+        })
+    });
+    g.finish();
+}
+
+fn matching(c: &mut Criterion) {
+    let mut g = c.benchmark_group("engine");
+    g.throughput(Throughput::Elements(1));
+    // Steady state at 150k PINGs/s with a 1 s timeout: a 512k-slot ring,
+    // one send, one reply and one expiry per iteration.
+    g.bench_function("matcher: send + reply + expire (1 responder)", |b| {
+        let mut m = Matcher::new(1_000_000_000, 1 << 19, 0);
+        let who = SysComp::new(1, 1);
+        let mut t = 0u64;
+        let mut sink = |e| {
+            black_box(e);
+        };
+        b.iter(|| {
+            t += 6_667;
+            let token = t / 1000;
+            let issued = m.on_send(token, t, &mut sink);
+            m.on_reply(
+                who,
+                Lookup::Seq {
+                    seq: issued.seq,
+                    token,
+                },
+                t + 50_000,
+                &mut sink,
+            );
+            m.expire(t, &mut sink);
+        })
+    });
+    g.bench_function("stats: record one RTT", |b| {
+        let mut s = RttStats::new();
+        let mut rtt = 40_000u64;
+        b.iter(|| {
+            rtt = rtt
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407)
+                % 5_000_000;
+            s.record(black_box(rtt));
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, frames, matching);
+criterion_main!(benches);
