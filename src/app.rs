@@ -90,7 +90,7 @@ fn exit_code(outcome: &Outcome) -> u8 {
 async fn run_ping(config: &Config) -> u8 {
     let stop = Arc::new(Notify::new());
     watch_signals(stop.clone());
-    let mut link = match Link::open(&config.link).await {
+    let mut link = match Link::open(&config.link, &config.link_options).await {
         Ok(link) => link,
         Err(e) => {
             print_error(&e);

@@ -8,6 +8,7 @@ use crate::cli::PingArgs;
 use crate::engine::session::SessionConfig;
 use crate::frame::{SysComp, Version};
 use crate::transport::address::{AddressError, LinkSpec};
+use crate::transport::LinkOptions;
 
 #[derive(Debug, Error)]
 pub enum ConfigError {
@@ -30,6 +31,7 @@ const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
 #[derive(Debug, Clone)]
 pub struct Config {
     pub link: LinkSpec,
+    pub link_options: LinkOptions,
     pub session: SessionConfig,
     pub quiet: bool,
     pub verbose: u8,
@@ -112,6 +114,11 @@ impl TryFrom<&PingArgs> for Config {
             return Err(invalid("--deadline 0: expected more than 0"));
         }
         let ours = validate_ids(cli.sysid, cli.compid)?;
+        if cli.baud == 0 {
+            return Err(invalid(
+                "--baud 0: expected a baud rate such as 57600 or 115200",
+            ));
+        }
         Ok(Config {
             session: SessionConfig {
                 link_name: link.to_string(),
@@ -130,6 +137,10 @@ impl TryFrom<&PingArgs> for Config {
                 first_seq: cli.first_seq,
             },
             link,
+            link_options: LinkOptions {
+                baud: cli.baud,
+                reconnect: cli.reconnect,
+            },
             quiet: cli.quiet,
             verbose: cli.verbose,
         })
@@ -165,6 +176,17 @@ mod tests {
         assert_eq!(c.session.interval, Duration::from_millis(1));
         assert_eq!(c.session.capacity, 2048);
         assert!(config("sim:?clock=virtual").unwrap().virtual_clock());
+        let c = config("/dev/ttyUSB0").unwrap();
+        assert_eq!(c.link_options, LinkOptions::default());
+        assert_eq!(c.link_options.baud, 115_200);
+        let c = config("--baud 57600 --reconnect tcp:127.0.0.1:5760").unwrap();
+        assert_eq!(
+            c.link_options,
+            LinkOptions {
+                baud: 57600,
+                reconnect: true
+            }
+        );
     }
 
     #[test]
@@ -186,6 +208,8 @@ mod tests {
             ("-i 1s --rate 5 sim:", "cannot be used with"),
             ("udpout:nowhere", "accepted forms"),
             ("--mavlink 3 sim:", "3"),
+            ("--baud 0 /dev/ttyUSB0", "--baud 0"),
+            ("--baud fast /dev/ttyUSB0", "fast"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");
