@@ -35,6 +35,10 @@ impl Connect for SerialConnector {
         &self.name
     }
 
+    fn eof_reason(&self) -> &'static str {
+        "device hung up (unplugged, or the pty closed)"
+    }
+
     async fn connect(&self) -> io::Result<SerialStream> {
         // The port is opened exclusively (TIOCEXCL), so a device another
         // program holds fails here as "busy" instead of sharing its bytes.

@@ -27,6 +27,10 @@ pub trait Connect {
     type Stream: AsyncRead + AsyncWrite + Unpin;
     /// The link as the user named it, for messages.
     fn name(&self) -> &str;
+    /// What the end of the stream means on this kind of link.
+    fn eof_reason(&self) -> &'static str {
+        "closed by the peer"
+    }
     async fn connect(&self) -> io::Result<Self::Stream>;
 }
 
@@ -62,13 +66,6 @@ fn notice(msg: std::fmt::Arguments<'_>) {
     let _ = writeln!(io::stderr(), "mavping: {msg}");
 }
 
-fn reason(e: &io::Error) -> String {
-    match e.kind() {
-        io::ErrorKind::UnexpectedEof => "closed by the peer".to_string(),
-        _ => e.to_string(),
-    }
-}
-
 impl<C: Connect> StreamLink<C> {
     /// Connects once; a failure here ends the run even with `reconnect`,
     /// since a wrong device or address is a usage error, not a lost link.
@@ -94,7 +91,7 @@ impl<C: Connect> StreamLink<C> {
             let name = self.connector.name();
             return Err(match e.kind() {
                 io::ErrorKind::UnexpectedEof => {
-                    LinkError::Closed(format!("{name}: link closed by the peer"))
+                    LinkError::Closed(format!("{name}: {}", self.connector.eof_reason()))
                 }
                 _ => LinkError::io(format!("{name}: link failed"), e),
             });
@@ -111,7 +108,11 @@ impl<C: Connect> StreamLink<C> {
         notice(format_args!(
             "{} lost ({}); reconnecting (attempt 1 in {})",
             self.connector.name(),
-            reason(&e),
+            if e.kind() == io::ErrorKind::UnexpectedEof {
+                self.connector.eof_reason().to_string()
+            } else {
+                e.to_string()
+            },
             humantime::format_duration(delay)
         ));
         self.state = State::Down {
