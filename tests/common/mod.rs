@@ -94,8 +94,11 @@ impl Peer {
     /// Stops the peer with SIGTERM and returns its ground-truth JSON line.
     pub fn finish(mut self) -> serde_json::Value {
         signal(self.child.id(), "TERM");
+        // pymavlink itself may print notices (e.g. "EOF on TCP socket").
         let mut line = String::new();
-        self.stdout.read_line(&mut line).unwrap();
+        while self.stdout.read_line(&mut line).unwrap() > 0 && !line.starts_with('{') {
+            line.clear();
+        }
         let _ = self.child.wait();
         serde_json::from_str(&line).unwrap_or_else(|e| panic!("peer truth {line:?}: {e}"))
     }
