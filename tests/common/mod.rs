@@ -16,13 +16,13 @@ pub fn python() -> PathBuf {
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
     let ok = Command::new(&path)
-        .args(["-c", "import pymavlink"])
+        .args(["-c", "import pymavlink, serial"])
         .stderr(Stdio::null())
         .status()
         .is_ok_and(|s| s.success());
     assert!(
         ok,
-        "pymavlink is not available at {} — run `bash scripts/test.sh` (it creates .venv with pymavlink)",
+        "pymavlink or pyserial is not available at {} — run `bash scripts/test.sh` (it creates .venv with both)",
         path.display()
     );
     path
