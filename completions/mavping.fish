@@ -16,6 +16,7 @@ complete -c mavping -l expect -d 'A responder that must answer: SYSID or SYSID/C
 complete -c mavping -l min-responders -d 'Fail unless at least N responders answer' -r
 complete -c mavping -l hgrm -d 'Write each responder\'s RTT distribution in HdrHistogram\'s .hgrm format' -r -F
 complete -c mavping -l samples -d 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)' -r -F
+complete -c mavping -l baud -d 'Baud rate of a serial device whose connection string names none' -r
 complete -c mavping -l generate -d 'Print shell completions or the man page (for packagers)' -r -f -a "complete-bash\t''
 complete-zsh\t''
 complete-fish\t''
@@ -26,5 +27,6 @@ complete -c mavping -s q -l quiet -d 'Print only the summary'
 complete -c mavping -l no-heartbeat -d 'Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)'
 complete -c mavping -s v -l verbose -d 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
 complete -c mavping -l json -d 'Same as --format json: newline-delimited JSON events on stdout'
+complete -c mavping -l reconnect -d 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run (pings sent while down count as lost)'
 complete -c mavping -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c mavping -s V -l version -d 'Print version'

@@ -119,7 +119,7 @@ async fn run_ping(config: &Config) -> u8 {
         Some(Ok(file)) => Some(file),
         None => None,
     };
-    let mut link = match Link::open(&config.link).await {
+    let mut link = match Link::open(&config.link, &config.link_options).await {
         Ok(link) => link,
         Err(e) => {
             print_error(&e);

@@ -26,8 +26,10 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
         matches each reply to its request by sequence and responder, and reports per-responder \
         RTT, loss, late and duplicate replies.",
     after_help = "Connection strings: udpin:HOST:PORT (also udp:HOST:PORT or HOST:PORT) listens and \
-        pings every peer heard; udpout:HOST:PORT sends to one address; sim:[?key=value&...] is the \
-        built-in simulated link (see the README).\n\n\
+        pings every peer heard; udpout:HOST:PORT sends to one address; udpbcast:ADDR:PORT broadcasts; \
+        tcp:HOST:PORT (tcpout:) connects, tcpin:HOST:PORT listens and pings every client; \
+        serial:DEVICE[:BAUD] or a bare /dev/... path opens a serial port; sim:[?key=value&...] \
+        is the built-in simulated link (see the README). IPv6 hosts go in brackets: [::1]:14550.\n\n\
         Exit status: 0 when a responder answered, 1 when none did, 2 on usage or link errors."
 )]
 pub struct Cli {
@@ -102,7 +104,8 @@ pub enum Generate {
 /// Options of a measurement run (the default command).
 #[derive(Debug, clap::Args)]
 pub struct PingArgs {
-    /// Where to ping: udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, sim:[?...]
+    /// Where to ping: udpin:HOST:PORT, udpout:HOST:PORT, udpbcast:ADDR:PORT, tcp:HOST:PORT,
+    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...]
     #[arg(
         value_name = "CONNECTION",
         env = "MAVPING_LINK",
@@ -198,4 +201,13 @@ pub struct PingArgs {
     /// Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)
     #[arg(long, value_name = "FILE")]
     pub samples: Option<PathBuf>,
+    /// Baud rate of a serial device whose connection string names none
+    #[arg(long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
+          env = "MAVPING_BAUD")]
+    pub baud: u32,
+
+    /// When a tcp or serial link breaks, reconnect with backoff instead of
+    /// ending the run (pings sent while down count as lost)
+    #[arg(long, env = "MAVPING_RECONNECT")]
+    pub reconnect: bool,
 }

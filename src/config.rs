@@ -1,15 +1,15 @@
 //! The validated run configuration: nothing downstream sees raw flags.
 
+use std::path::PathBuf;
 use std::time::Duration;
 
 use thiserror::Error;
-
-use std::path::PathBuf;
 
 use crate::cli::{Format, PingArgs};
 use crate::engine::session::SessionConfig;
 use crate::frame::{SysComp, Version};
 use crate::transport::address::{AddressError, LinkSpec};
+use crate::transport::LinkOptions;
 use crate::verdict::Thresholds;
 
 #[derive(Debug, Error)]
@@ -33,6 +33,7 @@ const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
 #[derive(Debug, Clone)]
 pub struct Config {
     pub link: LinkSpec,
+    pub link_options: LinkOptions,
     pub session: SessionConfig,
     pub quiet: bool,
     pub verbose: u8,
@@ -126,6 +127,11 @@ impl TryFrom<&PingArgs> for Config {
             return Err(invalid("--deadline 0: expected more than 0"));
         }
         let ours = validate_ids(cli.sysid, cli.compid)?;
+        if cli.baud == 0 {
+            return Err(invalid(
+                "--baud 0: expected a baud rate such as 57600 or 115200",
+            ));
+        }
         Ok(Config {
             session: SessionConfig {
                 link_name: link.to_string(),
@@ -144,6 +150,10 @@ impl TryFrom<&PingArgs> for Config {
                 first_seq: cli.first_seq,
             },
             link,
+            link_options: LinkOptions {
+                baud: cli.baud,
+                reconnect: cli.reconnect,
+            },
             quiet: cli.quiet,
             verbose: cli.verbose,
             format: if cli.json { Format::Json } else { cli.format },
@@ -205,6 +215,17 @@ mod tests {
                 compid: Some(1)
             }
         );
+        let c = config("/dev/ttyUSB0").unwrap();
+        assert_eq!(c.link_options, LinkOptions::default());
+        assert_eq!(c.link_options.baud, 115_200);
+        let c = config("--baud 57600 --reconnect tcp:127.0.0.1:5760").unwrap();
+        assert_eq!(
+            c.link_options,
+            LinkOptions {
+                baud: 57600,
+                reconnect: true
+            }
+        );
     }
 
     #[test]
@@ -233,6 +254,8 @@ mod tests {
             ("--expect 1/300 sim:", "SYSID"),
             ("--min-responders 0 sim:", "--min-responders 0"),
             ("--format xml sim:", "xml"),
+            ("--baud 0 /dev/ttyUSB0", "--baud 0"),
+            ("--baud fast /dev/ttyUSB0", "fast"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");

@@ -295,6 +295,7 @@ mod tests {
             hints: vec![],
             interrupted: false,
             link_error: None,
+            downtime_s: 0.0,
         }
     }
 

@@ -254,6 +254,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
         hints,
         interrupted,
         link_error: link_error.map(|e| e.to_string()),
+        downtime_s: link.downtime().as_secs_f64(),
     };
     let histograms = matcher
         .responders()

@@ -41,6 +41,8 @@ pub struct Summary {
     pub hints: Vec<String>,
     pub interrupted: bool,
     pub link_error: Option<String>,
+    /// Seconds the link was down while reconnecting (`--reconnect`).
+    pub downtime_s: f64,
 }
 
 impl Summary {

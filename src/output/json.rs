@@ -192,6 +192,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
             "in_flight": s.in_flight,
             "interrupted": s.interrupted,
             "link_error": s.link_error,
+            "downtime_s": s.downtime_s,
             "frames": s.frames,
             "foreign_replies": s.foreign_replies,
             "untracked_replies": s.untracked_replies,

@@ -216,6 +216,13 @@ impl<W: Write> Reporter for TextReporter<W> {
                 f.bad_crc, f.skipped_bytes, f.unknown_id, f.truncated, s.foreign_replies
             )?;
         }
+        if s.downtime_s > 0.0 {
+            writeln!(
+                out,
+                "link down {:.3} s in total while reconnecting (requests sent meanwhile count as lost)",
+                s.downtime_s
+            )?;
+        }
         for hint in &s.hints {
             writeln!(out, "hint: {hint}")?;
         }

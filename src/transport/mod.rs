@@ -6,10 +6,14 @@
 //! and hide CRC errors — each fatal to a ping tool.
 
 pub mod address;
+pub mod serial;
 pub mod sim;
+pub mod stream;
+pub mod tcp;
 pub mod udp;
 
 use std::io;
+use std::time::Duration;
 
 use thiserror::Error;
 use tokio::time::Instant;
@@ -66,6 +70,10 @@ pub trait Transport {
     }
     /// What the frame scanner has skipped and rejected so far.
     fn scan_stats(&self) -> ScanStats;
+    /// How long the link has been down in total (`--reconnect`).
+    fn downtime(&self) -> Duration {
+        Duration::ZERO
+    }
 }
 
 /// Scans one datagram and appends its frames, all stamped `at`.
@@ -85,59 +93,91 @@ pub(crate) fn push_datagram(
     });
 }
 
+/// How to open a link, beyond its connection string.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct LinkOptions {
+    /// Baud rate of a serial port whose connection string names none.
+    pub baud: u32,
+    /// Reopen a tcp client or serial link that breaks, instead of ending.
+    pub reconnect: bool,
+}
+
+impl Default for LinkOptions {
+    fn default() -> Self {
+        LinkOptions {
+            baud: serial::DEFAULT_BAUD,
+            reconnect: false,
+        }
+    }
+}
+
 /// Any of mavping's links, so the engine is written once.
 pub enum Link {
     Udp(udp::UdpLink),
+    Tcp(stream::StreamLink<tcp::TcpConnector>),
+    TcpIn(tcp::TcpServer),
+    Serial(stream::StreamLink<serial::SerialConnector>),
     Sim(sim::SimLink),
 }
 
 impl Link {
     /// Opens the link a connection string names.
-    pub async fn open(spec: &LinkSpec) -> Result<Link, LinkError> {
-        match spec {
-            LinkSpec::UdpIn(a) => Ok(Link::Udp(udp::UdpLink::listen(a).await?)),
-            LinkSpec::UdpOut(a) => Ok(Link::Udp(udp::UdpLink::connect(a).await?)),
-            LinkSpec::Sim(params) => Ok(Link::Sim(sim::SimLink::new(params.clone()))),
-            other => Err(LinkError::Closed(format!(
-                "{other}: this transport is not available in this build yet"
-            ))),
-        }
+    pub async fn open(spec: &LinkSpec, options: &LinkOptions) -> Result<Link, LinkError> {
+        Ok(match spec {
+            LinkSpec::UdpIn(a) => Link::Udp(udp::UdpLink::listen(a).await?),
+            LinkSpec::UdpOut(a) => Link::Udp(udp::UdpLink::connect(a).await?),
+            LinkSpec::UdpBcast(a) => Link::Udp(udp::UdpLink::broadcast(a).await?),
+            LinkSpec::TcpOut(a) => Link::Tcp(
+                stream::StreamLink::open(tcp::TcpConnector::new(a), options.reconnect).await?,
+            ),
+            LinkSpec::TcpIn(a) => Link::TcpIn(tcp::TcpServer::listen(a).await?),
+            LinkSpec::Serial { path, baud } => Link::Serial(
+                stream::StreamLink::open(
+                    serial::SerialConnector::new(path, baud.unwrap_or(options.baud)),
+                    options.reconnect,
+                )
+                .await?,
+            ),
+            LinkSpec::Sim(params) => Link::Sim(sim::SimLink::new(params.clone())),
+        })
     }
+}
+
+/// Calls the same method on whichever link this is.
+macro_rules! each_link {
+    ($link:expr, $l:ident => $body:expr) => {
+        match $link {
+            Link::Udp($l) => $body,
+            Link::Tcp($l) => $body,
+            Link::TcpIn($l) => $body,
+            Link::Serial($l) => $body,
+            Link::Sim($l) => $body,
+        }
+    };
 }
 
 impl Transport for Link {
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
-        match self {
-            Link::Udp(l) => l.send(frame).await,
-            Link::Sim(l) => l.send(frame).await,
-        }
+        each_link!(self, l => l.send(frame).await)
     }
 
     async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
-        match self {
-            Link::Udp(l) => l.send_to(path, frame).await,
-            Link::Sim(l) => l.send_to(path, frame).await,
-        }
+        each_link!(self, l => l.send_to(path, frame).await)
     }
 
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
-        match self {
-            Link::Udp(l) => l.recv(out).await,
-            Link::Sim(l) => l.recv(out).await,
-        }
+        each_link!(self, l => l.recv(out).await)
     }
 
     fn has_peers(&self) -> bool {
-        match self {
-            Link::Udp(l) => l.has_peers(),
-            Link::Sim(l) => l.has_peers(),
-        }
+        each_link!(self, l => l.has_peers())
     }
 
     fn scan_stats(&self) -> ScanStats {
-        match self {
-            Link::Udp(l) => l.scan_stats(),
-            Link::Sim(l) => l.scan_stats(),
-        }
+        each_link!(self, l => l.scan_stats())
+    }
+
+    fn downtime(&self) -> Duration {
+        each_link!(self, l => l.downtime())
     }
 }

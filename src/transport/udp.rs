@@ -1,5 +1,6 @@
 //! UDP: `udpin` listens and pings every peer it hears; `udpout` sends to one
-//! address from an ephemeral port. Each datagram is parsed on its own.
+//! address from an ephemeral port; `udpbcast` sends to a broadcast address
+//! and hears whoever answers. Each datagram is parsed on its own.
 
 use std::io;
 use std::net::SocketAddr;
@@ -22,6 +23,12 @@ enum Mode {
     Listen { peers: Vec<SocketAddr> },
     /// One fixed peer; the socket is connected so ICMP errors surface.
     Connected { peer: SocketAddr },
+    /// Requests go to a broadcast address; answers come from each system's
+    /// own address, learned like udpin's peers so one can be answered alone.
+    Broadcast {
+        target: SocketAddr,
+        peers: Vec<SocketAddr>,
+    },
 }
 
 pub struct UdpLink {
@@ -80,6 +87,36 @@ impl UdpLink {
         Ok(Self::with(socket, Mode::Connected { peer }))
     }
 
+    /// `udpbcast:ADDR:PORT`
+    pub async fn broadcast(addr: &HostPort) -> Result<Self, LinkError> {
+        let target = resolve(addr).await?;
+        if target.is_ipv6() {
+            return Err(LinkError::io(
+                format!("cannot broadcast to udp {addr}"),
+                io::Error::new(
+                    io::ErrorKind::InvalidInput,
+                    "IPv6 has no broadcast; use an IPv4 broadcast address",
+                ),
+            ));
+        }
+        let local: SocketAddr = "0.0.0.0:0".parse().expect("valid literal");
+        let socket = UdpSocket::bind(local)
+            .await
+            .map_err(|e| LinkError::io("cannot open a udp socket", e))?;
+        // Without SO_BROADCAST the kernel refuses to send to a broadcast
+        // address (EACCES).
+        socket
+            .set_broadcast(true)
+            .map_err(|e| LinkError::io(format!("cannot broadcast to udp {addr}"), e))?;
+        Ok(Self::with(
+            socket,
+            Mode::Broadcast {
+                target,
+                peers: Vec::new(),
+            },
+        ))
+    }
+
     pub fn local_addr(&self) -> io::Result<SocketAddr> {
         self.socket.local_addr()
     }
@@ -89,15 +126,17 @@ impl UdpLink {
     fn path_of(&mut self, from: SocketAddr) -> PathId {
         match &mut self.mode {
             Mode::Connected { .. } => 0,
-            Mode::Listen { peers } => match peers.iter().position(|p| *p == from) {
-                Some(i) => i as PathId,
-                None if peers.len() < MAX_PEERS => {
-                    tracing::info!(%from, "new udp peer");
-                    peers.push(from);
-                    (peers.len() - 1) as PathId
+            Mode::Listen { peers } | Mode::Broadcast { peers, .. } => {
+                match peers.iter().position(|p| *p == from) {
+                    Some(i) => i as PathId,
+                    None if peers.len() < MAX_PEERS => {
+                        tracing::info!(%from, "new udp peer");
+                        peers.push(from);
+                        (peers.len() - 1) as PathId
+                    }
+                    None => PathId::MAX,
                 }
-                None => PathId::MAX,
-            },
+            }
         }
     }
 
@@ -118,7 +157,9 @@ impl UdpLink {
     /// One datagram if one is waiting, without blocking.
     fn try_one(&mut self) -> io::Result<Option<(usize, SocketAddr)>> {
         let r = match &self.mode {
-            Mode::Listen { .. } => self.socket.try_recv_from(&mut self.buf),
+            Mode::Listen { .. } | Mode::Broadcast { .. } => {
+                self.socket.try_recv_from(&mut self.buf)
+            }
             Mode::Connected { peer } => self.socket.try_recv(&mut self.buf).map(|n| (n, *peer)),
         };
         match r {
@@ -155,6 +196,12 @@ impl Transport for UdpLink {
                     }
                 }
             }
+            Mode::Broadcast { target, .. } => {
+                self.socket
+                    .send_to(frame, target)
+                    .await
+                    .map_err(|e| LinkError::io(format!("cannot broadcast to udp {target}"), e))?;
+            }
         }
         Ok(Instant::now())
     }
@@ -164,7 +211,7 @@ impl Transport for UdpLink {
             Mode::Connected { .. } => {
                 self.socket.send(frame).await.map_err(|e| self.failed(e))?;
             }
-            Mode::Listen { peers } => {
+            Mode::Listen { peers } | Mode::Broadcast { peers, .. } => {
                 if let Some(peer) = peers.get(path as usize) {
                     if let Err(e) = self.socket.send_to(frame, peer).await {
                         tracing::debug!(%peer, error = %e, "send failed");
@@ -191,7 +238,7 @@ impl Transport for UdpLink {
                     // A listening socket can see ECONNREFUSED from an ICMP
                     // error to one of its peers: not a reason to stop.
                     Err(e)
-                        if matches!(self.mode, Mode::Listen { .. })
+                        if !matches!(self.mode, Mode::Connected { .. })
                             && e.kind() == io::ErrorKind::ConnectionRefused =>
                     {
                         continue
@@ -208,7 +255,7 @@ impl Transport for UdpLink {
     fn has_peers(&self) -> bool {
         match &self.mode {
             Mode::Listen { peers } => !peers.is_empty(),
-            Mode::Connected { .. } => true,
+            Mode::Connected { .. } | Mode::Broadcast { .. } => true,
         }
     }
 

@@ -16,13 +16,13 @@ pub fn python() -> PathBuf {
         .map(PathBuf::from)
         .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
     let ok = Command::new(&path)
-        .args(["-c", "import pymavlink"])
+        .args(["-c", "import pymavlink, serial"])
         .stderr(Stdio::null())
         .status()
         .is_ok_and(|s| s.success());
     assert!(
         ok,
-        "pymavlink is not available at {} — run `bash scripts/test.sh` (it creates .venv with pymavlink)",
+        "pymavlink or pyserial is not available at {} — run `bash scripts/test.sh` (it creates .venv with both)",
         path.display()
     );
     path
@@ -80,6 +80,13 @@ impl Peer {
         Peer { child, stdout }
     }
 
+    /// The next line the peer prints (after "ready").
+    pub fn read_line(&mut self) -> String {
+        let mut line = String::new();
+        self.stdout.read_line(&mut line).unwrap();
+        line.trim().to_string()
+    }
+
     pub fn pid(&self) -> u32 {
         self.child.id()
     }
@@ -87,8 +94,11 @@ impl Peer {
     /// Stops the peer with SIGTERM and returns its ground-truth JSON line.
     pub fn finish(mut self) -> serde_json::Value {
         signal(self.child.id(), "TERM");
+        // pymavlink itself may print notices (e.g. "EOF on TCP socket").
         let mut line = String::new();
-        self.stdout.read_line(&mut line).unwrap();
+        while self.stdout.read_line(&mut line).unwrap() > 0 && !line.starts_with('{') {
+            line.clear();
+        }
         let _ = self.child.wait();
         serde_json::from_str(&line).unwrap_or_else(|e| panic!("peer truth {line:?}: {e}"))
     }
@@ -129,6 +139,45 @@ pub fn run_mavping(args: &[&str]) -> (i32, String, String) {
         .spawn()
         .unwrap();
     wait_output(child, Duration::from_secs(60))
+}
+
+/// A mavping run in the background whose first line was read: the link
+/// is open, so peers that must connect to it can start.
+pub struct Running {
+    pub child: Child,
+    pub first_line: String,
+    rest: std::thread::JoinHandle<String>,
+}
+
+pub fn start_mavping(args: &[&str]) -> Running {
+    let mut child = mavping()
+        .args(args)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    let mut first_line = String::new();
+    stdout.read_line(&mut first_line).unwrap();
+    let rest = std::thread::spawn(move || {
+        let mut rest = String::new();
+        std::io::Read::read_to_string(&mut stdout, &mut rest).unwrap();
+        rest
+    });
+    Running {
+        child,
+        first_line,
+        rest,
+    }
+}
+
+impl Running {
+    /// Waits for the run to end: (exit code, whole stdout, stderr).
+    pub fn wait(self, limit: Duration) -> (i32, String, String) {
+        let (code, _, err) = wait_output(self.child, limit);
+        let out = self.first_line + &self.rest.join().unwrap();
+        (code, out, err)
+    }
 }
 
 pub fn wait_output(mut child: Child, limit: Duration) -> (i32, String, String) {

@@ -11,9 +11,36 @@ import argparse
 import json
 import os
 import random
+import select
 import signal
+import socket
 import sys
 import time
+
+
+class Udp6In:
+    """pymavlink has no IPv6 sockets: this gives its MAVLink encoder and
+    parser one, answering the last peer heard as pymavlink's udpin does."""
+
+    def __init__(self, host, port, mavlink, sysid, compid):
+        self.sock = socket.socket(socket.AF_INET6, socket.SOCK_DGRAM)
+        self.sock.bind((host, port))
+        self.peer = None
+        self.pending = []
+        self.mav = mavlink.MAVLink(self, srcSystem=sysid, srcComponent=compid)
+
+    def write(self, data):
+        if self.peer is not None:
+            self.sock.sendto(data, self.peer)
+
+    def recv_match(self, blocking=True, timeout=None):
+        if not self.pending:
+            ready, _, _ = select.select([self.sock], [], [], timeout)
+            if not ready:
+                return None
+            data, self.peer = self.sock.recvfrom(65535)
+            self.pending = self.mav.parse_buffer(data) or []
+        return self.pending.pop(0) if self.pending else None
 
 
 def parse_set(text):
@@ -22,7 +49,8 @@ def parse_set(text):
 
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("connection", help="pymavlink connection string, e.g. udpout:127.0.0.1:14550")
+    ap.add_argument("connection", help="pymavlink connection string, e.g. udpout:127.0.0.1:14550, "
+                    "tcpin:127.0.0.1:5760, /dev/pts/3; or udpin:[::1]:PORT (IPv6)")
     ap.add_argument("--sysid", type=int, default=1)
     ap.add_argument("--compid", type=int, default=1)
     ap.add_argument("--mavlink1", action="store_true", help="reply in MAVLink 1")
@@ -43,18 +71,23 @@ def main():
     from pymavlink import mavutil  # imported after MAVLINK20 is set
 
     rng = random.Random(args.seed)
-    conn = mavutil.mavlink_connection(
-        args.connection,
-        source_system=args.sysid,
-        source_component=args.compid,
-        baud=args.baud,
-        dialect="common",
-    )
+    if args.connection.startswith("udpin:["):
+        host, port = args.connection[len("udpin:["):].split("]:")
+        mavutil.set_dialect("common")
+        conn = Udp6In(host, int(port), mavutil.mavlink, args.sysid, args.compid)
+    else:
+        conn = mavutil.mavlink_connection(
+            args.connection,
+            source_system=args.sysid,
+            source_component=args.compid,
+            baud=args.baud,
+            dialect="common",
+        )
     mav = conn.mav
     drop, dup = parse_set(args.drop), parse_set(args.dup)
     junk_before, bad_crc = parse_set(args.junk_before), parse_set(args.bad_crc)
     truth = {"ping_requests": 0, "replies": 0, "dropped": 0, "duplicated": 0,
-             "junk": 0, "bad_crc": 0}
+             "junk": 0, "junk_bytes": 0, "bad_crc": 0}
     running = True
 
     def stop(*_):
@@ -78,7 +111,11 @@ def main():
         if now >= next_hb:
             heartbeat()
             next_hb = now + 1.0 / args.heartbeat_hz
-        msg = conn.recv_match(blocking=True, timeout=0.02)
+        try:
+            msg = conn.recv_match(blocking=True, timeout=0.02)
+        except Exception as e:  # the link under test went away (pty closed)
+            print(f"responder: link lost: {e}", file=sys.stderr)
+            break
         if msg is None:
             continue
         if msg.get_type() != "PING" or args.no_ping:
@@ -98,6 +135,7 @@ def main():
             junk = bytes(rng.randrange(256) for _ in range(rng.randrange(1, 60)))
             write_raw(junk)
             truth["junk"] += 1
+            truth["junk_bytes"] += len(junk)
         if seq in bad_crc:
             data = bytearray(reply.pack(mav))
             data[-1] ^= 0xFF

@@ -1,0 +1,236 @@
+//! Byte-stream links with one peer (a TCP client, a serial port), and how
+//! they survive a lost connection when `--reconnect` asks for it.
+//!
+//! A stream carries no message boundaries, so one [`StreamScanner`] keeps a
+//! partial frame between reads and resynchronises after junk. While the
+//! link is down, `send` succeeds without writing: the requests of that
+//! period time out and count as lost, which is what the link did to them.
+
+use std::io::{self, Write};
+use std::time::Duration;
+
+use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
+use tokio::time::{sleep_until, Instant};
+
+use super::{Inbound, LinkError, PathId, Transport};
+use crate::frame::{self, ScanStats, StreamScanner};
+
+/// Wait before the first reconnection attempt; doubled after each failure.
+const FIRST_RETRY: Duration = Duration::from_millis(100);
+/// Longest wait between attempts: a radio plugged back in is found quickly.
+const MAX_RETRY: Duration = Duration::from_secs(5);
+const READ_BUF: usize = 16 * 1024;
+
+/// Opens the underlying stream; called again for each reconnection.
+#[allow(async_fn_in_trait)] // used with concrete types only
+pub trait Connect {
+    type Stream: AsyncRead + AsyncWrite + Unpin;
+    /// The link as the user named it, for messages.
+    fn name(&self) -> &str;
+    /// What the end of the stream means on this kind of link.
+    fn eof_reason(&self) -> &'static str {
+        "closed by the peer"
+    }
+    async fn connect(&self) -> io::Result<Self::Stream>;
+}
+
+enum State<S> {
+    Up(S),
+    Down {
+        since: Instant,
+        attempt: u32,
+        retry_at: Instant,
+    },
+}
+
+pub struct StreamLink<C: Connect> {
+    connector: C,
+    reconnect: bool,
+    state: State<C::Stream>,
+    scanner: StreamScanner,
+    /// What the scanners of earlier connections saw.
+    earlier: ScanStats,
+    buf: Box<[u8]>,
+    /// Finished down periods; the current one is added by `downtime`.
+    downtime: Duration,
+}
+
+fn backoff(attempt: u32) -> Duration {
+    FIRST_RETRY
+        .saturating_mul(1u32 << attempt.saturating_sub(1).min(16))
+        .min(MAX_RETRY)
+}
+
+/// One line on stderr, the form every mavping message has.
+fn notice(msg: std::fmt::Arguments<'_>) {
+    let _ = writeln!(io::stderr(), "mavping: {msg}");
+}
+
+impl<C: Connect> StreamLink<C> {
+    /// Connects once; a failure here ends the run even with `reconnect`,
+    /// since a wrong device or address is a usage error, not a lost link.
+    pub async fn open(connector: C, reconnect: bool) -> Result<Self, LinkError> {
+        let stream = connector
+            .connect()
+            .await
+            .map_err(|e| LinkError::io(format!("cannot open {}", connector.name()), e))?;
+        Ok(StreamLink {
+            connector,
+            reconnect,
+            state: State::Up(stream),
+            scanner: StreamScanner::new(),
+            earlier: ScanStats::default(),
+            buf: vec![0; READ_BUF].into_boxed_slice(),
+            downtime: Duration::ZERO,
+        })
+    }
+
+    /// The connection broke: end the run, or start reconnecting.
+    fn lost(&mut self, e: io::Error) -> Result<(), LinkError> {
+        if !self.reconnect {
+            let name = self.connector.name();
+            return Err(match e.kind() {
+                io::ErrorKind::UnexpectedEof => {
+                    LinkError::Closed(format!("{name}: {}", self.connector.eof_reason()))
+                }
+                _ => LinkError::io(format!("{name}: link failed"), e),
+            });
+        }
+        // A frame cut by the break can never be finished.
+        let old = std::mem::take(&mut self.scanner);
+        self.earlier.add(&old.stats);
+        if old.pending_bytes() > 0 {
+            self.earlier.truncated += 1;
+            self.earlier.skipped_bytes += old.pending_bytes() as u64;
+        }
+        let now = Instant::now();
+        let delay = backoff(1);
+        notice(format_args!(
+            "{} lost ({}); reconnecting (attempt 1 in {})",
+            self.connector.name(),
+            if e.kind() == io::ErrorKind::UnexpectedEof {
+                self.connector.eof_reason().to_string()
+            } else {
+                e.to_string()
+            },
+            humantime::format_duration(delay)
+        ));
+        self.state = State::Down {
+            since: now,
+            attempt: 1,
+            retry_at: now + delay,
+        };
+        Ok(())
+    }
+
+    async fn try_reconnect(&mut self) {
+        let State::Down { since, attempt, .. } = self.state else {
+            return;
+        };
+        match self.connector.connect().await {
+            Ok(stream) => {
+                let down = since.elapsed();
+                self.downtime += down;
+                notice(format_args!(
+                    "{} reconnected after {:.3} s",
+                    self.connector.name(),
+                    down.as_secs_f64()
+                ));
+                self.state = State::Up(stream);
+            }
+            Err(e) => {
+                let attempt = attempt + 1;
+                let delay = backoff(attempt);
+                notice(format_args!(
+                    "{} still down ({e}); reconnecting (attempt {attempt} in {})",
+                    self.connector.name(),
+                    humantime::format_duration(delay)
+                ));
+                self.state = State::Down {
+                    since,
+                    attempt,
+                    retry_at: Instant::now() + delay,
+                };
+            }
+        }
+    }
+
+    async fn write(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
+        if let State::Up(stream) = &mut self.state {
+            if let Err(e) = stream.write_all(frame).await {
+                self.lost(e)?;
+            }
+        }
+        Ok(Instant::now())
+    }
+}
+
+impl<C: Connect> Transport for StreamLink<C> {
+    async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
+        self.write(frame).await
+    }
+
+    /// One peer: every path is the same stream.
+    async fn send_to(&mut self, _path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
+        self.write(frame).await
+    }
+
+    // Cancel-safe: a read that has not completed consumed nothing, a
+    // dropped sleep or connection attempt is simply tried again.
+    async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
+        loop {
+            match &mut self.state {
+                State::Up(stream) => {
+                    let read = stream.read(&mut self.buf).await;
+                    let at = Instant::now();
+                    match read {
+                        Ok(0) => self.lost(io::ErrorKind::UnexpectedEof.into())?,
+                        Ok(n) => {
+                            self.scanner.push(&self.buf[..n], &mut |raw| {
+                                out.push(Inbound {
+                                    frame: frame::decode(raw),
+                                    at,
+                                    path: 0,
+                                })
+                            });
+                            return Ok(());
+                        }
+                        Err(e) if e.kind() == io::ErrorKind::Interrupted => {}
+                        Err(e) => self.lost(e)?,
+                    }
+                }
+                State::Down { retry_at, .. } => {
+                    sleep_until(*retry_at).await;
+                    self.try_reconnect().await;
+                }
+            }
+        }
+    }
+
+    fn scan_stats(&self) -> ScanStats {
+        let mut stats = self.earlier;
+        stats.add(&self.scanner.stats);
+        stats
+    }
+
+    fn downtime(&self) -> Duration {
+        match self.state {
+            State::Down { since, .. } => self.downtime + since.elapsed(),
+            State::Up(_) => self.downtime,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn backoff_doubles_up_to_the_cap() {
+        assert_eq!(backoff(1), Duration::from_millis(100));
+        assert_eq!(backoff(2), Duration::from_millis(200));
+        assert_eq!(backoff(4), Duration::from_millis(800));
+        assert_eq!(backoff(7), MAX_RETRY);
+        assert_eq!(backoff(u32::MAX), MAX_RETRY);
+    }
+}

@@ -1,0 +1,251 @@
+//! TCP: `tcp:`/`tcpout:` connects to a router or SITL as a client;
+//! `tcpin:` listens and pings every connected client.
+//!
+//! Each tcpin client is a byte stream of its own, so each has its own
+//! scanner: a partial frame from one client must never join bytes of another.
+
+use std::future::poll_fn;
+use std::io;
+use std::net::SocketAddr;
+use std::task::Poll;
+use std::time::Duration;
+
+use tokio::io::AsyncWriteExt;
+use tokio::net::{TcpListener, TcpStream};
+use tokio::time::Instant;
+
+use super::address::HostPort;
+use super::stream::Connect;
+use super::udp::resolve;
+use super::{Inbound, LinkError, PathId, Transport};
+use crate::frame::{self, ScanStats, StreamScanner};
+
+/// Clients beyond this are refused: memory stays bounded.
+const MAX_CLIENTS: usize = 64;
+/// A client that does not take our bytes for this long is dropped, so one
+/// stuck client cannot stall the requests to all the others.
+const WRITE_STALL: Duration = Duration::from_secs(1);
+const READ_BUF: usize = 16 * 1024;
+
+/// `tcp:HOST:PORT`: the connector behind a reconnecting [`super::stream::StreamLink`].
+pub struct TcpConnector {
+    addr: HostPort,
+    name: String,
+}
+
+impl TcpConnector {
+    pub fn new(addr: &HostPort) -> Self {
+        TcpConnector {
+            addr: addr.clone(),
+            name: format!("tcp:{addr}"),
+        }
+    }
+}
+
+impl Connect for TcpConnector {
+    type Stream = TcpStream;
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    async fn connect(&self) -> io::Result<TcpStream> {
+        // Resolved on every attempt: a router's address may change while down.
+        let peer = resolve(&self.addr)
+            .await
+            .map_err(|e| io::Error::other(e.to_string()))?;
+        let stream = TcpStream::connect(peer).await?;
+        // A PING is a few dozen bytes: Nagle would hold it back for an ACK.
+        stream.set_nodelay(true)?;
+        Ok(stream)
+    }
+}
+
+struct Client {
+    path: PathId,
+    peer: SocketAddr,
+    stream: TcpStream,
+    scanner: StreamScanner,
+}
+
+/// `tcpin:HOST:PORT`: a listening socket and the clients it accepted.
+pub struct TcpServer {
+    listener: TcpListener,
+    clients: Vec<Client>,
+    next_path: PathId,
+    /// What the scanners of departed clients saw.
+    departed: ScanStats,
+    buf: Box<[u8]>,
+}
+
+impl TcpServer {
+    pub async fn listen(addr: &HostPort) -> Result<Self, LinkError> {
+        let local = resolve(addr).await?;
+        let listener = TcpListener::bind(local)
+            .await
+            .map_err(|e| LinkError::io(format!("cannot listen on tcp {addr}"), e))?;
+        Ok(TcpServer {
+            listener,
+            clients: Vec::new(),
+            next_path: 0,
+            departed: ScanStats::default(),
+            buf: vec![0; READ_BUF].into_boxed_slice(),
+        })
+    }
+
+    pub fn local_addr(&self) -> io::Result<SocketAddr> {
+        self.listener.local_addr()
+    }
+
+    fn accept(&mut self, stream: TcpStream, peer: SocketAddr) {
+        if self.clients.len() >= MAX_CLIENTS {
+            tracing::warn!(%peer, "too many tcp clients; refused");
+            return;
+        }
+        if let Err(e) = stream.set_nodelay(true) {
+            tracing::debug!(%peer, error = %e, "cannot set TCP_NODELAY");
+        }
+        tracing::info!(%peer, "tcp client connected");
+        self.clients.push(Client {
+            path: self.next_path,
+            peer,
+            stream,
+            scanner: StreamScanner::new(),
+        });
+        // Paths are never reused, so an answer meant for a departed client
+        // cannot reach a newcomer.
+        self.next_path = self.next_path.wrapping_add(1);
+    }
+
+    /// A client leaving is not a link failure: the others go on.
+    fn remove(&mut self, index: usize, why: &str) {
+        let client = self.clients.swap_remove(index);
+        tracing::info!(peer = %client.peer, why, "tcp client left");
+        self.departed.add(&client.scanner.stats);
+        if client.scanner.pending_bytes() > 0 {
+            self.departed.truncated += 1;
+            self.departed.skipped_bytes += client.scanner.pending_bytes() as u64;
+        }
+    }
+
+    async fn write_to(&mut self, index: usize, frame: &[u8]) -> bool {
+        let stream = &mut self.clients[index].stream;
+        matches!(
+            tokio::time::timeout(WRITE_STALL, stream.write_all(frame)).await,
+            Ok(Ok(()))
+        )
+    }
+}
+
+impl Transport for TcpServer {
+    async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
+        let mut i = 0;
+        while i < self.clients.len() {
+            if self.write_to(i, frame).await {
+                i += 1;
+            } else {
+                self.remove(i, "write failed");
+            }
+        }
+        Ok(Instant::now())
+    }
+
+    async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
+        if let Some(i) = self.clients.iter().position(|c| c.path == path) {
+            if !self.write_to(i, frame).await {
+                self.remove(i, "write failed");
+            }
+        }
+        Ok(Instant::now())
+    }
+
+    // Cancel-safe: it only polls, and keeps no state outside `self`.
+    // Returns after any read or new client, so the session sees new peers.
+    async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
+        poll_fn(|cx| {
+            let mut progress = false;
+            loop {
+                match self.listener.poll_accept(cx) {
+                    Poll::Ready(Ok((stream, peer))) => {
+                        self.accept(stream, peer);
+                        progress = true;
+                    }
+                    // Out of file descriptors and the like: the clients we
+                    // have still work, so keep serving them.
+                    Poll::Ready(Err(e)) => {
+                        tracing::warn!(error = %e, "tcp accept failed");
+                        break;
+                    }
+                    Poll::Pending => break,
+                }
+            }
+            let mut i = 0;
+            while i < self.clients.len() {
+                let client = &mut self.clients[i];
+                let mut gone: Option<String> = None;
+                loop {
+                    match client.stream.poll_read_ready(cx) {
+                        Poll::Pending => break,
+                        Poll::Ready(Err(e)) => {
+                            gone = Some(e.to_string());
+                            break;
+                        }
+                        Poll::Ready(Ok(())) => {}
+                    }
+                    // WouldBlock clears the readiness; polling again then
+                    // registers the waker, so no wake-up is missed.
+                    match client.stream.try_read(&mut self.buf) {
+                        Ok(0) => {
+                            gone = Some("closed".into());
+                            break;
+                        }
+                        Ok(n) => {
+                            let at = Instant::now();
+                            let path = client.path;
+                            client.scanner.push(&self.buf[..n], &mut |raw| {
+                                out.push(Inbound {
+                                    frame: frame::decode(raw),
+                                    at,
+                                    path,
+                                })
+                            });
+                            progress = true;
+                            break;
+                        }
+                        Err(e) if e.kind() == io::ErrorKind::WouldBlock => continue,
+                        Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+                        Err(e) => {
+                            gone = Some(e.to_string());
+                            break;
+                        }
+                    }
+                }
+                match gone {
+                    Some(why) => {
+                        self.remove(i, &why);
+                        progress = true;
+                    }
+                    None => i += 1,
+                }
+            }
+            if progress {
+                Poll::Ready(Ok(()))
+            } else {
+                Poll::Pending
+            }
+        })
+        .await
+    }
+
+    fn has_peers(&self) -> bool {
+        !self.clients.is_empty()
+    }
+
+    fn scan_stats(&self) -> ScanStats {
+        let mut stats = self.departed;
+        for c in &self.clients {
+            stats.add(&c.scanner.stats);
+        }
+        stats
+    }
+}

@@ -1,0 +1,158 @@
+//! mavping on a serial port: a pseudo-terminal "null-modem cable"
+//! (tests/peers/pty_bridge.py) with a pymavlink responder on its far end,
+//! opened at 57600 baud by both sides, as with a telemetry radio.
+
+mod common;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use common::*;
+
+/// A bridge and the device paths of its two ends.
+fn bridge(args: &[&str]) -> (Peer, String, String) {
+    let mut bridge = Peer::start("pty_bridge.py", args);
+    let line = bridge.read_line();
+    let (a, b) = line.split_once(' ').expect("two pty paths");
+    (bridge, a.to_string(), b.to_string())
+}
+
+fn scratch_dir(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("mavping-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn skipped_bytes(out: &str) -> u64 {
+    out.lines()
+        .find_map(|l| l.strip_prefix("link: "))
+        .and_then(|l| l.split(", ").find(|p| p.ends_with("bytes skipped")))
+        .and_then(|p| p.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0)
+}
+
+#[test]
+fn junk_between_frames_is_counted_and_skipped_exactly() {
+    let (_bridge, a, b) = bridge(&[]);
+    let responder = Peer::start(
+        "responder.py",
+        &[
+            &b,
+            "--baud",
+            "57600",
+            "--junk-before",
+            "1,3,5",
+            "--drop",
+            "4",
+        ],
+    );
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "8",
+        "-i",
+        "0.05",
+        "-W",
+        "300ms",
+        &format!("serial:{a}:57600"),
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    let c = text_counts(&out, "1/1").expect(&out);
+    assert_eq!(
+        (c.sent, c.received, c.lost, c.duplicate),
+        (8, 7, 1, 0),
+        "{out}"
+    );
+    let truth = responder.finish();
+    assert_eq!(truth["junk"], 3);
+    assert_eq!(truth["replies"], 7);
+    let junk = truth["junk_bytes"].as_u64().unwrap();
+    assert!(junk >= 3);
+    assert_eq!(skipped_bytes(&out), junk, "{out}");
+}
+
+#[test]
+fn frames_split_across_reads_are_reassembled() {
+    // Every 5 bytes from the responder arrive as a read of their own.
+    let (bridge, a, b) = bridge(&["--chunk", "5", "--chunk-delay-ms", "2"]);
+    let responder = Peer::start("responder.py", &[&b, "--baud", "57600"]);
+    // A bare device path takes its baud rate from --baud.
+    let (code, out, err) =
+        run_mavping(&["-c", "6", "-i", "0.1", "-W", "500ms", "--baud", "57600", &a]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    let c = text_counts(&out, "1/1").expect(&out);
+    assert_eq!((c.sent, c.received, c.lost), (6, 6, 0), "{out}");
+    assert_eq!(skipped_bytes(&out), 0, "{out}");
+    assert_eq!(responder.finish()["replies"], 6);
+    assert!(bridge.finish()["b_to_a"].as_u64().unwrap() > 6 * 26);
+}
+
+#[test]
+fn closing_the_pty_ends_the_run_with_the_summary_and_exit_2() {
+    let (mut bridge, a, b) = bridge(&[]);
+    let _responder = Peer::start("responder.py", &[&b, "--baud", "57600"]);
+    let run = start_mavping(&["-i", "0.05", "-W", "300ms", &format!("serial:{a}:57600")]);
+    std::thread::sleep(Duration::from_millis(700));
+    bridge.kill();
+    let (code, out, err) = run.wait(Duration::from_secs(10));
+    assert_eq!(code, 2, "{out}\n{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("hung up"), "{err}");
+    let c = text_counts(&out, "1/1").expect(&out);
+    assert!(c.received >= 5, "{out}");
+    assert_eq!(c.sent, c.received + c.lost, "{out}");
+}
+
+#[test]
+fn missing_device_exits_2_with_the_os_reason() {
+    let (code, out, err) = run_mavping(&["serial:/dev/ttyMAVPING_NONE:57600"]);
+    assert_eq!(code, 2, "{out}\n{err}");
+    assert!(out.is_empty(), "{out}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("cannot open serial:/dev/ttyMAVPING_NONE:57600")
+            && err.contains("No such file or directory"),
+        "{err}"
+    );
+}
+
+#[test]
+fn reconnect_reopens_the_device_when_it_comes_back() {
+    // The bridge's A end is reached through a symlink, so a new bridge (new
+    // pty numbers) reappears under the same name, as a radio replugged.
+    let dir = scratch_dir("reconnect");
+    let link = dir.join("ttyRADIO");
+    let link_s = link.to_str().unwrap();
+    let (mut first, _, b) = bridge(&["--link-a", link_s]);
+    let mut responder = Peer::start("responder.py", &[&b, "--baud", "57600"]);
+    let run = start_mavping(&[
+        "--reconnect",
+        "-i",
+        "0.05",
+        "-W",
+        "200ms",
+        "-w",
+        "3s",
+        &format!("serial:{link_s}:57600"),
+    ]);
+    std::thread::sleep(Duration::from_millis(700));
+    first.kill();
+    responder.kill();
+    std::thread::sleep(Duration::from_millis(500));
+    let (_second, _, b2) = bridge(&["--link-a", link_s]);
+    let _responder2 = Peer::start("responder.py", &[&b2, "--baud", "57600"]);
+    let (code, out, err) = run.wait(Duration::from_secs(15));
+    let _ = std::fs::remove_dir_all(&dir);
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(err.contains("lost (device hung up"), "{err}");
+    assert!(err.contains("reconnected after"), "{err}");
+    assert!(out.contains("while reconnecting"), "downtime shown: {out}");
+    let c = text_counts(&out, "1/1").expect(&out);
+    assert!(c.lost >= 5, "pings sent while down are lost: {out}");
+    // Replies to requests sent after the device came back (t > 1.5 s).
+    assert!(
+        out.lines()
+            .any(|l| l.starts_with("reply from 1/1: seq=4")
+                || l.starts_with("reply from 1/1: seq=5")),
+        "{out}"
+    );
+}
