@@ -8,11 +8,15 @@ use std::time::{SystemTime, UNIX_EPOCH};
 
 use tokio::sync::Notify;
 
-use crate::config::Config;
+use crate::cli::{Cli, Mode};
+use crate::config::{Config, Probe, RespondConfig};
+use crate::engine::command_session;
 use crate::engine::session::{self, Outcome};
 use crate::output::text::TextReporter;
 use crate::probe::ping::PingProbe;
-use crate::transport::Link;
+use crate::probe::timesync::TimesyncProbe;
+use crate::respond;
+use crate::transport::{Link, LinkSpec};
 
 /// Exit codes, as ping and fping use them.
 pub mod exit {
@@ -97,40 +101,116 @@ async fn run_ping(config: &Config) -> u8 {
             return exit::ERROR;
         }
     };
-    let wall_start_us = SystemTime::now()
+    let wall_start_ns = SystemTime::now()
         .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_micros() as u64)
+        .map(|d| d.as_nanos() as u64)
         .unwrap_or(0);
     let stdout = io::stdout().lock();
     let mut reporter = TextReporter::new(stdout, config.quiet);
-    let outcome = session::run(
-        &config.session,
-        &mut link,
-        PingProbe::new(wall_start_us),
-        &mut reporter,
-        stop,
-    )
-    .await;
+    let outcome = match &config.probe {
+        Probe::Ping => {
+            let probe = PingProbe::new(wall_start_ns / 1_000);
+            session::run(&config.session, &mut link, probe, &mut reporter, stop).await
+        }
+        Probe::Timesync { target } => {
+            // The simulated link has no wall clock: its responders count
+            // from its start, and so do we there (reproducible output).
+            let base = if matches!(config.link, LinkSpec::Sim(_)) {
+                0
+            } else {
+                wall_start_ns
+            };
+            let probe = TimesyncProbe::new(base, *target);
+            session::run(&config.session, &mut link, probe, &mut reporter, stop).await
+        }
+        Probe::Command(spec) => {
+            let outcome =
+                command_session::run(&config.session, spec, &mut link, &mut reporter, stop).await;
+            if let Some(e) = &outcome.summary.link_error {
+                print_error(e);
+            }
+            return outcome.exit_code();
+        }
+    };
     if let Some(e) = &outcome.summary.link_error {
         print_error(e);
     }
     exit_code(&outcome)
 }
 
+async fn run_respond(config: &RespondConfig) -> u8 {
+    let stop = Arc::new(Notify::new());
+    watch_signals(stop.clone());
+    let mut link = match Link::open(&config.link).await {
+        Ok(link) => link,
+        Err(e) => {
+            print_error(&e);
+            return exit::ERROR;
+        }
+    };
+    let mut out = io::stdout().lock();
+    // Printed once the link is open: a test (or a person) knows from it
+    // that requests will be heard.
+    let _ = writeln!(
+        out,
+        "{}",
+        respond::describe(config, &config.link.to_string())
+    );
+    let _ = out.flush();
+    let (counts, error) = respond::run(config, &mut link, stop).await;
+    let _ = writeln!(out, "respond {}: {counts}", config.id);
+    let _ = out.flush();
+    match error {
+        Some(e) => {
+            print_error(&e);
+            exit::ERROR
+        }
+        None => exit::OK,
+    }
+}
+
+fn runtime(paused: bool) -> Option<tokio::runtime::Runtime> {
+    let mut builder = tokio::runtime::Builder::new_current_thread();
+    builder.enable_all();
+    if paused {
+        builder.start_paused(true);
+    }
+    match builder.build() {
+        Ok(rt) => Some(rt),
+        Err(e) => {
+            print_error(&format!("cannot start the async runtime: {e}"));
+            None
+        }
+    }
+}
+
 /// Runs mavping with a validated configuration.
 pub fn run(config: Config) -> ExitCode {
     init_logging(config.verbose);
-    let mut builder = tokio::runtime::Builder::new_current_thread();
-    builder.enable_all();
-    if config.virtual_clock() {
-        builder.start_paused(true);
-    }
-    let runtime = match builder.build() {
-        Ok(rt) => rt,
-        Err(e) => {
-            print_error(&format!("cannot start the async runtime: {e}"));
-            return ExitCode::from(exit::ERROR);
-        }
+    let Some(runtime) = runtime(config.virtual_clock()) else {
+        return ExitCode::from(exit::ERROR);
     };
     ExitCode::from(runtime.block_on(run_ping(&config)))
+}
+
+/// Runs `mavping respond` with a validated configuration.
+pub fn respond(config: RespondConfig) -> ExitCode {
+    init_logging(config.verbose);
+    let paused = matches!(&config.link, LinkSpec::Sim(p) if p.virtual_clock);
+    let Some(runtime) = runtime(paused) else {
+        return ExitCode::from(exit::ERROR);
+    };
+    ExitCode::from(runtime.block_on(run_respond(&config)))
+}
+
+/// From parsed arguments to an exit code: validates, then runs the mode.
+pub fn main(cli: &Cli) -> ExitCode {
+    let result = match &cli.mode {
+        Some(Mode::Respond(args)) => RespondConfig::try_from(args).map(respond),
+        None => Config::try_from(&cli.ping).map(run),
+    };
+    result.unwrap_or_else(|e| {
+        print_error(&e);
+        ExitCode::from(exit::ERROR)
+    })
 }

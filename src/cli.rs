@@ -2,7 +2,7 @@
 
 use std::time::Duration;
 
-use clap::{ArgAction, Parser};
+use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 
 /// Parses "250ms", "2s", "1m30s", or a plain number of seconds ("0.2").
 pub fn parse_duration(s: &str) -> Result<Duration, String> {
@@ -27,17 +27,41 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
         built-in simulated link (see the README).\n\n\
         Exit status: 0 when a responder answered, 1 when none did, 2 on usage or link errors."
 )]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Cli {
     #[command(flatten)]
     pub ping: PingArgs,
+
+    #[command(subcommand)]
+    pub mode: Option<Mode>,
+}
+
+/// Modes other than measuring.
+#[derive(Debug, Subcommand)]
+pub enum Mode {
+    /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG
+    Respond(RespondArgs),
+}
+
+/// What to send.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ProbeKind {
+    /// MAVLink PING (PX4, QGroundControl, MAVSDK answer it)
+    Ping,
+    /// TIMESYNC: answered everywhere, ArduPilot included; also measures clock offset
+    Timesync,
+    /// COMMAND_LONG re-sent until its COMMAND_ACK arrives
+    Command,
 }
 
 /// Options of a measurement run (the default command).
 #[derive(Debug, clap::Args)]
 pub struct PingArgs {
     /// Where to ping: udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, sim:[?...]
-    #[arg(value_name = "CONNECTION", env = "MAVPING_LINK")]
-    pub link: String,
+    // An Option only so that `mavping respond ...` parses: it is required
+    // whenever no subcommand is given.
+    #[arg(value_name = "CONNECTION", env = "MAVPING_LINK", required = true)]
+    pub link: Option<String>,
 
     /// Stop after sending COUNT requests (and waiting for their replies)
     #[arg(short = 'c', long, value_name = "COUNT", env = "MAVPING_COUNT")]
@@ -88,6 +112,71 @@ pub struct PingArgs {
     pub first_seq: u32,
 
     /// More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG
+    #[arg(short = 'v', long, action = ArgAction::Count)]
+    pub verbose: u8,
+
+    /// What to send: ping, timesync (also ArduPilot; measures clock offset), command
+    #[arg(long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Ping,
+          env = "MAVPING_PROBE")]
+    pub probe: ProbeKind,
+
+    /// Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)
+    #[arg(long, value_name = "SYS/COMP", env = "MAVPING_TARGET")]
+    pub target: Option<String>,
+
+    /// --probe command: MAV_CMD name or id, then up to 7 params, comma-separated
+    #[arg(long, value_name = "CMD[,P1,...]", default_value = "REQUEST_MESSAGE,0")]
+    pub command: String,
+
+    /// --probe command: re-send an unacknowledged command this often
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "100ms")]
+    pub retry_interval: Duration,
+
+    /// --probe command: re-sends after the first before a command counts as failed
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    pub retries: u8,
+}
+
+/// Options of `mavping respond`.
+#[derive(Debug, clap::Args)]
+pub struct RespondArgs {
+    /// Where to answer: udpin:HOST:PORT (every peer), udpout:HOST:PORT, sim:...
+    #[arg(value_name = "CONNECTION")]
+    pub link: String,
+
+    /// Our MAVLink system id
+    #[arg(long, value_name = "ID", default_value_t = 1)]
+    pub sysid: u8,
+
+    /// Our MAVLink component id
+    #[arg(long, value_name = "ID", default_value_t = 1)]
+    pub compid: u8,
+
+    /// Hold every reply this long (one-way link emulation)
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
+    pub delay: Duration,
+
+    /// Extra delay per reply, uniform in [0, jitter]
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
+    pub jitter: Duration,
+
+    /// Drop this share of replies, e.g. 10 or 10%
+    #[arg(long, value_name = "PCT", default_value = "0")]
+    pub drop: String,
+
+    /// Send this share of replies twice
+    #[arg(long, value_name = "PCT", default_value = "0")]
+    pub dup: String,
+
+    /// Random seed for --jitter, --drop and --dup
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub seed: u64,
+
+    /// Answer only TIMESYNC and commands, not PING (like ArduPilot)
+    #[arg(long)]
+    pub no_ping: bool,
+
+    /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]
     pub verbose: u8,
 }

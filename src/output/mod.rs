@@ -6,9 +6,11 @@ pub mod text;
 use std::io;
 use std::time::Duration;
 
+use crate::config::CommandSpec;
+use crate::engine::commands::CommandEvent;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::roster::Identity;
-use crate::engine::summary::Summary;
+use crate::engine::summary::{CommandSummary, Summary};
 use crate::frame::SysComp;
 
 /// What a run is doing, printed first.
@@ -40,4 +42,12 @@ pub trait Reporter {
     fn start(&mut self, info: &StartInfo) -> io::Result<()>;
     fn event(&mut self, event: &Event<'_>) -> io::Result<()>;
     fn summary(&mut self, summary: &Summary) -> io::Result<()>;
+}
+
+/// An output format for `--probe command`, whose events and summary differ
+/// from the echo probes'.
+pub trait CommandReporter {
+    fn command_start(&mut self, info: &StartInfo, spec: &CommandSpec) -> io::Result<()>;
+    fn command_event(&mut self, event: &CommandEvent) -> io::Result<()>;
+    fn command_summary(&mut self, summary: &CommandSummary) -> io::Result<()>;
 }
