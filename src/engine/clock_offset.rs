@@ -18,6 +18,10 @@ use super::Nanos;
 
 /// Lowest-RTT samples kept for the offset estimate.
 pub const BEST: usize = 8;
+/// Samples up to twice the lowest RTT plus this much enter the drift fit:
+/// on loopback, RTTs of a few hundred µs vary by more than 2x without any
+/// meaningful queue.
+const FIT_SLACK_NS: Nanos = 1_000_000;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Sample {
@@ -39,8 +43,10 @@ pub struct ClockSummary {
     /// Standard deviation of the samples about the drift line, ns.
     pub spread_ns: f64,
     /// Their clock's rate relative to ours, parts per million (positive:
-    /// theirs runs fast). 0 until two samples at different times.
-    pub drift_ppm: f64,
+    /// theirs runs fast), and its standard error. None until three samples
+    /// at different times: two points always fit a line exactly.
+    pub drift_ppm: Option<f64>,
+    pub drift_stderr_ppm: Option<f64>,
     pub samples: u64,
 }
 
@@ -74,7 +80,7 @@ impl ClockOffset {
         let min_rtt = self.min_rtt.map_or(rtt, |m| m.min(rtt));
         self.min_rtt = Some(min_rtt);
         self.keep_best(Sample { rtt, mid, offset });
-        if rtt > min_rtt.saturating_mul(2) {
+        if rtt > min_rtt.saturating_mul(2) + FIT_SLACK_NS {
             return;
         }
 
@@ -127,17 +133,21 @@ impl ClockOffset {
             .map(|s| (s.offset - self.origin.unwrap_or(0)) as f64 - slope * s.mid as f64)
             .sum();
         let offset_ns = self.origin.unwrap_or(0) + (sum / self.best.len() as f64).round() as i128;
-        let spread_ns = if self.n >= 3 {
-            let residual = (self.c_yy - slope * 1e9 * self.c_xy).max(0.0);
-            (residual / (self.n - 2) as f64).sqrt()
+        let fitted = self.n >= 3 && self.c_xx > 0.0;
+        let residual_var = if fitted {
+            (self.c_yy - slope * 1e9 * self.c_xy).max(0.0) / (self.n - 2) as f64
         } else {
             0.0
         };
+        let spread_ns = residual_var.sqrt();
+        // Standard error of the slope, in ns per s, then ppm.
+        let drift_stderr_ppm = fitted.then(|| (residual_var / self.c_xx).sqrt() / 1e3);
         Some(ClockSummary {
             offset_ns,
             uncertainty_ns: min_rtt / 2,
             spread_ns,
-            drift_ppm: slope * 1e6,
+            drift_ppm: fitted.then_some(slope * 1e6),
+            drift_stderr_ppm,
             samples: self.seen,
         })
     }
@@ -164,7 +174,7 @@ mod tests {
         let s = c.summary().unwrap();
         assert_eq!(s.offset_ns, -7_000_000);
         assert_eq!(s.uncertainty_ns, 500);
-        assert_eq!(s.drift_ppm, 0.0);
+        assert_eq!(s.drift_ppm, Some(0.0));
         assert_eq!(s.spread_ns, 0.0);
         assert_eq!(s.samples, 10);
     }
@@ -198,7 +208,8 @@ mod tests {
             );
         }
         let s = c.summary().unwrap();
-        assert!((s.drift_ppm - 40.0).abs() < 1e-3, "{s:?}");
+        assert!((s.drift_ppm.unwrap() - 40.0).abs() < 1e-3, "{s:?}");
+        assert!(s.drift_stderr_ppm.unwrap() < 1e-3, "{s:?}");
         assert!((s.offset_ns - 1_500_000_000).abs() <= 2, "{s:?}");
         assert!(s.spread_ns < 1.0, "{s:?}");
     }
@@ -214,7 +225,7 @@ mod tests {
         }
         let s = c.summary().unwrap();
         assert_eq!(s.offset_ns, 42_000_000_000 - base);
-        assert_eq!(s.drift_ppm, 0.0);
+        assert_eq!(s.drift_ppm, Some(0.0));
     }
 
     #[test]
@@ -226,5 +237,10 @@ mod tests {
         assert_eq!(c.best.len(), BEST);
         assert!(c.best.iter().all(|s| s.rtt == 20));
         assert!(ClockOffset::default().summary().is_none());
+        // Two samples fit any line: no drift claimed.
+        let mut two = ClockOffset::default();
+        exchange(&mut two, 0, 10, 10, 0, 0.0);
+        exchange(&mut two, 1_000, 10, 30, 0, 0.0);
+        assert_eq!(two.summary().unwrap().drift_ppm, None);
     }
 }

@@ -111,13 +111,16 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
         ms_us(rtt.jitter_us)
     )?;
     if let Some(clock) = &r.clock {
+        let drift = match (clock.drift_ppm, clock.drift_stderr_ppm) {
+            (Some(d), Some(e)) => format!("{d:+.2} ± {e:.2} ppm"),
+            _ => "unknown (too few samples)".to_string(),
+        };
         writeln!(
             out,
-            "  clock offset {} ± {} ms, spread {} ms, drift {:+.2} ppm ({} samples)",
+            "  clock offset {} ± {} ms, spread {} ms, drift {drift} ({} samples)",
             offset(clock.offset_ns),
             ms(clock.uncertainty_ns),
             ms_us(clock.spread_ns / 1e3),
-            clock.drift_ppm,
             clock.samples
         )?;
     }
