@@ -21,7 +21,10 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
     long_about = "Measure MAVLink link latency and loss: ping for drones and radios.\n\n\
         Sends MAVLink PING requests on a schedule over UDP, TCP, serial or a simulated link, \
         matches each reply to its request by sequence and responder, and reports per-responder \
-        RTT, loss, late and duplicate replies.",
+        RTT, loss, late and duplicate replies. --probe timesync uses TIMESYNC instead (ArduPilot \
+        answers nothing else) and also measures each responder's clock offset and drift; \
+        --probe command re-sends a COMMAND_LONG until acknowledged. `mavping respond` is the \
+        other end: a MAVLink system that answers all three.",
     after_help = "Connection strings: udpin:HOST:PORT (also udp:HOST:PORT or HOST:PORT) listens and \
         pings every peer heard; udpout:HOST:PORT sends to one address; sim:[?key=value&...] is the \
         built-in simulated link (see the README).\n\n\
