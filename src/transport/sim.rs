@@ -207,9 +207,8 @@ impl fmt::Display for SimParams {
             self.seed
         )?;
         if self.clock_offset_ns != 0 {
-            let d = std::time::Duration::from_nanos(self.clock_offset_ns.unsigned_abs());
-            let sign = if self.clock_offset_ns < 0 { "-" } else { "" };
-            write!(f, "&offset={sign}{}", humantime::format_duration(d))?;
+            // Seconds as a number: humantime's "3s 250ms" has a space.
+            write!(f, "&offset={}s", self.clock_offset_ns as f64 / 1e9)?;
         }
         if self.drift_ppm != 0.0 {
             write!(f, "&drift={}", self.drift_ppm)?;
