@@ -43,6 +43,11 @@ Register-ArgumentCompleter -Native -CommandName 'mavping' -ScriptBlock {
             [CompletionResult]::new('--hgrm', '--hgrm', [CompletionResultType]::ParameterName, 'Write each responder''s RTT distribution in HdrHistogram''s .hgrm format')
             [CompletionResult]::new('--samples', '--samples', [CompletionResultType]::ParameterName, 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)')
             [CompletionResult]::new('--baud', '--baud', [CompletionResultType]::ParameterName, 'Baud rate of a serial device whose connection string names none')
+            [CompletionResult]::new('--probe', '--probe', [CompletionResultType]::ParameterName, 'What to send: ping, timesync (also ArduPilot; measures clock offset), command')
+            [CompletionResult]::new('--target', '--target', [CompletionResultType]::ParameterName, 'Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)')
+            [CompletionResult]::new('--command', '--command', [CompletionResultType]::ParameterName, '--probe command: MAV_CMD name or id, then up to 7 params, comma-separated')
+            [CompletionResult]::new('--retry-interval', '--retry-interval', [CompletionResultType]::ParameterName, '--probe command: re-send an unacknowledged command this often')
+            [CompletionResult]::new('--retries', '--retries', [CompletionResultType]::ParameterName, '--probe command: re-sends after the first before a command counts as failed')
             [CompletionResult]::new('--generate', '--generate', [CompletionResultType]::ParameterName, 'Print shell completions or the man page (for packagers)')
             [CompletionResult]::new('-q', '-q', [CompletionResultType]::ParameterName, 'Print only the summary')
             [CompletionResult]::new('--quiet', '--quiet', [CompletionResultType]::ParameterName, 'Print only the summary')
@@ -55,6 +60,35 @@ Register-ArgumentCompleter -Native -CommandName 'mavping' -ScriptBlock {
             [CompletionResult]::new('--help', '--help', [CompletionResultType]::ParameterName, 'Print help (see more with ''--help'')')
             [CompletionResult]::new('-V', '-V ', [CompletionResultType]::ParameterName, 'Print version')
             [CompletionResult]::new('--version', '--version', [CompletionResultType]::ParameterName, 'Print version')
+            [CompletionResult]::new('respond', 'respond', [CompletionResultType]::ParameterValue, 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG')
+            [CompletionResult]::new('help', 'help', [CompletionResultType]::ParameterValue, 'Print this message or the help of the given subcommand(s)')
+            break
+        }
+        'mavping;respond' {
+            [CompletionResult]::new('--sysid', '--sysid', [CompletionResultType]::ParameterName, 'Our MAVLink system id')
+            [CompletionResult]::new('--compid', '--compid', [CompletionResultType]::ParameterName, 'Our MAVLink component id')
+            [CompletionResult]::new('--delay', '--delay', [CompletionResultType]::ParameterName, 'Hold every reply this long (one-way link emulation)')
+            [CompletionResult]::new('--jitter', '--jitter', [CompletionResultType]::ParameterName, 'Extra delay per reply, uniform in [0, jitter]')
+            [CompletionResult]::new('--drop', '--drop', [CompletionResultType]::ParameterName, 'Drop this share of replies, e.g. 10 or 10%')
+            [CompletionResult]::new('--dup', '--dup', [CompletionResultType]::ParameterName, 'Send this share of replies twice')
+            [CompletionResult]::new('--seed', '--seed', [CompletionResultType]::ParameterName, 'Random seed for --jitter, --drop and --dup')
+            [CompletionResult]::new('--baud', '--baud', [CompletionResultType]::ParameterName, 'Baud rate of a serial device whose connection string names none')
+            [CompletionResult]::new('--no-ping', '--no-ping', [CompletionResultType]::ParameterName, 'Answer only TIMESYNC and commands, not PING (like ArduPilot)')
+            [CompletionResult]::new('-v', '-v', [CompletionResultType]::ParameterName, 'More logs on stderr (-v info, -vv debug)')
+            [CompletionResult]::new('--verbose', '--verbose', [CompletionResultType]::ParameterName, 'More logs on stderr (-v info, -vv debug)')
+            [CompletionResult]::new('-h', '-h', [CompletionResultType]::ParameterName, 'Print help')
+            [CompletionResult]::new('--help', '--help', [CompletionResultType]::ParameterName, 'Print help')
+            break
+        }
+        'mavping;help' {
+            [CompletionResult]::new('respond', 'respond', [CompletionResultType]::ParameterValue, 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG')
+            [CompletionResult]::new('help', 'help', [CompletionResultType]::ParameterValue, 'Print this message or the help of the given subcommand(s)')
+            break
+        }
+        'mavping;help;respond' {
+            break
+        }
+        'mavping;help;help' {
             break
         }
     })

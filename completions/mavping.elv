@@ -40,6 +40,11 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand --hgrm 'Write each responder''s RTT distribution in HdrHistogram''s .hgrm format'
             cand --samples 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)'
             cand --baud 'Baud rate of a serial device whose connection string names none'
+            cand --probe 'What to send: ping, timesync (also ArduPilot; measures clock offset), command'
+            cand --target 'Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)'
+            cand --command '--probe command: MAV_CMD name or id, then up to 7 params, comma-separated'
+            cand --retry-interval '--probe command: re-send an unacknowledged command this often'
+            cand --retries '--probe command: re-sends after the first before a command counts as failed'
             cand --generate 'Print shell completions or the man page (for packagers)'
             cand -q 'Print only the summary'
             cand --quiet 'Print only the summary'
@@ -52,6 +57,31 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand --help 'Print help (see more with ''--help'')'
             cand -V 'Print version'
             cand --version 'Print version'
+            cand respond 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'
+            cand help 'Print this message or the help of the given subcommand(s)'
+        }
+        &'mavping;respond'= {
+            cand --sysid 'Our MAVLink system id'
+            cand --compid 'Our MAVLink component id'
+            cand --delay 'Hold every reply this long (one-way link emulation)'
+            cand --jitter 'Extra delay per reply, uniform in [0, jitter]'
+            cand --drop 'Drop this share of replies, e.g. 10 or 10%'
+            cand --dup 'Send this share of replies twice'
+            cand --seed 'Random seed for --jitter, --drop and --dup'
+            cand --baud 'Baud rate of a serial device whose connection string names none'
+            cand --no-ping 'Answer only TIMESYNC and commands, not PING (like ArduPilot)'
+            cand -v 'More logs on stderr (-v info, -vv debug)'
+            cand --verbose 'More logs on stderr (-v info, -vv debug)'
+            cand -h 'Print help'
+            cand --help 'Print help'
+        }
+        &'mavping;help'= {
+            cand respond 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'
+            cand help 'Print this message or the help of the given subcommand(s)'
+        }
+        &'mavping;help;respond'= {
+        }
+        &'mavping;help;help'= {
         }
     ]
     $completions[$command]

@@ -10,15 +10,18 @@ use std::time::{SystemTime, UNIX_EPOCH};
 use clap::CommandFactory;
 use tokio::sync::Notify;
 
-use crate::cli::{Cli, Format, Generate};
-use crate::config::Config;
+use crate::cli::{Cli, Format, Generate, Mode};
+use crate::config::{Config, Probe, RespondConfig};
+use crate::engine::command_session;
 use crate::engine::session::{self, Outcome};
 use crate::output::json::JsonReporter;
 use crate::output::samples::SampleLog;
 use crate::output::text::TextReporter;
 use crate::output::{hgrm, Fanout, Reporter, WallClock};
 use crate::probe::ping::PingProbe;
-use crate::transport::Link;
+use crate::probe::timesync::TimesyncProbe;
+use crate::respond;
+use crate::transport::{Link, LinkSpec};
 use crate::verdict::{self, exit};
 
 /// A second Ctrl-C leaves at once, as shells expect (128 + SIGINT).
@@ -134,6 +137,22 @@ async fn run_ping(config: &Config) -> u8 {
         },
     };
     let stdout = io::stdout().lock();
+    if let Probe::Command(spec) = &config.probe {
+        let outcome = match config.format {
+            Format::Text => {
+                let mut report = TextReporter::new(stdout, config.quiet);
+                command_session::run(&config.session, spec, &mut link, &mut report, stop).await
+            }
+            Format::Json => {
+                let mut report = JsonReporter::new(stdout, config.quiet, wall);
+                command_session::run(&config.session, spec, &mut link, &mut report, stop).await
+            }
+        };
+        if let Some(e) = &outcome.summary.link_error {
+            print_error(e);
+        }
+        return outcome.exit_code();
+    }
     let main: Box<dyn Reporter> = match config.format {
         Format::Text => Box::new(TextReporter::new(stdout, config.quiet)),
         Format::Json => Box::new(JsonReporter::new(stdout, config.quiet, wall)),
@@ -143,14 +162,23 @@ async fn run_ping(config: &Config) -> u8 {
         reporters.push(Box::new(SampleLog::new(file)));
     }
     let mut report = Fanout { reporters };
-    let outcome = session::run(
-        &config.session,
-        &mut link,
-        PingProbe::new(wall.micros_since_epoch()),
-        &mut report,
-        stop,
-    )
-    .await;
+    let outcome = match &config.probe {
+        Probe::Timesync { target } => {
+            // The simulated link has no wall clock: its responders count
+            // from its start, and so do we there (reproducible output).
+            let base = if matches!(config.link, LinkSpec::Sim(_)) {
+                0
+            } else {
+                wall.micros_since_epoch() * 1_000
+            };
+            let probe = TimesyncProbe::new(base, *target);
+            session::run(&config.session, &mut link, probe, &mut report, stop).await
+        }
+        _ => {
+            let probe = PingProbe::new(wall.micros_since_epoch());
+            session::run(&config.session, &mut link, probe, &mut report, stop).await
+        }
+    };
     let verdict = verdict::judge(&outcome.summary, &config.thresholds);
     let output_closed =
         outcome.output_closed || report.summary(&outcome.summary, &verdict).is_err();
@@ -171,20 +199,88 @@ async fn run_ping(config: &Config) -> u8 {
     }
 }
 
+async fn run_respond(config: &RespondConfig) -> u8 {
+    let stop = Arc::new(Notify::new());
+    watch_signals(stop.clone());
+    let mut link = match Link::open(&config.link, &config.link_options).await {
+        Ok(link) => link,
+        Err(e) => {
+            print_error(&e);
+            return exit::ERROR;
+        }
+    };
+    let mut out = io::stdout().lock();
+    // Printed once the link is open: a test (or a person) knows from it
+    // that requests will be heard.
+    let _ = writeln!(
+        out,
+        "{}",
+        respond::describe(config, &config.link.to_string())
+    );
+    let _ = out.flush();
+    let (counts, error) = respond::run(config, &mut link, stop).await;
+    let _ = writeln!(out, "respond {}: {counts}", config.id);
+    let _ = out.flush();
+    match error {
+        Some(e) => {
+            print_error(&e);
+            exit::ERROR
+        }
+        None => exit::OK,
+    }
+}
+
+fn runtime(paused: bool) -> Option<tokio::runtime::Runtime> {
+    let mut builder = tokio::runtime::Builder::new_current_thread();
+    builder.enable_all();
+    if paused {
+        builder.start_paused(true);
+    }
+    match builder.build() {
+        Ok(rt) => Some(rt),
+        Err(e) => {
+            print_error(&format!("cannot start the async runtime: {e}"));
+            None
+        }
+    }
+}
+
 /// Runs mavping with a validated configuration.
 pub fn run(config: Config) -> ExitCode {
     init_logging(config.verbose);
-    let mut builder = tokio::runtime::Builder::new_current_thread();
-    builder.enable_all();
-    if config.virtual_clock() {
-        builder.start_paused(true);
-    }
-    let runtime = match builder.build() {
-        Ok(rt) => rt,
-        Err(e) => {
-            print_error(&format!("cannot start the async runtime: {e}"));
-            return ExitCode::from(exit::ERROR);
-        }
+    let Some(runtime) = runtime(config.virtual_clock()) else {
+        return ExitCode::from(exit::ERROR);
     };
     ExitCode::from(runtime.block_on(run_ping(&config)))
+}
+
+/// Runs `mavping respond` with a validated configuration.
+pub fn respond(config: RespondConfig) -> ExitCode {
+    init_logging(config.verbose);
+    let paused = matches!(&config.link, LinkSpec::Sim(p) if p.virtual_clock);
+    let Some(runtime) = runtime(paused) else {
+        return ExitCode::from(exit::ERROR);
+    };
+    ExitCode::from(runtime.block_on(run_respond(&config)))
+}
+
+/// From parsed arguments to an exit code: validates, then runs the mode.
+pub fn main(cli: &Cli) -> ExitCode {
+    if let Some(kind) = cli.generate {
+        return match generate(kind, &mut io::stdout()) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                print_error(&e);
+                ExitCode::from(exit::ERROR)
+            }
+        };
+    }
+    let result = match &cli.mode {
+        Some(Mode::Respond(args)) => RespondConfig::try_from(args).map(respond),
+        None => Config::try_from(&cli.ping).map(run),
+    };
+    result.unwrap_or_else(|e| {
+        print_error(&e);
+        ExitCode::from(exit::ERROR)
+    })
 }

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::time::Duration;
 
-use clap::{ArgAction, Parser, ValueEnum};
+use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 
 use crate::verdict::{Expected, RttLimit};
 
@@ -24,7 +24,10 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
     long_about = "Measure MAVLink link latency and loss: ping for drones and radios.\n\n\
         Sends MAVLink PING requests on a schedule over UDP, TCP, serial or a simulated link, \
         matches each reply to its request by sequence and responder, and reports per-responder \
-        RTT, loss, late and duplicate replies.",
+        RTT, loss, late and duplicate replies. --probe timesync uses TIMESYNC instead (ArduPilot \
+        answers nothing else) and also measures each responder's clock offset and drift; \
+        --probe command re-sends a COMMAND_LONG until acknowledged. `mavping respond` is the \
+        other end: a MAVLink system that answers all three.",
     after_help = "Connection strings: udpin:HOST:PORT (also udp:HOST:PORT or HOST:PORT) listens and \
         pings every peer heard; udpout:HOST:PORT sends to one address; udpbcast:ADDR:PORT broadcasts; \
         tcp:HOST:PORT (tcpout:) connects, tcpin:HOST:PORT listens and pings every client; \
@@ -32,6 +35,7 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
         is the built-in simulated link (see the README). IPv6 hosts go in brackets: [::1]:14550.\n\n\
         Exit status: 0 when a responder answered, 1 when none did, 2 on usage or link errors."
 )]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Cli {
     #[command(flatten)]
     pub ping: PingArgs,
@@ -39,6 +43,9 @@ pub struct Cli {
     /// Print shell completions or the man page (for packagers)
     #[arg(long, value_enum, hide = true, value_name = "KIND")]
     pub generate: Option<Generate>,
+
+    #[command(subcommand)]
+    pub mode: Option<Mode>,
 }
 
 /// `--percent`-style values: "5%", "0.5%" or "5" (all percent) -> ratio.
@@ -99,6 +106,24 @@ pub enum Generate {
     CompletePowershell,
     CompleteElvish,
     Man,
+}
+
+/// Modes other than measuring.
+#[derive(Debug, Subcommand)]
+pub enum Mode {
+    /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG
+    Respond(RespondArgs),
+}
+
+/// What to send.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ProbeKind {
+    /// MAVLink PING (PX4, QGroundControl, MAVSDK answer it)
+    Ping,
+    /// TIMESYNC: answered everywhere, ArduPilot included; also measures clock offset
+    Timesync,
+    /// COMMAND_LONG re-sent until its COMMAND_ACK arrives
+    Command,
 }
 
 /// Options of a measurement run (the default command).
@@ -210,4 +235,72 @@ pub struct PingArgs {
     /// ending the run (pings sent while down count as lost)
     #[arg(long, env = "MAVPING_RECONNECT")]
     pub reconnect: bool,
+    /// What to send: ping, timesync (also ArduPilot; measures clock offset), command
+    #[arg(long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Ping,
+          env = "MAVPING_PROBE")]
+    pub probe: ProbeKind,
+
+    /// Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)
+    #[arg(long, value_name = "SYS/COMP", env = "MAVPING_TARGET")]
+    pub target: Option<String>,
+
+    /// --probe command: MAV_CMD name or id, then up to 7 params, comma-separated
+    #[arg(long, value_name = "CMD[,P1,...]", default_value = "REQUEST_MESSAGE,0")]
+    pub command: String,
+
+    /// --probe command: re-send an unacknowledged command this often
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "100ms")]
+    pub retry_interval: Duration,
+
+    /// --probe command: re-sends after the first before a command counts as failed
+    #[arg(long, value_name = "N", default_value_t = 3)]
+    pub retries: u8,
+}
+
+/// Options of `mavping respond`.
+#[derive(Debug, clap::Args)]
+pub struct RespondArgs {
+    /// Where to answer: udpin:HOST:PORT (every peer), udpout:HOST:PORT, sim:...
+    #[arg(value_name = "CONNECTION")]
+    pub link: String,
+
+    /// Our MAVLink system id
+    #[arg(long, value_name = "ID", default_value_t = 1)]
+    pub sysid: u8,
+
+    /// Our MAVLink component id
+    #[arg(long, value_name = "ID", default_value_t = 1)]
+    pub compid: u8,
+
+    /// Hold every reply this long (one-way link emulation)
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
+    pub delay: Duration,
+
+    /// Extra delay per reply, uniform in [0, jitter]
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
+    pub jitter: Duration,
+
+    /// Drop this share of replies, e.g. 10 or 10%
+    #[arg(long, value_name = "PCT", default_value = "0")]
+    pub drop: String,
+
+    /// Send this share of replies twice
+    #[arg(long, value_name = "PCT", default_value = "0")]
+    pub dup: String,
+
+    /// Random seed for --jitter, --drop and --dup
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub seed: u64,
+
+    /// Answer only TIMESYNC and commands, not PING (like ArduPilot)
+    #[arg(long)]
+    pub no_ping: bool,
+
+    /// Baud rate of a serial device whose connection string names none
+    #[arg(long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD)]
+    pub baud: u32,
+
+    /// More logs on stderr (-v info, -vv debug)
+    #[arg(short = 'v', long, action = ArgAction::Count)]
+    pub verbose: u8,
 }

@@ -5,8 +5,9 @@ use std::time::Duration;
 
 use thiserror::Error;
 
-use crate::cli::{Format, PingArgs};
+use crate::cli::{Format, PingArgs, ProbeKind, RespondArgs};
 use crate::engine::session::SessionConfig;
+use crate::frame::codec;
 use crate::frame::{SysComp, Version};
 use crate::transport::address::{AddressError, LinkSpec};
 use crate::transport::LinkOptions;
@@ -41,6 +42,42 @@ pub struct Config {
     pub thresholds: Thresholds,
     pub hgrm: Option<PathBuf>,
     pub samples: Option<PathBuf>,
+    pub probe: Probe,
+}
+
+/// Which probe, with what it needs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Probe {
+    Ping,
+    Timesync { target: SysComp },
+    Command(CommandSpec),
+}
+
+/// The command probe's request and retry policy.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CommandSpec {
+    pub target: SysComp,
+    pub command: u16,
+    pub params: [f32; 7],
+    pub retry_interval: Duration,
+    /// Re-sends after the first transmission.
+    pub retries: u8,
+}
+
+/// `mavping respond`, validated.
+#[derive(Debug, Clone)]
+pub struct RespondConfig {
+    pub link: LinkSpec,
+    pub id: SysComp,
+    pub delay: Duration,
+    pub jitter: Duration,
+    /// Shares of replies dropped and duplicated, 0..=1.
+    pub drop: f64,
+    pub dup: f64,
+    pub seed: u64,
+    pub answer_ping: bool,
+    pub verbose: u8,
+    pub link_options: LinkOptions,
 }
 
 impl Config {
@@ -72,6 +109,15 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
     Ok(interval)
 }
 
+fn validate_baud(baud: u32) -> Result<u32, ConfigError> {
+    if baud == 0 {
+        return Err(invalid(
+            "--baud 0: expected a baud rate such as 57600 or 115200",
+        ));
+    }
+    Ok(baud)
+}
+
 fn validate_ids(sysid: u8, compid: u8) -> Result<SysComp, ConfigError> {
     if sysid == 0 {
         return Err(invalid(
@@ -101,6 +147,132 @@ fn pending_capacity(interval: Duration, timeout: Duration) -> Result<usize, Conf
     Ok(((in_flight * 2 + 16) as usize).next_power_of_two().max(64))
 }
 
+/// "SYS/COMP", or "SYS" for every component of a system.
+fn parse_target(text: &str) -> Result<SysComp, ConfigError> {
+    let bad = || {
+        invalid(format!(
+            "--target {text}: expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)"
+        ))
+    };
+    let (sys, comp) = text.split_once('/').unwrap_or((text, "0"));
+    let sysid = sys.trim().parse::<u8>().map_err(|_| bad())?;
+    let compid = comp.trim().parse::<u8>().map_err(|_| bad())?;
+    Ok(SysComp::new(sysid, compid))
+}
+
+/// "REQUEST_MESSAGE,0" or "512,0": a MAV_CMD by name or id, then params.
+fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
+    let mut parts = text.split(',').map(str::trim);
+    let name = parts.next().unwrap_or_default();
+    let command = match name.parse::<u16>() {
+        Ok(id) => id,
+        Err(_) => codec::command_id_from_name(name).ok_or_else(|| {
+            invalid(format!(
+                "--command {text}: '{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"
+            ))
+        })?,
+    };
+    let mut params = [0.0f32; 7];
+    for (i, p) in parts.enumerate() {
+        if i >= params.len() {
+            return Err(invalid(format!(
+                "--command {text}: at most 7 params after the command"
+            )));
+        }
+        params[i] = p
+            .parse::<f32>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| {
+                invalid(format!(
+                    "--command {text}: param {} '{p}' is not a number",
+                    i + 1
+                ))
+            })?;
+    }
+    Ok((command, params))
+}
+
+fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
+    let target = cli.target.as_deref().map(parse_target).transpose()?;
+    match cli.probe {
+        ProbeKind::Ping => {
+            if target.is_some() {
+                return Err(invalid(
+                    "--target: PING requests are always broadcast; use it with --probe timesync or command",
+                ));
+            }
+            Ok(Probe::Ping)
+        }
+        ProbeKind::Timesync => Ok(Probe::Timesync {
+            target: target.unwrap_or(SysComp::new(0, 0)),
+        }),
+        ProbeKind::Command => {
+            let target = target.unwrap_or(SysComp::new(1, 1));
+            if target.sysid == 0 {
+                return Err(invalid(
+                    "--target 0: a command needs one target system (e.g. --target 1/1)",
+                ));
+            }
+            if cli.retry_interval.is_zero() || cli.retry_interval > MAX_TIMEOUT {
+                return Err(invalid(format!(
+                    "--retry-interval {}: expected more than 0 and at most 1h",
+                    humantime::format_duration(cli.retry_interval)
+                )));
+            }
+            let (command, params) = parse_command(&cli.command)?;
+            Ok(Probe::Command(CommandSpec {
+                target,
+                command,
+                params,
+                retry_interval: cli.retry_interval,
+                retries: cli.retries,
+            }))
+        }
+    }
+}
+
+fn percent(flag: &str, text: &str) -> Result<f64, ConfigError> {
+    let number = text.strip_suffix('%').unwrap_or(text);
+    match number.parse::<f64>() {
+        Ok(p) if (0.0..=100.0).contains(&p) => Ok(p / 100.0),
+        _ => Err(invalid(format!(
+            "{flag} {text}: expected a percentage from 0 to 100"
+        ))),
+    }
+}
+
+impl TryFrom<&RespondArgs> for RespondConfig {
+    type Error = ConfigError;
+
+    fn try_from(cli: &RespondArgs) -> Result<Self, ConfigError> {
+        let link: LinkSpec = cli.link.parse()?;
+        for (flag, d) in [("--delay", cli.delay), ("--jitter", cli.jitter)] {
+            if d > MAX_TIMEOUT {
+                return Err(invalid(format!(
+                    "{flag} {}: at most 1h",
+                    humantime::format_duration(d)
+                )));
+            }
+        }
+        Ok(RespondConfig {
+            link,
+            id: validate_ids(cli.sysid, cli.compid)?,
+            delay: cli.delay,
+            jitter: cli.jitter,
+            drop: percent("--drop", &cli.drop)?,
+            dup: percent("--dup", &cli.dup)?,
+            seed: cli.seed,
+            answer_ping: !cli.no_ping,
+            verbose: cli.verbose,
+            link_options: LinkOptions {
+                baud: validate_baud(cli.baud)?,
+                reconnect: false,
+            },
+        })
+    }
+}
+
 impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
@@ -127,11 +299,7 @@ impl TryFrom<&PingArgs> for Config {
             return Err(invalid("--deadline 0: expected more than 0"));
         }
         let ours = validate_ids(cli.sysid, cli.compid)?;
-        if cli.baud == 0 {
-            return Err(invalid(
-                "--baud 0: expected a baud rate such as 57600 or 115200",
-            ));
-        }
+        validate_baud(cli.baud)?;
         Ok(Config {
             session: SessionConfig {
                 link_name: link.to_string(),
@@ -166,6 +334,7 @@ impl TryFrom<&PingArgs> for Config {
             },
             hgrm: cli.hgrm.clone(),
             samples: cli.samples.clone(),
+            probe: validate_probe(cli)?,
         })
     }
 }
@@ -226,6 +395,94 @@ mod tests {
                 reconnect: true
             }
         );
+        assert_eq!(config("sim:").unwrap().probe, Probe::Ping);
+        assert_eq!(
+            config("--probe timesync sim:").unwrap().probe,
+            Probe::Timesync {
+                target: SysComp::new(0, 0)
+            }
+        );
+        assert_eq!(
+            config("--probe timesync --target 1 sim:").unwrap().probe,
+            Probe::Timesync {
+                target: SysComp::new(1, 0)
+            }
+        );
+        assert_eq!(
+            config("--probe command sim:").unwrap().probe,
+            Probe::Command(CommandSpec {
+                target: SysComp::new(1, 1),
+                command: 512,
+                params: [0.0; 7],
+                retry_interval: Duration::from_millis(100),
+                retries: 3,
+            })
+        );
+        let Probe::Command(c) = config(
+            "--probe command --target 3/4 --command 400,1,21196 --retry-interval 50ms --retries 9 sim:",
+        )
+        .unwrap()
+        .probe
+        else {
+            panic!("not a command probe")
+        };
+        assert_eq!((c.target, c.command), (SysComp::new(3, 4), 400));
+        assert_eq!(c.params, [1.0, 21196.0, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        assert_eq!(
+            (c.retry_interval, c.retries),
+            (Duration::from_millis(50), 9)
+        );
+        let Probe::Command(c) =
+            config("--probe command --command mav_cmd_request_message,245 sim:")
+                .unwrap()
+                .probe
+        else {
+            panic!("not a command probe")
+        };
+        assert_eq!((c.command, c.params[0]), (512, 245.0));
+    }
+
+    fn respond(args: &str) -> Result<RespondConfig, String> {
+        let cli = Cli::try_parse_from(
+            ["mavping", "respond"]
+                .into_iter()
+                .chain(args.split_whitespace()),
+        )
+        .map_err(|e| e.to_string())?;
+        let Some(crate::cli::Mode::Respond(r)) = &cli.mode else {
+            return Err("not respond".into());
+        };
+        RespondConfig::try_from(r).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn respond_lines() {
+        let r = respond("udpin:0.0.0.0:14550").unwrap();
+        assert_eq!(r.id, SysComp::new(1, 1));
+        assert!(r.answer_ping);
+        assert_eq!((r.drop, r.dup), (0.0, 0.0));
+        let r = respond(
+            "--sysid 7 --compid 2 --delay 5ms --jitter 1ms --drop 10% --dup 2.5 --seed 9 --no-ping sim:",
+        )
+        .unwrap();
+        assert_eq!(r.id, SysComp::new(7, 2));
+        assert_eq!(
+            (r.delay, r.jitter),
+            (Duration::from_millis(5), Duration::from_millis(1))
+        );
+        assert!((r.drop - 0.1).abs() < 1e-12 && (r.dup - 0.025).abs() < 1e-12);
+        assert!(!r.answer_ping);
+        for (args, needle) in [
+            ("--drop 150 sim:", "--drop 150"),
+            ("--dup x sim:", "--dup x"),
+            ("--sysid 0 sim:", "--sysid 0"),
+            ("--delay 2h sim:", "at most 1h"),
+            ("bogus:1:2", "accepted forms"),
+            ("", "CONNECTION"),
+        ] {
+            let err = respond(args).unwrap_err();
+            assert!(err.contains(needle), "{args}: {err}");
+        }
     }
 
     #[test]
@@ -256,6 +513,23 @@ mod tests {
             ("--format xml sim:", "xml"),
             ("--baud 0 /dev/ttyUSB0", "--baud 0"),
             ("--baud fast /dev/ttyUSB0", "fast"),
+            ("--probe echo sim:", "echo"),
+            ("--target 1/1 sim:", "--target"),
+            ("--probe timesync --target 1/x sim:", "SYS/COMP"),
+            ("--probe timesync --target 300 sim:", "SYS/COMP"),
+            ("--probe command --target 0/1 sim:", "one target system"),
+            ("--probe command --command FLY_TO_MOON sim:", "FLY_TO_MOON"),
+            ("--probe command --command 512,a sim:", "param 1"),
+            (
+                "--probe command --command 512,1,2,3,4,5,6,7,8 sim:",
+                "at most 7",
+            ),
+            (
+                "--probe command --retry-interval 0 sim:",
+                "--retry-interval",
+            ),
+            ("--probe command --retries 300 sim:", "300"),
+            ("respond sim: sim:", "unexpected"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");

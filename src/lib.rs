@@ -12,6 +12,7 @@ pub mod engine;
 pub mod frame;
 pub mod output;
 pub mod probe;
+pub mod respond;
 pub mod responder;
 pub mod transport;
 pub mod verdict;

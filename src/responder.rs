@@ -13,6 +13,15 @@ pub struct ResponderCounts {
     pub ping_requests: u64,
     pub timesync_requests: u64,
     pub commands: u64,
+    /// COMMAND_LONGs with `confirmation > 0`: re-sent because our ACK was
+    /// lost or late. Each is acknowledged again.
+    pub retransmissions: u64,
+}
+
+impl ResponderCounts {
+    pub fn requests(&self) -> u64 {
+        self.ping_requests + self.timesync_requests + self.commands
+    }
 }
 
 #[derive(Debug, Clone)]
@@ -66,7 +75,8 @@ impl ResponderCore {
             } if self.answer_timesync && self.addressed(target_system, target_component) => {
                 self.counts.timesync_requests += 1;
                 Some(Msg::Timesync {
-                    tc1: clock_ns.max(1),
+                    // tc1 = 0 would make the answer a request.
+                    tc1: if clock_ns == 0 { 1 } else { clock_ns },
                     ts1,
                     target_system: to.sysid,
                     target_component: to.compid,
@@ -74,6 +84,7 @@ impl ResponderCore {
             }
             Msg::CommandLong {
                 command,
+                confirmation,
                 target_system,
                 target_component,
                 ..
@@ -82,6 +93,7 @@ impl ResponderCore {
                 && (target_component == 0 || target_component == self.id.compid) =>
             {
                 self.counts.commands += 1;
+                self.counts.retransmissions += u64::from(confirmation > 0);
                 Some(Msg::CommandAck {
                     command,
                     result: RESULT_ACCEPTED,
@@ -168,7 +180,7 @@ mod tests {
         );
         let cmd = |target_system| Msg::CommandLong {
             command: 512,
-            confirmation: 0,
+            confirmation: u8::from(target_system == 1),
             target_system,
             target_component: 1,
             params: [0.0; 7],
@@ -178,5 +190,7 @@ mod tests {
             Some(Msg::CommandAck { command: 512, .. })
         ));
         assert_eq!(r.answer(&from(GCS, cmd(2)), 0), None);
+        assert_eq!((r.counts.commands, r.counts.retransmissions), (1, 1));
+        assert_eq!(r.counts.requests(), 2);
     }
 }

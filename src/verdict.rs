@@ -277,6 +277,7 @@ mod tests {
             }),
             histogram: vec![],
             identity: None,
+            clock: None,
         }
     }
 

@@ -176,3 +176,50 @@ fn closed_stdout_is_not_an_error() {
     assert_eq!(code, 0, "{err}");
     assert!(err.is_empty(), "{err}");
 }
+
+#[test]
+fn probe_and_respond_usage_errors_exit_2_with_one_line() {
+    for args in [
+        &["--probe", "command", "--command", "FLY_TO_MOON", "sim:"][..],
+        &["--probe", "command", "--target", "0/1", "sim:"],
+        &["--probe", "timesync", "--target", "1/x", "sim:"],
+        &["--target", "1/1", "sim:"],
+        &["respond", "--drop", "200", "sim:"],
+        &["respond", "--sysid", "0", "sim:"],
+        &["respond", "bogus:1:2"],
+    ] {
+        let (code, out, err) = run_mavping(args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(out.is_empty(), "{args:?}: {out}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("mavping: "), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn respond_on_a_port_in_use_exits_2() {
+    let taken = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let port = taken.local_addr().unwrap().port();
+    let (code, _, err) = run_mavping(&["respond", &format!("udpin:127.0.0.1:{port}")]);
+    assert_eq!(code, 2);
+    assert!(err.contains("in use"), "{err}");
+}
+
+#[test]
+fn seeded_virtual_timesync_and_command_runs_are_reproducible() {
+    for probe in ["timesync", "command"] {
+        let args = [
+            "--probe",
+            probe,
+            "-c",
+            "100",
+            "-i",
+            "20ms",
+            "sim:?loss=10%&dup=5%&jitter=4ms&offset=2s&drift=-30&seed=9&clock=virtual",
+        ];
+        let (code1, first, _) = run_mavping(&args);
+        let (code2, second, _) = run_mavping(&args);
+        assert_eq!((code1, code2), (0, 0), "{first}");
+        assert_eq!(first, second);
+    }
+}

@@ -294,3 +294,57 @@ fn unwritable_export_path_exits_2_before_pinging() {
         "{err}"
     );
 }
+
+#[test]
+fn timesync_and_command_probe_json_matches_the_schema() {
+    let validator = schema();
+    for args in [
+        &[
+            "--json",
+            "--probe",
+            "timesync",
+            "-c",
+            "50",
+            "-i",
+            "0.01",
+            "sim:?offset=-2s&drift=50&loss=10%&clock=virtual",
+        ][..],
+        &[
+            "--json",
+            "--probe",
+            "command",
+            "-c",
+            "5",
+            "-i",
+            "0.2",
+            "sim:?loss=30%&seed=4&clock=virtual",
+        ],
+    ] {
+        let (code, out, err) = run_mavping(args);
+        assert_eq!(code, 0, "{args:?}: {err}");
+        let events = json_lines(&out);
+        for e in &events {
+            let errors: Vec<String> = validator.iter_errors(e).map(|e| e.to_string()).collect();
+            assert!(errors.is_empty(), "{e}\n{errors:?}");
+        }
+        let last = events.last().unwrap();
+        assert!(
+            last["type"] == "summary" || last["type"] == "command_summary",
+            "{last}"
+        );
+    }
+    let (_, out, _) = run_mavping(&[
+        "--json",
+        "-q",
+        "--probe",
+        "timesync",
+        "-c",
+        "50",
+        "-i",
+        "0.01",
+        "sim:?offset=-2s&clock=virtual",
+    ]);
+    let clock = &summary_of(&out)["responders"][0]["clock"];
+    let offset = clock["offset_ns"].as_i64().unwrap();
+    assert!((offset + 2_000_000_000).abs() < 1_000_000, "{clock}");
+}

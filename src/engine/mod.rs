@@ -1,6 +1,9 @@
 //! The measurement: scheduling, matching, statistics (pure), and the async
 //! session that joins them to a transport and a report.
 
+pub mod clock_offset;
+pub mod command_session;
+pub mod commands;
 pub mod matcher;
 pub mod roster;
 pub mod schedule;

@@ -48,39 +48,39 @@ pub struct Outcome {
     pub output_closed: bool,
 }
 
-const HEARTBEAT_PERIOD: Duration = Duration::from_secs(1);
+pub(super) const HEARTBEAT_PERIOD: Duration = Duration::from_secs(1);
 /// MAV_TYPE_GCS, MAV_AUTOPILOT_INVALID: we are a ground station.
-const OUR_HEARTBEAT: Msg = Msg::Heartbeat {
+pub(super) const OUR_HEARTBEAT: Msg = Msg::Heartbeat {
     mav_type: frame::mav_type::GCS,
     autopilot: frame::AUTOPILOT_INVALID,
 };
 
-struct Clock {
-    epoch: Instant,
+pub(super) struct Clock {
+    pub(super) epoch: Instant,
 }
 
 impl Clock {
-    fn ns(&self, t: Instant) -> Nanos {
+    pub(super) fn ns(&self, t: Instant) -> Nanos {
         t.saturating_duration_since(self.epoch).as_nanos() as Nanos
     }
-    fn now(&self) -> Nanos {
+    pub(super) fn now(&self) -> Nanos {
         self.ns(Instant::now())
     }
-    fn at(&self, ns: Nanos) -> Instant {
+    pub(super) fn at(&self, ns: Nanos) -> Instant {
         self.epoch + Duration::from_nanos(ns)
     }
 }
 
-struct Sender {
-    buf: Vec<u8>,
-    packet_seq: u8,
-    ours: SysComp,
-    version: Version,
+pub(super) struct Sender {
+    pub(super) buf: Vec<u8>,
+    pub(super) packet_seq: u8,
+    pub(super) ours: SysComp,
+    pub(super) version: Version,
 }
 
 impl Sender {
     /// Serialises `msg` into the reused buffer (no allocation per request).
-    fn frame(&mut self, msg: &Msg) -> &[u8] {
+    pub(super) fn frame(&mut self, msg: &Msg) -> &[u8] {
         self.buf.clear();
         let header = Header {
             sysid: self.ours.sysid,
@@ -220,7 +220,16 @@ pub async fn run<T: Transport, P: EchoProbe>(
                     }
                     match probe.classify(&frame, cfg.ours) {
                         Classified::Reply(lookup) => {
+                            let before = events.len();
                             matcher.on_reply(frame.source, lookup, at, &mut |e| events.push(e));
+                            // Only an accepted in-time reply feeds the probe.
+                            for e in &events[before..] {
+                                if let MatchEvent::Reply { responder, sent_at, at, .. } = *e {
+                                    if responder == frame.source {
+                                        probe.on_reply(&frame, sent_at, at);
+                                    }
+                                }
+                            }
                         }
                         Classified::ForeignReply => foreign_replies += 1,
                         Classified::NotAReply => {}
@@ -238,7 +247,10 @@ pub async fn run<T: Transport, P: EchoProbe>(
         output = flush(&mut events, report);
     }
     let in_flight = matcher.finish();
-    let responders = responder_summaries(&matcher, &roster);
+    let mut responders = responder_summaries(&matcher, &roster);
+    for r in &mut responders {
+        r.clock = probe.clock(r.id);
+    }
     let hints = silent_system_hints(&roster, &responders, cfg.ours, probe.name());
     let summary = Summary {
         link: cfg.link_name.clone(),

@@ -3,6 +3,7 @@
 
 use serde::Serialize;
 
+use super::clock_offset::ClockSummary;
 use super::matcher::{Counts, Matcher};
 use super::roster::{Identity, Roster};
 use super::stats::{Bucket, RttSummary};
@@ -19,6 +20,9 @@ pub struct ResponderSummary {
     pub rtt: Option<RttSummary>,
     pub histogram: Vec<Bucket>,
     pub identity: Option<Identity>,
+    /// Clock offset and drift (TIMESYNC probe only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub clock: Option<ClockSummary>,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -63,6 +67,7 @@ pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderS
             rtt: r.rtt.summary(),
             histogram: r.rtt.distribution(HISTOGRAM_ROWS),
             identity: roster.get(r.id).cloned(),
+            clock: None,
         })
         .collect();
     out.sort_by_key(|r| r.id);
@@ -97,6 +102,89 @@ pub fn silent_system_hints(
                     probe.to_uppercase()
                 )
             }
+        })
+        .collect()
+}
+
+/// `--probe command`: one target's figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct CommandTargetSummary {
+    pub id: SysComp,
+    pub commands: u64,
+    pub acknowledged: u64,
+    pub failed: u64,
+    pub skipped: u64,
+    pub late_acks: u64,
+    pub duplicate_acks: u64,
+    /// `attempts[k - 1]`: commands acknowledged after k transmissions.
+    pub attempts: Vec<u64>,
+    pub time_to_ack: Option<RttSummary>,
+    pub histogram: Vec<Bucket>,
+    pub results: Vec<AckResult>,
+    pub identity: Option<Identity>,
+}
+
+/// How many acknowledged commands got one MAV_RESULT.
+#[derive(Debug, Clone, Serialize)]
+pub struct AckResult {
+    pub result: u8,
+    pub name: String,
+    pub count: u64,
+}
+
+/// The end of a `--probe command` run.
+#[derive(Debug, Clone, Serialize)]
+pub struct CommandSummary {
+    pub link: String,
+    pub ours: SysComp,
+    pub command: u16,
+    pub command_name: String,
+    pub duration_s: f64,
+    /// Commands still pending when the run ended: neither acknowledged
+    /// nor failed.
+    pub in_flight: u64,
+    pub targets: Vec<CommandTargetSummary>,
+    /// ACKs addressed to us for commands we never sent that system.
+    pub unmatched_acks: u64,
+    pub frames: ScanStats,
+    pub interrupted: bool,
+    pub link_error: Option<String>,
+}
+
+impl CommandSummary {
+    pub fn any_ack(&self) -> bool {
+        self.targets.iter().any(|t| t.acknowledged > 0)
+    }
+}
+
+pub fn command_target_summaries(
+    tracker: &super::commands::CommandTracker,
+    roster: &Roster,
+) -> Vec<CommandTargetSummary> {
+    tracker
+        .targets()
+        .iter()
+        .map(|t| CommandTargetSummary {
+            id: t.id,
+            commands: t.commands,
+            acknowledged: t.acknowledged,
+            failed: t.failed,
+            skipped: t.skipped,
+            late_acks: t.late_acks,
+            duplicate_acks: t.duplicate_acks,
+            attempts: t.by_attempts.clone(),
+            time_to_ack: t.time_to_ack.summary(),
+            histogram: t.time_to_ack.distribution(HISTOGRAM_ROWS),
+            results: t
+                .results
+                .iter()
+                .map(|(&result, &count)| AckResult {
+                    result,
+                    name: crate::frame::codec::result_name(result),
+                    count,
+                })
+                .collect(),
+            identity: roster.get(t.id).cloned(),
         })
         .collect()
 }

@@ -265,6 +265,11 @@ pub fn command_id_from_name(name: &str) -> Option<u16> {
         .find(|&id| dialect::MavCmd::from_u16(id).is_some_and(|cmd| format!("{cmd:?}") == full))
 }
 
+/// Name of a MAV_CMD id ("request_message"), or the number when unknown.
+pub fn command_name(id: u16) -> String {
+    enum_name::<dialect::MavCmd>(u32::from(id), "MAV_CMD_")
+}
+
 /// Name of a MAV_RESULT value ("accepted").
 pub fn result_name(value: u8) -> String {
     enum_name::<dialect::MavResult>(u32::from(value), "MAV_RESULT_")

@@ -82,6 +82,15 @@ fn responder_json(r: &ResponderSummary, verdict: &Verdict) -> Value {
             "jitter": s.jitter_us,
         })),
         "histogram": r.histogram,
+        "clock": r.clock.map(|c| json!({
+            // i64 holds ±292 years of ns: enough for any two clocks.
+            "offset_ns": i64::try_from(c.offset_ns).unwrap_or(if c.offset_ns < 0 { i64::MIN } else { i64::MAX }),
+            "uncertainty_ns": c.uncertainty_ns,
+            "spread_ns": c.spread_ns,
+            "drift_ppm": c.drift_ppm,
+            "drift_stderr_ppm": c.drift_stderr_ppm,
+            "samples": c.samples,
+        })),
         "failures": failures,
     })
 }
@@ -201,6 +210,115 @@ impl<W: Write> Reporter for JsonReporter<W> {
             "verdict": verdict,
             "exit_code": verdict.exit_code,
         });
+        self.emit(value)?;
+        self.out.flush()
+    }
+}
+
+impl<W: Write> super::CommandReporter for JsonReporter<W> {
+    fn command_start(
+        &mut self,
+        info: &StartInfo,
+        spec: &crate::config::CommandSpec,
+    ) -> io::Result<()> {
+        if self.quiet {
+            return Ok(());
+        }
+        let value = json!({
+            "type": "start",
+            "schema_version": SCHEMA_VERSION,
+            "mavping_version": env!("CARGO_PKG_VERSION"),
+            "time": self.wall.rfc3339(0),
+            "link": info.link,
+            "probe": "command",
+            "ours": info.ours,
+            "interval_s": info.interval.as_secs_f64(),
+            "rate_hz": 1.0 / info.interval.as_secs_f64(),
+            "timeout_s": info.timeout.as_secs_f64(),
+            "count": info.count,
+            "command": {
+                "id": spec.command,
+                "name": crate::frame::codec::command_name(spec.command),
+                "target": spec.target,
+                "params": spec.params,
+                "retry_interval_s": spec.retry_interval.as_secs_f64(),
+                "retries": spec.retries,
+            },
+        });
+        self.emit(value)
+    }
+
+    fn command_event(&mut self, event: &crate::engine::commands::CommandEvent) -> io::Result<()> {
+        use crate::engine::commands::CommandEvent as E;
+        if self.quiet {
+            return Ok(());
+        }
+        let value = match *event {
+            // Each transmission is in the summary's attempt counts.
+            E::Send { .. } => return Ok(()),
+            E::Acked {
+                n,
+                target,
+                from,
+                command,
+                result,
+                attempts,
+                time_to_ack,
+            } => json!({
+                "type": "ack", "n": n, "target": target, "from": from, "command": command,
+                "result": result, "result_name": crate::frame::codec::result_name(result),
+                "attempts": attempts, "time_to_ack_us": us(time_to_ack),
+            }),
+            E::Failed {
+                n,
+                target,
+                command,
+                attempts,
+            } => json!({
+                "type": "command_failed", "n": n, "target": target, "command": command,
+                "attempts": attempts,
+            }),
+            E::Skipped {
+                target,
+                command,
+                at,
+                ..
+            } => json!({
+                "type": "skipped", "t_s": at as f64 / 1e9, "target": target, "command": command,
+            }),
+            E::LateAck {
+                from,
+                command,
+                result,
+            } => json!({"type": "late_ack", "from": from, "command": command, "result": result}),
+            E::DuplicateAck {
+                from,
+                command,
+                result,
+            } => {
+                json!({"type": "duplicate_ack", "from": from, "command": command, "result": result})
+            }
+        };
+        self.emit(value)
+    }
+
+    fn command_summary(
+        &mut self,
+        summary: &crate::engine::summary::CommandSummary,
+    ) -> io::Result<()> {
+        let mut value = serde_json::to_value(summary)?;
+        if let Value::Object(m) = &mut value {
+            m.insert("type".into(), "command_summary".into());
+            m.insert("schema_version".into(), SCHEMA_VERSION.into());
+            let exit_code = if summary.link_error.is_some() {
+                crate::verdict::exit::ERROR
+            } else if summary.any_ack() {
+                crate::verdict::exit::OK
+            } else {
+                crate::verdict::exit::FAILED
+            };
+            m.insert("exit_code".into(), exit_code.into());
+        }
         self.emit(value)?;
         self.out.flush()
     }

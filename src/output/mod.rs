@@ -9,9 +9,11 @@ pub mod text;
 use std::io;
 use std::time::{Duration, SystemTime};
 
+use crate::config::CommandSpec;
+use crate::engine::commands::CommandEvent;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::roster::Identity;
-use crate::engine::summary::Summary;
+use crate::engine::summary::{CommandSummary, Summary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -89,4 +91,12 @@ impl Reporter for Fanout<'_> {
             .iter_mut()
             .try_for_each(|r| r.summary(summary, verdict))
     }
+}
+
+/// An output format for `--probe command`, whose events and summary differ
+/// from the echo probes'.
+pub trait CommandReporter {
+    fn command_start(&mut self, info: &StartInfo, spec: &CommandSpec) -> io::Result<()>;
+    fn command_event(&mut self, event: &CommandEvent) -> io::Result<()>;
+    fn command_summary(&mut self, summary: &CommandSummary) -> io::Result<()>;
 }

@@ -3,10 +3,15 @@
 
 use std::io::{self, Write};
 
-use super::{Event, Reporter, StartInfo};
+use super::{CommandReporter, Event, Reporter, StartInfo};
+use crate::config::CommandSpec;
+use crate::engine::commands::CommandEvent;
 use crate::engine::matcher::MatchEvent;
+use crate::engine::stats::{Bucket, RttSummary};
+use crate::engine::summary::CommandSummary;
 use crate::engine::summary::{ResponderSummary, Summary};
 use crate::engine::Nanos;
+use crate::frame::codec;
 use crate::verdict::Verdict;
 
 pub struct TextReporter<W: Write> {
@@ -33,6 +38,14 @@ impl<W: Write> TextReporter<W> {
 /// Milliseconds with µs resolution, as ping prints them.
 fn ms(ns: Nanos) -> String {
     format!("{:.3}", ns as f64 / 1e6)
+}
+
+/// Signed seconds with µs resolution, exact even for clocks counting from
+/// 1970 (an f64 would lose the µs there).
+fn offset(ns: i128) -> String {
+    let sign = if ns < 0 { '-' } else { '+' };
+    let us = (ns.unsigned_abs() + 500) / 1_000;
+    format!("{sign}{}.{:06} s", us / 1_000_000, us % 1_000_000)
 }
 
 fn ms_us(us: f64) -> String {
@@ -98,14 +111,26 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
         ms_us(rtt.p999_us),
         ms_us(rtt.jitter_us)
     )?;
-    let most = r
-        .histogram
-        .iter()
-        .map(|b| b.count)
-        .max()
-        .unwrap_or(0)
-        .max(1);
-    for b in &r.histogram {
+    if let Some(clock) = &r.clock {
+        let drift = match (clock.drift_ppm, clock.drift_stderr_ppm) {
+            (Some(d), Some(e)) => format!("{d:+.2} ± {e:.2} ppm"),
+            _ => "unknown (too few samples)".to_string(),
+        };
+        writeln!(
+            out,
+            "  clock offset {} ± {} ms, spread {} ms, drift {drift} ({} samples)",
+            offset(clock.offset_ns),
+            ms(clock.uncertainty_ns),
+            ms_us(clock.spread_ns / 1e3),
+            clock.samples
+        )?;
+    }
+    write_histogram(out, &r.histogram)
+}
+
+fn write_histogram(out: &mut impl Write, histogram: &[Bucket]) -> io::Result<()> {
+    let most = histogram.iter().map(|b| b.count).max().unwrap_or(0).max(1);
+    for b in histogram {
         const WIDTH: u64 = 40;
         let bar = (b.count * WIDTH).div_ceil(most) as usize;
         writeln!(
@@ -229,6 +254,150 @@ impl<W: Write> Reporter for TextReporter<W> {
         // Threshold failures; "no reply at all" is already plain above.
         for f in verdict.failures.iter().filter(|f| f.check != "reply") {
             writeln!(out, "FAILED {}: {}", f.check, f.message)?;
+        }
+        out.flush()
+    }
+}
+
+fn write_time_to_ack(out: &mut impl Write, t: &RttSummary) -> io::Result<()> {
+    writeln!(
+        out,
+        "  time to ack min/mean/max/stddev = {}/{}/{}/{} ms",
+        ms_us(t.min_us),
+        ms_us(t.mean_us),
+        ms_us(t.max_us),
+        ms_us(t.stddev_us)
+    )?;
+    writeln!(
+        out,
+        "  time to ack p50/p90/p99/p99.9   = {}/{}/{}/{} ms",
+        ms_us(t.p50_us),
+        ms_us(t.p90_us),
+        ms_us(t.p99_us),
+        ms_us(t.p999_us)
+    )
+}
+
+impl<W: Write> CommandReporter for TextReporter<W> {
+    fn command_start(&mut self, info: &StartInfo, spec: &CommandSpec) -> io::Result<()> {
+        if self.quiet {
+            return Ok(());
+        }
+        writeln!(
+            self.out,
+            "MAVPING {} from {}: COMMAND_LONG {} to {} {}, re-sent every {} up to {} times",
+            info.link,
+            info.ours,
+            codec::command_name(spec.command).to_uppercase(),
+            spec.target,
+            rate(info.interval),
+            humantime::format_duration(spec.retry_interval),
+            spec.retries
+        )
+    }
+
+    fn command_event(&mut self, event: &CommandEvent) -> io::Result<()> {
+        if self.quiet {
+            return Ok(());
+        }
+        match *event {
+            // Re-sends are not news; the ACK line says how many it took.
+            CommandEvent::Send { .. } => Ok(()),
+            CommandEvent::Acked {
+                n,
+                from,
+                result,
+                attempts,
+                time_to_ack,
+                ..
+            } => writeln!(
+                self.out,
+                "ack from {from}: cmd={n} {} attempts={attempts} time={} ms",
+                codec::result_name(result),
+                ms(time_to_ack)
+            ),
+            CommandEvent::Failed {
+                n,
+                target,
+                attempts,
+                ..
+            } => writeln!(
+                self.out,
+                "no ack from {target}: cmd={n} after {attempts} attempts"
+            ),
+            CommandEvent::Skipped { target, .. } => writeln!(
+                self.out,
+                "skipped a command to {target}: the previous one is still unacknowledged"
+            ),
+            CommandEvent::LateAck { from, result, .. } => writeln!(
+                self.out,
+                "late ack from {from}: {} (the command had already failed)",
+                codec::result_name(result)
+            ),
+            CommandEvent::DuplicateAck { from, result, .. } => writeln!(
+                self.out,
+                "ack from {from}: {} (DUP!)",
+                codec::result_name(result)
+            ),
+        }
+    }
+
+    fn command_summary(&mut self, s: &CommandSummary) -> io::Result<()> {
+        let out = &mut self.out;
+        if !self.quiet {
+            writeln!(out)?;
+        }
+        writeln!(out, "--- {} mavping statistics ---", s.link)?;
+        let sent: u64 = s.targets.iter().map(|t| t.commands).sum();
+        write!(
+            out,
+            "{sent} {} commands sent in {:.3} s",
+            s.command_name.to_uppercase(),
+            s.duration_s
+        )?;
+        if s.in_flight > 0 {
+            write!(out, ", {} still in flight (not counted)", s.in_flight)?;
+        }
+        writeln!(out)?;
+        for t in &s.targets {
+            let who = match &t.identity {
+                Some(i) => format!("{} ({}, {})", t.id, i.vehicle, i.autopilot_name),
+                None => t.id.to_string(),
+            };
+            writeln!(
+                out,
+                "{who}: {} commands, {} acknowledged, {} failed, {} skipped, {} late acks, {} duplicate acks",
+                t.commands, t.acknowledged, t.failed, t.skipped, t.late_acks, t.duplicate_acks
+            )?;
+            let attempts: Vec<String> = t
+                .attempts
+                .iter()
+                .enumerate()
+                .filter(|(_, &count)| count > 0)
+                .map(|(i, count)| format!("{}x{count}", i + 1))
+                .collect();
+            if !attempts.is_empty() {
+                writeln!(out, "  attempts until ack: {}", attempts.join(", "))?;
+            }
+            if let Some(tta) = &t.time_to_ack {
+                write_time_to_ack(out, tta)?;
+                write_histogram(out, &t.histogram)?;
+            }
+            if !t.results.is_empty() {
+                let results: Vec<String> = t
+                    .results
+                    .iter()
+                    .map(|r| format!("{} {}", r.name, r.count))
+                    .collect();
+                writeln!(out, "  ack results: {}", results.join(", "))?;
+            }
+        }
+        if s.unmatched_acks > 0 {
+            writeln!(
+                out,
+                "{} acks for commands we did not send",
+                s.unmatched_acks
+            )?;
         }
         out.flush()
     }

@@ -2,8 +2,11 @@
 //! The matcher never sees MAVLink; a probe turns frames into [`Lookup`]s.
 
 pub mod ping;
+pub mod timesync;
 
+use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::Lookup;
+use crate::engine::Nanos;
 use crate::frame::{Frame, Msg, SysComp};
 
 /// What a received frame means to the probe.
@@ -28,4 +31,11 @@ pub trait EchoProbe {
     fn request(&self, seq: u32, token: u64) -> Msg;
     /// Classifies a received frame; `ours` is our own address.
     fn classify(&self, frame: &Frame, ours: SysComp) -> Classified;
+    /// Called with each in-time reply the matcher accepted (TIMESYNC reads
+    /// the responder's clock from it).
+    fn on_reply(&mut self, _frame: &Frame, _sent_at: Nanos, _at: Nanos) {}
+    /// The responder's clock offset, for probes that measure one.
+    fn clock(&self, _responder: SysComp) -> Option<ClockSummary> {
+        None
+    }
 }

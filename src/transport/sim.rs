@@ -42,6 +42,10 @@ pub struct SimParams {
     /// False: responders send HEARTBEAT but ignore PING (like ArduPilot).
     pub answer_ping: bool,
     pub heartbeat: bool,
+    /// Responders' clocks read `offset + (1 + drift·1e-6)·t`, t = ns since
+    /// the link opened: the truth a TIMESYNC measurement is held against.
+    pub clock_offset_ns: i64,
+    pub drift_ppm: f64,
 }
 
 impl Default for SimParams {
@@ -60,6 +64,8 @@ impl Default for SimParams {
             virtual_clock: false,
             answer_ping: true,
             heartbeat: true,
+            clock_offset_ns: 0,
+            drift_ppm: 0.0,
         }
     }
 }
@@ -67,7 +73,7 @@ impl Default for SimParams {
 /// The keys `sim:` accepts, for error messages and the README.
 pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURATION, \
 jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
-ping=on|off, heartbeat=on|off";
+ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM";
 
 fn percent(key: &str, value: &str) -> Result<f64, String> {
     let number = value.strip_suffix('%').unwrap_or(value);
@@ -146,6 +152,26 @@ impl SimParams {
                 }
                 "ping" => p.answer_ping = switch(key, value)?,
                 "heartbeat" => p.heartbeat = switch(key, value)?,
+                "offset" => {
+                    let (negative, magnitude) = match value.strip_prefix('-') {
+                        Some(rest) => (true, rest),
+                        None => (false, value.strip_prefix('+').unwrap_or(value)),
+                    };
+                    let ns = humantime::parse_duration(magnitude)
+                        .ok()
+                        .and_then(|d| i64::try_from(d.as_nanos()).ok())
+                        .filter(|ns| *ns <= 10 * 365 * 86_400 * 1_000_000_000)
+                        .ok_or_else(|| {
+                            format!("{key}={value}: expected a duration up to 10 years, e.g. 1.5s or -250ms")
+                        })?;
+                    p.clock_offset_ns = if negative { -ns } else { ns };
+                }
+                "drift" => {
+                    p.drift_ppm = number(key, value, "parts per million, -1000000 to 1000000")?;
+                    if !p.drift_ppm.is_finite() || p.drift_ppm.abs() > 1e6 {
+                        return Err(format!("{key}={value}: expected -1000000 to 1000000 ppm"));
+                    }
+                }
                 _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
             }
         }
@@ -179,7 +205,15 @@ impl fmt::Display for SimParams {
             self.dup * 100.0,
             self.reorder * 100.0,
             self.seed
-        )
+        )?;
+        if self.clock_offset_ns != 0 {
+            // Seconds as a number: humantime's "3s 250ms" has a space.
+            write!(f, "&offset={}s", self.clock_offset_ns as f64 / 1e9)?;
+        }
+        if self.drift_ppm != 0.0 {
+            write!(f, "&drift={}", self.drift_ppm)?;
+        }
+        Ok(())
     }
 }
 
@@ -260,6 +294,16 @@ impl SimLink {
         self.params.delay + Duration::from_nanos(extra)
     }
 
+    /// A responder's clock at `t`.
+    fn clock_ns(&self, t: Instant) -> i64 {
+        let t = (t - self.started).as_nanos() as i64;
+        let drift = (t as f64 * self.params.drift_ppm * 1e-6).round() as i64;
+        self.params
+            .clock_offset_ns
+            .saturating_add(t)
+            .saturating_add(drift)
+    }
+
     fn chance(&mut self, p: f64) -> bool {
         p > 0.0 && self.rng.gen::<f64>() < p
     }
@@ -316,20 +360,26 @@ impl Transport for SimLink {
         // Requests go through the real scanner, as on a wire.
         let mut ignored = ScanStats::default();
         push_datagram(bytes, now, 0, &mut ignored, &mut requests);
-        let clock_ns = (now - self.started).as_nanos() as i64;
         for request in &requests {
             for i in 0..self.responders.len() {
-                let Some(reply) = self.responders[i].core.answer(&request.frame, clock_ns) else {
+                let Some(mut reply) = self.responders[i].core.answer(&request.frame, 0) else {
                     continue;
                 };
                 // Loss is drawn once per exchange: request or reply leg.
                 if self.chance(self.params.loss) {
                     continue;
                 }
+                let up = self.one_way();
+                // A real responder reads its clock when the request arrives,
+                // one leg after we sent it: that is what makes the NTP
+                // offset estimate unbiased.
+                if let Msg::Timesync { tc1, .. } = &mut reply {
+                    *tc1 = self.clock_ns(now + up);
+                }
                 let header = self.responders[i].header();
                 let mut out = Vec::new();
                 frame::encode(&mut out, request.frame.version, header, &reply);
-                let mut at = now + self.one_way() + self.one_way();
+                let mut at = now + up + self.one_way();
                 if self.chance(self.params.reorder) {
                     at += self.params.hold;
                 }
@@ -402,6 +452,13 @@ mod tests {
         assert!(p.virtual_clock);
         assert!(!p.answer_ping);
         assert_eq!(SimParams::parse("").unwrap(), SimParams::default());
+        let p = SimParams::parse("?offset=-1.5s&drift=-20.5").unwrap();
+        assert_eq!(p.clock_offset_ns, -1_500_000_000);
+        assert_eq!(p.drift_ppm, -20.5);
+        assert_eq!(
+            SimParams::parse("?offset=+250ms").unwrap().clock_offset_ns,
+            250_000_000
+        );
     }
 
     #[test]
@@ -414,6 +471,10 @@ mod tests {
             ("?warp=9", "unknown key 'warp'"),
             ("?loss", "not key=value"),
             ("?clock=fast", "real or virtual"),
+            ("?offset=soon", "offset=soon"),
+            ("?offset=20y", "up to 10 years"),
+            ("?drift=2e6", "ppm"),
+            ("?drift=fast", "parts per million"),
         ] {
             let err = SimParams::parse(q).unwrap_err();
             assert!(err.contains(needle), "{q}: {err}");

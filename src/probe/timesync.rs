@@ -1,0 +1,178 @@
+//! The MAVLink TIMESYNC exchange: request `tc1 = 0`, `ts1 = our clock in
+//! ns`; the reply carries `tc1 = their clock in ns` and the same `ts1`.
+//! ArduPilot answers nothing else, so this is the probe that works on it.
+
+use std::collections::HashMap;
+
+use super::{Classified, EchoProbe};
+use crate::engine::clock_offset::{ClockOffset, ClockSummary};
+use crate::engine::matcher::{Lookup, MAX_RESPONDERS};
+use crate::engine::Nanos;
+use crate::frame::{Frame, Msg, SysComp};
+
+pub struct TimesyncProbe {
+    /// What our clock reads at session time 0, in ns: wall time on real
+    /// links (so a peer's logs make sense), advanced by the monotonic
+    /// session clock so a clock step cannot repeat a token.
+    base_ns: i128,
+    target: SysComp,
+    last_token: u64,
+    clocks: HashMap<SysComp, ClockOffset>,
+}
+
+impl TimesyncProbe {
+    pub fn new(base_ns: u64, target: SysComp) -> Self {
+        TimesyncProbe {
+            base_ns: i128::from(base_ns),
+            target,
+            last_token: 0,
+            clocks: HashMap::new(),
+        }
+    }
+}
+
+impl EchoProbe for TimesyncProbe {
+    fn name(&self) -> &'static str {
+        "timesync"
+    }
+
+    fn token(&mut self, now_ns: u64) -> u64 {
+        // Strictly rising (the matcher binary-searches tokens) and never 0.
+        let token = (self.base_ns as u64 + now_ns).max(self.last_token + 1);
+        self.last_token = token;
+        token
+    }
+
+    fn request(&self, _seq: u32, token: u64) -> Msg {
+        Msg::Timesync {
+            tc1: 0,
+            ts1: token as i64,
+            target_system: self.target.sysid,
+            target_component: self.target.compid,
+        }
+    }
+
+    fn classify(&self, frame: &Frame, ours: SysComp) -> Classified {
+        match frame.msg {
+            Msg::Timesync { tc1: 0, .. } => Classified::NotAReply, // a request
+            Msg::Timesync {
+                ts1,
+                target_system,
+                target_component,
+                ..
+            } => {
+                // ArduPilot and MAVLink 1 stacks leave the targets 0/0:
+                // only targets that are set can make a reply someone else's.
+                let other_system = target_system != 0 && target_system != ours.sysid;
+                let other_component = target_component != 0 && target_component != ours.compid;
+                if other_system || other_component {
+                    Classified::ForeignReply
+                } else {
+                    Classified::Reply(Lookup::Token(ts1 as u64))
+                }
+            }
+            _ => Classified::NotAReply,
+        }
+    }
+
+    fn on_reply(&mut self, frame: &Frame, sent_at: Nanos, at: Nanos) {
+        let Msg::Timesync { tc1, .. } = frame.msg else {
+            return;
+        };
+        // The matcher tracks at most MAX_RESPONDERS; so do we.
+        if self.clocks.len() >= MAX_RESPONDERS && !self.clocks.contains_key(&frame.source) {
+            return;
+        }
+        self.clocks
+            .entry(frame.source)
+            .or_default()
+            .record(sent_at, at, tc1, self.base_ns);
+    }
+
+    fn clock(&self, responder: SysComp) -> Option<ClockSummary> {
+        self.clocks.get(&responder).and_then(ClockOffset::summary)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::Version;
+
+    const US: SysComp = SysComp::new(255, 190);
+
+    fn reply(tc1: i64, ts1: i64, target_system: u8, target_component: u8) -> Frame {
+        Frame {
+            version: Version::V2,
+            source: SysComp::new(1, 1),
+            packet_seq: 0,
+            msgid: 111,
+            signed: false,
+            msg: Msg::Timesync {
+                tc1,
+                ts1,
+                target_system,
+                target_component,
+            },
+        }
+    }
+
+    #[test]
+    fn replies_match_by_ts1_and_unset_targets_are_ours() {
+        let p = TimesyncProbe::new(0, SysComp::new(0, 0));
+        assert_eq!(
+            p.classify(&reply(9, 42, 0, 0), US),
+            Classified::Reply(Lookup::Token(42))
+        );
+        assert_eq!(
+            p.classify(&reply(9, 42, 255, 190), US),
+            Classified::Reply(Lookup::Token(42))
+        );
+        assert_eq!(
+            p.classify(&reply(9, 42, 255, 0), US),
+            Classified::Reply(Lookup::Token(42))
+        );
+        assert_eq!(
+            p.classify(&reply(9, 42, 254, 0), US),
+            Classified::ForeignReply
+        );
+        assert_eq!(
+            p.classify(&reply(9, 42, 255, 1), US),
+            Classified::ForeignReply
+        );
+        // tc1 = 0 is someone's request, not a reply.
+        assert_eq!(p.classify(&reply(0, 42, 0, 0), US), Classified::NotAReply);
+    }
+
+    #[test]
+    fn tokens_rise_strictly_and_are_never_zero() {
+        let mut p = TimesyncProbe::new(0, SysComp::new(1, 1));
+        assert_eq!(p.token(0), 1);
+        assert_eq!(p.token(0), 2);
+        assert_eq!(p.token(1_000), 1_000);
+        assert_eq!(p.token(1_000), 1_001);
+        assert_eq!(
+            p.request(0, 7),
+            Msg::Timesync {
+                tc1: 0,
+                ts1: 7,
+                target_system: 1,
+                target_component: 1
+            }
+        );
+        let mut wall = TimesyncProbe::new(1_700_000_000_000_000_000, SysComp::new(0, 0));
+        assert_eq!(wall.token(5), 1_700_000_000_000_000_005);
+    }
+
+    #[test]
+    fn offsets_are_kept_per_responder() {
+        let mut p = TimesyncProbe::new(1_000, SysComp::new(0, 0));
+        // Sent at 100, answered at 300: their clock read 5_200 at our 200,
+        // which is 1_200 on the clock our ts1 counts.
+        p.on_reply(&reply(5_200, 1_100, 0, 0), 100, 300);
+        let c = p.clock(SysComp::new(1, 1)).unwrap();
+        assert_eq!(c.offset_ns, 4_000);
+        assert_eq!(c.uncertainty_ns, 100);
+        assert!(p.clock(SysComp::new(2, 1)).is_none());
+    }
+}
