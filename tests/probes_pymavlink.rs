@@ -350,3 +350,32 @@ fn mavping_measures_mavping_respond() {
     assert_eq!(c.received + c.lost, c.sent);
     assert!(c.lost > 0 && c.lost <= truth[6], "{out}\n{truth:?}");
 }
+
+/// `mavping respond` on a serial port: a pty pair ("null-modem cable")
+/// with a pymavlink prober on the far end, both at 57600 baud.
+#[test]
+fn respond_answers_a_pymavlink_prober_over_a_pty() {
+    let mut bridge = Peer::start("pty_bridge.py", &[]);
+    let line = bridge.read_line();
+    let (a, b) = line.split_once(' ').expect("two pty paths");
+    let respond = Respond::start(&[
+        "--sysid",
+        "7",
+        "--compid",
+        "3",
+        &format!("serial:{a}:57600"),
+    ]);
+    let f = run_peer(
+        "prober.py",
+        &[b, "--baud", "57600", "--responder", "7/3", "--count", "30"],
+    );
+    assert_eq!(f["ping_ok"], 30, "{f}");
+    assert_eq!(f["timesync_ok"], 30, "{f}");
+    assert_eq!(f["acks_ok"], 2, "{f}");
+    for bad in ["ping_bad", "timesync_bad", "acks_bad", "other_source"] {
+        assert_eq!(f[bad], 0, "{bad}: {f}");
+    }
+    let (code, counts) = respond.finish();
+    assert_eq!(code, 0);
+    assert_eq!(counts, vec![62, 30, 30, 2, 1, 62, 0, 0]);
+}
