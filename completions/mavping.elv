@@ -48,6 +48,7 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand --generate 'Print shell completions or the man page (for packagers)'
             cand -q 'Print only the summary'
             cand --quiet 'Print only the summary'
+            cand --every-reply 'Print a line for every reply even above 100 requests/s (where one status line per second is printed instead)'
             cand --no-heartbeat 'Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)'
             cand -v 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
             cand --verbose 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'

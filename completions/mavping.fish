@@ -1,6 +1,6 @@
 # Print an optspec for argparse to handle cmd's options that are independent of any subcommand.
 function __fish_mavping_global_optspecs
-    string join \n c/count= i/interval= rate= w/deadline= W/timeout= q/quiet sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= generate= h/help V/version
+    string join \n c/count= i/interval= rate= w/deadline= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= generate= h/help V/version
 end
 
 function __fish_mavping_needs_command
@@ -57,6 +57,7 @@ complete-powershell\t''
 complete-elvish\t''
 man\t''"
 complete -c mavping -n "__fish_mavping_needs_command" -s q -l quiet -d 'Print only the summary'
+complete -c mavping -n "__fish_mavping_needs_command" -l every-reply -d 'Print a line for every reply even above 100 requests/s (where one status line per second is printed instead)'
 complete -c mavping -n "__fish_mavping_needs_command" -l no-heartbeat -d 'Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)'
 complete -c mavping -n "__fish_mavping_needs_command" -s v -l verbose -d 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
 complete -c mavping -n "__fish_mavping_needs_command" -l json -d 'Same as --format json: newline-delimited JSON events on stdout'

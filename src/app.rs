@@ -136,8 +136,9 @@ async fn run_ping(config: &Config) -> u8 {
             SystemTime::now()
         },
     };
-    let stdout = io::stdout().lock();
     if let Probe::Command(spec) = &config.probe {
+        // A command a second at most: line-buffered output is fine here.
+        let stdout = io::stdout().lock();
         let outcome = match config.format {
             Format::Text => {
                 let mut report = TextReporter::new(stdout, config.quiet);
@@ -153,8 +154,13 @@ async fn run_ping(config: &Config) -> u8 {
         }
         return outcome.exit_code();
     }
+    // Buffered: a write per line would pace the engine at high rates. The
+    // session flushes before it blocks and every 50 ms while busy.
+    let stdout = BufWriter::new(io::stdout().lock());
     let main: Box<dyn Reporter> = match config.format {
-        Format::Text => Box::new(TextReporter::new(stdout, config.quiet)),
+        Format::Text => {
+            Box::new(TextReporter::new(stdout, config.quiet).every_reply(config.every_reply))
+        }
         Format::Json => Box::new(JsonReporter::new(stdout, config.quiet, wall)),
     };
     let mut reporters = vec![main];

@@ -165,6 +165,11 @@ pub struct PingArgs {
     #[arg(short = 'q', long)]
     pub quiet: bool,
 
+    /// Print a line for every reply even above 100 requests/s (where one
+    /// status line per second is printed instead)
+    #[arg(long)]
+    pub every_reply: bool,
+
     /// Our MAVLink system id (the header of our requests)
     #[arg(long, value_name = "ID", default_value_t = 255, env = "MAVPING_SYSID")]
     pub sysid: u8,

@@ -37,6 +37,7 @@ pub struct Config {
     pub link_options: LinkOptions,
     pub session: SessionConfig,
     pub quiet: bool,
+    pub every_reply: bool,
     pub verbose: u8,
     pub format: Format,
     pub thresholds: Thresholds,
@@ -316,6 +317,7 @@ impl TryFrom<&PingArgs> for Config {
                 heartbeat: !cli.no_heartbeat,
                 capacity: pending_capacity(interval, cli.timeout)?,
                 first_seq: cli.first_seq,
+                precise_pacing: !matches!(link, LinkSpec::Sim(_)),
             },
             link,
             link_options: LinkOptions {
@@ -323,6 +325,7 @@ impl TryFrom<&PingArgs> for Config {
                 reconnect: cli.reconnect,
             },
             quiet: cli.quiet,
+            every_reply: cli.every_reply,
             verbose: cli.verbose,
             format: if cli.json { Format::Json } else { cli.format },
             thresholds: Thresholds {

@@ -297,6 +297,8 @@ mod tests {
             interrupted: false,
             link_error: None,
             downtime_s: 0.0,
+            schedule: None,
+            rx_clock: "test",
         }
     }
 

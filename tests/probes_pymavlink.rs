@@ -86,6 +86,15 @@ impl Respond {
     }
 }
 
+impl Drop for Respond {
+    // A failing test must not leave a responder running (it would hold the
+    // test runner's output pipe open).
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
 /// Runs a pymavlink script that exits by itself; returns its JSON line.
 fn run_peer(script: &str, args: &[&str]) -> serde_json::Value {
     let child = std::process::Command::new(python())

@@ -15,7 +15,8 @@ use tokio::time::{sleep_until, Instant};
 use super::matcher::{MatchEvent, Matcher};
 use super::roster::Roster;
 use super::schedule::Schedule;
-use super::summary::{responder_summaries, silent_system_hints, Summary};
+use super::stats::RttStats;
+use super::summary::{responder_summaries, silent_system_hints, ScheduleSummary, Summary};
 use super::Nanos;
 use crate::frame::{self, Header, Msg, SysComp, Version};
 use crate::output::{Event, Reporter, StartInfo};
@@ -37,6 +38,10 @@ pub struct SessionConfig {
     /// Request slots in the matcher's ring.
     pub capacity: usize,
     pub first_seq: u32,
+    /// Wait for sends precisely (sub-millisecond) rather than on tokio's
+    /// 1 ms timer. Off for the simulated link, whose paused virtual clock
+    /// only moves while the runtime is idle.
+    pub precise_pacing: bool,
 }
 
 /// How the run ended. The caller judges it and reports the summary.
@@ -93,6 +98,98 @@ impl Sender {
     }
 }
 
+/// How close to a planned send the session stops trusting tokio's 1 ms
+/// timer and waits precisely instead.
+const FINE_WINDOW_NS: Nanos = 1_500_000;
+/// The precise wait sleeps in slices of at most this (so replies on links
+/// without kernel timestamps are read promptly)...
+const SLICE: Duration = Duration::from_micros(200);
+/// ...and spins for the last stretch, which nanosleep cannot hit exactly.
+const SPIN_NS: Nanos = 50_000;
+/// Output is buffered; while busy, it reaches the reader this often.
+const FLUSH_EVERY_NS: Nanos = 50_000_000;
+
+/// Everything a received frame can change.
+struct Intake<'a, P> {
+    ours: SysComp,
+    matcher: &'a mut Matcher,
+    roster: &'a mut Roster,
+    probe: &'a mut P,
+    events: &'a mut Vec<MatchEvent>,
+    foreign_replies: &'a mut u64,
+}
+
+impl<P: EchoProbe> Intake<'_, P> {
+    fn take(
+        &mut self,
+        clock: &Clock,
+        inbound: &mut Vec<Inbound>,
+        report: &mut dyn Reporter,
+    ) -> io::Result<()> {
+        let mut output = Ok(());
+        for Inbound { frame, at, .. } in inbound.drain(..) {
+            let at = clock.ns(at);
+            if let Msg::Heartbeat {
+                mav_type,
+                autopilot,
+            } = frame.msg
+            {
+                if self.roster.heard(frame.source, mav_type, autopilot, at) {
+                    let identity = self.roster.get(frame.source).expect("just added");
+                    output = output.and(report.event(&Event::Heard {
+                        id: frame.source,
+                        identity,
+                    }));
+                }
+                continue;
+            }
+            match self.probe.classify(&frame, self.ours) {
+                Classified::Reply(lookup) => {
+                    let before = self.events.len();
+                    let events = &mut *self.events;
+                    self.matcher
+                        .on_reply(frame.source, lookup, at, &mut |e| events.push(e));
+                    // Only an accepted in-time reply feeds the probe.
+                    for e in &self.events[before..] {
+                        if let MatchEvent::Reply {
+                            responder,
+                            sent_at,
+                            at,
+                            ..
+                        } = *e
+                        {
+                            if responder == frame.source {
+                                self.probe.on_reply(&frame, sent_at, at);
+                            }
+                        }
+                    }
+                }
+                Classified::ForeignReply => *self.foreign_replies += 1,
+                Classified::NotAReply => {}
+            }
+        }
+        output.and(flush(self.events, report))
+    }
+}
+
+/// Polls a future once: its result if it is ready now. Used on cancel-safe
+/// futures only (link receive, the stop signal), between precise sleeps.
+fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
+    let mut f = std::pin::pin!(f);
+    let mut cx = std::task::Context::from_waker(std::task::Waker::noop());
+    match f.as_mut().poll(&mut cx) {
+        std::task::Poll::Ready(v) => Some(v),
+        std::task::Poll::Pending => None,
+    }
+}
+
+/// Lets the OS wake us within a few µs of a requested time instead of the
+/// default 50 µs slack (Linux); harmless where it is not supported.
+fn tighten_timer_slack() {
+    #[cfg(target_os = "linux")]
+    let _ = nix::sys::prctl::set_timerslack(1_000);
+}
+
 /// Runs the measurement until it ends and returns what it measured.
 pub async fn run<T: Transport, P: EchoProbe>(
     cfg: &SessionConfig,
@@ -101,6 +198,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
     report: &mut dyn Reporter,
     stop: Arc<Notify>,
 ) -> Outcome {
+    tighten_timer_slack();
     let clock = Clock {
         epoch: Instant::now(),
     };
@@ -121,6 +219,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
     let mut foreign_replies = 0u64;
     let mut interrupted = false;
     let mut link_error: Option<LinkError> = None;
+    let mut pacing = Pacing::default();
     let mut output: io::Result<()> = report.start(&StartInfo {
         link: cfg.link_name.clone(),
         probe: probe.name(),
@@ -130,6 +229,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
         count: cfg.count,
     });
     let mut told_waiting = false;
+    let mut last_flush: Nanos = 0;
 
     'run: while output.is_ok() {
         let now = clock.now();
@@ -158,13 +258,15 @@ pub async fn run<T: Transport, P: EchoProbe>(
             }
         }
         if let Some(s) = schedule.as_mut() {
-            while s.take_due(clock.now()).is_some() {
+            while let Some((_, planned)) = s.take_due(clock.now()) {
                 let token = probe.token(clock.now());
                 let seq = cfg.first_seq.wrapping_add(matcher.issued() as u32);
                 let request = probe.request(seq, token);
                 match link.send(sender.frame(&request)).await {
                     Ok(sent) => {
-                        matcher.on_send(token, clock.ns(sent), &mut |e| events.push(e));
+                        let sent = clock.ns(sent);
+                        pacing.sent(planned, sent);
+                        matcher.on_send(token, sent, &mut |e| events.push(e));
                     }
                     Err(e) => {
                         link_error = Some(e);
@@ -183,15 +285,82 @@ pub async fn run<T: Transport, P: EchoProbe>(
             break;
         }
 
+        let mut intake = Intake {
+            ours: cfg.ours,
+            matcher: &mut matcher,
+            roster: &mut roster,
+            probe: &mut probe,
+            events: &mut events,
+            foreign_replies: &mut foreign_replies,
+        };
+        let next_send = schedule.as_ref().and_then(|s| s.next_due());
+        let now = clock.now();
+        // A send is due within the timer's resolution: wait for it
+        // precisely, still reading the link between short sleeps.
+        let fine = next_send
+            .filter(|&due| cfg.precise_pacing && due.saturating_sub(now) <= FINE_WINDOW_NS);
+        if let Some(due) = fine {
+            loop {
+                let now = clock.now();
+                if now >= due {
+                    break;
+                }
+                if ready_now(stop.notified()).is_some() {
+                    interrupted = true;
+                    break 'run;
+                }
+                match ready_now(link.recv(&mut inbound)) {
+                    Some(Err(e)) => {
+                        link_error = Some(e);
+                        break 'run;
+                    }
+                    Some(Ok(())) => {
+                        output = intake.take(&clock, &mut inbound, report);
+                        if output.is_err() {
+                            break 'run;
+                        }
+                        continue;
+                    }
+                    None => {}
+                }
+                if now.saturating_sub(last_flush) > FLUSH_EVERY_NS {
+                    last_flush = now;
+                    output = report.flush();
+                    if output.is_err() {
+                        break 'run;
+                    }
+                }
+                let left = due - now;
+                if left > SPIN_NS {
+                    std::thread::sleep(SLICE.min(Duration::from_nanos(left - SPIN_NS)));
+                } else {
+                    std::hint::spin_loop();
+                }
+            }
+            continue;
+        }
+
         let wake = [
-            schedule.as_ref().and_then(|s| s.next_due()),
-            matcher.next_deadline(),
+            next_send.map(|due| {
+                if cfg.precise_pacing {
+                    due.saturating_sub(FINE_WINDOW_NS)
+                } else {
+                    due
+                }
+            }),
+            intake.matcher.next_deadline(),
             next_heartbeat,
             deadline_ns,
         ]
         .into_iter()
         .flatten()
         .min();
+        // About to block: let buffered output reach the reader.
+        last_flush = now;
+        output = report.flush();
+        if output.is_err() {
+            break;
+        }
         let sleep = async {
             match wake {
                 Some(ns) => sleep_until(clock.at(ns)).await,
@@ -209,33 +378,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
                     link_error = Some(e);
                     break;
                 }
-                for Inbound { frame, at, .. } in inbound.drain(..) {
-                    let at = clock.ns(at);
-                    if let Msg::Heartbeat { mav_type, autopilot } = frame.msg {
-                        if roster.heard(frame.source, mav_type, autopilot, at) {
-                            let identity = roster.get(frame.source).expect("just added");
-                            output = output.and(report.event(&Event::Heard { id: frame.source, identity }));
-                        }
-                        continue;
-                    }
-                    match probe.classify(&frame, cfg.ours) {
-                        Classified::Reply(lookup) => {
-                            let before = events.len();
-                            matcher.on_reply(frame.source, lookup, at, &mut |e| events.push(e));
-                            // Only an accepted in-time reply feeds the probe.
-                            for e in &events[before..] {
-                                if let MatchEvent::Reply { responder, sent_at, at, .. } = *e {
-                                    if responder == frame.source {
-                                        probe.on_reply(&frame, sent_at, at);
-                                    }
-                                }
-                            }
-                        }
-                        Classified::ForeignReply => foreign_replies += 1,
-                        Classified::NotAReply => {}
-                    }
-                }
-                output = output.and(flush(&mut events, report));
+                output = intake.take(&clock, &mut inbound, report);
             }
             _ = sleep => {}
         }
@@ -267,6 +410,8 @@ pub async fn run<T: Transport, P: EchoProbe>(
         interrupted,
         link_error: link_error.map(|e| e.to_string()),
         downtime_s: link.downtime().as_secs_f64(),
+        schedule: pacing.summary(cfg.interval),
+        rx_clock: link.rx_clock(),
     };
     let histograms = matcher
         .responders()
@@ -277,6 +422,43 @@ pub async fn run<T: Transport, P: EchoProbe>(
         summary,
         histograms,
         output_closed: output.is_err(),
+    }
+}
+
+/// How well requests kept to their schedule: achieved rate and how late
+/// each went out against its planned time. Late sends mean the machine,
+/// not the link, was the bottleneck.
+#[derive(Default)]
+struct Pacing {
+    first: Option<Nanos>,
+    last: Nanos,
+    count: u64,
+    lateness: RttStats,
+}
+
+impl Pacing {
+    fn sent(&mut self, planned: Nanos, actual: Nanos) {
+        self.first.get_or_insert(actual);
+        self.last = actual;
+        self.count += 1;
+        self.lateness.record(actual.saturating_sub(planned));
+    }
+
+    fn summary(&self, interval: Duration) -> Option<ScheduleSummary> {
+        let first = self.first?;
+        let late = self.lateness.summary()?;
+        let span = self.last.saturating_sub(first) as f64 / 1e9;
+        Some(ScheduleSummary {
+            requested_rate_hz: 1.0 / interval.as_secs_f64(),
+            achieved_rate_hz: if self.count > 1 && span > 0.0 {
+                (self.count - 1) as f64 / span
+            } else {
+                0.0
+            },
+            lateness_p50_us: late.p50_us,
+            lateness_p99_us: late.p99_us,
+            lateness_max_us: late.max_us,
+        })
     }
 }
 

@@ -25,6 +25,17 @@ pub struct ResponderSummary {
     pub clock: Option<ClockSummary>,
 }
 
+/// How well requests kept to their schedule (see the session's pacing).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct ScheduleSummary {
+    pub requested_rate_hz: f64,
+    pub achieved_rate_hz: f64,
+    /// Actual send minus planned send, over all requests.
+    pub lateness_p50_us: f64,
+    pub lateness_p99_us: f64,
+    pub lateness_max_us: f64,
+}
+
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
     pub link: String,
@@ -47,6 +58,10 @@ pub struct Summary {
     pub link_error: Option<String>,
     /// Seconds the link was down while reconnecting (`--reconnect`).
     pub downtime_s: f64,
+    /// Send pacing figures, once a request was sent.
+    pub schedule: Option<ScheduleSummary>,
+    /// How receive times were taken (kernel timestamps or user space).
+    pub rx_clock: &'static str,
 }
 
 impl Summary {

@@ -96,6 +96,10 @@ fn responder_json(r: &ResponderSummary, verdict: &Verdict) -> Value {
 }
 
 impl<W: Write> Reporter for JsonReporter<W> {
+    fn flush(&mut self) -> io::Result<()> {
+        self.out.flush()
+    }
+
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         if self.quiet {
             return Ok(());
@@ -202,6 +206,8 @@ impl<W: Write> Reporter for JsonReporter<W> {
             "interrupted": s.interrupted,
             "link_error": s.link_error,
             "downtime_s": s.downtime_s,
+            "schedule": s.schedule,
+            "rx_clock": s.rx_clock,
             "frames": s.frames,
             "foreign_replies": s.foreign_replies,
             "untracked_replies": s.untracked_replies,

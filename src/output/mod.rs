@@ -47,6 +47,11 @@ pub trait Reporter {
     fn start(&mut self, info: &StartInfo) -> io::Result<()>;
     fn event(&mut self, event: &Event<'_>) -> io::Result<()>;
     fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()>;
+    /// Pushes buffered output to the reader (called before the session
+    /// blocks, and every 50 ms while it is busy).
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
 }
 
 /// Session time to wall-clock time. The wall clock is read once at the
@@ -90,6 +95,9 @@ impl Reporter for Fanout<'_> {
         self.reporters
             .iter_mut()
             .try_for_each(|r| r.summary(summary, verdict))
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        self.reporters.iter_mut().try_for_each(|r| r.flush())
     }
 }
 

@@ -80,4 +80,8 @@ impl<W: Write> Reporter for SampleLog<W> {
     fn summary(&mut self, _: &Summary, _: &Verdict) -> io::Result<()> {
         self.out.flush()
     }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.out.flush()
+    }
 }

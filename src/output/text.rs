@@ -19,6 +19,25 @@ pub struct TextReporter<W: Write> {
     /// Only the summary (`-q`).
     quiet: bool,
     timeout: std::time::Duration,
+    /// Print every reply even at high rates (`--every-reply`).
+    every_reply: bool,
+    /// Above [`MAX_LINE_RATE`] requests/s: one status line per second
+    /// instead of a line per event, so printing never paces the engine.
+    progress: Option<Progress>,
+}
+
+/// Requests per second above which per-reply lines are summarised.
+const MAX_LINE_RATE: f64 = 100.0;
+const PROGRESS_EVERY_NS: Nanos = 1_000_000_000;
+
+#[derive(Default)]
+struct Progress {
+    window_start: Nanos,
+    replies: u64,
+    lost: u64,
+    late: u64,
+    duplicate: u64,
+    last_rtt: Option<Nanos>,
 }
 
 impl<W: Write> TextReporter<W> {
@@ -27,7 +46,60 @@ impl<W: Write> TextReporter<W> {
             out,
             quiet,
             timeout: std::time::Duration::ZERO,
+            every_reply: false,
+            progress: None,
         }
+    }
+
+    /// A line per reply whatever the rate.
+    pub fn every_reply(mut self, every: bool) -> Self {
+        self.every_reply = every;
+        self
+    }
+
+    /// Counts a match event into the status line; prints it once a second.
+    fn tally(&mut self, e: &MatchEvent) -> io::Result<()> {
+        let Some(p) = self.progress.as_mut() else {
+            return Ok(());
+        };
+        let at = match *e {
+            MatchEvent::Reply { rtt, at, .. } => {
+                p.replies += 1;
+                p.last_rtt = Some(rtt);
+                at
+            }
+            MatchEvent::Lost { at, .. } => {
+                p.lost += 1;
+                at
+            }
+            MatchEvent::Late { at, .. } => {
+                p.late += 1;
+                at
+            }
+            MatchEvent::Duplicate { at, .. } => {
+                p.duplicate += 1;
+                at
+            }
+            MatchEvent::Stale { at, .. } => at,
+        };
+        if at.saturating_sub(p.window_start) < PROGRESS_EVERY_NS {
+            return Ok(());
+        }
+        let line = format!(
+            "[{:.1} s] {} replies, {} lost, {} late, {} duplicate in the last {:.1} s; last rtt {} ms",
+            at as f64 / 1e9,
+            p.replies,
+            p.lost,
+            p.late,
+            p.duplicate,
+            at.saturating_sub(p.window_start) as f64 / 1e9,
+            p.last_rtt.map_or("-".into(), ms)
+        );
+        *p = Progress {
+            window_start: at,
+            ..Progress::default()
+        };
+        writeln!(self.out, "{line}")
     }
 
     pub fn into_inner(self) -> W {
@@ -150,20 +222,36 @@ impl<W: Write> Reporter for TextReporter<W> {
         if self.quiet {
             return Ok(());
         }
+        let summarised = !self.every_reply && 1.0 / info.interval.as_secs_f64() > MAX_LINE_RATE;
+        if summarised {
+            self.progress = Some(Progress::default());
+        }
         writeln!(
             self.out,
-            "MAVPING {} from {}: {} {}, timeout {}",
+            "MAVPING {} from {}: {} {}, timeout {}{}",
             info.link,
             info.ours,
             info.probe.to_uppercase(),
             rate(info.interval),
-            humantime::format_duration(info.timeout)
+            humantime::format_duration(info.timeout),
+            if summarised {
+                " (one status line per second; --every-reply for all)"
+            } else {
+                ""
+            }
         )
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.out.flush()
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
         if self.quiet {
             return Ok(());
+        }
+        if let (Some(_), Event::Match(e)) = (&self.progress, event) {
+            return self.tally(e);
         }
         match *event {
             Event::Match(MatchEvent::Reply {
@@ -246,6 +334,18 @@ impl<W: Write> Reporter for TextReporter<W> {
                 out,
                 "link down {:.3} s in total while reconnecting (requests sent meanwhile count as lost)",
                 s.downtime_s
+            )?;
+        }
+        if let Some(p) = &s.schedule {
+            writeln!(
+                out,
+                "schedule: {:.1}/s achieved of {:.1}/s, send lateness p50/p99/max = {}/{}/{} ms; {}",
+                p.achieved_rate_hz,
+                p.requested_rate_hz,
+                ms_us(p.lateness_p50_us),
+                ms_us(p.lateness_p99_us),
+                ms_us(p.lateness_max_us),
+                s.rx_clock
             )?;
         }
         for hint in &s.hints {

@@ -70,6 +70,10 @@ pub trait Transport {
     }
     /// What the frame scanner has skipped and rejected so far.
     fn scan_stats(&self) -> ScanStats;
+    /// How receive times are taken, for the summary.
+    fn rx_clock(&self) -> &'static str {
+        "user-space receive timestamps"
+    }
     /// How long the link has been down in total (`--reconnect`).
     fn downtime(&self) -> Duration {
         Duration::ZERO
@@ -179,5 +183,19 @@ impl Transport for Link {
 
     fn downtime(&self) -> Duration {
         each_link!(self, l => l.downtime())
+    }
+
+    fn rx_clock(&self) -> &'static str {
+        each_link!(self, l => l.rx_clock())
+    }
+}
+
+impl Link {
+    /// The UDP receive buffer the kernel granted, if this is a UDP link.
+    pub fn udp_recv_buffer(&self) -> Option<usize> {
+        match self {
+            Link::Udp(l) => Some(l.recv_buffer()),
+            _ => None,
+        }
     }
 }

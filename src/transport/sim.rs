@@ -428,6 +428,10 @@ impl Transport for SimLink {
     fn scan_stats(&self) -> ScanStats {
         self.stats
     }
+
+    fn rx_clock(&self) -> &'static str {
+        "simulated arrival times"
+    }
 }
 
 #[cfg(test)]
