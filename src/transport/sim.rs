@@ -221,6 +221,23 @@ struct SimResponder {
     core: ResponderCore,
     packet_seq: u8,
     next_heartbeat: Instant,
+    truth: SimTruth,
+}
+
+/// What the simulated link did to one responder's exchanges: the ground
+/// truth tests hold mavping's counts against.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct SimTruth {
+    /// Requests the responder answered (before faults).
+    pub answered: u64,
+    /// Exchanges the link dropped...
+    pub dropped: u64,
+    /// ...of which before the first delivered reply (outside the window).
+    pub dropped_before_first: u64,
+    /// Replies delivered (first copies).
+    pub delivered: u64,
+    /// Extra copies delivered.
+    pub duplicated: u64,
 }
 
 impl SimResponder {
@@ -269,6 +286,7 @@ impl SimLink {
                     core,
                     packet_seq: 0,
                     next_heartbeat: now,
+                    truth: SimTruth::default(),
                 }
             })
             .collect();
@@ -282,6 +300,14 @@ impl SimLink {
             started: now,
             scratch: Vec::new(),
         }
+    }
+
+    /// Ground truth per responder, in responder order.
+    pub fn truth(&self) -> Vec<(SysComp, SimTruth)> {
+        self.responders
+            .iter()
+            .map(|r| (r.core.id, r.truth))
+            .collect()
     }
 
     fn one_way(&mut self) -> Duration {
@@ -365,10 +391,15 @@ impl Transport for SimLink {
                 let Some(mut reply) = self.responders[i].core.answer(&request.frame, 0) else {
                     continue;
                 };
+                self.responders[i].truth.answered += 1;
                 // Loss is drawn once per exchange: request or reply leg.
                 if self.chance(self.params.loss) {
+                    let truth = &mut self.responders[i].truth;
+                    truth.dropped += 1;
+                    truth.dropped_before_first += u64::from(truth.delivered == 0);
                     continue;
                 }
+                self.responders[i].truth.delivered += 1;
                 let up = self.one_way();
                 // A real responder reads its clock when the request arrives,
                 // one leg after we sent it: that is what makes the NTP
@@ -384,6 +415,7 @@ impl Transport for SimLink {
                     at += self.params.hold;
                 }
                 if self.chance(self.params.dup) {
+                    self.responders[i].truth.duplicated += 1;
                     let again = at + self.one_way();
                     self.enqueue(again, out.clone());
                 }

@@ -1,0 +1,22 @@
+#!/usr/bin/env bash
+# mavping's benchmark: builds in release mode, starts the responders itself,
+# runs irtt, a pymavlink pinger (the baseline) and mavping in the same run,
+# and prints a table of figures and ratios. Usage:
+#   bash scripts/bench.sh          # full run (about 6 minutes)
+#   bash scripts/bench.sh --quick  # shorter trials (about 2 minutes)
+# Micro-benchmarks of the parser, matcher and statistics: cargo bench --bench core
+set -euo pipefail
+cd "$(dirname "$0")/.."
+cargo build --release --quiet
+if ! command -v irtt >/dev/null; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    apt-get install -y -qq irtt >/dev/null || echo "bench: could not install irtt; its rows are skipped"
+  else
+    echo "bench: irtt is not installed (Debian: apt-get install irtt); its rows are skipped"
+  fi
+fi
+if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pymavlink" 2>/dev/null; then
+  python3 -m venv .venv
+  .venv/bin/pip install --quiet --disable-pip-version-check "pymavlink==2.4.50" pyserial==3.5
+fi
+exec .venv/bin/python bench/run.py "$@"
