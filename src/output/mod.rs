@@ -3,6 +3,9 @@
 
 pub mod hgrm;
 pub mod json;
+pub mod live;
+pub mod plot;
+pub mod prometheus;
 pub mod samples;
 pub mod text;
 
