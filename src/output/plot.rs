@@ -22,8 +22,8 @@ use crate::verdict::Verdict;
 pub const SPANS: usize = 1024;
 /// Width of a span at the start: fine enough for 1 kHz pinging.
 const FIRST_SPAN_NS: Nanos = 1_000_000;
-/// Distribution bins per decade, from 10 µs to 100 s.
-const BINS_PER_DECADE: usize = 10;
+/// Distribution bins per decade (4% wide), from 10 µs to 100 s.
+const BINS_PER_DECADE: usize = 60;
 const LOWEST_US: f64 = 10.0;
 const BINS: usize = 7 * BINS_PER_DECADE;
 const SIZE: (u32, u32) = (1000, 720);
@@ -222,13 +222,10 @@ fn draw(data: &PlotData, backend: SVGBackend<'_>) -> DrawResult {
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(60)
-        .build_cartesian_2d(
-            (bin_low_ms(lo)..bin_low_ms(hi)).log_scale(),
-            0f64..top_share * 1.1,
-        )?;
+        .build_cartesian_2d(bin_low_ms(lo)..bin_low_ms(hi), 0f64..top_share * 1.1)?;
     chart
         .configure_mesh()
-        .x_desc("RTT (ms, log scale)")
+        .x_desc("RTT (ms)")
         .y_desc("replies (%)")
         .draw()?;
     for (n, t) in data.tracks.values().enumerate() {
@@ -333,6 +330,7 @@ mod tests {
         assert_eq!(t.spans.iter().map(|s| s.lost).sum::<u64>(), 36_000);
         assert_eq!(t.bins.iter().sum::<u64>(), 324_000);
         assert_eq!(bin(20_000_000), bin(20_400_000));
+        assert_ne!(bin(20_000_000), bin(21_000_000));
     }
 
     #[test]
