@@ -97,12 +97,15 @@ fn prometheus_metrics_are_served_while_the_run_goes_on() {
         let (head, body) = get(&host, "/metrics");
         let scrape = Scrape::parse(body.lines().map(|l| Ok(l.to_string()))).unwrap();
         let lost = |id| {
-            scrape
+            let present = scrape
                 .samples
                 .iter()
-                .any(|s| s.metric == "mavping_lost_total" && s.labels.get("sysid") == Some(id))
-                .then(|| counter(&scrape, "mavping_lost_total", id))
-                .unwrap_or(0.0)
+                .any(|s| s.metric == "mavping_lost_total" && s.labels.get("sysid") == Some(id));
+            if present {
+                counter(&scrape, "mavping_lost_total", id)
+            } else {
+                0.0
+            }
         };
         if lost("1") > 0.0 && lost("2") > 0.0 {
             break (head, body);

@@ -61,6 +61,9 @@ impl Series {
     }
 }
 
+/// A metric family: name, help and its value in a responder's series.
+type Family<T> = (&'static str, &'static str, fn(&Series) -> T);
+
 /// Everything `/metrics` shows.
 #[derive(Debug, Default)]
 pub struct Metrics {
@@ -114,7 +117,7 @@ impl Metrics {
     /// The exposition, in the Prometheus text format 0.0.4.
     pub fn render(&self) -> String {
         let mut out = String::new();
-        let counters: [(&str, &str, fn(&Series) -> u64); 5] = [
+        let counters: [Family<u64>; 5] = [
             (
                 "mavping_sent_total",
                 "Requests in the responder's window whose fate is decided.",
@@ -165,7 +168,7 @@ impl Metrics {
             let _ = writeln!(out, "{name}_sum{{{labels}}} {}", s.rtt_sum_s);
             let _ = writeln!(out, "{name}_count{{{labels}}} {}", s.received);
         }
-        let gauges: [(&str, &str, fn(&Series) -> Option<f64>); 2] = [
+        let gauges: [Family<Option<f64>>; 2] = [
             (
                 "mavping_last_rtt_seconds",
                 "Round-trip time of the latest reply within the timeout.",
