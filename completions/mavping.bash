@@ -35,7 +35,7 @@ _mavping() {
 
     case "${cmd}" in
         mavping)
-            opts="-c -i -w -W -q -v -h -V --count --interval --rate --deadline --timeout --quiet --every-reply --sysid --compid --mavlink --no-heartbeat --first-seq --verbose --format --json --max-loss --max-rtt --max-jitter --expect --min-responders --hgrm --samples --baud --reconnect --probe --target --command --retry-interval --retries --generate --help --version respond help"
+            opts="-c -i -w -W -q -v -h -V --count --interval --rate --deadline --timeout --quiet --every-reply --sysid --compid --mavlink --no-heartbeat --first-seq --verbose --format --json --max-loss --max-rtt --max-jitter --expect --min-responders --hgrm --samples --baud --reconnect --probe --target --command --retry-interval --retries --live --prometheus --plot --generate --help --version respond help"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -146,6 +146,14 @@ _mavping() {
                     return 0
                     ;;
                 --retries)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --prometheus)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --plot)
                     COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;

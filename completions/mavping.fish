@@ -1,6 +1,6 @@
 # Print an optspec for argparse to handle cmd's options that are independent of any subcommand.
 function __fish_mavping_global_optspecs
-    string join \n c/count= i/interval= rate= w/deadline= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= generate= h/help V/version
+    string join \n c/count= i/interval= rate= w/deadline= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= live prometheus= plot= generate= h/help V/version
 end
 
 function __fish_mavping_needs_command
@@ -50,6 +50,8 @@ complete -c mavping -n "__fish_mavping_needs_command" -l target -d 'Address requ
 complete -c mavping -n "__fish_mavping_needs_command" -l command -d '--probe command: MAV_CMD name or id, then up to 7 params, comma-separated' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l retry-interval -d '--probe command: re-send an unacknowledged command this often' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l retries -d '--probe command: re-sends after the first before a command counts as failed' -r
+complete -c mavping -n "__fish_mavping_needs_command" -l prometheus -d 'Serve Prometheus metrics at http://ADDR:PORT/metrics while the run goes on' -r
+complete -c mavping -n "__fish_mavping_needs_command" -l plot -d 'At the end, draw RTT over time and the RTT distribution to FILE.svg' -r -F
 complete -c mavping -n "__fish_mavping_needs_command" -l generate -d 'Print shell completions or the man page (for packagers)' -r -f -a "complete-bash\t''
 complete-zsh\t''
 complete-fish\t''
@@ -62,6 +64,7 @@ complete -c mavping -n "__fish_mavping_needs_command" -l no-heartbeat -d 'Do not
 complete -c mavping -n "__fish_mavping_needs_command" -s v -l verbose -d 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
 complete -c mavping -n "__fish_mavping_needs_command" -l json -d 'Same as --format json: newline-delimited JSON events on stdout'
 complete -c mavping -n "__fish_mavping_needs_command" -l reconnect -d 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run (pings sent while down count as lost)'
+complete -c mavping -n "__fish_mavping_needs_command" -l live -d 'Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal'
 complete -c mavping -n "__fish_mavping_needs_command" -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c mavping -n "__fish_mavping_needs_command" -s V -l version -d 'Print version'
 complete -c mavping -n "__fish_mavping_needs_command" -a "respond" -d 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'

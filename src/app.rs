@@ -2,7 +2,7 @@
 //! link, probe, report, verdict, exports.
 
 use std::fs::File;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, IsTerminal, Write};
 use std::process::ExitCode;
 use std::sync::Arc;
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -15,6 +15,9 @@ use crate::config::{Config, Probe, RespondConfig};
 use crate::engine::command_session;
 use crate::engine::session::{self, Outcome};
 use crate::output::json::JsonReporter;
+use crate::output::live::LiveReporter;
+use crate::output::plot::PlotReporter;
+use crate::output::prometheus::PrometheusReporter;
 use crate::output::samples::SampleLog;
 use crate::output::text::TextReporter;
 use crate::output::{hgrm, Fanout, Reporter, WallClock};
@@ -110,6 +113,31 @@ fn write_hgrm(path: &std::path::Path, outcome: &Outcome) -> Result<(), String> {
         .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))
 }
 
+/// `--prometheus` and `--plot`, set up before the link opens so a port in
+/// use or a bad path fails before anything is sent.
+fn views(config: &Config) -> Result<Vec<Box<dyn Reporter>>, String> {
+    let mut views: Vec<Box<dyn Reporter>> = Vec::new();
+    if let Some(addr) = config.prometheus {
+        let (exporter, bound) = std::net::TcpListener::bind(addr)
+            .and_then(PrometheusReporter::serve)
+            .map_err(|e| format!("--prometheus {addr}: {e}"))?;
+        // Says the port when 0 was asked for; scripts and tests read it.
+        let _ = writeln!(
+            io::stderr(),
+            "mavping: serving metrics at http://{bound}/metrics"
+        );
+        views.push(Box::new(exporter));
+    }
+    if let Some(path) = &config.plot {
+        let file = create(path, "--plot")?;
+        views.push(Box::new(PlotReporter::new(
+            file,
+            path.display().to_string(),
+        )));
+    }
+    Ok(views)
+}
+
 async fn run_ping(config: &Config) -> u8 {
     let stop = Arc::new(Notify::new());
     watch_signals(stop.clone());
@@ -121,6 +149,13 @@ async fn run_ping(config: &Config) -> u8 {
         }
         Some(Ok(file)) => Some(file),
         None => None,
+    };
+    let views = match views(config) {
+        Ok(views) => views,
+        Err(e) => {
+            print_error(&e);
+            return exit::ERROR;
+        }
     };
     let mut link = match Link::open(&config.link, &config.link_options).await {
         Ok(link) => link,
@@ -154,19 +189,33 @@ async fn run_ping(config: &Config) -> u8 {
         }
         return outcome.exit_code();
     }
-    // Buffered: a write per line would pace the engine at high rates. The
-    // session flushes before it blocks and every 50 ms while busy.
-    let stdout = BufWriter::new(io::stdout().lock());
+    let live = config.live && io::stdout().is_terminal();
+    if config.live && !live {
+        let _ = writeln!(
+            io::stderr(),
+            "mavping: --live needs a terminal; printing text"
+        );
+    }
     let main: Box<dyn Reporter> = match config.format {
-        Format::Text => {
-            Box::new(TextReporter::new(stdout, config.quiet).every_reply(config.every_reply))
-        }
-        Format::Json => Box::new(JsonReporter::new(stdout, config.quiet, wall)),
+        // The view draws from its own thread: stdout must not be locked here.
+        Format::Text if live => Box::new(LiveReporter::new(stop.clone())),
+        // Buffered: a write per line would pace the engine at high rates.
+        // The session flushes before it blocks and every 50 ms while busy.
+        Format::Text => Box::new(
+            TextReporter::new(BufWriter::new(io::stdout().lock()), config.quiet)
+                .every_reply(config.every_reply),
+        ),
+        Format::Json => Box::new(JsonReporter::new(
+            BufWriter::new(io::stdout().lock()),
+            config.quiet,
+            wall,
+        )),
     };
     let mut reporters = vec![main];
     if let Some(file) = samples {
         reporters.push(Box::new(SampleLog::new(file)));
     }
+    reporters.extend(views);
     let mut report = Fanout { reporters };
     let outcome = match &config.probe {
         Probe::Timesync { target } => {

@@ -260,6 +260,18 @@ pub struct PingArgs {
     /// --probe command: re-sends after the first before a command counts as failed
     #[arg(long, value_name = "N", default_value_t = 3)]
     pub retries: u8,
+
+    /// Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal
+    #[arg(long, env = "MAVPING_LIVE")]
+    pub live: bool,
+
+    /// Serve Prometheus metrics at http://ADDR:PORT/metrics while the run goes on
+    #[arg(long, value_name = "ADDR:PORT", env = "MAVPING_PROMETHEUS")]
+    pub prometheus: Option<String>,
+
+    /// At the end, draw RTT over time and the RTT distribution to FILE.svg
+    #[arg(long, value_name = "FILE.svg")]
+    pub plot: Option<PathBuf>,
 }
 
 /// Options of `mavping respond`.

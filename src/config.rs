@@ -1,6 +1,7 @@
 //! The validated run configuration: nothing downstream sees raw flags.
 
-use std::path::PathBuf;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use thiserror::Error;
@@ -44,6 +45,10 @@ pub struct Config {
     pub hgrm: Option<PathBuf>,
     pub samples: Option<PathBuf>,
     pub probe: Probe,
+    /// `--live`; app.rs falls back to text when stdout is not a terminal.
+    pub live: bool,
+    pub prometheus: Option<SocketAddr>,
+    pub plot: Option<PathBuf>,
 }
 
 /// Which probe, with what it needs.
@@ -86,6 +91,51 @@ impl Config {
     pub fn virtual_clock(&self) -> bool {
         matches!(&self.link, LinkSpec::Sim(p) if p.virtual_clock)
     }
+}
+
+/// `--prometheus`: a numeric address, so nothing is resolved behind the
+/// user's back (and `localhost` cannot silently mean IPv6 only).
+fn validate_listen(arg: &str) -> Result<SocketAddr, ConfigError> {
+    arg.parse().map_err(|_| {
+        invalid(format!(
+            "--prometheus {arg}: expected ADDR:PORT, e.g. 127.0.0.1:9090, 0.0.0.0:9090 or [::1]:9090"
+        ))
+    })
+}
+
+/// `--plot`: only SVG; the PNG backend needs system font libraries.
+fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
+    let svg = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
+    if !svg {
+        return Err(invalid(format!(
+            "--plot {}: only .svg files can be drawn",
+            path.display()
+        )));
+    }
+    Ok(path.to_path_buf())
+}
+
+/// The live view, exporter and plot follow echo probes' events.
+fn validate_views(cli: &PingArgs) -> Result<(), ConfigError> {
+    if cli.probe == ProbeKind::Command {
+        for (set, flag) in [
+            (cli.live, "--live"),
+            (cli.prometheus.is_some(), "--prometheus"),
+            (cli.plot.is_some(), "--plot"),
+        ] {
+            if set {
+                return Err(invalid(format!(
+                    "{flag} works with --probe ping and timesync, not command"
+                )));
+            }
+        }
+    }
+    if cli.live && (cli.json || cli.format == Format::Json) {
+        return Err(invalid("--live cannot be used with --json"));
+    }
+    Ok(())
 }
 
 fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
@@ -301,6 +351,7 @@ impl TryFrom<&PingArgs> for Config {
         }
         let ours = validate_ids(cli.sysid, cli.compid)?;
         validate_baud(cli.baud)?;
+        validate_views(cli)?;
         Ok(Config {
             session: SessionConfig {
                 link_name: link.to_string(),
@@ -338,6 +389,9 @@ impl TryFrom<&PingArgs> for Config {
             hgrm: cli.hgrm.clone(),
             samples: cli.samples.clone(),
             probe: validate_probe(cli)?,
+            live: cli.live,
+            prometheus: cli.prometheus.as_deref().map(validate_listen).transpose()?,
+            plot: cli.plot.as_deref().map(validate_plot).transpose()?,
         })
     }
 }
@@ -443,6 +497,12 @@ mod tests {
             panic!("not a command probe")
         };
         assert_eq!((c.command, c.params[0]), (512, 245.0));
+        let c = config("--live --prometheus [::1]:9100 --plot out/RTT.SVG sim:").unwrap();
+        assert!(c.live);
+        assert_eq!(c.prometheus, Some("[::1]:9100".parse().unwrap()));
+        assert_eq!(c.plot, Some(PathBuf::from("out/RTT.SVG")));
+        let c = config("--probe timesync --prometheus 0.0.0.0:0 sim:").unwrap();
+        assert_eq!(c.prometheus, Some("0.0.0.0:0".parse().unwrap()));
     }
 
     fn respond(args: &str) -> Result<RespondConfig, String> {
@@ -521,6 +581,21 @@ mod tests {
             ("--probe timesync --target 1/x sim:", "SYS/COMP"),
             ("--probe timesync --target 300 sim:", "SYS/COMP"),
             ("--probe command --target 0/1 sim:", "one target system"),
+            (
+                "--prometheus 9090 sim:",
+                "--prometheus 9090: expected ADDR:PORT",
+            ),
+            ("--prometheus localhost:9090 sim:", "expected ADDR:PORT"),
+            ("--prometheus 127.0.0.1:99999 sim:", "99999"),
+            ("--plot rtt.png sim:", "--plot rtt.png: only .svg"),
+            ("--plot rtt sim:", "only .svg"),
+            ("--live --json sim:", "--live cannot be used with --json"),
+            ("--live --probe command sim:", "--live works with"),
+            (
+                "--prometheus 127.0.0.1:9090 --probe command sim:",
+                "--prometheus works with",
+            ),
+            ("--plot a.svg --probe command sim:", "--plot works with"),
             ("--probe command --command FLY_TO_MOON sim:", "FLY_TO_MOON"),
             ("--probe command --command 512,a sim:", "param 1"),
             (

@@ -3,6 +3,9 @@
 
 pub mod hgrm;
 pub mod json;
+pub mod live;
+pub mod plot;
+pub mod prometheus;
 pub mod samples;
 pub mod text;
 
@@ -91,10 +94,17 @@ impl Reporter for Fanout<'_> {
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
         self.reporters.iter_mut().try_for_each(|r| r.event(event))
     }
+    /// Every reporter gets the summary, even after one failed: a closed
+    /// stdout (`| head`) must not cost the plot or the sample log its end.
     fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()> {
-        self.reporters
-            .iter_mut()
-            .try_for_each(|r| r.summary(summary, verdict))
+        let mut result = Ok(());
+        for r in &mut self.reporters {
+            let written = r.summary(summary, verdict);
+            if result.is_ok() {
+                result = written;
+            }
+        }
+        result
     }
     fn flush(&mut self) -> io::Result<()> {
         self.reporters.iter_mut().try_for_each(|r| r.flush())

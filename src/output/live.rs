@@ -1,0 +1,523 @@
+//! `--live`: a full-screen view of the link, in the spirit of mtr and gping:
+//! a row per responder with its counts, RTT figures and a strip of its
+//! recent replies, where losses and late replies stand out.
+//!
+//! The measurement never waits on the terminal: `event()` only updates a
+//! small state under a mutex, and a separate thread draws it a few times a
+//! second and reads the keyboard. When the run ends, the terminal is
+//! restored and the normal text summary printed.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::io::{self, Stdout};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+use crossterm::event::{self, KeyCode, KeyEventKind, KeyModifiers};
+use ratatui::layout::{Constraint, Layout};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
+use ratatui::Frame;
+use tokio::sync::Notify;
+
+use super::text::TextReporter;
+use super::{Event, Reporter, StartInfo};
+use crate::engine::matcher::MatchEvent;
+use crate::engine::stats::RttStats;
+use crate::engine::summary::Summary;
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+use crate::verdict::Verdict;
+
+/// Outcomes kept per responder for the strip: more than a wide terminal shows.
+pub const RECENT: usize = 240;
+/// Redraw period: a few times a second is enough to watch a link.
+const REFRESH: Duration = Duration::from_millis(200);
+const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
+
+/// One request's outcome for one responder, as the strip shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mark {
+    Rtt(Nanos),
+    Lost,
+    Late,
+}
+
+#[derive(Clone)]
+struct Track {
+    sent: u64,
+    received: u64,
+    lost: u64,
+    late: u64,
+    duplicate: u64,
+    rtt: RttStats,
+    recent: VecDeque<Mark>,
+    heard_as: Option<String>,
+}
+
+impl Track {
+    fn new() -> Self {
+        Track {
+            sent: 0,
+            received: 0,
+            lost: 0,
+            late: 0,
+            duplicate: 0,
+            rtt: RttStats::new(),
+            recent: VecDeque::with_capacity(RECENT),
+            heard_as: None,
+        }
+    }
+
+    fn push(&mut self, mark: Mark) {
+        if self.recent.len() == RECENT {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(mark);
+    }
+}
+
+/// What the view shows, updated from events; bounded per responder.
+#[derive(Clone, Default)]
+pub struct LiveState {
+    link: String,
+    probe: &'static str,
+    /// Session time of the latest event.
+    now: Nanos,
+    waiting: bool,
+    tracks: BTreeMap<SysComp, Track>,
+}
+
+impl LiveState {
+    pub fn on_start(&mut self, info: &StartInfo) {
+        self.link = info.link.clone();
+        self.probe = info.probe;
+    }
+
+    pub fn on_event(&mut self, event: &Event<'_>) {
+        match event {
+            Event::WaitingForPeer => self.waiting = true,
+            Event::Heard { id, identity } => {
+                self.tracks.entry(*id).or_insert_with(Track::new).heard_as =
+                    Some(format!("{} {}", identity.vehicle, identity.autopilot_name));
+            }
+            Event::Match(e) => self.on_match(e),
+        }
+    }
+
+    fn on_match(&mut self, e: &MatchEvent) {
+        self.waiting = false;
+        let (id, at) = match *e {
+            MatchEvent::Reply { responder, at, .. }
+            | MatchEvent::Late { responder, at, .. }
+            | MatchEvent::Duplicate { responder, at, .. }
+            | MatchEvent::Lost { responder, at, .. } => (responder, at),
+            MatchEvent::Stale { .. } => return,
+        };
+        self.now = self.now.max(at);
+        let t = self.tracks.entry(id).or_insert_with(Track::new);
+        match *e {
+            MatchEvent::Reply { rtt, .. } => {
+                t.sent += 1;
+                t.received += 1;
+                t.rtt.record(rtt);
+                t.push(Mark::Rtt(rtt));
+            }
+            MatchEvent::Lost { .. } => {
+                t.sent += 1;
+                t.lost += 1;
+                t.push(Mark::Lost);
+            }
+            MatchEvent::Late { .. } => {
+                t.late += 1;
+                t.push(Mark::Late);
+            }
+            MatchEvent::Duplicate { .. } => t.duplicate += 1,
+            MatchEvent::Stale { .. } => {}
+        }
+    }
+
+    /// The figures to draw, computed while the state is locked so the
+    /// drawing itself runs without the lock.
+    pub fn screen(&self) -> Screen {
+        Screen {
+            title: format!(
+                "mavping {} · {} · {:.1} s",
+                self.link,
+                self.probe,
+                self.now as f64 / 1e9
+            ),
+            waiting: self.waiting,
+            rows: self
+                .tracks
+                .iter()
+                .map(|(id, t)| {
+                    let s = t.rtt.summary();
+                    RowView {
+                        id: format!("{}/{}", id.sysid, id.compid),
+                        heard_as: t.heard_as.clone(),
+                        sent: t.sent,
+                        received: t.received,
+                        lost: t.lost,
+                        late: t.late,
+                        duplicate: t.duplicate,
+                        last_ms: t.rtt.last().map(|ns| ns as f64 / 1e6),
+                        p50_ms: s.map(|s| s.p50_us / 1e3),
+                        p99_ms: s.map(|s| s.p99_us / 1e3),
+                        jitter_ms: s.map(|s| s.jitter_us / 1e3),
+                        recent: t.recent.iter().copied().collect(),
+                    }
+                })
+                .collect(),
+        }
+    }
+}
+
+/// One responder's row.
+#[derive(Debug, Clone)]
+pub struct RowView {
+    pub id: String,
+    pub heard_as: Option<String>,
+    pub sent: u64,
+    pub received: u64,
+    pub lost: u64,
+    pub late: u64,
+    pub duplicate: u64,
+    pub last_ms: Option<f64>,
+    pub p50_ms: Option<f64>,
+    pub p99_ms: Option<f64>,
+    pub jitter_ms: Option<f64>,
+    pub recent: Vec<Mark>,
+}
+
+/// Everything one frame shows.
+#[derive(Debug, Clone)]
+pub struct Screen {
+    pub title: String,
+    pub waiting: bool,
+    pub rows: Vec<RowView>,
+}
+
+fn ms(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.2}"))
+}
+
+/// The recent outcomes, newest on the right, scaled between the lowest and
+/// highest RTT shown: `×` lost (red), `!` late (yellow).
+fn strip(recent: &[Mark], width: usize) -> Line<'static> {
+    let shown = &recent[recent.len().saturating_sub(width)..];
+    let rtts = shown.iter().filter_map(|m| match m {
+        Mark::Rtt(ns) => Some(*ns),
+        _ => None,
+    });
+    let lo = rtts.clone().min().unwrap_or(0);
+    let hi = rtts.max().unwrap_or(0);
+    let spans: Vec<Span<'static>> = shown
+        .iter()
+        .map(|m| match *m {
+            Mark::Rtt(ns) => {
+                let level = if hi > lo {
+                    ((ns - lo) as f64 / (hi - lo) as f64 * 7.0).round() as usize
+                } else {
+                    0
+                };
+                Span::styled(BARS[level].to_string(), Style::new().fg(Color::Green))
+            }
+            Mark::Lost => Span::styled(
+                "×",
+                Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
+            ),
+            Mark::Late => Span::styled("!", Style::new().fg(Color::Yellow)),
+        })
+        .collect();
+    Line::from(spans)
+}
+
+/// Draws one frame; pure over `screen`, so it is tested on a test backend.
+pub fn render(frame: &mut Frame<'_>, screen: &Screen) {
+    let [head, body, foot] = Layout::vertical([
+        Constraint::Length(1),
+        Constraint::Min(3),
+        Constraint::Length(1),
+    ])
+    .areas(frame.area());
+    frame.render_widget(
+        Paragraph::new(screen.title.as_str()).style(Style::new().add_modifier(Modifier::BOLD)),
+        head,
+    );
+    let widths = [
+        Constraint::Length(9),
+        Constraint::Length(7),
+        Constraint::Length(7),
+        Constraint::Length(6),
+        Constraint::Length(5),
+        Constraint::Length(5),
+        Constraint::Length(8),
+        Constraint::Length(8),
+        Constraint::Length(8),
+        Constraint::Length(7),
+        Constraint::Min(8),
+    ];
+    let fixed: u16 = 9 + 7 + 7 + 6 + 5 + 5 + 8 + 8 + 8 + 7 + 10 + 2;
+    let strip_width = usize::from(body.width.saturating_sub(fixed)).max(8);
+    let header = Row::new([
+        "responder",
+        "sent",
+        "recv",
+        "loss%",
+        "late",
+        "dup",
+        "last ms",
+        "p50 ms",
+        "p99 ms",
+        "jitter",
+        "recent (× lost, ! late)",
+    ])
+    .style(Style::new().add_modifier(Modifier::UNDERLINED));
+    let rows = screen.rows.iter().map(|r| {
+        let loss = if r.sent == 0 {
+            0.0
+        } else {
+            100.0 * r.lost as f64 / r.sent as f64
+        };
+        let alarm = |bad: bool| {
+            if bad {
+                Style::new().fg(Color::Red).add_modifier(Modifier::BOLD)
+            } else {
+                Style::new()
+            }
+        };
+        let last = if r.received == 0 && r.heard_as.is_some() {
+            Cell::from(Line::from(format!(
+                "heard ({}), no reply",
+                r.heard_as.as_deref().unwrap_or_default()
+            )))
+        } else {
+            Cell::from(strip(&r.recent, strip_width))
+        };
+        Row::new([
+            Cell::from(r.id.clone()),
+            Cell::from(r.sent.to_string()),
+            Cell::from(r.received.to_string()),
+            Cell::from(format!("{loss:.1}")).style(alarm(r.lost > 0)),
+            Cell::from(r.late.to_string()).style(alarm(r.late > 0)),
+            Cell::from(r.duplicate.to_string()),
+            Cell::from(ms(r.last_ms)),
+            Cell::from(ms(r.p50_ms)),
+            Cell::from(ms(r.p99_ms)),
+            Cell::from(ms(r.jitter_ms)),
+            last,
+        ])
+    });
+    let table = Table::new(rows, widths)
+        .header(header)
+        .block(Block::bordered().title(if screen.waiting {
+            " waiting for a peer "
+        } else {
+            " responders "
+        }));
+    frame.render_widget(table, body);
+    frame.render_widget(
+        Paragraph::new("q or Ctrl-C: stop and print the summary")
+            .style(Style::new().fg(Color::DarkGray)),
+        foot,
+    );
+}
+
+fn lock(state: &Mutex<LiveState>) -> MutexGuard<'_, LiveState> {
+    state.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Leaves the alternate screen and raw mode however the UI thread ends.
+struct Restore;
+
+impl Drop for Restore {
+    fn drop(&mut self) {
+        ratatui::restore();
+    }
+}
+
+struct Ui {
+    done: Arc<AtomicBool>,
+    thread: JoinHandle<io::Result<()>>,
+}
+
+pub struct LiveReporter {
+    state: Arc<Mutex<LiveState>>,
+    stop: Arc<Notify>,
+    ui: Option<Ui>,
+    text: TextReporter<Stdout>,
+}
+
+impl LiveReporter {
+    /// `stop` ends the run, as Ctrl-C does, when `q` is pressed.
+    pub fn new(stop: Arc<Notify>) -> Self {
+        LiveReporter {
+            state: Arc::default(),
+            stop,
+            ui: None,
+            text: TextReporter::new(io::stdout(), true),
+        }
+    }
+
+    fn close(&mut self) -> io::Result<()> {
+        let Some(ui) = self.ui.take() else {
+            return Ok(());
+        };
+        ui.done.store(true, Ordering::Relaxed);
+        ui.thread
+            .join()
+            .unwrap_or_else(|_| Err(io::Error::other("the live view failed")))
+    }
+}
+
+fn ui_loop(
+    mut terminal: ratatui::DefaultTerminal,
+    state: Arc<Mutex<LiveState>>,
+    done: Arc<AtomicBool>,
+    stop: Arc<Notify>,
+) -> io::Result<()> {
+    let _restore = Restore;
+    while !done.load(Ordering::Relaxed) {
+        let screen = lock(&state).screen();
+        terminal.draw(|f| render(f, &screen))?;
+        // Raw mode turns Ctrl-C into a key, so it is handled here too.
+        if event::poll(REFRESH)? {
+            if let event::Event::Key(k) = event::read()? {
+                let ctrl_c =
+                    k.code == KeyCode::Char('c') && k.modifiers.contains(KeyModifiers::CONTROL);
+                if k.kind == KeyEventKind::Press && (k.code == KeyCode::Char('q') || ctrl_c) {
+                    stop.notify_one();
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+impl Reporter for LiveReporter {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        lock(&self.state).on_start(info);
+        self.text.start(info)?;
+        // Also sets a panic hook that restores the terminal first.
+        let terminal = ratatui::try_init()?;
+        let done = Arc::new(AtomicBool::new(false));
+        let (state, flag, stop) = (self.state.clone(), done.clone(), self.stop.clone());
+        let thread = std::thread::Builder::new()
+            .name("live view".into())
+            .spawn(move || ui_loop(terminal, state, flag, stop))
+            .inspect_err(|_| ratatui::restore())?;
+        self.ui = Some(Ui { done, thread });
+        Ok(())
+    }
+
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        lock(&self.state).on_event(event);
+        Ok(())
+    }
+
+    fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()> {
+        let closed = self.close();
+        self.text.summary(summary, verdict)?;
+        closed
+    }
+}
+
+impl Drop for LiveReporter {
+    /// A run that ends without a summary still gives the terminal back.
+    fn drop(&mut self) {
+        let _ = self.close();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use ratatui::backend::TestBackend;
+    use ratatui::Terminal;
+
+    use super::*;
+
+    fn reply(responder: SysComp, seq: u32, rtt_ms: u64) -> Event<'static> {
+        Event::Match(MatchEvent::Reply {
+            responder,
+            seq,
+            rtt: rtt_ms * 1_000_000,
+            sent_at: u64::from(seq) * 100_000_000,
+            at: u64::from(seq) * 100_000_000 + rtt_ms * 1_000_000,
+            out_of_order: false,
+            first_from_responder: seq == 0,
+        })
+    }
+
+    fn lost(responder: SysComp, seq: u32) -> Event<'static> {
+        Event::Match(MatchEvent::Lost {
+            responder,
+            seq,
+            sent_at: u64::from(seq) * 100_000_000,
+            at: u64::from(seq) * 100_000_000 + 2_000_000_000,
+        })
+    }
+
+    fn state() -> LiveState {
+        let mut s = LiveState::default();
+        s.on_start(&StartInfo {
+            link: "sim:?responders=2".into(),
+            probe: "ping",
+            ours: SysComp::new(255, 190),
+            interval: Duration::from_millis(100),
+            timeout: Duration::from_secs(2),
+            count: None,
+        });
+        let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));
+        for seq in 0..30 {
+            s.on_event(&reply(a, seq, 10 + u64::from(seq % 5)));
+            if seq % 7 == 3 {
+                s.on_event(&lost(b, seq));
+            } else {
+                s.on_event(&reply(b, seq, 20 + u64::from(seq % 3) * 4));
+            }
+        }
+        s.on_event(&Event::Match(MatchEvent::Late {
+            responder: b,
+            seq: 3,
+            rtt: 2_500_000_000,
+            sent_at: 300_000_000,
+            at: 2_800_000_000,
+        }));
+        s
+    }
+
+    #[test]
+    fn a_frame_shows_counts_figures_and_losses() {
+        let mut terminal = Terminal::new(TestBackend::new(110, 8)).unwrap();
+        let screen = state().screen();
+        terminal.draw(|f| render(f, &screen)).unwrap();
+        insta::assert_snapshot!(terminal.backend().to_string());
+    }
+
+    #[test]
+    fn recent_outcomes_are_bounded() {
+        let mut s = state();
+        let a = SysComp::new(1, 1);
+        for seq in 0..10_000 {
+            s.on_event(&reply(a, seq, 5));
+        }
+        let t = &s.tracks[&a];
+        assert_eq!(t.recent.len(), RECENT);
+        assert_eq!(t.sent, 10_030);
+        let line = strip(
+            &[
+                Mark::Rtt(9),
+                Mark::Rtt(1),
+                Mark::Lost,
+                Mark::Rtt(8),
+                Mark::Late,
+            ],
+            4,
+        );
+        let text: String = line.spans.iter().map(|s| s.content.as_ref()).collect();
+        assert_eq!(text, "▁×█!");
+    }
+}

@@ -1,0 +1,323 @@
+//! The views beside the text output, run as a user runs them: `--prometheus`
+//! scraped over HTTP and checked by a real parser and by promtool, `--plot`
+//! written to a file, and `--live` in a real terminal (tmux).
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::net::TcpStream;
+use std::path::PathBuf;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use assert_cmd::cargo::cargo_bin;
+use prometheus_parse::{Scrape, Value};
+
+/// Generous bound for something that normally takes a fraction of a second;
+/// reaching it fails the test instead of hanging it.
+const PATIENCE: Duration = Duration::from_secs(20);
+
+/// Kills the process when the test ends, whatever happens.
+struct Running(Child);
+
+impl Drop for Running {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+fn get(url_host: &str, path: &str) -> (String, String) {
+    let mut s = TcpStream::connect(url_host).expect("connect to the exporter");
+    write!(s, "GET {path} HTTP/1.1\r\nHost: {url_host}\r\n\r\n").unwrap();
+    let mut response = String::new();
+    s.read_to_string(&mut response).unwrap();
+    let (head, body) = response.split_once("\r\n\r\n").expect("an HTTP response");
+    (head.to_string(), body.to_string())
+}
+
+fn counter(scrape: &Scrape, name: &str, sysid: &str) -> f64 {
+    scrape
+        .samples
+        .iter()
+        .find(|s| s.metric == name && s.labels.get("sysid") == Some(sysid))
+        .map(|s| match s.value {
+            Value::Counter(v) | Value::Gauge(v) | Value::Untyped(v) => v,
+            _ => panic!("{name} is not a counter: {:?}", s.value),
+        })
+        .unwrap_or_else(|| panic!("no {name} for sysid {sysid}"))
+}
+
+fn promtool() -> PathBuf {
+    let path = PathBuf::from("promtool");
+    let found = Command::new(&path)
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success());
+    assert!(
+        found,
+        "promtool is missing — run `bash scripts/test.sh` (it installs Debian's prometheus package)"
+    );
+    path
+}
+
+#[test]
+fn prometheus_metrics_are_served_while_the_run_goes_on() {
+    let promtool = promtool();
+    let mut child = Command::new(cargo_bin("mavping"))
+        .args([
+            "-q",
+            "-i",
+            "0.01",
+            "-W",
+            "200ms",
+            "--prometheus",
+            "127.0.0.1:0",
+            "sim:?responders=2&loss=20%&delay=1ms&jitter=1ms&seed=4",
+        ])
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stderr = BufReader::new(child.stderr.take().unwrap());
+    let _running = Running(child);
+    let mut line = String::new();
+    stderr.read_line(&mut line).unwrap();
+    let host = line
+        .trim()
+        .strip_prefix("mavping: serving metrics at http://")
+        .and_then(|l| l.strip_suffix("/metrics"))
+        .unwrap_or_else(|| panic!("no address announced: {line:?}"))
+        .to_string();
+
+    // Scrape until both responders have lost something: the run goes on
+    // with no count, so the numbers only grow.
+    let start = Instant::now();
+    let (head, body) = loop {
+        let (head, body) = get(&host, "/metrics");
+        let scrape = Scrape::parse(body.lines().map(|l| Ok(l.to_string()))).unwrap();
+        let lost = |id| {
+            let present = scrape
+                .samples
+                .iter()
+                .any(|s| s.metric == "mavping_lost_total" && s.labels.get("sysid") == Some(id));
+            if present {
+                counter(&scrape, "mavping_lost_total", id)
+            } else {
+                0.0
+            }
+        };
+        if lost("1") > 0.0 && lost("2") > 0.0 {
+            break (head, body);
+        }
+        assert!(
+            start.elapsed() < PATIENCE,
+            "no losses after {PATIENCE:?}:\n{body}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    assert!(head.starts_with("HTTP/1.1 200 OK"), "{head}");
+    assert!(
+        head.contains("Content-Type: text/plain; version=0.0.4"),
+        "{head}"
+    );
+
+    let scrape = Scrape::parse(body.lines().map(|l| Ok(l.to_string()))).unwrap();
+    for id in ["1", "2"] {
+        let sent = counter(&scrape, "mavping_sent_total", id);
+        let received = counter(&scrape, "mavping_received_total", id);
+        let lost = counter(&scrape, "mavping_lost_total", id);
+        assert_eq!(sent, received + lost, "{body}");
+        assert!(received > 0.0);
+        counter(&scrape, "mavping_late_total", id);
+        counter(&scrape, "mavping_duplicate_total", id);
+        let last = counter(&scrape, "mavping_last_rtt_seconds", id);
+        assert!(last > 0.0 && last < 1.0, "last RTT {last} s");
+        let hist = scrape
+            .samples
+            .iter()
+            .find(|s| s.metric == "mavping_rtt_seconds" && s.labels.get("sysid") == Some(id))
+            .expect("an RTT histogram");
+        assert_eq!(hist.labels.get("compid"), Some("1"));
+        assert_eq!(hist.labels.get("probe"), Some("ping"));
+        // prometheus-parse splits label values on `=` and `,`, which the
+        // link's query string has: that label is checked on the raw text
+        // (and its syntax by promtool below).
+        assert!(
+            body.contains(&format!(
+                "mavping_rtt_seconds_count{{link=\"sim:?responders=2&delay=1ms&jitter=1ms&loss=20%&dup=0%&reorder=0%&seed=4\",probe=\"ping\",sysid=\"{id}\",compid=\"1\"}}"
+            )),
+            "{body}"
+        );
+        let Value::Histogram(buckets) = &hist.value else {
+            panic!("not a histogram: {:?}", hist.value)
+        };
+        let inf = buckets.last().unwrap();
+        assert!(inf.less_than.is_infinite());
+        assert_eq!(inf.count, received, "{body}");
+        assert!(buckets.windows(2).all(|w| w[0].count <= w[1].count));
+    }
+
+    let mut check = Command::new(promtool)
+        .args(["check", "metrics"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    check
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(body.as_bytes())
+        .unwrap();
+    let out = check.wait_with_output().unwrap();
+    assert!(
+        out.status.success() && out.stdout.is_empty() && out.stderr.is_empty(),
+        "promtool check metrics: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let (head, _) = get(&host, "/nothing");
+    assert!(head.starts_with("HTTP/1.1 404"), "{head}");
+}
+
+#[test]
+fn a_port_in_use_is_a_usage_error_with_the_os_reason() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    let out = Command::new(cargo_bin("mavping"))
+        .args(["-c", "1", "--prometheus", &addr, "sim:?clock=virtual"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr).trim(),
+        format!("mavping: --prometheus {addr}: Address already in use (os error 98)")
+    );
+    assert!(out.stdout.is_empty(), "nothing is sent before the check");
+}
+
+#[test]
+fn the_plot_shows_each_responder_and_the_losses() {
+    let dir = std::env::temp_dir().join(format!("mavping-plot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("rtt.svg");
+    let out = Command::new(cargo_bin("mavping"))
+        .args(["-q", "-c", "200", "-i", "0.05", "--plot"])
+        .arg(&path)
+        .arg("sim:?responders=2&loss=10%&jitter=5ms&seed=3&clock=virtual")
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    let svg = std::fs::read_to_string(&path).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    for text in ["1/1", "2/1", "RTT over time", "RTT distribution", "lost"] {
+        assert!(svg.contains(text), "{text} is not in the plot");
+    }
+    // Lost requests are drawn as red crosses (two strokes each).
+    assert!(svg.matches("#FF0000").count() >= 2, "no loss marked");
+}
+
+#[test]
+fn live_falls_back_to_text_when_stdout_is_not_a_terminal() {
+    let out = Command::new(cargo_bin("mavping"))
+        .args(["--live", "-c", "3", "sim:?clock=virtual"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr),
+        "mavping: --live needs a terminal; printing text\n"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("reply from 1/1: seq=2"), "{stdout}");
+    assert!(stdout.contains("mavping statistics"), "{stdout}");
+}
+
+fn tmux(socket: &str, args: &[&str]) -> String {
+    let out = Command::new("tmux")
+        .args(["-L", socket])
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("tmux is missing ({e}) — run `bash scripts/test.sh`"));
+    assert!(out.status.success(), "tmux {args:?}: {out:?}");
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Kills the test's own tmux server.
+struct TmuxServer(String);
+
+impl Drop for TmuxServer {
+    fn drop(&mut self) {
+        let _ = Command::new("tmux")
+            .args(["-L", &self.0, "kill-server"])
+            .output();
+    }
+}
+
+fn wait_for_pane(socket: &str, what: &str, found: impl Fn(&str) -> bool) -> String {
+    let start = Instant::now();
+    loop {
+        let screen = tmux(socket, &["capture-pane", "-p", "-S", "-200", "-t", "live"]);
+        if found(&screen) {
+            return screen;
+        }
+        assert!(
+            start.elapsed() < PATIENCE,
+            "{what:?} not on screen:\n{screen}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn live_view_in_a_real_terminal_stops_on_q_and_prints_the_summary() {
+    let socket = format!("mavping-test-{}", std::process::id());
+    let bin = cargo_bin("mavping");
+    let command = format!(
+        "{} --live -i 0.02 -W 300ms 'sim:?responders=2&loss=20%&delay=2ms&seed=5'; echo exit=$?",
+        bin.display()
+    );
+    tmux(
+        &socket,
+        &[
+            "new-session",
+            "-d",
+            "-s",
+            "live",
+            "-x",
+            "110",
+            "-y",
+            "20",
+            &command,
+        ],
+    );
+    let _server = TmuxServer(socket.clone());
+    tmux(
+        &socket,
+        &["set-option", "-t", "live", "remain-on-exit", "on"],
+    );
+
+    // Both responders have a row, and a loss shows in a row's strip.
+    let screen = wait_for_pane(&socket, "a loss in a row", |screen| {
+        let rows: Vec<&str> = screen
+            .lines()
+            .filter(|l| l.starts_with("│1/1") || l.starts_with("│2/1"))
+            .collect();
+        rows.len() == 2 && rows.iter().any(|r| r.contains('×'))
+    });
+    for text in ["responder", "loss%", "p99 ms", "1/1", "2/1", "q or Ctrl-C"] {
+        assert!(screen.contains(text), "{text:?} not on screen:\n{screen}");
+    }
+    tmux(&socket, &["send-keys", "-t", "live", "q"]);
+    let screen = wait_for_pane(&socket, "exit=", |s| s.contains("exit="));
+    assert!(screen.contains("mavping statistics"), "{screen}");
+    assert!(screen.contains("exit=0"), "{screen}");
+    assert!(
+        !screen.contains("q or Ctrl-C"),
+        "the view was not left:\n{screen}"
+    );
+}
