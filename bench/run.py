@@ -31,14 +31,16 @@ def free_port():
 
 
 def run_rusage(cmd, timeout=600):
-    """Like run, with the child's own rusage (peak RSS, CPU)."""
+    """Runs a command; returns (stdout, stderr, peak RSS KiB, CPU s, wall s).
+    GNU time reports the child's own figures (wait4's ru_maxrss would
+    include the forked Python parent's pages from before exec)."""
     t0 = time.monotonic()
-    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    out = p.stdout.read()
-    err = p.stderr.read()
-    _, status, ru = os.wait4(p.pid, 0)
+    p = subprocess.run(["/usr/bin/time", "-f", "TIME %M %U %S", *cmd], capture_output=True,
+                       text=True, timeout=timeout)
     wall = time.monotonic() - t0
-    return out.decode(), err.decode(), ru.ru_maxrss, ru.ru_utime + ru.ru_stime, wall
+    lines = p.stderr.rstrip().splitlines()
+    _, rss, user, system = lines[-1].split()
+    return p.stdout, "\n".join(lines[:-1]), int(rss), float(user) + float(system), wall
 
 
 class Responder:
