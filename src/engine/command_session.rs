@@ -9,7 +9,7 @@ use std::io;
 use std::sync::Arc;
 
 use tokio::sync::Notify;
-use tokio::time::{sleep_until, Instant};
+use tokio::time::Instant;
 
 use super::commands::{CommandEvent, CommandTracker};
 use super::roster::Roster;
@@ -142,12 +142,7 @@ pub async fn run<T: Transport>(
         .into_iter()
         .flatten()
         .min();
-        let sleep = async {
-            match wake {
-                Some(ns) => sleep_until(clock.at(ns)).await,
-                None => std::future::pending().await,
-            }
-        };
+        let sleep = clock.sleep_until(wake);
         tokio::select! {
             biased;
             _ = stop.notified() => {

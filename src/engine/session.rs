@@ -74,6 +74,14 @@ impl Clock {
     pub(super) fn at(&self, ns: Nanos) -> Instant {
         self.epoch + Duration::from_nanos(ns)
     }
+
+    /// Sleeps until session time `wake`, or forever when there is none.
+    pub(super) async fn sleep_until(&self, wake: Option<Nanos>) {
+        match wake {
+            Some(ns) => sleep_until(self.at(ns)).await,
+            None => std::future::pending().await,
+        }
+    }
 }
 
 pub(super) struct Sender {
@@ -369,12 +377,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
         if output.is_err() {
             break;
         }
-        let sleep = async {
-            match wake {
-                Some(ns) => sleep_until(clock.at(ns)).await,
-                None => std::future::pending().await,
-            }
-        };
+        let sleep = clock.sleep_until(wake);
         tokio::select! {
             biased;
             _ = stop.notified() => {

@@ -32,6 +32,26 @@ impl<W: Write> JsonReporter<W> {
         self.out.write_all(b"\n")
     }
 
+    /// The `start` event: what the run is about to do.
+    fn start_object(&self, info: &StartInfo) -> serde_json::Map<String, Value> {
+        let Value::Object(m) = json!({
+            "type": "start",
+            "schema_version": SCHEMA_VERSION,
+            "mavping_version": env!("CARGO_PKG_VERSION"),
+            "time": self.wall.rfc3339(0),
+            "link": info.link,
+            "probe": info.probe,
+            "ours": info.ours,
+            "interval_s": info.interval.as_secs_f64(),
+            "rate_hz": 1.0 / info.interval.as_secs_f64(),
+            "timeout_s": info.timeout.as_secs_f64(),
+            "count": info.count,
+        }) else {
+            unreachable!("json! of an object literal is an object")
+        };
+        m
+    }
+
     /// Fields every timed event carries: session seconds and wall time.
     fn stamped(&self, kind: &str, t: Nanos, responder: SysComp) -> serde_json::Map<String, Value> {
         let mut m = serde_json::Map::new();
@@ -104,19 +124,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
         if self.quiet {
             return Ok(());
         }
-        let value = json!({
-            "type": "start",
-            "schema_version": SCHEMA_VERSION,
-            "mavping_version": env!("CARGO_PKG_VERSION"),
-            "time": self.wall.rfc3339(0),
-            "link": info.link,
-            "probe": info.probe,
-            "ours": info.ours,
-            "interval_s": info.interval.as_secs_f64(),
-            "rate_hz": 1.0 / info.interval.as_secs_f64(),
-            "timeout_s": info.timeout.as_secs_f64(),
-            "count": info.count,
-        });
+        let value = Value::Object(self.start_object(info));
         self.emit(value)
     }
 
@@ -230,28 +238,19 @@ impl<W: Write> super::CommandReporter for JsonReporter<W> {
         if self.quiet {
             return Ok(());
         }
-        let value = json!({
-            "type": "start",
-            "schema_version": SCHEMA_VERSION,
-            "mavping_version": env!("CARGO_PKG_VERSION"),
-            "time": self.wall.rfc3339(0),
-            "link": info.link,
-            "probe": "command",
-            "ours": info.ours,
-            "interval_s": info.interval.as_secs_f64(),
-            "rate_hz": 1.0 / info.interval.as_secs_f64(),
-            "timeout_s": info.timeout.as_secs_f64(),
-            "count": info.count,
-            "command": {
+        let mut value = self.start_object(info);
+        value.insert(
+            "command".into(),
+            json!({
                 "id": spec.command,
                 "name": crate::frame::codec::command_name(spec.command),
                 "target": spec.target,
                 "params": spec.params,
                 "retry_interval_s": spec.retry_interval.as_secs_f64(),
                 "retries": spec.retries,
-            },
-        });
-        self.emit(value)
+            }),
+        );
+        self.emit(Value::Object(value))
     }
 
     fn command_event(&mut self, event: &crate::engine::commands::CommandEvent) -> io::Result<()> {
