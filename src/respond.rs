@@ -84,9 +84,23 @@ struct Responder {
     order: u64,
     counts: RespondCounts,
     epoch: Instant,
+    /// Paths (peers) greeted so far: links number new peers upwards and
+    /// never reuse a number, so the highest one seen is enough.
+    greeted: Option<PathId>,
 }
 
 impl Responder {
+    /// A new peer gets our HEARTBEAT at once rather than within a second:
+    /// a GCS or router discovers systems by their HEARTBEAT.
+    async fn greet<T: Transport>(&mut self, link: &mut T, path: PathId) -> Result<(), LinkError> {
+        if path == PathId::MAX || self.greeted.is_some_and(|g| path <= g) {
+            return Ok(());
+        }
+        self.greeted = Some(path);
+        self.encode(Version::V2, &OUR_HEARTBEAT);
+        link.send_to(path, &self.buf).await.map(|_| ())
+    }
+
     fn encode(&mut self, version: Version, msg: &Msg) {
         self.buf.clear();
         let header = Header {
@@ -191,6 +205,7 @@ pub async fn run<T: Transport>(
         order: 0,
         counts: RespondCounts::default(),
         epoch,
+        greeted: None,
     };
     let mut next_heartbeat = epoch;
     let mut inbound: Vec<Inbound> = Vec::new();
@@ -222,6 +237,10 @@ pub async fn run<T: Transport>(
                 let batch = std::mem::take(&mut inbound);
                 let mut failed = None;
                 for i in &batch {
+                    if let Err(e) = r.greet(link, i.path).await {
+                        failed = Some(e);
+                        break;
+                    }
                     if let Err(e) = r.handle(link, i).await {
                         failed = Some(e);
                         break;
