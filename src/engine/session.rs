@@ -21,7 +21,7 @@ use super::Nanos;
 use crate::frame::{self, Header, Msg, SysComp, Version};
 use crate::output::{Event, Reporter, StartInfo};
 use crate::probe::{Classified, EchoProbe};
-use crate::transport::{Inbound, LinkError, Transport};
+use crate::transport::{Inbound, LinkError, RxClock, Transport};
 
 /// What the session needs to know, already validated.
 #[derive(Debug, Clone)]
@@ -109,11 +109,12 @@ impl Sender {
 /// How close to a planned send the session stops trusting tokio's 1 ms
 /// timer and waits precisely instead.
 const FINE_WINDOW_NS: Nanos = 1_500_000;
-/// The precise wait sleeps in slices of at most this (so replies on links
-/// without kernel timestamps are read promptly)...
+/// On links whose replies are stamped when read, the precise wait sleeps
+/// in slices of at most this, so a reply waits little to be read...
 const SLICE: Duration = Duration::from_micros(200);
-/// ...and spins for the last stretch, which nanosleep cannot hit exactly.
-const SPIN_NS: Nanos = 50_000;
+/// ...and it spins for the last stretch, which nanosleep (with 1 µs timer
+/// slack) overshoots by a few µs.
+const SPIN_NS: Nanos = 20_000;
 /// Most requests sent back to back before the session reads the link.
 const MAX_BURST: usize = 256;
 /// Output is buffered; while busy, it reaches the reader this often.
@@ -315,6 +316,13 @@ pub async fn run<T: Transport, P: EchoProbe>(
         // precisely, still reading the link between short sleeps.
         let fine = next_send
             .filter(|&due| cfg.precise_pacing && due.saturating_sub(now) <= FINE_WINDOW_NS);
+        // Kernel-stamped replies keep their arrival time however late they
+        // are read: sleep in one go and save the wake-ups.
+        let slice = if link.rx_clock() == RxClock::Kernel {
+            Duration::from_nanos(FINE_WINDOW_NS)
+        } else {
+            SLICE
+        };
         if let Some(due) = fine {
             loop {
                 let now = clock.now();
@@ -348,7 +356,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
                 }
                 let left = due - now;
                 if left > SPIN_NS {
-                    std::thread::sleep(SLICE.min(Duration::from_nanos(left - SPIN_NS)));
+                    std::thread::sleep(slice.min(Duration::from_nanos(left - SPIN_NS)));
                 } else {
                     std::hint::spin_loop();
                 }
@@ -422,7 +430,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
         link_error: link_error.map(|e| e.to_string()),
         downtime_s: link.downtime().as_secs_f64(),
         schedule: pacing.summary(cfg.interval),
-        rx_clock: link.rx_clock(),
+        rx_clock: link.rx_clock().describe(),
     };
     let histograms = matcher
         .responders()

@@ -54,6 +54,28 @@ impl LinkError {
     }
 }
 
+/// Where a frame's receive time comes from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RxClock {
+    /// The kernel stamped the datagram when it arrived (SO_TIMESTAMPNS):
+    /// how late we read it does not change its RTT.
+    Kernel,
+    /// Stamped when our read returned: read promptly to keep RTTs honest.
+    UserSpace,
+    /// The simulated link's exact arrival times.
+    Simulated,
+}
+
+impl RxClock {
+    pub fn describe(self) -> &'static str {
+        match self {
+            RxClock::Kernel => "kernel receive timestamps (SO_TIMESTAMPNS)",
+            RxClock::UserSpace => "user-space receive timestamps",
+            RxClock::Simulated => "simulated arrival times",
+        }
+    }
+}
+
 /// What every link does. `recv` must be cancel-safe: the engine races it
 /// against its timers and drops it when a timer wins.
 #[allow(async_fn_in_trait)] // used with concrete types only, never boxed
@@ -70,9 +92,9 @@ pub trait Transport {
     }
     /// What the frame scanner has skipped and rejected so far.
     fn scan_stats(&self) -> ScanStats;
-    /// How receive times are taken, for the summary.
-    fn rx_clock(&self) -> &'static str {
-        "user-space receive timestamps"
+    /// How receive times are taken.
+    fn rx_clock(&self) -> RxClock {
+        RxClock::UserSpace
     }
     /// How long the link has been down in total (`--reconnect`).
     fn downtime(&self) -> Duration {
@@ -185,7 +207,7 @@ impl Transport for Link {
         each_link!(self, l => l.downtime())
     }
 
-    fn rx_clock(&self) -> &'static str {
+    fn rx_clock(&self) -> RxClock {
         each_link!(self, l => l.rx_clock())
     }
 }

@@ -15,7 +15,7 @@ use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use tokio::time::{sleep_until, Instant};
 
-use super::{push_datagram, Inbound, LinkError, PathId, Transport};
+use super::{push_datagram, Inbound, LinkError, PathId, RxClock, Transport};
 use crate::frame::{self, Header, Msg, ScanStats, SysComp, Version};
 use crate::responder::ResponderCore;
 
@@ -461,8 +461,8 @@ impl Transport for SimLink {
         self.stats
     }
 
-    fn rx_clock(&self) -> &'static str {
-        "simulated arrival times"
+    fn rx_clock(&self) -> RxClock {
+        RxClock::Simulated
     }
 }
 

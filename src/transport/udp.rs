@@ -15,7 +15,7 @@ use tokio::net::{lookup_host, UdpSocket};
 use tokio::time::Instant;
 
 use super::address::HostPort;
-use super::{push_datagram, Inbound, LinkError, PathId, Transport};
+use super::{push_datagram, Inbound, LinkError, PathId, RxClock, Transport};
 use crate::frame::ScanStats;
 
 /// At most this many peers are remembered on a listening socket; more than
@@ -355,11 +355,11 @@ impl Transport for UdpLink {
         self.stats
     }
 
-    fn rx_clock(&self) -> &'static str {
+    fn rx_clock(&self) -> RxClock {
         if self.kernel_timestamps {
-            "kernel receive timestamps (SO_TIMESTAMPNS)"
+            RxClock::Kernel
         } else {
-            "user-space receive timestamps"
+            RxClock::UserSpace
         }
     }
 }
