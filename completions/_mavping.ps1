@@ -41,7 +41,7 @@ Register-ArgumentCompleter -Native -CommandName 'mavping' -ScriptBlock {
             [CompletionResult]::new('--expect', '--expect', [CompletionResultType]::ParameterName, 'A responder that must answer: SYSID or SYSID/COMPID; repeatable')
             [CompletionResult]::new('--min-responders', '--min-responders', [CompletionResultType]::ParameterName, 'Fail unless at least N responders answer')
             [CompletionResult]::new('--hgrm', '--hgrm', [CompletionResultType]::ParameterName, 'Write each responder''s RTT distribution in HdrHistogram''s .hgrm format')
-            [CompletionResult]::new('--samples', '--samples', [CompletionResultType]::ParameterName, 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)')
+            [CompletionResult]::new('--samples', '--samples', [CompletionResultType]::ParameterName, 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)')
             [CompletionResult]::new('--baud', '--baud', [CompletionResultType]::ParameterName, 'Baud rate of a serial device whose connection string names none')
             [CompletionResult]::new('--probe', '--probe', [CompletionResultType]::ParameterName, 'What to send: ping, timesync (also ArduPilot; measures clock offset), command')
             [CompletionResult]::new('--target', '--target', [CompletionResultType]::ParameterName, 'Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)')

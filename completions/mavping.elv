@@ -38,7 +38,7 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand --expect 'A responder that must answer: SYSID or SYSID/COMPID; repeatable'
             cand --min-responders 'Fail unless at least N responders answer'
             cand --hgrm 'Write each responder''s RTT distribution in HdrHistogram''s .hgrm format'
-            cand --samples 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)'
+            cand --samples 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)'
             cand --baud 'Baud rate of a serial device whose connection string names none'
             cand --probe 'What to send: ping, timesync (also ArduPilot; measures clock offset), command'
             cand --target 'Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)'

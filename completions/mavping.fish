@@ -41,7 +41,7 @@ complete -c mavping -n "__fish_mavping_needs_command" -l max-jitter -d 'Fail whe
 complete -c mavping -n "__fish_mavping_needs_command" -l expect -d 'A responder that must answer: SYSID or SYSID/COMPID; repeatable' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l min-responders -d 'Fail unless at least N responders answer' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l hgrm -d 'Write each responder\'s RTT distribution in HdrHistogram\'s .hgrm format' -r -F
-complete -c mavping -n "__fish_mavping_needs_command" -l samples -d 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)' -r -F
+complete -c mavping -n "__fish_mavping_needs_command" -l samples -d 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)' -r -F
 complete -c mavping -n "__fish_mavping_needs_command" -l baud -d 'Baud rate of a serial device whose connection string names none' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l probe -d 'What to send: ping, timesync (also ArduPilot; measures clock offset), command' -r -f -a "ping\t'MAVLink PING (PX4, QGroundControl, MAVSDK answer it)'
 timesync\t'TIMESYNC: answered everywhere, ArduPilot included; also measures clock offset'

@@ -12,8 +12,8 @@ use tokio::sync::Notify;
 
 use crate::cli::{Cli, Format, Generate, Mode};
 use crate::config::{Config, Probe, RespondConfig};
-use crate::engine::command_session;
 use crate::engine::session::{self, Outcome};
+use crate::engine::{capacity, command_session};
 use crate::output::json::JsonReporter;
 use crate::output::live::LiveReporter;
 use crate::output::plot::PlotReporter;
@@ -196,6 +196,10 @@ async fn run_ping(config: &Config) -> u8 {
             "mavping: --live needs a terminal; printing text"
         );
     }
+    let wire = capacity::for_link(&config.link, &config.link_options, &config.session);
+    if let Some(w) = wire.and_then(|w| w.warning(1.0 / config.session.interval.as_secs_f64())) {
+        let _ = writeln!(io::stderr(), "mavping: warning: {w}");
+    }
     let main: Box<dyn Reporter> = match config.format {
         // The view draws from its own thread: stdout must not be locked here.
         Format::Text if live => Box::new(LiveReporter::new(stop.clone())),
@@ -234,6 +238,10 @@ async fn run_ping(config: &Config) -> u8 {
             session::run(&config.session, &mut link, probe, &mut report, stop).await
         }
     };
+    let mut outcome = outcome;
+    if let Some(w) = wire {
+        capacity::apply(&mut outcome.summary, w);
+    }
     let verdict = verdict::judge(&outcome.summary, &config.thresholds);
     let output_closed =
         outcome.output_closed || report.summary(&outcome.summary, &verdict).is_err();

@@ -228,7 +228,7 @@ pub struct PingArgs {
     #[arg(long, value_name = "FILE")]
     pub hgrm: Option<PathBuf>,
 
-    /// Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status)
+    /// Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)
     #[arg(long, value_name = "FILE")]
     pub samples: Option<PathBuf>,
     /// Baud rate of a serial device whose connection string names none

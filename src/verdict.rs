@@ -299,6 +299,8 @@ mod tests {
             downtime_s: 0.0,
             schedule: None,
             rx_clock: "test",
+            radios: vec![],
+            wire: None,
         }
     }
 

@@ -267,7 +267,10 @@ fn samples_csv_has_a_row_per_reply_and_loss() {
     assert_eq!(code, 0);
     let csv = std::fs::read_to_string(&path).unwrap();
     let mut lines = csv.lines();
-    assert_eq!(lines.next(), Some("sysid,compid,seq,sent_s,rtt_us,status"));
+    assert_eq!(
+        lines.next(),
+        Some("sysid,compid,seq,sent_s,rtt_us,status,rssi,remrssi,txbuf,noise,remnoise")
+    );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     for r in summary_of(&out)["responders"].as_array().unwrap() {
         let sysid = r["responder"]["sysid"].as_u64().unwrap().to_string();

@@ -156,3 +156,53 @@ fn reconnect_reopens_the_device_when_it_comes_back() {
         "{out}"
     );
 }
+
+#[test]
+fn capacity_warning_above_what_57600_baud_carries_and_not_below() {
+    // 57600 baud = 5760 bytes/s; a request (21 B for seqs < 256) and its
+    // reply (26 B) take 47: at most ~122 PINGs/s. A pty passes more, so
+    // the run itself succeeds; the warning is about the radio behind it.
+    let (_bridge, a, b) = bridge(&[]);
+    let _responder = Peer::start("responder.py", &[&b, "--baud", "57600"]);
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "20",
+        "-i",
+        "0.005",
+        "-W",
+        "1s",
+        &format!("serial:{a}:57600"),
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    let warnings: Vec<&str> = err.lines().filter(|l| l.contains("warning")).collect();
+    assert_eq!(warnings.len(), 1, "{err}");
+    assert!(
+        warnings[0].starts_with(
+            "mavping: warning: at 57600 baud this link carries at most ~122 PINGs/s each way; 200"
+        ) && warnings[0].ends_with("/s will queue and then lose"),
+        "{err}"
+    );
+    assert!(
+        out.contains(
+            "wire: 57600 baud carries ~122 PINGs/s; serialisation floor 8.160 ms per round trip \
+             (request 21 B + reply 26 B)"
+        ),
+        "{out}"
+    );
+
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "20",
+        "-i",
+        "0.01",
+        "-W",
+        "1s",
+        &format!("serial:{a}:57600"),
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(!err.contains("warning"), "{err}");
+    assert!(
+        out.contains("wire: 57600 baud carries ~122 PINGs/s"),
+        "{out}"
+    );
+}

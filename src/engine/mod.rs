@@ -1,10 +1,12 @@
 //! The measurement: scheduling, matching, statistics (pure), and the async
 //! session that joins them to a transport and a report.
 
+pub mod capacity;
 pub mod clock_offset;
 pub mod command_session;
 pub mod commands;
 pub mod matcher;
+pub mod radio;
 pub mod roster;
 pub mod schedule;
 pub mod session;

@@ -13,6 +13,7 @@ use tokio::sync::Notify;
 use tokio::time::{sleep_until, Instant};
 
 use super::matcher::{MatchEvent, Matcher};
+use super::radio::{radio_hints, RadioReport, Radios};
 use super::roster::Roster;
 use super::schedule::Schedule;
 use super::stats::RttStats;
@@ -125,6 +126,7 @@ struct Intake<'a, P> {
     ours: SysComp,
     matcher: &'a mut Matcher,
     roster: &'a mut Roster,
+    radios: &'a mut Radios,
     probe: &'a mut P,
     events: &'a mut Vec<MatchEvent>,
     foreign_replies: &'a mut u64,
@@ -154,6 +156,35 @@ impl<P: EchoProbe> Intake<'_, P> {
                 }
                 continue;
             }
+            // Radios inject this from their own ids on any link.
+            if let Msg::RadioStatus {
+                rssi,
+                remrssi,
+                txbuf,
+                noise,
+                remnoise,
+                rxerrors,
+                fixed,
+            } = frame.msg
+            {
+                let status = RadioReport {
+                    rssi,
+                    remrssi,
+                    txbuf,
+                    noise,
+                    remnoise,
+                    rxerrors,
+                    fixed,
+                };
+                let first = self.radios.record(frame.source, status, at);
+                output = output.and(report.event(&Event::Radio {
+                    id: frame.source,
+                    at,
+                    report: status,
+                    first,
+                }));
+                continue;
+            }
             match self.probe.classify(&frame, self.ours) {
                 Classified::Reply(lookup) => {
                     let before = self.events.len();
@@ -179,7 +210,7 @@ impl<P: EchoProbe> Intake<'_, P> {
                 Classified::NotAReply => {}
             }
         }
-        output.and(flush(self.events, report))
+        output.and(flush(self.events, report, self.radios))
     }
 }
 
@@ -216,6 +247,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
     let timeout_ns = cfg.timeout.as_nanos() as Nanos;
     let mut matcher = Matcher::new(timeout_ns, cfg.capacity, cfg.first_seq);
     let mut roster = Roster::default();
+    let mut radios = Radios::default();
     let mut sender = Sender {
         buf: Vec::with_capacity(frame::scanner::MAX_FRAME_LEN),
         packet_seq: 0,
@@ -293,7 +325,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
             }
         }
         matcher.expire(clock.now(), &mut |e| events.push(e));
-        output = flush(&mut events, report);
+        output = flush(&mut events, report, &mut radios);
         if output.is_err() {
             break;
         }
@@ -306,6 +338,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
             ours: cfg.ours,
             matcher: &mut matcher,
             roster: &mut roster,
+            radios: &mut radios,
             probe: &mut probe,
             events: &mut events,
             foreign_replies: &mut foreign_replies,
@@ -406,14 +439,18 @@ pub async fn run<T: Transport, P: EchoProbe>(
     // Decide what is due before counting what is still in flight.
     matcher.expire(clock.now(), &mut |e| events.push(e));
     if output.is_ok() {
-        output = flush(&mut events, report);
+        output = flush(&mut events, report, &mut radios);
     }
     let in_flight = matcher.finish();
     let mut responders = responder_summaries(&matcher, &roster);
     for r in &mut responders {
         r.clock = probe.clock(r.id);
     }
-    let hints = silent_system_hints(&roster, &responders, cfg.ours, probe.name());
+    let loss_by_txbuf = radios.loss_by_txbuf();
+    let radios = radios.summaries();
+    let radio_ids: Vec<SysComp> = radios.iter().map(|r| r.id).collect();
+    let mut hints = silent_system_hints(&roster, &responders, cfg.ours, probe.name(), &radio_ids);
+    hints.extend(radio_hints(&radios, loss_by_txbuf));
     let summary = Summary {
         link: cfg.link_name.clone(),
         probe: probe.name(),
@@ -431,6 +468,8 @@ pub async fn run<T: Transport, P: EchoProbe>(
         downtime_s: link.downtime().as_secs_f64(),
         schedule: pacing.summary(cfg.interval),
         rx_clock: link.rx_clock().describe(),
+        radios,
+        wire: None,
     };
     let histograms = matcher
         .responders()
@@ -481,9 +520,19 @@ impl Pacing {
     }
 }
 
-fn flush(events: &mut Vec<MatchEvent>, report: &mut dyn Reporter) -> io::Result<()> {
+fn flush(
+    events: &mut Vec<MatchEvent>,
+    report: &mut dyn Reporter,
+    radios: &mut Radios,
+) -> io::Result<()> {
     let mut result = Ok(());
     for e in events.drain(..) {
+        // Outcomes against the radio's buffer, for the "overloaded" hint.
+        match e {
+            MatchEvent::Reply { sent_at, .. } => radios.outcome(false, sent_at),
+            MatchEvent::Lost { sent_at, .. } => radios.outcome(true, sent_at),
+            _ => {}
+        }
         if result.is_ok() {
             result = report.event(&Event::Match(e));
         }

@@ -5,6 +5,7 @@ use serde::Serialize;
 
 use super::clock_offset::ClockSummary;
 use super::matcher::{Counts, Matcher};
+use super::radio::{self, RadioSummary};
 use super::roster::{Identity, Roster};
 use super::stats::{Bucket, RttSummary};
 use crate::frame::{ScanStats, SysComp};
@@ -62,6 +63,10 @@ pub struct Summary {
     pub schedule: Option<ScheduleSummary>,
     /// How receive times were taken (kernel timestamps or user space).
     pub rx_clock: &'static str,
+    /// Radios heard by their RADIO_STATUS.
+    pub radios: Vec<RadioSummary>,
+    /// What a serial link's baud rate carries (serial links only).
+    pub wire: Option<super::capacity::WireBudget>,
 }
 
 impl Summary {
@@ -95,10 +100,13 @@ pub fn silent_system_hints(
     responders: &[ResponderSummary],
     ours: SysComp,
     probe: &str,
+    radios: &[SysComp],
 ) -> Vec<String> {
     roster
         .iter()
         .filter(|(id, identity)| **id != ours && identity.is_vehicle_like())
+        // A radio answers no PING: its silence says nothing about the link.
+        .filter(|(id, _)| !radios.contains(id) && !radio::is_sik_default(**id))
         .filter(|(id, _)| {
             !responders
                 .iter()
@@ -202,4 +210,38 @@ pub fn command_target_summaries(
             identity: roster.get(t.id).cloned(),
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn radios_never_get_the_silent_system_hint() {
+        let mut roster = Roster::default();
+        let quad = (2, 12); // quadrotor, PX4
+        for (sysid, compid) in [(1, 1), (51, 68), (7, 3)] {
+            roster.heard(SysComp { sysid, compid }, quad.0, quad.1, 0);
+        }
+        let ours = SysComp {
+            sysid: 255,
+            compid: 190,
+        };
+        // 7:3 sent RADIO_STATUS; 51:68 is SiK's own id even without it.
+        let hints = silent_system_hints(
+            &roster,
+            &[],
+            ours,
+            "ping",
+            &[SysComp {
+                sysid: 7,
+                compid: 3,
+            }],
+        );
+        assert_eq!(hints.len(), 1, "{hints:?}");
+        assert!(
+            hints[0].starts_with("1/1") || hints[0].starts_with("1:1"),
+            "{hints:?}"
+        );
+    }
 }

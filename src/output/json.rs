@@ -197,6 +197,20 @@ impl<W: Write> Reporter for JsonReporter<W> {
                 Value::Object(m)
             }
             Event::WaitingForPeer => json!({"type": "waiting", "reason": "no peer heard yet"}),
+            // The first report of each radio; the summary has the rest.
+            Event::Radio {
+                id,
+                at,
+                report,
+                first,
+            } => {
+                if !first {
+                    return Ok(());
+                }
+                let mut m = self.stamped("radio", at, id);
+                m.insert("status".into(), json!(report));
+                Value::Object(m)
+            }
         };
         self.emit(value)
     }
@@ -220,6 +234,8 @@ impl<W: Write> Reporter for JsonReporter<W> {
             "foreign_replies": s.foreign_replies,
             "untracked_replies": s.untracked_replies,
             "hints": s.hints,
+            "radios": s.radios,
+            "wire": s.wire,
             "responders": s.responders.iter().map(|r| responder_json(r, verdict)).collect::<Vec<_>>(),
             "verdict": verdict,
             "exit_code": verdict.exit_code,

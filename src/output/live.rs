@@ -104,6 +104,7 @@ impl LiveState {
                     Some(format!("{} {}", identity.vehicle, identity.autopilot_name));
             }
             Event::Match(e) => self.on_match(e),
+            Event::Radio { .. } => {}
         }
     }
 

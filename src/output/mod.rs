@@ -15,6 +15,7 @@ use std::time::{Duration, SystemTime};
 use crate::config::CommandSpec;
 use crate::engine::commands::CommandEvent;
 use crate::engine::matcher::MatchEvent;
+use crate::engine::radio::RadioReport;
 use crate::engine::roster::Identity;
 use crate::engine::summary::{CommandSummary, Summary};
 use crate::engine::Nanos;
@@ -39,6 +40,13 @@ pub enum Event<'a> {
     Heard {
         id: SysComp,
         identity: &'a Identity,
+    },
+    /// A RADIO_STATUS; `first` for each radio's first report.
+    Radio {
+        id: SysComp,
+        at: Nanos,
+        report: RadioReport,
+        first: bool,
     },
     /// Nothing to send to yet (udpin before a peer is heard).
     WaitingForPeer,

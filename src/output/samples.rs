@@ -6,19 +6,39 @@ use std::io::{self, Write};
 
 use super::{Event, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::radio::{self, RadioReport};
 use crate::engine::summary::Summary;
 use crate::verdict::Verdict;
 
-pub const HEADER: &str = "sysid,compid,seq,sent_s,rtt_us,status";
+/// The radio columns come last, so readers of the first six keep working.
+/// They hold the latest RADIO_STATUS (any radio) when the row was written,
+/// so loss can be plotted against RSSI; empty before one or when unknown.
+pub const HEADER: &str = "sysid,compid,seq,sent_s,rtt_us,status,rssi,remrssi,txbuf,noise,remnoise";
 
 pub struct SampleLog<W: Write> {
     out: W,
+    radio: Option<RadioReport>,
 }
 
 impl<W: Write> SampleLog<W> {
     pub fn new(out: W) -> Self {
-        SampleLog { out }
+        SampleLog { out, radio: None }
     }
+}
+
+fn radio_columns(r: Option<RadioReport>) -> String {
+    let Some(r) = r else {
+        return ",,,,".into();
+    };
+    [r.rssi, r.remrssi, r.txbuf, r.noise, r.remnoise]
+        .map(|v| {
+            if v == radio::UNKNOWN {
+                String::new()
+            } else {
+                v.to_string()
+            }
+        })
+        .join(",")
 }
 
 fn secs(ns: u64) -> String {
@@ -35,6 +55,9 @@ impl<W: Write> Reporter for SampleLog<W> {
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        if let Event::Radio { report, .. } = *event {
+            self.radio = Some(report);
+        }
         let Event::Match(e) = event else {
             return Ok(());
         };
@@ -70,10 +93,11 @@ impl<W: Write> Reporter for SampleLog<W> {
         };
         writeln!(
             self.out,
-            "{},{},{seq},{},{rtt},{status}",
+            "{},{},{seq},{},{rtt},{status},{}",
             who.sysid,
             who.compid,
-            secs(sent)
+            secs(sent),
+            radio_columns(self.radio)
         )
     }
 
@@ -83,5 +107,46 @@ impl<W: Write> Reporter for SampleLog<W> {
 
     fn flush(&mut self) -> io::Result<()> {
         self.out.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::SysComp;
+
+    #[test]
+    fn rows_carry_the_latest_radio_figures() {
+        let mut log = SampleLog::new(Vec::new());
+        let lost = |seq| {
+            Event::Match(MatchEvent::Lost {
+                responder: SysComp::new(1, 1),
+                seq,
+                sent_at: 0,
+                at: 1,
+            })
+        };
+        log.event(&lost(0)).unwrap();
+        log.event(&Event::Radio {
+            id: SysComp::new(51, 68),
+            at: 1,
+            report: RadioReport {
+                rssi: 200,
+                remrssi: radio::UNKNOWN,
+                txbuf: 15,
+                noise: 40,
+                remnoise: 60,
+                rxerrors: 0,
+                fixed: 0,
+            },
+            first: true,
+        })
+        .unwrap();
+        log.event(&lost(1)).unwrap();
+        let out = String::from_utf8(log.out).unwrap();
+        assert_eq!(
+            out,
+            "1,1,0,0.000000,,lost,,,,,\n1,1,1,0.000000,,lost,200,,15,40,60\n"
+        );
     }
 }

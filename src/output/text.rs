@@ -7,11 +7,12 @@ use super::{CommandReporter, Event, Reporter, StartInfo};
 use crate::config::CommandSpec;
 use crate::engine::commands::CommandEvent;
 use crate::engine::matcher::MatchEvent;
+use crate::engine::radio::{self, RadioReport, RadioSummary};
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::engine::summary::CommandSummary;
 use crate::engine::summary::{ResponderSummary, Summary};
 use crate::engine::Nanos;
-use crate::frame::codec;
+use crate::frame::{codec, SysComp};
 use crate::verdict::Verdict;
 
 pub struct TextReporter<W: Write> {
@@ -24,7 +25,13 @@ pub struct TextReporter<W: Write> {
     /// Above [`MAX_LINE_RATE`] requests/s: one status line per second
     /// instead of a line per event, so printing never paces the engine.
     progress: Option<Progress>,
+    /// The latest RADIO_STATUS, and when a reply line last showed one.
+    radio: Option<(SysComp, RadioReport)>,
+    radio_shown: Option<Nanos>,
 }
+
+/// Reply lines carry the radio's figures at most this often.
+const RADIO_NOTE_EVERY_NS: Nanos = 1_000_000_000;
 
 /// Requests per second above which per-reply lines are summarised.
 const MAX_LINE_RATE: f64 = 100.0;
@@ -48,6 +55,8 @@ impl<W: Write> TextReporter<W> {
             timeout: std::time::Duration::ZERO,
             every_reply: false,
             progress: None,
+            radio: None,
+            radio_shown: None,
         }
     }
 
@@ -99,7 +108,24 @@ impl<W: Write> TextReporter<W> {
             window_start: at,
             ..Progress::default()
         };
-        writeln!(self.out, "{line}")
+        let note = self.radio_note(at);
+        writeln!(self.out, "{line}{note}")
+    }
+
+    /// " [radio 51:68 rssi=… remrssi=… txbuf=…%]" when one is heard and
+    /// the last note is at least a second old, so fast runs stay readable.
+    fn radio_note(&mut self, at: Nanos) -> String {
+        let Some((id, r)) = self.radio else {
+            return String::new();
+        };
+        if self
+            .radio_shown
+            .is_some_and(|t| at.saturating_sub(t) < RADIO_NOTE_EVERY_NS)
+        {
+            return String::new();
+        }
+        self.radio_shown = Some(at);
+        format!(" [radio {id} {}]", radio_figures(&r))
     }
 
     pub fn into_inner(self) -> W {
@@ -118,6 +144,67 @@ fn offset(ns: i128) -> String {
     let sign = if ns < 0 { '-' } else { '+' };
     let us = (ns.unsigned_abs() + 500) / 1_000;
     format!("{sign}{}.{:06} s", us / 1_000_000, us % 1_000_000)
+}
+
+fn raw(v: u8) -> String {
+    if v == radio::UNKNOWN {
+        "?".into()
+    } else {
+        v.to_string()
+    }
+}
+
+fn radio_figures(r: &RadioReport) -> String {
+    format!(
+        "rssi={} remrssi={} txbuf={}%",
+        raw(r.rssi),
+        raw(r.remrssi),
+        raw(r.txbuf)
+    )
+}
+
+fn write_radio(out: &mut impl Write, r: &RadioSummary) -> io::Result<()> {
+    writeln!(
+        out,
+        "radio {}: {} reports, rxerrors +{}, fixed +{} during the run",
+        r.id, r.reports, r.rxerrors_delta, r.fixed_delta
+    )?;
+    let rows = [
+        ("rssi", r.rssi, ""),
+        ("remote rssi", r.remrssi, ""),
+        ("noise", r.noise, ""),
+        ("remote noise", r.remnoise, ""),
+        ("fade margin", r.fade_margin, ""),
+        ("remote fade margin", r.remote_fade_margin, ""),
+        ("txbuf free", r.txbuf, " %"),
+    ];
+    for (name, range, unit) in rows {
+        if let Some(v) = range {
+            writeln!(
+                out,
+                "  {name:<18} min/mean/max = {:.0}/{:.1}/{:.0}{unit}",
+                v.min, v.mean, v.max
+            )?;
+        }
+    }
+    if let Some(a) = &r.approx_dbm {
+        let rows = [
+            ("rssi", a.rssi, "dBm"),
+            ("remote rssi", a.remrssi, "dBm"),
+            ("fade margin", a.fade_margin_db, "dB"),
+            ("remote fade margin", a.remote_fade_margin_db, "dB"),
+        ];
+        for (name, range, unit) in rows {
+            if let Some(v) = range {
+                writeln!(
+                    out,
+                    "  {name:<18} ~{:.1}/{:.1}/{:.1} {unit} (approximate, SiK scale)",
+                    v.min, v.mean, v.max
+                )?;
+            }
+        }
+    }
+    Ok(())
 }
 
 fn ms_us(us: f64) -> String {
@@ -250,6 +337,22 @@ impl<W: Write> Reporter for TextReporter<W> {
         if self.quiet {
             return Ok(());
         }
+        if let Event::Radio {
+            id, report, first, ..
+        } = *event
+        {
+            self.radio = Some((id, report));
+            if !first {
+                return Ok(());
+            }
+            return writeln!(
+                self.out,
+                "heard radio {id}: {}, noise={} remnoise={}",
+                radio_figures(&report),
+                raw(report.noise),
+                raw(report.remnoise)
+            );
+        }
         if let (Some(_), Event::Match(e)) = (&self.progress, event) {
             return self.tally(e);
         }
@@ -259,13 +362,17 @@ impl<W: Write> Reporter for TextReporter<W> {
                 seq,
                 rtt,
                 out_of_order,
+                at,
                 ..
-            }) => writeln!(
-                self.out,
-                "reply from {responder}: seq={seq} time={} ms{}",
-                ms(rtt),
-                if out_of_order { " (out of order)" } else { "" }
-            ),
+            }) => {
+                let note = self.radio_note(at);
+                writeln!(
+                    self.out,
+                    "reply from {responder}: seq={seq} time={} ms{}{note}",
+                    ms(rtt),
+                    if out_of_order { " (out of order)" } else { "" }
+                )
+            }
             Event::Match(MatchEvent::Lost { responder, seq, .. }) => writeln!(
                 self.out,
                 "no reply from {responder}: seq={seq} (timeout {})",
@@ -301,6 +408,7 @@ impl<W: Write> Reporter for TextReporter<W> {
                 identity.vehicle, identity.autopilot_name
             ),
             Event::WaitingForPeer => writeln!(self.out, "waiting for a peer to send MAVLink..."),
+            Event::Radio { .. } => Ok(()),
         }
     }
 
@@ -320,6 +428,35 @@ impl<W: Write> Reporter for TextReporter<W> {
         }
         for r in &s.responders {
             write_responder(out, r)?;
+        }
+        for r in &s.radios {
+            write_radio(out, r)?;
+        }
+        if let Some(w) = &s.wire {
+            write!(
+                out,
+                "wire: {} baud carries ~{:.0} PINGs/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
+                w.baud,
+                w.max_rate_hz.floor(),
+                ms_us(w.floor_us),
+                w.request_bytes,
+                w.reply_bytes
+            )?;
+            // The rest of the RTT is the radio's and the autopilot's.
+            if let Some(p50) = s
+                .responders
+                .iter()
+                .filter_map(|r| r.rtt)
+                .map(|t| t.p50_us)
+                .reduce(f64::min)
+            {
+                write!(
+                    out,
+                    ", {} ms of the rtt p50 is beyond the wire",
+                    ms_us((p50 - w.floor_us).max(0.0))
+                )?;
+            }
+            writeln!(out)?;
         }
         let f = &s.frames;
         if f.bad_crc + f.skipped_bytes + f.unknown_id + f.truncated + s.foreign_replies > 0 {
@@ -500,5 +637,56 @@ impl<W: Write> CommandReporter for TextReporter<W> {
             )?;
         }
         out.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn reply(seq: u32, at: Nanos) -> Event<'static> {
+        Event::Match(MatchEvent::Reply {
+            responder: SysComp::new(1, 1),
+            seq,
+            rtt: 1_000_000,
+            sent_at: at - 1_000_000,
+            at,
+            out_of_order: false,
+            first_from_responder: seq == 0,
+        })
+    }
+
+    #[test]
+    fn reply_lines_carry_the_radio_at_most_once_a_second() {
+        let mut t = TextReporter::new(Vec::new(), false);
+        let status = RadioReport {
+            rssi: 200,
+            remrssi: radio::UNKNOWN,
+            txbuf: 90,
+            noise: 40,
+            remnoise: 60,
+            rxerrors: 0,
+            fixed: 0,
+        };
+        t.event(&reply(0, 10_000_000)).unwrap();
+        t.event(&Event::Radio {
+            id: SysComp::new(51, 68),
+            at: 20_000_000,
+            report: status,
+            first: true,
+        })
+        .unwrap();
+        for (seq, at) in [(1, 30_000_000), (2, 500_000_000), (3, 1_030_000_000)] {
+            t.event(&reply(seq, at)).unwrap();
+        }
+        let out = String::from_utf8(t.into_inner()).unwrap();
+        let notes: Vec<&str> = out.lines().filter(|l| l.contains("[radio")).collect();
+        assert_eq!(notes.len(), 2, "{out}");
+        assert!(
+            notes[0].contains("seq=1 ")
+                && notes[0].ends_with("[radio 51/68 rssi=200 remrssi=? txbuf=90%]"),
+            "{out}"
+        );
+        assert!(notes[1].contains("seq=3 "), "{out}");
     }
 }

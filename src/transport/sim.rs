@@ -46,6 +46,12 @@ pub struct SimParams {
     /// the link opened: the truth a TIMESYNC measurement is held against.
     pub clock_offset_ns: i64,
     pub drift_ppm: f64,
+    /// A serial radio link at this baud: every frame takes its bytes x 10
+    /// bits of wire time, requests and replies share it (half duplex, as
+    /// SiK), and a bounded buffer drops what does not fit.
+    pub baud: Option<u32>,
+    /// Emit RADIO_STATUS as 51/68 once a second, following the link.
+    pub radio: bool,
 }
 
 impl Default for SimParams {
@@ -66,6 +72,8 @@ impl Default for SimParams {
             heartbeat: true,
             clock_offset_ns: 0,
             drift_ppm: 0.0,
+            baud: None,
+            radio: false,
         }
     }
 }
@@ -73,7 +81,7 @@ impl Default for SimParams {
 /// The keys `sim:` accepts, for error messages and the README.
 pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURATION, \
 jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
-ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM";
+ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off";
 
 fn percent(key: &str, value: &str) -> Result<f64, String> {
     let number = value.strip_suffix('%').unwrap_or(value);
@@ -172,6 +180,16 @@ impl SimParams {
                         return Err(format!("{key}={value}: expected -1000000 to 1000000 ppm"));
                     }
                 }
+                "baud" => {
+                    let baud: u32 = number(key, value, "a baud rate from 300 to 10000000")?;
+                    if !(300..=10_000_000).contains(&baud) {
+                        return Err(format!(
+                            "{key}={value}: expected a baud rate from 300 to 10000000"
+                        ));
+                    }
+                    p.baud = Some(baud);
+                }
+                "radio" => p.radio = switch(key, value)?,
                 _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
             }
         }
@@ -213,6 +231,12 @@ impl fmt::Display for SimParams {
         if self.drift_ppm != 0.0 {
             write!(f, "&drift={}", self.drift_ppm)?;
         }
+        if let Some(baud) = self.baud {
+            write!(f, "&baud={baud}")?;
+        }
+        if self.radio {
+            write!(f, "&radio=on")?;
+        }
         Ok(())
     }
 }
@@ -238,6 +262,9 @@ pub struct SimTruth {
     pub delivered: u64,
     /// Extra copies delivered.
     pub duplicated: u64,
+    /// Exchanges the radio's full buffer dropped (`baud=`), also counted
+    /// in `dropped`.
+    pub overflowed: u64,
 }
 
 impl SimResponder {
@@ -264,6 +291,18 @@ struct Delivery {
 /// memory without bound; past it, replies are dropped like a full queue.
 const MAX_QUEUED: usize = 1 << 20;
 
+/// The simulated radio's transmit buffer (`baud=`): bytes waiting for the
+/// wire beyond this are dropped, as a radio drops what its buffer cannot
+/// hold.
+pub const RADIO_BUFFER_BYTES: u64 = 1024;
+pub const RADIO_ID: SysComp = SysComp::new(51, 68);
+
+/// The shared wire of a `baud=` link: when it is next free.
+#[derive(Default)]
+struct Wire {
+    free_at: Option<Instant>,
+}
+
 pub struct SimLink {
     params: SimParams,
     responders: Vec<SimResponder>,
@@ -273,6 +312,9 @@ pub struct SimLink {
     stats: ScanStats,
     started: Instant,
     scratch: Vec<Inbound>,
+    wire: Wire,
+    next_radio: Instant,
+    radio_seq: u8,
 }
 
 impl SimLink {
@@ -299,6 +341,9 @@ impl SimLink {
             stats: ScanStats::default(),
             started: now,
             scratch: Vec::new(),
+            wire: Wire::default(),
+            next_radio: now,
+            radio_seq: 0,
         }
     }
 
@@ -371,10 +416,83 @@ impl SimLink {
     }
 
     fn next_heartbeat(&self) -> Option<Instant> {
-        self.params
+        let heartbeat = self
+            .params
             .heartbeat
             .then(|| self.responders.iter().map(|r| r.next_heartbeat).min())
-            .flatten()
+            .flatten();
+        let radio = self.params.radio.then_some(self.next_radio);
+        heartbeat.into_iter().chain(radio).min()
+    }
+
+    /// Wire time of `bytes` at the link's baud.
+    fn wire_time(&self, bytes: usize) -> Duration {
+        let baud = u64::from(self.params.baud.unwrap_or(u32::MAX));
+        Duration::from_nanos(bytes as u64 * 10 * 1_000_000_000 / baud)
+    }
+
+    /// Bytes waiting for the wire at `now`.
+    fn backlog_bytes(&self, now: Instant) -> u64 {
+        let Some(baud) = self.params.baud else {
+            return 0;
+        };
+        let wait = self
+            .wire
+            .free_at
+            .map_or(Duration::ZERO, |t| t.saturating_duration_since(now));
+        (wait.as_nanos() * u128::from(baud) / 10 / 1_000_000_000) as u64
+    }
+
+    /// Puts `bytes` on the shared wire: when their last bit is sent, or
+    /// None when the buffer is full and they are dropped.
+    fn serialise(&mut self, now: Instant, bytes: usize) -> Option<Instant> {
+        if self.params.baud.is_none() {
+            return Some(now);
+        }
+        if self.backlog_bytes(now) + bytes as u64 > RADIO_BUFFER_BYTES {
+            return None;
+        }
+        let start = self.wire.free_at.map_or(now, |t| t.max(now));
+        let done = start + self.wire_time(bytes);
+        self.wire.free_at = Some(done);
+        Some(done)
+    }
+
+    /// RADIO_STATUS once a second: RSSI falls with the simulated loss,
+    /// txbuf is the buffer's free share, rxerrors the drops so far.
+    fn queue_radio_status(&mut self, now: Instant) {
+        while self.params.radio && self.next_radio <= now {
+            let sent = self.next_radio;
+            self.next_radio += Duration::from_secs(1);
+            let rssi = (200.0 - 300.0 * self.params.loss).clamp(0.0, 254.0) as u8;
+            let free = RADIO_BUFFER_BYTES.saturating_sub(self.backlog_bytes(sent));
+            let txbuf = (free * 100 / RADIO_BUFFER_BYTES) as u8;
+            let dropped = self.responders.iter().map(|r| r.truth.dropped).sum::<u64>();
+            self.radio_seq = self.radio_seq.wrapping_add(1);
+            let header = Header {
+                sysid: RADIO_ID.sysid,
+                compid: RADIO_ID.compid,
+                seq: self.radio_seq,
+            };
+            let mut bytes = Vec::new();
+            frame::encode(
+                &mut bytes,
+                Version::V2,
+                header,
+                &Msg::RadioStatus {
+                    rssi,
+                    remrssi: rssi,
+                    txbuf,
+                    noise: 40,
+                    remnoise: 40,
+                    // Since-boot counters wrap at 65 535, as a radio's do.
+                    rxerrors: dropped as u16,
+                    fixed: 0,
+                },
+            );
+            // The radio is the near end: no link delay.
+            self.enqueue(sent, bytes);
+        }
     }
 }
 
@@ -386,6 +504,22 @@ impl Transport for SimLink {
         // Requests go through the real scanner, as on a wire.
         let mut ignored = ScanStats::default();
         push_datagram(bytes, now, 0, &mut ignored, &mut requests);
+        // The request's own wire time; a full buffer loses it for everyone.
+        let Some(sent_done) = self.serialise(now, bytes.len()) else {
+            for request in &requests {
+                for i in 0..self.responders.len() {
+                    if self.responders[i].core.answer(&request.frame, 0).is_some() {
+                        let truth = &mut self.responders[i].truth;
+                        truth.answered += 1;
+                        truth.dropped += 1;
+                        truth.overflowed += 1;
+                        truth.dropped_before_first += u64::from(truth.delivered == 0);
+                    }
+                }
+            }
+            self.scratch = requests;
+            return Ok(now);
+        };
         for request in &requests {
             for i in 0..self.responders.len() {
                 let Some(mut reply) = self.responders[i].core.answer(&request.frame, 0) else {
@@ -399,7 +533,6 @@ impl Transport for SimLink {
                     truth.dropped_before_first += u64::from(truth.delivered == 0);
                     continue;
                 }
-                self.responders[i].truth.delivered += 1;
                 let up = self.one_way();
                 // A real responder reads its clock when the request arrives,
                 // one leg after we sent it: that is what makes the NTP
@@ -410,7 +543,17 @@ impl Transport for SimLink {
                 let header = self.responders[i].header();
                 let mut out = Vec::new();
                 frame::encode(&mut out, request.frame.version, header, &reply);
-                let mut at = now + up + self.one_way();
+                // Simplification: the reply is queued for the wire when the
+                // request is, so the wire's order is the requests' order.
+                let Some(reply_done) = self.serialise(sent_done, out.len()) else {
+                    let truth = &mut self.responders[i].truth;
+                    truth.dropped += 1;
+                    truth.overflowed += 1;
+                    truth.dropped_before_first += u64::from(truth.delivered == 0);
+                    continue;
+                };
+                self.responders[i].truth.delivered += 1;
+                let mut at = reply_done + up + self.one_way();
                 if self.chance(self.params.reorder) {
                     at += self.params.hold;
                 }
@@ -444,6 +587,7 @@ impl Transport for SimLink {
             sleep_until(wake).await;
             let now = Instant::now();
             self.queue_heartbeats(now);
+            self.queue_radio_status(now);
             let before = out.len();
             while self.queue.peek().is_some_and(|d| d.0.at <= now) {
                 let Reverse(d) = self.queue.pop().expect("peeked");
@@ -523,5 +667,15 @@ mod tests {
         let ids: std::collections::HashSet<_> = (0..1000).map(|i| p.responder_id(i)).collect();
         assert_eq!(ids.len(), 1000);
         assert!(ids.iter().all(|id| id.sysid != 0 && id.compid != 0));
+    }
+
+    #[test]
+    fn baud_and_radio_parse_and_bad_values_are_refused() {
+        let p = SimParams::parse("?baud=57600&radio=on").unwrap();
+        assert_eq!((p.baud, p.radio), (Some(57_600), true));
+        assert!(p.to_string().ends_with("&baud=57600&radio=on"));
+        for bad in ["?baud=0", "?baud=fast", "?radio=maybe"] {
+            assert!(SimParams::parse(bad).is_err(), "{bad}");
+        }
     }
 }

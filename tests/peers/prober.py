@@ -87,6 +87,11 @@ def main():
         f["commands_sent"] += 1
         drain(time.monotonic() + args.interval)
     drain(time.monotonic() + 0.5)
+    # The responder's HEARTBEAT comes at 1 Hz: on a fast machine the run
+    # above ends before the first one reaches us, so wait for it (bounded).
+    deadline = time.monotonic() + 2.0
+    while f["heartbeats"] == 0 and time.monotonic() < deadline:
+        drain(time.monotonic() + 0.05)
     print(json.dumps(f), flush=True)
     return 0
 

@@ -5,6 +5,10 @@ mavping's integration tests measure against.
 It answers PING requests (targets 0/0) as PX4 does, and can drop or
 duplicate chosen sequence numbers, send junk datagrams or corrupt frames,
 or behave like ArduPilot (HEARTBEAT and TIMESYNC only, no PING).
+With --radio-status it also plays a telemetry radio injecting RADIO_STATUS
+into the same stream from its own ids (SiK: 51/68), one report from the
+schedule before each reply, so every report reaches the pinger before the
+reply that follows it.
 Prints one JSON line of ground truth on exit (SIGTERM/SIGINT or --count).
 """
 import argparse
@@ -64,6 +68,10 @@ def main():
     ap.add_argument("--heartbeat-hz", type=float, default=10.0)
     ap.add_argument("--baud", type=int, default=57600)
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--radio-status", default="",
+                    help="RADIO_STATUS schedule, one report per PING request: "
+                    "'rssi,remrssi,txbuf,noise,remnoise,rxerrors,fixed;...'")
+    ap.add_argument("--radio-id", default="51/68", help="sysid/compid the radio sends as")
     args = ap.parse_args()
 
     if not args.mavlink1:
@@ -84,10 +92,17 @@ def main():
             dialect="common",
         )
     mav = conn.mav
+    radio_schedule = [tuple(int(v) for v in r.split(",")) for r in args.radio_status.split(";") if r]
+    radio = None
+    if radio_schedule:
+        rsys, rcomp = (int(v) for v in args.radio_id.split("/"))
+        # A second encoder on the same link: the radio's frames share the
+        # stream (and its order) with the autopilot's, as on a real radio.
+        radio = mavutil.mavlink.MAVLink(conn, srcSystem=rsys, srcComponent=rcomp)
     drop, dup = parse_set(args.drop), parse_set(args.dup)
     junk_before, bad_crc = parse_set(args.junk_before), parse_set(args.bad_crc)
     truth = {"ping_requests": 0, "replies": 0, "dropped": 0, "duplicated": 0,
-             "junk": 0, "junk_bytes": 0, "bad_crc": 0}
+             "junk": 0, "junk_bytes": 0, "bad_crc": 0, "radio_status": 0}
     running = True
 
     def stop(*_):
@@ -124,6 +139,9 @@ def main():
             continue  # a reply to someone else, not a request
         truth["ping_requests"] += 1
         seq = msg.seq
+        if radio is not None and truth["radio_status"] < len(radio_schedule):
+            radio.radio_status_send(*radio_schedule[truth["radio_status"]])
+            truth["radio_status"] += 1
         if seq in drop:
             truth["dropped"] += 1
             continue

@@ -1,0 +1,249 @@
+//! What a serial link can carry: frame sizes, PINGs per second at a baud
+//! rate, and the serialisation floor under every RTT. Pure arithmetic.
+//!
+//! A pty or a USB adapter may ignore the baud rate, but the radio behind
+//! a real port cannot: these figures are what the radio's UART delivers.
+
+use serde::Serialize;
+
+use super::session::SessionConfig;
+use super::summary::Summary;
+use crate::frame::Version;
+use crate::transport::{LinkOptions, LinkSpec};
+
+/// Start bit, 8 data bits, stop bit.
+pub const BITS_PER_BYTE: u64 = 10;
+/// PING's payload: time_usec u64, seq u32, target system and component.
+const PING_PAYLOAD: u64 = 14;
+const V1_OVERHEAD: u64 = 6 + 2;
+const V2_OVERHEAD: u64 = 10 + 2;
+/// A MAVLink 2 signature (link id, timestamp, signature).
+pub const SIGNATURE: u64 = 13;
+
+/// Bytes of a PING reply: its targets are set, so nothing is trimmed.
+pub fn reply_bytes(version: Version, signed: bool) -> u64 {
+    let base = match version {
+        Version::V1 => V1_OVERHEAD + PING_PAYLOAD,
+        Version::V2 => V2_OVERHEAD + PING_PAYLOAD,
+    };
+    base + if signed { SIGNATURE } else { 0 }
+}
+
+/// Bytes of our PING request with sequence numbers up to `max_seq`.
+/// MAVLink 2 trims trailing zero bytes of the payload: the targets (0/0)
+/// and the seq's unused high bytes go. time_usec is never zero.
+pub fn request_bytes(version: Version, max_seq: u32) -> u64 {
+    match version {
+        Version::V1 => V1_OVERHEAD + PING_PAYLOAD,
+        Version::V2 => {
+            let seq_bytes = 4 - u64::from(max_seq.leading_zeros() / 8);
+            V2_OVERHEAD + 8 + seq_bytes
+        }
+    }
+}
+
+/// A serial link's budget for one request and its replies.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct WireBudget {
+    pub baud: u32,
+    pub request_bytes: u64,
+    pub reply_bytes: u64,
+    /// Replies each request is expected to draw.
+    pub replies: u64,
+    /// Request and replies share the radio's air time (SiK is half duplex),
+    /// so the bound is the baud's bytes over all of them.
+    pub max_rate_hz: f64,
+    /// Request plus one reply at the baud: the part of every RTT the wire
+    /// itself costs, before any radio or autopilot processing.
+    pub floor_us: f64,
+}
+
+pub fn budget(baud: u32, version: Version, max_seq: u32, replies: u64) -> WireBudget {
+    let request = request_bytes(version, max_seq);
+    let reply = reply_bytes(version, false);
+    let bytes_per_s = u64::from(baud) as f64 / BITS_PER_BYTE as f64;
+    WireBudget {
+        baud,
+        request_bytes: request,
+        reply_bytes: reply,
+        replies: 0,
+        max_rate_hz: 0.0,
+        floor_us: (request + reply) as f64 / bytes_per_s * 1e6,
+    }
+    .with_replies(replies)
+}
+
+/// The budget of a link that has a baud rate; None for the others.
+pub fn for_link(
+    link: &LinkSpec,
+    options: &LinkOptions,
+    session: &SessionConfig,
+) -> Option<WireBudget> {
+    let (baud, replies) = match link {
+        LinkSpec::Serial { baud, .. } => (baud.unwrap_or(options.baud), 1),
+        LinkSpec::Sim(p) => (p.baud?, u64::from(p.responders)),
+        _ => return None,
+    };
+    // The largest seq of the run sets the request's length; an endless run
+    // is assumed to reach full width.
+    let max_seq = session
+        .count
+        .and_then(|c| u32::try_from(c.saturating_sub(1)).ok())
+        .and_then(|c| session.first_seq.checked_add(c))
+        .unwrap_or(u32::MAX);
+    // One responder on a real link unless the run shows more: the warning
+    // is a floor.
+    Some(budget(baud, session.version, max_seq, replies))
+}
+
+impl WireBudget {
+    /// The same link with `replies` replies per request.
+    pub fn with_replies(self, replies: u64) -> WireBudget {
+        let replies = replies.max(1);
+        let bytes_per_s = u64::from(self.baud) as f64 / BITS_PER_BYTE as f64;
+        WireBudget {
+            replies,
+            max_rate_hz: bytes_per_s / (self.request_bytes + replies * self.reply_bytes) as f64,
+            ..self
+        }
+    }
+
+    /// The one-line warning before a run whose rate the link cannot carry.
+    pub fn warning(&self, rate_hz: f64) -> Option<String> {
+        (rate_hz > self.max_rate_hz).then(|| {
+            format!(
+                "at {} baud this link carries at most ~{:.0} PINGs/s each way; {}/s will queue and then lose",
+                self.baud,
+                self.max_rate_hz.floor(),
+                trim(rate_hz)
+            )
+        })
+    }
+}
+
+fn trim(v: f64) -> String {
+    if v.fract() == 0.0 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.1}")
+    }
+}
+
+/// Puts the budget in the summary and, when the run shows the link was
+/// overrun (losses, or an RTT spread far beyond the wire time, which is a
+/// queue growing), says so.
+pub fn apply(summary: &mut Summary, budget: WireBudget) {
+    summary.wire = Some(budget);
+    let Some(rate) = summary.schedule.map(|s| s.requested_rate_hz) else {
+        return;
+    };
+    // After the run the responders are known, not guessed.
+    let b = budget.with_replies(summary.responders.len() as u64);
+    let overrun = summary.responders.iter().any(|r| {
+        r.counts.lost > 0
+            || r.rtt
+                .is_some_and(|t| t.max_us - t.min_us > 10.0 * budget.floor_us)
+    });
+    if overrun {
+        if let Some(w) = b.warning(rate) {
+            summary.hints.push(format!("{w}: this run did"));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_sizes_match_the_spec() {
+        assert_eq!(reply_bytes(Version::V2, false), 26);
+        assert_eq!(reply_bytes(Version::V1, false), 22);
+        assert_eq!(reply_bytes(Version::V2, true), 39);
+        assert_eq!(request_bytes(Version::V1, 5), 22);
+        // Targets and the seq's zero high bytes trimmed.
+        assert_eq!(request_bytes(Version::V2, 200), 21);
+        assert_eq!(request_bytes(Version::V2, 300), 22);
+        assert_eq!(request_bytes(Version::V2, u32::MAX), 24);
+    }
+
+    #[test]
+    fn capacity_at_57600_baud() {
+        // 5760 bytes/s over 21 + 26 bytes: 122.55 PINGs/s.
+        let b = budget(57_600, Version::V2, 99, 1);
+        assert_eq!(b.max_rate_hz.floor(), 122.0);
+        // 47 bytes at 5760 bytes/s = 8159.7 µs.
+        assert!((b.floor_us - 47.0 / 5760.0 * 1e6).abs() < 1e-6);
+        assert!(b.warning(100.0).is_none());
+        assert_eq!(
+            b.warning(500.0).unwrap(),
+            "at 57600 baud this link carries at most ~122 PINGs/s each way; 500/s will queue and then lose"
+        );
+        // Two responders: 21 + 52 bytes.
+        assert_eq!(budget(57_600, Version::V2, 99, 2).max_rate_hz.floor(), 78.0);
+    }
+
+    fn run(lost: u64, requested_rate_hz: f64) -> Summary {
+        use super::super::matcher::Counts;
+        use super::super::summary::{ResponderSummary, ScheduleSummary};
+        use crate::frame::SysComp;
+        Summary {
+            link: "serial:/dev/x:57600".into(),
+            probe: "ping",
+            ours: SysComp::new(255, 190),
+            duration_s: 1.0,
+            requests: 10,
+            in_flight: 0,
+            responders: vec![ResponderSummary {
+                id: SysComp::new(1, 1),
+                counts: Counts {
+                    sent: 10,
+                    received: 10 - lost,
+                    lost,
+                    ..Counts::default()
+                },
+                loss_ratio: lost as f64 / 10.0,
+                rtt: None,
+                histogram: vec![],
+                identity: None,
+                clock: None,
+            }],
+            foreign_replies: 0,
+            untracked_replies: 0,
+            frames: Default::default(),
+            hints: vec![],
+            interrupted: false,
+            link_error: None,
+            downtime_s: 0.0,
+            schedule: Some(ScheduleSummary {
+                requested_rate_hz,
+                achieved_rate_hz: requested_rate_hz,
+                lateness_p50_us: 0.0,
+                lateness_p99_us: 0.0,
+                lateness_max_us: 0.0,
+            }),
+            rx_clock: "test",
+            radios: vec![],
+            wire: None,
+        }
+    }
+
+    #[test]
+    fn the_summary_says_so_only_when_the_run_shows_it() {
+        let b = budget(57_600, Version::V2, 99, 1);
+        // Over capacity and losing: said.
+        let mut s = run(3, 500.0);
+        apply(&mut s, b);
+        assert_eq!(s.wire, Some(b));
+        assert_eq!(s.hints.len(), 1, "{:?}", s.hints);
+        assert!(s.hints[0].ends_with("will queue and then lose: this run did"));
+        // Over capacity but nothing lost (a pty ignores the baud): silent.
+        let mut s = run(0, 500.0);
+        apply(&mut s, b);
+        assert!(s.hints.is_empty());
+        // Losing below capacity: the wire is not the reason.
+        let mut s = run(3, 50.0);
+        apply(&mut s, b);
+        assert!(s.hints.is_empty());
+    }
+}

@@ -1,0 +1,225 @@
+//! RADIO_STATUS from a radio injecting into the stream (pymavlink, 51/68)
+//! beside a PING responder: the figures and counter deltas are exact.
+
+mod common;
+use common::*;
+
+#[test]
+fn radio_figures_and_counter_deltas_are_exact() {
+    let port = free_udp_port();
+    // rssi,remrssi,txbuf,noise,remnoise,rxerrors,fixed. rssi 255 is
+    // unknown; rxerrors wraps 65 530 → 3 (65 530, 65 534, 3, 10: +4 +5 +7).
+    let schedule = "200,150,90,40,60,65530,100;\
+                    190,140,80,50,60,65534,100;\
+                    255,130,255,50,255,3,101;\
+                    180,120,20,60,70,10,101";
+    let peer = Peer::start(
+        "responder.py",
+        &[
+            &format!("udpout:127.0.0.1:{port}"),
+            "--radio-status",
+            schedule,
+        ],
+    );
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "4",
+        "-i",
+        "0.1",
+        "-W",
+        "2s",
+        "--json",
+        &format!("udpin:127.0.0.1:{port}"),
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    let lines: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    // One radio event: the first report only.
+    let events: Vec<_> = lines.iter().filter(|v| v["type"] == "radio").collect();
+    assert_eq!(events.len(), 1, "{out}");
+    assert_eq!(events[0]["responder"]["sysid"], 51);
+    assert_eq!(events[0]["status"]["rxerrors"], 65530);
+    let s = lines.iter().find(|v| v["type"] == "summary").expect(&out);
+    let radios = s["radios"].as_array().unwrap();
+    assert_eq!(radios.len(), 1, "{s}");
+    let r = &radios[0];
+    assert_eq!(
+        (&r["id"]["sysid"], &r["id"]["compid"]),
+        (&51.into(), &68.into())
+    );
+    assert_eq!(r["reports"], 4);
+    let range = |k: &str| {
+        let v = &r[k];
+        (
+            v["min"].as_f64().unwrap(),
+            v["mean"].as_f64().unwrap(),
+            v["max"].as_f64().unwrap(),
+            v["samples"].as_u64().unwrap(),
+        )
+    };
+    assert_eq!(range("rssi"), (180.0, 190.0, 200.0, 3));
+    assert_eq!(range("remrssi"), (120.0, 135.0, 150.0, 4));
+    assert_eq!(range("noise"), (40.0, 50.0, 60.0, 4));
+    assert_eq!(range("remnoise"), (60.0, 190.0 / 3.0, 70.0, 3));
+    // 160, 140, 120: the third report has no rssi.
+    assert_eq!(range("fade_margin"), (120.0, 140.0, 160.0, 3));
+    // 90, 80, 50: the third report has no remnoise.
+    assert_eq!(range("remote_fade_margin"), (50.0, 220.0 / 3.0, 90.0, 3));
+    assert_eq!(range("txbuf"), (20.0, 190.0 / 3.0, 90.0, 3));
+    assert_eq!(r["rxerrors_delta"], 16);
+    assert_eq!(r["fixed_delta"], 1);
+    let dbm = r["approx_dbm"]["rssi"]["max"].as_f64().unwrap();
+    assert!((dbm - (200.0 / 1.9 - 127.0)).abs() < 1e-9, "{r}");
+    assert_eq!(r["latest"]["rxerrors"], 10);
+    // The radio is no responder and gets no "never answered" hint; the
+    // counters grew, so that hint is there.
+    let responders = s["responders"].as_array().unwrap();
+    assert_eq!(responders.len(), 1, "{s}");
+    assert_eq!(responders[0]["responder"]["sysid"], 1);
+    assert_eq!(responders[0]["received"], 4);
+    let hints: Vec<&str> = s["hints"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|h| h.as_str().unwrap())
+        .collect();
+    assert!(
+        !hints.iter().any(|h| h.contains("never answered")),
+        "{hints:?}"
+    );
+    assert!(
+        hints.contains(&"radio 51/68: rxerrors grew by 16 during the run: interference or range"),
+        "{hints:?}"
+    );
+    assert_eq!(peer.finish()["radio_status"], 4);
+}
+
+#[test]
+fn text_output_has_the_radio_block_and_annotated_replies() {
+    let port = free_udp_port();
+    let _peer = Peer::start(
+        "responder.py",
+        &[
+            &format!("udpout:127.0.0.1:{port}"),
+            "--radio-status",
+            "200,150,90,40,60,7,0;200,150,90,40,60,9,0",
+        ],
+    );
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "2",
+        "-i",
+        "0.1",
+        "-W",
+        "2s",
+        &format!("udpin:127.0.0.1:{port}"),
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(
+        out.contains("heard radio 51/68: rssi=200 remrssi=150 txbuf=90%, noise=40 remnoise=60"),
+        "{out}"
+    );
+    // The first reply after a report carries it (how often later ones do
+    // is the text reporter's unit test, with explicit times).
+    assert!(
+        out.lines().any(|l| l.contains("seq=0 time=")
+            && l.ends_with("[radio 51/68 rssi=200 remrssi=150 txbuf=90%]")),
+        "{out}"
+    );
+    assert!(
+        out.contains("radio 51/68: 2 reports, rxerrors +2, fixed +0 during the run"),
+        "{out}"
+    );
+    assert!(
+        out.contains("  rssi               min/mean/max = 200/200.0/200"),
+        "{out}"
+    );
+    assert!(out.contains("(approximate, SiK scale)"), "{out}");
+}
+
+/// `sim:?baud=`: wire time and a bounded radio buffer, on the virtual clock.
+fn sim_run(interval: &str) -> serde_json::Value {
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "200",
+        "-i",
+        interval,
+        "-W",
+        "2s",
+        "--json",
+        "-q",
+        "sim:?baud=57600&delay=0&jitter=0&heartbeat=off&clock=virtual&radio=on",
+    ]);
+    assert!(code == 0 || code == 1, "{out}\n{err}");
+    let mut s: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    s["stderr"] = err.into();
+    s
+}
+
+#[test]
+fn sim_baud_queues_and_loses_where_the_arithmetic_says() {
+    // 57600 baud = 5760 bytes/s; request 21 B + reply 26 B = 47 B per
+    // exchange: 8.1597 ms of wire each, at most 122.55 exchanges/s.
+    let floor_ms = 47.0 / 5760.0 * 1e3;
+
+    // Our own HEARTBEAT (21 B, once a second) shares the wire too.
+    let heartbeat_ms = 21.0 / 5760.0 * 1e3;
+
+    // 100/s: the wire keeps up; an RTT is the wire time alone, or that
+    // plus a HEARTBEAT ahead of it in the queue.
+    let below = sim_run("0.01");
+    assert!(!below["stderr"].as_str().unwrap().contains("warning"));
+    let r = &below["responders"][0];
+    assert_eq!(
+        (r["received"].as_u64(), r["lost"].as_u64()),
+        (Some(200), Some(0)),
+        "{below}"
+    );
+    let p50_ms = r["rtt_us"]["p50"].as_f64().unwrap() / 1e3;
+    assert!((p50_ms - floor_ms).abs() < 0.001, "{p50_ms} vs {floor_ms}");
+    let max_ms = r["rtt_us"]["max"].as_f64().unwrap() / 1e3;
+    assert!(max_ms <= floor_ms + heartbeat_ms + 0.001, "{max_ms}");
+    assert_eq!(below["wire"]["request_bytes"], 21);
+    assert_eq!(below["wire"]["reply_bytes"], 26);
+
+    // 200/s: each request adds 47 - 28.8 = 18.2 B to the backlog, so the
+    // 1024 B buffer fills after 1024 / 18.2 = 56 requests and drops from
+    // then on; the RTT climbs with the queue meanwhile. Delivered: what the
+    // wire carries while sending (122.55/s over the 0.995 s between the
+    // first and last request) plus what the full buffer still held
+    // (1024 / 47 = 21.8): 143.7.
+    let above = sim_run("0.005");
+    assert!(
+        above["stderr"]
+            .as_str()
+            .unwrap()
+            .contains("at 57600 baud this link carries at most ~122 PINGs/s each way; 200/s"),
+        "{above}"
+    );
+    let r = &above["responders"][0];
+    let received = r["received"].as_u64().unwrap();
+    assert!((143..=145).contains(&received), "{above}");
+    assert_eq!(r["lost"].as_u64().unwrap(), 200 - received);
+    let rtt = &r["rtt_us"];
+    // The first exchange queues behind our first HEARTBEAT only.
+    let min_ms = rtt["min"].as_f64().unwrap() / 1e3;
+    assert!(min_ms <= floor_ms + heartbeat_ms + 0.001, "{above}");
+    // A full buffer's worth of queueing on top of the wire time.
+    let max_ms = rtt["max"].as_f64().unwrap() / 1e3;
+    let full_ms = 1024.0 / 5760.0 * 1e3;
+    assert!(
+        max_ms > full_ms && max_ms < full_ms + 2.0 * floor_ms,
+        "{max_ms}"
+    );
+    // The simulated radio counts the drops and shows its buffer filling.
+    let radio = &above["radios"][0];
+    assert_eq!(radio["rxerrors_delta"].as_u64().unwrap(), 200 - received);
+    assert_eq!(radio["txbuf"]["min"].as_f64(), Some(0.0), "{radio}");
+    let hints = above["hints"].to_string();
+    assert!(
+        hints.contains("200/s will queue and then lose: this run did"),
+        "{hints}"
+    );
+}
