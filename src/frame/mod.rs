@@ -6,6 +6,7 @@
 
 pub mod codec;
 pub mod scanner;
+pub mod signing;
 
 pub use codec::{decode, encode, Header, Version};
 pub use scanner::{scan_datagram, ScanStats, StreamScanner};

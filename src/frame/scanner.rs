@@ -54,7 +54,7 @@ impl ScanStats {
 }
 
 /// CRC_EXTRA for a message id, or `None` when the dialect does not know it.
-fn extra_crc(msgid: u32) -> Option<u8> {
+pub(crate) fn extra_crc(msgid: u32) -> Option<u8> {
     let crc = MavMessage::extra_crc(msgid);
     // The generated table answers 0 for unknown ids; 0 is also a legal value.
     if crc != 0 || MavMessage::default_message_from_id(msgid).is_some() {
