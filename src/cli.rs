@@ -272,6 +272,44 @@ pub struct PingArgs {
     /// At the end, draw RTT over time and the RTT distribution to FILE.svg
     #[arg(long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
+
+    #[command(flatten)]
+    pub signing: SigningArgs,
+
+    /// With a signing key: refuse unsigned replies too (wrongly signed and
+    /// replayed ones are always refused); refused frames are counted, never
+    /// measured
+    #[arg(long, env = "MAVPING_REQUIRE_SIGNED")]
+    pub require_signed: bool,
+}
+
+/// MAVLink 2 signing, for `mavping` and `mavping respond`.
+#[derive(Debug, clap::Args)]
+pub struct SigningArgs {
+    /// MAVLink 2 signing key: 64 hex characters (the 32-byte secret) or a
+    /// passphrase, hashed with SHA-256 as MAVProxy does. Signs what we send
+    /// and checks what we receive. Prefer MAVPING_SIGNING_KEY or
+    /// --signing-key-file: a command line ends up in shell history
+    #[arg(
+        long,
+        value_name = "KEY",
+        env = "MAVPING_SIGNING_KEY",
+        hide_env_values = true
+    )]
+    pub signing_key: Option<String>,
+
+    /// Read the signing key from FILE (its content, trimmed)
+    #[arg(long, value_name = "FILE", env = "MAVPING_SIGNING_KEY_FILE")]
+    pub signing_key_file: Option<PathBuf>,
+
+    /// Link id in the signature of our frames (0-255)
+    #[arg(
+        long,
+        value_name = "ID",
+        default_value_t = 0,
+        env = "MAVPING_SIGNING_LINK_ID"
+    )]
+    pub signing_link_id: u8,
 }
 
 /// Options of `mavping respond`.
@@ -316,6 +354,11 @@ pub struct RespondArgs {
     /// Baud rate of a serial device whose connection string names none
     #[arg(long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD)]
     pub baud: u32,
+
+    /// With a key (below), sign our replies and answer only correctly
+    /// signed, not replayed requests
+    #[command(flatten)]
+    pub signing: SigningArgs,
 
     /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]

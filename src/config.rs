@@ -6,9 +6,10 @@ use std::time::Duration;
 
 use thiserror::Error;
 
-use crate::cli::{Format, PingArgs, ProbeKind, RespondArgs};
+use crate::cli::{Format, PingArgs, ProbeKind, RespondArgs, SigningArgs};
 use crate::engine::session::SessionConfig;
 use crate::frame::codec;
+use crate::frame::signing::{SecretKey, SigningConfig};
 use crate::frame::{SysComp, Version};
 use crate::transport::address::{AddressError, LinkSpec};
 use crate::transport::LinkOptions;
@@ -84,6 +85,8 @@ pub struct RespondConfig {
     pub answer_ping: bool,
     pub verbose: u8,
     pub link_options: LinkOptions,
+    /// With a key: replies signed, requests checked (all must be signed).
+    pub signing: Option<SigningConfig>,
 }
 
 impl Config {
@@ -158,6 +161,59 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
         )));
     }
     Ok(interval)
+}
+
+/// The signing key from `--signing-key` (or its env var) or the file
+/// `--signing-key-file` names; `None` when neither is given.
+fn signing_key(args: &SigningArgs) -> Result<Option<SecretKey>, ConfigError> {
+    let text =
+        match (&args.signing_key, &args.signing_key_file) {
+            (Some(_), Some(_)) => return Err(invalid(
+                "--signing-key (or MAVPING_SIGNING_KEY) and --signing-key-file: give one, not both",
+            )),
+            (Some(key), None) => key.trim().to_string(),
+            (None, Some(path)) => std::fs::read_to_string(path)
+                .map_err(|e| {
+                    invalid(format!(
+                        "--signing-key-file {}: cannot read it: {e}",
+                        path.display()
+                    ))
+                })?
+                .trim()
+                .to_string(),
+            (None, None) => return Ok(None),
+        };
+    let from = if args.signing_key.is_some() {
+        "--signing-key".to_string()
+    } else {
+        format!(
+            "--signing-key-file {}",
+            args.signing_key_file.as_ref().expect("matched").display()
+        )
+    };
+    SecretKey::parse(&text).map(Some).map_err(|e| {
+        invalid(format!(
+            "{from}: {e}; expected 64 hex characters or a passphrase"
+        ))
+    })
+}
+
+fn validate_signing(
+    args: &SigningArgs,
+    require_signed: bool,
+) -> Result<Option<SigningConfig>, ConfigError> {
+    let key = signing_key(args)?;
+    match key {
+        None if require_signed => Err(invalid(
+            "--require-signed needs a signing key (--signing-key, MAVPING_SIGNING_KEY or --signing-key-file)",
+        )),
+        None => Ok(None),
+        Some(key) => Ok(Some(SigningConfig {
+            key,
+            link_id: args.signing_link_id,
+            require_signed,
+        })),
+    }
 }
 
 fn validate_baud(baud: u32) -> Result<u32, ConfigError> {
@@ -320,6 +376,12 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 baud: validate_baud(cli.baud)?,
                 reconnect: false,
             },
+            // A responder with a key answers only signed requests.
+            signing: signing_key(&cli.signing)?.map(|key| SigningConfig {
+                key,
+                link_id: cli.signing.signing_link_id,
+                require_signed: true,
+            }),
         })
     }
 }
@@ -352,6 +414,12 @@ impl TryFrom<&PingArgs> for Config {
         let ours = validate_ids(cli.sysid, cli.compid)?;
         validate_baud(cli.baud)?;
         validate_views(cli)?;
+        let signing = validate_signing(&cli.signing, cli.require_signed)?;
+        if signing.is_some() && cli.mavlink_version == 1 {
+            return Err(invalid(
+                "--mavlink 1 with a signing key: signing needs MAVLink 2 (drop --mavlink 1)",
+            ));
+        }
         Ok(Config {
             session: SessionConfig {
                 link_name: link.to_string(),
@@ -369,6 +437,7 @@ impl TryFrom<&PingArgs> for Config {
                 capacity: pending_capacity(interval, cli.timeout)?,
                 first_seq: cli.first_seq,
                 precise_pacing: !matches!(link, LinkSpec::Sim(_)),
+                signing,
             },
             link,
             link_options: LinkOptions {
@@ -516,6 +585,63 @@ mod tests {
             return Err("not respond".into());
         };
         RespondConfig::try_from(r).map_err(|e| e.to_string())
+    }
+
+    #[test]
+    fn signing_lines() {
+        let hex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
+        let c = config(&format!("--signing-key {hex} sim:")).unwrap();
+        let s = c.session.signing.expect("signing on");
+        let mut bytes = [0u8; 32];
+        for (i, b) in bytes.iter_mut().enumerate() {
+            *b = i as u8;
+        }
+        assert_eq!(s.key, SecretKey::from_bytes(bytes));
+        assert_eq!((s.link_id, s.require_signed), (0, false));
+        let s = config("--signing-key pass --signing-link-id 9 --require-signed sim:")
+            .unwrap()
+            .session
+            .signing
+            .unwrap();
+        assert_eq!(s.key, SecretKey::parse("pass").unwrap());
+        assert_eq!((s.link_id, s.require_signed), (9, true));
+        assert!(config("sim:").unwrap().session.signing.is_none());
+
+        let file = std::env::temp_dir().join(format!("mavping-key-{}", std::process::id()));
+        std::fs::write(&file, "  pass\n").unwrap();
+        let from_file = config(&format!("--signing-key-file {} sim:", file.display()));
+        std::fs::remove_file(&file).unwrap();
+        assert_eq!(
+            from_file.unwrap().session.signing.unwrap().key,
+            SecretKey::parse("pass").unwrap()
+        );
+
+        for (line, error) in [
+            (
+                "--require-signed sim:",
+                "--require-signed needs a signing key",
+            ),
+            (
+                "--signing-key k --mavlink 1 sim:",
+                "signing needs MAVLink 2",
+            ),
+            (
+                "--signing-key-file /nonexistent/key sim:",
+                "--signing-key-file /nonexistent/key: cannot read it",
+            ),
+            (
+                "--signing-key k --signing-key-file /x sim:",
+                "give one, not both",
+            ),
+            ("--signing-link-id 256 --signing-key k sim:", "256"),
+        ] {
+            let e = config(line).unwrap_err();
+            assert!(e.contains(error), "{line}: {e}");
+        }
+        let r = respond("--signing-key pass --signing-link-id 3 udpin:0.0.0.0:14550").unwrap();
+        let s = r.signing.unwrap();
+        assert_eq!((s.link_id, s.require_signed), (3, true));
+        assert!(respond("udpin:0.0.0.0:14550").unwrap().signing.is_none());
     }
 
     #[test]

@@ -17,6 +17,7 @@ use tokio::sync::Notify;
 use tokio::time::{sleep_until, Instant};
 
 use crate::config::RespondConfig;
+use crate::frame::signing::{self, Gate, Signer, SigningCounts};
 use crate::frame::{self, Header, Msg, SysComp, Version};
 use crate::responder::{ResponderCore, ResponderCounts};
 use crate::transport::{Inbound, LinkError, PathId, Transport};
@@ -41,6 +42,8 @@ pub struct RespondCounts {
     pub duplicated: u64,
     /// Replies dropped because too many were held by `--delay`.
     pub overflow: u64,
+    /// With a signing key: frames accepted and refused by signature.
+    pub signing: Option<SigningCounts>,
 }
 
 impl std::fmt::Display for RespondCounts {
@@ -61,6 +64,9 @@ impl std::fmt::Display for RespondCounts {
         )?;
         if self.overflow > 0 {
             write!(f, ", {} dropped (too many held)", self.overflow)?;
+        }
+        if let Some(signing) = &self.signing {
+            write!(f, "; signing: {signing}")?;
         }
         Ok(())
     }
@@ -87,6 +93,10 @@ struct Responder {
     /// Paths (peers) greeted so far: links number new peers upwards and
     /// never reuse a number, so the highest one seen is enough.
     greeted: Option<PathId>,
+    /// With a signing key: signs what we send...
+    signer: Option<Signer>,
+    /// ...and refuses requests not signed with it (or replayed).
+    gate: Option<Gate>,
 }
 
 impl Responder {
@@ -109,7 +119,15 @@ impl Responder {
             seq: self.packet_seq,
         };
         self.packet_seq = self.packet_seq.wrapping_add(1);
-        frame::encode(&mut self.buf, version, header, msg);
+        match self.signer.as_mut() {
+            // Signed frames are MAVLink 2 only; only MAVLink 2 requests
+            // can pass the gate anyway.
+            Some(signer) => {
+                frame::encode(&mut self.buf, Version::V2, header, msg);
+                signer.sign(&mut self.buf, 0, signing::timestamp_now());
+            }
+            None => frame::encode(&mut self.buf, version, header, msg),
+        }
     }
 
     fn chance(&mut self, p: f64) -> bool {
@@ -135,6 +153,15 @@ impl Responder {
         // Our clock for TIMESYNC: ns since we started (like an autopilot's
         // boot time), read when the request arrived.
         let clock_ns = (inbound.at - self.epoch).as_nanos() as i64 + 1;
+        if let Some(gate) = self.gate.as_mut() {
+            let frame = &inbound.frame;
+            let radio = matches!(frame.msg, Msg::RadioStatus { .. });
+            let verdict = gate.judge(frame.source, inbound.signature.as_ref(), radio);
+            if !verdict.accepted() {
+                tracing::debug!(from = %frame.source, msgid = frame.msgid, ?verdict, "frame refused");
+                return Ok(());
+            }
+        }
         let Some(reply) = self.core.answer(&inbound.frame, clock_ns) else {
             return Ok(());
         };
@@ -206,6 +233,8 @@ pub async fn run<T: Transport>(
         counts: RespondCounts::default(),
         epoch,
         greeted: None,
+        signer: cfg.signing.as_ref().map(|s| s.signer()),
+        gate: cfg.signing.map(Gate::new),
     };
     let mut next_heartbeat = epoch;
     let mut inbound: Vec<Inbound> = Vec::new();
@@ -256,6 +285,7 @@ pub async fn run<T: Transport>(
         }
     };
     r.counts.requests = r.core.counts;
+    r.counts.signing = r.gate.as_ref().map(Gate::counts);
     (r.counts, error)
 }
 
@@ -267,5 +297,10 @@ pub fn describe(cfg: &RespondConfig, link_name: &str) -> String {
     } else {
         "TIMESYNC and COMMAND_LONG (not PING)"
     };
-    format!("mavping respond: {sysid}/{compid} on {link_name}, answering {what}")
+    let signed = if cfg.signing.is_some() {
+        " (signed requests only)"
+    } else {
+        ""
+    };
+    format!("mavping respond: {sysid}/{compid} on {link_name}, answering {what}{signed}")
 }

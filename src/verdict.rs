@@ -301,6 +301,7 @@ mod tests {
             rx_clock: "test",
             radios: vec![],
             wire: None,
+            signing: None,
         }
     }
 

@@ -225,6 +225,7 @@ mod tests {
             rx_clock: "test",
             radios: vec![],
             wire: None,
+            signing: None,
         }
     }
 

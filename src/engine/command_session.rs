@@ -14,11 +14,12 @@ use tokio::time::Instant;
 use super::commands::{CommandEvent, CommandTracker};
 use super::roster::Roster;
 use super::schedule::Schedule;
-use super::session::{Clock, Sender, SessionConfig, HEARTBEAT_PERIOD, OUR_HEARTBEAT};
+use super::session::{admitted, Clock, Sender, SessionConfig, HEARTBEAT_PERIOD, OUR_HEARTBEAT};
 use super::summary::{command_target_summaries, CommandSummary};
 use super::Nanos;
 use crate::config::CommandSpec;
-use crate::frame::{self, codec, Msg};
+use crate::frame::signing::Gate;
+use crate::frame::{codec, Msg};
 use crate::output::{CommandReporter, StartInfo};
 use crate::transport::{Inbound, LinkError, Transport};
 use crate::verdict::exit;
@@ -54,12 +55,8 @@ pub async fn run<T: Transport>(
     };
     let mut tracker = CommandTracker::new(spec.retry_interval.as_nanos() as Nanos, spec.retries);
     let mut roster = Roster::default();
-    let mut sender = Sender {
-        buf: Vec::with_capacity(frame::scanner::MAX_FRAME_LEN),
-        packet_seq: 0,
-        ours: cfg.ours,
-        version: cfg.version,
-    };
+    let mut sender = Sender::new(cfg);
+    let mut gate = cfg.signing.map(Gate::new);
     let mut schedule: Option<Schedule> = None;
     let mut next_heartbeat: Option<Nanos> = cfg.heartbeat.then_some(0);
     let deadline_ns = cfg.deadline.map(|d| d.as_nanos() as Nanos);
@@ -154,7 +151,10 @@ pub async fn run<T: Transport>(
                     link_error = Some(e);
                     break;
                 }
-                for Inbound { frame, at, .. } in inbound.drain(..) {
+                for Inbound { frame, at, signature, .. } in inbound.drain(..) {
+                    if !admitted(&mut gate, &frame, signature.as_ref()) {
+                        continue;
+                    }
                     let at = clock.ns(at);
                     match frame.msg {
                         Msg::Heartbeat { mav_type, autopilot } => {
@@ -193,6 +193,7 @@ pub async fn run<T: Transport>(
         frames: link.scan_stats(),
         interrupted,
         link_error: link_error.map(|e| e.to_string()),
+        signing: gate.as_ref().map(Gate::summary),
     };
     if output.is_ok() {
         output = report.command_summary(&summary);

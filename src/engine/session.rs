@@ -19,6 +19,7 @@ use super::schedule::Schedule;
 use super::stats::RttStats;
 use super::summary::{responder_summaries, silent_system_hints, ScheduleSummary, Summary};
 use super::Nanos;
+use crate::frame::signing::{self, Gate, Signer, SigningConfig};
 use crate::frame::{self, Header, Msg, SysComp, Version};
 use crate::output::{Event, Reporter, StartInfo};
 use crate::probe::{Classified, EchoProbe};
@@ -43,6 +44,9 @@ pub struct SessionConfig {
     /// 1 ms timer. Off for the simulated link, whose paused virtual clock
     /// only moves while the runtime is idle.
     pub precise_pacing: bool,
+    /// MAVLink 2 signing (`--signing-key`): sign what we send, check what
+    /// we receive.
+    pub signing: Option<SigningConfig>,
 }
 
 /// How the run ended. The caller judges it and reports the summary.
@@ -90,9 +94,21 @@ pub(super) struct Sender {
     pub(super) packet_seq: u8,
     pub(super) ours: SysComp,
     pub(super) version: Version,
+    /// Signs each frame when signing is on (MAVLink 2 only).
+    pub(super) signer: Option<Signer>,
 }
 
 impl Sender {
+    pub(super) fn new(cfg: &SessionConfig) -> Self {
+        Sender {
+            buf: Vec::with_capacity(frame::scanner::MAX_FRAME_LEN),
+            packet_seq: 0,
+            ours: cfg.ours,
+            version: cfg.version,
+            signer: cfg.signing.as_ref().map(SigningConfig::signer),
+        }
+    }
+
     /// Serialises `msg` into the reused buffer (no allocation per request).
     pub(super) fn frame(&mut self, msg: &Msg) -> &[u8] {
         self.buf.clear();
@@ -103,6 +119,9 @@ impl Sender {
         };
         self.packet_seq = self.packet_seq.wrapping_add(1);
         frame::encode(&mut self.buf, self.version, header, msg);
+        if let Some(signer) = self.signer.as_mut() {
+            signer.sign(&mut self.buf, 0, signing::timestamp_now());
+        }
         &self.buf
     }
 }
@@ -130,6 +149,7 @@ struct Intake<'a, P> {
     probe: &'a mut P,
     events: &'a mut Vec<MatchEvent>,
     foreign_replies: &'a mut u64,
+    gate: &'a mut Option<Gate>,
 }
 
 impl<P: EchoProbe> Intake<'_, P> {
@@ -140,7 +160,16 @@ impl<P: EchoProbe> Intake<'_, P> {
         report: &mut dyn Reporter,
     ) -> io::Result<()> {
         let mut output = Ok(());
-        for Inbound { frame, at, .. } in inbound.drain(..) {
+        for Inbound {
+            frame,
+            at,
+            signature,
+            ..
+        } in inbound.drain(..)
+        {
+            if !admitted(self.gate, &frame, signature.as_ref()) {
+                continue;
+            }
             let at = clock.ns(at);
             if let Msg::Heartbeat {
                 mav_type,
@@ -214,6 +243,24 @@ impl<P: EchoProbe> Intake<'_, P> {
     }
 }
 
+/// Whether the signing gate (if any) lets `frame` through; what it refuses
+/// reaches nothing else, and is counted.
+pub(super) fn admitted(
+    gate: &mut Option<Gate>,
+    frame: &frame::Frame,
+    signature: Option<&signing::SignedBytes>,
+) -> bool {
+    let Some(gate) = gate else {
+        return true;
+    };
+    let radio = matches!(frame.msg, Msg::RadioStatus { .. });
+    let verdict = gate.judge(frame.source, signature, radio);
+    if !verdict.accepted() {
+        tracing::debug!(from = %frame.source, msgid = frame.msgid, ?verdict, "frame refused");
+    }
+    verdict.accepted()
+}
+
 /// Polls a future once: its result if it is ready now. Used on cancel-safe
 /// futures only (link receive, the stop signal), between precise sleeps.
 fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
@@ -248,12 +295,8 @@ pub async fn run<T: Transport, P: EchoProbe>(
     let mut matcher = Matcher::new(timeout_ns, cfg.capacity, cfg.first_seq);
     let mut roster = Roster::default();
     let mut radios = Radios::default();
-    let mut sender = Sender {
-        buf: Vec::with_capacity(frame::scanner::MAX_FRAME_LEN),
-        packet_seq: 0,
-        ours: cfg.ours,
-        version: cfg.version,
-    };
+    let mut sender = Sender::new(cfg);
+    let mut gate = cfg.signing.map(Gate::new);
     let mut schedule: Option<Schedule> = None;
     let mut next_heartbeat: Option<Nanos> = cfg.heartbeat.then_some(0);
     let deadline_ns = cfg.deadline.map(|d| d.as_nanos() as Nanos);
@@ -342,6 +385,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
             probe: &mut probe,
             events: &mut events,
             foreign_replies: &mut foreign_replies,
+            gate: &mut gate,
         };
         let next_send = schedule.as_ref().and_then(|s| s.next_due());
         let now = clock.now();
@@ -470,6 +514,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
         rx_clock: link.rx_clock().describe(),
         radios,
         wire: None,
+        signing: gate.as_ref().map(Gate::summary),
     };
     let histograms = matcher
         .responders()

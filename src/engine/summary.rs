@@ -67,6 +67,8 @@ pub struct Summary {
     pub radios: Vec<RadioSummary>,
     /// What a serial link's baud rate carries (serial links only).
     pub wire: Option<super::capacity::WireBudget>,
+    /// What the signing gate accepted and refused (`--signing-key`).
+    pub signing: Option<crate::frame::signing::SigningSummary>,
 }
 
 impl Summary {
@@ -172,6 +174,8 @@ pub struct CommandSummary {
     pub frames: ScanStats,
     pub interrupted: bool,
     pub link_error: Option<String>,
+    /// What the signing gate accepted and refused (`--signing-key`).
+    pub signing: Option<crate::frame::signing::SigningSummary>,
 }
 
 impl CommandSummary {

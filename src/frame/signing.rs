@@ -243,6 +243,17 @@ impl std::fmt::Display for SigningCounts {
     }
 }
 
+/// Signing in a run's summary: present only when a key was given.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct SigningSummary {
+    /// `--require-signed`
+    pub required: bool,
+    /// Our outgoing link id.
+    pub link_id: u8,
+    #[serde(flatten)]
+    pub counts: SigningCounts,
+}
+
 /// The last timestamp accepted per stream (sysid, compid, link id), for at
 /// most [`MAX_STREAMS`] streams: constant memory whatever arrives.
 ///
@@ -288,25 +299,33 @@ impl ReplayTable {
     }
 }
 
-/// What to accept: with a key, signatures are checked; `require_signed`
-/// also refuses unsigned frames.
+/// Signing, as configured: our frames are signed with `key` on `link_id`;
+/// received frames' signatures are checked, and `require_signed` also
+/// refuses unsigned ones.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Policy {
+pub struct SigningConfig {
     pub key: SecretKey,
+    pub link_id: u8,
     pub require_signed: bool,
 }
 
-/// Checks every received frame against a [`Policy`] before anything else
+impl SigningConfig {
+    pub fn signer(&self) -> Signer {
+        Signer::new(self.key, self.link_id)
+    }
+}
+
+/// Checks every received frame against a [`SigningConfig`] before anything else
 /// looks at it, and counts what it refused.
 #[derive(Debug)]
 pub struct Gate {
-    policy: Policy,
+    policy: SigningConfig,
     replay: ReplayTable,
     counts: SigningCounts,
 }
 
 impl Gate {
-    pub fn new(policy: Policy) -> Self {
+    pub fn new(policy: SigningConfig) -> Self {
         Gate {
             policy,
             replay: ReplayTable::default(),
@@ -345,8 +364,13 @@ impl Gate {
         self.counts
     }
 
-    pub fn policy(&self) -> Policy {
-        self.policy
+    /// What a run's summary reports.
+    pub fn summary(&self) -> SigningSummary {
+        SigningSummary {
+            required: self.policy.require_signed,
+            link_id: self.policy.link_id,
+            counts: self.counts,
+        }
     }
 }
 
@@ -485,9 +509,10 @@ mod tests {
         assert_eq!(stamps, [500, 501, 502, 1000]);
     }
 
-    fn policy(require_signed: bool) -> Policy {
-        Policy {
+    fn policy(require_signed: bool) -> SigningConfig {
+        SigningConfig {
             key: key(),
+            link_id: 0,
             require_signed,
         }
     }

@@ -236,6 +236,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
             "hints": s.hints,
             "radios": s.radios,
             "wire": s.wire,
+            "signing": s.signing,
             "responders": s.responders.iter().map(|r| responder_json(r, verdict)).collect::<Vec<_>>(),
             "verdict": verdict,
             "exit_code": verdict.exit_code,

@@ -12,6 +12,7 @@ use crate::engine::stats::{Bucket, RttSummary};
 use crate::engine::summary::CommandSummary;
 use crate::engine::summary::{ResponderSummary, Summary};
 use crate::engine::Nanos;
+use crate::frame::signing::SigningSummary;
 use crate::frame::{codec, SysComp};
 use crate::verdict::Verdict;
 
@@ -466,6 +467,9 @@ impl<W: Write> Reporter for TextReporter<W> {
                 f.bad_crc, f.skipped_bytes, f.unknown_id, f.truncated, s.foreign_replies
             )?;
         }
+        if let Some(signing) = &s.signing {
+            write_signing(out, signing)?;
+        }
         if s.downtime_s > 0.0 {
             writeln!(
                 out,
@@ -494,6 +498,22 @@ impl<W: Write> Reporter for TextReporter<W> {
         }
         out.flush()
     }
+}
+
+/// One line: what the signing gate let through and what it refused
+/// (refused frames were never measured).
+fn write_signing(out: &mut impl Write, s: &SigningSummary) -> io::Result<()> {
+    writeln!(
+        out,
+        "signing (link id {}, {}): {}",
+        s.link_id,
+        if s.required {
+            "signatures required"
+        } else {
+            "unsigned accepted"
+        },
+        s.counts
+    )
 }
 
 fn write_time_to_ack(out: &mut impl Write, t: &RttSummary) -> io::Result<()> {
@@ -635,6 +655,9 @@ impl<W: Write> CommandReporter for TextReporter<W> {
                 "{} acks for commands we did not send",
                 s.unmatched_acks
             )?;
+        }
+        if let Some(signing) = &s.signing {
+            write_signing(out, signing)?;
         }
         out.flush()
     }

@@ -18,6 +18,7 @@ use std::time::Duration;
 use thiserror::Error;
 use tokio::time::Instant;
 
+use crate::frame::signing::SignedBytes;
 use crate::frame::{self, Frame, ScanStats};
 pub use address::LinkSpec;
 
@@ -26,11 +27,26 @@ pub use address::LinkSpec;
 pub type PathId = u32;
 
 /// One received frame, when it arrived, and from which path.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Inbound {
     pub frame: Frame,
     pub at: Instant,
     pub path: PathId,
+    /// The frame's bytes when it is signed, for the signature check
+    /// ([`crate::frame::signing::Gate`]); `None` for unsigned frames.
+    pub signature: Option<SignedBytes>,
+}
+
+impl Inbound {
+    /// The inbound form of one whole, CRC-checked frame.
+    pub fn of(raw: &[u8], at: Instant, path: PathId) -> Self {
+        Inbound {
+            frame: frame::decode(raw),
+            at,
+            path,
+            signature: SignedBytes::of(raw),
+        }
+    }
 }
 
 #[derive(Debug, Error)]
@@ -110,13 +126,7 @@ pub(crate) fn push_datagram(
     stats: &mut ScanStats,
     out: &mut Vec<Inbound>,
 ) {
-    frame::scan_datagram(data, stats, &mut |raw| {
-        out.push(Inbound {
-            frame: frame::decode(raw),
-            at,
-            path,
-        })
-    });
+    frame::scan_datagram(data, stats, &mut |raw| out.push(Inbound::of(raw, at, path)));
 }
 
 /// How to open a link, beyond its connection string.

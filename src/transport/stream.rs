@@ -13,7 +13,7 @@ use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 use tokio::time::{sleep_until, Instant};
 
 use super::{Inbound, LinkError, PathId, Transport};
-use crate::frame::{self, ScanStats, StreamScanner};
+use crate::frame::{ScanStats, StreamScanner};
 
 /// Wait before the first reconnection attempt; doubled after each failure.
 const FIRST_RETRY: Duration = Duration::from_millis(100);
@@ -186,13 +186,8 @@ impl<C: Connect> Transport for StreamLink<C> {
                     match read {
                         Ok(0) => self.lost(io::ErrorKind::UnexpectedEof.into())?,
                         Ok(n) => {
-                            self.scanner.push(&self.buf[..n], &mut |raw| {
-                                out.push(Inbound {
-                                    frame: frame::decode(raw),
-                                    at,
-                                    path: 0,
-                                })
-                            });
+                            self.scanner
+                                .push(&self.buf[..n], &mut |raw| out.push(Inbound::of(raw, at, 0)));
                             return Ok(());
                         }
                         Err(e) if e.kind() == io::ErrorKind::Interrupted => {}

@@ -18,7 +18,7 @@ use super::address::HostPort;
 use super::stream::Connect;
 use super::udp::resolve;
 use super::{Inbound, LinkError, PathId, Transport};
-use crate::frame::{self, ScanStats, StreamScanner};
+use crate::frame::{ScanStats, StreamScanner};
 
 /// Clients beyond this are refused: memory stays bounded.
 const MAX_CLIENTS: usize = 64;
@@ -203,11 +203,7 @@ impl Transport for TcpServer {
                             let at = Instant::now();
                             let path = client.path;
                             client.scanner.push(&self.buf[..n], &mut |raw| {
-                                out.push(Inbound {
-                                    frame: frame::decode(raw),
-                                    at,
-                                    path,
-                                })
+                                out.push(Inbound::of(raw, at, path))
                             });
                             progress = true;
                             break;
