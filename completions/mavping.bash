@@ -35,7 +35,7 @@ _mavping() {
 
     case "${cmd}" in
         mavping)
-            opts="-c -i -w -W -q -v -h -V --count --interval --rate --deadline --timeout --quiet --every-reply --sysid --compid --mavlink --no-heartbeat --first-seq --verbose --format --json --max-loss --max-rtt --max-jitter --expect --min-responders --hgrm --samples --baud --reconnect --probe --target --command --retry-interval --retries --live --prometheus --plot --generate --help --version respond help"
+            opts="-c -i -w -W -q -v -h -V --count --interval --rate --deadline --timeout --quiet --every-reply --sysid --compid --mavlink --no-heartbeat --first-seq --verbose --format --json --max-loss --max-rtt --max-jitter --expect --min-responders --hgrm --samples --baud --reconnect --probe --target --command --retry-interval --retries --live --prometheus --plot --signing-key --signing-key-file --signing-link-id --require-signed --generate --help --version respond help"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -157,6 +157,18 @@ _mavping() {
                     COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;
+                --signing-key)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --signing-key-file)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --signing-link-id)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
                 --generate)
                     COMPREPLY=($(compgen -W "complete-bash complete-zsh complete-fish complete-powershell complete-elvish man" -- "${cur}"))
                     return 0
@@ -211,7 +223,7 @@ _mavping() {
             return 0
             ;;
         mavping__subcmd__respond)
-            opts="-v -h --sysid --compid --delay --jitter --drop --dup --seed --no-ping --baud --verbose --help"
+            opts="-v -h --sysid --compid --delay --jitter --drop --dup --seed --no-ping --baud --signing-key --signing-key-file --signing-link-id --verbose --help"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 2 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -246,6 +258,18 @@ _mavping() {
                     return 0
                     ;;
                 --baud)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --signing-key)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --signing-key-file)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --signing-link-id)
                     COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;

@@ -1,6 +1,6 @@
 # Print an optspec for argparse to handle cmd's options that are independent of any subcommand.
 function __fish_mavping_global_optspecs
-    string join \n c/count= i/interval= rate= w/deadline= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= live prometheus= plot= generate= h/help V/version
+    string join \n c/count= i/interval= rate= w/deadline= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= live prometheus= plot= signing-key= signing-key-file= signing-link-id= require-signed generate= h/help V/version
 end
 
 function __fish_mavping_needs_command
@@ -52,6 +52,9 @@ complete -c mavping -n "__fish_mavping_needs_command" -l retry-interval -d '--pr
 complete -c mavping -n "__fish_mavping_needs_command" -l retries -d '--probe command: re-sends after the first before a command counts as failed' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l prometheus -d 'Serve Prometheus metrics at http://ADDR:PORT/metrics while the run goes on' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l plot -d 'At the end, draw RTT over time and the RTT distribution to FILE.svg' -r -F
+complete -c mavping -n "__fish_mavping_needs_command" -l signing-key -d 'MAVLink 2 signing key: 64 hex characters (the 32-byte secret) or a passphrase, hashed with SHA-256 as MAVProxy does. Signs what we send and checks what we receive. Prefer MAVPING_SIGNING_KEY or --signing-key-file: a command line ends up in shell history' -r
+complete -c mavping -n "__fish_mavping_needs_command" -l signing-key-file -d 'Read the signing key from FILE (its content, trimmed)' -r -F
+complete -c mavping -n "__fish_mavping_needs_command" -l signing-link-id -d 'Link id in the signature of our frames (0-255)' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l generate -d 'Print shell completions or the man page (for packagers)' -r -f -a "complete-bash\t''
 complete-zsh\t''
 complete-fish\t''
@@ -65,6 +68,7 @@ complete -c mavping -n "__fish_mavping_needs_command" -s v -l verbose -d 'More l
 complete -c mavping -n "__fish_mavping_needs_command" -l json -d 'Same as --format json: newline-delimited JSON events on stdout'
 complete -c mavping -n "__fish_mavping_needs_command" -l reconnect -d 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run (pings sent while down count as lost)'
 complete -c mavping -n "__fish_mavping_needs_command" -l live -d 'Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal'
+complete -c mavping -n "__fish_mavping_needs_command" -l require-signed -d 'With a signing key: refuse unsigned replies too (wrongly signed and replayed ones are always refused); refused frames are counted, never measured'
 complete -c mavping -n "__fish_mavping_needs_command" -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c mavping -n "__fish_mavping_needs_command" -s V -l version -d 'Print version'
 complete -c mavping -n "__fish_mavping_needs_command" -a "respond" -d 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'
@@ -77,6 +81,9 @@ complete -c mavping -n "__fish_mavping_using_subcommand respond" -l drop -d 'Dro
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -l dup -d 'Send this share of replies twice' -r
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -l seed -d 'Random seed for --jitter, --drop and --dup' -r
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -l baud -d 'Baud rate of a serial device whose connection string names none' -r
+complete -c mavping -n "__fish_mavping_using_subcommand respond" -l signing-key -d 'MAVLink 2 signing key: 64 hex characters (the 32-byte secret) or a passphrase, hashed with SHA-256 as MAVProxy does. Signs what we send and checks what we receive. Prefer MAVPING_SIGNING_KEY or --signing-key-file: a command line ends up in shell history' -r
+complete -c mavping -n "__fish_mavping_using_subcommand respond" -l signing-key-file -d 'Read the signing key from FILE (its content, trimmed)' -r -F
+complete -c mavping -n "__fish_mavping_using_subcommand respond" -l signing-link-id -d 'Link id in the signature of our frames (0-255)' -r
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -l no-ping -d 'Answer only TIMESYNC and commands, not PING (like ArduPilot)'
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -s v -l verbose -d 'More logs on stderr (-v info, -vv debug)'
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -s h -l help -d 'Print help'
