@@ -282,6 +282,10 @@ fn text_summary_reports_refused_frames() {
         ),
         "{out}"
     );
+    assert!(
+        out.contains("hint: 1 frames were signed with another key"),
+        "{out}"
+    );
     drop(peer);
 }
 

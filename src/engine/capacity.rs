@@ -59,8 +59,15 @@ pub struct WireBudget {
 }
 
 pub fn budget(baud: u32, version: Version, max_seq: u32, replies: u64) -> WireBudget {
-    let request = request_bytes(version, max_seq);
-    let reply = reply_bytes(version, false);
+    sized(
+        baud,
+        request_bytes(version, max_seq),
+        reply_bytes(version, false),
+        replies,
+    )
+}
+
+fn sized(baud: u32, request: u64, reply: u64, replies: u64) -> WireBudget {
     let bytes_per_s = u64::from(baud) as f64 / BITS_PER_BYTE as f64;
     WireBudget {
         baud,
@@ -93,7 +100,18 @@ pub fn for_link(
         .unwrap_or(u32::MAX);
     // One responder on a real link unless the run shows more: the warning
     // is a floor.
-    Some(budget(baud, session.version, max_seq, replies))
+    let b = budget(baud, session.version, max_seq, replies);
+    // Signed, our request and (from a peer that signs) each reply carry a
+    // 13-byte signature more.
+    Some(match session.signing {
+        Some(_) => sized(
+            baud,
+            b.request_bytes + SIGNATURE,
+            b.reply_bytes + SIGNATURE,
+            replies,
+        ),
+        None => b,
+    })
 }
 
 impl WireBudget {
@@ -165,6 +183,29 @@ mod tests {
         assert_eq!(request_bytes(Version::V2, 200), 21);
         assert_eq!(request_bytes(Version::V2, 300), 22);
         assert_eq!(request_bytes(Version::V2, u32::MAX), 24);
+    }
+
+    #[test]
+    fn signed_frames_cost_13_bytes_each_way() {
+        use clap::Parser;
+        let budget_of = |extra: &[&str]| {
+            let args = ["mavping", "-c", "100"]
+                .iter()
+                .chain(extra)
+                .chain(&["serial:/dev/ttyUSB0:57600"]);
+            let cli = crate::cli::Cli::try_parse_from(args).unwrap();
+            let c = crate::config::Config::try_from(&cli.ping).unwrap();
+            for_link(&c.link, &c.link_options, &c.session).unwrap()
+        };
+        let plain = budget_of(&[]);
+        let signed = budget_of(&["--signing-key", "k"]);
+        assert_eq!(
+            (signed.request_bytes, signed.reply_bytes),
+            (plain.request_bytes + 13, plain.reply_bytes + 13)
+        );
+        // 5760 bytes/s over 21 + 13 + 26 + 13 bytes: 78.9 PINGs/s.
+        assert_eq!(signed.max_rate_hz.floor(), 78.0);
+        assert!(signed.floor_us > plain.floor_us);
     }
 
     #[test]

@@ -261,6 +261,25 @@ pub(super) fn admitted(
     verdict.accepted()
 }
 
+/// Why replies may be missing when the signing gate refused frames.
+fn signing_hints(c: &signing::SigningCounts) -> Vec<String> {
+    let mut hints = Vec::new();
+    if c.rejected_bad_signature > 0 {
+        hints.push(format!(
+            "{} frames were signed with another key: are both ends using the same signing key?",
+            c.rejected_bad_signature
+        ));
+    }
+    if c.rejected_unsigned > 0 && c.signed == 0 {
+        hints.push(format!(
+            "{} unsigned frames were refused (--require-signed) and none came signed: \
+             is signing set up on the other end?",
+            c.rejected_unsigned
+        ));
+    }
+    hints
+}
+
 /// Polls a future once: its result if it is ready now. Used on cancel-safe
 /// futures only (link receive, the stop signal), between precise sleeps.
 fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
@@ -495,6 +514,9 @@ pub async fn run<T: Transport, P: EchoProbe>(
     let radio_ids: Vec<SysComp> = radios.iter().map(|r| r.id).collect();
     let mut hints = silent_system_hints(&roster, &responders, cfg.ours, probe.name(), &radio_ids);
     hints.extend(radio_hints(&radios, loss_by_txbuf));
+    if let Some(gate) = &gate {
+        hints.extend(signing_hints(&gate.counts()));
+    }
     let summary = Summary {
         link: cfg.link_name.clone(),
         probe: probe.name(),
