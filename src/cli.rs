@@ -33,7 +33,10 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
         tcp:HOST:PORT (tcpout:) connects, tcpin:HOST:PORT listens and pings every client; \
         serial:DEVICE[:BAUD] or a bare /dev/... path opens a serial port; sim:[?key=value&...] \
         is the built-in simulated link (see the README). IPv6 hosts go in brackets: [::1]:14550.\n\n\
-        Exit status: 0 when a responder answered, 1 when none did, 2 on usage or link errors."
+        Several connections are pinged side by side on the same schedule, each with its own \
+        sequence numbers and report; thresholds and --expect apply to each link.\n\n\
+        Exit status: 0 when a responder answered (on every link), 1 when none did, 2 on usage \
+        or link errors (on any link)."
 )]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Cli {
@@ -130,13 +133,15 @@ pub enum ProbeKind {
 #[derive(Debug, clap::Args)]
 pub struct PingArgs {
     /// Where to ping: udpin:HOST:PORT, udpout:HOST:PORT, udpbcast:ADDR:PORT, tcp:HOST:PORT,
-    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...]
+    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...]; several links are pinged side by
+    /// side, each reported on its own
     #[arg(
         value_name = "CONNECTION",
         env = "MAVPING_LINK",
-        required_unless_present = "generate"
+        required_unless_present = "generate",
+        num_args = 1..
     )]
-    pub link: Option<String>,
+    pub links: Vec<String>,
 
     /// Stop after sending COUNT requests (and waiting for their replies)
     #[arg(short = 'c', long, value_name = "COUNT", env = "MAVPING_COUNT")]

@@ -34,7 +34,11 @@ const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
 
 #[derive(Debug, Clone)]
 pub struct Config {
-    pub link: LinkSpec,
+    /// One or more links, in command-line order; each gets its own session.
+    pub links: Vec<LinkSpec>,
+    /// Each link's connection string as typed: with several links, the
+    /// name reports and error lines give it.
+    pub link_names: Vec<String>,
     pub link_options: LinkOptions,
     pub session: SessionConfig,
     pub quiet: bool,
@@ -87,10 +91,55 @@ pub struct RespondConfig {
 }
 
 impl Config {
-    /// True when the run should use tokio's paused, virtual clock.
+    /// True when the run should use tokio's paused, virtual clock (only
+    /// simulated links with `clock=virtual`; validation rejects a mix).
     pub fn virtual_clock(&self) -> bool {
-        matches!(&self.link, LinkSpec::Sim(p) if p.virtual_clock)
+        self.links
+            .iter()
+            .all(|l| matches!(l, LinkSpec::Sim(p) if p.virtual_clock))
     }
+
+    /// The first (with one link, the only) link.
+    pub fn link(&self) -> &LinkSpec {
+        &self.links[0]
+    }
+}
+
+/// Several links: each must be named once (reports are keyed by the
+/// connection string), a virtual clock cannot drive real links, and the
+/// outputs that draw one link (`--live`, `--plot`) or the command probe
+/// are for one link only.
+fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError> {
+    if links.len() < 2 {
+        return Ok(());
+    }
+    for (i, link) in links.iter().enumerate() {
+        if links[..i].iter().any(|l| l.to_string() == link.to_string()) {
+            return Err(invalid(format!(
+                "{} names the same link as an earlier one ({link}): name each link once",
+                cli.links[i]
+            )));
+        }
+    }
+    let is_virtual = |l: &LinkSpec| matches!(l, LinkSpec::Sim(p) if p.virtual_clock);
+    if links.iter().any(is_virtual) && !links.iter().all(is_virtual) {
+        return Err(invalid(
+            "sim:?clock=virtual cannot run beside other links: use clock=virtual on every sim: link or on none",
+        ));
+    }
+    for (set, flag) in [
+        (cli.probe == ProbeKind::Command, "--probe command"),
+        (cli.live, "--live"),
+        (cli.plot.is_some(), "--plot"),
+    ] {
+        if set {
+            return Err(invalid(format!(
+                "{flag} works with one link, not {}",
+                links.len()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// `--prometheus`: a numeric address, so nothing is resolved behind the
@@ -328,11 +377,18 @@ impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
     fn try_from(cli: &PingArgs) -> Result<Self, ConfigError> {
-        let link: LinkSpec = cli
-            .link
-            .as_deref()
-            .ok_or_else(|| invalid("missing CONNECTION (e.g. udpout:127.0.0.1:14550 or sim:)"))?
-            .parse()?;
+        if cli.links.is_empty() {
+            return Err(invalid(
+                "missing CONNECTION (e.g. udpout:127.0.0.1:14550 or sim:)",
+            ));
+        }
+        let links = cli
+            .links
+            .iter()
+            .map(|l| l.parse::<LinkSpec>())
+            .collect::<Result<Vec<_>, _>>()?;
+        validate_links(cli, &links)?;
+        let link = &links[0];
         if cli.min_responders == Some(0) {
             return Err(invalid("--min-responders 0: expected at least 1"));
         }
@@ -368,9 +424,12 @@ impl TryFrom<&PingArgs> for Config {
                 heartbeat: !cli.no_heartbeat,
                 capacity: pending_capacity(interval, cli.timeout)?,
                 first_seq: cli.first_seq,
-                precise_pacing: !matches!(link, LinkSpec::Sim(_)),
+                // Several links share one thread: a session must not spin
+                // there while another's replies wait (see app.rs).
+                precise_pacing: links.len() == 1 && !matches!(link, LinkSpec::Sim(_)),
             },
-            link,
+            link_names: cli.links.iter().map(|l| l.trim().to_string()).collect(),
+            links,
             link_options: LinkOptions {
                 baud: cli.baud,
                 reconnect: cli.reconnect,
@@ -501,6 +560,14 @@ mod tests {
         assert!(c.live);
         assert_eq!(c.prometheus, Some("[::1]:9100".parse().unwrap()));
         assert_eq!(c.plot, Some(PathBuf::from("out/RTT.SVG")));
+        let c = config("-c 3 --json --samples s.csv --hgrm h.hgrm sim: sim:?delay=50ms").unwrap();
+        assert_eq!(c.links.len(), 2);
+        assert_eq!(c.link_names, ["sim:", "sim:?delay=50ms"]);
+        assert!(!c.session.precise_pacing, "links share one thread");
+        assert!(!c.virtual_clock());
+        assert!(config("sim:?clock=virtual sim:?delay=5ms&clock=virtual")
+            .unwrap()
+            .virtual_clock());
         let c = config("--probe timesync --prometheus 0.0.0.0:0 sim:").unwrap();
         assert_eq!(c.prometheus, Some("0.0.0.0:0".parse().unwrap()));
     }
@@ -608,6 +675,27 @@ mod tests {
             ),
             ("--probe command --retries 300 sim:", "300"),
             ("respond sim: sim:", "unexpected"),
+            (
+                "sim: sim:?delay=10ms",
+                "sim:?delay=10ms names the same link",
+            ),
+            (
+                "sim: sim:?clock=virtual&delay=5ms",
+                "clock=virtual cannot run beside",
+            ),
+            (
+                "--live sim: sim:?delay=5ms",
+                "--live works with one link, not 2",
+            ),
+            (
+                "--plot a.svg sim: sim:?delay=5ms",
+                "--plot works with one link",
+            ),
+            (
+                "--probe command sim: sim:?delay=5ms",
+                "--probe command works with one link",
+            ),
+            ("sim: udpout:nowhere", "accepted forms"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");
