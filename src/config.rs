@@ -107,8 +107,7 @@ impl Config {
 
 /// Several links: each must be named once (reports are keyed by the
 /// connection string), a virtual clock cannot drive real links, and the
-/// outputs that draw one link (`--live`, `--plot`) or the command probe
-/// are for one link only.
+/// plot (it draws one link) and the command probe are for one link only.
 fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError> {
     if links.len() < 2 {
         return Ok(());
@@ -129,7 +128,6 @@ fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError>
     }
     for (set, flag) in [
         (cli.probe == ProbeKind::Command, "--probe command"),
-        (cli.live, "--live"),
         (cli.plot.is_some(), "--plot"),
     ] {
         if set {
@@ -682,10 +680,6 @@ mod tests {
             (
                 "sim: sim:?clock=virtual&delay=5ms",
                 "clock=virtual cannot run beside",
-            ),
-            (
-                "--live sim: sim:?delay=5ms",
-                "--live works with one link, not 2",
             ),
             (
                 "--plot a.svg sim: sim:?delay=5ms",

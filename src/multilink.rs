@@ -15,12 +15,12 @@
 //!   `--- LINK mavping statistics ---` header. JSON: every object carries
 //!   `"link"`. `--samples` gains a `link` column, `--hgrm` a section per
 //!   link and responder, `--prometheus` a series per link (its `link`
-//!   label). Sessions share one thread, so sends wait on tokio's timer
+//!   label), `--live` a section per link. Sessions share one thread, so sends wait on tokio's timer
 //!   (about 1 ms resolution) instead of spinning; the RTT is still taken
 //!   from the actual send time.
 
 use std::future::Future;
-use std::io::{self, BufWriter, Write};
+use std::io::{self, BufWriter, IsTerminal, Write};
 use std::pin::Pin;
 use std::sync::Arc;
 use std::task::Poll;
@@ -35,6 +35,7 @@ use crate::engine::capacity;
 use crate::engine::session::{self, Outcome, SessionConfig};
 use crate::engine::summary::Summary;
 use crate::output::json::JsonReporter;
+use crate::output::live::LiveLinks;
 use crate::output::samples::SampleLog;
 use crate::output::text::TextReporter;
 use crate::output::{Event, Fanout, Prefixed, Reporter, Shared, StartInfo, WallClock};
@@ -87,6 +88,25 @@ impl<W: Write> Reporter for LinkText<W> {
     }
     fn flush(&mut self) -> io::Result<()> {
         self.events.flush()
+    }
+}
+
+/// `--live` for one of several links: its section of the view as it
+/// goes, then its text summary once the view is closed.
+struct LinkLive<W: Write> {
+    view: crate::output::live::LiveLink,
+    summary: TextReporter<Shared<W>>,
+}
+
+impl<W: Write> Reporter for LinkLive<W> {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        self.view.start(info)
+    }
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        self.view.event(event)
+    }
+    fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()> {
+        self.summary.summary(summary, verdict)
     }
 }
 
@@ -184,7 +204,25 @@ pub async fn run(config: &Config) -> u8 {
             SystemTime::now()
         },
     };
-    let stdout = Shared::new(BufWriter::new(io::stdout().lock()));
+    // Not locked: the live view draws to stdout from its own thread.
+    let stdout = Shared::new(BufWriter::new(io::stdout()));
+    let live = config.live && io::stdout().is_terminal();
+    if config.live && !live {
+        let _ = writeln!(
+            io::stderr(),
+            "mavping: --live needs a terminal; printing text"
+        );
+    }
+    let mut view = None;
+    if live {
+        match LiveLinks::start(stop.clone()) {
+            Ok(v) => view = Some(v),
+            Err(e) => {
+                print_error(&format!("--live: {e}"));
+                return exit::ERROR;
+            }
+        }
+    }
     let mut runs = Vec::new();
     for (i, (spec, opened)) in config.links.iter().zip(opened).enumerate() {
         let name = &names[i];
@@ -202,8 +240,13 @@ pub async fn run(config: &Config) -> u8 {
         if let Some(w) = wire.and_then(|w| w.warning(1.0 / session.interval.as_secs_f64())) {
             let _ = writeln!(io::stderr(), "mavping: warning: {name}: {w}");
         }
-        let main: Box<dyn Reporter> = match config.format {
-            Format::Text => Box::new(LinkText {
+        let main: Box<dyn Reporter> = match (config.format, &view) {
+            // The view shows the run; the text summaries follow it.
+            (Format::Text, Some(view)) => Box::new(LinkLive {
+                view: view.link(),
+                summary: TextReporter::new(stdout.clone(), true),
+            }),
+            (Format::Text, None) => Box::new(LinkText {
                 events: TextReporter::new(
                     Prefixed::new(stdout.clone(), format!("[{name}] ")),
                     config.quiet,
@@ -211,7 +254,7 @@ pub async fn run(config: &Config) -> u8 {
                 .every_reply(config.every_reply),
                 summary: TextReporter::new(stdout.clone(), config.quiet),
             }),
-            Format::Json => Box::new(
+            (Format::Json, _) => Box::new(
                 JsonReporter::new(stdout.clone(), config.quiet, wall).with_link(name.clone()),
             ),
         };
@@ -253,6 +296,11 @@ pub async fn run(config: &Config) -> u8 {
             .collect(),
     )
     .await;
+    if let Some(mut view) = view {
+        if let Err(e) = view.close() {
+            print_error(&format!("--live: {e}"));
+        }
+    }
     let mut codes = Vec::new();
     let mut output_closed = false;
     let mut finished = Vec::new();
@@ -261,6 +309,11 @@ pub async fn run(config: &Config) -> u8 {
             capacity::apply(&mut outcome.summary, w);
         }
         let verdict = verdict::judge(&outcome.summary, &config.thresholds);
+        // Quiet summaries are not preceded by a blank line: separate them.
+        let separate = config.format == Format::Text && (config.quiet || live);
+        if separate && !finished.is_empty() {
+            output_closed |= writeln!(stdout.clone()).is_err();
+        }
         output_closed |=
             outcome.output_closed || report.summary(&outcome.summary, &verdict).is_err();
         codes.push(verdict.exit_code);

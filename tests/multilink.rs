@@ -312,3 +312,92 @@ fn combinations_that_need_one_link_are_refused() {
         assert!(err.contains("works with one link, not 2"), "{err}");
     }
 }
+
+fn tmux(socket: &str, args: &[&str]) -> String {
+    let out = std::process::Command::new("tmux")
+        .args(["-L", socket])
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("tmux is missing ({e}) — run `bash scripts/test.sh`"));
+    assert!(out.status.success(), "tmux {args:?}: {out:?}");
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Kills the test's own tmux server.
+struct TmuxServer(String);
+
+impl Drop for TmuxServer {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("tmux")
+            .args(["-L", &self.0, "kill-server"])
+            .output();
+    }
+}
+
+fn wait_for_pane(socket: &str, what: &str, found: impl Fn(&str) -> bool) -> String {
+    let start = std::time::Instant::now();
+    loop {
+        let screen = tmux(socket, &["capture-pane", "-p", "-S", "-200", "-t", "live"]);
+        if found(&screen) {
+            return screen;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "{what:?} not on screen:\n{screen}"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+#[test]
+fn live_view_has_a_section_per_link() {
+    let socket = format!("mavping-multilink-{}", std::process::id());
+    let command = format!(
+        "{} --live -i 0.02 -W 300ms 'sim:?loss=20%&seed=5' 'sim:?delay=30ms'; echo exit=$?",
+        env!("CARGO_BIN_EXE_mavping")
+    );
+    tmux(
+        &socket,
+        &[
+            "new-session",
+            "-d",
+            "-s",
+            "live",
+            "-x",
+            "110",
+            "-y",
+            "20",
+            &command,
+        ],
+    );
+    let _server = TmuxServer(socket.clone());
+    tmux(
+        &socket,
+        &["set-option", "-t", "live", "remain-on-exit", "on"],
+    );
+    // A section per link, each with its responder's row; a loss shows on
+    // the lossy link.
+    let screen = wait_for_pane(&socket, "two sections with rows", |screen| {
+        let rows: Vec<&str> = screen.lines().filter(|l| l.starts_with("│1/1")).collect();
+        rows.len() == 2 && rows[0].contains('×')
+    });
+    for text in [
+        "mavping · 2 links · ping",
+        "┌ sim:?loss=20%&seed=5 ─",
+        "┌ sim:?delay=30ms ─",
+    ] {
+        assert!(screen.contains(text), "{text:?} not on screen:\n{screen}");
+    }
+    tmux(&socket, &["send-keys", "-t", "live", "q"]);
+    let screen = wait_for_pane(&socket, "exit=", |s| s.contains("exit=0"));
+    for link in ["sim:?loss=20%&seed=5", "sim:?delay=30ms"] {
+        assert!(
+            screen.contains(&format!("--- {link} mavping statistics ---")),
+            "{screen}"
+        );
+    }
+    assert!(
+        !screen.contains("q or Ctrl-C"),
+        "the view was not left:\n{screen}"
+    );
+}
