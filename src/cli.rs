@@ -72,6 +72,30 @@ pub fn parse_rtt_limit(s: &str) -> Result<RttLimit, String> {
     })
 }
 
+/// `--expect`: a responder, on every link or on one (`LINK=ID`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExpectArg {
+    /// The connection string it is scoped to, as given.
+    pub link: Option<String>,
+    pub id: Expected,
+}
+
+/// `SYSID[/COMPID]`, or `LINK=SYSID[/COMPID]` for one of several links
+/// (split at the last `=`, since connection strings may hold one).
+pub fn parse_expect_arg(s: &str) -> Result<ExpectArg, String> {
+    match s.rsplit_once('=') {
+        Some((link, id)) if !link.is_empty() => Ok(ExpectArg {
+            link: Some(link.to_string()),
+            id: parse_expected(id)
+                .map_err(|_| format!("'{s}' is not LINK=SYSID or LINK=SYSID/COMPID (1-255)"))?,
+        }),
+        _ => Ok(ExpectArg {
+            link: None,
+            id: parse_expected(s)?,
+        }),
+    }
+}
+
 /// `SYSID` or `SYSID/COMPID`, each 1-255.
 pub fn parse_expected(s: &str) -> Result<Expected, String> {
     let id = |part: &str| -> Result<u8, String> {
@@ -221,9 +245,10 @@ pub struct PingArgs {
     #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
     pub max_jitter: Option<Duration>,
 
-    /// A responder that must answer: SYSID or SYSID/COMPID; repeatable
-    #[arg(long, value_name = "SYSID[/COMPID]", value_parser = parse_expected)]
-    pub expect: Vec<Expected>,
+    /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
+    /// LINK=SYSID[/COMPID] (on that one of several links); repeatable
+    #[arg(long, value_name = "[LINK=]SYSID[/COMPID]", value_parser = parse_expect_arg)]
+    pub expect: Vec<ExpectArg>,
 
     /// Fail unless at least N responders answer
     #[arg(long, value_name = "N")]

@@ -12,7 +12,7 @@ use crate::frame::codec;
 use crate::frame::{SysComp, Version};
 use crate::transport::address::{AddressError, LinkSpec};
 use crate::transport::LinkOptions;
-use crate::verdict::Thresholds;
+use crate::verdict::{Expected, Thresholds};
 
 #[derive(Debug, Error)]
 pub enum ConfigError {
@@ -45,7 +45,10 @@ pub struct Config {
     pub every_reply: bool,
     pub verbose: u8,
     pub format: Format,
+    /// Thresholds of every link (with one link, all of them).
     pub thresholds: Thresholds,
+    /// `--expect LINK=ID`: (index of the link, responder), several links.
+    pub expect_on: Vec<(usize, Expected)>,
     pub hgrm: Option<PathBuf>,
     pub samples: Option<PathBuf>,
     pub probe: Probe,
@@ -103,6 +106,33 @@ impl Config {
     pub fn link(&self) -> &LinkSpec {
         &self.links[0]
     }
+}
+
+/// `--expect LINK=ID`: LINK must be one of the links (as given, or in the
+/// form mavping prints it). With one link it is the plain `--expect ID`.
+fn validate_scoped_expect(
+    cli: &PingArgs,
+    links: &[LinkSpec],
+) -> Result<Vec<(usize, Expected)>, ConfigError> {
+    let mut scoped = Vec::new();
+    for e in &cli.expect {
+        let Some(link) = &e.link else { continue };
+        let index = cli
+            .links
+            .iter()
+            .zip(links)
+            .position(|(given, spec)| given.trim() == link || spec.to_string() == *link)
+            .ok_or_else(|| {
+                invalid(format!(
+                    "--expect {link}={}: {link} is not one of the links given",
+                    e.id
+                ))
+            })?;
+        if links.len() > 1 {
+            scoped.push((index, e.id));
+        }
+    }
+    Ok(scoped)
 }
 
 /// Several links: each must be named once (reports are keyed by the
@@ -426,6 +456,7 @@ impl TryFrom<&PingArgs> for Config {
                 // there while another's replies wait (see app.rs).
                 precise_pacing: links.len() == 1 && !matches!(link, LinkSpec::Sim(_)),
             },
+            expect_on: validate_scoped_expect(cli, &links)?,
             link_names: cli.links.iter().map(|l| l.trim().to_string()).collect(),
             links,
             link_options: LinkOptions {
@@ -440,7 +471,12 @@ impl TryFrom<&PingArgs> for Config {
                 max_loss: cli.max_loss,
                 max_rtt: cli.max_rtt.clone(),
                 max_jitter: cli.max_jitter,
-                expect: cli.expect.clone(),
+                expect: cli
+                    .expect
+                    .iter()
+                    .filter(|e| e.link.is_none() || cli.links.len() == 1)
+                    .map(|e| e.id)
+                    .collect(),
                 min_responders: cli.min_responders,
             },
             hgrm: cli.hgrm.clone(),
@@ -566,6 +602,22 @@ mod tests {
         assert!(config("sim:?clock=virtual sim:?delay=5ms&clock=virtual")
             .unwrap()
             .virtual_clock());
+        let c = config("--expect 1 --expect sim:?delay=50ms=2/1 sim: sim:?delay=50ms").unwrap();
+        let two_one = Expected {
+            sysid: 2,
+            compid: Some(1),
+        };
+        assert_eq!(c.thresholds.expect.len(), 1);
+        assert_eq!(c.expect_on, [(1, two_one)]);
+        // By the form mavping prints, too; with one link it is a plain --expect.
+        let c = config(
+            "--expect sim:?responders=1&delay=10ms&jitter=2ms&loss=0%&dup=0%&reorder=0%&seed=1=2/1 sim:",
+        )
+        .unwrap();
+        assert_eq!(
+            (c.thresholds.expect.clone(), c.expect_on),
+            (vec![two_one], vec![])
+        );
         let c = config("--probe timesync --prometheus 0.0.0.0:0 sim:").unwrap();
         assert_eq!(c.prometheus, Some("0.0.0.0:0".parse().unwrap()));
     }
@@ -690,6 +742,11 @@ mod tests {
                 "--probe command works with one link",
             ),
             ("sim: udpout:nowhere", "accepted forms"),
+            (
+                "--expect udp:1.2.3.4:5=1 sim: sim:?delay=5ms",
+                "--expect udp:1.2.3.4:5=1: udp:1.2.3.4:5 is not one of the links given",
+            ),
+            ("--expect sim:=1/0 sim:", "LINK=SYSID"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");

@@ -42,7 +42,7 @@ use crate::output::{Event, Fanout, Prefixed, Reporter, Shared, StartInfo, WallCl
 use crate::probe::ping::PingProbe;
 use crate::probe::timesync::TimesyncProbe;
 use crate::transport::{Link, LinkSpec};
-use crate::verdict::{self, exit, Verdict};
+use crate::verdict::{self, exit, Thresholds, Verdict};
 
 /// Polls every future until all are done; outputs in the input order.
 /// The sessions share one task, so their reports can share stdout.
@@ -149,6 +149,20 @@ async fn run_link(
         print_error(&link_error_line(&session.link_name, e));
     }
     outcome
+}
+
+/// The thresholds of the `index`-th link: every link's, and the
+/// responders `--expect LINK=ID` expects there.
+fn thresholds_of(config: &Config, index: usize) -> Thresholds {
+    let mut t = config.thresholds.clone();
+    t.expect.extend(
+        config
+            .expect_on
+            .iter()
+            .filter(|(i, _)| *i == index)
+            .map(|(_, id)| *id),
+    );
+    t
 }
 
 /// The exit code over all links: any error wins, then any failure.
@@ -267,7 +281,7 @@ pub async fn run(config: &Config) -> u8 {
         if let Some(p) = &prometheus {
             reporters.push(Box::new(p.link(runs.len())));
         }
-        runs.push((spec, link, session, wire, Fanout { reporters }));
+        runs.push((spec, link, session, (i, wire), Fanout { reporters }));
     }
     // Each session gets its own stop signal, all raised by the one.
     let stops: Vec<Arc<Notify>> = runs.iter().map(|_| Arc::new(Notify::new())).collect();
@@ -304,11 +318,11 @@ pub async fn run(config: &Config) -> u8 {
     let mut codes = Vec::new();
     let mut output_closed = false;
     let mut finished = Vec::new();
-    for ((mut outcome, mut report), wire) in outcomes.into_iter().zip(reports).zip(wires) {
+    for ((mut outcome, mut report), (index, wire)) in outcomes.into_iter().zip(reports).zip(wires) {
         if let Some(w) = wire {
             capacity::apply(&mut outcome.summary, w);
         }
-        let verdict = verdict::judge(&outcome.summary, &config.thresholds);
+        let verdict = verdict::judge(&outcome.summary, &thresholds_of(config, index));
         // Quiet summaries are not preceded by a blank line: separate them.
         let separate = config.format == Format::Text && (config.quiet || live);
         if separate && !finished.is_empty() {

@@ -273,6 +273,17 @@ fn thresholds_and_expect_apply_to_each_link() {
         text_section(&out, SIMS[1]).contains("FAILED expect"),
         "{out}"
     );
+    // Scoped to one link, it is checked there only.
+    let scoped = format!("{first}=2");
+    let (code, out, _) = run_mavping(&["-c", "3", "-q", "--expect", &scoped, first, SIMS[1]]);
+    assert_eq!(code, 0, "{out}");
+    let scoped = format!("{}=2", SIMS[1]);
+    let (code, out, _) = run_mavping(&["-c", "3", "-q", "--expect", &scoped, first, SIMS[1]]);
+    assert_eq!(code, 1, "{out}");
+    assert!(
+        text_section(&out, SIMS[1]).contains("FAILED expect"),
+        "{out}"
+    );
     let (code, out, _) = run_mavping(&[
         "-c",
         "3",
