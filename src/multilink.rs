@@ -31,7 +31,7 @@ use tokio::sync::Notify;
 use crate::app::{self, print_error};
 use crate::cli::Format;
 use crate::config::{Config, Probe};
-use crate::engine::capacity;
+use crate::engine::capacity::{self, WireBudget};
 use crate::engine::session::{self, Outcome, SessionConfig};
 use crate::engine::summary::Summary;
 use crate::output::json::JsonReporter;
@@ -119,17 +119,32 @@ fn link_error_line(link: &str, error: &str) -> String {
     }
 }
 
-/// One link's session, from its open link to its outcome. Prints the
-/// link's error line as soon as it fails, while the others go on.
+/// An opened link, ready to run.
+struct LinkRun<'a> {
+    /// Its place on the command line.
+    index: usize,
+    spec: &'a LinkSpec,
+    link: Link,
+    session: SessionConfig,
+    wire: Option<WireBudget>,
+}
+
+/// One link's session, from its open link to its outcome. With `announce`,
+/// prints the link's error line as soon as it fails, while the others go on.
 async fn run_link(
     config: &Config,
-    spec: &LinkSpec,
-    mut link: Link,
-    session: SessionConfig,
+    run: LinkRun<'_>,
     wall: WallClock,
     report: &mut Fanout<'_>,
     stop: Arc<Notify>,
+    announce: bool,
 ) -> Outcome {
+    let LinkRun {
+        spec,
+        mut link,
+        session,
+        ..
+    } = run;
     let outcome = match &config.probe {
         Probe::Timesync { target } => {
             let base = if matches!(spec, LinkSpec::Sim(_)) {
@@ -145,7 +160,7 @@ async fn run_link(
             session::run(&session, &mut link, probe, report, stop).await
         }
     };
-    if let Some(e) = &outcome.summary.link_error {
+    if let Some(e) = outcome.summary.link_error.as_ref().filter(|_| announce) {
         print_error(&link_error_line(&session.link_name, e));
     }
     outcome
@@ -201,7 +216,6 @@ pub async fn run(config: &Config) -> u8 {
             return exit::ERROR;
         }
     };
-    let names = &config.link_names;
     let opened = join_all(
         config
             .links
@@ -210,7 +224,6 @@ pub async fn run(config: &Config) -> u8 {
             .collect(),
     )
     .await;
-    let mut open_failed = false;
     let wall = WallClock {
         start: if config.virtual_clock() {
             UNIX_EPOCH
@@ -218,6 +231,33 @@ pub async fn run(config: &Config) -> u8 {
             SystemTime::now()
         },
     };
+    // Errors and warnings first, before a live view takes the screen.
+    let mut open_failed = false;
+    let mut runs = Vec::new();
+    for (index, (spec, opened)) in config.links.iter().zip(opened).enumerate() {
+        let name = &config.link_names[index];
+        let link = match opened {
+            Ok(link) => link,
+            Err(e) => {
+                print_error(&link_error_line(name, &e.to_string()));
+                open_failed = true;
+                continue;
+            }
+        };
+        let mut session = config.session.clone();
+        session.link_name = name.clone();
+        let wire = capacity::for_link(spec, &config.link_options, &session);
+        if let Some(w) = wire.and_then(|w| w.warning(1.0 / session.interval.as_secs_f64())) {
+            let _ = writeln!(io::stderr(), "mavping: warning: {name}: {w}");
+        }
+        runs.push(LinkRun {
+            index,
+            spec,
+            link,
+            session,
+            wire,
+        });
+    }
     // Not locked: the live view draws to stdout from its own thread.
     let stdout = Shared::new(BufWriter::new(io::stdout()));
     let live = config.live && io::stdout().is_terminal();
@@ -237,23 +277,9 @@ pub async fn run(config: &Config) -> u8 {
             }
         }
     }
-    let mut runs = Vec::new();
-    for (i, (spec, opened)) in config.links.iter().zip(opened).enumerate() {
-        let name = &names[i];
-        let link = match opened {
-            Ok(link) => link,
-            Err(e) => {
-                print_error(&link_error_line(name, &e.to_string()));
-                open_failed = true;
-                continue;
-            }
-        };
-        let mut session = config.session.clone();
-        session.link_name = name.clone();
-        let wire = capacity::for_link(spec, &config.link_options, &session);
-        if let Some(w) = wire.and_then(|w| w.warning(1.0 / session.interval.as_secs_f64())) {
-            let _ = writeln!(io::stderr(), "mavping: warning: {name}: {w}");
-        }
+    let mut reports: Vec<Fanout<'_>> = Vec::new();
+    for run in &runs {
+        let name = &run.session.link_name;
         let main: Box<dyn Reporter> = match (config.format, &view) {
             // The view shows the run; the text summaries follow it.
             (Format::Text, Some(view)) => Box::new(LinkLive {
@@ -275,13 +301,13 @@ pub async fn run(config: &Config) -> u8 {
         let mut reporters = vec![main];
         if let Some(file) = &samples {
             reporters.push(Box::new(
-                SampleLog::new(file.clone()).for_link(name, runs.is_empty()),
+                SampleLog::new(file.clone()).for_link(name, reports.is_empty()),
             ));
         }
         if let Some(p) = &prometheus {
-            reporters.push(Box::new(p.link(runs.len())));
+            reporters.push(Box::new(p.link(reports.len())));
         }
-        runs.push((spec, link, session, (i, wire), Fanout { reporters }));
+        reports.push(Fanout { reporters });
     }
     // Each session gets its own stop signal, all raised by the one.
     let stops: Vec<Arc<Notify>> = runs.iter().map(|_| Arc::new(Notify::new())).collect();
@@ -292,33 +318,28 @@ pub async fn run(config: &Config) -> u8 {
             s.notify_one();
         }
     });
-    let mut reports = Vec::new();
+    let mut done = Vec::new();
     let mut futures = Vec::new();
-    let mut wires = Vec::new();
-    for ((spec, link, session, wire, report), stop) in runs.into_iter().zip(stops) {
-        reports.push(report);
-        wires.push(wire);
-        futures.push((spec, link, session, stop));
+    for ((run, report), stop) in runs.into_iter().zip(reports.iter_mut()).zip(stops) {
+        done.push((run.index, run.wire));
+        // Under the live view, error lines wait until it is closed.
+        futures.push(run_link(config, run, wall, report, stop, view.is_none()));
     }
-    let outcomes = join_all(
-        futures
-            .into_iter()
-            .zip(reports.iter_mut())
-            .map(|((spec, link, session, stop), report)| {
-                run_link(config, spec, link, session, wall, report, stop)
-            })
-            .collect(),
-    )
-    .await;
+    let outcomes = join_all(futures).await;
     if let Some(mut view) = view {
         if let Err(e) = view.close() {
             print_error(&format!("--live: {e}"));
+        }
+        for outcome in &outcomes {
+            if let Some(e) = &outcome.summary.link_error {
+                print_error(&link_error_line(&outcome.summary.link, e));
+            }
         }
     }
     let mut codes = Vec::new();
     let mut output_closed = false;
     let mut finished = Vec::new();
-    for ((mut outcome, mut report), (index, wire)) in outcomes.into_iter().zip(reports).zip(wires) {
+    for ((mut outcome, mut report), (index, wire)) in outcomes.into_iter().zip(reports).zip(done) {
         if let Some(w) = wire {
             capacity::apply(&mut outcome.summary, w);
         }
