@@ -38,7 +38,7 @@ Register-ArgumentCompleter -Native -CommandName 'mavping' -ScriptBlock {
             [CompletionResult]::new('--max-loss', '--max-loss', [CompletionResultType]::ParameterName, 'Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5')
             [CompletionResult]::new('--max-rtt', '--max-rtt', [CompletionResultType]::ParameterName, 'Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION (default figure: max); repeatable, e.g. --max-rtt p99=50ms')
             [CompletionResult]::new('--max-jitter', '--max-jitter', [CompletionResultType]::ParameterName, 'Fail when a responder''s jitter is above DURATION')
-            [CompletionResult]::new('--expect', '--expect', [CompletionResultType]::ParameterName, 'A responder that must answer: SYSID or SYSID/COMPID; repeatable')
+            [CompletionResult]::new('--expect', '--expect', [CompletionResultType]::ParameterName, 'A responder that must answer: SYSID or SYSID/COMPID (on every link), or LINK=SYSID[/COMPID] (on that one of several links); repeatable')
             [CompletionResult]::new('--min-responders', '--min-responders', [CompletionResultType]::ParameterName, 'Fail unless at least N responders answer')
             [CompletionResult]::new('--hgrm', '--hgrm', [CompletionResultType]::ParameterName, 'Write each responder''s RTT distribution in HdrHistogram''s .hgrm format')
             [CompletionResult]::new('--samples', '--samples', [CompletionResultType]::ParameterName, 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)')

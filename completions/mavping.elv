@@ -35,7 +35,7 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand --max-loss 'Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5'
             cand --max-rtt 'Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION (default figure: max); repeatable, e.g. --max-rtt p99=50ms'
             cand --max-jitter 'Fail when a responder''s jitter is above DURATION'
-            cand --expect 'A responder that must answer: SYSID or SYSID/COMPID; repeatable'
+            cand --expect 'A responder that must answer: SYSID or SYSID/COMPID (on every link), or LINK=SYSID[/COMPID] (on that one of several links); repeatable'
             cand --min-responders 'Fail unless at least N responders answer'
             cand --hgrm 'Write each responder''s RTT distribution in HdrHistogram''s .hgrm format'
             cand --samples 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)'

@@ -38,7 +38,7 @@ json\t'Newline-delimited JSON events'"
 complete -c mavping -n "__fish_mavping_needs_command" -l max-loss -d 'Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l max-rtt -d 'Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION (default figure: max); repeatable, e.g. --max-rtt p99=50ms' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l max-jitter -d 'Fail when a responder\'s jitter is above DURATION' -r
-complete -c mavping -n "__fish_mavping_needs_command" -l expect -d 'A responder that must answer: SYSID or SYSID/COMPID; repeatable' -r
+complete -c mavping -n "__fish_mavping_needs_command" -l expect -d 'A responder that must answer: SYSID or SYSID/COMPID (on every link), or LINK=SYSID[/COMPID] (on that one of several links); repeatable' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l min-responders -d 'Fail unless at least N responders answer' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l hgrm -d 'Write each responder\'s RTT distribution in HdrHistogram\'s .hgrm format' -r -F
 complete -c mavping -n "__fish_mavping_needs_command" -l samples -d 'Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)' -r -F

@@ -14,6 +14,7 @@ use crate::cli::{Cli, Format, Generate, Mode};
 use crate::config::{Config, Probe, RespondConfig};
 use crate::engine::session::{self, Outcome};
 use crate::engine::{capacity, command_session};
+use crate::multilink;
 use crate::output::json::JsonReporter;
 use crate::output::live::LiveReporter;
 use crate::output::plot::PlotReporter;
@@ -67,7 +68,7 @@ fn init_logging(verbose: u8) {
 }
 
 /// First Ctrl-C (or SIGTERM): stop and print the summary. Second: leave now.
-fn watch_signals(stop: Arc<Notify>) {
+pub(crate) fn watch_signals(stop: Arc<Notify>) {
     tokio::spawn(async move {
         #[cfg(unix)]
         let mut term =
@@ -97,35 +98,50 @@ fn watch_signals(stop: Arc<Notify>) {
     });
 }
 
-fn create(path: &std::path::Path, what: &str) -> Result<BufWriter<File>, String> {
+pub(crate) fn create(path: &std::path::Path, what: &str) -> Result<BufWriter<File>, String> {
     File::create(path)
         .map(BufWriter::new)
         .map_err(|e| format!("cannot write {what} {}: {e}", path.display()))
 }
 
-fn write_hgrm(path: &std::path::Path, outcome: &Outcome) -> Result<(), String> {
+/// Every link's responders, one section each, in one file.
+pub(crate) fn write_hgrm<'a>(
+    path: &std::path::Path,
+    outcomes: impl IntoIterator<Item = &'a Outcome>,
+) -> Result<(), String> {
     let mut out = create(path, "--hgrm")?;
-    for (id, hist) in &outcome.histograms {
-        hgrm::write_section(&mut out, &outcome.summary.link, *id, hist)
-            .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))?;
+    for outcome in outcomes {
+        for (id, hist) in &outcome.histograms {
+            hgrm::write_section(&mut out, &outcome.summary.link, *id, hist)
+                .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))?;
+        }
     }
     out.flush()
         .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))
+}
+
+/// `--prometheus`: serving before the link opens, so a port in use fails
+/// before anything is sent.
+pub(crate) fn prometheus(config: &Config) -> Result<Option<PrometheusReporter>, String> {
+    let Some(addr) = config.prometheus else {
+        return Ok(None);
+    };
+    let (exporter, bound) = std::net::TcpListener::bind(addr)
+        .and_then(PrometheusReporter::serve)
+        .map_err(|e| format!("--prometheus {addr}: {e}"))?;
+    // Says the port when 0 was asked for; scripts and tests read it.
+    let _ = writeln!(
+        io::stderr(),
+        "mavping: serving metrics at http://{bound}/metrics"
+    );
+    Ok(Some(exporter))
 }
 
 /// `--prometheus` and `--plot`, set up before the link opens so a port in
 /// use or a bad path fails before anything is sent.
 fn views(config: &Config) -> Result<Vec<Box<dyn Reporter>>, String> {
     let mut views: Vec<Box<dyn Reporter>> = Vec::new();
-    if let Some(addr) = config.prometheus {
-        let (exporter, bound) = std::net::TcpListener::bind(addr)
-            .and_then(PrometheusReporter::serve)
-            .map_err(|e| format!("--prometheus {addr}: {e}"))?;
-        // Says the port when 0 was asked for; scripts and tests read it.
-        let _ = writeln!(
-            io::stderr(),
-            "mavping: serving metrics at http://{bound}/metrics"
-        );
+    if let Some(exporter) = prometheus(config)? {
         views.push(Box::new(exporter));
     }
     if let Some(path) = &config.plot {
@@ -139,6 +155,9 @@ fn views(config: &Config) -> Result<Vec<Box<dyn Reporter>>, String> {
 }
 
 async fn run_ping(config: &Config) -> u8 {
+    if config.links.len() > 1 {
+        return multilink::run(config).await;
+    }
     let stop = Arc::new(Notify::new());
     watch_signals(stop.clone());
     // Exports are opened before the link, so a bad path fails before we ping.
@@ -157,7 +176,7 @@ async fn run_ping(config: &Config) -> u8 {
             return exit::ERROR;
         }
     };
-    let mut link = match Link::open(&config.link, &config.link_options).await {
+    let mut link = match Link::open(config.link(), &config.link_options).await {
         Ok(link) => link,
         Err(e) => {
             print_error(&e);
@@ -196,7 +215,7 @@ async fn run_ping(config: &Config) -> u8 {
             "mavping: --live needs a terminal; printing text"
         );
     }
-    let wire = capacity::for_link(&config.link, &config.link_options, &config.session);
+    let wire = capacity::for_link(config.link(), &config.link_options, &config.session);
     if let Some(w) = wire.and_then(|w| w.warning(1.0 / config.session.interval.as_secs_f64())) {
         let _ = writeln!(io::stderr(), "mavping: warning: {w}");
     }
@@ -225,7 +244,7 @@ async fn run_ping(config: &Config) -> u8 {
         Probe::Timesync { target } => {
             // The simulated link has no wall clock: its responders count
             // from its start, and so do we there (reproducible output).
-            let base = if matches!(config.link, LinkSpec::Sim(_)) {
+            let base = if matches!(config.link(), LinkSpec::Sim(_)) {
                 0
             } else {
                 wall.micros_since_epoch() * 1_000
@@ -249,7 +268,7 @@ async fn run_ping(config: &Config) -> u8 {
         print_error(e);
     }
     if let Some(path) = &config.hgrm {
-        if let Err(e) = write_hgrm(path, &outcome) {
+        if let Err(e) = write_hgrm(path, [&outcome]) {
             print_error(&e);
             return exit::ERROR;
         }

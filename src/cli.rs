@@ -33,7 +33,10 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
         tcp:HOST:PORT (tcpout:) connects, tcpin:HOST:PORT listens and pings every client; \
         serial:DEVICE[:BAUD] or a bare /dev/... path opens a serial port; sim:[?key=value&...] \
         is the built-in simulated link (see the README). IPv6 hosts go in brackets: [::1]:14550.\n\n\
-        Exit status: 0 when a responder answered, 1 when none did, 2 on usage or link errors."
+        Several connections are pinged side by side on the same schedule, each with its own \
+        sequence numbers and report; thresholds and --expect apply to each link.\n\n\
+        Exit status: 0 when a responder answered (on every link), 1 when none did, 2 on usage \
+        or link errors (on any link)."
 )]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Cli {
@@ -67,6 +70,30 @@ pub fn parse_rtt_limit(s: &str) -> Result<RttLimit, String> {
         figure,
         limit: parse_duration(limit)?,
     })
+}
+
+/// `--expect`: a responder, on every link or on one (`LINK=ID`).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExpectArg {
+    /// The connection string it is scoped to, as given.
+    pub link: Option<String>,
+    pub id: Expected,
+}
+
+/// `SYSID[/COMPID]`, or `LINK=SYSID[/COMPID]` for one of several links
+/// (split at the last `=`, since connection strings may hold one).
+pub fn parse_expect_arg(s: &str) -> Result<ExpectArg, String> {
+    match s.rsplit_once('=') {
+        Some((link, id)) if !link.is_empty() => Ok(ExpectArg {
+            link: Some(link.to_string()),
+            id: parse_expected(id)
+                .map_err(|_| format!("'{s}' is not LINK=SYSID or LINK=SYSID/COMPID (1-255)"))?,
+        }),
+        _ => Ok(ExpectArg {
+            link: None,
+            id: parse_expected(s)?,
+        }),
+    }
 }
 
 /// `SYSID` or `SYSID/COMPID`, each 1-255.
@@ -130,13 +157,15 @@ pub enum ProbeKind {
 #[derive(Debug, clap::Args)]
 pub struct PingArgs {
     /// Where to ping: udpin:HOST:PORT, udpout:HOST:PORT, udpbcast:ADDR:PORT, tcp:HOST:PORT,
-    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...]
+    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...]; several links are pinged side by
+    /// side, each reported on its own
     #[arg(
         value_name = "CONNECTION",
         env = "MAVPING_LINK",
-        required_unless_present = "generate"
+        required_unless_present = "generate",
+        num_args = 1..
     )]
-    pub link: Option<String>,
+    pub links: Vec<String>,
 
     /// Stop after sending COUNT requests (and waiting for their replies)
     #[arg(short = 'c', long, value_name = "COUNT", env = "MAVPING_COUNT")]
@@ -216,9 +245,10 @@ pub struct PingArgs {
     #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
     pub max_jitter: Option<Duration>,
 
-    /// A responder that must answer: SYSID or SYSID/COMPID; repeatable
-    #[arg(long, value_name = "SYSID[/COMPID]", value_parser = parse_expected)]
-    pub expect: Vec<Expected>,
+    /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
+    /// LINK=SYSID[/COMPID] (on that one of several links); repeatable
+    #[arg(long, value_name = "[LINK=]SYSID[/COMPID]", value_parser = parse_expect_arg)]
+    pub expect: Vec<ExpectArg>,
 
     /// Fail unless at least N responders answer
     #[arg(long, value_name = "N")]

@@ -13,7 +13,7 @@ use crate::frame::signing::{SecretKey, SigningConfig};
 use crate::frame::{SysComp, Version};
 use crate::transport::address::{AddressError, LinkSpec};
 use crate::transport::LinkOptions;
-use crate::verdict::Thresholds;
+use crate::verdict::{Expected, Thresholds};
 
 #[derive(Debug, Error)]
 pub enum ConfigError {
@@ -35,14 +35,21 @@ const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
 
 #[derive(Debug, Clone)]
 pub struct Config {
-    pub link: LinkSpec,
+    /// One or more links, in command-line order; each gets its own session.
+    pub links: Vec<LinkSpec>,
+    /// Each link's connection string as typed: with several links, the
+    /// name reports and error lines give it.
+    pub link_names: Vec<String>,
     pub link_options: LinkOptions,
     pub session: SessionConfig,
     pub quiet: bool,
     pub every_reply: bool,
     pub verbose: u8,
     pub format: Format,
+    /// Thresholds of every link (with one link, all of them).
     pub thresholds: Thresholds,
+    /// `--expect LINK=ID`: (index of the link, responder), several links.
+    pub expect_on: Vec<(usize, Expected)>,
     pub hgrm: Option<PathBuf>,
     pub samples: Option<PathBuf>,
     pub probe: Probe,
@@ -90,10 +97,80 @@ pub struct RespondConfig {
 }
 
 impl Config {
-    /// True when the run should use tokio's paused, virtual clock.
+    /// True when the run should use tokio's paused, virtual clock (only
+    /// simulated links with `clock=virtual`; validation rejects a mix).
     pub fn virtual_clock(&self) -> bool {
-        matches!(&self.link, LinkSpec::Sim(p) if p.virtual_clock)
+        self.links
+            .iter()
+            .all(|l| matches!(l, LinkSpec::Sim(p) if p.virtual_clock))
     }
+
+    /// The first (with one link, the only) link.
+    pub fn link(&self) -> &LinkSpec {
+        &self.links[0]
+    }
+}
+
+/// `--expect LINK=ID`: LINK must be one of the links (as given, or in the
+/// form mavping prints it). With one link it is the plain `--expect ID`.
+fn validate_scoped_expect(
+    cli: &PingArgs,
+    links: &[LinkSpec],
+) -> Result<Vec<(usize, Expected)>, ConfigError> {
+    let mut scoped = Vec::new();
+    for e in &cli.expect {
+        let Some(link) = &e.link else { continue };
+        let index = cli
+            .links
+            .iter()
+            .zip(links)
+            .position(|(given, spec)| given.trim() == link || spec.to_string() == *link)
+            .ok_or_else(|| {
+                invalid(format!(
+                    "--expect {link}={}: {link} is not one of the links given",
+                    e.id
+                ))
+            })?;
+        if links.len() > 1 {
+            scoped.push((index, e.id));
+        }
+    }
+    Ok(scoped)
+}
+
+/// Several links: each must be named once (reports are keyed by the
+/// connection string), a virtual clock cannot drive real links, and the
+/// plot (it draws one link) and the command probe are for one link only.
+fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError> {
+    if links.len() < 2 {
+        return Ok(());
+    }
+    for (i, link) in links.iter().enumerate() {
+        if links[..i].iter().any(|l| l.to_string() == link.to_string()) {
+            return Err(invalid(format!(
+                "{} names the same link as an earlier one ({link}): name each link once",
+                cli.links[i]
+            )));
+        }
+    }
+    let is_virtual = |l: &LinkSpec| matches!(l, LinkSpec::Sim(p) if p.virtual_clock);
+    if links.iter().any(is_virtual) && !links.iter().all(is_virtual) {
+        return Err(invalid(
+            "sim:?clock=virtual cannot run beside other links: use clock=virtual on every sim: link or on none",
+        ));
+    }
+    for (set, flag) in [
+        (cli.probe == ProbeKind::Command, "--probe command"),
+        (cli.plot.is_some(), "--plot"),
+    ] {
+        if set {
+            return Err(invalid(format!(
+                "{flag} works with one link, not {}",
+                links.len()
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// `--prometheus`: a numeric address, so nothing is resolved behind the
@@ -390,11 +467,18 @@ impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
     fn try_from(cli: &PingArgs) -> Result<Self, ConfigError> {
-        let link: LinkSpec = cli
-            .link
-            .as_deref()
-            .ok_or_else(|| invalid("missing CONNECTION (e.g. udpout:127.0.0.1:14550 or sim:)"))?
-            .parse()?;
+        if cli.links.is_empty() {
+            return Err(invalid(
+                "missing CONNECTION (e.g. udpout:127.0.0.1:14550 or sim:)",
+            ));
+        }
+        let links = cli
+            .links
+            .iter()
+            .map(|l| l.parse::<LinkSpec>())
+            .collect::<Result<Vec<_>, _>>()?;
+        validate_links(cli, &links)?;
+        let link = &links[0];
         if cli.min_responders == Some(0) {
             return Err(invalid("--min-responders 0: expected at least 1"));
         }
@@ -436,10 +520,14 @@ impl TryFrom<&PingArgs> for Config {
                 heartbeat: !cli.no_heartbeat,
                 capacity: pending_capacity(interval, cli.timeout)?,
                 first_seq: cli.first_seq,
-                precise_pacing: !matches!(link, LinkSpec::Sim(_)),
+                // Several links share one thread: a session must not spin
+                // there while another's replies wait (see app.rs).
+                precise_pacing: links.len() == 1 && !matches!(link, LinkSpec::Sim(_)),
                 signing,
             },
-            link,
+            expect_on: validate_scoped_expect(cli, &links)?,
+            link_names: cli.links.iter().map(|l| l.trim().to_string()).collect(),
+            links,
             link_options: LinkOptions {
                 baud: cli.baud,
                 reconnect: cli.reconnect,
@@ -452,7 +540,12 @@ impl TryFrom<&PingArgs> for Config {
                 max_loss: cli.max_loss,
                 max_rtt: cli.max_rtt.clone(),
                 max_jitter: cli.max_jitter,
-                expect: cli.expect.clone(),
+                expect: cli
+                    .expect
+                    .iter()
+                    .filter(|e| e.link.is_none() || cli.links.len() == 1)
+                    .map(|e| e.id)
+                    .collect(),
                 min_responders: cli.min_responders,
             },
             hgrm: cli.hgrm.clone(),
@@ -570,6 +663,30 @@ mod tests {
         assert!(c.live);
         assert_eq!(c.prometheus, Some("[::1]:9100".parse().unwrap()));
         assert_eq!(c.plot, Some(PathBuf::from("out/RTT.SVG")));
+        let c = config("-c 3 --json --samples s.csv --hgrm h.hgrm sim: sim:?delay=50ms").unwrap();
+        assert_eq!(c.links.len(), 2);
+        assert_eq!(c.link_names, ["sim:", "sim:?delay=50ms"]);
+        assert!(!c.session.precise_pacing, "links share one thread");
+        assert!(!c.virtual_clock());
+        assert!(config("sim:?clock=virtual sim:?delay=5ms&clock=virtual")
+            .unwrap()
+            .virtual_clock());
+        let c = config("--expect 1 --expect sim:?delay=50ms=2/1 sim: sim:?delay=50ms").unwrap();
+        let two_one = Expected {
+            sysid: 2,
+            compid: Some(1),
+        };
+        assert_eq!(c.thresholds.expect.len(), 1);
+        assert_eq!(c.expect_on, [(1, two_one)]);
+        // By the form mavping prints, too; with one link it is a plain --expect.
+        let c = config(
+            "--expect sim:?responders=1&delay=10ms&jitter=2ms&loss=0%&dup=0%&reorder=0%&seed=1=2/1 sim:",
+        )
+        .unwrap();
+        assert_eq!(
+            (c.thresholds.expect.clone(), c.expect_on),
+            (vec![two_one], vec![])
+        );
         let c = config("--probe timesync --prometheus 0.0.0.0:0 sim:").unwrap();
         assert_eq!(c.prometheus, Some("0.0.0.0:0".parse().unwrap()));
     }
@@ -734,6 +851,28 @@ mod tests {
             ),
             ("--probe command --retries 300 sim:", "300"),
             ("respond sim: sim:", "unexpected"),
+            (
+                "sim: sim:?delay=10ms",
+                "sim:?delay=10ms names the same link",
+            ),
+            (
+                "sim: sim:?clock=virtual&delay=5ms",
+                "clock=virtual cannot run beside",
+            ),
+            (
+                "--plot a.svg sim: sim:?delay=5ms",
+                "--plot works with one link",
+            ),
+            (
+                "--probe command sim: sim:?delay=5ms",
+                "--probe command works with one link",
+            ),
+            ("sim: udpout:nowhere", "accepted forms"),
+            (
+                "--expect udp:1.2.3.4:5=1 sim: sim:?delay=5ms",
+                "--expect udp:1.2.3.4:5=1: udp:1.2.3.4:5 is not one of the links given",
+            ),
+            ("--expect sim:=1/0 sim:", "LINK=SYSID"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");

@@ -10,6 +10,7 @@ pub mod cli;
 pub mod config;
 pub mod engine;
 pub mod frame;
+pub mod multilink;
 pub mod output;
 pub mod probe;
 pub mod respond;

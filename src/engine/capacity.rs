@@ -195,7 +195,7 @@ mod tests {
                 .chain(&["serial:/dev/ttyUSB0:57600"]);
             let cli = crate::cli::Cli::try_parse_from(args).unwrap();
             let c = crate::config::Config::try_from(&cli.ping).unwrap();
-            for_link(&c.link, &c.link_options, &c.session).unwrap()
+            for_link(c.link(), &c.link_options, &c.session).unwrap()
         };
         let plain = budget_of(&[]);
         let signed = budget_of(&["--signing-key", "k"]);

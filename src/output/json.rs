@@ -20,14 +20,31 @@ pub struct JsonReporter<W: Write> {
     /// Only the summary object (`--json -q`).
     quiet: bool,
     wall: WallClock,
+    /// With several links, every object names its link.
+    link: Option<String>,
 }
 
 impl<W: Write> JsonReporter<W> {
     pub fn new(out: W, quiet: bool, wall: WallClock) -> Self {
-        JsonReporter { out, quiet, wall }
+        JsonReporter {
+            out,
+            quiet,
+            wall,
+            link: None,
+        }
     }
 
-    fn emit(&mut self, value: Value) -> io::Result<()> {
+    /// Adds `"link": LINK` to every event (the start and summary objects
+    /// always carry it), for runs over several links.
+    pub fn with_link(mut self, link: String) -> Self {
+        self.link = Some(link);
+        self
+    }
+
+    fn emit(&mut self, mut value: Value) -> io::Result<()> {
+        if let (Some(link), Value::Object(m)) = (&self.link, &mut value) {
+            m.insert("link".into(), link.clone().into());
+        }
         serde_json::to_writer(&mut self.out, &value)?;
         self.out.write_all(b"\n")
     }

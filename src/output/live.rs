@@ -144,6 +144,8 @@ impl LiveState {
     /// drawing itself runs without the lock.
     pub fn screen(&self) -> Screen {
         Screen {
+            link: self.link.clone(),
+            now: self.now,
             title: format!(
                 "mavping {} · {} · {:.1} s",
                 self.link,
@@ -196,6 +198,9 @@ pub struct RowView {
 /// Everything one frame shows.
 #[derive(Debug, Clone)]
 pub struct Screen {
+    pub link: String,
+    /// Session time of the latest event.
+    pub now: Nanos,
     pub title: String,
     pub waiting: bool,
     pub rows: Vec<RowView>,
@@ -237,7 +242,11 @@ fn strip(recent: &[Mark], width: usize) -> Line<'static> {
 }
 
 /// Draws one frame; pure over `screen`, so it is tested on a test backend.
-pub fn render(frame: &mut Frame<'_>, screen: &Screen) {
+/// Title line, body, key help.
+fn frame_areas(
+    frame: &mut Frame<'_>,
+    title: &str,
+) -> (ratatui::layout::Rect, ratatui::layout::Rect) {
     let [head, body, foot] = Layout::vertical([
         Constraint::Length(1),
         Constraint::Min(3),
@@ -245,9 +254,62 @@ pub fn render(frame: &mut Frame<'_>, screen: &Screen) {
     ])
     .areas(frame.area());
     frame.render_widget(
-        Paragraph::new(screen.title.as_str()).style(Style::new().add_modifier(Modifier::BOLD)),
+        Paragraph::new(title).style(Style::new().add_modifier(Modifier::BOLD)),
         head,
     );
+    (body, foot)
+}
+
+fn key_help(frame: &mut Frame<'_>, foot: ratatui::layout::Rect) {
+    frame.render_widget(
+        Paragraph::new("q or Ctrl-C: stop and print the summary")
+            .style(Style::new().fg(Color::DarkGray)),
+        foot,
+    );
+}
+
+pub fn render(frame: &mut Frame<'_>, screen: &Screen) {
+    let (body, foot) = frame_areas(frame, &screen.title);
+    let title = if screen.waiting {
+        " waiting for a peer ".to_string()
+    } else {
+        " responders ".to_string()
+    };
+    table(frame, body, screen, title);
+    key_help(frame, foot);
+}
+
+/// Several links: a table per link, titled with the link.
+pub fn render_links(frame: &mut Frame<'_>, screens: &[Screen]) {
+    let now = screens.iter().map(|s| s.now).max().unwrap_or(0);
+    let probe = screens
+        .first()
+        .map_or("", |s| s.title.split(" · ").nth(1).unwrap_or_default());
+    let title = format!(
+        "mavping · {} links · {probe} · {:.1} s",
+        screens.len(),
+        now as f64 / 1e9
+    );
+    let (body, foot) = frame_areas(frame, &title);
+    let areas = Layout::vertical(
+        screens
+            .iter()
+            .map(|s| Constraint::Length(s.rows.len().max(1) as u16 + 3)),
+    )
+    .split(body);
+    for (screen, area) in screens.iter().zip(areas.iter()) {
+        let title = if screen.waiting {
+            format!(" {}: waiting for a peer ", screen.link)
+        } else {
+            format!(" {} ", screen.link)
+        };
+        table(frame, *area, screen, title);
+    }
+    key_help(frame, foot);
+}
+
+/// One link's responders.
+fn table(frame: &mut Frame<'_>, body: ratatui::layout::Rect, screen: &Screen, title: String) {
     let widths = [
         Constraint::Length(9),
         Constraint::Length(7),
@@ -314,20 +376,11 @@ pub fn render(frame: &mut Frame<'_>, screen: &Screen) {
     });
     let table = Table::new(rows, widths)
         .header(header)
-        .block(Block::bordered().title(if screen.waiting {
-            " waiting for a peer "
-        } else {
-            " responders "
-        }));
+        .block(Block::bordered().title(title));
     frame.render_widget(table, body);
-    frame.render_widget(
-        Paragraph::new("q or Ctrl-C: stop and print the summary")
-            .style(Style::new().fg(Color::DarkGray)),
-        foot,
-    );
 }
 
-fn lock(state: &Mutex<LiveState>) -> MutexGuard<'_, LiveState> {
+fn lock<T>(state: &Mutex<T>) -> MutexGuard<'_, T> {
     state.lock().unwrap_or_else(|e| e.into_inner())
 }
 
@@ -374,16 +427,16 @@ impl LiveReporter {
     }
 }
 
+/// Draws a frame with `draw` a few times a second until `done`.
 fn ui_loop(
     mut terminal: ratatui::DefaultTerminal,
-    state: Arc<Mutex<LiveState>>,
+    draw: impl Fn(&mut Frame<'_>),
     done: Arc<AtomicBool>,
     stop: Arc<Notify>,
 ) -> io::Result<()> {
     let _restore = Restore;
     while !done.load(Ordering::Relaxed) {
-        let screen = lock(&state).screen();
-        terminal.draw(|f| render(f, &screen))?;
+        terminal.draw(&draw)?;
         // Raw mode turns Ctrl-C into a key, so it is handled here too.
         if event::poll(REFRESH)? {
             if let event::Event::Key(k) = event::read()? {
@@ -406,9 +459,14 @@ impl Reporter for LiveReporter {
         let terminal = ratatui::try_init()?;
         let done = Arc::new(AtomicBool::new(false));
         let (state, flag, stop) = (self.state.clone(), done.clone(), self.stop.clone());
+        // The state is locked only while the figures are computed.
+        let draw = move |f: &mut Frame<'_>| {
+            let screen = lock(&state).screen();
+            render(f, &screen);
+        };
         let thread = std::thread::Builder::new()
             .name("live view".into())
-            .spawn(move || ui_loop(terminal, state, flag, stop))
+            .spawn(move || ui_loop(terminal, draw, flag, stop))
             .inspect_err(|_| ratatui::restore())?;
         self.ui = Some(Ui { done, thread });
         Ok(())
@@ -430,6 +488,85 @@ impl Drop for LiveReporter {
     /// A run that ends without a summary still gives the terminal back.
     fn drop(&mut self) {
         let _ = self.close();
+    }
+}
+
+/// The live view of several links: one terminal, a section per link. Each
+/// link's session feeds its [`LiveLink`]; the caller closes the view once
+/// every session ended, then prints the summaries.
+pub struct LiveLinks {
+    states: Arc<Mutex<Vec<LiveState>>>,
+    ui: Option<Ui>,
+}
+
+impl LiveLinks {
+    /// Takes the terminal and starts drawing; `stop` is raised by `q`.
+    pub fn start(stop: Arc<Notify>) -> io::Result<Self> {
+        let states: Arc<Mutex<Vec<LiveState>>> = Arc::default();
+        let terminal = ratatui::try_init()?;
+        let done = Arc::new(AtomicBool::new(false));
+        let (shown, flag) = (states.clone(), done.clone());
+        let draw = move |f: &mut Frame<'_>| {
+            let screens: Vec<Screen> = lock(&shown).iter().map(LiveState::screen).collect();
+            render_links(f, &screens);
+        };
+        let thread = std::thread::Builder::new()
+            .name("live view".into())
+            .spawn(move || ui_loop(terminal, draw, flag, stop))
+            .inspect_err(|_| ratatui::restore())?;
+        Ok(LiveLinks {
+            states,
+            ui: Some(Ui { done, thread }),
+        })
+    }
+
+    /// The reporter of the next link, shown below the previous ones.
+    pub fn link(&self) -> LiveLink {
+        let mut states = lock(&self.states);
+        states.push(LiveState::default());
+        LiveLink {
+            states: self.states.clone(),
+            index: states.len() - 1,
+        }
+    }
+
+    /// Gives the terminal back.
+    pub fn close(&mut self) -> io::Result<()> {
+        let Some(ui) = self.ui.take() else {
+            return Ok(());
+        };
+        ui.done.store(true, Ordering::Relaxed);
+        ui.thread
+            .join()
+            .unwrap_or_else(|_| Err(io::Error::other("the live view failed")))
+    }
+}
+
+impl Drop for LiveLinks {
+    fn drop(&mut self) {
+        let _ = self.close();
+    }
+}
+
+/// One link's part of [`LiveLinks`]; its summary is printed by the caller.
+pub struct LiveLink {
+    states: Arc<Mutex<Vec<LiveState>>>,
+    index: usize,
+}
+
+impl Reporter for LiveLink {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        lock(&self.states)[self.index].on_start(info);
+        Ok(())
+    }
+
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        lock(&self.states)[self.index].on_event(event);
+        Ok(())
+    }
+
+    fn summary(&mut self, _: &Summary, _: &Verdict) -> io::Result<()> {
+        Ok(())
     }
 }
 
@@ -495,6 +632,24 @@ mod tests {
         let mut terminal = Terminal::new(TestBackend::new(110, 8)).unwrap();
         let screen = state().screen();
         terminal.draw(|f| render(f, &screen)).unwrap();
+        insta::assert_snapshot!(terminal.backend().to_string());
+    }
+
+    #[test]
+    fn several_links_get_a_section_each() {
+        let mut terminal = Terminal::new(TestBackend::new(110, 12)).unwrap();
+        let mut other = LiveState::default();
+        other.on_start(&StartInfo {
+            link: "udpout:10.8.0.2:14550".into(),
+            probe: "ping",
+            ours: SysComp::new(255, 190),
+            interval: Duration::from_millis(100),
+            timeout: Duration::from_secs(2),
+            count: None,
+        });
+        other.on_event(&Event::WaitingForPeer);
+        let screens = [state().screen(), other.screen()];
+        terminal.draw(|f| render_links(f, &screens)).unwrap();
         insta::assert_snapshot!(terminal.backend().to_string());
     }
 

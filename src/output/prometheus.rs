@@ -116,79 +116,7 @@ impl Metrics {
 
     /// The exposition, in the Prometheus text format 0.0.4.
     pub fn render(&self) -> String {
-        let mut out = String::new();
-        let counters: [Family<u64>; 5] = [
-            (
-                "mavping_sent_total",
-                "Requests in the responder's window whose fate is decided.",
-                |s| s.sent,
-            ),
-            (
-                "mavping_received_total",
-                "Replies received within the timeout.",
-                |s| s.received,
-            ),
-            (
-                "mavping_lost_total",
-                "Requests not answered within the timeout.",
-                |s| s.lost,
-            ),
-            (
-                "mavping_late_total",
-                "First replies after the timeout (each also counted lost).",
-                |s| s.late,
-            ),
-            (
-                "mavping_duplicate_total",
-                "Second and later replies to the same request.",
-                |s| s.duplicate,
-            ),
-        ];
-        for (name, help, value) in counters {
-            let _ = writeln!(out, "# HELP {name} {help}\n# TYPE {name} counter");
-            for (id, s) in &self.responders {
-                let _ = writeln!(out, "{name}{{{}}} {}", self.labels(*id), value(s));
-            }
-        }
-        let name = "mavping_rtt_seconds";
-        let _ = writeln!(
-            out,
-            "# HELP {name} Round-trip time of replies within the timeout.\n# TYPE {name} histogram"
-        );
-        for (id, s) in &self.responders {
-            let labels = self.labels(*id);
-            let mut cumulative = 0;
-            for (i, count) in s.buckets.iter().enumerate() {
-                cumulative += count;
-                let le = BUCKETS_S
-                    .get(i)
-                    .map_or_else(|| "+Inf".to_string(), |b| b.to_string());
-                let _ = writeln!(out, "{name}_bucket{{{labels},le=\"{le}\"}} {cumulative}");
-            }
-            let _ = writeln!(out, "{name}_sum{{{labels}}} {}", s.rtt_sum_s);
-            let _ = writeln!(out, "{name}_count{{{labels}}} {}", s.received);
-        }
-        let gauges: [Family<Option<f64>>; 2] = [
-            (
-                "mavping_last_rtt_seconds",
-                "Round-trip time of the latest reply within the timeout.",
-                |s| s.last_rtt_s,
-            ),
-            (
-                "mavping_clock_offset_seconds",
-                "Responder's clock minus ours (TIMESYNC probe, at the end of the run).",
-                |s| s.clock_offset_s,
-            ),
-        ];
-        for (name, help, value) in gauges {
-            let _ = writeln!(out, "# HELP {name} {help}\n# TYPE {name} gauge");
-            for (id, s) in &self.responders {
-                if let Some(v) = value(s) {
-                    let _ = writeln!(out, "{name}{{{}}} {v}", self.labels(*id));
-                }
-            }
-        }
-        out
+        render(std::slice::from_ref(self))
     }
 
     fn labels(&self, id: SysComp) -> String {
@@ -202,6 +130,88 @@ impl Metrics {
     }
 }
 
+/// The exposition of one or several links (each family once, a series per
+/// link and responder, told apart by the `link` label).
+pub fn render(links: &[Metrics]) -> String {
+    let series = || {
+        links
+            .iter()
+            .flat_map(|m| m.responders.iter().map(move |(id, s)| (m.labels(*id), s)))
+    };
+    let mut out = String::new();
+    let counters: [Family<u64>; 5] = [
+        (
+            "mavping_sent_total",
+            "Requests in the responder's window whose fate is decided.",
+            |s| s.sent,
+        ),
+        (
+            "mavping_received_total",
+            "Replies received within the timeout.",
+            |s| s.received,
+        ),
+        (
+            "mavping_lost_total",
+            "Requests not answered within the timeout.",
+            |s| s.lost,
+        ),
+        (
+            "mavping_late_total",
+            "First replies after the timeout (each also counted lost).",
+            |s| s.late,
+        ),
+        (
+            "mavping_duplicate_total",
+            "Second and later replies to the same request.",
+            |s| s.duplicate,
+        ),
+    ];
+    for (name, help, value) in counters {
+        let _ = writeln!(out, "# HELP {name} {help}\n# TYPE {name} counter");
+        for (labels, s) in series() {
+            let _ = writeln!(out, "{name}{{{labels}}} {}", value(s));
+        }
+    }
+    let name = "mavping_rtt_seconds";
+    let _ = writeln!(
+        out,
+        "# HELP {name} Round-trip time of replies within the timeout.\n# TYPE {name} histogram"
+    );
+    for (labels, s) in series() {
+        let mut cumulative = 0;
+        for (i, count) in s.buckets.iter().enumerate() {
+            cumulative += count;
+            let le = BUCKETS_S
+                .get(i)
+                .map_or_else(|| "+Inf".to_string(), |b| b.to_string());
+            let _ = writeln!(out, "{name}_bucket{{{labels},le=\"{le}\"}} {cumulative}");
+        }
+        let _ = writeln!(out, "{name}_sum{{{labels}}} {}", s.rtt_sum_s);
+        let _ = writeln!(out, "{name}_count{{{labels}}} {}", s.received);
+    }
+    let gauges: [Family<Option<f64>>; 2] = [
+        (
+            "mavping_last_rtt_seconds",
+            "Round-trip time of the latest reply within the timeout.",
+            |s| s.last_rtt_s,
+        ),
+        (
+            "mavping_clock_offset_seconds",
+            "Responder's clock minus ours (TIMESYNC probe, at the end of the run).",
+            |s| s.clock_offset_s,
+        ),
+    ];
+    for (name, help, value) in gauges {
+        let _ = writeln!(out, "# HELP {name} {help}\n# TYPE {name} gauge");
+        for (labels, s) in series() {
+            if let Some(v) = value(s) {
+                let _ = writeln!(out, "{name}{{{labels}}} {v}");
+            }
+        }
+    }
+    out
+}
+
 /// Label values escape backslash, double quote and newline.
 fn escape(value: &str) -> String {
     value
@@ -210,13 +220,15 @@ fn escape(value: &str) -> String {
         .replace('\n', "\\n")
 }
 
-fn lock(m: &Mutex<Metrics>) -> MutexGuard<'_, Metrics> {
+fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
     // A panic elsewhere must not take the exporter down with it.
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// One link's view of the served metrics.
 pub struct PrometheusReporter {
-    metrics: Arc<Mutex<Metrics>>,
+    metrics: Arc<Mutex<Vec<Metrics>>>,
+    index: usize,
 }
 
 impl PrometheusReporter {
@@ -225,7 +237,7 @@ impl PrometheusReporter {
         listener.set_nonblocking(true)?;
         let listener = TcpListener::from_std(listener)?;
         let addr = listener.local_addr()?;
-        let metrics = Arc::new(Mutex::new(Metrics::default()));
+        let metrics = Arc::new(Mutex::new(vec![Metrics::default()]));
         let shared = metrics.clone();
         tokio::spawn(async move {
             loop {
@@ -237,12 +249,29 @@ impl PrometheusReporter {
                 tokio::spawn(answer(stream, shared.clone()));
             }
         });
-        Ok((PrometheusReporter { metrics }, addr))
+        Ok((PrometheusReporter { metrics, index: 0 }, addr))
+    }
+
+    /// The reporter of the `index`-th of several links (0 is this one's),
+    /// served at the same address.
+    pub fn link(&self, index: usize) -> Self {
+        let mut all = lock(&self.metrics);
+        if all.len() <= index {
+            all.resize_with(index + 1, Metrics::default);
+        }
+        PrometheusReporter {
+            metrics: self.metrics.clone(),
+            index,
+        }
+    }
+
+    fn this(&self) -> MutexGuard<'_, Vec<Metrics>> {
+        lock(&self.metrics)
     }
 }
 
 /// One HTTP/1.1 exchange, then the connection closes.
-async fn answer(mut stream: TcpStream, metrics: Arc<Mutex<Metrics>>) {
+async fn answer(mut stream: TcpStream, metrics: Arc<Mutex<Vec<Metrics>>>) {
     let mut buf = Vec::with_capacity(1024);
     let head = tokio::time::timeout(READ_TIMEOUT, async {
         let mut chunk = [0u8; 1024];
@@ -266,7 +295,7 @@ async fn answer(mut stream: TcpStream, metrics: Arc<Mutex<Metrics>>) {
     let (method, target) = (parts.next().unwrap_or(""), parts.next().unwrap_or(""));
     let path = target.split('?').next().unwrap_or("");
     let (status, body) = match (method, path) {
-        ("GET" | "HEAD", "/metrics") => ("200 OK", lock(&metrics).render()),
+        ("GET" | "HEAD", "/metrics") => ("200 OK", render(&lock(&metrics))),
         ("GET" | "HEAD", "/") => ("200 OK", "mavping: metrics at /metrics\n".to_string()),
         ("GET" | "HEAD", _) => ("404 Not Found", "not found\n".to_string()),
         _ => ("405 Method Not Allowed", "only GET\n".to_string()),
@@ -285,19 +314,19 @@ async fn answer(mut stream: TcpStream, metrics: Arc<Mutex<Metrics>>) {
 
 impl Reporter for PrometheusReporter {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        lock(&self.metrics).on_start(info);
+        self.this()[self.index].on_start(info);
         Ok(())
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
         if let Event::Match(e) = event {
-            lock(&self.metrics).on_event(e);
+            self.this()[self.index].on_event(e);
         }
         Ok(())
     }
 
     fn summary(&mut self, summary: &Summary, _: &Verdict) -> io::Result<()> {
-        lock(&self.metrics).on_summary(summary);
+        self.this()[self.index].on_summary(summary);
         Ok(())
     }
 }
@@ -379,5 +408,29 @@ mod tests {
             .unwrap();
         assert!((sum - 0.0308).abs() < 1e-12, "{sum}");
         assert!(!text.contains("mavping_clock_offset_seconds{"));
+    }
+
+    #[test]
+    fn several_links_are_series_of_one_family() {
+        let mut a = Metrics::default();
+        a.on_start(&info("sim:"));
+        let mut b = Metrics::default();
+        b.on_start(&info("udpout:127.0.0.1:1"));
+        for m in [&mut a, &mut b] {
+            m.on_event(&MatchEvent::Lost {
+                responder: SysComp::new(1, 1),
+                seq: 0,
+                sent_at: 0,
+                at: 0,
+            });
+        }
+        let text = render(&[a, b]);
+        assert_eq!(text.matches("# TYPE mavping_lost_total counter").count(), 1);
+        for link in ["sim:", "udpout:127.0.0.1:1"] {
+            let line = format!(
+                "mavping_lost_total{{link=\"{link}\",probe=\"ping\",sysid=\"1\",compid=\"1\"}} 1"
+            );
+            assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
+        }
     }
 }

@@ -15,14 +15,43 @@ use crate::verdict::Verdict;
 /// so loss can be plotted against RSSI; empty before one or when unknown.
 pub const HEADER: &str = "sysid,compid,seq,sent_s,rtt_us,status,rssi,remrssi,txbuf,noise,remnoise";
 
+/// With several links, one file holds them all and each row ends with its
+/// link's connection string.
+pub const LINK_COLUMN: &str = ",link";
+
 pub struct SampleLog<W: Write> {
     out: W,
     radio: Option<RadioReport>,
+    /// `,LINK` (CSV-quoted when needed) after each row, with several links.
+    link: Option<String>,
+    header: bool,
 }
 
 impl<W: Write> SampleLog<W> {
     pub fn new(out: W) -> Self {
-        SampleLog { out, radio: None }
+        SampleLog {
+            out,
+            radio: None,
+            link: None,
+            header: true,
+        }
+    }
+
+    /// Rows end with a `link` column; only the first link's log writes
+    /// the header (`header`), as they share one file.
+    pub fn for_link(mut self, link: &str, header: bool) -> Self {
+        self.link = Some(format!(",{}", csv_field(link)));
+        self.header = header;
+        self
+    }
+}
+
+/// A CSV field, quoted when it holds a comma, a quote or a line break.
+fn csv_field(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
     }
 }
 
@@ -51,7 +80,11 @@ fn us(ns: u64) -> String {
 
 impl<W: Write> Reporter for SampleLog<W> {
     fn start(&mut self, _: &StartInfo) -> io::Result<()> {
-        writeln!(self.out, "{HEADER}")
+        match (self.header, &self.link) {
+            (false, _) => Ok(()),
+            (true, None) => writeln!(self.out, "{HEADER}"),
+            (true, Some(_)) => writeln!(self.out, "{HEADER}{LINK_COLUMN}"),
+        }
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
@@ -93,11 +126,12 @@ impl<W: Write> Reporter for SampleLog<W> {
         };
         writeln!(
             self.out,
-            "{},{},{seq},{},{rtt},{status},{}",
+            "{},{},{seq},{},{rtt},{status},{}{}",
             who.sysid,
             who.compid,
             secs(sent),
-            radio_columns(self.radio)
+            radio_columns(self.radio),
+            self.link.as_deref().unwrap_or("")
         )
     }
 
@@ -147,6 +181,38 @@ mod tests {
         assert_eq!(
             out,
             "1,1,0,0.000000,,lost,,,,,\n1,1,1,0.000000,,lost,200,,15,40,60\n"
+        );
+    }
+
+    #[test]
+    fn rows_of_several_links_name_their_link() {
+        let info = StartInfo {
+            link: "sim:?a=1,2".into(),
+            probe: "ping",
+            ours: SysComp::new(255, 190),
+            interval: std::time::Duration::from_secs(1),
+            timeout: std::time::Duration::from_secs(1),
+            count: None,
+        };
+        let lost = Event::Match(MatchEvent::Lost {
+            responder: SysComp::new(1, 1),
+            seq: 3,
+            sent_at: 0,
+            at: 1,
+        });
+        let mut first = SampleLog::new(Vec::new()).for_link("sim:?a=1,2", true);
+        first.start(&info).unwrap();
+        first.event(&lost).unwrap();
+        let mut second = SampleLog::new(Vec::new()).for_link("sim:", false);
+        second.start(&info).unwrap();
+        second.event(&lost).unwrap();
+        assert_eq!(
+            String::from_utf8(first.out).unwrap(),
+            format!("{HEADER},link\n1,1,3,0.000000,,lost,,,,,,\"sim:?a=1,2\"\n")
+        );
+        assert_eq!(
+            String::from_utf8(second.out).unwrap(),
+            "1,1,3,0.000000,,lost,,,,,,sim:\n"
         );
     }
 }
