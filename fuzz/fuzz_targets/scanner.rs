@@ -1,6 +1,6 @@
 //! The byte-stream frame scanner fed arbitrary bytes in arbitrary read
 //! splits. Invariants:
-//! - no panic, and the carried tail stays below one maximal frame;
+//! - no panic, and the carried tail is at most one maximal frame;
 //! - the same frames, stats and tail whatever the split;
 //! - every byte is accounted for: good frames + skipped + unknown-id
 //!   frames + the carried tail = all bytes fed;
@@ -37,7 +37,7 @@ fn stream(data: &[u8], splits: &[u8]) -> (Vec<Vec<u8>>, ScanStats, usize) {
         };
         let (now, later) = rest.split_at(size);
         scanner.push(now, &mut |f| frames.push(f.to_vec()));
-        assert!(scanner.pending_bytes() < MAX_FRAME_LEN);
+        assert!(scanner.pending_bytes() <= MAX_FRAME_LEN);
         rest = later;
     }
     (frames, scanner.stats, scanner.pending_bytes())
