@@ -370,3 +370,171 @@ fn sim_outage_and_delay_spikes_are_counted_exactly() {
     assert!(n(r, "late") <= spiked, "{r}");
     assert_eq!(code, 0, "{err}");
 }
+
+/// The rule for spoofed ids: on a link with several peers (udpin, tcpin,
+/// udpbcast) a responder's ids are believed only from the peer it first
+/// answered from in time. A second peer that sees our requests and answers
+/// them as 1/1 (even for the requests the real 1/1 dropped) is counted in
+/// `wrong_path_replies` and never measured.
+#[test]
+fn spoofed_ids_from_another_peer_are_rejected_not_measured() {
+    use mavping::frame::{decode, scan_datagram, ScanStats, SysComp};
+    use std::io::{BufRead, BufReader, Read};
+
+    let port = free_udp_port();
+    let mut ping = mavping()
+        .args([
+            "--json",
+            "-c",
+            "80",
+            "-i",
+            "10ms",
+            "-W",
+            "2s",
+            "--expect",
+            "1/1",
+            &format!("udpin:127.0.0.1:{port}"),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut respond = mavping()
+        .args([
+            "respond",
+            "--drop",
+            "20",
+            "--seed",
+            "3",
+            &format!("udpout:127.0.0.1:{port}"),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let armed = Arc::new(AtomicBool::new(false));
+    let stop = Arc::new(AtomicBool::new(false));
+    let forged = Arc::new(AtomicU64::new(0));
+    let spoofer = {
+        let (armed, stop, forged) = (armed.clone(), stop.clone(), forged.clone());
+        std::thread::spawn(move || {
+            let sock = UdpSocket::bind("127.0.0.1:0").unwrap();
+            sock.set_read_timeout(Some(Duration::from_millis(50)))
+                .unwrap();
+            let mut hello = Vec::new();
+            let header = Header {
+                sysid: 66,
+                compid: 1,
+                seq: 0,
+            };
+            encode(
+                &mut hello,
+                Version::V2,
+                header,
+                &Msg::Heartbeat {
+                    mav_type: 6,
+                    autopilot: 8,
+                },
+            );
+            sock.send_to(&hello, ("127.0.0.1", port)).unwrap();
+            let mut buf = [0u8; 2048];
+            while !stop.load(Ordering::Relaxed) {
+                let Ok(len) = sock.recv(&mut buf) else {
+                    continue;
+                };
+                let mut requests = Vec::new();
+                scan_datagram(&buf[..len], &mut ScanStats::default(), &mut |raw| {
+                    requests.push(decode(raw))
+                });
+                for f in requests {
+                    let Msg::Ping {
+                        time_usec,
+                        seq,
+                        target_system: 0,
+                        target_component: 0,
+                    } = f.msg
+                    else {
+                        continue;
+                    };
+                    if !armed.load(Ordering::Relaxed) {
+                        continue;
+                    }
+                    let SysComp { sysid, compid } = f.source;
+                    let mut reply = Vec::new();
+                    let header = Header {
+                        sysid: 1,
+                        compid: 1,
+                        seq: 0,
+                    };
+                    let msg = Msg::Ping {
+                        time_usec,
+                        seq,
+                        target_system: sysid,
+                        target_component: compid,
+                    };
+                    encode(&mut reply, Version::V2, header, &msg);
+                    sock.send_to(&reply, ("127.0.0.1", port)).unwrap();
+                    forged.fetch_add(1, Ordering::Relaxed);
+                }
+            }
+        })
+    };
+    // Arm the spoofer once mavping has accepted a reply from the real 1/1.
+    let mut lines = BufReader::new(ping.stdout.take().unwrap());
+    let mut out = String::new();
+    let mut line = String::new();
+    while lines.read_line(&mut line).unwrap() > 0 {
+        if !armed.load(Ordering::Relaxed) && line.contains(r#""type":"reply""#) {
+            armed.store(true, Ordering::Relaxed);
+        }
+        out.push_str(&line);
+        line.clear();
+    }
+    let mut err = String::new();
+    ping.stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    let code = ping.wait().unwrap().code();
+    stop.store(true, Ordering::Relaxed);
+    spoofer.join().unwrap();
+    signal(respond.id(), "TERM");
+    let mut rest = String::new();
+    respond
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut rest)
+        .unwrap();
+    let _ = respond.wait();
+    let replies_sent: u64 = rest
+        .split(" replies sent")
+        .next()
+        .and_then(|x| x.rsplit(", ").next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("respond said: {rest}"));
+    let s = summary(&out);
+    let r = responder(&s, "1/1");
+    assert_eq!(code, Some(0), "{err}");
+    assert!(
+        forged.load(Ordering::Relaxed) > 30,
+        "{}",
+        forged.load(Ordering::Relaxed)
+    );
+    assert_eq!(
+        n(&s, "wrong_path_replies"),
+        forged.load(Ordering::Relaxed),
+        "{s}"
+    );
+    // Only the real responder's replies count for 1/1: the requests it
+    // dropped stay lost although the spoofer answered them.
+    assert_eq!(
+        n(r, "received") + n(r, "late") + n(r, "duplicate"),
+        replies_sent,
+        "{r}"
+    );
+    assert_eq!(n(r, "duplicate"), 0, "{r}");
+    assert!(n(r, "lost") > 0, "{r}");
+    assert_eq!(n(r, "sent"), n(r, "received") + n(r, "lost"), "{r}");
+}

@@ -209,6 +209,7 @@ mod tests {
                 clock: None,
             }],
             foreign_replies: 0,
+            wrong_path_replies: 0,
             untracked_replies: 0,
             frames: Default::default(),
             hints: vec![],

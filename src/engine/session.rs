@@ -4,6 +4,7 @@
 //! The only place that reads a clock. Everything it decides, it decides
 //! through the pure matcher with explicit timestamps.
 
+use std::collections::HashMap;
 use std::io;
 use std::sync::Arc;
 use std::time::Duration;
@@ -12,7 +13,7 @@ use hdrhistogram::Histogram;
 use tokio::sync::Notify;
 use tokio::time::{sleep_until, Instant};
 
-use super::matcher::{MatchEvent, Matcher};
+use super::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
 use super::radio::{radio_hints, RadioReport, Radios};
 use super::roster::Roster;
 use super::schedule::Schedule;
@@ -22,7 +23,7 @@ use super::Nanos;
 use crate::frame::{self, Header, Msg, SysComp, Version};
 use crate::output::{Event, Reporter, StartInfo};
 use crate::probe::{Classified, EchoProbe};
-use crate::transport::{Inbound, LinkError, RxClock, Transport};
+use crate::transport::{Inbound, LinkError, PathId, RxClock, Transport};
 
 /// What the session needs to know, already validated.
 #[derive(Debug, Clone)]
@@ -130,6 +131,10 @@ struct Intake<'a, P> {
     probe: &'a mut P,
     events: &'a mut Vec<MatchEvent>,
     foreign_replies: &'a mut u64,
+    /// The link path each responder first answered from (links with
+    /// several peers): its ids are believed from that path only.
+    paths: &'a mut HashMap<SysComp, PathId>,
+    wrong_path_replies: &'a mut u64,
 }
 
 impl<P: EchoProbe> Intake<'_, P> {
@@ -140,7 +145,7 @@ impl<P: EchoProbe> Intake<'_, P> {
         report: &mut dyn Reporter,
     ) -> io::Result<()> {
         let mut output = Ok(());
-        for Inbound { frame, at, .. } in inbound.drain(..) {
+        for Inbound { frame, at, path } in inbound.drain(..) {
             let at = clock.ns(at);
             if let Msg::Heartbeat {
                 mav_type,
@@ -187,6 +192,13 @@ impl<P: EchoProbe> Intake<'_, P> {
             }
             match self.probe.classify(&frame, self.ours) {
                 Classified::Reply(lookup) => {
+                    // A reply naming a responder that answered from another
+                    // peer of this link (a spoofed id, or one system heard
+                    // through two routers) is counted, never measured.
+                    if self.paths.get(&frame.source).is_some_and(|&p| p != path) {
+                        *self.wrong_path_replies += 1;
+                        continue;
+                    }
                     let before = self.events.len();
                     let events = &mut *self.events;
                     self.matcher
@@ -202,6 +214,11 @@ impl<P: EchoProbe> Intake<'_, P> {
                         {
                             if responder == frame.source {
                                 self.probe.on_reply(&frame, sent_at, at);
+                                // Bound by its first accepted reply, so
+                                // stale forgeries cannot claim an id first.
+                                if self.paths.len() < MAX_RESPONDERS {
+                                    self.paths.entry(responder).or_insert(path);
+                                }
                             }
                         }
                     }
@@ -260,6 +277,8 @@ pub async fn run<T: Transport, P: EchoProbe>(
     let mut events: Vec<MatchEvent> = Vec::new();
     let mut inbound: Vec<Inbound> = Vec::new();
     let mut foreign_replies = 0u64;
+    let mut paths: HashMap<SysComp, PathId> = HashMap::new();
+    let mut wrong_path_replies = 0u64;
     let mut interrupted = false;
     let mut link_error: Option<LinkError> = None;
     let mut pacing = Pacing::default();
@@ -342,6 +361,8 @@ pub async fn run<T: Transport, P: EchoProbe>(
             probe: &mut probe,
             events: &mut events,
             foreign_replies: &mut foreign_replies,
+            paths: &mut paths,
+            wrong_path_replies: &mut wrong_path_replies,
         };
         let next_send = schedule.as_ref().and_then(|s| s.next_due());
         let now = clock.now();
@@ -460,6 +481,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
         in_flight,
         responders,
         foreign_replies,
+        wrong_path_replies,
         untracked_replies: matcher.untracked(),
         frames: link.scan_stats(),
         hints,

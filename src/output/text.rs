@@ -466,6 +466,13 @@ impl<W: Write> Reporter for TextReporter<W> {
                 f.bad_crc, f.skipped_bytes, f.unknown_id, f.truncated, s.foreign_replies
             )?;
         }
+        if s.wrong_path_replies > 0 {
+            writeln!(
+                out,
+                "link: {} replies rejected: a responder's ids from another peer than the one it answered from",
+                s.wrong_path_replies
+            )?;
+        }
         if s.downtime_s > 0.0 {
             writeln!(
                 out,
