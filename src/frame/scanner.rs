@@ -126,6 +126,35 @@ enum Step {
     NeedMore,
 }
 
+/// True when `frame` (exactly one frame long) is a known message with a
+/// matching CRC.
+fn is_good_frame(frame: &[u8]) -> bool {
+    extra_crc(message_id(frame)).is_some_and(|extra| crc_matches(frame, extra))
+}
+
+/// True when a whole good frame lies inside the candidate's claimed extent
+/// `buf[1..len]` (as far as the bytes are there). Such a candidate is junk
+/// whose length field lies (or a frame tunnelled in a payload, which loses
+/// to the frame inside): rejecting it at once means a real frame behind a
+/// false start byte is found without waiting for the bytes the false one
+/// claims, which on a quiet serial link could hold it back indefinitely.
+/// The answer depends only on bytes within the extent, so a byte stream
+/// gives the same frames whatever its read splits.
+fn hides_a_good_frame(buf: &[u8], len: usize) -> bool {
+    let end = len.min(buf.len());
+    let mut i = 1;
+    while let Some(offset) = buf[i..end].iter().position(|&b| b == STX_V1 || b == STX_V2) {
+        let at = i + offset;
+        if let Ok(Some(inner)) = frame_len(&buf[at..]) {
+            if at + inner <= end && is_good_frame(&buf[at..at + inner]) {
+                return true;
+            }
+        }
+        i = at + 1;
+    }
+    false
+}
+
 /// Judges the candidate at `buf[0]` (which is a start byte). `at_end` says
 /// no more bytes will follow `buf` (end of a datagram).
 fn judge(buf: &[u8], at_end: bool) -> Step {
@@ -134,6 +163,9 @@ fn judge(buf: &[u8], at_end: bool) -> Step {
         Ok(None) => return Step::NeedMore,
         Ok(Some(len)) => len,
     };
+    if hides_a_good_frame(buf, len) {
+        return Step::Reject { bad_crc: false };
+    }
     if buf.len() < len {
         return Step::NeedMore;
     }
@@ -305,7 +337,22 @@ mod tests {
         data.extend([0u8; 40]);
         let (frames, stats) = collect_datagram(&data);
         assert_eq!(frames.len(), 1, "{stats:?}");
-        assert_eq!(stats.bad_crc, 1);
+        // Rejected for the good frame inside it, before any CRC check.
+        assert_eq!((stats.bad_crc, stats.skipped_bytes), (0, 6 + 40));
+    }
+
+    #[test]
+    fn lying_length_on_a_stream_does_not_hold_back_the_frame_behind_it() {
+        // A false v1 start claiming 255 bytes, then one real frame, then
+        // silence: the frame is delivered now, not when 263 bytes arrived.
+        let mut data = vec![STX_V1, 255, 0, 1, 1, 4];
+        data.extend(ping_frame(Version::V2, 9));
+        let mut scanner = StreamScanner::new();
+        let mut count = 0;
+        scanner.push(&data, &mut |_| count += 1);
+        assert_eq!(count, 1);
+        assert_eq!(scanner.stats.skipped_bytes, 6);
+        assert_eq!(scanner.pending_bytes(), 0);
     }
 
     #[test]

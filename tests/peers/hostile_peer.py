@@ -7,7 +7,7 @@ Per request i (mavping's n-th request, counted here):
   i % 6 == 0  a bad-CRC PING datagram first (no start byte after its own)
   i % 6 == 1  an unknown message id frame (0xEEEEEE) in its own datagram
   i % 6 == 2  a v1 start byte whose length (255) lies, then the reply in the
-              same datagram (the reply must still be found; UDP only)
+              same datagram or write (the reply must still be found at once)
   i % 6 == 3  the reply is MAVLink 2 *signed* (a key mavping does not have)
   i % 6 == 4  the reply is MAVLink 1 (v1/v2 mixed)
   i % 4 == 0  a reply echoing a wrong time_usec for this seq, sent first
@@ -170,9 +170,7 @@ def main():
                 truth["v1"] += 1
             else:
                 reply = v2.ping_encode(msg.time_usec, msg.seq, ts, tc).pack(v2)
-            # On a stream a lying length holds what follows until enough
-            # bytes arrive to judge it (see README): datagrams only.
-            if kind == 2 and not args.serial:
+            if kind == 2:
                 reply = LYING + reply
                 truth["lying"] += 1
                 truth["skipped_bytes"] += len(LYING)
