@@ -22,14 +22,12 @@ fn summary(out: &str) -> Value {
 
 fn responder<'a>(s: &'a Value, id: &str) -> &'a Value {
     let (sys, comp) = id.split_once('/').unwrap();
+    let (sys, comp): (u64, u64) = (sys.parse().unwrap(), comp.parse().unwrap());
     s["responders"]
         .as_array()
         .unwrap()
         .iter()
-        .find(|r| {
-            r["responder"]["sysid"].to_string() == sys
-                && r["responder"]["compid"].to_string() == comp
-        })
+        .find(|r| r["responder"]["sysid"] == sys && r["responder"]["compid"] == comp)
         .unwrap_or_else(|| panic!("no responder {id} in {s}"))
 }
 
