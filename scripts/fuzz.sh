@@ -26,7 +26,7 @@ for target in "${TARGETS[@]}"; do
   set +e
   "${CARGO[@]}" fuzz run -O "$target" "corpus/$target" "seeds/$target" -- \
     -max_total_time="$SECONDS_PER_TARGET" -timeout=10 -print_final_stats=1 2>&1 |
-    grep -E '^(#[0-9]+ +DONE|stat::number_of_executed_units|stat::average_exec_per_sec|stat::peak_rss_mb|INFO: seed corpus|==[0-9]+==|SUMMARY|Test unit written)'
+    awk '/cov:/ { last = $0 } /^stat::|^INFO: seed corpus|^==[0-9]+==|^SUMMARY|Test unit written|panicked/ { print } END { if (last) print "last status: " last }'
   status=${PIPESTATUS[0]}
   set -e
   if [ "$status" -ne 0 ]; then

@@ -545,3 +545,39 @@ fn spoofed_ids_from_another_peer_are_rejected_not_measured() {
     assert!(n(r, "lost") > 0, "{r}");
     assert_eq!(n(r, "sent"), n(r, "received") + n(r, "lost"), "{r}");
 }
+
+#[test]
+fn timesync_replies_echoing_a_wrong_ts1_are_stale_not_measured() {
+    let port = free_udp_port();
+    let peer = Peer::start("hostile_peer.py", &["--port", &port.to_string()]);
+    let (code, out, err) = run_mavping(&[
+        "--json",
+        "-q",
+        "--probe",
+        "timesync",
+        "-c",
+        "30",
+        "-i",
+        "10ms",
+        "-W",
+        "2s",
+        &format!("udpout:127.0.0.1:{port}"),
+    ]);
+    let truth = peer.finish();
+    assert_eq!(code, 0, "{err}");
+    let s = summary(&out);
+    let r = responder(&s, "1/1");
+    assert_eq!(n(&truth, "timesync_requests"), 30, "{truth}");
+    assert_eq!(
+        (
+            n(r, "sent"),
+            n(r, "received"),
+            n(r, "lost"),
+            n(r, "duplicate")
+        ),
+        (30, 30, 0, 0),
+        "{r}"
+    );
+    assert_eq!(n(r, "stale"), n(&truth, "wrong_ts1"), "{r}");
+    assert_eq!(n(&truth, "wrong_ts1"), 10);
+}

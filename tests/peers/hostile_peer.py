@@ -14,6 +14,8 @@ Per request i (mavping's n-th request, counted here):
   i % 4 == 1  a reply for a seq never sent (seq + 1,000,000)
   i % 5 == 0  a reply claiming 7/1 (an id that never answers) with a wrong
               time_usec: stale for 7/1, never received
+TIMESYNC requests get their reply, and every 3rd one first a reply echoing
+a wrong ts1.
 Serial mode (--serial DEV): one byte stream; the replies and junk are cut
 into pieces written separately (frames split across reads), and a
 truncated frame (first 9 bytes of a HEARTBEAT) precedes every 3rd reply.
@@ -85,7 +87,8 @@ def main():
     signed = encoder(mav2, key=bytes(range(32)))
     spoof = encoder(mav2, sysid=7)
     truth = dict(requests=0, replies=0, signed=0, v1=0, bad_crc=0, unknown_id=0, lying=0,
-                 wrong_time=0, unsent_seq=0, spoofed=0, skipped_bytes=0, truncated_sent=0)
+                 wrong_time=0, unsent_seq=0, spoofed=0, skipped_bytes=0, truncated_sent=0,
+                 timesync_requests=0, wrong_ts1=0)
     bad = bad_crc_frame()
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
@@ -139,6 +142,19 @@ def main():
         except InterruptedError:
             continue
         for msg in msgs:
+            if msg.get_type() == "TIMESYNC" and msg.tc1 == 0:
+                # TIMESYNC: the reply, and before every 3rd one a reply
+                # echoing a wrong ts1 (targets 0/0, as ArduPilot sends).
+                j = truth["timesync_requests"]
+                truth["timesync_requests"] += 1
+                out = []
+                if j % 3 == 0:
+                    out.append(v2.timesync_encode(12345, msg.ts1 + 7).pack(v2))
+                    truth["wrong_ts1"] += 1
+                out.append(v2.timesync_encode(time.monotonic_ns(), msg.ts1).pack(v2))
+                truth["replies"] += 1
+                send(out)
+                continue
             if msg.get_type() != "PING" or msg.target_system != 0:
                 continue
             i = truth["requests"]
