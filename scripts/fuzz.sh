@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Bounded coverage-guided fuzzing of the frame scanner and the matcher.
-#   scripts/fuzz.sh [SECONDS]   (default 60 s per target)
+#   scripts/fuzz.sh [SECONDS] [TARGET...]   (default 60 s per target; both targets)
 # Needs cargo-fuzz (`cargo install cargo-fuzz`) and a nightly toolchain, or
 # the stable one with RUSTC_BOOTSTRAP=1 (set here when no nightly exists).
 # The committed seeds (fuzz/seeds/<target>, real v1, v2 and signed frames
@@ -10,7 +10,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
 SECONDS_PER_TARGET=${1:-60}
-TARGETS=(scanner matcher)
+shift || true
+TARGETS=("$@")
+[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(scanner matcher)
 
 if rustup toolchain list 2>/dev/null | grep -q '^nightly'; then
   CARGO=(cargo +nightly)

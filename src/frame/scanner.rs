@@ -132,38 +132,62 @@ fn is_good_frame(frame: &[u8]) -> bool {
     extra_crc(message_id(frame)).is_some_and(|extra| crc_matches(frame, extra))
 }
 
-/// True when a whole good frame lies inside the candidate's claimed extent
-/// `buf[1..len]` (as far as the bytes are there). Such a candidate is junk
+/// Whether a good frame starts at each offset of one scanned buffer,
+/// worked out at most once per offset: every candidate looks inside its
+/// extent, so without this crafted junk could cost a CRC per byte per
+/// candidate. Allocated only when a start byte is found inside a candidate.
+#[derive(Default)]
+struct Inner {
+    /// Per offset: 0 not yet known, 1 no good frame, 2 a good one.
+    known: Vec<u8>,
+}
+
+impl Inner {
+    fn good_at(&mut self, buf: &[u8], at: usize, end: usize) -> bool {
+        if self.known.len() < buf.len() {
+            self.known.resize(buf.len(), 0);
+        }
+        if self.known[at] == 0 {
+            let good = matches!(frame_len(&buf[at..]), Ok(Some(len))
+                if at + len <= buf.len() && is_good_frame(&buf[at..at + len]));
+            self.known[at] = 1 + u8::from(good);
+        }
+        // Good, and it ends inside the candidate's extent.
+        self.known[at] == 2 && matches!(frame_len(&buf[at..]), Ok(Some(len)) if at + len <= end)
+    }
+}
+
+/// True when a whole good frame lies inside the candidate at `buf[start]`
+/// whose claimed extent is `len` bytes (as far as the bytes are there). Such a candidate is junk
 /// whose length field lies (or a frame tunnelled in a payload, which loses
 /// to the frame inside): rejecting it at once means a real frame behind a
 /// false start byte is found without waiting for the bytes the false one
 /// claims, which on a quiet serial link could hold it back indefinitely.
 /// The answer depends only on bytes within the extent, so a byte stream
 /// gives the same frames whatever its read splits.
-fn hides_a_good_frame(buf: &[u8], len: usize) -> bool {
-    let end = len.min(buf.len());
-    let mut i = 1;
+fn hides_a_good_frame(buf: &[u8], start: usize, len: usize, inner: &mut Inner) -> bool {
+    let end = (start + len).min(buf.len());
+    let mut i = start + 1;
     while let Some(offset) = buf[i..end].iter().position(|&b| b == STX_V1 || b == STX_V2) {
         let at = i + offset;
-        if let Ok(Some(inner)) = frame_len(&buf[at..]) {
-            if at + inner <= end && is_good_frame(&buf[at..at + inner]) {
-                return true;
-            }
+        if inner.good_at(buf, at, end) {
+            return true;
         }
         i = at + 1;
     }
     false
 }
 
-/// Judges the candidate at `buf[0]` (which is a start byte). `at_end` says
-/// no more bytes will follow `buf` (end of a datagram).
-fn judge(buf: &[u8], at_end: bool) -> Step {
+/// Judges the candidate at `whole[start]` (a start byte). `at_end` says
+/// no more bytes will follow `whole` (end of a datagram).
+fn judge(whole: &[u8], start: usize, at_end: bool, inner: &mut Inner) -> Step {
+    let buf = &whole[start..];
     let len = match frame_len(buf) {
         Err(()) => return Step::Reject { bad_crc: false },
         Ok(None) => return Step::NeedMore,
         Ok(Some(len)) => len,
     };
-    if hides_a_good_frame(buf, len) {
+    if hides_a_good_frame(whole, start, len, inner) {
         return Step::Reject { bad_crc: false };
     }
     if buf.len() < len {
@@ -188,6 +212,7 @@ fn judge(buf: &[u8], at_end: bool) -> Step {
 /// leading bytes are finished with; with `at_end` that is all of them.
 fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) -> usize {
     let mut pos = 0;
+    let mut inner = Inner::default();
     loop {
         let Some(offset) = buf[pos..].iter().position(|&b| b == STX_V1 || b == STX_V2) else {
             stats.skipped_bytes += (buf.len() - pos) as u64;
@@ -195,7 +220,7 @@ fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMu
         };
         stats.skipped_bytes += offset as u64;
         pos += offset;
-        match judge(&buf[pos..], at_end) {
+        match judge(buf, pos, at_end, &mut inner) {
             Step::Frame(len) => {
                 stats.frames += 1;
                 on_frame(&buf[pos..pos + len]);
