@@ -132,28 +132,48 @@ fn is_good_frame(frame: &[u8]) -> bool {
     extra_crc(message_id(frame)).is_some_and(|extra| crc_matches(frame, extra))
 }
 
-/// Whether a good frame starts at each offset of one scanned buffer,
-/// worked out at most once per offset: every candidate looks inside its
-/// extent, so without this crafted junk could cost a CRC per byte per
-/// candidate. Allocated only when a start byte is found inside a candidate.
+/// Whether a good frame starts at each offset of the scanned bytes, worked
+/// out at most once per offset (kept across reads of a stream): every
+/// candidate looks inside its extent, so without this crafted junk read a
+/// byte at a time could cost a CRC per byte per candidate. Allocated only
+/// when a start byte is found inside a candidate.
 #[derive(Default)]
 struct Inner {
-    /// Per offset: 0 not yet known, 1 no good frame, 2 a good one.
-    known: Vec<u8>,
+    /// Per offset: 0 not known yet (or the frame is not all there yet),
+    /// 1 no good frame, otherwise 2 + the good frame's length.
+    known: Vec<u16>,
 }
 
 impl Inner {
+    /// True when a good frame starts at `buf[at]` and ends by `end`.
     fn good_at(&mut self, buf: &[u8], at: usize, end: usize) -> bool {
         if self.known.len() < buf.len() {
             self.known.resize(buf.len(), 0);
         }
         if self.known[at] == 0 {
-            let good = matches!(frame_len(&buf[at..]), Ok(Some(len))
-                if at + len <= buf.len() && is_good_frame(&buf[at..at + len]));
-            self.known[at] = 1 + u8::from(good);
+            self.known[at] = match frame_len(&buf[at..]) {
+                Err(()) => 1,
+                Ok(Some(len)) if at + len <= buf.len() => {
+                    if is_good_frame(&buf[at..at + len]) {
+                        2 + len as u16
+                    } else {
+                        1
+                    }
+                }
+                // Not all there yet: decided when more bytes come.
+                Ok(_) => return false,
+            };
         }
-        // Good, and it ends inside the candidate's extent.
-        self.known[at] == 2 && matches!(frame_len(&buf[at..]), Ok(Some(len)) if at + len <= end)
+        self.known[at] >= 2 && at + usize::from(self.known[at] - 2) <= end
+    }
+
+    /// The first `done` bytes of the stream buffer were consumed.
+    fn consumed(&mut self, done: usize) {
+        if self.known.len() > done {
+            self.known.drain(..done);
+        } else {
+            self.known.clear();
+        }
     }
 }
 
@@ -210,9 +230,14 @@ fn judge(whole: &[u8], start: usize, at_end: bool, inner: &mut Inner) -> Step {
 
 /// Scans `buf`, calling `on_frame` with each good frame. Returns how many
 /// leading bytes are finished with; with `at_end` that is all of them.
-fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) -> usize {
+fn scan(
+    buf: &[u8],
+    at_end: bool,
+    stats: &mut ScanStats,
+    inner: &mut Inner,
+    on_frame: &mut dyn FnMut(&[u8]),
+) -> usize {
     let mut pos = 0;
-    let mut inner = Inner::default();
     loop {
         let Some(offset) = buf[pos..].iter().position(|&b| b == STX_V1 || b == STX_V2) else {
             stats.skipped_bytes += (buf.len() - pos) as u64;
@@ -220,7 +245,7 @@ fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMu
         };
         stats.skipped_bytes += offset as u64;
         pos += offset;
-        match judge(buf, pos, at_end, &mut inner) {
+        match judge(buf, pos, at_end, inner) {
             Step::Frame(len) => {
                 stats.frames += 1;
                 on_frame(&buf[pos..pos + len]);
@@ -254,13 +279,14 @@ fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMu
 
 /// Scans one datagram on its own.
 pub fn scan_datagram(datagram: &[u8], stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) {
-    scan(datagram, true, stats, on_frame);
+    scan(datagram, true, stats, &mut Inner::default(), on_frame);
 }
 
 /// Scanner for a byte stream: keeps an unfinished frame between reads.
 /// Its buffer never grows past a few frames, whatever the input.
 pub struct StreamScanner {
     buf: Vec<u8>,
+    inner: Inner,
     pub stats: ScanStats,
 }
 
@@ -274,6 +300,7 @@ impl StreamScanner {
     pub fn new() -> Self {
         StreamScanner {
             buf: Vec::with_capacity(4 * MAX_FRAME_LEN),
+            inner: Inner::default(),
             stats: ScanStats::default(),
         }
     }
@@ -282,11 +309,13 @@ impl StreamScanner {
     pub fn push(&mut self, data: &[u8], on_frame: &mut dyn FnMut(&[u8])) {
         if self.buf.is_empty() {
             // Fast path: no carried tail, scan the read in place.
-            let done = scan(data, false, &mut self.stats, on_frame);
+            let done = scan(data, false, &mut self.stats, &mut self.inner, on_frame);
+            self.inner.consumed(done);
             self.buf.extend_from_slice(&data[done..]);
         } else {
             self.buf.extend_from_slice(data);
-            let done = scan(&self.buf, false, &mut self.stats, on_frame);
+            let done = scan(&self.buf, false, &mut self.stats, &mut self.inner, on_frame);
+            self.inner.consumed(done);
             self.buf.drain(..done);
         }
         // The tail is one unfinished candidate, so it is at most one frame
