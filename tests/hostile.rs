@@ -581,3 +581,100 @@ fn timesync_replies_echoing_a_wrong_ts1_are_stale_not_measured() {
     assert_eq!(n(r, "stale"), n(&truth, "wrong_ts1"), "{r}");
     assert_eq!(n(&truth, "wrong_ts1"), 10);
 }
+
+/// The path rule does not lock out a responder that restarts on a new
+/// port: once it has been silent for a whole timeout, its ids are believed
+/// from the new peer.
+#[test]
+fn a_responder_restarted_on_a_new_port_is_measured_again() {
+    use std::io::{BufRead, BufReader, Read};
+
+    let port = free_udp_port();
+    let mut ping = mavping()
+        .args([
+            "--json",
+            "-c",
+            "150",
+            "-i",
+            "20ms",
+            "-W",
+            "200ms",
+            &format!("udpin:127.0.0.1:{port}"),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start_respond = || {
+        mavping()
+            .args(["respond", &format!("udpout:127.0.0.1:{port}")])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let replies_of = |mut child: std::process::Child| -> u64 {
+        signal(child.id(), "TERM");
+        let mut rest = String::new();
+        child
+            .stdout
+            .take()
+            .unwrap()
+            .read_to_string(&mut rest)
+            .unwrap();
+        let _ = child.wait();
+        rest.split(" replies sent")
+            .next()
+            .and_then(|x| x.rsplit(", ").next())
+            .and_then(|x| x.parse().ok())
+            .unwrap_or_else(|| panic!("respond said: {rest}"))
+    };
+    let mut first = Some(start_respond());
+    let mut second = None;
+    let mut first_replies = 0;
+    let mut lines = BufReader::new(ping.stdout.take().unwrap());
+    let (mut out, mut line) = (String::new(), String::new());
+    let (mut replies, mut last_reply_seq) = (0u64, 0u64);
+    while lines.read_line(&mut line).unwrap() > 0 {
+        let event: Value = serde_json::from_str(&line).unwrap_or(Value::Null);
+        match event["type"].as_str() {
+            Some("reply") => {
+                replies += 1;
+                last_reply_seq = event["seq"].as_u64().unwrap();
+                // After ten replies the first responder goes away.
+                if replies == 10 {
+                    first_replies = replies_of(first.take().unwrap());
+                }
+            }
+            // Ten intervals after its last reply, plus the timeout, have
+            // passed: it comes back from a new port.
+            Some("lost")
+                if second.is_none()
+                    && first.is_none()
+                    && event["seq"].as_u64().unwrap() >= last_reply_seq + 10 =>
+            {
+                second = Some(start_respond());
+            }
+            _ => {}
+        }
+        out.push_str(&line);
+        line.clear();
+    }
+    let mut err = String::new();
+    ping.stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
+        .unwrap();
+    let _ = ping.wait();
+    let second_replies = replies_of(second.expect("the responder came back"));
+    let s = summary(&out);
+    let r = responder(&s, "1/1");
+    assert!(second_replies > 10, "{second_replies} {err}");
+    assert_eq!(n(&s, "wrong_path_replies"), 0, "{s}");
+    assert_eq!(
+        n(r, "received") + n(r, "late") + n(r, "duplicate"),
+        first_replies + second_replies,
+        "{r}"
+    );
+}

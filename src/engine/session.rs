@@ -131,10 +131,13 @@ struct Intake<'a, P> {
     probe: &'a mut P,
     events: &'a mut Vec<MatchEvent>,
     foreign_replies: &'a mut u64,
-    /// The link path each responder first answered from (links with
-    /// several peers): its ids are believed from that path only.
-    paths: &'a mut HashMap<SysComp, PathId>,
+    /// The link path each responder answers from (links with several
+    /// peers) and when it last did: its ids are believed from that path
+    /// only, until it has been silent for a whole timeout (a responder that
+    /// restarts or reconnects comes back on a new path).
+    paths: &'a mut HashMap<SysComp, (PathId, Nanos)>,
     wrong_path_replies: &'a mut u64,
+    timeout: Nanos,
 }
 
 impl<P: EchoProbe> Intake<'_, P> {
@@ -195,7 +198,12 @@ impl<P: EchoProbe> Intake<'_, P> {
                     // A reply naming a responder that answered from another
                     // peer of this link (a spoofed id, or one system heard
                     // through two routers) is counted, never measured.
-                    if self.paths.get(&frame.source).is_some_and(|&p| p != path) {
+                    let timeout = self.timeout;
+                    if self
+                        .paths
+                        .get(&frame.source)
+                        .is_some_and(|&(p, last)| p != path && at < last.saturating_add(timeout))
+                    {
                         *self.wrong_path_replies += 1;
                         continue;
                     }
@@ -214,10 +222,12 @@ impl<P: EchoProbe> Intake<'_, P> {
                         {
                             if responder == frame.source {
                                 self.probe.on_reply(&frame, sent_at, at);
-                                // Bound by its first accepted reply, so
-                                // stale forgeries cannot claim an id first.
-                                if self.paths.len() < MAX_RESPONDERS {
-                                    self.paths.entry(responder).or_insert(path);
+                                // Bound by accepted replies only, so stale
+                                // forgeries cannot claim an id.
+                                if self.paths.len() < MAX_RESPONDERS
+                                    || self.paths.contains_key(&responder)
+                                {
+                                    self.paths.insert(responder, (path, at));
                                 }
                             }
                         }
@@ -277,7 +287,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
     let mut events: Vec<MatchEvent> = Vec::new();
     let mut inbound: Vec<Inbound> = Vec::new();
     let mut foreign_replies = 0u64;
-    let mut paths: HashMap<SysComp, PathId> = HashMap::new();
+    let mut paths: HashMap<SysComp, (PathId, Nanos)> = HashMap::new();
     let mut wrong_path_replies = 0u64;
     let mut interrupted = false;
     let mut link_error: Option<LinkError> = None;
@@ -363,6 +373,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
             foreign_replies: &mut foreign_replies,
             paths: &mut paths,
             wrong_path_replies: &mut wrong_path_replies,
+            timeout: timeout_ns,
         };
         let next_send = schedule.as_ref().and_then(|s| s.next_due());
         let now = clock.now();
