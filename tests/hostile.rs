@@ -217,12 +217,13 @@ fn flood_datagrams() -> (Vec<Vec<u8>>, u64) {
 
 #[test]
 fn flood_of_foreign_traffic_leaves_the_responders_counts_exact() {
+    use std::io::{BufRead, BufReader, Read};
+
     let port = free_udp_port();
     // mavping listens; `mavping respond` and the flood both send to it.
     let mut ping = mavping()
         .args([
             "--json",
-            "-q",
             "-c",
             "300",
             "-i",
@@ -237,9 +238,15 @@ fn flood_of_foreign_traffic_leaves_the_responders_counts_exact() {
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
+    let mut respond = mavping()
+        .args(["respond", &format!("udpout:127.0.0.1:{port}")])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
     let stop = Arc::new(AtomicBool::new(false));
     let sent = Arc::new(AtomicU64::new(0));
-    let flood = {
+    let start_flood = || {
         let (stop, sent) = (stop.clone(), sent.clone());
         std::thread::spawn(move || {
             let (datagrams, _) = flood_datagrams();
@@ -257,40 +264,36 @@ fn flood_of_foreign_traffic_leaves_the_responders_counts_exact() {
             }
         })
     };
-    let mut respond = mavping()
-        .args(["respond", &format!("udpout:127.0.0.1:{port}")])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::null())
-        .spawn()
+    // The flood starts once mavping has its responder (so a slow start of
+    // `mavping respond` on a busy machine cannot leave it unheard), and
+    // runs through the rest of the 300 requests.
+    let mut flood = None;
+    let mut lines = BufReader::new(ping.stdout.take().unwrap());
+    let (mut out, mut line) = (String::new(), String::new());
+    while lines.read_line(&mut line).unwrap() > 0 {
+        if flood.is_none() && line.contains(r#""type":"reply""#) {
+            flood = Some(start_flood());
+        }
+        out.push_str(&line);
+        line.clear();
+    }
+    let mut err = String::new();
+    ping.stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut err)
         .unwrap();
-    let out = ping.stdout.take().unwrap();
-    let (code, out, err) = {
-        use std::io::Read;
-        let mut text = String::new();
-        std::io::BufReader::new(out)
-            .read_to_string(&mut text)
-            .unwrap();
-        let mut err = String::new();
-        ping.stderr
-            .take()
-            .unwrap()
-            .read_to_string(&mut err)
-            .unwrap();
-        (ping.wait().unwrap().code().unwrap_or(-1), text, err)
-    };
+    let code = ping.wait().unwrap().code().unwrap_or(-1);
     stop.store(true, Ordering::Relaxed);
-    flood.join().unwrap();
+    flood.expect("a reply came").join().unwrap();
     signal(respond.id(), "TERM");
     let mut rest = String::new();
-    {
-        use std::io::Read;
-        respond
-            .stdout
-            .take()
-            .unwrap()
-            .read_to_string(&mut rest)
-            .unwrap();
-    }
+    respond
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut rest)
+        .unwrap();
     let _ = respond.wait();
     let s = summary(&out);
     let replies_sent: u64 = rest
