@@ -443,9 +443,10 @@ fn spoofed_ids_from_another_peer_are_rejected_not_measured() {
             let mut buf = [0u8; 2048];
             let mut heard = false;
             while !stop.load(Ordering::Relaxed) {
-                // Like a real system, say hello until mavping (which may
-                // not be listening yet) has heard us and sends requests.
-                if !heard {
+                // Once armed (mavping has heard the real responder, so its
+                // schedule runs), say hello like a real system until
+                // mavping has heard us and sends requests.
+                if !heard && armed.load(Ordering::Relaxed) {
                     let _ = sock.send_to(&hello, ("127.0.0.1", port));
                 }
                 let Ok(len) = sock.recv(&mut buf) else {
