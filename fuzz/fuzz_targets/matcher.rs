@@ -34,7 +34,13 @@ fuzz_target!(|data: &[u8]| {
     let mut tally: HashMap<SysComp, Tally> = HashMap::new();
     let record = |e: MatchEvent, tally: &mut HashMap<SysComp, Tally>| {
         let (who, t) = match e {
-            MatchEvent::Reply { responder, rtt, sent_at, at, .. } => {
+            MatchEvent::Reply {
+                responder,
+                rtt,
+                sent_at,
+                at,
+                ..
+            } => {
                 assert_eq!(rtt, at - sent_at);
                 (responder, 0)
             }

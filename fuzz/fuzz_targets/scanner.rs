@@ -47,10 +47,16 @@ fn check_accounting(frames: &[Vec<u8>], stats: &ScanStats, pending: usize, total
     let frame_bytes: u64 = frames.iter().map(|f| f.len() as u64).sum();
     assert_eq!(stats.frames, frames.len() as u64);
     let accounted = frame_bytes + stats.skipped_bytes + pending as u64;
-    assert!(accounted <= total as u64, "{stats:?} pending {pending} total {total}");
+    assert!(
+        accounted <= total as u64,
+        "{stats:?} pending {pending} total {total}"
+    );
     let unknown_bytes = total as u64 - accounted;
     assert!(unknown_bytes >= stats.unknown_id * MIN_FRAME, "{stats:?}");
-    assert!(unknown_bytes <= stats.unknown_id * MAX_FRAME_LEN as u64, "{stats:?}");
+    assert!(
+        unknown_bytes <= stats.unknown_id * MAX_FRAME_LEN as u64,
+        "{stats:?}"
+    );
 }
 
 fuzz_target!(|input: &[u8]| {
