@@ -61,7 +61,7 @@ Register-ArgumentCompleter -Native -CommandName 'mavping' -ScriptBlock {
             [CompletionResult]::new('-v', '-v', [CompletionResultType]::ParameterName, 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG')
             [CompletionResult]::new('--verbose', '--verbose', [CompletionResultType]::ParameterName, 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG')
             [CompletionResult]::new('--json', '--json', [CompletionResultType]::ParameterName, 'Same as --format json: newline-delimited JSON events on stdout')
-            [CompletionResult]::new('--reconnect', '--reconnect', [CompletionResultType]::ParameterName, 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run (pings sent while down count as lost)')
+            [CompletionResult]::new('--reconnect', '--reconnect', [CompletionResultType]::ParameterName, 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run; on udpout an ICMP "port unreachable" does not end it (pings sent while down count as lost)')
             [CompletionResult]::new('--live', '--live', [CompletionResultType]::ParameterName, 'Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal')
             [CompletionResult]::new('--require-signed', '--require-signed', [CompletionResultType]::ParameterName, 'With a signing key: refuse unsigned replies too (wrongly signed and replayed ones are always refused); refused frames are counted, never measured')
             [CompletionResult]::new('-h', '-h', [CompletionResultType]::ParameterName, 'Print help (see more with ''--help'')')

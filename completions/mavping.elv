@@ -58,7 +58,7 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand -v 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
             cand --verbose 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
             cand --json 'Same as --format json: newline-delimited JSON events on stdout'
-            cand --reconnect 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run (pings sent while down count as lost)'
+            cand --reconnect 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run; on udpout an ICMP "port unreachable" does not end it (pings sent while down count as lost)'
             cand --live 'Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal'
             cand --require-signed 'With a signing key: refuse unsigned replies too (wrongly signed and replayed ones are always refused); refused frames are counted, never measured'
             cand -h 'Print help (see more with ''--help'')'

@@ -66,7 +66,7 @@ complete -c mavping -n "__fish_mavping_needs_command" -l every-reply -d 'Print a
 complete -c mavping -n "__fish_mavping_needs_command" -l no-heartbeat -d 'Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)'
 complete -c mavping -n "__fish_mavping_needs_command" -s v -l verbose -d 'More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG'
 complete -c mavping -n "__fish_mavping_needs_command" -l json -d 'Same as --format json: newline-delimited JSON events on stdout'
-complete -c mavping -n "__fish_mavping_needs_command" -l reconnect -d 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run (pings sent while down count as lost)'
+complete -c mavping -n "__fish_mavping_needs_command" -l reconnect -d 'When a tcp or serial link breaks, reconnect with backoff instead of ending the run; on udpout an ICMP "port unreachable" does not end it (pings sent while down count as lost)'
 complete -c mavping -n "__fish_mavping_needs_command" -l live -d 'Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal'
 complete -c mavping -n "__fish_mavping_needs_command" -l require-signed -d 'With a signing key: refuse unsigned replies too (wrongly signed and replayed ones are always refused); refused frames are counted, never measured'
 complete -c mavping -n "__fish_mavping_needs_command" -s h -l help -d 'Print help (see more with \'--help\')'

@@ -36,6 +36,26 @@ pub fn print_error(error: &dyn std::fmt::Display) {
     let _ = writeln!(io::stderr(), "mavping: {error}");
 }
 
+/// A command-line parse error on one line (`mavping: ...`, exit 2), as
+/// every other usage error; help and version print as clap prints them.
+pub fn usage_error(error: &clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(
+        error.kind(),
+        ErrorKind::DisplayHelp
+            | ErrorKind::DisplayVersion
+            | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        let _ = error.print();
+        return ExitCode::from(u8::try_from(error.exit_code()).unwrap_or(2));
+    }
+    let text = error.render().to_string();
+    let line = text.lines().next().unwrap_or("bad arguments");
+    let line = line.strip_prefix("error: ").unwrap_or(line);
+    print_error(&format_args!("{line} (see --help)"));
+    ExitCode::from(exit::ERROR)
+}
+
 /// `--generate`: completions and the man page, from the clap definition.
 pub fn generate(kind: Generate, out: &mut dyn Write) -> io::Result<()> {
     use clap_complete::Shell;
@@ -257,6 +277,23 @@ async fn run_ping(config: &Config) -> u8 {
             session::run(&config.session, &mut link, probe, &mut report, stop).await
         }
     };
+    // The simulated link's ground truth, for soak scripts (`-v`).
+    if let Link::Sim(sim) = &link {
+        for (id, t) in sim.truth() {
+            tracing::info!(
+                "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
+                 duplicated={} outage={} spiked={} spiked_before_first={}",
+                t.answered,
+                t.dropped,
+                t.dropped_before_first,
+                t.delivered,
+                t.duplicated,
+                t.outage,
+                t.spiked,
+                t.spiked_before_first
+            );
+        }
+    }
     let mut outcome = outcome;
     if let Some(w) = wire {
         capacity::apply(&mut outcome.summary, w);

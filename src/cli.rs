@@ -8,12 +8,21 @@ use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 use crate::verdict::{Expected, RttLimit};
 
 /// Parses "250ms", "2s", "1m30s", or a plain number of seconds ("0.2").
+/// At most a year: anything longer is a typo, and would overflow the
+/// clock arithmetic (`Instant + Duration`) that schedules it.
 pub fn parse_duration(s: &str) -> Result<Duration, String> {
-    if let Ok(secs) = s.parse::<f64>() {
-        return Duration::try_from_secs_f64(secs)
-            .map_err(|_| format!("'{s}' is not a duration of zero or more seconds"));
+    const MAX: Duration = Duration::from_secs(365 * 86_400);
+    let d = match s.parse::<f64>() {
+        Ok(secs) => Duration::try_from_secs_f64(secs)
+            .map_err(|_| format!("'{s}' is not a duration of zero or more seconds"))?,
+        Err(_) => {
+            humantime::parse_duration(s).map_err(|e| format!("'{s}': {e} (e.g. 250ms, 2s, 1m)"))?
+        }
+    };
+    if d > MAX {
+        return Err(format!("'{s}': at most 365 days"));
     }
-    humantime::parse_duration(s).map_err(|e| format!("'{s}': {e} (e.g. 250ms, 2s, 1m)"))
+    Ok(d)
 }
 
 #[derive(Debug, Parser)]
@@ -39,6 +48,8 @@ pub fn parse_duration(s: &str) -> Result<Duration, String> {
         or link errors (on any link)."
 )]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
+// `-i -1` reaches the value parser (and a clear error), not "unexpected argument".
+#[command(allow_negative_numbers = true)]
 pub struct Cli {
     #[command(flatten)]
     pub ping: PingArgs,
@@ -139,6 +150,7 @@ pub enum Generate {
 #[derive(Debug, Subcommand)]
 pub enum Mode {
     /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG
+    #[command(allow_negative_numbers = true)]
     Respond(RespondArgs),
 }
 
@@ -267,7 +279,8 @@ pub struct PingArgs {
     pub baud: u32,
 
     /// When a tcp or serial link breaks, reconnect with backoff instead of
-    /// ending the run (pings sent while down count as lost)
+    /// ending the run; on udpout an ICMP "port unreachable" does not end it
+    /// (pings sent while down count as lost)
     #[arg(long, env = "MAVPING_RECONNECT")]
     pub reconnect: bool,
     /// What to send: ping, timesync (also ArduPilot; measures clock offset), command

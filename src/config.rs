@@ -31,6 +31,8 @@ fn invalid(msg: impl Into<String>) -> ConfigError {
 /// large pending table: lower the rate or the timeout.
 pub const MAX_IN_FLIGHT: u64 = 1 << 21;
 const MAX_RATE: f64 = 1_000_000.0;
+/// The longest interval between requests (the lowest rate).
+const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
 const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
 
 #[derive(Debug, Clone)]
@@ -226,6 +228,12 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
                     "--rate {rate}: expected more than 0 and at most {MAX_RATE} requests per second"
                 )));
             }
+            // A tiny rate would mean an interval past what a Duration holds.
+            if rate < 1.0 / MAX_INTERVAL.as_secs_f64() {
+                return Err(invalid(format!(
+                    "--rate {rate}: at least one request a day (1.2e-5 per second)"
+                )));
+            }
             Duration::from_secs_f64(1.0 / rate)
         }
         (None, Some(interval)) => interval,
@@ -234,6 +242,12 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
     if interval < Duration::from_micros(1) {
         return Err(invalid(format!(
             "--interval {}: at least 1us (1,000,000 requests per second)",
+            humantime::format_duration(interval)
+        )));
+    }
+    if interval > MAX_INTERVAL {
+        return Err(invalid(format!(
+            "--interval {}: at most 1 day",
             humantime::format_duration(interval)
         )));
     }
@@ -451,7 +465,9 @@ impl TryFrom<&RespondArgs> for RespondConfig {
             verbose: cli.verbose,
             link_options: LinkOptions {
                 baud: validate_baud(cli.baud)?,
-                reconnect: false,
+                // A responder outlives its pingers: one that is not up yet
+                // or restarts must not end it.
+                reconnect: true,
             },
             // A responder with a key answers only signed requests.
             signing: signing_key(&cli.signing)?.map(|key| SigningConfig {
@@ -806,6 +822,8 @@ mod tests {
             ("-W 2h sim:", "at most 1h"),
             ("-w 0 sim:", "--deadline 0"),
             ("-i soon sim:", "soon"),
+            ("--rate 1e-30 sim:", "at least one request a day"),
+            ("-i 2d sim:", "at most 1 day"),
             ("--rate 100000 -W 1h sim:", "in flight"),
             ("-i 1s --rate 5 sim:", "cannot be used with"),
             ("udpout:nowhere", "accepted forms"),

@@ -3,5 +3,8 @@ use std::process::ExitCode;
 use clap::Parser;
 
 fn main() -> ExitCode {
-    mavping::app::main(&mavping::cli::Cli::parse())
+    match mavping::cli::Cli::try_parse() {
+        Ok(cli) => mavping::app::main(&cli),
+        Err(error) => mavping::app::usage_error(&error),
+    }
 }

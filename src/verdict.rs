@@ -291,6 +291,7 @@ mod tests {
             in_flight: 0,
             responders,
             foreign_replies: 0,
+            wrong_path_replies: 0,
             untracked_replies: 0,
             frames: Default::default(),
             hints: vec![],

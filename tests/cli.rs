@@ -205,6 +205,40 @@ fn respond_on_a_port_in_use_exits_2() {
     assert!(err.contains("in use"), "{err}");
 }
 
+/// A responder may start before its pinger: the ICMP "port unreachable"
+/// its first HEARTBEATs draw must not end it (this raced in a test).
+#[test]
+fn respond_udpout_outlives_a_pinger_that_is_not_up_yet() {
+    let port = free_udp_port();
+    let respond = mavping()
+        .args(["respond", &format!("udpout:127.0.0.1:{port}")])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Long enough for HEARTBEATs to hit the closed port and draw ICMP.
+    std::thread::sleep(Duration::from_millis(1500));
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "5",
+        "-i",
+        "50ms",
+        "-W",
+        "2s",
+        &format!("udpin:127.0.0.1:{port}"),
+    ]);
+    signal(respond.id(), "TERM");
+    let (_, respond_out, respond_err) = wait_output(respond, Duration::from_secs(10));
+    assert_eq!(
+        code, 0,
+        "{out}{err}
+respond: {respond_out}{respond_err}"
+    );
+    let counts = text_counts(&out, "1/1").expect("1/1 answered");
+    assert_eq!((counts.received, counts.lost), (5, 0), "{out}");
+    assert!(respond_out.contains("5 replies sent"), "{respond_out}");
+}
+
 #[test]
 fn seeded_virtual_timesync_and_command_runs_are_reproducible() {
     for probe in ["timesync", "command"] {

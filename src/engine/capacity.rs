@@ -250,6 +250,7 @@ mod tests {
                 clock: None,
             }],
             foreign_replies: 0,
+            wrong_path_replies: 0,
             untracked_replies: 0,
             frames: Default::default(),
             hints: vec![],

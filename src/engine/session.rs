@@ -4,6 +4,7 @@
 //! The only place that reads a clock. Everything it decides, it decides
 //! through the pure matcher with explicit timestamps.
 
+use std::collections::HashMap;
 use std::io;
 use std::sync::Arc;
 use std::time::Duration;
@@ -12,7 +13,7 @@ use hdrhistogram::Histogram;
 use tokio::sync::Notify;
 use tokio::time::{sleep_until, Instant};
 
-use super::matcher::{MatchEvent, Matcher};
+use super::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
 use super::radio::{radio_hints, RadioReport, Radios};
 use super::roster::Roster;
 use super::schedule::Schedule;
@@ -23,7 +24,7 @@ use crate::frame::signing::{self, Gate, Signer, SigningConfig};
 use crate::frame::{self, Header, Msg, SysComp, Version};
 use crate::output::{Event, Reporter, StartInfo};
 use crate::probe::{Classified, EchoProbe};
-use crate::transport::{Inbound, LinkError, RxClock, Transport};
+use crate::transport::{Inbound, LinkError, PathId, RxClock, Transport};
 
 /// What the session needs to know, already validated.
 #[derive(Debug, Clone)]
@@ -150,6 +151,13 @@ struct Intake<'a, P> {
     events: &'a mut Vec<MatchEvent>,
     foreign_replies: &'a mut u64,
     gate: &'a mut Option<Gate>,
+    /// The link path each responder answers from (links with several
+    /// peers) and when it last did: its ids are believed from that path
+    /// only, until it has been silent for a whole timeout (a responder that
+    /// restarts or reconnects comes back on a new path).
+    paths: &'a mut HashMap<SysComp, (PathId, Nanos)>,
+    wrong_path_replies: &'a mut u64,
+    timeout: Nanos,
 }
 
 impl<P: EchoProbe> Intake<'_, P> {
@@ -164,7 +172,7 @@ impl<P: EchoProbe> Intake<'_, P> {
             frame,
             at,
             signature,
-            ..
+            path,
         } in inbound.drain(..)
         {
             if !admitted(self.gate, &frame, signature.as_ref()) {
@@ -216,6 +224,18 @@ impl<P: EchoProbe> Intake<'_, P> {
             }
             match self.probe.classify(&frame, self.ours) {
                 Classified::Reply(lookup) => {
+                    // A reply naming a responder that answered from another
+                    // peer of this link (a spoofed id, or one system heard
+                    // through two routers) is counted, never measured.
+                    let timeout = self.timeout;
+                    if self
+                        .paths
+                        .get(&frame.source)
+                        .is_some_and(|&(p, last)| p != path && at < last.saturating_add(timeout))
+                    {
+                        *self.wrong_path_replies += 1;
+                        continue;
+                    }
                     let before = self.events.len();
                     let events = &mut *self.events;
                     self.matcher
@@ -231,6 +251,13 @@ impl<P: EchoProbe> Intake<'_, P> {
                         {
                             if responder == frame.source {
                                 self.probe.on_reply(&frame, sent_at, at);
+                                // Bound by accepted replies only, so stale
+                                // forgeries cannot claim an id.
+                                if self.paths.len() < MAX_RESPONDERS
+                                    || self.paths.contains_key(&responder)
+                                {
+                                    self.paths.insert(responder, (path, at));
+                                }
                             }
                         }
                     }
@@ -322,6 +349,8 @@ pub async fn run<T: Transport, P: EchoProbe>(
     let mut events: Vec<MatchEvent> = Vec::new();
     let mut inbound: Vec<Inbound> = Vec::new();
     let mut foreign_replies = 0u64;
+    let mut paths: HashMap<SysComp, (PathId, Nanos)> = HashMap::new();
+    let mut wrong_path_replies = 0u64;
     let mut interrupted = false;
     let mut link_error: Option<LinkError> = None;
     let mut pacing = Pacing::default();
@@ -405,6 +434,9 @@ pub async fn run<T: Transport, P: EchoProbe>(
             events: &mut events,
             foreign_replies: &mut foreign_replies,
             gate: &mut gate,
+            paths: &mut paths,
+            wrong_path_replies: &mut wrong_path_replies,
+            timeout: timeout_ns,
         };
         let next_send = schedule.as_ref().and_then(|s| s.next_due());
         let now = clock.now();
@@ -526,6 +558,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
         in_flight,
         responders,
         foreign_replies,
+        wrong_path_replies,
         untracked_replies: matcher.untracked(),
         frames: link.scan_stats(),
         hints,

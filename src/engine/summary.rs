@@ -51,6 +51,9 @@ pub struct Summary {
     pub responders: Vec<ResponderSummary>,
     /// Replies addressed to another system.
     pub foreign_replies: u64,
+    /// Replies naming a responder that answered from another link peer
+    /// (spoofed ids): counted, never measured.
+    pub wrong_path_replies: u64,
     /// Replies from responders beyond the tracking limit.
     pub untracked_replies: u64,
     pub frames: ScanStats,

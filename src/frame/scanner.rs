@@ -126,14 +126,90 @@ enum Step {
     NeedMore,
 }
 
-/// Judges the candidate at `buf[0]` (which is a start byte). `at_end` says
-/// no more bytes will follow `buf` (end of a datagram).
-fn judge(buf: &[u8], at_end: bool) -> Step {
+/// True when `frame` (exactly one frame long) is a known message with a
+/// matching CRC.
+fn is_good_frame(frame: &[u8]) -> bool {
+    extra_crc(message_id(frame)).is_some_and(|extra| crc_matches(frame, extra))
+}
+
+/// Whether a good frame starts at each offset of the scanned bytes, worked
+/// out at most once per offset (kept across reads of a stream): every
+/// candidate looks inside its extent, so without this crafted junk read a
+/// byte at a time could cost a CRC per byte per candidate. Allocated only
+/// when a start byte is found inside a candidate.
+#[derive(Default)]
+struct Inner {
+    /// Per offset: 0 not known yet (or the frame is not all there yet),
+    /// 1 no good frame, otherwise 2 + the good frame's length.
+    known: Vec<u16>,
+}
+
+impl Inner {
+    /// True when a good frame starts at `buf[at]` and ends by `end`.
+    fn good_at(&mut self, buf: &[u8], at: usize, end: usize) -> bool {
+        if self.known.len() < buf.len() {
+            self.known.resize(buf.len(), 0);
+        }
+        if self.known[at] == 0 {
+            self.known[at] = match frame_len(&buf[at..]) {
+                Err(()) => 1,
+                Ok(Some(len)) if at + len <= buf.len() => {
+                    if is_good_frame(&buf[at..at + len]) {
+                        2 + len as u16
+                    } else {
+                        1
+                    }
+                }
+                // Not all there yet: decided when more bytes come.
+                Ok(_) => return false,
+            };
+        }
+        self.known[at] >= 2 && at + usize::from(self.known[at] - 2) <= end
+    }
+
+    /// The first `done` bytes of the stream buffer were consumed.
+    fn consumed(&mut self, done: usize) {
+        if self.known.len() > done {
+            self.known.drain(..done);
+        } else {
+            self.known.clear();
+        }
+    }
+}
+
+/// True when a whole good frame lies inside the candidate at `buf[start]`
+/// whose claimed extent is `len` bytes (as far as the bytes are there). Such a candidate is junk
+/// whose length field lies (or a frame tunnelled in a payload, which loses
+/// to the frame inside): rejecting it at once means a real frame behind a
+/// false start byte is found without waiting for the bytes the false one
+/// claims, which on a quiet serial link could hold it back indefinitely.
+/// The answer depends only on bytes within the extent, so a byte stream
+/// gives the same frames whatever its read splits.
+fn hides_a_good_frame(buf: &[u8], start: usize, len: usize, inner: &mut Inner) -> bool {
+    let end = (start + len).min(buf.len());
+    let mut i = start + 1;
+    while let Some(offset) = buf[i..end].iter().position(|&b| b == STX_V1 || b == STX_V2) {
+        let at = i + offset;
+        if inner.good_at(buf, at, end) {
+            return true;
+        }
+        i = at + 1;
+    }
+    false
+}
+
+/// Judges the candidate at `whole[start]` (a start byte). `at_end` says
+/// no more bytes will follow `whole` (end of a datagram).
+fn judge(whole: &[u8], start: usize, at_end: bool, inner: &mut Inner) -> Step {
+    let buf = &whole[start..];
     let len = match frame_len(buf) {
         Err(()) => return Step::Reject { bad_crc: false },
         Ok(None) => return Step::NeedMore,
         Ok(Some(len)) => len,
     };
+    if hides_a_good_frame(whole, start, len, inner) {
+        return Step::Reject { bad_crc: false };
+    }
     if buf.len() < len {
         return Step::NeedMore;
     }
@@ -154,7 +230,13 @@ fn judge(buf: &[u8], at_end: bool) -> Step {
 
 /// Scans `buf`, calling `on_frame` with each good frame. Returns how many
 /// leading bytes are finished with; with `at_end` that is all of them.
-fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) -> usize {
+fn scan(
+    buf: &[u8],
+    at_end: bool,
+    stats: &mut ScanStats,
+    inner: &mut Inner,
+    on_frame: &mut dyn FnMut(&[u8]),
+) -> usize {
     let mut pos = 0;
     loop {
         let Some(offset) = buf[pos..].iter().position(|&b| b == STX_V1 || b == STX_V2) else {
@@ -163,7 +245,7 @@ fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMu
         };
         stats.skipped_bytes += offset as u64;
         pos += offset;
-        match judge(&buf[pos..], at_end) {
+        match judge(buf, pos, at_end, inner) {
             Step::Frame(len) => {
                 stats.frames += 1;
                 on_frame(&buf[pos..pos + len]);
@@ -197,13 +279,14 @@ fn scan(buf: &[u8], at_end: bool, stats: &mut ScanStats, on_frame: &mut dyn FnMu
 
 /// Scans one datagram on its own.
 pub fn scan_datagram(datagram: &[u8], stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) {
-    scan(datagram, true, stats, on_frame);
+    scan(datagram, true, stats, &mut Inner::default(), on_frame);
 }
 
 /// Scanner for a byte stream: keeps an unfinished frame between reads.
 /// Its buffer never grows past a few frames, whatever the input.
 pub struct StreamScanner {
     buf: Vec<u8>,
+    inner: Inner,
     pub stats: ScanStats,
 }
 
@@ -217,6 +300,7 @@ impl StreamScanner {
     pub fn new() -> Self {
         StreamScanner {
             buf: Vec::with_capacity(4 * MAX_FRAME_LEN),
+            inner: Inner::default(),
             stats: ScanStats::default(),
         }
     }
@@ -225,15 +309,19 @@ impl StreamScanner {
     pub fn push(&mut self, data: &[u8], on_frame: &mut dyn FnMut(&[u8])) {
         if self.buf.is_empty() {
             // Fast path: no carried tail, scan the read in place.
-            let done = scan(data, false, &mut self.stats, on_frame);
+            let done = scan(data, false, &mut self.stats, &mut self.inner, on_frame);
+            self.inner.consumed(done);
             self.buf.extend_from_slice(&data[done..]);
         } else {
             self.buf.extend_from_slice(data);
-            let done = scan(&self.buf, false, &mut self.stats, on_frame);
+            let done = scan(&self.buf, false, &mut self.stats, &mut self.inner, on_frame);
+            self.inner.consumed(done);
             self.buf.drain(..done);
         }
-        // The tail is one unfinished candidate, so it is at most one frame.
-        debug_assert!(self.buf.len() < MAX_FRAME_LEN);
+        // The tail is one unfinished candidate, so it is at most one frame
+        // (exactly one whole frame when an unknown id waits for the next
+        // byte to show it lines up; found by the fuzzer).
+        debug_assert!(self.buf.len() <= MAX_FRAME_LEN);
     }
 
     /// Bytes held back waiting for the rest of a frame.
@@ -303,7 +391,22 @@ mod tests {
         data.extend([0u8; 40]);
         let (frames, stats) = collect_datagram(&data);
         assert_eq!(frames.len(), 1, "{stats:?}");
-        assert_eq!(stats.bad_crc, 1);
+        // Rejected for the good frame inside it, before any CRC check.
+        assert_eq!((stats.bad_crc, stats.skipped_bytes), (0, 6 + 40));
+    }
+
+    #[test]
+    fn lying_length_on_a_stream_does_not_hold_back_the_frame_behind_it() {
+        // A false v1 start claiming 255 bytes, then one real frame, then
+        // silence: the frame is delivered now, not when 263 bytes arrived.
+        let mut data = vec![STX_V1, 255, 0, 1, 1, 4];
+        data.extend(ping_frame(Version::V2, 9));
+        let mut scanner = StreamScanner::new();
+        let mut count = 0;
+        scanner.push(&data, &mut |_| count += 1);
+        assert_eq!(count, 1);
+        assert_eq!(scanner.stats.skipped_bytes, 6);
+        assert_eq!(scanner.pending_bytes(), 0);
     }
 
     #[test]

@@ -249,6 +249,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
             "rx_clock": s.rx_clock,
             "frames": s.frames,
             "foreign_replies": s.foreign_replies,
+            "wrong_path_replies": s.wrong_path_replies,
             "untracked_replies": s.untracked_replies,
             "hints": s.hints,
             "radios": s.radios,

@@ -467,6 +467,13 @@ impl<W: Write> Reporter for TextReporter<W> {
                 f.bad_crc, f.skipped_bytes, f.unknown_id, f.truncated, s.foreign_replies
             )?;
         }
+        if s.wrong_path_replies > 0 {
+            writeln!(
+                out,
+                "link: {} replies rejected: a responder's ids from another peer than the one it answered from",
+                s.wrong_path_replies
+            )?;
+        }
         if let Some(signing) = &s.signing {
             write_signing(out, signing)?;
         }

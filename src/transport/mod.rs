@@ -134,7 +134,8 @@ pub(crate) fn push_datagram(
 pub struct LinkOptions {
     /// Baud rate of a serial port whose connection string names none.
     pub baud: u32,
-    /// Reopen a tcp client or serial link that breaks, instead of ending.
+    /// Reopen a tcp client or serial link that breaks, instead of ending;
+    /// on `udpout:` an ICMP "port unreachable" does not end the link.
     pub reconnect: bool,
 }
 
@@ -161,7 +162,14 @@ impl Link {
     pub async fn open(spec: &LinkSpec, options: &LinkOptions) -> Result<Link, LinkError> {
         Ok(match spec {
             LinkSpec::UdpIn(a) => Link::Udp(udp::UdpLink::listen(a).await?),
-            LinkSpec::UdpOut(a) => Link::Udp(udp::UdpLink::connect(a).await?),
+            LinkSpec::UdpOut(a) => {
+                let link = udp::UdpLink::connect(a).await?;
+                Link::Udp(if options.reconnect {
+                    link.keep_going_when_refused()
+                } else {
+                    link
+                })
+            }
             LinkSpec::UdpBcast(a) => Link::Udp(udp::UdpLink::broadcast(a).await?),
             LinkSpec::TcpOut(a) => Link::Tcp(
                 stream::StreamLink::open(tcp::TcpConnector::new(a), options.reconnect).await?,

@@ -52,6 +52,12 @@ pub struct SimParams {
     pub baud: Option<u32>,
     /// Emit RADIO_STATUS as 51/68 once a second, following the link.
     pub radio: bool,
+    /// A link outage: from `start` after the link opened, for `length`,
+    /// every request and reply is lost.
+    pub outage: Option<(Duration, Duration)>,
+    /// Share of replies hit by a delay spike of `spike_delay` extra.
+    pub spike: f64,
+    pub spike_delay: Duration,
 }
 
 impl Default for SimParams {
@@ -74,6 +80,9 @@ impl Default for SimParams {
             drift_ppm: 0.0,
             baud: None,
             radio: false,
+            outage: None,
+            spike: 0.0,
+            spike_delay: Duration::from_millis(500),
         }
     }
 }
@@ -81,7 +90,8 @@ impl Default for SimParams {
 /// The keys `sim:` accepts, for error messages and the README.
 pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURATION, \
 jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
-ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off";
+ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
+outage=START+LENGTH, spike=PCT, spike_delay=DURATION";
 
 fn percent(key: &str, value: &str) -> Result<f64, String> {
     let number = value.strip_suffix('%').unwrap_or(value);
@@ -190,6 +200,14 @@ impl SimParams {
                     p.baud = Some(baud);
                 }
                 "radio" => p.radio = switch(key, value)?,
+                "outage" => {
+                    let (start, length) = value.split_once('+').ok_or_else(|| {
+                        format!("{key}={value}: expected START+LENGTH, e.g. outage=30s+5s")
+                    })?;
+                    p.outage = Some((duration(key, start)?, duration(key, length)?));
+                }
+                "spike" => p.spike = percent(key, value)?,
+                "spike_delay" => p.spike_delay = duration(key, value)?,
                 _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
             }
         }
@@ -237,6 +255,22 @@ impl fmt::Display for SimParams {
         if self.radio {
             write!(f, "&radio=on")?;
         }
+        if let Some((start, length)) = self.outage {
+            write!(
+                f,
+                "&outage={}+{}",
+                humantime::format_duration(start),
+                humantime::format_duration(length)
+            )?;
+        }
+        if self.spike > 0.0 {
+            write!(
+                f,
+                "&spike={}%&spike_delay={}",
+                self.spike * 100.0,
+                humantime::format_duration(self.spike_delay)
+            )?;
+        }
         Ok(())
     }
 }
@@ -265,6 +299,13 @@ pub struct SimTruth {
     /// Exchanges the radio's full buffer dropped (`baud=`), also counted
     /// in `dropped`.
     pub overflowed: u64,
+    /// Exchanges lost to the outage (`outage=`), also counted in `dropped`.
+    pub outage: u64,
+    /// Replies delayed by a spike (`spike=`); not in `delivered`: with a
+    /// `spike_delay` past the timeout they arrive late.
+    pub spiked: u64,
+    /// ...of which before the first delivered reply.
+    pub spiked_before_first: u64,
 }
 
 impl SimResponder {
@@ -373,6 +414,14 @@ impl SimLink {
             .clock_offset_ns
             .saturating_add(t)
             .saturating_add(drift)
+    }
+
+    /// True while the `outage=` window is on.
+    fn in_outage(&self, now: Instant) -> bool {
+        self.params.outage.is_some_and(|(start, length)| {
+            let t = now.saturating_duration_since(self.started);
+            t >= start && t < start + length
+        })
     }
 
     fn chance(&mut self, p: f64) -> bool {
@@ -526,6 +575,13 @@ impl Transport for SimLink {
                     continue;
                 };
                 self.responders[i].truth.answered += 1;
+                if self.in_outage(now) {
+                    let truth = &mut self.responders[i].truth;
+                    truth.dropped += 1;
+                    truth.outage += 1;
+                    truth.dropped_before_first += u64::from(truth.delivered == 0);
+                    continue;
+                }
                 // Loss is drawn once per exchange: request or reply leg.
                 if self.chance(self.params.loss) {
                     let truth = &mut self.responders[i].truth;
@@ -552,8 +608,16 @@ impl Transport for SimLink {
                     truth.dropped_before_first += u64::from(truth.delivered == 0);
                     continue;
                 };
-                self.responders[i].truth.delivered += 1;
                 let mut at = reply_done + up + self.one_way();
+                // Drawn only when asked for, so seeds keep their faults.
+                if self.chance(self.params.spike) {
+                    let truth = &mut self.responders[i].truth;
+                    truth.spiked += 1;
+                    truth.spiked_before_first += u64::from(truth.delivered == 0);
+                    at += self.params.spike_delay;
+                } else {
+                    self.responders[i].truth.delivered += 1;
+                }
                 if self.chance(self.params.reorder) {
                     at += self.params.hold;
                 }
@@ -639,12 +703,26 @@ mod tests {
             SimParams::parse("?offset=+250ms").unwrap().clock_offset_ns,
             250_000_000
         );
+        let p = SimParams::parse("?outage=30s+5s&spike=1%&spike_delay=2s").unwrap();
+        assert_eq!(
+            p.outage,
+            Some((Duration::from_secs(30), Duration::from_secs(5)))
+        );
+        assert!((p.spike - 0.01).abs() < 1e-12);
+        assert_eq!(p.spike_delay, Duration::from_secs(2));
+        assert_eq!(
+            SimParams::parse(&p.to_string()[4..]).unwrap().outage,
+            p.outage
+        );
     }
 
     #[test]
     fn rejects_bad_values_with_the_reason() {
         for (q, needle) in [
             ("?loss=120%", "percentage"),
+            ("?outage=5s", "START+LENGTH"),
+            ("?outage=5s+2h", "at most 1h"),
+            ("?spike=-1", "percentage"),
             ("?responders=0", "1 to 1000"),
             ("?delay=soon", "delay=soon"),
             ("?delay=2h", "at most 1h"),

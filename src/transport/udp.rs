@@ -35,7 +35,11 @@ enum Mode {
     /// Peers learned from what we hear.
     Listen { peers: Vec<SocketAddr> },
     /// One fixed peer; the socket is connected so ICMP errors surface.
-    Connected { peer: SocketAddr },
+    Connected {
+        peer: SocketAddr,
+        /// ICMP "port unreachable" is logged, not fatal.
+        refused_is_transient: bool,
+    },
     /// Requests go to a broadcast address; answers come from each system's
     /// own address, learned like udpin's peers so one can be answered alone.
     Broadcast {
@@ -145,7 +149,27 @@ impl UdpLink {
             .connect(peer)
             .await
             .map_err(|e| LinkError::io(format!("cannot send to udp {addr}"), e))?;
-        Ok(Self::with(socket, Mode::Connected { peer }))
+        Ok(Self::with(
+            socket,
+            Mode::Connected {
+                peer,
+                refused_is_transient: false,
+            },
+        ))
+    }
+
+    /// ICMP "port unreachable" from a `udpout:` peer no longer ends the
+    /// link: the peer may not be up yet or may come back (`--reconnect`,
+    /// and always for `mavping respond`, which may start before its pinger).
+    pub fn keep_going_when_refused(mut self) -> Self {
+        if let Mode::Connected {
+            refused_is_transient,
+            ..
+        } = &mut self.mode
+        {
+            *refused_is_transient = true;
+        }
+        self
     }
 
     /// `udpbcast:ADDR:PORT`
@@ -201,9 +225,26 @@ impl UdpLink {
         }
     }
 
+    /// Whether `e` is an ICMP "port unreachable" that this link shrugs off
+    /// (see [`UdpLink::keep_going_when_refused`]).
+    fn refused_is_transient(&self, e: &io::Error) -> bool {
+        let transient = e.kind() == io::ErrorKind::ConnectionRefused
+            && matches!(
+                self.mode,
+                Mode::Connected {
+                    refused_is_transient: true,
+                    ..
+                }
+            );
+        if transient {
+            tracing::debug!(error = %e, "udp peer unreachable for now");
+        }
+        transient
+    }
+
     fn failed(&self, e: io::Error) -> LinkError {
         match &self.mode {
-            Mode::Connected { peer } if e.kind() == io::ErrorKind::ConnectionRefused => {
+            Mode::Connected { peer, .. } if e.kind() == io::ErrorKind::ConnectionRefused => {
                 LinkError::io(
                     format!(
                         "udp {peer} is unreachable (ICMP port unreachable: nothing listening?)"
@@ -246,7 +287,7 @@ impl UdpLink {
             Ok((len, from, kernel)) => {
                 let from = match (from, &*mode) {
                     (Some(from), _) => from,
-                    (None, Mode::Connected { peer }) => *peer,
+                    (None, Mode::Connected { peer, .. }) => *peer,
                     (None, _) => return Ok(None),
                 };
                 Ok(Some((len, from, arrival(kernel, now, now_wall))))
@@ -276,7 +317,11 @@ impl Transport for UdpLink {
         let sent = Instant::now();
         match &self.mode {
             Mode::Connected { .. } => {
-                self.socket.send(frame).await.map_err(|e| self.failed(e))?;
+                if let Err(e) = self.socket.send(frame).await {
+                    if !self.refused_is_transient(&e) {
+                        return Err(self.failed(e));
+                    }
+                }
             }
             Mode::Listen { peers } => {
                 for peer in peers {
@@ -300,7 +345,11 @@ impl Transport for UdpLink {
         let sent = Instant::now();
         match &self.mode {
             Mode::Connected { .. } => {
-                self.socket.send(frame).await.map_err(|e| self.failed(e))?;
+                if let Err(e) = self.socket.send(frame).await {
+                    if !self.refused_is_transient(&e) {
+                        return Err(self.failed(e));
+                    }
+                }
             }
             Mode::Listen { peers } | Mode::Broadcast { peers, .. } => {
                 if let Some(peer) = peers.get(path as usize) {
@@ -330,8 +379,9 @@ impl Transport for UdpLink {
                     // A listening socket can see ECONNREFUSED from an ICMP
                     // error to one of its peers: not a reason to stop.
                     Err(e)
-                        if !matches!(self.mode, Mode::Connected { .. })
-                            && e.kind() == io::ErrorKind::ConnectionRefused =>
+                        if e.kind() == io::ErrorKind::ConnectionRefused
+                            && (!matches!(self.mode, Mode::Connected { .. })
+                                || self.refused_is_transient(&e)) =>
                     {
                         continue
                     }

@@ -1,0 +1,98 @@
+//! Out-of-range and malformed options: one clear error line on stderr,
+//! nothing on stdout, exit 2, and never a panic.
+
+mod common;
+use common::*;
+
+fn rejects(args: &[&str], needle: &str) {
+    let (code, out, err) = run_mavping(args);
+    assert_eq!(code, 2, "{args:?}: {err}");
+    assert!(out.is_empty(), "{args:?}: {out}");
+    assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+    assert!(err.starts_with("mavping: "), "{args:?}: {err}");
+    assert!(err.contains(needle), "{args:?}: {err} (wanted {needle:?})");
+    assert!(!err.contains("panicked"), "{args:?}: {err}");
+}
+
+#[test]
+fn rates_counts_and_durations_out_of_range() {
+    for (args, needle) in [
+        (&["--rate", "0", "sim:"][..], "--rate 0"),
+        (&["--rate", "-5", "sim:"], "--rate -5"),
+        (&["--rate", "nan", "sim:"], "--rate NaN"),
+        (&["--rate", "inf", "sim:"], "--rate inf"),
+        (&["--rate", "1e-30", "sim:"], "at least one request a day"),
+        (&["--rate", "fast", "sim:"], "fast"),
+        (&["-c", "0", "sim:"], "--count 0"),
+        (&["-c", "-1", "sim:"], "'-1'"),
+        (&["-c", "1e3", "sim:"], "1e3"),
+        (&["-i", "0", "sim:"], "at least 1us"),
+        (&["-i", "-1", "sim:"], "'-1' is not a duration"),
+        (&["-i", "1e30", "sim:"], "1e30"),
+        (&["-i", "2d", "sim:"], "at most 1 day"),
+        (&["-i", "nan", "sim:"], "nan"),
+        (&["-w", "99999999999h", "sim:"], "at most 365 days"),
+        (&["-w", "1e30s", "sim:"], "1e30s"),
+        (&["-W", "0", "sim:"], "--timeout"),
+        (&["-W", "2h", "sim:"], "at most 1h"),
+        (&["--max-jitter", "1e30", "sim:"], "1e30"),
+        (&["--max-loss", "-1", "sim:"], "-1"),
+        (&["--max-loss", "nan", "sim:"], "nan"),
+    ] {
+        rejects(args, needle);
+    }
+}
+
+#[test]
+fn ids_out_of_range() {
+    for (args, needle) in [
+        (&["--sysid", "0", "sim:"][..], "--sysid 0"),
+        (&["--sysid", "256", "sim:"], "256"),
+        (&["--sysid", "-1", "sim:"], "-1"),
+        (&["--compid", "0", "sim:"], "--compid 0"),
+        (&["--compid", "256", "sim:"], "256"),
+        (&["--expect", "1/300", "sim:"], "SYSID"),
+        (
+            &["--probe", "timesync", "--target", "300", "sim:"],
+            "SYS/COMP",
+        ),
+        (&["respond", "--sysid", "0", "sim:"], "--sysid 0"),
+        (&["respond", "--sysid", "-3", "sim:"], "-3"),
+        (&["respond", "--compid", "999", "sim:"], "999"),
+    ] {
+        rejects(args, needle);
+    }
+}
+
+#[test]
+fn bad_sim_parameters() {
+    for (link, needle) in [
+        ("sim:?responders=0", "responders=0"),
+        ("sim:?responders=1001", "responders=1001"),
+        ("sim:?responders=-1", "responders=-1"),
+        ("sim:?sysid=0", "sysid=0"),
+        ("sim:?sysid=256", "sysid=256"),
+        ("sim:?compid=0", "compid=0"),
+        ("sim:?delay=1e30s", "delay=1e30s"),
+        ("sim:?delay=-1ms", "delay=-1ms"),
+        ("sim:?jitter=99999999999h", "at most 1h"),
+        ("sim:?loss=nan", "loss=nan"),
+        ("sim:?loss=-1", "loss=-1"),
+        ("sim:?dup=101", "dup=101"),
+        ("sim:?seed=-1", "seed=-1"),
+        ("sim:?drift=nan", "drift=nan"),
+        ("sim:?drift=1e30", "drift=1e30"),
+        ("sim:?offset=1e30s", "offset=1e30s"),
+        ("sim:?baud=0", "baud=0"),
+        ("sim:?hold=1e30", "hold=1e30"),
+        ("sim:?foo=1", "unknown key 'foo'"),
+        ("sim:?loss", "not key=value"),
+        ("sim:?clock=fast", "clock=fast"),
+        ("sim:?outage=1e30s", "outage=1e30s"),
+        ("sim:?outage=1s", "START+LENGTH"),
+        ("sim:?spike=200%", "spike=200%"),
+        ("sim:?spike_delay=2h", "at most 1h"),
+    ] {
+        rejects(&[link], needle);
+    }
+}
