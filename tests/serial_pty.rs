@@ -206,3 +206,54 @@ fn capacity_warning_above_what_57600_baud_carries_and_not_below() {
         "{out}"
     );
 }
+
+/// A serial device another program holds exclusively (TIOCEXCL, as
+/// mavping and most ground stations open it) is "busy": exit 2 with the
+/// OS reason. Root ignores TIOCEXCL, so as root mavping runs as nobody.
+#[test]
+fn a_device_held_exclusively_exits_2_busy() {
+    let holder = "import os, pty, fcntl, termios, sys, time\n\
+                  m, s = pty.openpty()\n\
+                  name = os.ttyname(s)\n\
+                  os.chmod(name, 0o666)\n\
+                  fcntl.ioctl(s, termios.TIOCEXCL)\n\
+                  print(name, flush=True)\n\
+                  sys.stdin.read()\n";
+    let mut held = std::process::Command::new(python())
+        .args(["-c", holder])
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut device = String::new();
+    std::io::BufRead::read_line(
+        &mut std::io::BufReader::new(held.stdout.take().unwrap()),
+        &mut device,
+    )
+    .unwrap();
+    let link = format!("serial:{}:57600", device.trim());
+    let binary = assert_cmd::cargo::cargo_bin("mavping");
+    // /proc/self belongs to our effective user.
+    let as_root =
+        std::os::unix::fs::MetadataExt::uid(&std::fs::metadata("/proc/self").unwrap()) == 0;
+    let mut cmd = if as_root {
+        let mut c = std::process::Command::new("setpriv");
+        c.args(["--reuid=65534", "--regid=65534", "--clear-groups"])
+            .arg(&binary);
+        c
+    } else {
+        std::process::Command::new(&binary)
+    };
+    let child = cmd
+        .args(["-c", "1", "-W", "200ms", &link])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("setpriv (util-linux) runs mavping as nobody");
+    let (code, out, err) = wait_output(child, Duration::from_secs(30));
+    drop(held.stdin.take());
+    let _ = held.wait();
+    assert_eq!(code, 2, "{out}{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains("busy"), "{err}");
+}
