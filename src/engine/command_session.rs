@@ -14,7 +14,7 @@ use tokio::time::Instant;
 use super::commands::{CommandEvent, CommandTracker};
 use super::roster::Roster;
 use super::schedule::Schedule;
-use super::session::{admitted, Clock, Sender, SessionConfig, HEARTBEAT_PERIOD, OUR_HEARTBEAT};
+use super::session::{admitted, heartbeat_if_due, Clock, Sender, SessionConfig};
 use super::summary::{command_target_summaries, CommandSummary};
 use super::Nanos;
 use crate::config::CommandSpec;
@@ -81,12 +81,9 @@ pub async fn run<T: Transport>(
         if deadline_ns.is_some_and(|d| now >= d) {
             break;
         }
-        if let Some(due) = next_heartbeat.filter(|&due| due <= now) {
-            if let Err(e) = link.send(sender.frame(&OUR_HEARTBEAT)).await {
-                link_error = Some(e);
-                break;
-            }
-            next_heartbeat = Some(due + HEARTBEAT_PERIOD.as_nanos() as Nanos);
+        if let Err(e) = heartbeat_if_due(link, &mut sender, &mut next_heartbeat, now).await {
+            link_error = Some(e);
+            break;
         }
         if schedule.is_none() && link.has_peers() {
             let interval = cfg.interval.as_nanos() as Nanos;

@@ -66,6 +66,21 @@ pub(super) const OUR_HEARTBEAT: Msg = Msg::Heartbeat {
     autopilot: frame::AUTOPILOT_INVALID,
 };
 
+/// Sends our HEARTBEAT when it is due and schedules the next one; `None`
+/// (`--no-heartbeat`) never sends.
+pub(super) async fn heartbeat_if_due<T: Transport>(
+    link: &mut T,
+    sender: &mut Sender,
+    next: &mut Option<Nanos>,
+    now: Nanos,
+) -> Result<(), LinkError> {
+    if let Some(due) = next.filter(|&due| due <= now) {
+        link.send(sender.frame(&OUR_HEARTBEAT)).await?;
+        *next = Some(due + HEARTBEAT_PERIOD.as_nanos() as Nanos);
+    }
+    Ok(())
+}
+
 pub(super) struct Clock {
     pub(super) epoch: Instant,
 }
@@ -372,12 +387,9 @@ pub async fn run<T: Transport, P: EchoProbe>(
         }
         // Our HEARTBEAT goes first, so a stack that discovers systems by
         // their messages (MAVSDK) knows us before our first PING.
-        if let Some(due) = next_heartbeat.filter(|&due| due <= now) {
-            if let Err(e) = link.send(sender.frame(&OUR_HEARTBEAT)).await {
-                link_error = Some(e);
-                break;
-            }
-            next_heartbeat = Some(due + HEARTBEAT_PERIOD.as_nanos() as Nanos);
+        if let Err(e) = heartbeat_if_due(link, &mut sender, &mut next_heartbeat, now).await {
+            link_error = Some(e);
+            break;
         }
         if schedule.is_none() {
             if link.has_peers() {
