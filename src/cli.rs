@@ -5,25 +5,8 @@ use std::time::Duration;
 
 use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 
+use crate::units::{parse_duration, parse_percent};
 use crate::verdict::{Expected, RttLimit};
-
-/// Parses "250ms", "2s", "1m30s", or a plain number of seconds ("0.2").
-/// At most a year: anything longer is a typo, and would overflow the
-/// clock arithmetic (`Instant + Duration`) that schedules it.
-pub fn parse_duration(s: &str) -> Result<Duration, String> {
-    const MAX: Duration = Duration::from_secs(365 * 86_400);
-    let d = match s.parse::<f64>() {
-        Ok(secs) => Duration::try_from_secs_f64(secs)
-            .map_err(|_| format!("'{s}' is not a duration of zero or more seconds"))?,
-        Err(_) => {
-            humantime::parse_duration(s).map_err(|e| format!("'{s}': {e} (e.g. 250ms, 2s, 1m)"))?
-        }
-    };
-    if d > MAX {
-        return Err(format!("'{s}': at most 365 days"));
-    }
-    Ok(d)
-}
 
 #[derive(Debug, Parser)]
 #[command(
@@ -60,15 +43,6 @@ pub struct Cli {
 
     #[command(subcommand)]
     pub mode: Option<Mode>,
-}
-
-/// `--percent`-style values: "5%", "0.5%" or "5" (all percent) -> ratio.
-pub fn parse_percent(s: &str) -> Result<f64, String> {
-    let number = s.strip_suffix('%').unwrap_or(s);
-    match number.parse::<f64>() {
-        Ok(p) if (0.0..=100.0).contains(&p) => Ok(p / 100.0),
-        _ => Err(format!("'{s}' is not a percentage from 0 to 100")),
-    }
 }
 
 /// `[FIGURE=]DURATION`, e.g. `p99=50ms` or `200ms` (the maximum).

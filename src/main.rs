@@ -1,10 +1,12 @@
 use std::process::ExitCode;
 
 use clap::Parser;
+use mavping::{cli::Cli, exit, run};
 
 fn main() -> ExitCode {
-    match mavping::cli::Cli::try_parse() {
-        Ok(cli) => mavping::app::main(&cli),
-        Err(error) => mavping::app::usage_error(&error),
-    }
+    let ending = match Cli::try_parse() {
+        Ok(cli) => run::main(&cli),
+        Err(error) => run::usage_error(&error),
+    };
+    ExitCode::from(exit::code(&ending))
 }

@@ -1,4 +1,5 @@
-//! Thresholds and the exit code: pure judgement of a finished run.
+//! Thresholds: pure judgement of a finished link. The code it leads to
+//! comes from [`crate::exit`], the one exit policy.
 
 use std::fmt;
 use std::time::Duration;
@@ -6,18 +7,9 @@ use std::time::Duration;
 use serde::Serialize;
 
 use crate::engine::stats::RttSummary;
-use crate::engine::summary::{ResponderSummary, Summary};
+use crate::engine::summary::{CommandSummary, LinkSummary, ResponderSummary, Summary};
+use crate::exit::{self, LinkEnd};
 use crate::frame::SysComp;
-
-/// Exit codes, as ping and fping use them.
-pub mod exit {
-    /// Every expectation held.
-    pub const OK: u8 = 0;
-    /// No reply at all, an expected responder missing, or a threshold broken.
-    pub const FAILED: u8 = 1;
-    /// Usage error, or the link could not be opened or failed.
-    pub const ERROR: u8 = 2;
-}
 
 /// Which RTT figure a `--max-rtt` limit applies to.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -228,17 +220,50 @@ pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
             });
         }
     }
-    let exit_code = if summary.link_error.is_some() {
-        exit::ERROR
-    } else if failures.is_empty() {
-        exit::OK
-    } else {
-        exit::FAILED
+    verdict(summary.link_error.is_some(), failures)
+}
+
+/// Judges a command run: something must have been acknowledged.
+pub fn judge_command(summary: &CommandSummary) -> Verdict {
+    let mut failures = Vec::new();
+    if !summary.any_ack() {
+        failures.push(Failure {
+            responder: None,
+            check: "ack",
+            message: "no command acknowledged".into(),
+        });
+    }
+    verdict(summary.link_error.is_some(), failures)
+}
+
+/// Judges any link's run; thresholds apply to echo probes.
+pub fn judge_link(summary: &LinkSummary, t: &Thresholds) -> Verdict {
+    match summary {
+        LinkSummary::Echo(s) => judge(s, t),
+        LinkSummary::Command(s) => judge_command(s),
+    }
+}
+
+fn verdict(link_failed: bool, failures: Vec<Failure>) -> Verdict {
+    let end = LinkEnd {
+        link_failed,
+        checks_held: failures.is_empty(),
     };
+    let exit_code = exit::of_link(end);
     Verdict {
         ok: exit_code == exit::OK,
         exit_code,
         failures,
+    }
+}
+
+impl Verdict {
+    /// What the exit policy needs of it.
+    pub fn end(&self) -> LinkEnd {
+        LinkEnd {
+            link_failed: self.exit_code == exit::ERROR,
+            checks_held: self.failures.is_empty(),
+        }
     }
 }
 

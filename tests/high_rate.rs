@@ -5,31 +5,17 @@
 mod common;
 use std::io::{BufRead, BufReader, Read};
 use std::process::Stdio;
-use std::sync::Arc;
 use std::time::Duration;
 
 use common::*;
-use mavping::engine::session::{self, SessionConfig};
-use mavping::engine::summary::Summary;
+use mavping::engine::echo;
+use mavping::engine::observe::Unobserved;
+use mavping::engine::summary::LinkSummary;
+use mavping::engine::SessionConfig;
 use mavping::frame::{SysComp, Version};
-use mavping::output::{Event, Reporter, StartInfo};
 use mavping::probe::ping::PingProbe;
 use mavping::transport::sim::{SimLink, SimParams};
-use mavping::verdict::Verdict;
-
-struct Silent;
-
-impl Reporter for Silent {
-    fn start(&mut self, _: &StartInfo) -> std::io::Result<()> {
-        Ok(())
-    }
-    fn event(&mut self, _: &Event<'_>) -> std::io::Result<()> {
-        Ok(())
-    }
-    fn summary(&mut self, _: &Summary, _: &Verdict) -> std::io::Result<()> {
-        Ok(())
-    }
-}
+use tokio::sync::Notify;
 
 #[test]
 fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
@@ -57,20 +43,17 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         .unwrap();
     let (outcome, truth) = runtime.block_on(async {
         let mut link = SimLink::new(params);
-        let outcome = session::run(
-            &cfg,
-            &mut link,
-            PingProbe::new(0),
-            &mut Silent,
-            Arc::default(),
-        )
-        .await;
+        let probe = PingProbe::new(0);
+        let stop = Notify::new();
+        let outcome = echo::run(&cfg, &mut link, probe, &mut Unobserved, &stop).await;
         (outcome, link.truth())
     });
-    assert_eq!(outcome.summary.requests, 100_000);
+    let LinkSummary::Echo(summary) = outcome.summary else {
+        panic!("an echo probe's summary")
+    };
+    assert_eq!(summary.requests, 100_000);
     for (id, t) in truth {
-        let c = outcome
-            .summary
+        let c = summary
             .responders
             .iter()
             .find(|r| r.id == id)

@@ -315,13 +315,40 @@ fn a_link_that_cannot_open_ends_only_itself() {
 }
 
 #[test]
-fn combinations_that_need_one_link_are_refused() {
-    for (flag, value) in [("--plot", "x.svg"), ("--probe", "command")] {
-        let (code, out, err) = run_mavping(&[flag, value, "sim:", "sim:?delay=5ms"]);
-        assert_eq!(code, 2, "{flag}: {out}\n{err}");
-        assert_eq!(err.lines().count(), 1, "{err}");
-        assert!(err.contains("works with one link, not 2"), "{err}");
+fn several_links_take_the_plot_and_the_command_probe() {
+    let svg = std::env::temp_dir().join(format!("mavping-links-{}.svg", std::process::id()));
+    let svg_arg = svg.to_str().unwrap();
+    let (code, out, err) = run_mavping(&[
+        "-c", "5", "-i", "20ms", "-q", "--plot", svg_arg, SIMS[0], SIMS[1],
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    let drawn = std::fs::read_to_string(&svg).unwrap();
+    std::fs::remove_file(&svg).unwrap();
+    for label in [
+        "mavping, 2 links",
+        &format!("{} 1/1", SIMS[0]),
+        &format!("{} 1/1", SIMS[1]),
+    ] {
+        // SVG text escapes '&'.
+        let label = label.replace('&', "&amp;");
+        assert!(drawn.contains(&label), "{label} not in the plot");
     }
+
+    let (code, out, err) = run_mavping(&[
+        "--probe", "command", "-c", "3", "-i", "200ms", SIMS[0], SIMS[1],
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    for link in SIMS {
+        let section = text_section(&out, link);
+        assert!(
+            section.contains(": 3 commands, 3 acknowledged, 0 failed"),
+            "{link}: {out}"
+        );
+    }
+    assert!(
+        out.contains(&format!("[{}] ack from 1/1: cmd=0", SIMS[1])),
+        "{out}"
+    );
 }
 
 fn tmux(socket: &str, args: &[&str]) -> String {

@@ -6,8 +6,7 @@
 
 use serde::Serialize;
 
-use super::session::SessionConfig;
-use super::summary::Summary;
+use super::SessionConfig;
 use crate::frame::Version;
 use crate::transport::{LinkOptions, LinkSpec};
 
@@ -147,28 +146,6 @@ fn trim(v: f64) -> String {
     }
 }
 
-/// Puts the budget in the summary and, when the run shows the link was
-/// overrun (losses, or an RTT spread far beyond the wire time, which is a
-/// queue growing), says so.
-pub fn apply(summary: &mut Summary, budget: WireBudget) {
-    summary.wire = Some(budget);
-    let Some(rate) = summary.schedule.map(|s| s.requested_rate_hz) else {
-        return;
-    };
-    // After the run the responders are known, not guessed.
-    let b = budget.with_replies(summary.responders.len() as u64);
-    let overrun = summary.responders.iter().any(|r| {
-        r.counts.lost > 0
-            || r.rtt
-                .is_some_and(|t| t.max_us - t.min_us > 10.0 * budget.floor_us)
-    });
-    if overrun {
-        if let Some(w) = b.warning(rate) {
-            summary.hints.push(format!("{w}: this run did"));
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -187,18 +164,33 @@ mod tests {
 
     #[test]
     fn signed_frames_cost_13_bytes_each_way() {
-        use clap::Parser;
-        let budget_of = |extra: &[&str]| {
-            let args = ["mavping", "-c", "100"]
-                .iter()
-                .chain(extra)
-                .chain(&["serial:/dev/ttyUSB0:57600"]);
-            let cli = crate::cli::Cli::try_parse_from(args).unwrap();
-            let c = crate::config::Config::try_from(&cli.ping).unwrap();
-            for_link(c.link(), &c.link_options, &c.session).unwrap()
+        use crate::frame::signing::{SecretKey, SigningConfig};
+        use crate::frame::SysComp;
+        use std::time::Duration;
+        let budget_of = |signing: Option<SigningConfig>| {
+            let session = SessionConfig {
+                link_name: "serial:/dev/ttyUSB0:57600".into(),
+                ours: SysComp::new(255, 190),
+                interval: Duration::from_secs(1),
+                count: Some(100),
+                deadline: None,
+                timeout: Duration::from_secs(2),
+                version: Version::V2,
+                heartbeat: true,
+                capacity: 64,
+                first_seq: 0,
+                precise_pacing: true,
+                signing,
+            };
+            let link: LinkSpec = "serial:/dev/ttyUSB0:57600".parse().unwrap();
+            for_link(&link, &LinkOptions::default(), &session).unwrap()
         };
-        let plain = budget_of(&[]);
-        let signed = budget_of(&["--signing-key", "k"]);
+        let plain = budget_of(None);
+        let signed = budget_of(Some(SigningConfig {
+            key: SecretKey::parse("k").unwrap(),
+            link_id: 0,
+            require_signed: false,
+        }));
         assert_eq!(
             (signed.request_bytes, signed.reply_bytes),
             (plain.request_bytes + 13, plain.reply_bytes + 13)
@@ -222,71 +214,5 @@ mod tests {
         );
         // Two responders: 21 + 52 bytes.
         assert_eq!(budget(57_600, Version::V2, 99, 2).max_rate_hz.floor(), 78.0);
-    }
-
-    fn run(lost: u64, requested_rate_hz: f64) -> Summary {
-        use super::super::matcher::Counts;
-        use super::super::summary::{ResponderSummary, ScheduleSummary};
-        use crate::frame::SysComp;
-        Summary {
-            link: "serial:/dev/x:57600".into(),
-            probe: "ping",
-            ours: SysComp::new(255, 190),
-            duration_s: 1.0,
-            requests: 10,
-            in_flight: 0,
-            responders: vec![ResponderSummary {
-                id: SysComp::new(1, 1),
-                counts: Counts {
-                    sent: 10,
-                    received: 10 - lost,
-                    lost,
-                    ..Counts::default()
-                },
-                loss_ratio: lost as f64 / 10.0,
-                rtt: None,
-                histogram: vec![],
-                identity: None,
-                clock: None,
-            }],
-            foreign_replies: 0,
-            wrong_path_replies: 0,
-            untracked_replies: 0,
-            frames: Default::default(),
-            hints: vec![],
-            interrupted: false,
-            link_error: None,
-            downtime_s: 0.0,
-            schedule: Some(ScheduleSummary {
-                requested_rate_hz,
-                achieved_rate_hz: requested_rate_hz,
-                lateness_p50_us: 0.0,
-                lateness_p99_us: 0.0,
-                lateness_max_us: 0.0,
-            }),
-            rx_clock: "test",
-            radios: vec![],
-            wire: None,
-            signing: None,
-        }
-    }
-
-    #[test]
-    fn the_summary_says_so_only_when_the_run_shows_it() {
-        let b = budget(57_600, Version::V2, 99, 1);
-        // Over capacity and losing: said.
-        let mut s = run(3, 500.0);
-        apply(&mut s, b);
-        assert_eq!(s.wire, Some(b));
-        assert_eq!(s.hints.len(), 1, "{:?}", s.hints);
-        assert!(s.hints[0].ends_with("will queue and then lose: this run did"));
-        // Over capacity but nothing lost (a pty ignores the baud): silent.
-        let mut s = run(0, 500.0);
-        apply(&mut s, b);
-        assert!(s.hints.is_empty());
-        // Losing below capacity: the wire is not the reason.
-        let mut s = run(3, 50.0);
-        apply(&mut s, b);
-        assert!(s.hints.is_empty());
     }
 }

@@ -17,12 +17,24 @@
 //!   decided is a **duplicate**. Neither changes the other counts.
 
 use std::collections::BTreeMap;
+use std::time::Duration;
 
 use super::stats::RttStats;
 use super::Nanos;
 use crate::frame::SysComp;
 
 type Key = (SysComp, u16);
+
+/// The command probe's request and retry policy.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CommandSpec {
+    pub target: SysComp,
+    pub command: u16,
+    pub params: [f32; 7],
+    pub retry_interval: Duration,
+    /// Re-sends after the first transmission.
+    pub retries: u8,
+}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum CommandEvent {

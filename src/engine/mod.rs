@@ -1,18 +1,53 @@
-//! The measurement: scheduling, matching, statistics (pure), and the async
-//! session that joins them to a transport and a report.
+//! The measurement: scheduling, matching and statistics (pure, time passed
+//! in), and the async session that joins them to a transport. It defines
+//! what it tells the world ([`observe`]) and depends on nothing above it:
+//! not on the command line, the configuration, the reports or the verdict.
 
 pub mod capacity;
 pub mod clock_offset;
-pub mod command_session;
+pub mod command;
 pub mod commands;
+pub mod echo;
+pub mod link_io;
 pub mod matcher;
+pub mod observe;
 pub mod radio;
 pub mod roster;
 pub mod schedule;
 pub mod session;
 pub mod stats;
+pub mod summary;
+
+use std::time::Duration;
+
+use crate::frame::signing::SigningConfig;
+use crate::frame::{SysComp, Version};
 
 /// Time in nanoseconds since the session started, from a monotonic clock.
 /// The pure parts take time as a value; only the session reads a clock.
 pub type Nanos = u64;
-pub mod summary;
+
+/// What a session needs to know, already validated.
+#[derive(Debug, Clone)]
+pub struct SessionConfig {
+    pub link_name: String,
+    pub ours: SysComp,
+    pub interval: Duration,
+    pub count: Option<u64>,
+    pub deadline: Option<Duration>,
+    pub timeout: Duration,
+    pub version: Version,
+    /// Send our own HEARTBEAT at 1 Hz (MAVSDK and routers need it).
+    pub heartbeat: bool,
+    /// Request slots in the matcher's ring.
+    pub capacity: usize,
+    pub first_seq: u32,
+    /// Wait for sends precisely (sub-millisecond) rather than on tokio's
+    /// 1 ms timer. Off for the simulated link, whose paused virtual clock
+    /// only moves while the runtime is idle, and where sessions share a
+    /// thread.
+    pub precise_pacing: bool,
+    /// MAVLink 2 signing (`--signing-key`): sign what we send, check what
+    /// we receive.
+    pub signing: Option<SigningConfig>,
+}

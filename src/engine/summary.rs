@@ -3,6 +3,7 @@
 
 use serde::Serialize;
 
+use super::capacity::WireBudget;
 use super::clock_offset::ClockSummary;
 use super::matcher::{Counts, Matcher};
 use super::radio::{self, RadioSummary};
@@ -69,7 +70,7 @@ pub struct Summary {
     /// Radios heard by their RADIO_STATUS.
     pub radios: Vec<RadioSummary>,
     /// What a serial link's baud rate carries (serial links only).
-    pub wire: Option<super::capacity::WireBudget>,
+    pub wire: Option<WireBudget>,
     /// What the signing gate accepted and refused (`--signing-key`).
     pub signing: Option<crate::frame::signing::SigningSummary>,
 }
@@ -78,6 +79,28 @@ impl Summary {
     /// True when at least one responder answered in time.
     pub fn any_reply(&self) -> bool {
         self.responders.iter().any(|r| r.counts.received > 0)
+    }
+
+    /// Puts a serial link's budget in the summary and, when the run shows
+    /// the link was overrun (losses, or an RTT spread far beyond the wire
+    /// time, which is a queue growing), says so.
+    pub fn apply_wire(&mut self, budget: WireBudget) {
+        self.wire = Some(budget);
+        let Some(rate) = self.schedule.map(|s| s.requested_rate_hz) else {
+            return;
+        };
+        // After the run the responders are known, not guessed.
+        let b = budget.with_replies(self.responders.len() as u64);
+        let overrun = self.responders.iter().any(|r| {
+            r.counts.lost > 0
+                || r.rtt
+                    .is_some_and(|t| t.max_us - t.min_us > 10.0 * budget.floor_us)
+        });
+        if overrun {
+            if let Some(w) = b.warning(rate) {
+                self.hints.push(format!("{w}: this run did"));
+            }
+        }
     }
 }
 
@@ -187,6 +210,31 @@ impl CommandSummary {
     }
 }
 
+/// The end of one link's run, by probe kind.
+#[derive(Debug, Clone)]
+pub enum LinkSummary {
+    /// PING or TIMESYNC.
+    Echo(Summary),
+    /// COMMAND_LONG until acknowledged.
+    Command(CommandSummary),
+}
+
+impl LinkSummary {
+    pub fn link(&self) -> &str {
+        match self {
+            LinkSummary::Echo(s) => &s.link,
+            LinkSummary::Command(s) => &s.link,
+        }
+    }
+
+    pub fn link_error(&self) -> Option<&str> {
+        match self {
+            LinkSummary::Echo(s) => s.link_error.as_deref(),
+            LinkSummary::Command(s) => s.link_error.as_deref(),
+        }
+    }
+}
+
 pub fn command_target_summaries(
     tracker: &super::commands::CommandTracker,
     roster: &Roster,
@@ -250,5 +298,69 @@ mod tests {
             hints[0].starts_with("1/1") || hints[0].starts_with("1:1"),
             "{hints:?}"
         );
+    }
+
+    fn run(lost: u64, requested_rate_hz: f64) -> Summary {
+        use super::super::matcher::Counts;
+        Summary {
+            link: "serial:/dev/x:57600".into(),
+            probe: "ping",
+            ours: SysComp::new(255, 190),
+            duration_s: 1.0,
+            requests: 10,
+            in_flight: 0,
+            responders: vec![ResponderSummary {
+                id: SysComp::new(1, 1),
+                counts: Counts {
+                    sent: 10,
+                    received: 10 - lost,
+                    lost,
+                    ..Counts::default()
+                },
+                loss_ratio: lost as f64 / 10.0,
+                rtt: None,
+                histogram: vec![],
+                identity: None,
+                clock: None,
+            }],
+            foreign_replies: 0,
+            wrong_path_replies: 0,
+            untracked_replies: 0,
+            frames: Default::default(),
+            hints: vec![],
+            interrupted: false,
+            link_error: None,
+            downtime_s: 0.0,
+            schedule: Some(ScheduleSummary {
+                requested_rate_hz,
+                achieved_rate_hz: requested_rate_hz,
+                lateness_p50_us: 0.0,
+                lateness_p99_us: 0.0,
+                lateness_max_us: 0.0,
+            }),
+            rx_clock: "test",
+            radios: vec![],
+            wire: None,
+            signing: None,
+        }
+    }
+
+    #[test]
+    fn the_summary_says_so_only_when_the_run_shows_it() {
+        let b = super::super::capacity::budget(57_600, crate::frame::Version::V2, 99, 1);
+        // Over capacity and losing: said.
+        let mut s = run(3, 500.0);
+        s.apply_wire(b);
+        assert_eq!(s.wire, Some(b));
+        assert_eq!(s.hints.len(), 1, "{:?}", s.hints);
+        assert!(s.hints[0].ends_with("will queue and then lose: this run did"));
+        // Over capacity but nothing lost (a pty ignores the baud): silent.
+        let mut s = run(0, 500.0);
+        s.apply_wire(b);
+        assert!(s.hints.is_empty());
+        // Losing below capacity: the wire is not the reason.
+        let mut s = run(3, 50.0);
+        s.apply_wire(b);
+        assert!(s.hints.is_empty());
     }
 }

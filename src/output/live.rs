@@ -5,10 +5,10 @@
 //! The measurement never waits on the terminal: `event()` only updates a
 //! small state under a mutex, and a separate thread draws it a few times a
 //! second and reads the keyboard. When the run ends, the terminal is
-//! restored and the normal text summary printed.
+//! restored and the normal text summary printed (by the run, as text).
 
 use std::collections::{BTreeMap, VecDeque};
-use std::io::{self, Stdout};
+use std::io;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard};
 use std::thread::JoinHandle;
@@ -22,11 +22,10 @@ use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
 use ratatui::Frame;
 use tokio::sync::Notify;
 
-use super::text::TextReporter;
-use super::{Event, Reporter, StartInfo};
+use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::stats::RttStats;
-use crate::engine::summary::Summary;
+use crate::engine::summary::LinkSummary;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -104,7 +103,7 @@ impl LiveState {
                     Some(format!("{} {}", identity.vehicle, identity.autopilot_name));
             }
             Event::Match(e) => self.on_match(e),
-            Event::Radio { .. } => {}
+            Event::Radio { .. } | Event::Command(_) => {}
         }
     }
 
@@ -398,35 +397,6 @@ struct Ui {
     thread: JoinHandle<io::Result<()>>,
 }
 
-pub struct LiveReporter {
-    state: Arc<Mutex<LiveState>>,
-    stop: Arc<Notify>,
-    ui: Option<Ui>,
-    text: TextReporter<Stdout>,
-}
-
-impl LiveReporter {
-    /// `stop` ends the run, as Ctrl-C does, when `q` is pressed.
-    pub fn new(stop: Arc<Notify>) -> Self {
-        LiveReporter {
-            state: Arc::default(),
-            stop,
-            ui: None,
-            text: TextReporter::new(io::stdout(), true),
-        }
-    }
-
-    fn close(&mut self) -> io::Result<()> {
-        let Some(ui) = self.ui.take() else {
-            return Ok(());
-        };
-        ui.done.store(true, Ordering::Relaxed);
-        ui.thread
-            .join()
-            .unwrap_or_else(|_| Err(io::Error::other("the live view failed")))
-    }
-}
-
 /// Draws a frame with `draw` a few times a second until `done`.
 fn ui_loop(
     mut terminal: ratatui::DefaultTerminal,
@@ -451,70 +421,35 @@ fn ui_loop(
     Ok(())
 }
 
-impl Reporter for LiveReporter {
-    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        lock(&self.state).on_start(info);
-        self.text.start(info)?;
-        // Also sets a panic hook that restores the terminal first.
-        let terminal = ratatui::try_init()?;
-        let done = Arc::new(AtomicBool::new(false));
-        let (state, flag, stop) = (self.state.clone(), done.clone(), self.stop.clone());
-        // The state is locked only while the figures are computed.
-        let draw = move |f: &mut Frame<'_>| {
-            let screen = lock(&state).screen();
-            render(f, &screen);
-        };
-        let thread = std::thread::Builder::new()
-            .name("live view".into())
-            .spawn(move || ui_loop(terminal, draw, flag, stop))
-            .inspect_err(|_| ratatui::restore())?;
-        self.ui = Some(Ui { done, thread });
-        Ok(())
-    }
-
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        lock(&self.state).on_event(event);
-        Ok(())
-    }
-
-    fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()> {
-        let closed = self.close();
-        self.text.summary(summary, verdict)?;
-        closed
-    }
-}
-
-impl Drop for LiveReporter {
-    /// A run that ends without a summary still gives the terminal back.
-    fn drop(&mut self) {
-        let _ = self.close();
-    }
-}
-
-/// The live view of several links: one terminal, a section per link. Each
-/// link's session feeds its [`LiveLink`]; the caller closes the view once
-/// every session ended, then prints the summaries.
-pub struct LiveLinks {
+/// The live view: one terminal, a section per link (one link fills it).
+/// Each link's session feeds its [`LiveLink`]; the caller closes the view
+/// once every session ended, then prints the summaries.
+pub struct LiveView {
     states: Arc<Mutex<Vec<LiveState>>>,
     ui: Option<Ui>,
 }
 
-impl LiveLinks {
+impl LiveView {
     /// Takes the terminal and starts drawing; `stop` is raised by `q`.
     pub fn start(stop: Arc<Notify>) -> io::Result<Self> {
         let states: Arc<Mutex<Vec<LiveState>>> = Arc::default();
+        // Also sets a panic hook that restores the terminal first.
         let terminal = ratatui::try_init()?;
         let done = Arc::new(AtomicBool::new(false));
         let (shown, flag) = (states.clone(), done.clone());
+        // The state is locked only while the figures are computed.
         let draw = move |f: &mut Frame<'_>| {
             let screens: Vec<Screen> = lock(&shown).iter().map(LiveState::screen).collect();
-            render_links(f, &screens);
+            match screens.as_slice() {
+                [one] => render(f, one),
+                several => render_links(f, several),
+            }
         };
         let thread = std::thread::Builder::new()
             .name("live view".into())
             .spawn(move || ui_loop(terminal, draw, flag, stop))
             .inspect_err(|_| ratatui::restore())?;
-        Ok(LiveLinks {
+        Ok(LiveView {
             states,
             ui: Some(Ui { done, thread }),
         })
@@ -542,19 +477,21 @@ impl LiveLinks {
     }
 }
 
-impl Drop for LiveLinks {
+impl Drop for LiveView {
+    /// A run that ends early still gives the terminal back.
     fn drop(&mut self) {
         let _ = self.close();
     }
 }
 
-/// One link's part of [`LiveLinks`]; its summary is printed by the caller.
+/// One link's part of the [`LiveView`]; its summary is printed as text
+/// once the view is closed.
 pub struct LiveLink {
     states: Arc<Mutex<Vec<LiveState>>>,
     index: usize,
 }
 
-impl Reporter for LiveLink {
+impl Observer for LiveLink {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         lock(&self.states)[self.index].on_start(info);
         Ok(())
@@ -564,8 +501,10 @@ impl Reporter for LiveLink {
         lock(&self.states)[self.index].on_event(event);
         Ok(())
     }
+}
 
-    fn summary(&mut self, _: &Summary, _: &Verdict) -> io::Result<()> {
+impl Reporter for LiveLink {
+    fn summary(&mut self, _: &LinkSummary, _: &Verdict) -> io::Result<()> {
         Ok(())
     }
 }
@@ -607,6 +546,7 @@ mod tests {
             interval: Duration::from_millis(100),
             timeout: Duration::from_secs(2),
             count: None,
+            command: None,
         });
         let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));
         for seq in 0..30 {
@@ -646,6 +586,7 @@ mod tests {
             interval: Duration::from_millis(100),
             timeout: Duration::from_secs(2),
             count: None,
+            command: None,
         });
         other.on_event(&Event::WaitingForPeer);
         let screens = [state().screen(), other.screen()];

@@ -1,5 +1,5 @@
-//! Reports: the engine hands events and the summary to one [`Reporter`];
-//! each output format is one implementation.
+//! Reports: each output format follows a session as an engine
+//! [`Observer`] and renders the judged summary at the end ([`Reporter`]).
 
 pub mod hgrm;
 pub mod json;
@@ -12,57 +12,14 @@ pub mod text;
 use std::io;
 use std::time::{Duration, SystemTime};
 
-use crate::config::CommandSpec;
-use crate::engine::commands::CommandEvent;
-use crate::engine::matcher::MatchEvent;
-use crate::engine::radio::RadioReport;
-use crate::engine::roster::Identity;
-use crate::engine::summary::{CommandSummary, Summary};
+pub use crate::engine::observe::{Event, Observer, StartInfo};
+use crate::engine::summary::LinkSummary;
 use crate::engine::Nanos;
-use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
-/// What a run is doing, printed first.
-#[derive(Debug, Clone)]
-pub struct StartInfo {
-    pub link: String,
-    pub probe: &'static str,
-    pub ours: SysComp,
-    pub interval: Duration,
-    pub timeout: Duration,
-    pub count: Option<u64>,
-}
-
-#[derive(Debug, Clone, Copy)]
-pub enum Event<'a> {
-    Match(MatchEvent),
-    /// A system's first HEARTBEAT.
-    Heard {
-        id: SysComp,
-        identity: &'a Identity,
-    },
-    /// A RADIO_STATUS; `first` for each radio's first report.
-    Radio {
-        id: SysComp,
-        at: Nanos,
-        report: RadioReport,
-        first: bool,
-    },
-    /// Nothing to send to yet (udpin before a peer is heard).
-    WaitingForPeer,
-}
-
-/// An output format. Write errors end the run quietly (a closed pipe,
-/// as in `mavping ... | head -1`, is not a failure).
-pub trait Reporter {
-    fn start(&mut self, info: &StartInfo) -> io::Result<()>;
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()>;
-    fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()>;
-    /// Pushes buffered output to the reader (called before the session
-    /// blocks, and every 50 ms while it is busy).
-    fn flush(&mut self) -> io::Result<()> {
-        Ok(())
-    }
+/// An output format: it follows the run, then renders its summary.
+pub trait Reporter: Observer {
+    fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()>;
 }
 
 /// Session time to wall-clock time. The wall clock is read once at the
@@ -74,6 +31,17 @@ pub struct WallClock {
 }
 
 impl WallClock {
+    /// Now, or the UNIX epoch when the run is on a virtual clock.
+    pub fn starting(virtual_clock: bool) -> Self {
+        WallClock {
+            start: if virtual_clock {
+                SystemTime::UNIX_EPOCH
+            } else {
+                SystemTime::now()
+            },
+        }
+    }
+
     pub fn at(&self, t: Nanos) -> SystemTime {
         self.start + Duration::from_nanos(t)
     }
@@ -90,21 +58,29 @@ impl WallClock {
     }
 }
 
-/// Several reporters fed the same run (the chosen format plus a sample log).
+/// Several reporters fed the same run (the chosen format, the sample log,
+/// the exporter...).
+#[derive(Default)]
 pub struct Fanout<'a> {
     pub reporters: Vec<Box<dyn Reporter + 'a>>,
 }
 
-impl Reporter for Fanout<'_> {
+impl Observer for Fanout<'_> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.reporters.iter_mut().try_for_each(|r| r.start(info))
     }
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
         self.reporters.iter_mut().try_for_each(|r| r.event(event))
     }
+    fn flush(&mut self) -> io::Result<()> {
+        self.reporters.iter_mut().try_for_each(|r| r.flush())
+    }
+}
+
+impl Reporter for Fanout<'_> {
     /// Every reporter gets the summary, even after one failed: a closed
     /// stdout (`| head`) must not cost the plot or the sample log its end.
-    fn summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()> {
+    fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
         let mut result = Ok(());
         for r in &mut self.reporters {
             let written = r.summary(summary, verdict);
@@ -114,17 +90,6 @@ impl Reporter for Fanout<'_> {
         }
         result
     }
-    fn flush(&mut self) -> io::Result<()> {
-        self.reporters.iter_mut().try_for_each(|r| r.flush())
-    }
-}
-
-/// An output format for `--probe command`, whose events and summary differ
-/// from the echo probes'.
-pub trait CommandReporter {
-    fn command_start(&mut self, info: &StartInfo, spec: &CommandSpec) -> io::Result<()>;
-    fn command_event(&mut self, event: &CommandEvent) -> io::Result<()>;
-    fn command_summary(&mut self, summary: &CommandSummary) -> io::Result<()>;
 }
 
 /// One writer shared by the reports of several links run side by side on
@@ -158,15 +123,15 @@ impl<W: io::Write> io::Write for Shared<W> {
 }
 
 /// Starts every line with a fixed prefix (`[LINK] `), so per-reply lines
-/// of several links can be told apart.
+/// of several links can be told apart; without one, writes through.
 pub struct Prefixed<W: io::Write> {
     out: W,
-    prefix: String,
+    prefix: Option<String>,
     at_line_start: bool,
 }
 
 impl<W: io::Write> Prefixed<W> {
-    pub fn new(out: W, prefix: String) -> Self {
+    pub fn new(out: W, prefix: Option<String>) -> Self {
         Prefixed {
             out,
             prefix,
@@ -175,12 +140,26 @@ impl<W: io::Write> Prefixed<W> {
     }
 }
 
+impl<W: io::Write> Prefixed<W> {
+    /// The writer itself, bypassing the prefix.
+    pub fn inner(&mut self) -> &mut W {
+        &mut self.out
+    }
+
+    pub fn into_inner(self) -> W {
+        self.out
+    }
+}
+
 impl<W: io::Write> io::Write for Prefixed<W> {
     fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let Some(prefix) = &self.prefix else {
+            return self.out.write(buf);
+        };
         let mut rest = buf;
         while !rest.is_empty() {
             if self.at_line_start {
-                self.out.write_all(self.prefix.as_bytes())?;
+                self.out.write_all(prefix.as_bytes())?;
                 self.at_line_start = false;
             }
             let end = rest
@@ -207,13 +186,15 @@ mod tests {
     #[test]
     fn prefixed_lines_share_one_writer() {
         let shared = Shared::new(Vec::new());
-        let mut a = Prefixed::new(shared.clone(), "[a] ".into());
-        let mut b = Prefixed::new(shared.clone(), "[b] ".into());
+        let mut a = Prefixed::new(shared.clone(), Some("[a] ".into()));
+        let mut b = Prefixed::new(shared.clone(), Some("[b] ".into()));
+        let mut plain = Prefixed::new(shared.clone(), None);
         write!(a, "one").unwrap();
         writeln!(a, " line\ntwo").unwrap();
         writeln!(b, "three").unwrap();
+        writeln!(plain, "four").unwrap();
         a.write_all(b"").unwrap();
         let out = String::from_utf8(shared.0.borrow().clone()).unwrap();
-        assert_eq!(out, "[a] one line\n[a] two\n[b] three\n");
+        assert_eq!(out, "[a] one line\n[a] two\n[b] three\nfour\n");
     }
 }

@@ -1,19 +1,21 @@
-//! `--plot FILE.svg`: RTT over time per responder (losses marked) above the
-//! RTT distribution, drawn when the run ends.
+//! `--plot FILE.svg`: RTT over time per responder of every link (losses
+//! marked) above the RTT distribution, drawn when the run ends.
 //!
 //! Memory is constant: each responder keeps [`SPANS`] time spans. When a
 //! sample falls past the last span, every span doubles in width and
 //! neighbours merge, so a long run is drawn at a coarser time resolution
 //! (the mean RTT of each span, and whether it lost anything), never dropped.
 
+use std::cell::RefCell;
 use std::collections::BTreeMap;
-use std::io::{self, Write};
+use std::io;
+use std::rc::Rc;
 
 use plotters::prelude::*;
 
-use super::{Event, Reporter, StartInfo};
+use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
-use crate::engine::summary::Summary;
+use crate::engine::summary::LinkSummary;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -99,15 +101,16 @@ fn bin_low_ms(i: usize) -> f64 {
     LOWEST_US * 10f64.powf(i as f64 / BINS_PER_DECADE as f64) / 1e3
 }
 
-/// The samples a plot is drawn from.
+/// The samples a plot is drawn from: every link's responders.
 #[derive(Debug, Default)]
 pub struct PlotData {
-    link: String,
-    tracks: BTreeMap<SysComp, Track>,
+    /// Each link's name, by its place on the command line.
+    links: Vec<String>,
+    tracks: BTreeMap<(usize, SysComp), Track>,
 }
 
 impl PlotData {
-    pub fn on_event(&mut self, e: &MatchEvent) {
+    pub fn on_event(&mut self, link: usize, e: &MatchEvent) {
         match *e {
             MatchEvent::Reply {
                 responder,
@@ -116,17 +119,34 @@ impl PlotData {
                 ..
             } => self
                 .tracks
-                .entry(responder)
+                .entry((link, responder))
                 .or_insert_with(Track::new)
                 .reply(sent_at, rtt),
             MatchEvent::Lost {
                 responder, sent_at, ..
             } => self
                 .tracks
-                .entry(responder)
+                .entry((link, responder))
                 .or_insert_with(Track::new)
                 .lost(sent_at),
             _ => {}
+        }
+    }
+
+    /// The plot's title: the link, or how many.
+    fn title(&self) -> String {
+        match self.links.as_slice() {
+            [one] => format!("mavping {one}"),
+            several => format!("mavping, {} links", several.len()),
+        }
+    }
+
+    /// A responder's legend entry; with several links, its link too.
+    fn label(&self, link: usize, id: SysComp) -> String {
+        let id = format!("{}/{}", id.sysid, id.compid);
+        match self.links.len() {
+            1 => id,
+            _ => format!("{} {id}", self.links.get(link).map_or("?", String::as_str)),
         }
     }
 
@@ -143,10 +163,7 @@ type DrawResult = Result<(), Box<dyn std::error::Error>>;
 fn draw(data: &PlotData, backend: SVGBackend<'_>) -> DrawResult {
     let root = backend.into_drawing_area();
     root.fill(&WHITE)?;
-    let root = root.titled(
-        &format!("mavping {}", data.link),
-        ("sans-serif", 18).into_font(),
-    )?;
+    let root = root.titled(&data.title(), ("sans-serif", 18).into_font())?;
     let (top, bottom) = root.split_vertically(SIZE.1 * 3 / 5);
 
     let mut t_max = 1e-3f64;
@@ -171,7 +188,7 @@ fn draw(data: &PlotData, backend: SVGBackend<'_>) -> DrawResult {
         .x_desc("time since start (s)")
         .y_desc("RTT (ms)")
         .draw()?;
-    for (n, (id, t)) in data.tracks.iter().enumerate() {
+    for (n, (&(link, id), t)) in data.tracks.iter().enumerate() {
         let color = Palette99::pick(n).to_rgba();
         let at = |i: usize| (i as f64 + 0.5) * t.span_ns as f64 / 1e9;
         let line: Vec<(f64, f64)> = t
@@ -183,7 +200,7 @@ fn draw(data: &PlotData, backend: SVGBackend<'_>) -> DrawResult {
             .collect();
         chart
             .draw_series(LineSeries::new(line, color.stroke_width(1)))?
-            .label(format!("{}/{}", id.sysid, id.compid))
+            .label(data.label(link, id))
             .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2)));
         chart.draw_series(
             t.spans
@@ -243,49 +260,52 @@ fn draw(data: &PlotData, backend: SVGBackend<'_>) -> DrawResult {
     Ok(())
 }
 
-/// Collects samples during the run and writes the plot at the end.
-pub struct PlotReporter<W: Write> {
-    data: PlotData,
-    out: W,
-    path: String,
+/// `--plot`: collects every link's samples during the run; the run draws
+/// it once every link has ended.
+#[derive(Default)]
+pub struct Plot {
+    data: Rc<RefCell<PlotData>>,
 }
 
-impl<W: Write> PlotReporter<W> {
-    /// `out` is opened by the caller before the run, so a bad path fails
-    /// before anything is sent.
-    pub fn new(out: W, path: String) -> Self {
-        PlotReporter {
-            data: PlotData::default(),
-            out,
-            path,
+impl Plot {
+    /// The reporter of the next link.
+    pub fn link(&self) -> PlotLink {
+        let mut data = self.data.borrow_mut();
+        data.links.push(String::new());
+        PlotLink {
+            data: self.data.clone(),
+            index: data.links.len() - 1,
         }
+    }
+
+    /// Draws the SVG document.
+    pub fn svg(&self) -> Result<String, String> {
+        self.data.borrow().svg()
     }
 }
 
-impl<W: Write> Reporter for PlotReporter<W> {
+/// One link's samples into the [`Plot`].
+pub struct PlotLink {
+    data: Rc<RefCell<PlotData>>,
+    index: usize,
+}
+
+impl Observer for PlotLink {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        self.data.link = info.link.clone();
+        self.data.borrow_mut().links[self.index] = info.link.clone();
         Ok(())
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
         if let Event::Match(e) = event {
-            self.data.on_event(e);
+            self.data.borrow_mut().on_event(self.index, e);
         }
         Ok(())
     }
+}
 
-    fn summary(&mut self, _: &Summary, _: &Verdict) -> io::Result<()> {
-        // A failed plot is reported, but must not hide the summary's verdict.
-        let written = self.data.svg().and_then(|svg| {
-            self.out
-                .write_all(svg.as_bytes())
-                .and_then(|()| self.out.flush())
-                .map_err(|e| e.to_string())
-        });
-        if let Err(e) = written {
-            crate::app::print_error(&format!("cannot write --plot {}: {e}", self.path));
-        }
+impl Reporter for PlotLink {
+    fn summary(&mut self, _: &LinkSummary, _: &Verdict) -> io::Result<()> {
         Ok(())
     }
 }
@@ -310,21 +330,25 @@ mod tests {
     fn a_long_run_merges_spans_and_keeps_every_sample() {
         let r = SysComp::new(1, 1);
         let mut d = PlotData::default();
+        d.links.push("sim:".into());
         // One hour at 100 Hz, every tenth lost.
         for i in 0..360_000u64 {
             let at = i * 10_000_000;
             if i % 10 == 0 {
-                d.on_event(&MatchEvent::Lost {
-                    responder: r,
-                    seq: 0,
-                    sent_at: at,
-                    at,
-                });
+                d.on_event(
+                    0,
+                    &MatchEvent::Lost {
+                        responder: r,
+                        seq: 0,
+                        sent_at: at,
+                        at,
+                    },
+                );
             } else {
-                d.on_event(&reply(r, at, 20_000_000));
+                d.on_event(0, &reply(r, at, 20_000_000));
             }
         }
-        let t = &d.tracks[&r];
+        let t = &d.tracks[&(0, r)];
         assert!(t.spans.len() <= SPANS);
         assert_eq!(t.spans.iter().map(|s| s.replies).sum::<u64>(), 324_000);
         assert_eq!(t.spans.iter().map(|s| s.lost).sum::<u64>(), 36_000);
@@ -336,7 +360,7 @@ mod tests {
     #[test]
     fn the_svg_has_a_line_per_responder_and_marks_losses() {
         let mut d = PlotData {
-            link: "sim:".into(),
+            links: vec!["sim:".into()],
             ..PlotData::default()
         };
         for (n, id) in [SysComp::new(1, 1), SysComp::new(2, 1)]
@@ -344,18 +368,20 @@ mod tests {
             .enumerate()
         {
             for i in 0..50u64 {
-                d.on_event(&reply(
-                    id,
-                    i * 100_000_000,
-                    (10 + n as u64 * 5 + i % 3) * 1_000_000,
-                ));
+                d.on_event(
+                    0,
+                    &reply(id, i * 100_000_000, (10 + n as u64 * 5 + i % 3) * 1_000_000),
+                );
             }
-            d.on_event(&MatchEvent::Lost {
-                responder: id,
-                seq: 0,
-                sent_at: 5_000_000_000,
-                at: 7_000_000_000,
-            });
+            d.on_event(
+                0,
+                &MatchEvent::Lost {
+                    responder: id,
+                    seq: 0,
+                    sent_at: 5_000_000_000,
+                    at: 7_000_000_000,
+                },
+            );
         }
         let svg = d.svg().unwrap();
         assert!(svg.starts_with("<svg"), "{}", &svg[..80]);
@@ -369,5 +395,22 @@ mod tests {
             assert!(svg.contains(text), "{text} missing");
         }
         assert!(svg.matches("<polyline").count() >= 4);
+    }
+
+    #[test]
+    fn several_links_share_one_plot_with_labelled_lines() {
+        let mut d = PlotData {
+            links: vec!["sim:".into(), "udpout:10.0.0.2:14550".into()],
+            ..PlotData::default()
+        };
+        for link in 0..2 {
+            for i in 0..20u64 {
+                d.on_event(link, &reply(SysComp::new(1, 1), i * 100_000_000, 5_000_000));
+            }
+        }
+        let svg = d.svg().unwrap();
+        for text in ["mavping, 2 links", "sim: 1/1", "udpout:10.0.0.2:14550 1/1"] {
+            assert!(svg.contains(text), "{text} missing");
+        }
     }
 }

@@ -16,9 +16,9 @@ use std::time::Duration;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 use tokio::net::{TcpListener, TcpStream};
 
-use super::{Event, Reporter, StartInfo};
+use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
-use crate::engine::summary::Summary;
+use crate::engine::summary::{LinkSummary, Summary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -312,7 +312,7 @@ async fn answer(mut stream: TcpStream, metrics: Arc<Mutex<Vec<Metrics>>>) {
     let _ = stream.shutdown().await;
 }
 
-impl Reporter for PrometheusReporter {
+impl Observer for PrometheusReporter {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.this()[self.index].on_start(info);
         Ok(())
@@ -324,9 +324,13 @@ impl Reporter for PrometheusReporter {
         }
         Ok(())
     }
+}
 
-    fn summary(&mut self, summary: &Summary, _: &Verdict) -> io::Result<()> {
-        self.this()[self.index].on_summary(summary);
+impl Reporter for PrometheusReporter {
+    fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
+        if let LinkSummary::Echo(summary) = summary {
+            self.this()[self.index].on_summary(summary);
+        }
         Ok(())
     }
 }
@@ -343,6 +347,7 @@ mod tests {
             interval: Duration::from_secs(1),
             timeout: Duration::from_secs(2),
             count: None,
+            command: None,
         }
     }
 

@@ -4,10 +4,10 @@
 
 use std::io::{self, Write};
 
-use super::{Event, Reporter, StartInfo};
+use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport};
-use crate::engine::summary::Summary;
+use crate::engine::summary::LinkSummary;
 use crate::verdict::Verdict;
 
 /// The radio columns come last, so readers of the first six keep working.
@@ -78,7 +78,7 @@ fn us(ns: u64) -> String {
     format!("{:.3}", ns as f64 / 1e3)
 }
 
-impl<W: Write> Reporter for SampleLog<W> {
+impl<W: Write> Observer for SampleLog<W> {
     fn start(&mut self, _: &StartInfo) -> io::Result<()> {
         match (self.header, &self.link) {
             (false, _) => Ok(()),
@@ -135,11 +135,13 @@ impl<W: Write> Reporter for SampleLog<W> {
         )
     }
 
-    fn summary(&mut self, _: &Summary, _: &Verdict) -> io::Result<()> {
+    fn flush(&mut self) -> io::Result<()> {
         self.out.flush()
     }
+}
 
-    fn flush(&mut self) -> io::Result<()> {
+impl<W: Write> Reporter for SampleLog<W> {
+    fn summary(&mut self, _: &LinkSummary, _: &Verdict) -> io::Result<()> {
         self.out.flush()
     }
 }
@@ -193,6 +195,7 @@ mod tests {
             interval: std::time::Duration::from_secs(1),
             timeout: std::time::Duration::from_secs(1),
             count: None,
+            command: None,
         };
         let lost = Event::Match(MatchEvent::Lost {
             responder: SysComp::new(1, 1),

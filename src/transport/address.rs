@@ -42,6 +42,13 @@ impl fmt::Display for HostPort {
     }
 }
 
+impl LinkSpec {
+    /// A simulated link on tokio's paused, virtual clock.
+    pub fn is_virtual(&self) -> bool {
+        matches!(self, LinkSpec::Sim(p) if p.virtual_clock)
+    }
+}
+
 impl fmt::Display for LinkSpec {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

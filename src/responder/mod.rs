@@ -1,13 +1,14 @@
 //! `mavping respond`: a well-behaved MAVLink system on any link, answering
-//! PING, TIMESYNC and COMMAND_LONG through [`ResponderCore`], with optional
-//! link emulation (delay, jitter, drop, duplicate) for tests.
+//! PING, TIMESYNC and COMMAND_LONG through [`core::ResponderCore`], with
+//! optional link emulation (delay, jitter, drop, duplicate) for tests.
 //!
 //! Every answer goes back only on the path its request came from
 //! (`send_to`): one reply per request, never amplified to other peers.
 
+pub mod core;
+
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
-use std::sync::Arc;
 use std::time::Duration;
 
 use rand::rngs::SmallRng;
@@ -16,22 +17,31 @@ use serde::Serialize;
 use tokio::sync::Notify;
 use tokio::time::{sleep_until, Instant};
 
-use crate::config::RespondConfig;
-use crate::frame::signing::{self, Gate, Signer, SigningCounts};
-use crate::frame::{self, Header, Msg, SysComp, Version};
-use crate::responder::{ResponderCore, ResponderCounts};
+use self::core::{ResponderCore, ResponderCounts};
+use crate::engine::link_io::{admitted, Clock, Heartbeat, Sender};
+use crate::frame::signing::{Gate, SigningConfig, SigningCounts};
+use crate::frame::{SysComp, Version};
 use crate::transport::{Inbound, LinkError, PathId, Transport};
 
 /// Replies held back by `--delay` at once; past it they are dropped (and
 /// counted), so memory stays bounded whatever the request rate.
 const MAX_HELD: usize = 1 << 16;
-const HEARTBEAT_PERIOD: Duration = Duration::from_secs(1);
-/// A companion-computer-like system, not a vehicle: it answers probes but
-/// flies nothing.
-const OUR_HEARTBEAT: Msg = Msg::Heartbeat {
-    mav_type: frame::mav_type::ONBOARD_CONTROLLER,
-    autopilot: frame::AUTOPILOT_INVALID,
-};
+
+/// How the responder behaves, already validated.
+#[derive(Debug, Clone)]
+pub struct ResponderSettings {
+    pub id: SysComp,
+    /// Every reply is held this long, plus up to `jitter`.
+    pub delay: Duration,
+    pub jitter: Duration,
+    /// Shares of replies dropped and duplicated, 0..=1.
+    pub drop: f64,
+    pub dup: f64,
+    pub seed: u64,
+    pub answer_ping: bool,
+    /// With a key: replies signed, requests checked (all must be signed).
+    pub signing: Option<SigningConfig>,
+}
 
 /// Ground truth printed on exit, to hold a pinger's figures against.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
@@ -82,20 +92,19 @@ struct Held {
 
 struct Responder {
     core: ResponderCore,
-    cfg: RespondConfig,
+    settings: ResponderSettings,
     rng: SmallRng,
-    buf: Vec<u8>,
-    packet_seq: u8,
+    sender: Sender,
+    heartbeat: Heartbeat,
+    clock: Clock,
     held: BinaryHeap<Reverse<Held>>,
     order: u64,
     counts: RespondCounts,
-    epoch: Instant,
     /// Paths (peers) greeted so far: links number new peers upwards and
     /// never reuse a number, so the highest one seen is enough.
     greeted: Option<PathId>,
-    /// With a signing key: signs what we send...
-    signer: Option<Signer>,
-    /// ...and refuses requests not signed with it (or replayed).
+    /// With a signing key: refuses requests not signed with it (or
+    /// replayed).
     gate: Option<Gate>,
 }
 
@@ -107,27 +116,8 @@ impl Responder {
             return Ok(());
         }
         self.greeted = Some(path);
-        self.encode(Version::V2, &OUR_HEARTBEAT);
-        link.send_to(path, &self.buf).await.map(|_| ())
-    }
-
-    fn encode(&mut self, version: Version, msg: &Msg) {
-        self.buf.clear();
-        let header = Header {
-            sysid: self.core.id.sysid,
-            compid: self.core.id.compid,
-            seq: self.packet_seq,
-        };
-        self.packet_seq = self.packet_seq.wrapping_add(1);
-        match self.signer.as_mut() {
-            // Signed frames are MAVLink 2 only; only MAVLink 2 requests
-            // can pass the gate anyway.
-            Some(signer) => {
-                frame::encode(&mut self.buf, Version::V2, header, msg);
-                signer.sign(&mut self.buf, 0, signing::timestamp_now());
-            }
-            None => frame::encode(&mut self.buf, version, header, msg),
-        }
+        let bytes = self.sender.frame_as(Version::V2, self.heartbeat.msg());
+        link.send_to(path, bytes).await.map(|_| ())
     }
 
     fn chance(&mut self, p: f64) -> bool {
@@ -135,13 +125,13 @@ impl Responder {
     }
 
     fn hold_time(&mut self) -> Duration {
-        let jitter = self.cfg.jitter.as_nanos() as u64;
+        let jitter = self.settings.jitter.as_nanos() as u64;
         let extra = if jitter == 0 {
             0
         } else {
             self.rng.gen_range(0..=jitter)
         };
-        self.cfg.delay + Duration::from_nanos(extra)
+        self.settings.delay + Duration::from_nanos(extra)
     }
 
     /// Answers one inbound frame: sends now, holds for later, or drops.
@@ -152,24 +142,18 @@ impl Responder {
     ) -> Result<(), LinkError> {
         // Our clock for TIMESYNC: ns since we started (like an autopilot's
         // boot time), read when the request arrived.
-        let clock_ns = (inbound.at - self.epoch).as_nanos() as i64 + 1;
-        if let Some(gate) = self.gate.as_mut() {
-            let frame = &inbound.frame;
-            let radio = matches!(frame.msg, Msg::RadioStatus { .. });
-            let verdict = gate.judge(frame.source, inbound.signature.as_ref(), radio);
-            if !verdict.accepted() {
-                tracing::debug!(from = %frame.source, msgid = frame.msgid, ?verdict, "frame refused");
-                return Ok(());
-            }
+        let clock_ns = self.clock.ns(inbound.at) as i64 + 1;
+        if !admitted(&mut self.gate, &inbound.frame, inbound.signature.as_ref()) {
+            return Ok(());
         }
         let Some(reply) = self.core.answer(&inbound.frame, clock_ns) else {
             return Ok(());
         };
-        if self.chance(self.cfg.drop) {
+        if self.chance(self.settings.drop) {
             self.counts.dropped += 1;
             return Ok(());
         }
-        let copies = if self.chance(self.cfg.dup) {
+        let copies = if self.chance(self.settings.dup) {
             self.counts.duplicated += 1;
             2
         } else {
@@ -177,11 +161,11 @@ impl Responder {
         };
         // Answer in the version we were asked in: a MAVLink 1 stack may not
         // parse MAVLink 2.
-        self.encode(inbound.frame.version, &reply);
+        self.sender.frame_as(inbound.frame.version, &reply);
         for _ in 0..copies {
             let hold = self.hold_time();
             if hold.is_zero() {
-                link.send_to(inbound.path, &self.buf).await?;
+                link.send_to(inbound.path, self.sender.last()).await?;
                 self.counts.replies_sent += 1;
             } else if self.held.len() >= MAX_HELD {
                 self.counts.overflow += 1;
@@ -191,7 +175,7 @@ impl Responder {
                     due: inbound.at + hold,
                     order: self.order,
                     path: inbound.path,
-                    bytes: self.buf.clone(),
+                    bytes: self.sender.last().to_vec(),
                 }));
             }
         }
@@ -210,50 +194,55 @@ impl Responder {
         }
         Ok(())
     }
+
+    /// When the loop must wake at the latest: the next held reply or
+    /// HEARTBEAT.
+    fn wake(&self) -> Instant {
+        let heartbeat = self.heartbeat.next().map_or_else(
+            || Instant::now() + Duration::from_secs(1),
+            |ns| self.clock.at(ns),
+        );
+        self.held
+            .peek()
+            .map_or(heartbeat, |h| h.0.due.min(heartbeat))
+    }
 }
 
 /// Answers until `stop` (Ctrl-C, SIGTERM) or a link failure; returns the
 /// counts either way.
 pub async fn run<T: Transport>(
-    cfg: &RespondConfig,
+    settings: &ResponderSettings,
     link: &mut T,
-    stop: Arc<Notify>,
+    stop: &Notify,
 ) -> (RespondCounts, Option<LinkError>) {
-    let mut core = ResponderCore::new(cfg.id);
-    core.answer_ping = cfg.answer_ping;
-    let epoch = Instant::now();
+    let mut core = ResponderCore::new(settings.id);
+    core.answer_ping = settings.answer_ping;
     let mut r = Responder {
         core,
-        cfg: cfg.clone(),
-        rng: SmallRng::seed_from_u64(cfg.seed),
-        buf: Vec::with_capacity(frame::scanner::MAX_FRAME_LEN),
-        packet_seq: 0,
+        settings: settings.clone(),
+        rng: SmallRng::seed_from_u64(settings.seed),
+        sender: Sender::new(
+            settings.id,
+            Version::V2,
+            settings.signing.as_ref().map(SigningConfig::signer),
+        ),
+        heartbeat: Heartbeat::onboard_controller(),
+        clock: Clock::start(),
         held: BinaryHeap::new(),
         order: 0,
         counts: RespondCounts::default(),
-        epoch,
         greeted: None,
-        signer: cfg.signing.as_ref().map(|s| s.signer()),
-        gate: cfg.signing.map(Gate::new),
+        gate: settings.signing.map(Gate::new),
     };
-    let mut next_heartbeat = epoch;
     let mut inbound: Vec<Inbound> = Vec::new();
     let error = loop {
-        let now = Instant::now();
-        if next_heartbeat <= now {
-            r.encode(Version::V2, &OUR_HEARTBEAT);
-            if let Err(e) = link.send(&r.buf).await {
-                break Some(e);
-            }
-            next_heartbeat += HEARTBEAT_PERIOD;
-        }
-        if let Err(e) = r.send_due(link, now).await {
+        let now = r.clock.now();
+        if let Err(e) = r.heartbeat.send_if_due(link, &mut r.sender, now).await {
             break Some(e);
         }
-        let wake = r
-            .held
-            .peek()
-            .map_or(next_heartbeat, |h| h.0.due.min(next_heartbeat));
+        if let Err(e) = r.send_due(link, Instant::now()).await {
+            break Some(e);
+        }
         tokio::select! {
             biased;
             _ = stop.notified() => break None,
@@ -281,7 +270,7 @@ pub async fn run<T: Transport>(
                     break failed;
                 }
             }
-            _ = sleep_until(wake) => {}
+            _ = sleep_until(r.wake()) => {}
         }
     };
     r.counts.requests = r.core.counts;
@@ -290,14 +279,14 @@ pub async fn run<T: Transport>(
 }
 
 /// Who we are, for the first line.
-pub fn describe(cfg: &RespondConfig, link_name: &str) -> String {
-    let SysComp { sysid, compid } = cfg.id;
-    let what = if cfg.answer_ping {
+pub fn describe(settings: &ResponderSettings, link_name: &str) -> String {
+    let SysComp { sysid, compid } = settings.id;
+    let what = if settings.answer_ping {
         "PING, TIMESYNC and COMMAND_LONG"
     } else {
         "TIMESYNC and COMMAND_LONG (not PING)"
     };
-    let signed = if cfg.signing.is_some() {
+    let signed = if settings.signing.is_some() {
         " (signed requests only)"
     } else {
         ""

@@ -1,31 +1,22 @@
-//! The validated run configuration: nothing downstream sees raw flags.
+//! `mavping [OPTIONS] LINK...` into a [`Config`]: one rule a function, each
+//! with an error that names the option and says what would be accepted.
 
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use thiserror::Error;
-
-use crate::cli::{Format, PingArgs, ProbeKind, RespondArgs, SigningArgs};
-use crate::engine::session::SessionConfig;
-use crate::frame::codec;
-use crate::frame::signing::{SecretKey, SigningConfig};
-use crate::frame::{SysComp, Version};
-use crate::transport::address::{AddressError, LinkSpec};
+use super::{
+    invalid, signing, validate_baud, validate_ids, Config, ConfigError, LinkConfig, OutputConfig,
+    Probe, MAX_TIMEOUT,
+};
+use crate::cli::{Format, PingArgs, ProbeKind};
+use crate::engine::commands::CommandSpec;
+use crate::engine::SessionConfig;
+use crate::frame::signing::SigningConfig;
+use crate::frame::{codec, SysComp, Version};
+use crate::transport::address::LinkSpec;
 use crate::transport::LinkOptions;
 use crate::verdict::{Expected, Thresholds};
-
-#[derive(Debug, Error)]
-pub enum ConfigError {
-    #[error(transparent)]
-    Address(#[from] AddressError),
-    #[error("{0}")]
-    Invalid(String),
-}
-
-fn invalid(msg: impl Into<String>) -> ConfigError {
-    ConfigError::Invalid(msg.into())
-}
 
 /// More requests than this in flight at once would need an unreasonably
 /// large pending table: lower the rate or the timeout.
@@ -33,88 +24,9 @@ pub const MAX_IN_FLIGHT: u64 = 1 << 21;
 const MAX_RATE: f64 = 1_000_000.0;
 /// The longest interval between requests (the lowest rate).
 const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
-const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
-
-#[derive(Debug, Clone)]
-pub struct Config {
-    /// One or more links, in command-line order; each gets its own session.
-    pub links: Vec<LinkSpec>,
-    /// Each link's connection string as typed: with several links, the
-    /// name reports and error lines give it.
-    pub link_names: Vec<String>,
-    pub link_options: LinkOptions,
-    pub session: SessionConfig,
-    pub quiet: bool,
-    pub every_reply: bool,
-    pub verbose: u8,
-    pub format: Format,
-    /// Thresholds of every link (with one link, all of them).
-    pub thresholds: Thresholds,
-    /// `--expect LINK=ID`: (index of the link, responder), several links.
-    pub expect_on: Vec<(usize, Expected)>,
-    pub hgrm: Option<PathBuf>,
-    pub samples: Option<PathBuf>,
-    pub probe: Probe,
-    /// `--live`; app.rs falls back to text when stdout is not a terminal.
-    pub live: bool,
-    pub prometheus: Option<SocketAddr>,
-    pub plot: Option<PathBuf>,
-}
-
-/// Which probe, with what it needs.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Probe {
-    Ping,
-    Timesync { target: SysComp },
-    Command(CommandSpec),
-}
-
-/// The command probe's request and retry policy.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CommandSpec {
-    pub target: SysComp,
-    pub command: u16,
-    pub params: [f32; 7],
-    pub retry_interval: Duration,
-    /// Re-sends after the first transmission.
-    pub retries: u8,
-}
-
-/// `mavping respond`, validated.
-#[derive(Debug, Clone)]
-pub struct RespondConfig {
-    pub link: LinkSpec,
-    pub id: SysComp,
-    pub delay: Duration,
-    pub jitter: Duration,
-    /// Shares of replies dropped and duplicated, 0..=1.
-    pub drop: f64,
-    pub dup: f64,
-    pub seed: u64,
-    pub answer_ping: bool,
-    pub verbose: u8,
-    pub link_options: LinkOptions,
-    /// With a key: replies signed, requests checked (all must be signed).
-    pub signing: Option<SigningConfig>,
-}
-
-impl Config {
-    /// True when the run should use tokio's paused, virtual clock (only
-    /// simulated links with `clock=virtual`; validation rejects a mix).
-    pub fn virtual_clock(&self) -> bool {
-        self.links
-            .iter()
-            .all(|l| matches!(l, LinkSpec::Sim(p) if p.virtual_clock))
-    }
-
-    /// The first (with one link, the only) link.
-    pub fn link(&self) -> &LinkSpec {
-        &self.links[0]
-    }
-}
 
 /// `--expect LINK=ID`: LINK must be one of the links (as given, or in the
-/// form mavping prints it). With one link it is the plain `--expect ID`.
+/// form mavping prints it). Returns (index of the link, responder).
 fn validate_scoped_expect(
     cli: &PingArgs,
     links: &[LinkSpec],
@@ -133,20 +45,14 @@ fn validate_scoped_expect(
                     e.id
                 ))
             })?;
-        if links.len() > 1 {
-            scoped.push((index, e.id));
-        }
+        scoped.push((index, e.id));
     }
     Ok(scoped)
 }
 
 /// Several links: each must be named once (reports are keyed by the
-/// connection string), a virtual clock cannot drive real links, and the
-/// plot (it draws one link) and the command probe are for one link only.
+/// connection string), and a virtual clock cannot drive real links.
 fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError> {
-    if links.len() < 2 {
-        return Ok(());
-    }
     for (i, link) in links.iter().enumerate() {
         if links[..i].iter().any(|l| l.to_string() == link.to_string()) {
             return Err(invalid(format!(
@@ -155,22 +61,10 @@ fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError>
             )));
         }
     }
-    let is_virtual = |l: &LinkSpec| matches!(l, LinkSpec::Sim(p) if p.virtual_clock);
-    if links.iter().any(is_virtual) && !links.iter().all(is_virtual) {
+    if links.iter().any(LinkSpec::is_virtual) && !links.iter().all(LinkSpec::is_virtual) {
         return Err(invalid(
             "sim:?clock=virtual cannot run beside other links: use clock=virtual on every sim: link or on none",
         ));
-    }
-    for (set, flag) in [
-        (cli.probe == ProbeKind::Command, "--probe command"),
-        (cli.plot.is_some(), "--plot"),
-    ] {
-        if set {
-            return Err(invalid(format!(
-                "{flag} works with one link, not {}",
-                links.len()
-            )));
-        }
     }
     Ok(())
 }
@@ -199,13 +93,15 @@ fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
     Ok(path.to_path_buf())
 }
 
-/// The live view, exporter and plot follow echo probes' events.
+/// The live view, exporter, plot and sample log follow echo probes'
+/// replies; a command probe has none.
 fn validate_views(cli: &PingArgs) -> Result<(), ConfigError> {
     if cli.probe == ProbeKind::Command {
         for (set, flag) in [
             (cli.live, "--live"),
             (cli.prometheus.is_some(), "--prometheus"),
             (cli.plot.is_some(), "--plot"),
+            (cli.samples.is_some(), "--samples"),
         ] {
             if set {
                 return Err(invalid(format!(
@@ -254,80 +150,19 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
     Ok(interval)
 }
 
-/// The signing key from `--signing-key` (or its env var) or the file
-/// `--signing-key-file` names; `None` when neither is given.
-fn signing_key(args: &SigningArgs) -> Result<Option<SecretKey>, ConfigError> {
-    let text =
-        match (&args.signing_key, &args.signing_key_file) {
-            (Some(_), Some(_)) => return Err(invalid(
-                "--signing-key (or MAVPING_SIGNING_KEY) and --signing-key-file: give one, not both",
-            )),
-            (Some(key), None) => key.trim().to_string(),
-            (None, Some(path)) => std::fs::read_to_string(path)
-                .map_err(|e| {
-                    invalid(format!(
-                        "--signing-key-file {}: cannot read it: {e}",
-                        path.display()
-                    ))
-                })?
-                .trim()
-                .to_string(),
-            (None, None) => return Ok(None),
-        };
-    let from = if args.signing_key.is_some() {
-        "--signing-key".to_string()
-    } else {
-        format!(
-            "--signing-key-file {}",
-            args.signing_key_file.as_ref().expect("matched").display()
-        )
-    };
-    SecretKey::parse(&text).map(Some).map_err(|e| {
-        invalid(format!(
-            "{from}: {e}; expected 64 hex characters or a passphrase"
-        ))
-    })
-}
-
-fn validate_signing(
-    args: &SigningArgs,
-    require_signed: bool,
-) -> Result<Option<SigningConfig>, ConfigError> {
-    let key = signing_key(args)?;
-    match key {
-        None if require_signed => Err(invalid(
+fn validate_signing(cli: &PingArgs) -> Result<Option<SigningConfig>, ConfigError> {
+    let policy = signing(&cli.signing, cli.require_signed)?;
+    if policy.is_none() && cli.require_signed {
+        return Err(invalid(
             "--require-signed needs a signing key (--signing-key, MAVPING_SIGNING_KEY or --signing-key-file)",
-        )),
-        None => Ok(None),
-        Some(key) => Ok(Some(SigningConfig {
-            key,
-            link_id: args.signing_link_id,
-            require_signed,
-        })),
-    }
-}
-
-fn validate_baud(baud: u32) -> Result<u32, ConfigError> {
-    if baud == 0 {
-        return Err(invalid(
-            "--baud 0: expected a baud rate such as 57600 or 115200",
         ));
     }
-    Ok(baud)
-}
-
-fn validate_ids(sysid: u8, compid: u8) -> Result<SysComp, ConfigError> {
-    if sysid == 0 {
+    if policy.is_some() && cli.mavlink_version == 1 {
         return Err(invalid(
-            "--sysid 0: 0 means 'broadcast'; use 1-255 (255 is a GCS)",
+            "--mavlink 1 with a signing key: signing needs MAVLink 2 (drop --mavlink 1)",
         ));
     }
-    if compid == 0 {
-        return Err(invalid(
-            "--compid 0: 0 means 'all components'; use 1-255 (190 is a GCS)",
-        ));
-    }
-    Ok(SysComp::new(sysid, compid))
+    Ok(policy)
 }
 
 /// Ring size: twice the requests that can be in flight within one
@@ -430,53 +265,49 @@ fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
     }
 }
 
-fn percent(flag: &str, text: &str) -> Result<f64, ConfigError> {
-    let number = text.strip_suffix('%').unwrap_or(text);
-    match number.parse::<f64>() {
-        Ok(p) if (0.0..=100.0).contains(&p) => Ok(p / 100.0),
-        _ => Err(invalid(format!(
-            "{flag} {text}: expected a percentage from 0 to 100"
-        ))),
+/// The session settings every link shares; each link then names its own.
+fn session(
+    cli: &PingArgs,
+    links: &[LinkSpec],
+    probe: &Probe,
+) -> Result<SessionConfig, ConfigError> {
+    let interval = validate_interval(cli)?;
+    if cli.count == Some(0) {
+        return Err(invalid("--count 0: expected at least 1"));
     }
-}
-
-impl TryFrom<&RespondArgs> for RespondConfig {
-    type Error = ConfigError;
-
-    fn try_from(cli: &RespondArgs) -> Result<Self, ConfigError> {
-        let link: LinkSpec = cli.link.parse()?;
-        for (flag, d) in [("--delay", cli.delay), ("--jitter", cli.jitter)] {
-            if d > MAX_TIMEOUT {
-                return Err(invalid(format!(
-                    "{flag} {}: at most 1h",
-                    humantime::format_duration(d)
-                )));
-            }
-        }
-        Ok(RespondConfig {
-            link,
-            id: validate_ids(cli.sysid, cli.compid)?,
-            delay: cli.delay,
-            jitter: cli.jitter,
-            drop: percent("--drop", &cli.drop)?,
-            dup: percent("--dup", &cli.dup)?,
-            seed: cli.seed,
-            answer_ping: !cli.no_ping,
-            verbose: cli.verbose,
-            link_options: LinkOptions {
-                baud: validate_baud(cli.baud)?,
-                // A responder outlives its pingers: one that is not up yet
-                // or restarts must not end it.
-                reconnect: true,
-            },
-            // A responder with a key answers only signed requests.
-            signing: signing_key(&cli.signing)?.map(|key| SigningConfig {
-                key,
-                link_id: cli.signing.signing_link_id,
-                require_signed: true,
-            }),
-        })
+    if cli.timeout.is_zero() || cli.timeout > MAX_TIMEOUT {
+        return Err(invalid(format!(
+            "--timeout {}: expected more than 0 and at most 1h",
+            humantime::format_duration(cli.timeout)
+        )));
     }
+    if cli.deadline.is_some_and(|d| d.is_zero()) {
+        return Err(invalid("--deadline 0: expected more than 0"));
+    }
+    let ours = validate_ids(cli.sysid, cli.compid)?;
+    let signing = validate_signing(cli)?;
+    let echo = !matches!(probe, Probe::Command(_));
+    Ok(SessionConfig {
+        link_name: String::new(),
+        ours,
+        interval,
+        count: cli.count,
+        deadline: cli.deadline,
+        timeout: cli.timeout,
+        version: if cli.mavlink_version == 1 {
+            Version::V1
+        } else {
+            Version::V2
+        },
+        heartbeat: !cli.no_heartbeat,
+        capacity: pending_capacity(interval, cli.timeout)?,
+        first_seq: cli.first_seq,
+        // Several links share one thread: a session must not spin there
+        // while another's replies wait. Commands go out at most every few
+        // ms: tokio's timer is precise enough.
+        precise_pacing: echo && links.len() == 1 && !matches!(links[0], LinkSpec::Sim(_)),
+        signing,
+    })
 }
 
 impl TryFrom<&PingArgs> for Config {
@@ -488,88 +319,82 @@ impl TryFrom<&PingArgs> for Config {
                 "missing CONNECTION (e.g. udpout:127.0.0.1:14550 or sim:)",
             ));
         }
-        let links = cli
+        let specs = cli
             .links
             .iter()
             .map(|l| l.parse::<LinkSpec>())
             .collect::<Result<Vec<_>, _>>()?;
-        validate_links(cli, &links)?;
-        let link = &links[0];
+        validate_links(cli, &specs)?;
         if cli.min_responders == Some(0) {
             return Err(invalid("--min-responders 0: expected at least 1"));
         }
-        let interval = validate_interval(cli)?;
-        if cli.count == Some(0) {
-            return Err(invalid("--count 0: expected at least 1"));
-        }
-        if cli.timeout.is_zero() || cli.timeout > MAX_TIMEOUT {
-            return Err(invalid(format!(
-                "--timeout {}: expected more than 0 and at most 1h",
-                humantime::format_duration(cli.timeout)
-            )));
-        }
-        if cli.deadline.is_some_and(|d| d.is_zero()) {
-            return Err(invalid("--deadline 0: expected more than 0"));
-        }
-        let ours = validate_ids(cli.sysid, cli.compid)?;
         validate_baud(cli.baud)?;
         validate_views(cli)?;
-        let signing = validate_signing(&cli.signing, cli.require_signed)?;
-        if signing.is_some() && cli.mavlink_version == 1 {
-            return Err(invalid(
-                "--mavlink 1 with a signing key: signing needs MAVLink 2 (drop --mavlink 1)",
-            ));
-        }
+        let probe = validate_probe(cli)?;
+        let session = session(cli, &specs, &probe)?;
+        let everywhere = Thresholds {
+            max_loss: cli.max_loss,
+            max_rtt: cli.max_rtt.clone(),
+            max_jitter: cli.max_jitter,
+            expect: cli
+                .expect
+                .iter()
+                .filter(|e| e.link.is_none())
+                .map(|e| e.id)
+                .collect(),
+            min_responders: cli.min_responders,
+        };
+        let scoped = validate_scoped_expect(cli, &specs)?;
+        let several = specs.len() > 1;
+        let links = specs
+            .into_iter()
+            .zip(&cli.links)
+            .enumerate()
+            .map(|(index, (spec, given))| {
+                let name = given.trim().to_string();
+                let mut thresholds = everywhere.clone();
+                thresholds.expect.extend(
+                    scoped
+                        .iter()
+                        .filter(|(i, _)| *i == index)
+                        .map(|(_, id)| *id),
+                );
+                LinkConfig {
+                    session: SessionConfig {
+                        // Alone, a link is headed by its full form (the
+                        // defaults of `sim:` spelled out); beside others,
+                        // by the name it was given.
+                        link_name: if several {
+                            name.clone()
+                        } else {
+                            spec.to_string()
+                        },
+                        ..session.clone()
+                    },
+                    spec,
+                    name,
+                    thresholds,
+                }
+            })
+            .collect();
         Ok(Config {
-            session: SessionConfig {
-                link_name: link.to_string(),
-                ours,
-                interval,
-                count: cli.count,
-                deadline: cli.deadline,
-                timeout: cli.timeout,
-                version: if cli.mavlink_version == 1 {
-                    Version::V1
-                } else {
-                    Version::V2
-                },
-                heartbeat: !cli.no_heartbeat,
-                capacity: pending_capacity(interval, cli.timeout)?,
-                first_seq: cli.first_seq,
-                // Several links share one thread: a session must not spin
-                // there while another's replies wait (see app.rs).
-                precise_pacing: links.len() == 1 && !matches!(link, LinkSpec::Sim(_)),
-                signing,
-            },
-            expect_on: validate_scoped_expect(cli, &links)?,
-            link_names: cli.links.iter().map(|l| l.trim().to_string()).collect(),
             links,
             link_options: LinkOptions {
                 baud: cli.baud,
                 reconnect: cli.reconnect,
             },
-            quiet: cli.quiet,
-            every_reply: cli.every_reply,
-            verbose: cli.verbose,
-            format: if cli.json { Format::Json } else { cli.format },
-            thresholds: Thresholds {
-                max_loss: cli.max_loss,
-                max_rtt: cli.max_rtt.clone(),
-                max_jitter: cli.max_jitter,
-                expect: cli
-                    .expect
-                    .iter()
-                    .filter(|e| e.link.is_none() || cli.links.len() == 1)
-                    .map(|e| e.id)
-                    .collect(),
-                min_responders: cli.min_responders,
+            probe,
+            output: OutputConfig {
+                format: if cli.json { Format::Json } else { cli.format },
+                quiet: cli.quiet,
+                every_reply: cli.every_reply,
+                live: cli.live,
+                hgrm: cli.hgrm.clone(),
+                samples: cli.samples.clone(),
+                plot: cli.plot.as_deref().map(validate_plot).transpose()?,
+                prometheus: cli.prometheus.as_deref().map(validate_listen).transpose()?,
             },
-            hgrm: cli.hgrm.clone(),
-            samples: cli.samples.clone(),
-            probe: validate_probe(cli)?,
-            live: cli.live,
-            prometheus: cli.prometheus.as_deref().map(validate_listen).transpose()?,
-            plot: cli.plot.as_deref().map(validate_plot).transpose()?,
+            verbose: cli.verbose,
         })
     }
 }
@@ -580,6 +405,7 @@ mod tests {
 
     use super::*;
     use crate::cli::Cli;
+    use crate::frame::signing::SecretKey;
 
     fn config(args: &str) -> Result<Config, String> {
         let cli = Cli::try_parse_from(std::iter::once("mavping").chain(args.split_whitespace()))
@@ -590,25 +416,25 @@ mod tests {
     #[test]
     fn good_argument_lines() {
         let c = config("sim:").unwrap();
-        assert_eq!(c.session.interval, Duration::from_secs(1));
-        assert_eq!(c.session.timeout, Duration::from_secs(2));
-        assert_eq!(c.session.ours, SysComp::new(255, 190));
-        assert_eq!(c.session.capacity, 64);
+        assert_eq!(c.links[0].session.interval, Duration::from_secs(1));
+        assert_eq!(c.links[0].session.timeout, Duration::from_secs(2));
+        assert_eq!(c.links[0].session.ours, SysComp::new(255, 190));
+        assert_eq!(c.links[0].session.capacity, 64);
         let c =
             config("-c 5 -i 0.2 -W 500ms --sysid 200 --compid 1 udpout:127.0.0.1:14550").unwrap();
-        assert_eq!(c.session.count, Some(5));
-        assert_eq!(c.session.interval, Duration::from_millis(200));
-        assert_eq!(c.session.timeout, Duration::from_millis(500));
+        assert_eq!(c.links[0].session.count, Some(5));
+        assert_eq!(c.links[0].session.interval, Duration::from_millis(200));
+        assert_eq!(c.links[0].session.timeout, Duration::from_millis(500));
         let c = config("--rate 1000 -W 1s sim:").unwrap();
-        assert_eq!(c.session.interval, Duration::from_millis(1));
-        assert_eq!(c.session.capacity, 2048);
+        assert_eq!(c.links[0].session.interval, Duration::from_millis(1));
+        assert_eq!(c.links[0].session.capacity, 2048);
         assert!(config("sim:?clock=virtual").unwrap().virtual_clock());
         let c = config(
             "--json --max-loss 5% --max-rtt p99=50ms --max-rtt 1s --expect 1 --expect 2/1 sim:",
         )
         .unwrap();
-        assert_eq!(c.format, Format::Json);
-        let t = &c.thresholds;
+        assert_eq!(c.output.format, Format::Json);
+        let t = &c.links[0].thresholds;
         assert_eq!(t.max_loss, Some(0.05));
         assert_eq!(t.max_rtt.len(), 2);
         assert_eq!(t.max_rtt[1].figure, crate::verdict::RttFigure::Max);
@@ -676,13 +502,15 @@ mod tests {
         };
         assert_eq!((c.command, c.params[0]), (512, 245.0));
         let c = config("--live --prometheus [::1]:9100 --plot out/RTT.SVG sim:").unwrap();
-        assert!(c.live);
-        assert_eq!(c.prometheus, Some("[::1]:9100".parse().unwrap()));
-        assert_eq!(c.plot, Some(PathBuf::from("out/RTT.SVG")));
+        assert!(c.output.live);
+        assert_eq!(c.output.prometheus, Some("[::1]:9100".parse().unwrap()));
+        assert_eq!(c.output.plot, Some(PathBuf::from("out/RTT.SVG")));
         let c = config("-c 3 --json --samples s.csv --hgrm h.hgrm sim: sim:?delay=50ms").unwrap();
         assert_eq!(c.links.len(), 2);
-        assert_eq!(c.link_names, ["sim:", "sim:?delay=50ms"]);
-        assert!(!c.session.precise_pacing, "links share one thread");
+        let names: Vec<&str> = c.links.iter().map(|l| l.name.as_str()).collect();
+        assert_eq!(names, ["sim:", "sim:?delay=50ms"]);
+        assert_eq!(c.links[1].session.link_name, "sim:?delay=50ms");
+        assert!(!c.links[0].session.precise_pacing, "links share one thread");
         assert!(!c.virtual_clock());
         assert!(config("sim:?clock=virtual sim:?delay=5ms&clock=virtual")
             .unwrap()
@@ -692,39 +520,24 @@ mod tests {
             sysid: 2,
             compid: Some(1),
         };
-        assert_eq!(c.thresholds.expect.len(), 1);
-        assert_eq!(c.expect_on, [(1, two_one)]);
+        assert_eq!(c.links[0].thresholds.expect.len(), 1);
+        assert_eq!(c.links[1].thresholds.expect.len(), 2);
+        assert_eq!(c.links[1].thresholds.expect[1], two_one);
         // By the form mavping prints, too; with one link it is a plain --expect.
         let c = config(
             "--expect sim:?responders=1&delay=10ms&jitter=2ms&loss=0%&dup=0%&reorder=0%&seed=1=2/1 sim:",
         )
         .unwrap();
-        assert_eq!(
-            (c.thresholds.expect.clone(), c.expect_on),
-            (vec![two_one], vec![])
-        );
+        assert_eq!(c.links[0].thresholds.expect, vec![two_one]);
         let c = config("--probe timesync --prometheus 0.0.0.0:0 sim:").unwrap();
-        assert_eq!(c.prometheus, Some("0.0.0.0:0".parse().unwrap()));
-    }
-
-    fn respond(args: &str) -> Result<RespondConfig, String> {
-        let cli = Cli::try_parse_from(
-            ["mavping", "respond"]
-                .into_iter()
-                .chain(args.split_whitespace()),
-        )
-        .map_err(|e| e.to_string())?;
-        let Some(crate::cli::Mode::Respond(r)) = &cli.mode else {
-            return Err("not respond".into());
-        };
-        RespondConfig::try_from(r).map_err(|e| e.to_string())
+        assert_eq!(c.output.prometheus, Some("0.0.0.0:0".parse().unwrap()));
     }
 
     #[test]
     fn signing_lines() {
         let hex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
         let c = config(&format!("--signing-key {hex} sim:")).unwrap();
-        let s = c.session.signing.expect("signing on");
+        let s = c.links[0].session.signing.expect("signing on");
         let mut bytes = [0u8; 32];
         for (i, b) in bytes.iter_mut().enumerate() {
             *b = i as u8;
@@ -733,19 +546,20 @@ mod tests {
         assert_eq!((s.link_id, s.require_signed), (0, false));
         let s = config("--signing-key pass --signing-link-id 9 --require-signed sim:")
             .unwrap()
+            .links[0]
             .session
             .signing
             .unwrap();
         assert_eq!(s.key, SecretKey::parse("pass").unwrap());
         assert_eq!((s.link_id, s.require_signed), (9, true));
-        assert!(config("sim:").unwrap().session.signing.is_none());
+        assert!(config("sim:").unwrap().links[0].session.signing.is_none());
 
         let file = std::env::temp_dir().join(format!("mavping-key-{}", std::process::id()));
         std::fs::write(&file, "  pass\n").unwrap();
         let from_file = config(&format!("--signing-key-file {} sim:", file.display()));
         std::fs::remove_file(&file).unwrap();
         assert_eq!(
-            from_file.unwrap().session.signing.unwrap().key,
+            from_file.unwrap().links[0].session.signing.unwrap().key,
             SecretKey::parse("pass").unwrap()
         );
 
@@ -771,40 +585,26 @@ mod tests {
             let e = config(line).unwrap_err();
             assert!(e.contains(error), "{line}: {e}");
         }
-        let r = respond("--signing-key pass --signing-link-id 3 udpin:0.0.0.0:14550").unwrap();
-        let s = r.signing.unwrap();
-        assert_eq!((s.link_id, s.require_signed), (3, true));
-        assert!(respond("udpin:0.0.0.0:14550").unwrap().signing.is_none());
     }
 
     #[test]
-    fn respond_lines() {
-        let r = respond("udpin:0.0.0.0:14550").unwrap();
-        assert_eq!(r.id, SysComp::new(1, 1));
-        assert!(r.answer_ping);
-        assert_eq!((r.drop, r.dup), (0.0, 0.0));
-        let r = respond(
-            "--sysid 7 --compid 2 --delay 5ms --jitter 1ms --drop 10% --dup 2.5 --seed 9 --no-ping sim:",
-        )
-        .unwrap();
-        assert_eq!(r.id, SysComp::new(7, 2));
-        assert_eq!(
-            (r.delay, r.jitter),
-            (Duration::from_millis(5), Duration::from_millis(1))
+    fn several_links_take_every_probe_and_the_plot() {
+        let c = config("--probe command --target 1/1 sim: sim:?delay=5ms").unwrap();
+        assert!(matches!(c.probe, Probe::Command(_)));
+        assert_eq!(c.links.len(), 2);
+        let c = config("--plot a.svg sim: sim:?delay=5ms").unwrap();
+        assert_eq!(c.output.plot, Some(PathBuf::from("a.svg")));
+        // One link alone is headed by its full form.
+        let c = config("udpout:127.0.0.1:14550").unwrap();
+        assert_eq!(c.links[0].name, "udpout:127.0.0.1:14550");
+        assert!(c.links[0].session.precise_pacing);
+        assert!(
+            !config("--probe command udpout:127.0.0.1:14550")
+                .unwrap()
+                .links[0]
+                .session
+                .precise_pacing
         );
-        assert!((r.drop - 0.1).abs() < 1e-12 && (r.dup - 0.025).abs() < 1e-12);
-        assert!(!r.answer_ping);
-        for (args, needle) in [
-            ("--drop 150 sim:", "--drop 150"),
-            ("--dup x sim:", "--dup x"),
-            ("--sysid 0 sim:", "--sysid 0"),
-            ("--delay 2h sim:", "at most 1h"),
-            ("bogus:1:2", "accepted forms"),
-            ("", "CONNECTION"),
-        ] {
-            let err = respond(args).unwrap_err();
-            assert!(err.contains(needle), "{args}: {err}");
-        }
     }
 
     #[test]
@@ -878,12 +678,8 @@ mod tests {
                 "clock=virtual cannot run beside",
             ),
             (
-                "--plot a.svg sim: sim:?delay=5ms",
-                "--plot works with one link",
-            ),
-            (
-                "--probe command sim: sim:?delay=5ms",
-                "--probe command works with one link",
+                "--samples s.csv --probe command sim:",
+                "--samples works with",
             ),
             ("sim: udpout:nowhere", "accepted forms"),
             (

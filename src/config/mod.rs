@@ -1,0 +1,166 @@
+//! The validated configuration: clap's types stop here. What the engine
+//! and transports get from it are their own plain types ([`SessionConfig`],
+//! [`CommandSpec`], [`LinkSpec`], [`ResponderSettings`]).
+
+mod ping;
+mod respond;
+
+use std::net::SocketAddr;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use thiserror::Error;
+
+use crate::cli::{Format, SigningArgs};
+use crate::engine::commands::CommandSpec;
+use crate::engine::SessionConfig;
+use crate::frame::signing::{SecretKey, SigningConfig};
+use crate::frame::SysComp;
+use crate::responder::ResponderSettings;
+use crate::transport::address::{AddressError, LinkSpec};
+use crate::transport::LinkOptions;
+use crate::verdict::Thresholds;
+
+#[derive(Debug, Error)]
+pub enum ConfigError {
+    #[error(transparent)]
+    Address(#[from] AddressError),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+fn invalid(msg: impl Into<String>) -> ConfigError {
+    ConfigError::Invalid(msg.into())
+}
+
+/// A measurement run over one or more links.
+#[derive(Debug, Clone)]
+pub struct Config {
+    /// In command-line order; each gets its own session.
+    pub links: Vec<LinkConfig>,
+    pub link_options: LinkOptions,
+    pub probe: Probe,
+    pub output: OutputConfig,
+    pub verbose: u8,
+}
+
+/// One link of a run.
+#[derive(Debug, Clone)]
+pub struct LinkConfig {
+    pub spec: LinkSpec,
+    /// The connection string as typed: with several links, reply lines,
+    /// error lines and exports are labelled with it.
+    pub name: String,
+    /// Its session; `link_name` is the form reports head the run with
+    /// (the link's full form alone, or the name beside others).
+    pub session: SessionConfig,
+    /// Every link's thresholds, and the responders `--expect` wants here.
+    pub thresholds: Thresholds,
+}
+
+/// Where results go.
+#[derive(Debug, Clone)]
+pub struct OutputConfig {
+    pub format: Format,
+    pub quiet: bool,
+    pub every_reply: bool,
+    /// `--live`; the run falls back to text when stdout is not a terminal.
+    pub live: bool,
+    pub hgrm: Option<PathBuf>,
+    pub samples: Option<PathBuf>,
+    pub plot: Option<PathBuf>,
+    pub prometheus: Option<SocketAddr>,
+}
+
+/// Which probe, with what it needs.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Probe {
+    Ping,
+    Timesync { target: SysComp },
+    Command(CommandSpec),
+}
+
+/// `mavping respond`, validated.
+#[derive(Debug, Clone)]
+pub struct RespondConfig {
+    pub link: LinkSpec,
+    pub link_options: LinkOptions,
+    pub settings: ResponderSettings,
+    pub verbose: u8,
+}
+
+impl Config {
+    /// True when the run should use tokio's paused, virtual clock (only
+    /// simulated links with `clock=virtual`; validation rejects a mix).
+    pub fn virtual_clock(&self) -> bool {
+        self.links.iter().all(|l| l.spec.is_virtual())
+    }
+}
+
+/// Longest reply timeout, retry interval or emulated delay.
+const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
+
+fn validate_baud(baud: u32) -> Result<u32, ConfigError> {
+    if baud == 0 {
+        return Err(invalid(
+            "--baud 0: expected a baud rate such as 57600 or 115200",
+        ));
+    }
+    Ok(baud)
+}
+
+fn validate_ids(sysid: u8, compid: u8) -> Result<SysComp, ConfigError> {
+    if sysid == 0 {
+        return Err(invalid(
+            "--sysid 0: 0 means 'broadcast'; use 1-255 (255 is a GCS)",
+        ));
+    }
+    if compid == 0 {
+        return Err(invalid(
+            "--compid 0: 0 means 'all components'; use 1-255 (190 is a GCS)",
+        ));
+    }
+    Ok(SysComp::new(sysid, compid))
+}
+
+/// The signing key from `--signing-key` (or its env var) or the file
+/// `--signing-key-file` names; `None` when neither is given.
+fn signing_key(args: &SigningArgs) -> Result<Option<SecretKey>, ConfigError> {
+    let text =
+        match (&args.signing_key, &args.signing_key_file) {
+            (Some(_), Some(_)) => return Err(invalid(
+                "--signing-key (or MAVPING_SIGNING_KEY) and --signing-key-file: give one, not both",
+            )),
+            (Some(key), None) => key.trim().to_string(),
+            (None, Some(path)) => std::fs::read_to_string(path)
+                .map_err(|e| {
+                    invalid(format!(
+                        "--signing-key-file {}: cannot read it: {e}",
+                        path.display()
+                    ))
+                })?
+                .trim()
+                .to_string(),
+            (None, None) => return Ok(None),
+        };
+    let from = match &args.signing_key_file {
+        Some(path) if args.signing_key.is_none() => {
+            format!("--signing-key-file {}", path.display())
+        }
+        _ => "--signing-key".to_string(),
+    };
+    SecretKey::parse(&text).map(Some).map_err(|e| {
+        invalid(format!(
+            "{from}: {e}; expected 64 hex characters or a passphrase"
+        ))
+    })
+}
+
+/// The signing policy: a key signs what we send and checks what comes.
+fn signing(args: &SigningArgs, require_signed: bool) -> Result<Option<SigningConfig>, ConfigError> {
+    Ok(signing_key(args)?.map(|key| SigningConfig {
+        key,
+        link_id: args.signing_link_id,
+        require_signed,
+    }))
+}

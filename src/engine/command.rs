@@ -1,0 +1,179 @@
+//! `--probe command` in the session: a COMMAND_LONG due every interval,
+//! re-sent until acknowledged, through the pure [`CommandTracker`].
+//!
+//! The mechanics differ from the echo probes (one command in flight per
+//! target, retries on a fixed plan, no per-reply matching ring); the
+//! clock, framing, schedule and loop are the session's.
+
+use std::io;
+
+use hdrhistogram::Histogram;
+use tokio::sync::Notify;
+
+use super::commands::{CommandEvent, CommandSpec, CommandTracker};
+use super::link_io::{Clock, Sender};
+use super::observe::{Event, Observer, StartInfo};
+use super::radio::Radios;
+use super::schedule::Schedule;
+use super::session::{self, Driver, Ended, Outcome};
+use super::summary::{command_target_summaries, CommandSummary, LinkSummary};
+use super::Nanos;
+use super::SessionConfig;
+use crate::frame::signing::Gate;
+use crate::frame::{codec, Frame, Msg, SysComp};
+use crate::transport::{LinkError, PathId, Transport};
+
+/// Runs the command probe on `link` until the run ends.
+pub async fn run<T: Transport>(
+    cfg: &SessionConfig,
+    spec: &CommandSpec,
+    link: &mut T,
+    observer: &mut dyn Observer,
+    stop: &Notify,
+) -> Outcome {
+    session::run(cfg, link, CommandDriver::new(cfg, spec), observer, stop).await
+}
+
+pub struct CommandDriver {
+    spec: CommandSpec,
+    ours: SysComp,
+    tracker: CommandTracker,
+    /// Decided, not yet reported...
+    events: Vec<CommandEvent>,
+    /// ...of which the first `transmitted` were looked at for sending.
+    transmitted: usize,
+}
+
+impl CommandDriver {
+    pub fn new(cfg: &SessionConfig, spec: &CommandSpec) -> Self {
+        CommandDriver {
+            spec: spec.clone(),
+            ours: cfg.ours,
+            tracker: CommandTracker::new(spec.retry_interval.as_nanos() as Nanos, spec.retries),
+            events: Vec::new(),
+            transmitted: 0,
+        }
+    }
+}
+
+impl Driver for CommandDriver {
+    fn start_info(&self, cfg: &SessionConfig) -> StartInfo {
+        StartInfo {
+            link: cfg.link_name.clone(),
+            probe: "command",
+            ours: cfg.ours,
+            interval: cfg.interval,
+            timeout: self.spec.retry_interval,
+            count: cfg.count,
+            command: Some(self.spec.clone()),
+        }
+    }
+
+    async fn send_due<T: Transport>(
+        &mut self,
+        schedule: &mut Schedule,
+        link: &mut T,
+        sender: &mut Sender,
+        clock: &Clock,
+    ) -> Result<(), LinkError> {
+        let events = &mut self.events;
+        while schedule.take_due(clock.now()).is_some() {
+            let (target, command) = (self.spec.target, self.spec.command);
+            self.tracker
+                .start(target, command, clock.now(), &mut |e| events.push(e));
+        }
+        self.tracker.poll(clock.now(), &mut |e| events.push(e));
+        while let Some(&e) = self.events.get(self.transmitted) {
+            self.transmitted += 1;
+            if let CommandEvent::Send {
+                target,
+                command,
+                attempt,
+                ..
+            } = e
+            {
+                let request = Msg::CommandLong {
+                    command,
+                    // Tells the target this is a re-send (MAVLink's rule).
+                    confirmation: (attempt - 1).min(255) as u8,
+                    target_system: target.sysid,
+                    target_component: target.compid,
+                    params: self.spec.params,
+                };
+                link.send(sender.frame(&request)).await?;
+            }
+        }
+        Ok(())
+    }
+
+    fn expire(&mut self, _now: Nanos) {
+        // Failures are decided with the re-sends, in `send_due`.
+    }
+
+    fn on_frame(&mut self, frame: &Frame, _path: PathId, at: Nanos) {
+        let Msg::CommandAck {
+            command,
+            result,
+            target_system,
+            target_component,
+        } = frame.msg
+        else {
+            return;
+        };
+        // Old stacks leave the targets 0: only set targets can make an
+        // ACK someone else's.
+        let ours = self.ours;
+        if (target_system != 0 && target_system != ours.sysid)
+            || (target_component != 0 && target_component != ours.compid)
+        {
+            return;
+        }
+        let events = &mut self.events;
+        self.tracker
+            .on_ack(frame.source, command, result, at, &mut |e| events.push(e));
+    }
+
+    fn report(&mut self, _radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
+        self.transmitted = 0;
+        let mut result = Ok(());
+        for e in self.events.drain(..) {
+            if result.is_ok() {
+                result = observer.event(&Event::Command(e));
+            }
+        }
+        result
+    }
+
+    fn next_deadline(&self) -> Option<Nanos> {
+        self.tracker.next_deadline()
+    }
+
+    fn settled(&self) -> bool {
+        self.tracker.idle()
+    }
+
+    fn finish(self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>) {
+        let cfg = ended.cfg;
+        let summary = CommandSummary {
+            link: cfg.link_name.clone(),
+            ours: cfg.ours,
+            command: self.spec.command,
+            command_name: codec::command_name(self.spec.command),
+            duration_s: ended.duration_s,
+            in_flight: self.tracker.in_flight(),
+            targets: command_target_summaries(&self.tracker, &ended.roster),
+            unmatched_acks: self.tracker.unmatched_acks(),
+            frames: ended.frames,
+            interrupted: ended.interrupted,
+            link_error: ended.link_error,
+            signing: ended.gate.as_ref().map(Gate::summary),
+        };
+        let histograms = self
+            .tracker
+            .targets()
+            .iter()
+            .map(|t| (t.id, t.time_to_ack.histogram().clone()))
+            .collect();
+        (LinkSummary::Command(summary), histograms)
+    }
+}

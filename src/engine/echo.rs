@@ -1,0 +1,296 @@
+//! Echo probes (PING, TIMESYNC) in the session: requests on schedule, each
+//! reply matched to its request by the pure [`Matcher`], per responder.
+
+use std::collections::HashMap;
+use std::io;
+use std::time::Duration;
+
+use hdrhistogram::Histogram;
+use tokio::sync::Notify;
+
+use super::link_io::{Clock, Sender};
+use super::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
+use super::observe::{Event, Observer, StartInfo};
+use super::radio::{radio_hints, Radios};
+use super::schedule::Schedule;
+use super::session::{self, Driver, Ended, Outcome};
+use super::stats::RttStats;
+use super::summary::{
+    responder_summaries, silent_system_hints, LinkSummary, ScheduleSummary, Summary,
+};
+use super::Nanos;
+use super::SessionConfig;
+use crate::frame::signing::{Gate, SigningCounts};
+use crate::frame::{Frame, SysComp};
+use crate::probe::{Classified, EchoProbe};
+use crate::transport::{LinkError, PathId, Transport};
+
+/// Most requests sent back to back before the session reads the link.
+const MAX_BURST: usize = 256;
+
+/// Runs an echo probe on `link` until the run ends.
+pub async fn run<T: Transport, P: EchoProbe>(
+    cfg: &SessionConfig,
+    link: &mut T,
+    probe: P,
+    observer: &mut dyn Observer,
+    stop: &Notify,
+) -> Outcome {
+    let driver = EchoDriver::new(cfg, probe);
+    session::run(cfg, link, driver, observer, stop).await
+}
+
+/// An echo probe's state in a session.
+pub struct EchoDriver<P> {
+    probe: P,
+    ours: SysComp,
+    first_seq: u32,
+    timeout: Nanos,
+    matcher: Matcher,
+    /// Decided, not yet reported.
+    events: Vec<MatchEvent>,
+    foreign_replies: u64,
+    /// The link path each responder answers from (links with several
+    /// peers) and when it last did: its ids are believed from that path
+    /// only, until it has been silent for a whole timeout (a responder that
+    /// restarts or reconnects comes back on a new path).
+    paths: HashMap<SysComp, (PathId, Nanos)>,
+    wrong_path_replies: u64,
+    pacing: Pacing,
+}
+
+impl<P: EchoProbe> EchoDriver<P> {
+    pub fn new(cfg: &SessionConfig, probe: P) -> Self {
+        let timeout = cfg.timeout.as_nanos() as Nanos;
+        EchoDriver {
+            probe,
+            ours: cfg.ours,
+            first_seq: cfg.first_seq,
+            timeout,
+            matcher: Matcher::new(timeout, cfg.capacity, cfg.first_seq),
+            events: Vec::new(),
+            foreign_replies: 0,
+            paths: HashMap::new(),
+            wrong_path_replies: 0,
+            pacing: Pacing::default(),
+        }
+    }
+
+    fn on_reply(&mut self, frame: &Frame, lookup: super::matcher::Lookup, path: PathId, at: Nanos) {
+        // A reply naming a responder that answered from another peer of
+        // this link (a spoofed id, or one system heard through two routers)
+        // is counted, never measured.
+        let timeout = self.timeout;
+        if self
+            .paths
+            .get(&frame.source)
+            .is_some_and(|&(p, last)| p != path && at < last.saturating_add(timeout))
+        {
+            self.wrong_path_replies += 1;
+            return;
+        }
+        let before = self.events.len();
+        let events = &mut self.events;
+        self.matcher
+            .on_reply(frame.source, lookup, at, &mut |e| events.push(e));
+        // Only an accepted in-time reply feeds the probe.
+        for e in &self.events[before..] {
+            if let MatchEvent::Reply {
+                responder,
+                sent_at,
+                at,
+                ..
+            } = *e
+            {
+                if responder == frame.source {
+                    self.probe.on_reply(frame, sent_at, at);
+                    // Bound by accepted replies only, so stale forgeries
+                    // cannot claim an id.
+                    if self.paths.len() < MAX_RESPONDERS || self.paths.contains_key(&responder) {
+                        self.paths.insert(responder, (path, at));
+                    }
+                }
+            }
+        }
+    }
+}
+
+impl<P: EchoProbe> Driver for EchoDriver<P> {
+    fn start_info(&self, cfg: &SessionConfig) -> StartInfo {
+        StartInfo {
+            link: cfg.link_name.clone(),
+            probe: self.probe.name(),
+            ours: cfg.ours,
+            interval: cfg.interval,
+            timeout: cfg.timeout,
+            count: cfg.count,
+            command: None,
+        }
+    }
+
+    async fn send_due<T: Transport>(
+        &mut self,
+        schedule: &mut Schedule,
+        link: &mut T,
+        sender: &mut Sender,
+        clock: &Clock,
+    ) -> Result<(), LinkError> {
+        // At most a burst per turn: a machine too slow for the rate falls
+        // behind (and the lateness figures say so) but still reads replies
+        // and honours the deadline between bursts.
+        for _ in 0..MAX_BURST {
+            let Some((_, planned)) = schedule.take_due(clock.now()) else {
+                break;
+            };
+            let token = self.probe.token(clock.now());
+            let seq = self.first_seq.wrapping_add(self.matcher.issued() as u32);
+            let request = self.probe.request(seq, token);
+            let sent = clock.ns(link.send(sender.frame(&request)).await?);
+            self.pacing.sent(planned, sent);
+            let events = &mut self.events;
+            self.matcher.on_send(token, sent, &mut |e| events.push(e));
+        }
+        Ok(())
+    }
+
+    fn expire(&mut self, now: Nanos) {
+        let events = &mut self.events;
+        self.matcher.expire(now, &mut |e| events.push(e));
+    }
+
+    fn on_frame(&mut self, frame: &Frame, path: PathId, at: Nanos) {
+        match self.probe.classify(frame, self.ours) {
+            Classified::Reply(lookup) => self.on_reply(frame, lookup, path, at),
+            Classified::ForeignReply => self.foreign_replies += 1,
+            Classified::NotAReply => {}
+        }
+    }
+
+    fn report(&mut self, radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
+        let mut result = Ok(());
+        for e in self.events.drain(..) {
+            // Outcomes against the radio's buffer, for the "overloaded" hint.
+            match e {
+                MatchEvent::Reply { sent_at, .. } => radios.outcome(false, sent_at),
+                MatchEvent::Lost { sent_at, .. } => radios.outcome(true, sent_at),
+                _ => {}
+            }
+            if result.is_ok() {
+                result = observer.event(&Event::Match(e));
+            }
+        }
+        result
+    }
+
+    fn next_deadline(&self) -> Option<Nanos> {
+        self.matcher.next_deadline()
+    }
+
+    fn settled(&self) -> bool {
+        self.matcher.next_deadline().is_none() || self.matcher.all_answered()
+    }
+
+    fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>) {
+        let in_flight = self.matcher.finish();
+        let mut responders = responder_summaries(&self.matcher, &ended.roster);
+        for r in &mut responders {
+            r.clock = self.probe.clock(r.id);
+        }
+        let loss_by_txbuf = ended.radios.loss_by_txbuf();
+        let radios = ended.radios.summaries();
+        let radio_ids: Vec<SysComp> = radios.iter().map(|r| r.id).collect();
+        let name = self.probe.name();
+        let mut hints =
+            silent_system_hints(&ended.roster, &responders, self.ours, name, &radio_ids);
+        hints.extend(radio_hints(&radios, loss_by_txbuf));
+        if let Some(gate) = &ended.gate {
+            hints.extend(signing_hints(&gate.counts()));
+        }
+        let cfg = ended.cfg;
+        let summary = Summary {
+            link: cfg.link_name.clone(),
+            probe: name,
+            ours: self.ours,
+            duration_s: ended.duration_s,
+            requests: self.matcher.issued(),
+            in_flight,
+            responders,
+            foreign_replies: self.foreign_replies,
+            wrong_path_replies: self.wrong_path_replies,
+            untracked_replies: self.matcher.untracked(),
+            frames: ended.frames,
+            hints,
+            interrupted: ended.interrupted,
+            link_error: ended.link_error,
+            downtime_s: ended.downtime_s,
+            schedule: self.pacing.summary(cfg.interval),
+            rx_clock: ended.rx_clock.describe(),
+            radios,
+            wire: None,
+            signing: ended.gate.as_ref().map(Gate::summary),
+        };
+        let histograms = self
+            .matcher
+            .responders()
+            .iter()
+            .map(|r| (r.id, r.rtt.histogram().clone()))
+            .collect();
+        (LinkSummary::Echo(summary), histograms)
+    }
+}
+
+/// Why replies may be missing when the signing gate refused frames.
+fn signing_hints(c: &SigningCounts) -> Vec<String> {
+    let mut hints = Vec::new();
+    if c.rejected_bad_signature > 0 {
+        hints.push(format!(
+            "{} frames were signed with another key: are both ends using the same signing key?",
+            c.rejected_bad_signature
+        ));
+    }
+    if c.rejected_unsigned > 0 && c.signed == 0 {
+        hints.push(format!(
+            "{} unsigned frames were refused (--require-signed) and none came signed: \
+             is signing set up on the other end?",
+            c.rejected_unsigned
+        ));
+    }
+    hints
+}
+
+/// How well requests kept to their schedule: achieved rate and how late
+/// each went out against its planned time. Late sends mean the machine,
+/// not the link, was the bottleneck.
+#[derive(Default)]
+struct Pacing {
+    first: Option<Nanos>,
+    last: Nanos,
+    count: u64,
+    lateness: RttStats,
+}
+
+impl Pacing {
+    fn sent(&mut self, planned: Nanos, actual: Nanos) {
+        self.first.get_or_insert(actual);
+        self.last = actual;
+        self.count += 1;
+        self.lateness.record(actual.saturating_sub(planned));
+    }
+
+    fn summary(&self, interval: Duration) -> Option<ScheduleSummary> {
+        let first = self.first?;
+        let late = self.lateness.summary()?;
+        let span = self.last.saturating_sub(first) as f64 / 1e9;
+        Some(ScheduleSummary {
+            requested_rate_hz: 1.0 / interval.as_secs_f64(),
+            achieved_rate_hz: if self.count > 1 && span > 0.0 {
+                (self.count - 1) as f64 / span
+            } else {
+                0.0
+            },
+            lateness_p50_us: late.p50_us,
+            lateness_p99_us: late.p99_us,
+            lateness_max_us: late.max_us,
+        })
+    }
+}

@@ -1,0 +1,171 @@
+//! What every MAVLink system on a link needs, whatever it measures or
+//! answers: a session clock, its own HEARTBEAT on schedule, a frame sender
+//! (packet sequence and signing) and the signing gate for what comes in.
+//! Used by the echo and command sessions and by `mavping respond`.
+
+use std::time::Duration;
+
+use tokio::time::{sleep_until, Instant};
+
+use super::Nanos;
+use crate::frame::signing::{self, Gate, SignedBytes, Signer};
+use crate::frame::{self, Frame, Header, Msg, SysComp, Version};
+use crate::transport::{LinkError, Transport};
+
+/// Session time: nanoseconds since the session started, from the
+/// monotonic clock (tokio's, so a paused runtime's virtual time too).
+pub struct Clock {
+    epoch: Instant,
+}
+
+impl Clock {
+    pub fn start() -> Self {
+        Clock {
+            epoch: Instant::now(),
+        }
+    }
+
+    pub fn ns(&self, t: Instant) -> Nanos {
+        t.saturating_duration_since(self.epoch).as_nanos() as Nanos
+    }
+
+    pub fn now(&self) -> Nanos {
+        self.ns(Instant::now())
+    }
+
+    pub fn at(&self, ns: Nanos) -> Instant {
+        self.epoch + Duration::from_nanos(ns)
+    }
+
+    /// Sleeps until session time `wake`, or forever when there is none.
+    pub async fn sleep_until(&self, wake: Option<Nanos>) {
+        match wake {
+            Some(ns) => sleep_until(self.at(ns)).await,
+            None => std::future::pending().await,
+        }
+    }
+}
+
+/// A HEARTBEAT a second: routers and MAVSDK learn who is on the link from
+/// it. `None` due time means it is off (`--no-heartbeat`).
+pub struct Heartbeat {
+    msg: Msg,
+    next: Option<Nanos>,
+}
+
+const HEARTBEAT_PERIOD_NS: Nanos = 1_000_000_000;
+
+impl Heartbeat {
+    /// We are a ground station (MAV_TYPE_GCS); the first is due at once.
+    pub fn ground_station(on: bool) -> Self {
+        Heartbeat {
+            msg: Msg::Heartbeat {
+                mav_type: frame::mav_type::GCS,
+                autopilot: frame::AUTOPILOT_INVALID,
+            },
+            next: on.then_some(0),
+        }
+    }
+
+    /// A companion-computer-like system, not a vehicle (`mavping respond`):
+    /// it answers probes but flies nothing.
+    pub fn onboard_controller() -> Self {
+        Heartbeat {
+            msg: Msg::Heartbeat {
+                mav_type: frame::mav_type::ONBOARD_CONTROLLER,
+                autopilot: frame::AUTOPILOT_INVALID,
+            },
+            next: Some(0),
+        }
+    }
+
+    /// When the next one is due.
+    pub fn next(&self) -> Option<Nanos> {
+        self.next
+    }
+
+    pub fn msg(&self) -> &Msg {
+        &self.msg
+    }
+
+    /// Sends the HEARTBEAT to every peer when it is due, and schedules the
+    /// next one a period after the one due (no drift).
+    pub async fn send_if_due<T: Transport>(
+        &mut self,
+        link: &mut T,
+        sender: &mut Sender,
+        now: Nanos,
+    ) -> Result<(), LinkError> {
+        if let Some(due) = self.next.filter(|&due| due <= now) {
+            link.send(sender.frame(&self.msg)).await?;
+            self.next = Some(due + HEARTBEAT_PERIOD_NS);
+        }
+        Ok(())
+    }
+}
+
+/// Serialises our frames into one reused buffer: our ids, the running
+/// packet sequence, and a signature when signing is on.
+pub struct Sender {
+    buf: Vec<u8>,
+    packet_seq: u8,
+    ours: SysComp,
+    version: Version,
+    signer: Option<Signer>,
+}
+
+impl Sender {
+    pub fn new(ours: SysComp, version: Version, signer: Option<Signer>) -> Self {
+        Sender {
+            buf: Vec::with_capacity(frame::scanner::MAX_FRAME_LEN),
+            packet_seq: 0,
+            ours,
+            version,
+            signer,
+        }
+    }
+
+    /// `msg` as our next frame (no allocation per frame).
+    pub fn frame(&mut self, msg: &Msg) -> &[u8] {
+        self.frame_as(self.version, msg)
+    }
+
+    /// `msg` in MAVLink `version`; signed frames are MAVLink 2 whatever is
+    /// asked (only MAVLink 2 can carry a signature).
+    pub fn frame_as(&mut self, version: Version, msg: &Msg) -> &[u8] {
+        self.buf.clear();
+        let header = Header {
+            sysid: self.ours.sysid,
+            compid: self.ours.compid,
+            seq: self.packet_seq,
+        };
+        self.packet_seq = self.packet_seq.wrapping_add(1);
+        match self.signer.as_mut() {
+            Some(signer) => {
+                frame::encode(&mut self.buf, Version::V2, header, msg);
+                signer.sign(&mut self.buf, 0, signing::timestamp_now());
+            }
+            None => frame::encode(&mut self.buf, version, header, msg),
+        }
+        &self.buf
+    }
+
+    /// The last frame built, to send again or keep.
+    pub fn last(&self) -> &[u8] {
+        &self.buf
+    }
+}
+
+/// Whether the signing gate (if any) lets `frame` through; what it refuses
+/// reaches nothing else, and is counted by the gate.
+pub fn admitted(gate: &mut Option<Gate>, frame: &Frame, signature: Option<&SignedBytes>) -> bool {
+    let Some(gate) = gate else {
+        return true;
+    };
+    let radio = matches!(frame.msg, Msg::RadioStatus { .. });
+    let verdict = gate.judge(frame.source, signature, radio);
+    if !verdict.accepted() {
+        tracing::debug!(from = %frame.source, msgid = frame.msgid, ?verdict, "frame refused");
+    }
+    verdict.accepted()
+}

@@ -1,0 +1,70 @@
+//! What a session tells the world while it runs: the engine's own
+//! interface. Reports, exporters and tests implement [`Observer`]; the
+//! engine names none of them.
+
+use std::io;
+use std::time::Duration;
+
+use super::commands::{CommandEvent, CommandSpec};
+use super::matcher::MatchEvent;
+use super::radio::RadioReport;
+use super::roster::Identity;
+use super::Nanos;
+use crate::frame::SysComp;
+
+/// What a run is doing, told first.
+#[derive(Debug, Clone)]
+pub struct StartInfo {
+    pub link: String,
+    pub probe: &'static str,
+    pub ours: SysComp,
+    pub interval: Duration,
+    /// The reply timeout (the retry interval for commands).
+    pub timeout: Duration,
+    pub count: Option<u64>,
+    /// `--probe command`: what is sent, and how it is re-sent.
+    pub command: Option<CommandSpec>,
+}
+
+#[derive(Debug, Clone, Copy)]
+pub enum Event<'a> {
+    /// An echo probe's reply, loss, late or duplicate reply.
+    Match(MatchEvent),
+    /// A command's transmission, acknowledgement or failure.
+    Command(CommandEvent),
+    /// A system's first HEARTBEAT.
+    Heard { id: SysComp, identity: &'a Identity },
+    /// A RADIO_STATUS; `first` for each radio's first report.
+    Radio {
+        id: SysComp,
+        at: Nanos,
+        report: RadioReport,
+        first: bool,
+    },
+    /// Nothing to send to yet (udpin before a peer is heard).
+    WaitingForPeer,
+}
+
+/// Follows a session. Write errors end the run quietly (a closed pipe, as
+/// in `mavping ... | head -1`, is not a failure).
+pub trait Observer {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()>;
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()>;
+    /// Pushes buffered output to the reader (called before the session
+    /// blocks, and every 50 ms while it is busy).
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Follows nothing: for runs whose outcome is all that matters.
+pub struct Unobserved;
+
+impl Observer for Unobserved {
+    fn start(&mut self, _: &StartInfo) -> io::Result<()> {
+        Ok(())
+    }
+    fn event(&mut self, _: &Event<'_>) -> io::Result<()> {
+        Ok(())
+    }
+}

@@ -1,0 +1,470 @@
+//! Text lines and summary of the echo probes (PING, TIMESYNC).
+
+use std::io::{self, Write};
+
+use super::{ms, ms_us, rate, write_histogram, write_signing, TextReporter};
+use crate::engine::matcher::MatchEvent;
+use crate::engine::radio::{self, RadioReport, RadioSummary};
+use crate::engine::summary::{ResponderSummary, Summary};
+use crate::engine::Nanos;
+use crate::output::{Event, StartInfo};
+use crate::verdict::Verdict;
+
+/// Reply lines carry the radio's figures at most this often.
+const RADIO_NOTE_EVERY_NS: Nanos = 1_000_000_000;
+
+/// Requests per second above which per-reply lines are summarised.
+pub(super) const MAX_LINE_RATE: f64 = 100.0;
+const PROGRESS_EVERY_NS: Nanos = 1_000_000_000;
+
+#[derive(Default)]
+pub(super) struct Progress {
+    window_start: Nanos,
+    replies: u64,
+    lost: u64,
+    late: u64,
+    duplicate: u64,
+    last_rtt: Option<Nanos>,
+}
+
+impl<W: Write> TextReporter<W> {
+    pub(super) fn echo_start(&mut self, info: &StartInfo) -> io::Result<()> {
+        let summarised = !self.every_reply && 1.0 / info.interval.as_secs_f64() > MAX_LINE_RATE;
+        if summarised {
+            self.progress = Some(Progress::default());
+        }
+        writeln!(
+            self.out,
+            "MAVPING {} from {}: {} {}, timeout {}{}",
+            info.link,
+            info.ours,
+            info.probe.to_uppercase(),
+            rate(info.interval),
+            humantime::format_duration(info.timeout),
+            if summarised {
+                " (one status line per second; --every-reply for all)"
+            } else {
+                ""
+            }
+        )
+    }
+
+    pub(super) fn echo_event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        if let Event::Radio {
+            id, report, first, ..
+        } = *event
+        {
+            self.radio = Some((id, report));
+            if !first {
+                return Ok(());
+            }
+            return writeln!(
+                self.out,
+                "heard radio {id}: {}, noise={} remnoise={}",
+                radio_figures(&report),
+                raw(report.noise),
+                raw(report.remnoise)
+            );
+        }
+        if let (Some(_), Event::Match(e)) = (&self.progress, event) {
+            return self.tally(e);
+        }
+        match *event {
+            Event::Match(MatchEvent::Reply {
+                responder,
+                seq,
+                rtt,
+                out_of_order,
+                at,
+                ..
+            }) => {
+                let note = self.radio_note(at);
+                writeln!(
+                    self.out,
+                    "reply from {responder}: seq={seq} time={} ms{}{note}",
+                    ms(rtt),
+                    if out_of_order { " (out of order)" } else { "" }
+                )
+            }
+            Event::Match(MatchEvent::Lost { responder, seq, .. }) => writeln!(
+                self.out,
+                "no reply from {responder}: seq={seq} (timeout {})",
+                humantime::format_duration(self.timeout)
+            ),
+            Event::Match(MatchEvent::Late {
+                responder,
+                seq,
+                rtt,
+                ..
+            }) => writeln!(
+                self.out,
+                "late reply from {responder}: seq={seq} time={} ms (after the timeout)",
+                ms(rtt)
+            ),
+            Event::Match(MatchEvent::Duplicate {
+                responder,
+                seq,
+                rtt,
+                ..
+            }) => writeln!(
+                self.out,
+                "reply from {responder}: seq={seq} time={} ms (DUP!)",
+                ms(rtt)
+            ),
+            Event::Match(MatchEvent::Stale { responder, .. }) => writeln!(
+                self.out,
+                "stale reply from {responder}: matches no request we hold"
+            ),
+            Event::Heard { id, identity } => writeln!(
+                self.out,
+                "heard {id}: {}, {}",
+                identity.vehicle, identity.autopilot_name
+            ),
+            Event::WaitingForPeer => writeln!(self.out, "waiting for a peer to send MAVLink..."),
+            Event::Radio { .. } | Event::Command(_) => Ok(()),
+        }
+    }
+
+    /// Counts a match event into the status line; prints it once a second.
+    fn tally(&mut self, e: &MatchEvent) -> io::Result<()> {
+        let Some(p) = self.progress.as_mut() else {
+            return Ok(());
+        };
+        let at = match *e {
+            MatchEvent::Reply { rtt, at, .. } => {
+                p.replies += 1;
+                p.last_rtt = Some(rtt);
+                at
+            }
+            MatchEvent::Lost { at, .. } => {
+                p.lost += 1;
+                at
+            }
+            MatchEvent::Late { at, .. } => {
+                p.late += 1;
+                at
+            }
+            MatchEvent::Duplicate { at, .. } => {
+                p.duplicate += 1;
+                at
+            }
+            MatchEvent::Stale { at, .. } => at,
+        };
+        if at.saturating_sub(p.window_start) < PROGRESS_EVERY_NS {
+            return Ok(());
+        }
+        let line = format!(
+            "[{:.1} s] {} replies, {} lost, {} late, {} duplicate in the last {:.1} s; last rtt {} ms",
+            at as f64 / 1e9,
+            p.replies,
+            p.lost,
+            p.late,
+            p.duplicate,
+            at.saturating_sub(p.window_start) as f64 / 1e9,
+            p.last_rtt.map_or("-".into(), ms)
+        );
+        *p = Progress {
+            window_start: at,
+            ..Progress::default()
+        };
+        let note = self.radio_note(at);
+        writeln!(self.out, "{line}{note}")
+    }
+
+    /// " [radio 51:68 rssi=… remrssi=… txbuf=…%]" when one is heard and
+    /// the last note is at least a second old, so fast runs stay readable.
+    fn radio_note(&mut self, at: Nanos) -> String {
+        let Some((id, r)) = self.radio else {
+            return String::new();
+        };
+        if self
+            .radio_shown
+            .is_some_and(|t| at.saturating_sub(t) < RADIO_NOTE_EVERY_NS)
+        {
+            return String::new();
+        }
+        self.radio_shown = Some(at);
+        format!(" [radio {id} {}]", radio_figures(&r))
+    }
+}
+
+/// Signed seconds with µs resolution, exact even for clocks counting from
+/// 1970 (an f64 would lose the µs there).
+fn offset(ns: i128) -> String {
+    let sign = if ns < 0 { '-' } else { '+' };
+    let us = (ns.unsigned_abs() + 500) / 1_000;
+    format!("{sign}{}.{:06} s", us / 1_000_000, us % 1_000_000)
+}
+
+fn raw(v: u8) -> String {
+    if v == radio::UNKNOWN {
+        "?".into()
+    } else {
+        v.to_string()
+    }
+}
+
+fn radio_figures(r: &RadioReport) -> String {
+    format!(
+        "rssi={} remrssi={} txbuf={}%",
+        raw(r.rssi),
+        raw(r.remrssi),
+        raw(r.txbuf)
+    )
+}
+
+fn write_radio(out: &mut impl Write, r: &RadioSummary) -> io::Result<()> {
+    writeln!(
+        out,
+        "radio {}: {} reports, rxerrors +{}, fixed +{} during the run",
+        r.id, r.reports, r.rxerrors_delta, r.fixed_delta
+    )?;
+    let rows = [
+        ("rssi", r.rssi, ""),
+        ("remote rssi", r.remrssi, ""),
+        ("noise", r.noise, ""),
+        ("remote noise", r.remnoise, ""),
+        ("fade margin", r.fade_margin, ""),
+        ("remote fade margin", r.remote_fade_margin, ""),
+        ("txbuf free", r.txbuf, " %"),
+    ];
+    for (name, range, unit) in rows {
+        if let Some(v) = range {
+            writeln!(
+                out,
+                "  {name:<18} min/mean/max = {:.0}/{:.1}/{:.0}{unit}",
+                v.min, v.mean, v.max
+            )?;
+        }
+    }
+    if let Some(a) = &r.approx_dbm {
+        let rows = [
+            ("rssi", a.rssi, "dBm"),
+            ("remote rssi", a.remrssi, "dBm"),
+            ("fade margin", a.fade_margin_db, "dB"),
+            ("remote fade margin", a.remote_fade_margin_db, "dB"),
+        ];
+        for (name, range, unit) in rows {
+            if let Some(v) = range {
+                writeln!(
+                    out,
+                    "  {name:<18} ~{:.1}/{:.1}/{:.1} {unit} (approximate, SiK scale)",
+                    v.min, v.mean, v.max
+                )?;
+            }
+        }
+    }
+    Ok(())
+}
+
+fn percent(ratio: f64) -> String {
+    let p = ratio * 100.0;
+    if p == 0.0 || p == 100.0 || p >= 10.0 {
+        format!("{p:.1}%")
+    } else {
+        format!("{p:.2}%")
+    }
+}
+
+fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()> {
+    let c = &r.counts;
+    let who = match &r.identity {
+        Some(i) => format!("{} ({}, {})", r.id, i.vehicle, i.autopilot_name),
+        None => r.id.to_string(),
+    };
+    write!(
+        out,
+        "{who}: {} sent, {} received, {} lost ({}), {} late, {} duplicate, {} out of order",
+        c.sent,
+        c.received,
+        c.lost,
+        percent(r.loss_ratio),
+        c.late,
+        c.duplicate,
+        c.out_of_order
+    )?;
+    if c.stale > 0 {
+        write!(out, ", {} stale", c.stale)?;
+    }
+    writeln!(out)?;
+    let Some(rtt) = &r.rtt else {
+        return Ok(());
+    };
+    writeln!(
+        out,
+        "  rtt min/mean/max/stddev = {}/{}/{}/{} ms",
+        ms_us(rtt.min_us),
+        ms_us(rtt.mean_us),
+        ms_us(rtt.max_us),
+        ms_us(rtt.stddev_us)
+    )?;
+    writeln!(
+        out,
+        "  rtt p50/p90/p99/p99.9   = {}/{}/{}/{} ms, jitter {} ms",
+        ms_us(rtt.p50_us),
+        ms_us(rtt.p90_us),
+        ms_us(rtt.p99_us),
+        ms_us(rtt.p999_us),
+        ms_us(rtt.jitter_us)
+    )?;
+    if let Some(clock) = &r.clock {
+        let drift = match (clock.drift_ppm, clock.drift_stderr_ppm) {
+            (Some(d), Some(e)) => format!("{d:+.2} ± {e:.2} ppm"),
+            _ => "unknown (too few samples)".to_string(),
+        };
+        writeln!(
+            out,
+            "  clock offset {} ± {} ms, spread {} ms, drift {drift} ({} samples)",
+            offset(clock.offset_ns),
+            ms(clock.uncertainty_ns),
+            ms_us(clock.spread_ns / 1e3),
+            clock.samples
+        )?;
+    }
+    write_histogram(out, &r.histogram)
+}
+
+pub(super) fn write_summary(
+    out: &mut impl Write,
+    s: &Summary,
+    verdict: &Verdict,
+) -> io::Result<()> {
+    write!(out, "{} requests sent in {:.3} s", s.requests, s.duration_s)?;
+    if s.in_flight > 0 {
+        write!(out, ", {} still in flight (not counted)", s.in_flight)?;
+    }
+    writeln!(out)?;
+    if s.responders.is_empty() {
+        writeln!(out, "no replies")?;
+    }
+    for r in &s.responders {
+        write_responder(out, r)?;
+    }
+    for r in &s.radios {
+        write_radio(out, r)?;
+    }
+    if let Some(w) = &s.wire {
+        write!(
+            out,
+            "wire: {} baud carries ~{:.0} PINGs/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
+            w.baud,
+            w.max_rate_hz.floor(),
+            ms_us(w.floor_us),
+            w.request_bytes,
+            w.reply_bytes
+        )?;
+        // The rest of the RTT is the radio's and the autopilot's.
+        if let Some(p50) = s
+            .responders
+            .iter()
+            .filter_map(|r| r.rtt)
+            .map(|t| t.p50_us)
+            .reduce(f64::min)
+        {
+            write!(
+                out,
+                ", {} ms of the rtt p50 is beyond the wire",
+                ms_us((p50 - w.floor_us).max(0.0))
+            )?;
+        }
+        writeln!(out)?;
+    }
+    let f = &s.frames;
+    if f.bad_crc + f.skipped_bytes + f.unknown_id + f.truncated + s.foreign_replies > 0 {
+        writeln!(
+            out,
+            "link: {} bad CRC, {} bytes skipped, {} unknown messages, {} truncated, {} replies to others",
+            f.bad_crc, f.skipped_bytes, f.unknown_id, f.truncated, s.foreign_replies
+        )?;
+    }
+    if s.wrong_path_replies > 0 {
+        writeln!(
+            out,
+            "link: {} replies rejected: a responder's ids from another peer than the one it answered from",
+            s.wrong_path_replies
+        )?;
+    }
+    if let Some(signing) = &s.signing {
+        write_signing(out, signing)?;
+    }
+    if s.downtime_s > 0.0 {
+        writeln!(
+            out,
+            "link down {:.3} s in total while reconnecting (requests sent meanwhile count as lost)",
+            s.downtime_s
+        )?;
+    }
+    if let Some(p) = &s.schedule {
+        writeln!(
+            out,
+            "schedule: {:.1}/s achieved of {:.1}/s, send lateness p50/p99/max = {}/{}/{} ms; {}",
+            p.achieved_rate_hz,
+            p.requested_rate_hz,
+            ms_us(p.lateness_p50_us),
+            ms_us(p.lateness_p99_us),
+            ms_us(p.lateness_max_us),
+            s.rx_clock
+        )?;
+    }
+    for hint in &s.hints {
+        writeln!(out, "hint: {hint}")?;
+    }
+    // Threshold failures; "no reply at all" is already plain above.
+    for f in verdict.failures.iter().filter(|f| f.check != "reply") {
+        writeln!(out, "FAILED {}: {}", f.check, f.message)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::SysComp;
+    use crate::output::Observer;
+
+    fn reply(seq: u32, at: Nanos) -> Event<'static> {
+        Event::Match(MatchEvent::Reply {
+            responder: SysComp::new(1, 1),
+            seq,
+            rtt: 1_000_000,
+            sent_at: at - 1_000_000,
+            at,
+            out_of_order: false,
+            first_from_responder: seq == 0,
+        })
+    }
+
+    #[test]
+    fn reply_lines_carry_the_radio_at_most_once_a_second() {
+        let mut t = TextReporter::new(Vec::new(), false);
+        let status = RadioReport {
+            rssi: 200,
+            remrssi: radio::UNKNOWN,
+            txbuf: 90,
+            noise: 40,
+            remnoise: 60,
+            rxerrors: 0,
+            fixed: 0,
+        };
+        t.event(&reply(0, 10_000_000)).unwrap();
+        t.event(&Event::Radio {
+            id: SysComp::new(51, 68),
+            at: 20_000_000,
+            report: status,
+            first: true,
+        })
+        .unwrap();
+        for (seq, at) in [(1, 30_000_000), (2, 500_000_000), (3, 1_030_000_000)] {
+            t.event(&reply(seq, at)).unwrap();
+        }
+        let out = String::from_utf8(t.into_inner()).unwrap();
+        let notes: Vec<&str> = out.lines().filter(|l| l.contains("[radio")).collect();
+        assert_eq!(notes.len(), 2, "{out}");
+        assert!(
+            notes[0].contains("seq=1 ")
+                && notes[0].ends_with("[radio 51/68 rssi=200 remrssi=? txbuf=90%]"),
+            "{out}"
+        );
+        assert!(notes[1].contains("seq=3 "), "{out}");
+    }
+}

@@ -1,0 +1,165 @@
+//! Human output, modelled on ping: a line per reply as it happens, then a
+//! summary per responder. Echo probes' lines and summary are in
+//! [`echo`], the command probe's in [`command`]; this file holds what both
+//! share.
+
+mod command;
+mod echo;
+
+use std::io::{self, Write};
+
+use super::{Event, Observer, Prefixed, Reporter, StartInfo};
+use crate::engine::radio::RadioReport;
+use crate::engine::stats::Bucket;
+use crate::engine::summary::LinkSummary;
+use crate::engine::Nanos;
+use crate::frame::signing::SigningSummary;
+use crate::frame::SysComp;
+use crate::verdict::Verdict;
+
+pub struct TextReporter<W: Write> {
+    /// Event lines go through the link's prefix (with several links);
+    /// the summary is written unprefixed, under its own header.
+    out: Prefixed<W>,
+    /// Only the summary (`-q`).
+    quiet: bool,
+    /// The run is a command probe's: only its own events are printed.
+    command: bool,
+    timeout: std::time::Duration,
+    /// Print every reply even at high rates (`--every-reply`).
+    every_reply: bool,
+    /// Above [`echo::MAX_LINE_RATE`] requests/s: one status line per
+    /// second instead of a line per event, so printing never paces the
+    /// engine.
+    progress: Option<echo::Progress>,
+    /// The latest RADIO_STATUS, and when a reply line last showed one.
+    radio: Option<(SysComp, RadioReport)>,
+    radio_shown: Option<Nanos>,
+}
+
+impl<W: Write> TextReporter<W> {
+    pub fn new(out: W, quiet: bool) -> Self {
+        TextReporter {
+            out: Prefixed::new(out, None),
+            quiet,
+            command: false,
+            timeout: std::time::Duration::ZERO,
+            every_reply: false,
+            progress: None,
+            radio: None,
+            radio_shown: None,
+        }
+    }
+
+    /// A line per reply whatever the rate.
+    pub fn every_reply(mut self, every: bool) -> Self {
+        self.every_reply = every;
+        self
+    }
+
+    /// Event lines start with `[LINK] ` (one of several links).
+    pub fn prefixed(mut self, prefix: Option<String>) -> Self {
+        self.out = Prefixed::new(self.out.into_inner(), prefix);
+        self
+    }
+
+    pub fn into_inner(self) -> W {
+        self.out.into_inner()
+    }
+}
+
+impl<W: Write> Observer for TextReporter<W> {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        self.timeout = info.timeout;
+        self.command = info.command.is_some();
+        if self.quiet {
+            return Ok(());
+        }
+        match &info.command {
+            Some(spec) => self.command_start(info, spec),
+            None => self.echo_start(info),
+        }
+    }
+
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        if self.quiet {
+            return Ok(());
+        }
+        match event {
+            Event::Command(e) => self.command_event(e),
+            // A command run prints its commands' fate only.
+            _ if self.command => Ok(()),
+            _ => self.echo_event(event),
+        }
+    }
+
+    fn flush(&mut self) -> io::Result<()> {
+        self.out.flush()
+    }
+}
+
+impl<W: Write> Reporter for TextReporter<W> {
+    fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
+        let quiet = self.quiet;
+        let out = self.out.inner();
+        if !quiet {
+            writeln!(out)?;
+        }
+        writeln!(out, "--- {} mavping statistics ---", summary.link())?;
+        match summary {
+            LinkSummary::Echo(s) => echo::write_summary(out, s, verdict)?,
+            LinkSummary::Command(s) => command::write_summary(out, s)?,
+        }
+        out.flush()
+    }
+}
+
+/// Milliseconds with µs resolution, as ping prints them.
+fn ms(ns: Nanos) -> String {
+    format!("{:.3}", ns as f64 / 1e6)
+}
+
+fn ms_us(us: f64) -> String {
+    format!("{:.3}", us / 1e3)
+}
+
+fn rate(interval: std::time::Duration) -> String {
+    let per_s = 1.0 / interval.as_secs_f64();
+    if per_s >= 1.0 && per_s.fract() == 0.0 {
+        format!("{per_s}/s")
+    } else {
+        format!("every {}", humantime::format_duration(interval))
+    }
+}
+
+fn write_histogram(out: &mut impl Write, histogram: &[Bucket]) -> io::Result<()> {
+    let most = histogram.iter().map(|b| b.count).max().unwrap_or(0).max(1);
+    for b in histogram {
+        const WIDTH: u64 = 40;
+        let bar = (b.count * WIDTH).div_ceil(most) as usize;
+        writeln!(
+            out,
+            "  {:>9} ms |{:<40}| {}",
+            ms_us(b.low_us),
+            "#".repeat(bar),
+            b.count
+        )?;
+    }
+    Ok(())
+}
+
+/// One line: what the signing gate let through and what it refused
+/// (refused frames were never measured).
+fn write_signing(out: &mut impl Write, s: &SigningSummary) -> io::Result<()> {
+    writeln!(
+        out,
+        "signing (link id {}, {}): {}",
+        s.link_id,
+        if s.required {
+            "signatures required"
+        } else {
+            "unsigned accepted"
+        },
+        s.counts
+    )
+}

@@ -1,0 +1,116 @@
+//! What a run writes besides its report: `--samples`, `--plot`, `--hgrm`
+//! and the `--prometheus` endpoint. Each is opened before the first
+//! request, so a bad path or a port in use fails before anything is sent;
+//! the plot and the histograms are written once every link has ended.
+
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use crate::config::Config;
+use crate::engine::session::Outcome;
+use crate::output::hgrm;
+use crate::output::plot::Plot;
+use crate::output::prometheus::PrometheusReporter;
+use crate::output::samples::SampleLog;
+use crate::output::{Reporter, Shared};
+use crate::stderr;
+
+pub struct Exports {
+    samples: Option<Shared<BufWriter<File>>>,
+    plot: Option<(Plot, BufWriter<File>, PathBuf)>,
+    prometheus: Option<PrometheusReporter>,
+    hgrm: Option<PathBuf>,
+    /// Several links: sample rows name their link.
+    several: bool,
+}
+
+fn create(path: &Path, what: &str) -> Result<BufWriter<File>, String> {
+    File::create(path)
+        .map(BufWriter::new)
+        .map_err(|e| format!("cannot write {what} {}: {e}", path.display()))
+}
+
+impl Exports {
+    /// Opens every export the configuration asks for, in a fixed order.
+    pub fn open(config: &Config) -> Result<Self, String> {
+        let out = &config.output;
+        let samples = out
+            .samples
+            .as_deref()
+            .map(|p| create(p, "--samples").map(Shared::new))
+            .transpose()?;
+        let prometheus = match out.prometheus {
+            None => None,
+            Some(addr) => {
+                let (exporter, bound) = std::net::TcpListener::bind(addr)
+                    .and_then(PrometheusReporter::serve)
+                    .map_err(|e| format!("--prometheus {addr}: {e}"))?;
+                // Says the port when 0 was asked for; scripts and tests read it.
+                stderr::error(&format_args!("serving metrics at http://{bound}/metrics"));
+                Some(exporter)
+            }
+        };
+        let plot = out
+            .plot
+            .as_deref()
+            .map(|p| create(p, "--plot").map(|f| (Plot::default(), f, p.to_path_buf())))
+            .transpose()?;
+        Ok(Exports {
+            samples,
+            plot,
+            prometheus,
+            hgrm: out.hgrm.clone(),
+            several: config.links.len() > 1,
+        })
+    }
+
+    /// The reporters of the `index`-th link, named `name`.
+    pub fn reporters(&self, index: usize, name: &str) -> Vec<Box<dyn Reporter>> {
+        let mut reporters: Vec<Box<dyn Reporter>> = Vec::new();
+        if let Some(file) = &self.samples {
+            let log = SampleLog::new(file.clone());
+            reporters.push(Box::new(if self.several {
+                log.for_link(name, index == 0)
+            } else {
+                log
+            }));
+        }
+        if let Some(p) = &self.prometheus {
+            reporters.push(Box::new(p.link(index)));
+        }
+        if let Some((plot, _, _)) = &self.plot {
+            reporters.push(Box::new(plot.link()));
+        }
+        reporters
+    }
+
+    /// Writes the plot and the histograms of every link; an error says
+    /// which file could not be written.
+    pub fn finish<'a>(self, outcomes: impl IntoIterator<Item = &'a Outcome>) -> Result<(), String> {
+        if let Some((plot, mut file, path)) = self.plot {
+            let written = plot.svg().and_then(|svg| {
+                file.write_all(svg.as_bytes())
+                    .and_then(|()| file.flush())
+                    .map_err(|e| e.to_string())
+            });
+            written.map_err(|e| format!("cannot write --plot {}: {e}", path.display()))?;
+        }
+        if let Some(path) = &self.hgrm {
+            write_hgrm(path, outcomes)
+                .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))?;
+        }
+        Ok(())
+    }
+}
+
+/// Every link's responders, one section each, in one file.
+fn write_hgrm<'a>(path: &Path, outcomes: impl IntoIterator<Item = &'a Outcome>) -> io::Result<()> {
+    let mut out = BufWriter::new(File::create(path)?);
+    for outcome in outcomes {
+        for (id, hist) in &outcome.histograms {
+            hgrm::write_section(&mut out, outcome.summary.link(), *id, hist)?;
+        }
+    }
+    out.flush()
+}

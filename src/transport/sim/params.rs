@@ -1,0 +1,338 @@
+//! The `sim:` connection string's query: `sim:?key=value&...`, parsed
+//! and validated, and printed back in the form reports name the link by.
+
+use std::fmt;
+use std::time::Duration;
+
+use crate::frame::SysComp;
+use crate::units::{parse_duration_up_to, parse_percent};
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct SimParams {
+    pub responders: u16,
+    /// sysid of the first responder; the others follow (1, 2, 3, ...).
+    pub first_sysid: u8,
+    pub compid: u8,
+    /// One-way delay.
+    pub delay: Duration,
+    /// Extra one-way delay, uniform in [0, jitter], drawn per direction.
+    pub jitter: Duration,
+    /// Share of exchanges lost, 0..=1.
+    pub loss: f64,
+    /// Share of replies delivered twice.
+    pub dup: f64,
+    /// Share of replies held back by `hold` (arrive after later replies).
+    pub reorder: f64,
+    pub hold: Duration,
+    pub seed: u64,
+    /// Paused tokio clock: deterministic output, no waiting.
+    pub virtual_clock: bool,
+    /// False: responders send HEARTBEAT but ignore PING (like ArduPilot).
+    pub answer_ping: bool,
+    pub heartbeat: bool,
+    /// Responders' clocks read `offset + (1 + drift·1e-6)·t`, t = ns since
+    /// the link opened: the truth a TIMESYNC measurement is held against.
+    pub clock_offset_ns: i64,
+    pub drift_ppm: f64,
+    /// A serial radio link at this baud: every frame takes its bytes x 10
+    /// bits of wire time, requests and replies share it (half duplex, as
+    /// SiK), and a bounded buffer drops what does not fit.
+    pub baud: Option<u32>,
+    /// Emit RADIO_STATUS as 51/68 once a second, following the link.
+    pub radio: bool,
+    /// A link outage: from `start` after the link opened, for `length`,
+    /// every request and reply is lost.
+    pub outage: Option<(Duration, Duration)>,
+    /// Share of replies hit by a delay spike of `spike_delay` extra.
+    pub spike: f64,
+    pub spike_delay: Duration,
+}
+
+impl Default for SimParams {
+    fn default() -> Self {
+        SimParams {
+            responders: 1,
+            first_sysid: 1,
+            compid: 1,
+            delay: Duration::from_millis(10),
+            jitter: Duration::from_millis(2),
+            loss: 0.0,
+            dup: 0.0,
+            reorder: 0.0,
+            hold: Duration::from_millis(50),
+            seed: 1,
+            virtual_clock: false,
+            answer_ping: true,
+            heartbeat: true,
+            clock_offset_ns: 0,
+            drift_ppm: 0.0,
+            baud: None,
+            radio: false,
+            outage: None,
+            spike: 0.0,
+            spike_delay: Duration::from_millis(500),
+        }
+    }
+}
+
+/// The keys `sim:` accepts, for error messages and the README.
+pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURATION, \
+jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
+ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
+outage=START+LENGTH, spike=PCT, spike_delay=DURATION";
+
+fn percent(key: &str, value: &str) -> Result<f64, String> {
+    parse_percent(value).map_err(|e| format!("{key}={value}: {e}"))
+}
+
+fn duration(key: &str, value: &str) -> Result<Duration, String> {
+    parse_duration_up_to(value, Duration::from_secs(3600))
+        .map_err(|e| format!("{key}={value}: {e}"))
+}
+
+fn switch(key: &str, value: &str) -> Result<bool, String> {
+    match value {
+        "on" | "1" | "true" | "yes" => Ok(true),
+        "off" | "0" | "false" | "no" => Ok(false),
+        _ => Err(format!("{key}={value}: expected on or off")),
+    }
+}
+
+fn number<T: std::str::FromStr>(key: &str, value: &str, range: &str) -> Result<T, String> {
+    value
+        .parse()
+        .map_err(|_| format!("{key}={value}: expected {range}"))
+}
+
+impl SimParams {
+    /// Parses the part after `sim:`: empty, or `?key=value&key=value`.
+    pub fn parse(query: &str) -> Result<Self, String> {
+        let mut p = SimParams::default();
+        let query = query.strip_prefix('?').unwrap_or(query);
+        for pair in query.split('&').filter(|s| !s.is_empty()) {
+            let (key, value) = pair
+                .split_once('=')
+                .ok_or_else(|| format!("'{pair}' is not key=value; keys: {SIM_KEYS}"))?;
+            match key {
+                "responders" => {
+                    p.responders = number(key, value, "1 to 1000")?;
+                    if !(1..=1000).contains(&p.responders) {
+                        return Err(format!("{key}={value}: expected 1 to 1000"));
+                    }
+                }
+                "sysid" => {
+                    p.first_sysid = number(key, value, "1 to 255")?;
+                    if p.first_sysid == 0 {
+                        return Err(format!("{key}={value}: expected 1 to 255"));
+                    }
+                }
+                "compid" => {
+                    p.compid = number(key, value, "1 to 255")?;
+                    if p.compid == 0 {
+                        return Err(format!("{key}={value}: expected 1 to 255"));
+                    }
+                }
+                "delay" => p.delay = duration(key, value)?,
+                "jitter" => p.jitter = duration(key, value)?,
+                "hold" => p.hold = duration(key, value)?,
+                "loss" => p.loss = percent(key, value)?,
+                "dup" => p.dup = percent(key, value)?,
+                "reorder" => p.reorder = percent(key, value)?,
+                "seed" => p.seed = number(key, value, "a whole number")?,
+                "clock" => {
+                    p.virtual_clock = match value {
+                        "virtual" => true,
+                        "real" => false,
+                        _ => return Err(format!("{key}={value}: expected real or virtual")),
+                    }
+                }
+                "ping" => p.answer_ping = switch(key, value)?,
+                "heartbeat" => p.heartbeat = switch(key, value)?,
+                "offset" => {
+                    let (negative, magnitude) = match value.strip_prefix('-') {
+                        Some(rest) => (true, rest),
+                        None => (false, value.strip_prefix('+').unwrap_or(value)),
+                    };
+                    let ns = humantime::parse_duration(magnitude)
+                        .ok()
+                        .and_then(|d| i64::try_from(d.as_nanos()).ok())
+                        .filter(|ns| *ns <= 10 * 365 * 86_400 * 1_000_000_000)
+                        .ok_or_else(|| {
+                            format!("{key}={value}: expected a duration up to 10 years, e.g. 1.5s or -250ms")
+                        })?;
+                    p.clock_offset_ns = if negative { -ns } else { ns };
+                }
+                "drift" => {
+                    p.drift_ppm = number(key, value, "parts per million, -1000000 to 1000000")?;
+                    if !p.drift_ppm.is_finite() || p.drift_ppm.abs() > 1e6 {
+                        return Err(format!("{key}={value}: expected -1000000 to 1000000 ppm"));
+                    }
+                }
+                "baud" => {
+                    let baud: u32 = number(key, value, "a baud rate from 300 to 10000000")?;
+                    if !(300..=10_000_000).contains(&baud) {
+                        return Err(format!(
+                            "{key}={value}: expected a baud rate from 300 to 10000000"
+                        ));
+                    }
+                    p.baud = Some(baud);
+                }
+                "radio" => p.radio = switch(key, value)?,
+                "outage" => {
+                    let (start, length) = value.split_once('+').ok_or_else(|| {
+                        format!("{key}={value}: expected START+LENGTH, e.g. outage=30s+5s")
+                    })?;
+                    p.outage = Some((duration(key, start)?, duration(key, length)?));
+                }
+                "spike" => p.spike = percent(key, value)?,
+                "spike_delay" => p.spike_delay = duration(key, value)?,
+                _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
+            }
+        }
+        // Responders are numbered by sysid; the last one must still fit.
+        if usize::from(p.first_sysid) + usize::from(p.responders) - 1 > 255 * 255 {
+            return Err("too many responders for the sysid range".into());
+        }
+        Ok(p)
+    }
+
+    /// The ids of responder `i`: sysids count up from `first_sysid`, and
+    /// past 255 the component id counts up too, so 1,000 stay distinct.
+    pub fn responder_id(&self, i: u16) -> SysComp {
+        let slot = usize::from(self.first_sysid) - 1 + usize::from(i);
+        SysComp::new(
+            (slot % 255 + 1) as u8,
+            (usize::from(self.compid) - 1 + slot / 255) as u8 % 255 + 1,
+        )
+    }
+}
+
+impl fmt::Display for SimParams {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "sim:?responders={}&delay={}&jitter={}&loss={}%&dup={}%&reorder={}%&seed={}",
+            self.responders,
+            humantime::format_duration(self.delay),
+            humantime::format_duration(self.jitter),
+            self.loss * 100.0,
+            self.dup * 100.0,
+            self.reorder * 100.0,
+            self.seed
+        )?;
+        if self.clock_offset_ns != 0 {
+            // Seconds as a number: humantime's "3s 250ms" has a space.
+            write!(f, "&offset={}s", self.clock_offset_ns as f64 / 1e9)?;
+        }
+        if self.drift_ppm != 0.0 {
+            write!(f, "&drift={}", self.drift_ppm)?;
+        }
+        if let Some(baud) = self.baud {
+            write!(f, "&baud={baud}")?;
+        }
+        if self.radio {
+            write!(f, "&radio=on")?;
+        }
+        if let Some((start, length)) = self.outage {
+            write!(
+                f,
+                "&outage={}+{}",
+                humantime::format_duration(start),
+                humantime::format_duration(length)
+            )?;
+        }
+        if self.spike > 0.0 {
+            write!(
+                f,
+                "&spike={}%&spike_delay={}",
+                self.spike * 100.0,
+                humantime::format_duration(self.spike_delay)
+            )?;
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_every_key() {
+        let p = SimParams::parse(
+            "?responders=3&sysid=10&compid=2&delay=20ms&jitter=5ms&loss=2%&dup=1&reorder=0.5%\
+             &hold=30ms&seed=7&clock=virtual&ping=off&heartbeat=on",
+        )
+        .unwrap();
+        assert_eq!(p.responders, 3);
+        assert_eq!(p.responder_id(2), SysComp::new(12, 2));
+        assert_eq!(p.delay, Duration::from_millis(20));
+        assert_eq!(p.jitter, Duration::from_millis(5));
+        assert!((p.loss - 0.02).abs() < 1e-12);
+        assert!((p.dup - 0.01).abs() < 1e-12);
+        assert!((p.reorder - 0.005).abs() < 1e-12);
+        assert_eq!(p.seed, 7);
+        assert!(p.virtual_clock);
+        assert!(!p.answer_ping);
+        assert_eq!(SimParams::parse("").unwrap(), SimParams::default());
+        let p = SimParams::parse("?offset=-1.5s&drift=-20.5").unwrap();
+        assert_eq!(p.clock_offset_ns, -1_500_000_000);
+        assert_eq!(p.drift_ppm, -20.5);
+        assert_eq!(
+            SimParams::parse("?offset=+250ms").unwrap().clock_offset_ns,
+            250_000_000
+        );
+        let p = SimParams::parse("?outage=30s+5s&spike=1%&spike_delay=2s").unwrap();
+        assert_eq!(
+            p.outage,
+            Some((Duration::from_secs(30), Duration::from_secs(5)))
+        );
+        assert!((p.spike - 0.01).abs() < 1e-12);
+        assert_eq!(p.spike_delay, Duration::from_secs(2));
+        assert_eq!(
+            SimParams::parse(&p.to_string()[4..]).unwrap().outage,
+            p.outage
+        );
+    }
+
+    #[test]
+    fn rejects_bad_values_with_the_reason() {
+        for (q, needle) in [
+            ("?loss=120%", "percentage"),
+            ("?outage=5s", "START+LENGTH"),
+            ("?outage=5s+2h", "at most 1h"),
+            ("?spike=-1", "percentage"),
+            ("?responders=0", "1 to 1000"),
+            ("?delay=soon", "delay=soon"),
+            ("?delay=2h", "at most 1h"),
+            ("?warp=9", "unknown key 'warp'"),
+            ("?loss", "not key=value"),
+            ("?clock=fast", "real or virtual"),
+            ("?offset=soon", "offset=soon"),
+            ("?offset=20y", "up to 10 years"),
+            ("?drift=2e6", "ppm"),
+            ("?drift=fast", "parts per million"),
+        ] {
+            let err = SimParams::parse(q).unwrap_err();
+            assert!(err.contains(needle), "{q}: {err}");
+        }
+    }
+
+    #[test]
+    fn a_thousand_responders_have_distinct_ids() {
+        let p = SimParams::parse("?responders=1000").unwrap();
+        let ids: std::collections::HashSet<_> = (0..1000).map(|i| p.responder_id(i)).collect();
+        assert_eq!(ids.len(), 1000);
+        assert!(ids.iter().all(|id| id.sysid != 0 && id.compid != 0));
+    }
+
+    #[test]
+    fn baud_and_radio_parse_and_bad_values_are_refused() {
+        let p = SimParams::parse("?baud=57600&radio=on").unwrap();
+        assert_eq!((p.baud, p.radio), (Some(57_600), true));
+        assert!(p.to_string().ends_with("&baud=57600&radio=on"));
+        for bad in ["?baud=0", "?baud=fast", "?radio=maybe"] {
+            assert!(SimParams::parse(bad).is_err(), "{bad}");
+        }
+    }
+}
