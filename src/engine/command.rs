@@ -12,7 +12,7 @@ use tokio::sync::Notify;
 
 use super::commands::{CommandEvent, CommandSpec, CommandTracker};
 use super::link_io::{Clock, Sender};
-use super::observe::{Event, Observer, StartInfo};
+use super::observe::{tell_each, Event, Observer, StartInfo};
 use super::radio::Radios;
 use super::schedule::Schedule;
 use super::session::{self, Driver, Ended, Outcome};
@@ -135,13 +135,7 @@ impl Driver for CommandDriver {
 
     fn report(&mut self, _radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
         self.transmitted = 0;
-        let mut result = Ok(());
-        for e in self.events.drain(..) {
-            if result.is_ok() {
-                result = observer.event(&Event::Command(e));
-            }
-        }
-        result
+        tell_each(observer, self.events.drain(..).map(Event::Command))
     }
 
     fn next_deadline(&self) -> Option<Nanos> {

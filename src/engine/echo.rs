@@ -10,7 +10,7 @@ use tokio::sync::Notify;
 
 use super::link_io::{Clock, Sender};
 use super::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
-use super::observe::{Event, Observer, StartInfo};
+use super::observe::{tell_each, Event, Observer, StartInfo};
 use super::radio::{radio_hints, Radios};
 use super::schedule::Schedule;
 use super::session::{self, Driver, Ended, Outcome};
@@ -167,19 +167,13 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     }
 
     fn report(&mut self, radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
-        let mut result = Ok(());
-        for e in self.events.drain(..) {
-            // Outcomes against the radio's buffer, for the "overloaded" hint.
-            match e {
-                MatchEvent::Reply { sent_at, .. } => radios.outcome(false, sent_at),
-                MatchEvent::Lost { sent_at, .. } => radios.outcome(true, sent_at),
-                _ => {}
-            }
-            if result.is_ok() {
-                result = observer.event(&Event::Match(e));
-            }
-        }
-        result
+        // Outcomes against the radio's buffer, for the "overloaded" hint.
+        let events = self.events.drain(..).inspect(|e| match *e {
+            MatchEvent::Reply { sent_at, .. } => radios.outcome(false, sent_at),
+            MatchEvent::Lost { sent_at, .. } => radios.outcome(true, sent_at),
+            _ => {}
+        });
+        tell_each(observer, events.map(Event::Match))
     }
 
     fn next_deadline(&self) -> Option<Nanos> {

@@ -57,6 +57,22 @@ pub trait Observer {
     }
 }
 
+/// Tells `observer` each event in order. After a write error the rest are
+/// still taken (their side effects happen) but not written; the first
+/// error is returned.
+pub fn tell_each<'a>(
+    observer: &mut dyn Observer,
+    events: impl Iterator<Item = Event<'a>>,
+) -> io::Result<()> {
+    let mut result = Ok(());
+    for event in events {
+        if result.is_ok() {
+            result = observer.event(&event);
+        }
+    }
+    result
+}
+
 /// Follows nothing: for runs whose outcome is all that matters.
 pub struct Unobserved;
 

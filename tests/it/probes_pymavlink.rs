@@ -1,12 +1,11 @@
 //! TIMESYNC and command probes against pymavlink peers, and `mavping
 //! respond` checked by pymavlink's own decoding, over real UDP sockets.
 
-mod common;
 use std::io::{BufRead, BufReader, Read};
 use std::process::{Child, Stdio};
 use std::time::Duration;
 
-use common::*;
+use crate::common::*;
 
 /// "  clock offset -1795426178.236208 s ± ..." -> ns.
 fn clock_offset_ns(stdout: &str) -> i128 {

@@ -1,7 +1,6 @@
 //! mavping over real UDP sockets against pymavlink responders.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 #[test]
 fn udpin_pings_every_peer_and_counts_each_exactly() {

@@ -1,11 +1,10 @@
 //! The command line: exit codes, errors, signals, reproducible output.
 
-mod common;
 use std::net::UdpSocket;
 use std::process::Stdio;
 use std::time::Duration;
 
-use common::*;
+use crate::common::*;
 
 #[test]
 fn help_and_version_exit_zero() {

@@ -1,10 +1,9 @@
 //! mavping over TCP against pymavlink: as a client of a pymavlink `tcpin:`
 //! server, and as a `tcpin:` server with pymavlink clients.
 
-mod common;
 use std::time::Duration;
 
-use common::*;
+use crate::common::*;
 
 #[test]
 fn tcp_client_counts_a_pymavlink_server_exactly() {

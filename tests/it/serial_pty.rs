@@ -2,20 +2,12 @@
 //! (tests/peers/pty_bridge.py) with a pymavlink responder on its far end,
 //! opened at 57600 baud by both sides, as with a telemetry radio.
 
-mod common;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use common::*;
+use crate::common::*;
 
 /// A bridge and the device paths of its two ends.
-fn bridge(args: &[&str]) -> (Peer, String, String) {
-    let mut bridge = Peer::start("pty_bridge.py", args);
-    let line = bridge.read_line();
-    let (a, b) = line.split_once(' ').expect("two pty paths");
-    (bridge, a.to_string(), b.to_string())
-}
-
 fn scratch_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("mavping-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -33,7 +25,7 @@ fn skipped_bytes(out: &str) -> u64 {
 
 #[test]
 fn junk_between_frames_is_counted_and_skipped_exactly() {
-    let (_bridge, a, b) = bridge(&[]);
+    let (_bridge, a, b) = pty_bridge(&[]);
     let responder = Peer::start(
         "responder.py",
         &[
@@ -73,7 +65,7 @@ fn junk_between_frames_is_counted_and_skipped_exactly() {
 #[test]
 fn frames_split_across_reads_are_reassembled() {
     // Every 5 bytes from the responder arrive as a read of their own.
-    let (bridge, a, b) = bridge(&["--chunk", "5", "--chunk-delay-ms", "2"]);
+    let (bridge, a, b) = pty_bridge(&["--chunk", "5", "--chunk-delay-ms", "2"]);
     let responder = Peer::start("responder.py", &[&b, "--baud", "57600"]);
     // A bare device path takes its baud rate from --baud.
     let (code, out, err) =
@@ -88,7 +80,7 @@ fn frames_split_across_reads_are_reassembled() {
 
 #[test]
 fn closing_the_pty_ends_the_run_with_the_summary_and_exit_2() {
-    let (mut bridge, a, b) = bridge(&[]);
+    let (mut bridge, a, b) = pty_bridge(&[]);
     let _responder = Peer::start("responder.py", &[&b, "--baud", "57600"]);
     let run = start_mavping(&["-i", "0.05", "-W", "300ms", &format!("serial:{a}:57600")]);
     std::thread::sleep(Duration::from_millis(700));
@@ -122,7 +114,7 @@ fn reconnect_reopens_the_device_when_it_comes_back() {
     let dir = scratch_dir("reconnect");
     let link = dir.join("ttyRADIO");
     let link_s = link.to_str().unwrap();
-    let (mut first, _, b) = bridge(&["--link-a", link_s]);
+    let (mut first, _, b) = pty_bridge(&["--link-a", link_s]);
     let mut responder = Peer::start("responder.py", &[&b, "--baud", "57600"]);
     let run = start_mavping(&[
         "--reconnect",
@@ -138,7 +130,7 @@ fn reconnect_reopens_the_device_when_it_comes_back() {
     first.kill();
     responder.kill();
     std::thread::sleep(Duration::from_millis(500));
-    let (_second, _, b2) = bridge(&["--link-a", link_s]);
+    let (_second, _, b2) = pty_bridge(&["--link-a", link_s]);
     let _responder2 = Peer::start("responder.py", &[&b2, "--baud", "57600"]);
     let (code, out, err) = run.wait(Duration::from_secs(15));
     let _ = std::fs::remove_dir_all(&dir);
@@ -162,7 +154,7 @@ fn capacity_warning_above_what_57600_baud_carries_and_not_below() {
     // 57600 baud = 5760 bytes/s; a request (21 B for seqs < 256) and its
     // reply (26 B) take 47: at most ~122 PINGs/s. A pty passes more, so
     // the run itself succeeds; the warning is about the radio behind it.
-    let (_bridge, a, b) = bridge(&[]);
+    let (_bridge, a, b) = pty_bridge(&[]);
     let _responder = Peer::start("responder.py", &[&b, "--baud", "57600"]);
     let (code, out, err) = run_mavping(&[
         "-c",

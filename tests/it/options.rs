@@ -1,8 +1,7 @@
 //! Out-of-range and malformed options: one clear error line on stderr,
 //! nothing on stdout, exit 2, and never a panic.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 fn rejects(args: &[&str], needle: &str) {
     let (code, out, err) = run_mavping(args);

@@ -4,36 +4,15 @@
 //! frames split and truncated across serial reads, a flood of foreign
 //! traffic; and the simulated link's outage and delay spikes.
 
-mod common;
 use std::net::UdpSocket;
 use std::process::Stdio;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::Duration;
 
-use common::*;
+use crate::common::*;
 use mavping::frame::{encode, Header, Msg, StreamScanner, Version};
 use serde_json::Value;
-
-fn summary(out: &str) -> Value {
-    let last = out.lines().last().expect("a summary line");
-    serde_json::from_str(last).unwrap_or_else(|e| panic!("{e}: {last}"))
-}
-
-fn responder<'a>(s: &'a Value, id: &str) -> &'a Value {
-    let (sys, comp) = id.split_once('/').unwrap();
-    let (sys, comp): (u64, u64) = (sys.parse().unwrap(), comp.parse().unwrap());
-    s["responders"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|r| r["responder"]["sysid"] == sys && r["responder"]["compid"] == comp)
-        .unwrap_or_else(|| panic!("no responder {id} in {s}"))
-}
-
-fn n(v: &Value, key: &str) -> u64 {
-    v[key].as_u64().unwrap_or_else(|| panic!("{key} in {v}"))
-}
 
 #[test]
 fn hostile_udp_peer_costs_no_reply_and_every_rejection_is_counted() {
@@ -52,7 +31,7 @@ fn hostile_udp_peer_costs_no_reply_and_every_rejection_is_counted() {
     ]);
     let truth = peer.finish();
     assert!(code == 0 || code == 1, "{err}");
-    let s = summary(&out);
+    let s = summary_of(&out);
     let t = |k: &str| n(&truth, k);
     assert_eq!(t("requests"), 60, "{truth}");
     assert_eq!(n(&s, "requests"), 60);
@@ -124,7 +103,7 @@ fn hostile_serial_peer_frames_split_and_truncated_across_reads() {
     ]);
     let truth = peer.finish();
     assert!(code == 0 || code == 1, "{err}");
-    let s = summary(&out);
+    let s = summary_of(&out);
     let t = |k: &str| n(&truth, k);
     assert_eq!(t("requests"), 30, "{truth}");
     assert!(t("truncated_sent") > 0 && t("signed") > 0 && t("v1") > 0 && t("lying") > 0);
@@ -295,7 +274,7 @@ fn flood_of_foreign_traffic_leaves_the_responders_counts_exact() {
         .read_to_string(&mut rest)
         .unwrap();
     let _ = respond.wait();
-    let s = summary(&out);
+    let s = summary_of(&out);
     let replies_sent: u64 = rest
         .split(" replies sent")
         .next()
@@ -347,7 +326,7 @@ fn sim_outage_and_delay_spikes_are_counted_exactly() {
         "-v",
         "sim:?jitter=0ms&outage=300ms+200ms&spike=10%&spike_delay=1s&seed=4&clock=virtual",
     ]);
-    let s = summary(&out);
+    let s = summary_of(&out);
     let r = responder(&s, "1/1");
     let truth_line = err
         .lines()
@@ -525,7 +504,7 @@ fn spoofed_ids_from_another_peer_are_rejected_not_measured() {
         .and_then(|x| x.rsplit(", ").next())
         .and_then(|x| x.parse().ok())
         .unwrap_or_else(|| panic!("respond said: {rest}"));
-    let s = summary(&out);
+    let s = summary_of(&out);
     let r = responder(&s, "1/1");
     assert_eq!(code, Some(0), "{err}");
     assert!(
@@ -569,7 +548,7 @@ fn timesync_replies_echoing_a_wrong_ts1_are_stale_not_measured() {
     ]);
     let truth = peer.finish();
     assert_eq!(code, 0, "{err}");
-    let s = summary(&out);
+    let s = summary_of(&out);
     let r = responder(&s, "1/1");
     assert_eq!(n(&truth, "timesync_requests"), 30, "{truth}");
     assert_eq!(
@@ -672,7 +651,7 @@ fn a_responder_restarted_on_a_new_port_is_measured_again() {
         .unwrap();
     let _ = ping.wait();
     let second_replies = replies_of(second.expect("the responder came back"));
-    let s = summary(&out);
+    let s = summary_of(&out);
     let r = responder(&s, "1/1");
     assert!(second_replies > 10, "{second_replies} {err}");
     assert_eq!(n(&s, "wrong_path_replies"), 0, "{s}");

@@ -1,6 +1,11 @@
 //! Shared by the integration tests: real peers (pymavlink processes),
-//! free loopback ports, and parsing of mavping's summary.
-#![allow(dead_code)] // each test binary uses a different part
+//! free loopback ports, running mavping, and parsing its summaries.
+
+pub mod json;
+pub mod tmux;
+
+pub use json::*;
+pub use tmux::Tmux;
 
 use std::io::{BufRead, BufReader};
 use std::net::UdpSocket;
@@ -52,6 +57,15 @@ pub fn free_tcp_port() -> u16 {
         .port()
 }
 
+/// A pty pair joined by `tests/peers/pty_bridge.py` (with `args`): the
+/// bridge and the two device paths.
+pub fn pty_bridge(args: &[&str]) -> (Peer, String, String) {
+    let mut bridge = Peer::start("pty_bridge.py", args);
+    let line = bridge.read_line();
+    let (a, b) = line.split_once(' ').expect("two pty paths");
+    (bridge, a.to_string(), b.to_string())
+}
+
 /// A running peer process; killed when dropped.
 pub struct Peer {
     child: Child,
@@ -85,10 +99,6 @@ impl Peer {
         let mut line = String::new();
         self.stdout.read_line(&mut line).unwrap();
         line.trim().to_string()
-    }
-
-    pub fn pid(&self) -> u32 {
-        self.child.id()
     }
 
     /// Stops the peer with SIGTERM and returns its ground-truth JSON line.

@@ -1,36 +1,12 @@
 //! mavping for scripts: JSON events against the committed schema, exact
 //! snapshots, every threshold's exit code, and the exports.
 
-mod common;
-use common::*;
-use serde_json::Value;
+use crate::common::*;
 
 /// Loss, duplicates, reordering and late replies, all seeded and in
 /// virtual time: every run gives the same bytes.
 const FAULTY: &str =
     "sim:?responders=2&loss=5%&dup=3%&reorder=5%&hold=150ms&jitter=4ms&seed=9&clock=virtual";
-
-fn json_lines(out: &str) -> Vec<Value> {
-    out.lines()
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON: {l}: {e}")))
-        .collect()
-}
-
-fn schema() -> jsonschema::Validator {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/schema/mavping-events.schema.json"
-    ))
-    .unwrap();
-    jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).unwrap()
-}
-
-fn summary_of(out: &str) -> Value {
-    json_lines(out)
-        .into_iter()
-        .find(|v| v["type"] == "summary")
-        .expect("a summary line")
-}
 
 #[test]
 fn every_json_event_matches_the_schema() {

@@ -9,6 +9,8 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use assert_cmd::cargo::cargo_bin;
+
+use crate::common::Tmux;
 use prometheus_parse::{Scrape, Value};
 
 /// Generous bound for something that normally takes a fraction of a second;
@@ -237,72 +239,16 @@ fn live_falls_back_to_text_when_stdout_is_not_a_terminal() {
     assert!(stdout.contains("mavping statistics"), "{stdout}");
 }
 
-fn tmux(socket: &str, args: &[&str]) -> String {
-    let out = Command::new("tmux")
-        .args(["-L", socket])
-        .args(args)
-        .output()
-        .unwrap_or_else(|e| panic!("tmux is missing ({e}) — run `bash scripts/test.sh`"));
-    assert!(out.status.success(), "tmux {args:?}: {out:?}");
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-/// Kills the test's own tmux server.
-struct TmuxServer(String);
-
-impl Drop for TmuxServer {
-    fn drop(&mut self) {
-        let _ = Command::new("tmux")
-            .args(["-L", &self.0, "kill-server"])
-            .output();
-    }
-}
-
-fn wait_for_pane(socket: &str, what: &str, found: impl Fn(&str) -> bool) -> String {
-    let start = Instant::now();
-    loop {
-        let screen = tmux(socket, &["capture-pane", "-p", "-S", "-200", "-t", "live"]);
-        if found(&screen) {
-            return screen;
-        }
-        assert!(
-            start.elapsed() < PATIENCE,
-            "{what:?} not on screen:\n{screen}"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
-}
-
 #[test]
 fn live_view_in_a_real_terminal_stops_on_q_and_prints_the_summary() {
-    let socket = format!("mavping-test-{}", std::process::id());
-    let bin = cargo_bin("mavping");
     let command = format!(
         "{} --live -i 0.02 -W 300ms 'sim:?responders=2&loss=20%&delay=2ms&seed=5'; echo exit=$?",
-        bin.display()
+        cargo_bin("mavping").display()
     );
-    tmux(
-        &socket,
-        &[
-            "new-session",
-            "-d",
-            "-s",
-            "live",
-            "-x",
-            "110",
-            "-y",
-            "20",
-            &command,
-        ],
-    );
-    let _server = TmuxServer(socket.clone());
-    tmux(
-        &socket,
-        &["set-option", "-t", "live", "remain-on-exit", "on"],
-    );
+    let tmux = Tmux::start("views", &command, 110, 20);
 
     // Both responders have a row, and a loss shows in a row's strip.
-    let screen = wait_for_pane(&socket, "a loss in a row", |screen| {
+    let screen = tmux.wait_for("a loss in a row", |screen| {
         let rows: Vec<&str> = screen
             .lines()
             .filter(|l| l.starts_with("│1/1") || l.starts_with("│2/1"))
@@ -312,8 +258,8 @@ fn live_view_in_a_real_terminal_stops_on_q_and_prints_the_summary() {
     for text in ["responder", "loss%", "p99 ms", "1/1", "2/1", "q or Ctrl-C"] {
         assert!(screen.contains(text), "{text:?} not on screen:\n{screen}");
     }
-    tmux(&socket, &["send-keys", "-t", "live", "q"]);
-    let screen = wait_for_pane(&socket, "exit=", |s| s.contains("exit="));
+    tmux.send_keys("q");
+    let screen = tmux.wait_for("exit=", |s| s.contains("exit="));
     assert!(screen.contains("mavping statistics"), "{screen}");
     assert!(screen.contains("exit=0"), "{screen}");
     assert!(

@@ -1,8 +1,6 @@
 //! The committed completions and man page match the current CLI.
 //! Regenerate with `bash scripts/gen-completions.sh`.
 
-mod common;
-
 #[test]
 fn committed_completions_are_current() {
     for (kind, file) in [
@@ -13,7 +11,7 @@ fn committed_completions_are_current() {
         ("complete-elvish", "mavping.elv"),
         ("man", "mavping.1"),
     ] {
-        let (code, fresh, err) = common::run_mavping(&["--generate", kind]);
+        let (code, fresh, err) = crate::common::run_mavping(&["--generate", kind]);
         assert_eq!(code, 0, "{err}");
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("completions")

@@ -2,19 +2,12 @@
 //! with different reply delays and one behind a pty serial link, in one
 //! run; the simulated links for exact, reproducible output.
 
-mod common;
 use std::time::Duration;
 
-use common::*;
+use crate::common::*;
 use serde_json::Value;
 
 const SIMS: [&str; 2] = ["sim:?clock=virtual", "sim:?delay=50ms&clock=virtual"];
-
-fn json_lines(out: &str) -> Vec<Value> {
-    out.lines()
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON: {l}: {e}")))
-        .collect()
-}
 
 /// Each link's summary object, by its link.
 fn summary_for(out: &str, link: &str) -> Value {
@@ -47,13 +40,6 @@ fn text_section<'a>(out: &'a str, link: &str) -> &'a str {
     &rest[..end]
 }
 
-fn bridge() -> (Peer, String, String) {
-    let mut bridge = Peer::start("pty_bridge.py", &[]);
-    let line = bridge.read_line();
-    let (a, b) = line.split_once(' ').expect("two pty paths");
-    (bridge, a.to_string(), b.to_string())
-}
-
 #[test]
 fn each_link_has_its_own_figures() {
     let (pa, pb) = (free_udp_port(), free_udp_port());
@@ -73,7 +59,7 @@ fn each_link_has_its_own_figures() {
             "3",
         ],
     );
-    let (_bridge, a, b) = bridge();
+    let (_bridge, a, b) = pty_bridge(&[]);
     let serial = Peer::start("responder.py", &[&b, "--baud", "57600", "--sysid", "3"]);
     let links = [
         format!("udpout:127.0.0.1:{pa}"),
@@ -134,7 +120,7 @@ fn killing_one_links_peer_ends_that_link_only() {
         "responder.py",
         &[&format!("udpin:127.0.0.1:{pb}"), "--sysid", "2"],
     );
-    let (_bridge, a, b) = bridge();
+    let (_bridge, a, b) = pty_bridge(&[]);
     let _serial = Peer::start("responder.py", &[&b, "--baud", "57600", "--sysid", "3"]);
     let links = [
         format!("udpout:127.0.0.1:{pa}"),
@@ -351,71 +337,16 @@ fn several_links_take_the_plot_and_the_command_probe() {
     );
 }
 
-fn tmux(socket: &str, args: &[&str]) -> String {
-    let out = std::process::Command::new("tmux")
-        .args(["-L", socket])
-        .args(args)
-        .output()
-        .unwrap_or_else(|e| panic!("tmux is missing ({e}) — run `bash scripts/test.sh`"));
-    assert!(out.status.success(), "tmux {args:?}: {out:?}");
-    String::from_utf8_lossy(&out.stdout).into_owned()
-}
-
-/// Kills the test's own tmux server.
-struct TmuxServer(String);
-
-impl Drop for TmuxServer {
-    fn drop(&mut self) {
-        let _ = std::process::Command::new("tmux")
-            .args(["-L", &self.0, "kill-server"])
-            .output();
-    }
-}
-
-fn wait_for_pane(socket: &str, what: &str, found: impl Fn(&str) -> bool) -> String {
-    let start = std::time::Instant::now();
-    loop {
-        let screen = tmux(socket, &["capture-pane", "-p", "-S", "-200", "-t", "live"]);
-        if found(&screen) {
-            return screen;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(30),
-            "{what:?} not on screen:\n{screen}"
-        );
-        std::thread::sleep(Duration::from_millis(50));
-    }
-}
-
 #[test]
 fn live_view_has_a_section_per_link() {
-    let socket = format!("mavping-multilink-{}", std::process::id());
     let command = format!(
         "{} --live -i 0.02 -W 300ms 'sim:?loss=20%&seed=5' 'sim:?delay=30ms'; echo exit=$?",
         env!("CARGO_BIN_EXE_mavping")
     );
-    tmux(
-        &socket,
-        &[
-            "new-session",
-            "-d",
-            "-s",
-            "live",
-            "-x",
-            "110",
-            "-y",
-            "20",
-            &command,
-        ],
-    );
-    let _server = TmuxServer(socket.clone());
-    tmux(
-        &socket,
-        &["set-option", "-t", "live", "remain-on-exit", "on"],
-    );
+    let tmux = Tmux::start("multilink", &command, 110, 20);
     // A section per link, each with its responder's row; a loss shows on
     // the lossy link.
-    let screen = wait_for_pane(&socket, "two sections with rows", |screen| {
+    let screen = tmux.wait_for("two sections with rows", |screen| {
         let rows: Vec<&str> = screen.lines().filter(|l| l.starts_with("│1/1")).collect();
         rows.len() == 2 && rows[0].contains('×')
     });
@@ -426,8 +357,8 @@ fn live_view_has_a_section_per_link() {
     ] {
         assert!(screen.contains(text), "{text:?} not on screen:\n{screen}");
     }
-    tmux(&socket, &["send-keys", "-t", "live", "q"]);
-    let screen = wait_for_pane(&socket, "exit=", |s| s.contains("exit=0"));
+    tmux.send_keys("q");
+    let screen = tmux.wait_for("exit=", |s| s.contains("exit=0"));
     for link in ["sim:?loss=20%&seed=5", "sim:?delay=30ms"] {
         assert!(
             screen.contains(&format!("--- {link} mavping statistics ---")),

@@ -1,8 +1,7 @@
 //! RADIO_STATUS from a radio injecting into the stream (pymavlink, 51/68)
 //! beside a PING responder: the figures and counter deltas are exact.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 #[test]
 fn radio_figures_and_counter_deltas_are_exact() {

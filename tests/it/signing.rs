@@ -2,8 +2,7 @@
 //! mavping against `mavping respond`: forged, unsigned and replayed frames
 //! are refused, counted exactly and never measured.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 use std::process::Stdio;
 use std::time::Duration;
@@ -19,48 +18,6 @@ fn run_with_env(args: &[&str], env: &[(&str, &str)]) -> (i32, String, String) {
         cmd.env(k, v);
     }
     wait_output(cmd.spawn().unwrap(), Duration::from_secs(60))
-}
-
-fn json_lines(out: &str) -> Vec<Value> {
-    out.lines()
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON: {l}: {e}")))
-        .collect()
-}
-
-fn schema() -> jsonschema::Validator {
-    let text = std::fs::read_to_string(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/schema/mavping-events.schema.json"
-    ))
-    .unwrap();
-    jsonschema::validator_for(&serde_json::from_str(&text).unwrap()).unwrap()
-}
-
-/// The summary line, checked against the schema.
-fn summary(out: &str) -> Value {
-    let validator = schema();
-    let events = json_lines(out);
-    for e in &events {
-        let errors: Vec<String> = validator.iter_errors(e).map(|e| e.to_string()).collect();
-        assert!(errors.is_empty(), "{e}\n{errors:?}");
-    }
-    events
-        .into_iter()
-        .find(|v| v["type"] == "summary")
-        .expect("a summary line")
-}
-
-fn responder<'a>(summary: &'a Value, id: &str) -> &'a Value {
-    summary["responders"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .find(|r| {
-            let ids = &r["responder"];
-            format!("{}/{}", ids["sysid"], ids["compid"]) == id
-        })
-        .unwrap_or_else(|| panic!("no responder {id} in {summary}"))
 }
 
 fn key_file(name: &str, content: &str) -> std::path::PathBuf {
@@ -94,7 +51,7 @@ fn pymavlink_signs_and_mavping_requiring_signatures_measures_every_reply() {
         &[("MAVPING_SIGNING_KEY", HEX_KEY)],
     );
     assert_eq!(code, 0, "{out}\n{err}");
-    let s = summary(&out);
+    let s = checked_summary(&out);
     let r = responder(&s, "1/1");
     assert_eq!(
         (&r["sent"], &r["received"], &r["lost"]),
@@ -205,7 +162,7 @@ fn forged_unsigned_and_replayed_replies_are_refused_counted_and_never_measured()
         args.push(&target);
         let (code, out, err) = run_mavping(&args);
         assert_eq!(code, 0, "{out}\n{err}");
-        summary(&out)
+        checked_summary(&out)
     };
 
     // Required: the forged (1, 4) and unsigned (2) replies are lost; the
@@ -322,7 +279,7 @@ fn mavping_respond_with_a_key_answers_signed_pings_and_ignores_the_rest() {
     ]);
     std::fs::remove_file(&file).unwrap();
     assert_eq!(code, 0, "{out}\n{err}");
-    let s = summary(&out);
+    let s = checked_summary(&out);
     let r = responder(&s, "1/1");
     assert_eq!((&r["sent"], &r["received"]), (&5.into(), &5.into()), "{s}");
     // Its replies (and HEARTBEATs) were signed: nothing refused.

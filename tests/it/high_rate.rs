@@ -2,12 +2,11 @@
 //! link (against its own ground truth) and through UDP loopback (against
 //! `mavping respond`'s own counts).
 
-mod common;
 use std::io::{BufRead, BufReader, Read};
 use std::process::Stdio;
 use std::time::Duration;
 
-use common::*;
+use crate::common::*;
 use mavping::engine::echo;
 use mavping::engine::observe::Unobserved;
 use mavping::engine::summary::LinkSummary;

@@ -1,8 +1,7 @@
 //! udpbcast on loopback (127.255.255.255 is looped back to every socket
 //! bound to the port on 0.0.0.0) and IPv6 over ::1, against pymavlink.
 
-mod common;
-use common::*;
+use crate::common::*;
 
 #[test]
 fn udpbcast_hears_every_responder_on_the_segment() {

@@ -1,0 +1,22 @@
+//! The integration tests, one binary (one link step): real sockets, ptys,
+//! third-party MAVLink peers and the mavping binary. Helpers are in
+//! `common/`; each file tests one area.
+
+mod common;
+
+mod cli;
+mod completions;
+mod high_rate;
+mod hostile;
+mod multilink;
+mod options;
+mod probes_pymavlink;
+mod properties;
+mod radio;
+mod scripting;
+mod serial_pty;
+mod signing;
+mod tcp_pymavlink;
+mod udp_bcast_ipv6;
+mod udp_pymavlink;
+mod views;
