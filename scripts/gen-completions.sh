@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates the committed shell completions and man page from the clap
-# definition. tests/completions.rs fails when they are out of date.
+# definition. tests/it/completions.rs fails when they are out of date.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --quiet
