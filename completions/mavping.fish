@@ -1,6 +1,6 @@
 # Print an optspec for argparse to handle cmd's options that are independent of any subcommand.
 function __fish_mavping_global_optspecs
-    string join \n c/count= i/interval= rate= w/deadline= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= live prometheus= plot= signing-key= signing-key-file= signing-link-id= require-signed generate= h/help V/version
+    string join \n c/count= i/interval= rate= w/deadline= wait= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= live prometheus= plot= signing-key= signing-key-file= signing-link-id= require-signed generate= h/help V/version
 end
 
 function __fish_mavping_needs_command
@@ -28,8 +28,9 @@ complete -c mavping -n "__fish_mavping_needs_command" -s c -l count -d 'Stop aft
 complete -c mavping -n "__fish_mavping_needs_command" -s i -l interval -d 'Time between requests, e.g. 1s, 100ms, 0.01' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l rate -d 'Requests per second (instead of --interval)' -r
 complete -c mavping -n "__fish_mavping_needs_command" -s w -l deadline -d 'Stop after this long, whatever is still in flight' -r
+complete -c mavping -n "__fish_mavping_needs_command" -l wait -d 'On a listening link (udpin:, udp:, tcpin:), give up when no MAVLink system is heard within DURATION (default with -c: the time the count takes plus the timeout; without -c: wait for ever)' -r
 complete -c mavping -n "__fish_mavping_needs_command" -s W -l timeout -d 'How long to wait for each reply before counting it lost' -r
-complete -c mavping -n "__fish_mavping_needs_command" -l sysid -d 'Our MAVLink system id (the header of our requests)' -r
+complete -c mavping -n "__fish_mavping_needs_command" -l sysid -d 'Our MAVLink system id (the header of our requests). Not 255: that is QGroundControl\'s and Mission Planner\'s (255/190), which MAVSDK-based ground stations ignore and ArduPilot\'s GCS failsafe listens to' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l compid -d 'Our MAVLink component id' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l mavlink -d 'MAVLink version of our requests (replies of either version are accepted)' -r
 complete -c mavping -n "__fish_mavping_needs_command" -l first-seq -d 'Sequence number of the first request (to test wrap-around)' -r

@@ -171,6 +171,12 @@ pub struct PingArgs {
           env = "MAVPING_DEADLINE")]
     pub deadline: Option<Duration>,
 
+    /// On a listening link (udpin:, udp:, tcpin:), give up when no MAVLink
+    /// system is heard within DURATION (default with -c: the time the count
+    /// takes plus the timeout; without -c: wait for ever)
+    #[arg(long, value_name = "DURATION", value_parser = parse_duration, env = "MAVPING_WAIT")]
+    pub wait: Option<Duration>,
+
     /// How long to wait for each reply before counting it lost
     #[arg(short = 'W', long, value_name = "DURATION", value_parser = parse_duration,
           default_value = "2s", env = "MAVPING_TIMEOUT")]
@@ -185,8 +191,10 @@ pub struct PingArgs {
     #[arg(long)]
     pub every_reply: bool,
 
-    /// Our MAVLink system id (the header of our requests)
-    #[arg(long, value_name = "ID", default_value_t = 255, env = "MAVPING_SYSID")]
+    /// Our MAVLink system id (the header of our requests). Not 255: that is
+    /// QGroundControl's and Mission Planner's (255/190), which MAVSDK-based
+    /// ground stations ignore and ArduPilot's GCS failsafe listens to
+    #[arg(long, value_name = "ID", default_value_t = 250, env = "MAVPING_SYSID")]
     pub sysid: u8,
 
     /// Our MAVLink component id

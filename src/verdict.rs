@@ -308,26 +308,8 @@ mod tests {
 
     fn summary(responders: Vec<ResponderSummary>) -> Summary {
         Summary {
-            link: "sim:".into(),
-            probe: "ping",
-            ours: SysComp::new(255, 190),
-            duration_s: 1.0,
-            requests: 10,
-            in_flight: 0,
             responders,
-            foreign_replies: 0,
-            wrong_path_replies: 0,
-            untracked_replies: 0,
-            frames: Default::default(),
-            hints: vec![],
-            interrupted: false,
-            link_error: None,
-            downtime_s: 0.0,
-            schedule: None,
-            rx_clock: "test",
-            radios: vec![],
-            wire: None,
-            signing: None,
+            ..Summary::empty("sim:", 10)
         }
     }
 

@@ -112,7 +112,7 @@ fn validate_baud(baud: u32) -> Result<u32, ConfigError> {
 fn validate_ids(sysid: u8, compid: u8) -> Result<SysComp, ConfigError> {
     if sysid == 0 {
         return Err(invalid(
-            "--sysid 0: 0 means 'broadcast'; use 1-255 (255 is a GCS)",
+            "--sysid 0: 0 means 'broadcast'; use 1-255 (ground stations use 250-255)",
         ));
     }
     if compid == 0 {

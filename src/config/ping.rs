@@ -265,6 +265,23 @@ fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
     }
 }
 
+/// How long a listening link waits for its first peer before the run ends:
+/// `--wait`, else what `-c` takes plus one timeout; other links do not
+/// wait for a peer (they send from the start).
+fn peer_wait(cli: &PingArgs, spec: &LinkSpec, session: &SessionConfig) -> Option<Duration> {
+    if !matches!(spec, LinkSpec::UdpIn(_) | LinkSpec::TcpIn(_)) {
+        return None;
+    }
+    cli.wait.or_else(|| {
+        let count = u32::try_from(cli.count?).unwrap_or(u32::MAX);
+        session
+            .interval
+            .checked_mul(count)
+            .and_then(|d| d.checked_add(session.timeout))
+            .map(|d| d.min(crate::units::MAX_DURATION))
+    })
+}
+
 /// The session settings every link shares; each link then names its own.
 fn session(
     cli: &PingArgs,
@@ -284,6 +301,9 @@ fn session(
     if cli.deadline.is_some_and(|d| d.is_zero()) {
         return Err(invalid("--deadline 0: expected more than 0"));
     }
+    if cli.wait.is_some_and(|d| d.is_zero()) {
+        return Err(invalid("--wait 0: expected more than 0"));
+    }
     let ours = validate_ids(cli.sysid, cli.compid)?;
     let signing = validate_signing(cli)?;
     let echo = !matches!(probe, Probe::Command(_));
@@ -293,6 +313,8 @@ fn session(
         interval,
         count: cli.count,
         deadline: cli.deadline,
+        // Each link sets its own: only listening links wait for a peer.
+        wait: None,
         timeout: cli.timeout,
         version: if cli.mavlink_version == 1 {
             Version::V1
@@ -361,6 +383,7 @@ impl TryFrom<&PingArgs> for Config {
                 );
                 LinkConfig {
                     session: SessionConfig {
+                        wait: peer_wait(cli, &spec, &session),
                         // Alone, a link is headed by its full form (the
                         // defaults of `sim:` spelled out); beside others,
                         // by the name it was given.
@@ -418,7 +441,7 @@ mod tests {
         let c = config("sim:").unwrap();
         assert_eq!(c.links[0].session.interval, Duration::from_secs(1));
         assert_eq!(c.links[0].session.timeout, Duration::from_secs(2));
-        assert_eq!(c.links[0].session.ours, SysComp::new(255, 190));
+        assert_eq!(c.links[0].session.ours, SysComp::new(250, 190));
         assert_eq!(c.links[0].session.capacity, 64);
         let c =
             config("-c 5 -i 0.2 -W 500ms --sysid 200 --compid 1 udpout:127.0.0.1:14550").unwrap();

@@ -174,6 +174,7 @@ mod tests {
                 interval: Duration::from_secs(1),
                 count: Some(100),
                 deadline: None,
+                wait: None,
                 timeout: Duration::from_secs(2),
                 version: Version::V2,
                 heartbeat: true,

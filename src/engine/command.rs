@@ -19,7 +19,6 @@ use super::session::{self, Driver, Ended, Outcome};
 use super::summary::{command_target_summaries, CommandSummary, LinkSummary};
 use super::Nanos;
 use super::SessionConfig;
-use crate::frame::signing::Gate;
 use crate::frame::{codec, Frame, Msg, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
 
@@ -160,7 +159,7 @@ impl Driver for CommandDriver {
             frames: ended.frames,
             interrupted: ended.interrupted,
             link_error: ended.link_error,
-            signing: ended.gate.as_ref().map(Gate::summary),
+            signing: ended.gate.summary(),
         };
         let histograms = self
             .tracker

@@ -8,6 +8,7 @@ use std::time::Duration;
 use hdrhistogram::Histogram;
 use tokio::sync::Notify;
 
+use super::diagnosis::{diagnose, Observed};
 use super::link_io::{Clock, Sender};
 use super::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
 use super::observe::{tell_each, Event, Observer, StartInfo};
@@ -15,12 +16,9 @@ use super::radio::{radio_hints, Radios};
 use super::schedule::Schedule;
 use super::session::{self, Driver, Ended, Outcome};
 use super::stats::RttStats;
-use super::summary::{
-    responder_summaries, silent_system_hints, LinkSummary, ScheduleSummary, Summary,
-};
+use super::summary::{responder_summaries, LinkSummary, ScheduleSummary, Summary};
 use super::Nanos;
 use super::SessionConfig;
-use crate::frame::signing::{Gate, SigningCounts};
 use crate::frame::{Frame, SysComp};
 use crate::probe::{Classified, EchoProbe};
 use crate::transport::{LinkError, PathId, Transport};
@@ -185,6 +183,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     }
 
     fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>) {
+        let cfg = ended.cfg;
         let in_flight = self.matcher.finish();
         let mut responders = responder_summaries(&self.matcher, &ended.roster);
         for r in &mut responders {
@@ -194,13 +193,24 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let radios = ended.radios.summaries();
         let radio_ids: Vec<SysComp> = radios.iter().map(|r| r.id).collect();
         let name = self.probe.name();
-        let mut hints =
-            silent_system_hints(&ended.roster, &responders, self.ours, name, &radio_ids);
+        let signing = ended.gate.summary();
+        let mut hints = diagnose(&Observed {
+            link: &cfg.link_name,
+            kind: ended.kind,
+            probe: name,
+            ours: self.ours,
+            version: cfg.version,
+            key: signing.key,
+            signing: signing.counts,
+            frames: ended.frames,
+            roster: &ended.roster,
+            responders: &responders,
+            radios: &radio_ids,
+            requests: self.matcher.issued(),
+            in_flight,
+            no_peer_within: ended.no_peer_within,
+        });
         hints.extend(radio_hints(&radios, loss_by_txbuf));
-        if let Some(gate) = &ended.gate {
-            hints.extend(signing_hints(&gate.counts()));
-        }
-        let cfg = ended.cfg;
         let summary = Summary {
             link: cfg.link_name.clone(),
             probe: name,
@@ -208,6 +218,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             duration_s: ended.duration_s,
             requests: self.matcher.issued(),
             in_flight,
+            no_peer_heard_s: ended.no_peer_within.map(|d| d.as_secs_f64()),
             responders,
             foreign_replies: self.foreign_replies,
             wrong_path_replies: self.wrong_path_replies,
@@ -221,7 +232,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             rx_clock: ended.rx_clock.describe(),
             radios,
             wire: None,
-            signing: ended.gate.as_ref().map(Gate::summary),
+            signing,
         };
         let histograms = self
             .matcher
@@ -231,25 +242,6 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             .collect();
         (LinkSummary::Echo(summary), histograms)
     }
-}
-
-/// Why replies may be missing when the signing gate refused frames.
-fn signing_hints(c: &SigningCounts) -> Vec<String> {
-    let mut hints = Vec::new();
-    if c.rejected_bad_signature > 0 {
-        hints.push(format!(
-            "{} frames were signed with another key: are both ends using the same signing key?",
-            c.rejected_bad_signature
-        ));
-    }
-    if c.rejected_unsigned > 0 && c.signed == 0 {
-        hints.push(format!(
-            "{} unsigned frames were refused (--require-signed) and none came signed: \
-             is signing set up on the other end?",
-            c.rejected_unsigned
-        ));
-    }
-    hints
 }
 
 /// How well requests kept to their schedule: achieved rate and how late

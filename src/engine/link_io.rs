@@ -158,10 +158,7 @@ impl Sender {
 
 /// Whether the signing gate (if any) lets `frame` through; what it refuses
 /// reaches nothing else, and is counted by the gate.
-pub fn admitted(gate: &mut Option<Gate>, frame: &Frame, signature: Option<&SignedBytes>) -> bool {
-    let Some(gate) = gate else {
-        return true;
-    };
+pub fn admitted(gate: &mut Gate, frame: &Frame, signature: Option<&SignedBytes>) -> bool {
     let radio = matches!(frame.msg, Msg::RadioStatus { .. });
     let verdict = gate.judge(frame.source, signature, radio);
     if !verdict.accepted() {

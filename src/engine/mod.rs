@@ -7,7 +7,9 @@ pub mod capacity;
 pub mod clock_offset;
 pub mod command;
 pub mod commands;
+pub mod diagnosis;
 pub mod echo;
+pub mod hint;
 pub mod link_io;
 pub mod matcher;
 pub mod observe;
@@ -35,6 +37,10 @@ pub struct SessionConfig {
     pub interval: Duration,
     pub count: Option<u64>,
     pub deadline: Option<Duration>,
+    /// On a link that waits for peers to send first (udpin, tcpin): end
+    /// the run when none is heard within this (`--wait`, or what `-c`
+    /// would take plus the timeout).
+    pub wait: Option<Duration>,
     pub timeout: Duration,
     pub version: Version,
     /// Send our own HEARTBEAT at 1 Hz (MAVSDK and routers need it).

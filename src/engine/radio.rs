@@ -9,6 +9,7 @@ use std::collections::{BTreeMap, VecDeque};
 
 use serde::Serialize;
 
+use super::hint::{Hint, HintCode};
 use super::Nanos;
 use crate::frame::SysComp;
 
@@ -320,7 +321,7 @@ impl Radios {
 }
 
 /// Hints the radio figures support; none when the data is silent.
-pub fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<String> {
+pub fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<Hint> {
     let mut hints = Vec::new();
     let ratio = |lost: u64, of: u64| {
         if of == 0 {
@@ -335,11 +336,11 @@ pub fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<String> {
     if loss.lost_while_low >= MIN_LOSSES_FOR_HINT
         && low >= 2.0 * ratio(loss.lost_otherwise, loss.decided_otherwise)
     {
-        hints.push(format!(
+        hints.push(Hint::new(HintCode::RadioOverloaded, format!(
             "loss concentrated while txbuf < {LOW_TXBUF_PERCENT} % free ({} of {} lost, against {} of {} otherwise): \
              the radio is overloaded — lower the rate",
             loss.lost_while_low, loss.decided_while_low, loss.lost_otherwise, loss.decided_otherwise
-        ));
+        )));
     }
     for r in radios {
         if let Some(a) = &r.approx_dbm {
@@ -348,17 +349,20 @@ pub fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<String> {
                 ("remote", a.remote_fade_margin_db),
             ] {
                 if let Some(m) = m.filter(|m| m.min < WEAK_FADE_MARGIN_DB) {
-                    hints.push(format!(
+                    hints.push(Hint::new(HintCode::RadioWeakSignal, format!(
                         "radio {}: {side} fade margin fell to ~{:.1} dB (under {WEAK_FADE_MARGIN_DB} dB): weak signal",
                         r.id, m.min
-                    ));
+                    )));
                 }
             }
         }
         if r.rxerrors_delta > 0 {
-            hints.push(format!(
-                "radio {}: rxerrors grew by {} during the run: interference or range",
-                r.id, r.rxerrors_delta
+            hints.push(Hint::new(
+                HintCode::RadioErrors,
+                format!(
+                    "radio {}: rxerrors grew by {} during the run: interference or range",
+                    r.id, r.rxerrors_delta
+                ),
             ));
         }
     }
@@ -454,14 +458,14 @@ mod tests {
         let hints = radio_hints(&radios.summaries(), radios.loss_by_txbuf());
         assert_eq!(hints.len(), 3, "{hints:?}");
         assert!(
-            hints[0].contains("local fade margin fell to ~7.9 dB"),
+            hints[0].text.contains("local fade margin fell to ~7.9 dB"),
             "{hints:?}"
         );
         assert!(
-            hints[1].contains("remote fade margin fell to ~2.6 dB"),
+            hints[1].text.contains("remote fade margin fell to ~2.6 dB"),
             "{hints:?}"
         );
-        assert!(hints[2].contains("rxerrors grew by 3"), "{hints:?}");
+        assert!(hints[2].text.contains("rxerrors grew by 3"), "{hints:?}");
     }
 
     #[test]
@@ -483,8 +487,11 @@ mod tests {
         let hints = radio_hints(&radios.summaries(), radios.loss_by_txbuf());
         assert_eq!(
             hints,
-            ["loss concentrated while txbuf < 20 % free (3 of 4 lost, against 1 of 10 otherwise): \
-              the radio is overloaded — lower the rate"]
+            [Hint::new(
+                HintCode::RadioOverloaded,
+                "loss concentrated while txbuf < 20 % free (3 of 4 lost, against 1 of 10 otherwise): \
+                 the radio is overloaded — lower the rate"
+            )]
         );
         // Unknown txbuf leaves the state as it was.
         radios.record(SIK, report(150, 50, UNKNOWN, 0, 0), 30);

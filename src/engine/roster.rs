@@ -1,12 +1,17 @@
-//! Who is on the link: systems heard by their HEARTBEAT, for the summary
-//! ("1/1: quadrotor, px4") and for the hint when a system never answers.
+//! Who is on the link: every system heard, by its HEARTBEAT (what it is:
+//! "1/1: quadrotor, px4") and by its traffic (how many frames, signed or
+//! in MAVLink 1), for the summary and for the diagnosis when a system
+//! never answers.
 
 use std::collections::BTreeMap;
 
 use serde::Serialize;
 
 use super::Nanos;
-use crate::frame::{self, SysComp};
+use crate::frame::{self, SysComp, Version};
+
+/// MAV_AUTOPILOT_ARDUPILOTMEGA: every ArduPilot vehicle.
+pub const AUTOPILOT_ARDUPILOT: u8 = 3;
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Identity {
@@ -24,40 +29,106 @@ impl Identity {
     pub fn is_vehicle_like(&self) -> bool {
         self.mav_type != frame::mav_type::GCS && self.autopilot != frame::AUTOPILOT_INVALID
     }
+
+    pub fn is_ardupilot(&self) -> bool {
+        self.autopilot == AUTOPILOT_ARDUPILOT
+    }
+}
+
+/// One system's traffic.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Source {
+    /// From its first HEARTBEAT.
+    pub identity: Option<Identity>,
+    /// Frames of every kind, of which signed and MAVLink 1.
+    pub frames: u64,
+    pub signed: u64,
+    pub v1: u64,
 }
 
 /// Systems heard, bounded so a spoofing flood cannot grow memory.
 #[derive(Default)]
 pub struct Roster {
-    systems: BTreeMap<SysComp, Identity>,
+    sources: BTreeMap<SysComp, Source>,
 }
 
 const MAX_SYSTEMS: usize = 1024;
 
 impl Roster {
+    fn source(&mut self, id: SysComp) -> Option<&mut Source> {
+        if !self.sources.contains_key(&id) && self.sources.len() >= MAX_SYSTEMS {
+            return None;
+        }
+        Some(self.sources.entry(id).or_default())
+    }
+
+    /// Counts one frame from `source`.
+    pub fn frame(&mut self, source: SysComp, version: Version, signed: bool) {
+        if let Some(s) = self.source(source) {
+            s.frames += 1;
+            s.signed += u64::from(signed);
+            s.v1 += u64::from(version == Version::V1);
+        }
+    }
+
     /// Records a HEARTBEAT; returns true the first time a system is heard.
     pub fn heard(&mut self, source: SysComp, mav_type: u8, autopilot: u8, at: Nanos) -> bool {
-        if self.systems.contains_key(&source) || self.systems.len() >= MAX_SYSTEMS {
+        let Some(s) = self.source(source) else {
+            return false;
+        };
+        if s.identity.is_some() {
             return false;
         }
-        self.systems.insert(
-            source,
-            Identity {
-                mav_type,
-                autopilot,
-                vehicle: frame::vehicle_type_name(mav_type),
-                autopilot_name: frame::autopilot_name(autopilot),
-                first_heard: at,
-            },
-        );
+        s.identity = Some(Identity {
+            mav_type,
+            autopilot,
+            vehicle: frame::vehicle_type_name(mav_type),
+            autopilot_name: frame::autopilot_name(autopilot),
+            first_heard: at,
+        });
         true
     }
 
     pub fn get(&self, id: SysComp) -> Option<&Identity> {
-        self.systems.get(&id)
+        self.sources.get(&id).and_then(|s| s.identity.as_ref())
     }
 
+    /// Systems heard by their HEARTBEAT.
     pub fn iter(&self) -> impl Iterator<Item = (&SysComp, &Identity)> {
-        self.systems.iter()
+        self.sources
+            .iter()
+            .filter_map(|(id, s)| s.identity.as_ref().map(|i| (id, i)))
+    }
+
+    /// Every system heard, by HEARTBEAT or any other frame.
+    pub fn sources(&self) -> impl Iterator<Item = (&SysComp, &Source)> {
+        self.sources.iter()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn traffic_and_identity_per_system_bounded() {
+        let mut r = Roster::default();
+        let id = SysComp::new(8, 1);
+        r.frame(id, Version::V2, true);
+        r.frame(id, Version::V1, false);
+        assert!(r.get(id).is_none());
+        assert!(r.heard(id, 2, 3, 5));
+        assert!(!r.heard(id, 2, 3, 6));
+        let s = r.sources().next().unwrap().1;
+        assert_eq!((s.frames, s.signed, s.v1), (2, 1, 1));
+        assert!(s.identity.as_ref().unwrap().is_ardupilot());
+        for i in 0..2000u16 {
+            r.frame(
+                SysComp::new((i % 255) as u8 + 1, (i / 255) as u8 + 2),
+                Version::V2,
+                false,
+            );
+        }
+        assert_eq!(r.sources().count(), MAX_SYSTEMS);
     }
 }

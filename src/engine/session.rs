@@ -22,7 +22,7 @@ use super::summary::LinkSummary;
 use super::{Nanos, SessionConfig};
 use crate::frame::signing::{Gate, SigningConfig};
 use crate::frame::{Frame, Msg, ScanStats, SysComp};
-use crate::transport::{Inbound, LinkError, PathId, RxClock, Transport};
+use crate::transport::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 
 /// How the run ended. The caller judges it and reports the summary.
 pub struct Outcome {
@@ -42,9 +42,12 @@ pub struct Ended<'a> {
     pub frames: ScanStats,
     pub downtime_s: f64,
     pub rx_clock: RxClock,
+    pub kind: LinkKind,
+    /// A listening link heard no peer within `SessionConfig::wait`.
+    pub no_peer_within: Option<Duration>,
     pub roster: Roster,
     pub radios: Radios,
-    pub gate: Option<Gate>,
+    pub gate: Gate,
 }
 
 /// What one probe kind does inside the session loop.
@@ -92,7 +95,7 @@ const FLUSH_EVERY_NS: Nanos = 50_000_000;
 struct Heard {
     roster: Roster,
     radios: Radios,
-    gate: Option<Gate>,
+    gate: Gate,
 }
 
 impl Heard {
@@ -116,6 +119,7 @@ impl Heard {
             if !admitted(&mut self.gate, &frame, signature.as_ref()) {
                 continue;
             }
+            self.roster.frame(frame.source, frame.version, frame.signed);
             let at = clock.ns(at);
             match frame.msg {
                 Msg::Heartbeat {
@@ -187,6 +191,8 @@ enum Stopped {
     Interrupted,
     LinkFailed(LinkError),
     OutputClosed,
+    /// A listening link heard nobody in time.
+    NoPeer,
 }
 
 /// Runs one session until it ends and returns what it measured.
@@ -208,10 +214,11 @@ pub async fn run<T: Transport, D: Driver>(
     let mut heard = Heard {
         roster: Roster::default(),
         radios: Radios::default(),
-        gate: cfg.signing.map(Gate::new),
+        gate: Gate::new(cfg.signing),
     };
     let mut schedule: Option<Schedule> = None;
     let deadline_ns = cfg.deadline.map(|d| d.as_nanos() as Nanos);
+    let wait_ns = cfg.wait.map(|d| d.as_nanos() as Nanos);
     let mut inbound: Vec<Inbound> = Vec::new();
     let mut told_waiting = false;
     let mut last_flush: Nanos = 0;
@@ -234,6 +241,8 @@ pub async fn run<T: Transport, D: Driver>(
             if link.has_peers() {
                 let interval = cfg.interval.as_nanos() as Nanos;
                 schedule = Some(Schedule::new(now, interval, cfg.count));
+            } else if wait_ns.is_some_and(|w| now >= w) {
+                break Some(Stopped::NoPeer);
             } else if !told_waiting {
                 told_waiting = true;
                 output = observer.event(&Event::WaitingForPeer);
@@ -314,6 +323,7 @@ pub async fn run<T: Transport, D: Driver>(
             driver.next_deadline(),
             heartbeat.next(),
             deadline_ns,
+            wait_ns.filter(|_| schedule.is_none()),
         ]
         .into_iter()
         .flatten()
@@ -344,6 +354,10 @@ pub async fn run<T: Transport, D: Driver>(
         Some(Stopped::OutputClosed) => true,
         _ => driver.report(&mut heard.radios, observer).is_err(),
     };
+    let no_peer_within = match stopped {
+        Some(Stopped::NoPeer) => cfg.wait,
+        _ => None,
+    };
     let (interrupted, link_error) = match stopped {
         Some(Stopped::Interrupted) => (true, None),
         Some(Stopped::LinkFailed(e)) => (false, Some(e.to_string())),
@@ -357,6 +371,8 @@ pub async fn run<T: Transport, D: Driver>(
         frames: link.scan_stats(),
         downtime_s: link.downtime().as_secs_f64(),
         rx_clock: link.rx_clock(),
+        kind: link.kind(),
+        no_peer_within,
         roster: heard.roster,
         radios: heard.radios,
         gate: heard.gate,

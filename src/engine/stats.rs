@@ -135,7 +135,9 @@ impl RttStats {
     }
 
     /// The distribution in at most `rows` buckets between min and max:
-    /// log-spaced when the range spans more than a factor of 4, else linear.
+    /// log-spaced when the range spans more than a factor of 4, else linear
+    /// with buckets at least 1 µs wide (the resolution reports show), so
+    /// equal RTTs make one row, not eight with the same label.
     pub fn distribution(&self, rows: usize) -> Vec<Bucket> {
         if self.count == 0 || rows == 0 {
             return Vec::new();
@@ -143,6 +145,11 @@ impl RttStats {
         let lo = (self.min / 1_000).max(1) as f64;
         let hi = ((self.max / 1_000).max(1) as f64).max(lo) + 1.0;
         let log = hi / lo > 4.0;
+        let rows = if log {
+            rows
+        } else {
+            rows.min((hi - lo) as usize)
+        };
         let edge = |i: usize| {
             let t = i as f64 / rows as f64;
             if log {
@@ -211,6 +218,25 @@ mod tests {
         let buckets = s.distribution(8);
         assert_eq!(buckets.len(), 8);
         assert_eq!(buckets.iter().map(|b| b.count).sum::<u64>(), 1000);
+    }
+
+    #[test]
+    fn equal_rtts_make_one_row() {
+        let mut s = RttStats::new();
+        for _ in 0..5 {
+            s.record(10_000_000);
+        }
+        let buckets = s.distribution(8);
+        assert_eq!(buckets.len(), 1, "{buckets:?}");
+        assert_eq!(buckets[0].count, 5);
+        // Three distinct µs: three rows at most.
+        let mut s = RttStats::new();
+        for ns in [101_503_000, 101_504_000, 101_505_400] {
+            s.record(ns);
+        }
+        let buckets = s.distribution(8);
+        assert_eq!(buckets.len(), 3, "{buckets:?}");
+        assert_eq!(buckets.iter().map(|b| b.count).sum::<u64>(), 3);
     }
 
     #[test]

@@ -5,10 +5,12 @@ use serde::Serialize;
 
 use super::capacity::WireBudget;
 use super::clock_offset::ClockSummary;
+use super::hint::{Hint, HintCode};
 use super::matcher::{Counts, Matcher};
-use super::radio::{self, RadioSummary};
+use super::radio::RadioSummary;
 use super::roster::{Identity, Roster};
 use super::stats::{Bucket, RttSummary};
+use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
 
 /// Rows in the ASCII/JSON RTT distribution.
@@ -49,6 +51,9 @@ pub struct Summary {
     /// Requests still within their timeout when the run ended, unanswered
     /// by at least one responder: counted neither received nor lost.
     pub in_flight: u64,
+    /// A listening link heard no MAVLink system in this many seconds, and
+    /// the run ended.
+    pub no_peer_heard_s: Option<f64>,
     pub responders: Vec<ResponderSummary>,
     /// Replies addressed to another system.
     pub foreign_replies: u64,
@@ -58,7 +63,7 @@ pub struct Summary {
     /// Replies from responders beyond the tracking limit.
     pub untracked_replies: u64,
     pub frames: ScanStats,
-    pub hints: Vec<String>,
+    pub hints: Vec<Hint>,
     pub interrupted: bool,
     pub link_error: Option<String>,
     /// Seconds the link was down while reconnecting (`--reconnect`).
@@ -71,8 +76,9 @@ pub struct Summary {
     pub radios: Vec<RadioSummary>,
     /// What a serial link's baud rate carries (serial links only).
     pub wire: Option<WireBudget>,
-    /// What the signing gate accepted and refused (`--signing-key`).
-    pub signing: Option<crate::frame::signing::SigningSummary>,
+    /// What the signing gate accepted and refused, or, without a key, what
+    /// came signed unchecked.
+    pub signing: SigningSummary,
 }
 
 impl Summary {
@@ -83,8 +89,32 @@ impl Summary {
 
     /// Puts a serial link's budget in the summary and, when the run shows
     /// the link was overrun (losses, or an RTT spread far beyond the wire
-    /// time, which is a queue growing), says so.
+    /// time, which is a queue growing), says so. Replies faster than the
+    /// baud rate allows show the device ignores it (USB CDC, a pty): then
+    /// there is no budget to report.
     pub fn apply_wire(&mut self, budget: WireBudget) {
+        let fastest = self
+            .responders
+            .iter()
+            .filter_map(|r| r.rtt)
+            .map(|t| t.min_us)
+            .reduce(f64::min);
+        // Well under the floor: the clocks' and the arithmetic's rounding
+        // cannot explain it.
+        if let Some(fastest) = fastest.filter(|&f| f < 0.9 * budget.floor_us) {
+            self.hints.push(Hint::new(
+                HintCode::BaudNotInEffect,
+                format!(
+                    "replies came back in {:.3} ms, faster than {} baud allows ({:.3} ms per \
+                     round trip): the device ignores the baud rate (USB CDC or a pty), so no \
+                     wire floor or capacity applies",
+                    fastest / 1e3,
+                    budget.baud,
+                    budget.floor_us / 1e3
+                ),
+            ));
+            return;
+        }
         self.wire = Some(budget);
         let Some(rate) = self.schedule.map(|s| s.requested_rate_hz) else {
             return;
@@ -98,7 +128,10 @@ impl Summary {
         });
         if overrun {
             if let Some(w) = b.warning(rate) {
-                self.hints.push(format!("{w}: this run did"));
+                self.hints.push(Hint::new(
+                    HintCode::WireOverrun,
+                    format!("{w}: this run did"),
+                ));
             }
         }
     }
@@ -120,41 +153,6 @@ pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderS
         .collect();
     out.sort_by_key(|r| r.id);
     out
-}
-
-/// Systems that announce themselves but never answered this probe.
-pub fn silent_system_hints(
-    roster: &Roster,
-    responders: &[ResponderSummary],
-    ours: SysComp,
-    probe: &str,
-    radios: &[SysComp],
-) -> Vec<String> {
-    roster
-        .iter()
-        .filter(|(id, identity)| **id != ours && identity.is_vehicle_like())
-        // A radio answers no PING: its silence says nothing about the link.
-        .filter(|(id, _)| !radios.contains(id) && !radio::is_sik_default(**id))
-        .filter(|(id, _)| {
-            !responders
-                .iter()
-                .any(|r| r.id == **id && (r.counts.received > 0 || r.counts.late > 0))
-        })
-        .map(|(id, identity)| {
-            let what = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_name);
-            if probe == "ping" {
-                format!(
-                    "{what} sends HEARTBEAT but never answered PING; ArduPilot answers only \
-                     TIMESYNC: try --probe timesync"
-                )
-            } else {
-                format!(
-                    "{what} sends HEARTBEAT but never answered {}",
-                    probe.to_uppercase()
-                )
-            }
-        })
-        .collect()
 }
 
 /// `--probe command`: one target's figures.
@@ -200,8 +198,9 @@ pub struct CommandSummary {
     pub frames: ScanStats,
     pub interrupted: bool,
     pub link_error: Option<String>,
-    /// What the signing gate accepted and refused (`--signing-key`).
-    pub signing: Option<crate::frame::signing::SigningSummary>,
+    /// What the signing gate accepted and refused, or, without a key, what
+    /// came signed unchecked.
+    pub signing: SigningSummary,
 }
 
 impl CommandSummary {
@@ -268,47 +267,46 @@ pub fn command_target_summaries(
 }
 
 #[cfg(test)]
+impl Summary {
+    /// A run of `requests` PINGs on `link` with nothing in it, for tests
+    /// to fill in.
+    pub(crate) fn empty(link: &str, requests: u64) -> Summary {
+        Summary {
+            link: link.into(),
+            probe: "ping",
+            ours: SysComp::new(250, 190),
+            duration_s: 1.0,
+            requests,
+            in_flight: 0,
+            no_peer_heard_s: None,
+            responders: vec![],
+            foreign_replies: 0,
+            wrong_path_replies: 0,
+            untracked_replies: 0,
+            frames: ScanStats::default(),
+            hints: vec![],
+            interrupted: false,
+            link_error: None,
+            downtime_s: 0.0,
+            schedule: None,
+            rx_clock: "test",
+            radios: vec![],
+            wire: None,
+            signing: crate::frame::signing::Gate::new(None).summary(),
+        }
+    }
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::matcher::Counts;
+    use crate::engine::stats::RttStats;
 
-    #[test]
-    fn radios_never_get_the_silent_system_hint() {
-        let mut roster = Roster::default();
-        let quad = (2, 12); // quadrotor, PX4
-        for (sysid, compid) in [(1, 1), (51, 68), (7, 3)] {
-            roster.heard(SysComp { sysid, compid }, quad.0, quad.1, 0);
-        }
-        let ours = SysComp {
-            sysid: 255,
-            compid: 190,
-        };
-        // 7:3 sent RADIO_STATUS; 51:68 is SiK's own id even without it.
-        let hints = silent_system_hints(
-            &roster,
-            &[],
-            ours,
-            "ping",
-            &[SysComp {
-                sysid: 7,
-                compid: 3,
-            }],
-        );
-        assert_eq!(hints.len(), 1, "{hints:?}");
-        assert!(
-            hints[0].starts_with("1/1") || hints[0].starts_with("1:1"),
-            "{hints:?}"
-        );
-    }
-
-    fn run(lost: u64, requested_rate_hz: f64) -> Summary {
-        use super::super::matcher::Counts;
+    fn run(lost: u64, requested_rate_hz: f64, min_rtt_ms: u64) -> Summary {
+        let mut rtt = RttStats::new();
+        rtt.record(min_rtt_ms * 1_000_000);
         Summary {
-            link: "serial:/dev/x:57600".into(),
-            probe: "ping",
-            ours: SysComp::new(255, 190),
-            duration_s: 1.0,
-            requests: 10,
-            in_flight: 0,
             responders: vec![ResponderSummary {
                 id: SysComp::new(1, 1),
                 counts: Counts {
@@ -318,19 +316,11 @@ mod tests {
                     ..Counts::default()
                 },
                 loss_ratio: lost as f64 / 10.0,
-                rtt: None,
+                rtt: rtt.summary(),
                 histogram: vec![],
                 identity: None,
                 clock: None,
             }],
-            foreign_replies: 0,
-            wrong_path_replies: 0,
-            untracked_replies: 0,
-            frames: Default::default(),
-            hints: vec![],
-            interrupted: false,
-            link_error: None,
-            downtime_s: 0.0,
             schedule: Some(ScheduleSummary {
                 requested_rate_hz,
                 achieved_rate_hz: requested_rate_hz,
@@ -338,10 +328,7 @@ mod tests {
                 lateness_p99_us: 0.0,
                 lateness_max_us: 0.0,
             }),
-            rx_clock: "test",
-            radios: vec![],
-            wire: None,
-            signing: None,
+            ..Summary::empty("serial:/dev/x:57600", 10)
         }
     }
 
@@ -349,18 +336,37 @@ mod tests {
     fn the_summary_says_so_only_when_the_run_shows_it() {
         let b = super::super::capacity::budget(57_600, crate::frame::Version::V2, 99, 1);
         // Over capacity and losing: said.
-        let mut s = run(3, 500.0);
+        let mut s = run(3, 500.0, 20);
         s.apply_wire(b);
         assert_eq!(s.wire, Some(b));
         assert_eq!(s.hints.len(), 1, "{:?}", s.hints);
-        assert!(s.hints[0].ends_with("will queue and then lose: this run did"));
-        // Over capacity but nothing lost (a pty ignores the baud): silent.
-        let mut s = run(0, 500.0);
+        assert_eq!(s.hints[0].code, HintCode::WireOverrun);
+        assert!(s.hints[0]
+            .text
+            .ends_with("will queue and then lose: this run did"));
+        // Over capacity but nothing lost: silent.
+        let mut s = run(0, 500.0, 20);
         s.apply_wire(b);
         assert!(s.hints.is_empty());
         // Losing below capacity: the wire is not the reason.
-        let mut s = run(3, 50.0);
+        let mut s = run(3, 50.0, 20);
         s.apply_wire(b);
         assert!(s.hints.is_empty());
+    }
+
+    #[test]
+    fn replies_faster_than_the_baud_allows_drop_the_budget() {
+        let b = super::super::capacity::budget(57_600, crate::frame::Version::V2, 99, 1);
+        // 8.16 ms is the floor at 57600 baud; a pty answers in 1 ms.
+        let mut s = run(3, 500.0, 1);
+        s.apply_wire(b);
+        assert_eq!(s.wire, None);
+        let codes: Vec<HintCode> = s.hints.iter().map(|h| h.code).collect();
+        assert_eq!(codes, [HintCode::BaudNotInEffect]);
+        assert!(
+            s.hints[0].text.contains("faster than 57600 baud allows"),
+            "{:?}",
+            s.hints
+        );
     }
 }

@@ -185,6 +185,8 @@ pub enum Verdict {
     Signed,
     /// Not signed, and unsigned frames are allowed.
     Unsigned,
+    /// Signed, but we have no key to check it with.
+    SignedUnchecked,
     RejectedUnsigned,
     RejectedBadSignature,
     RejectedReplay,
@@ -192,7 +194,10 @@ pub enum Verdict {
 
 impl Verdict {
     pub fn accepted(self) -> bool {
-        matches!(self, Verdict::Signed | Verdict::Unsigned)
+        matches!(
+            self,
+            Verdict::Signed | Verdict::Unsigned | Verdict::SignedUnchecked
+        )
     }
 }
 
@@ -201,6 +206,8 @@ impl Verdict {
 pub struct SigningCounts {
     /// Accepted: correctly signed, not replayed.
     pub signed: u64,
+    /// Accepted without a check: signed, but we have no key.
+    pub signed_unchecked: u64,
     /// Accepted unsigned (no `--require-signed`; or a radio's RADIO_STATUS).
     pub unsigned: u64,
     /// Refused: not signed while signatures are required.
@@ -220,6 +227,7 @@ impl SigningCounts {
     fn record(&mut self, v: Verdict) {
         match v {
             Verdict::Signed => self.signed += 1,
+            Verdict::SignedUnchecked => self.signed_unchecked += 1,
             Verdict::Unsigned => self.unsigned += 1,
             Verdict::RejectedUnsigned => self.rejected_unsigned += 1,
             Verdict::RejectedBadSignature => self.rejected_bad_signature += 1,
@@ -230,6 +238,13 @@ impl SigningCounts {
 
 impl std::fmt::Display for SigningCounts {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if self.signed_unchecked > 0 {
+            write!(
+                f,
+                "{} signed frames accepted unchecked; ",
+                self.signed_unchecked
+            )?;
+        }
         write!(
             f,
             "{} signed and {} unsigned frames accepted; rejected {} unsigned, \
@@ -243,13 +258,16 @@ impl std::fmt::Display for SigningCounts {
     }
 }
 
-/// Signing in a run's summary: present only when a key was given.
+/// Signing in a run's summary: what the gate checked with a key, or,
+/// without one, the signed frames it let through unchecked.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct SigningSummary {
+    /// A key was given: our frames are signed, signatures checked.
+    pub key: bool,
     /// `--require-signed`
     pub required: bool,
-    /// Our outgoing link id.
-    pub link_id: u8,
+    /// Our outgoing link id (with a key).
+    pub link_id: Option<u8>,
     #[serde(flatten)]
     pub counts: SigningCounts,
 }
@@ -316,16 +334,17 @@ impl SigningConfig {
 }
 
 /// Checks every received frame against a [`SigningConfig`] before anything else
-/// looks at it, and counts what it refused.
+/// looks at it, and counts what it refused. Without a key it checks
+/// nothing and counts what came signed.
 #[derive(Debug)]
 pub struct Gate {
-    policy: SigningConfig,
+    policy: Option<SigningConfig>,
     replay: ReplayTable,
     counts: SigningCounts,
 }
 
 impl Gate {
-    pub fn new(policy: SigningConfig) -> Self {
+    pub fn new(policy: Option<SigningConfig>) -> Self {
         Gate {
             policy,
             replay: ReplayTable::default(),
@@ -343,10 +362,18 @@ impl Gate {
         signed: Option<&SignedBytes>,
         radio_status: bool,
     ) -> Verdict {
+        let Some(policy) = &self.policy else {
+            let verdict = match signed {
+                None => Verdict::Unsigned,
+                Some(_) => Verdict::SignedUnchecked,
+            };
+            self.counts.record(verdict);
+            return verdict;
+        };
         let verdict = match signed {
-            None if self.policy.require_signed && !radio_status => Verdict::RejectedUnsigned,
+            None if policy.require_signed && !radio_status => Verdict::RejectedUnsigned,
             None => Verdict::Unsigned,
-            Some(s) if !s.verify(&self.policy.key) => Verdict::RejectedBadSignature,
+            Some(s) if !s.verify(&policy.key) => Verdict::RejectedBadSignature,
             Some(s) => {
                 let stream = (source.sysid, source.compid, s.link_id());
                 if self.replay.admit(stream, s.timestamp()) {
@@ -367,8 +394,9 @@ impl Gate {
     /// What a run's summary reports.
     pub fn summary(&self) -> SigningSummary {
         SigningSummary {
-            required: self.policy.require_signed,
-            link_id: self.policy.link_id,
+            key: self.policy.is_some(),
+            required: self.policy.is_some_and(|p| p.require_signed),
+            link_id: self.policy.map(|p| p.link_id),
             counts: self.counts,
         }
     }
@@ -526,7 +554,7 @@ mod tests {
         let second = SignedBytes::of(&signed_ping(&mut ours, 1_000)).unwrap();
         let forged = SignedBytes::of(&signed_ping(&mut forger, 5_000)).unwrap();
 
-        let mut gate = Gate::new(policy(true));
+        let mut gate = Gate::new(Some(policy(true)));
         assert_eq!(gate.judge(id, Some(&first), false), Verdict::Signed);
         assert_eq!(gate.judge(id, Some(&first), false), Verdict::RejectedReplay);
         assert_eq!(gate.judge(id, Some(&second), false), Verdict::Signed);
@@ -550,14 +578,29 @@ mod tests {
                 rejected_unsigned: 1,
                 rejected_bad_signature: 1,
                 rejected_replay: 2,
+                ..SigningCounts::default()
             }
         );
 
-        let mut lenient = Gate::new(policy(false));
+        let mut lenient = Gate::new(Some(policy(false)));
         assert_eq!(lenient.judge(id, None, false), Verdict::Unsigned);
         assert_eq!(
             lenient.judge(id, Some(&forged), false),
             Verdict::RejectedBadSignature
+        );
+
+        // Without a key nothing is checked, and what came signed is said.
+        let mut keyless = Gate::new(None);
+        assert_eq!(
+            keyless.judge(id, Some(&forged), false),
+            Verdict::SignedUnchecked
+        );
+        assert_eq!(keyless.judge(id, None, false), Verdict::Unsigned);
+        let summary = keyless.summary();
+        assert!(!summary.key && summary.link_id.is_none());
+        assert_eq!(
+            (summary.counts.signed_unchecked, summary.counts.unsigned),
+            (1, 1)
         );
     }
 

@@ -105,7 +105,7 @@ struct Responder {
     greeted: Option<PathId>,
     /// With a signing key: refuses requests not signed with it (or
     /// replayed).
-    gate: Option<Gate>,
+    gate: Gate,
 }
 
 impl Responder {
@@ -232,7 +232,7 @@ pub async fn run<T: Transport>(
         order: 0,
         counts: RespondCounts::default(),
         greeted: None,
-        gate: settings.signing.map(Gate::new),
+        gate: Gate::new(settings.signing),
     };
     let mut inbound: Vec<Inbound> = Vec::new();
     let error = loop {
@@ -274,7 +274,7 @@ pub async fn run<T: Transport>(
         }
     };
     r.counts.requests = r.core.counts;
-    r.counts.signing = r.gate.as_ref().map(Gate::counts);
+    r.counts.signing = settings.signing.map(|_| r.gate.counts());
     (r.counts, error)
 }
 

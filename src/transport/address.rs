@@ -43,6 +43,20 @@ impl fmt::Display for HostPort {
 }
 
 impl LinkSpec {
+    /// A serial device that may ignore its baud rate: a USB CDC ACM port
+    /// (a flight controller's own USB) or a pseudo-terminal pass data as
+    /// fast as they can, whatever the baud rate says.
+    pub fn may_ignore_baud(&self) -> bool {
+        match self {
+            LinkSpec::Serial { path, .. } => {
+                ["/dev/ttyACM", "/dev/pts/", "/dev/cu.usbmodem", "/dev/tty.usbmodem"]
+                    .iter()
+                    .any(|prefix| path.starts_with(prefix))
+            }
+            _ => false,
+        }
+    }
+
     /// A simulated link on tokio's paused, virtual clock.
     pub fn is_virtual(&self) -> bool {
         matches!(self, LinkSpec::Sim(p) if p.virtual_clock)
@@ -186,6 +200,16 @@ impl std::str::FromStr for LinkSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn usb_cdc_and_ptys_may_ignore_the_baud_rate() {
+        let spec = |s: &str| s.parse::<LinkSpec>().unwrap();
+        assert!(spec("/dev/ttyACM0").may_ignore_baud());
+        assert!(spec("serial:/dev/pts/4:57600").may_ignore_baud());
+        assert!(!spec("/dev/ttyUSB0").may_ignore_baud());
+        assert!(!spec("serial:/dev/ttyAMA0:57600").may_ignore_baud());
+        assert!(!spec("udpout:127.0.0.1:14550").may_ignore_baud());
+    }
 
     fn hp(host: &str, port: u16) -> HostPort {
         HostPort {

@@ -92,11 +92,28 @@ impl RxClock {
     }
 }
 
+/// How a link meets its peers, for advice when nothing is heard.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinkKind {
+    /// Waits for peers to send first (udpin, tcpin).
+    Listening,
+    /// Sends to one address it was given (udpout, tcp client).
+    Connecting,
+    /// Sends to a broadcast address.
+    Broadcast,
+    /// A serial port.
+    Serial,
+    /// The simulated link.
+    Simulated,
+}
+
 /// What every link does. `recv` must be cancel-safe: the engine races it
 /// against its timers and drops it when a timer wins.
 #[allow(async_fn_in_trait)] // used with concrete types only, never boxed
 pub trait Transport {
-    /// Sends one frame to every peer; returns the time just after the write.
+    /// Sends one frame to every peer; returns the time taken just before the
+    /// write, so an RTT may include the write but is never shorter than
+    /// the true round trip.
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError>;
     /// Sends one frame to one path only (answers: never amplify).
     async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError>;
@@ -116,6 +133,8 @@ pub trait Transport {
     fn downtime(&self) -> Duration {
         Duration::ZERO
     }
+    /// How the link meets its peers.
+    fn kind(&self) -> LinkKind;
 }
 
 /// Scans one datagram and appends its frames, all stamped `at`.
@@ -227,6 +246,10 @@ impl Transport for Link {
 
     fn rx_clock(&self) -> RxClock {
         each_link!(self, l => l.rx_clock())
+    }
+
+    fn kind(&self) -> LinkKind {
+        each_link!(self, l => l.kind())
     }
 }
 

@@ -8,6 +8,7 @@ use std::io;
 use tokio_serial::{SerialPortBuilderExt, SerialStream};
 
 use super::stream::Connect;
+use super::LinkKind;
 
 /// pymavlink's and MAVProxy's default when no baud rate is given.
 pub const DEFAULT_BAUD: u32 = 115_200;
@@ -30,6 +31,7 @@ impl SerialConnector {
 
 impl Connect for SerialConnector {
     type Stream = SerialStream;
+    const KIND: LinkKind = LinkKind::Serial;
 
     fn name(&self) -> &str {
         &self.name

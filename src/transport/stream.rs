@@ -12,7 +12,7 @@ use std::time::Duration;
 use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
 use tokio::time::{sleep_until, Instant};
 
-use super::{Inbound, LinkError, PathId, Transport};
+use super::{Inbound, LinkError, LinkKind, PathId, Transport};
 use crate::frame::{ScanStats, StreamScanner};
 
 /// Wait before the first reconnection attempt; doubled after each failure.
@@ -25,6 +25,8 @@ const READ_BUF: usize = 16 * 1024;
 #[allow(async_fn_in_trait)] // used with concrete types only
 pub trait Connect {
     type Stream: AsyncRead + AsyncWrite + Unpin;
+    /// How this kind of link meets its peer.
+    const KIND: LinkKind;
     /// The link as the user named it, for messages.
     fn name(&self) -> &str;
     /// What the end of the stream means on this kind of link.
@@ -156,18 +158,23 @@ impl<C: Connect> StreamLink<C> {
     }
 
     async fn write(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
+        let sent = Instant::now();
         if let State::Up(stream) = &mut self.state {
             if let Err(e) = stream.write_all(frame).await {
                 self.lost(e)?;
             }
         }
-        Ok(Instant::now())
+        Ok(sent)
     }
 }
 
 impl<C: Connect> Transport for StreamLink<C> {
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
         self.write(frame).await
+    }
+
+    fn kind(&self) -> LinkKind {
+        C::KIND
     }
 
     /// One peer: every path is the same stream.

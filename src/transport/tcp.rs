@@ -17,7 +17,7 @@ use tokio::time::Instant;
 use super::address::HostPort;
 use super::stream::Connect;
 use super::udp::resolve;
-use super::{Inbound, LinkError, PathId, Transport};
+use super::{Inbound, LinkError, LinkKind, PathId, Transport};
 use crate::frame::{ScanStats, StreamScanner};
 
 /// Clients beyond this are refused: memory stays bounded.
@@ -44,6 +44,7 @@ impl TcpConnector {
 
 impl Connect for TcpConnector {
     type Stream = TcpStream;
+    const KIND: LinkKind = LinkKind::Connecting;
 
     fn name(&self) -> &str {
         &self.name
@@ -139,6 +140,7 @@ impl TcpServer {
 
 impl Transport for TcpServer {
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
+        let sent = Instant::now();
         let mut i = 0;
         while i < self.clients.len() {
             if self.write_to(i, frame).await {
@@ -147,16 +149,21 @@ impl Transport for TcpServer {
                 self.remove(i, "write failed");
             }
         }
-        Ok(Instant::now())
+        Ok(sent)
+    }
+
+    fn kind(&self) -> LinkKind {
+        LinkKind::Listening
     }
 
     async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
+        let sent = Instant::now();
         if let Some(i) = self.clients.iter().position(|c| c.path == path) {
             if !self.write_to(i, frame).await {
                 self.remove(i, "write failed");
             }
         }
-        Ok(Instant::now())
+        Ok(sent)
     }
 
     // Cancel-safe: it only polls, and keeps no state outside `self`.

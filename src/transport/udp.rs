@@ -15,7 +15,7 @@ use tokio::net::{lookup_host, UdpSocket};
 use tokio::time::Instant;
 
 use super::address::HostPort;
-use super::{push_datagram, Inbound, LinkError, PathId, RxClock, Transport};
+use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::frame::ScanStats;
 
 /// At most this many peers are remembered on a listening socket; more than
@@ -391,6 +391,14 @@ impl Transport for UdpLink {
             if got_any {
                 return Ok(());
             }
+        }
+    }
+
+    fn kind(&self) -> LinkKind {
+        match self.mode {
+            Mode::Listen { .. } => LinkKind::Listening,
+            Mode::Connected { .. } => LinkKind::Connecting,
+            Mode::Broadcast { .. } => LinkKind::Broadcast,
         }
     }
 

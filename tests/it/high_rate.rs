@@ -27,6 +27,7 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         interval: Duration::from_micros(100),
         count: Some(100_000),
         deadline: None,
+        wait: None,
         timeout: Duration::from_millis(200),
         version: Version::V2,
         heartbeat: true,

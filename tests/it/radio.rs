@@ -82,7 +82,7 @@ fn radio_figures_and_counter_deltas_are_exact() {
         .as_array()
         .unwrap()
         .iter()
-        .map(|h| h.as_str().unwrap())
+        .map(|h| h["text"].as_str().unwrap())
         .collect();
     assert!(
         !hints.iter().any(|h| h.contains("never answered")),

@@ -157,6 +157,7 @@ pub(super) fn summary(s: &Summary, verdict: &Verdict) -> Value {
         "duration_s": s.duration_s,
         "requests": s.requests,
         "in_flight": s.in_flight,
+        "no_peer_heard_s": s.no_peer_heard_s,
         "interrupted": s.interrupted,
         "link_error": s.link_error,
         "downtime_s": s.downtime_s,

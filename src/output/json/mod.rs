@@ -16,7 +16,7 @@ use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
-pub const SCHEMA_VERSION: u32 = 1;
+pub const SCHEMA_VERSION: u32 = 2;
 
 pub struct JsonReporter<W: Write> {
     out: W,

@@ -139,8 +139,6 @@ pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Res
             s.unmatched_acks
         )?;
     }
-    if let Some(signing) = &s.signing {
-        write_signing(out, signing)?;
-    }
+    write_signing(out, &s.signing)?;
     Ok(())
 }

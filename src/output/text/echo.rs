@@ -3,6 +3,7 @@
 use std::io::{self, Write};
 
 use super::{ms, ms_us, rate, write_histogram, write_signing, TextReporter};
+use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport, RadioSummary};
 use crate::engine::summary::{ResponderSummary, Summary};
@@ -334,8 +335,13 @@ pub(super) fn write_summary(
         write!(out, ", {} still in flight (not counted)", s.in_flight)?;
     }
     writeln!(out)?;
-    if s.responders.is_empty() {
-        writeln!(out, "no replies")?;
+    // A listening link that gave up says so in its own words (the hint);
+    // "no replies" would hide that nothing was ever heard.
+    let no_peer = s.hints.iter().find(|h| h.code == HintCode::NoPeerHeard);
+    match no_peer {
+        Some(hint) => writeln!(out, "{}", hint.text)?,
+        None if s.responders.is_empty() => writeln!(out, "no replies")?,
+        None => {}
     }
     for r in &s.responders {
         write_responder(out, r)?;
@@ -384,9 +390,7 @@ pub(super) fn write_summary(
             s.wrong_path_replies
         )?;
     }
-    if let Some(signing) = &s.signing {
-        write_signing(out, signing)?;
-    }
+    write_signing(out, &s.signing)?;
     if s.downtime_s > 0.0 {
         writeln!(
             out,
@@ -406,8 +410,8 @@ pub(super) fn write_summary(
             s.rx_clock
         )?;
     }
-    for hint in &s.hints {
-        writeln!(out, "hint: {hint}")?;
+    for hint in s.hints.iter().filter(|h| h.code != HintCode::NoPeerHeard) {
+        writeln!(out, "hint: {}", hint.text)?;
     }
     // Threshold failures; "no reply at all" is already plain above.
     for f in verdict.failures.iter().filter(|f| f.check != "reply") {

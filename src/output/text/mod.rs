@@ -149,17 +149,25 @@ fn write_histogram(out: &mut impl Write, histogram: &[Bucket]) -> io::Result<()>
 }
 
 /// One line: what the signing gate let through and what it refused
-/// (refused frames were never measured).
+/// (refused frames were never measured); without a key, only when signed
+/// frames came (their signatures could not be checked).
 fn write_signing(out: &mut impl Write, s: &SigningSummary) -> io::Result<()> {
-    writeln!(
-        out,
-        "signing (link id {}, {}): {}",
-        s.link_id,
-        if s.required {
-            "signatures required"
-        } else {
-            "unsigned accepted"
-        },
-        s.counts
-    )
+    match s.link_id {
+        Some(link_id) => writeln!(
+            out,
+            "signing (link id {link_id}, {}): {}",
+            if s.required {
+                "signatures required"
+            } else {
+                "unsigned accepted"
+            },
+            s.counts
+        ),
+        None if s.counts.signed_unchecked > 0 => writeln!(
+            out,
+            "signing (no key): {} signed frames accepted unchecked, {} unsigned",
+            s.counts.signed_unchecked, s.counts.unsigned
+        ),
+        None => Ok(()),
+    }
 }

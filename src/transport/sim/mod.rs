@@ -14,7 +14,7 @@ use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use tokio::time::{sleep_until, Instant};
 
-use super::{push_datagram, Inbound, LinkError, PathId, RxClock, Transport};
+use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::frame::{self, Header, Msg, ScanStats, SysComp, Version};
 use crate::responder::core::ResponderCore;
 
@@ -413,6 +413,10 @@ impl Transport for SimLink {
 
     fn scan_stats(&self) -> ScanStats {
         self.stats
+    }
+
+    fn kind(&self) -> LinkKind {
+        LinkKind::Simulated
     }
 
     fn rx_clock(&self) -> RxClock {

@@ -1,0 +1,399 @@
+//! Why requests went unanswered, from what the link showed. Each hint
+//! names what was observed (nothing at all, bytes but no frame, signed
+//! frames without a key, a vehicle's HEARTBEAT, MAVLink 1 only...), most
+//! likely cause first; none is a guess. Pure: the session hands in what it
+//! saw.
+
+use std::time::Duration;
+
+use super::hint::{Hint, HintCode};
+use super::radio;
+use super::roster::{Roster, Source};
+use super::summary::ResponderSummary;
+use crate::frame::signing::SigningCounts;
+use crate::frame::{ScanStats, SysComp, Version};
+use crate::transport::LinkKind;
+
+/// QGroundControl's and Mission Planner's ids, which MAVSDK ground
+/// stations drop on receipt (`MavsdkImpl::receive_message`).
+pub const QGC_IDS: SysComp = SysComp::new(255, 190);
+
+/// What a run saw, for its diagnosis.
+pub struct Observed<'a> {
+    pub link: &'a str,
+    pub kind: LinkKind,
+    pub probe: &'static str,
+    pub ours: SysComp,
+    pub version: Version,
+    /// A signing key was given.
+    pub key: bool,
+    /// What the signing gate accepted and refused.
+    pub signing: SigningCounts,
+    pub frames: ScanStats,
+    pub roster: &'a Roster,
+    pub responders: &'a [ResponderSummary],
+    /// Radios heard by their RADIO_STATUS: no answer is expected of them.
+    pub radios: &'a [SysComp],
+    pub requests: u64,
+    pub in_flight: u64,
+    /// A listening link gave up after this long without a peer.
+    pub no_peer_within: Option<Duration>,
+}
+
+/// Seconds as a person writes them: "2.5 s", "20 s".
+pub fn seconds(d: Duration) -> String {
+    let s = format!("{:.3}", d.as_secs_f64());
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    format!("{s} s")
+}
+
+fn nothing_heard(o: &Observed<'_>) -> Hint {
+    let advice = match o.kind {
+        LinkKind::Connecting => {
+            "no reply, no HEARTBEAT, not even a refusal: check the address and port; a vehicle, \
+             SITL or router that sends to this port needs a listening link (udp:HOST:PORT)"
+        }
+        LinkKind::Listening => {
+            "a vehicle, SITL or router must send to this address; one that only listens needs \
+             udpout:HOST:PORT"
+        }
+        LinkKind::Broadcast => "no system on this segment answered or sent anything",
+        LinkKind::Serial => {
+            "check the wiring, that the device speaks MAVLink, and that nothing else holds the port"
+        }
+        LinkKind::Simulated => "the simulated link delivered nothing",
+    };
+    Hint::new(
+        HintCode::NothingHeard,
+        format!("nothing heard on {} at all: {advice}", o.link),
+    )
+}
+
+fn not_mavlink(o: &Observed<'_>) -> Hint {
+    let f = &o.frames;
+    let baud = if o.kind == LinkKind::Serial {
+        "a wrong baud rate, "
+    } else {
+        ""
+    };
+    Hint::new(
+        HintCode::NotMavlink,
+        format!(
+            "{} bytes heard on {} but no valid MAVLink frame ({} failed their CRC): {baud}not \
+             MAVLink, or a dialect whose messages have other CRCs",
+            f.skipped_bytes, o.link, f.bad_crc
+        ),
+    )
+}
+
+/// What one silent system's traffic says about its silence, if anything.
+fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint> {
+    if source.signed > 0 && !o.key {
+        return Some(Hint::new(
+            HintCode::SignedNoKey,
+            format!("frames from {id} are signed and we have no key: pass --signing-key"),
+        ));
+    }
+    let identity = source.identity.as_ref().filter(|i| i.is_vehicle_like())?;
+    let who = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_name);
+    let probe = o.probe.to_uppercase();
+    if source.v1 == source.frames && o.version == Version::V2 {
+        return Some(Hint::new(
+            HintCode::Mavlink1Only,
+            format!("{who} sends MAVLink 1 only and our requests are MAVLink 2: try --mavlink 1"),
+        ));
+    }
+    if identity.is_ardupilot() {
+        if o.probe == "ping" {
+            return Some(Hint::new(
+                HintCode::TimesyncOnly,
+                format!(
+                    "{who} sends HEARTBEAT but never answered PING; ArduPilot answers only \
+                     TIMESYNC: try --probe timesync"
+                ),
+            ));
+        }
+        if o.ours.sysid != 255 {
+            return Some(Hint::new(
+                HintCode::SysidEnforced,
+                format!(
+                    "{who} sends HEARTBEAT but never answered {probe}: with SYSID_ENFORCE=1 \
+                     ArduPilot accepts only its ground station's system id (SYSID_MYGCS, \
+                     usually 255): try --sysid 255"
+                ),
+            ));
+        }
+    }
+    Some(Hint::new(
+        HintCode::NeverAnswered,
+        format!(
+            "{who} sends HEARTBEAT but never answered {probe}: a router may not forward our \
+             requests to it, or it ignores our ids {}: try --sysid or --compid",
+            o.ours
+        ),
+    ))
+}
+
+/// Why replies may be missing when the signing gate refused frames.
+fn signing(c: &SigningCounts) -> Vec<Hint> {
+    let mut hints = Vec::new();
+    if c.rejected_bad_signature > 0 {
+        hints.push(Hint::new(
+            HintCode::SignedOtherKey,
+            format!(
+                "{} frames were signed with another key: are both ends using the same signing key?",
+                c.rejected_bad_signature
+            ),
+        ));
+    }
+    if c.rejected_unsigned > 0 && c.signed == 0 {
+        hints.push(Hint::new(
+            HintCode::UnsignedRefused,
+            format!(
+                "{} unsigned frames were refused (--require-signed) and none came signed: \
+                 is signing set up on the other end?",
+                c.rejected_unsigned
+            ),
+        ));
+    }
+    hints
+}
+
+/// The hints that explain missing replies, most likely first.
+pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
+    let mut hints = signing(&o.signing);
+    if let Some(waited) = o.no_peer_within {
+        let mut hint = nothing_heard(o);
+        hint.code = HintCode::NoPeerHeard;
+        hint.text = format!(
+            "no MAVLink system heard on {} in {}",
+            o.link,
+            seconds(waited)
+        );
+        hints.push(hint);
+        return hints;
+    }
+    let f = &o.frames;
+    if f.frames == 0 && hints.is_empty() {
+        if f.skipped_bytes + f.bad_crc + f.truncated > 0 {
+            hints.push(not_mavlink(o));
+        } else {
+            hints.push(nothing_heard(o));
+        }
+        if o.ours == QGC_IDS && o.kind != LinkKind::Serial {
+            hints.push(Hint::new(
+                HintCode::OurIdsAreQgcs,
+                format!(
+                    "our ids {QGC_IDS} are QGroundControl's: MAVSDK-based ground stations \
+                     (mavsdk_server) ignore every frame from them; try --sysid 250"
+                ),
+            ));
+        }
+        return hints;
+    }
+    let answered = |id: SysComp| {
+        o.responders
+            .iter()
+            .any(|r| r.id == id && (r.counts.received > 0 || r.counts.late > 0))
+    };
+    let silent: Vec<(&SysComp, &Source)> = o
+        .roster
+        .sources()
+        .filter(|(id, _)| **id != o.ours && !answered(**id))
+        // A radio answers no probe: its silence says nothing about the link.
+        .filter(|(id, _)| !o.radios.contains(id) && !radio::is_sik_default(**id))
+        .collect();
+    let decided = o.requests.saturating_sub(o.in_flight);
+    if decided == 0 && o.requests > 0 && !silent.is_empty() {
+        hints.push(Hint::new(
+            HintCode::TooEarly,
+            format!(
+                "all {} requests were still within their timeout when the run ended: too \
+                 early to tell why a system has not answered",
+                o.requests
+            ),
+        ));
+        return hints;
+    }
+    hints.extend(
+        silent
+            .into_iter()
+            .filter_map(|(&id, source)| silent_system(o, id, source)),
+    );
+    // The codes are ranked by how directly the evidence explains silence.
+    hints.sort_by_key(|h| h.code);
+    hints
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::matcher::Counts;
+    use crate::frame::mav_type;
+
+    const ARDUPILOT: (u8, u8) = (2, 3);
+    const PX4: (u8, u8) = (2, 12);
+
+    fn observed<'a>(roster: &'a Roster, frames: u64) -> Observed<'a> {
+        Observed {
+            link: "udpout:127.0.0.1:14550",
+            kind: LinkKind::Connecting,
+            probe: "ping",
+            ours: SysComp::new(250, 190),
+            version: Version::V2,
+            key: false,
+            signing: SigningCounts::default(),
+            frames: ScanStats {
+                frames,
+                ..ScanStats::default()
+            },
+            roster,
+            responders: &[],
+            radios: &[],
+            requests: 10,
+            in_flight: 2,
+            no_peer_within: None,
+        }
+    }
+
+    fn codes(hints: &[Hint]) -> Vec<HintCode> {
+        hints.iter().map(|h| h.code).collect()
+    }
+
+    fn vehicle(
+        roster: &mut Roster,
+        id: SysComp,
+        (mav, autopilot): (u8, u8),
+        v: Version,
+        signed: bool,
+    ) {
+        roster.heard(id, mav, autopilot, 0);
+        roster.frame(id, v, signed);
+    }
+
+    #[test]
+    fn nothing_at_all_bytes_but_no_frame_and_qgc_ids() {
+        let roster = Roster::default();
+        let o = observed(&roster, 0);
+        let hints = diagnose(&o);
+        assert_eq!(codes(&hints), [HintCode::NothingHeard]);
+        assert!(hints[0].text.contains("udp:HOST:PORT"), "{hints:?}");
+        let o = Observed {
+            ours: QGC_IDS,
+            ..observed(&roster, 0)
+        };
+        assert_eq!(
+            codes(&diagnose(&o)),
+            [HintCode::NothingHeard, HintCode::OurIdsAreQgcs]
+        );
+        let o = Observed {
+            frames: ScanStats {
+                skipped_bytes: 300,
+                bad_crc: 4,
+                ..ScanStats::default()
+            },
+            kind: LinkKind::Serial,
+            ..observed(&roster, 0)
+        };
+        let hints = diagnose(&o);
+        assert_eq!(codes(&hints), [HintCode::NotMavlink]);
+        assert!(hints[0].text.contains("wrong baud rate"), "{hints:?}");
+    }
+
+    #[test]
+    fn a_listening_link_that_gave_up_says_how_long_it_waited() {
+        let roster = Roster::default();
+        let o = Observed {
+            link: "udpin:0.0.0.0:14550",
+            kind: LinkKind::Listening,
+            no_peer_within: Some(Duration::from_millis(2500)),
+            ..observed(&roster, 0)
+        };
+        let hints = diagnose(&o);
+        assert_eq!(codes(&hints), [HintCode::NoPeerHeard]);
+        assert_eq!(
+            hints[0].text,
+            "no MAVLink system heard on udpin:0.0.0.0:14550 in 2.5 s"
+        );
+    }
+
+    #[test]
+    fn each_silent_system_by_what_it_showed() {
+        let mut roster = Roster::default();
+        vehicle(&mut roster, SysComp::new(8, 1), PX4, Version::V2, true);
+        vehicle(&mut roster, SysComp::new(2, 1), PX4, Version::V1, false);
+        vehicle(
+            &mut roster,
+            SysComp::new(3, 1),
+            ARDUPILOT,
+            Version::V2,
+            false,
+        );
+        vehicle(&mut roster, SysComp::new(4, 1), PX4, Version::V2, false);
+        // A ground station and a radio are not expected to answer.
+        vehicle(
+            &mut roster,
+            SysComp::new(245, 190),
+            (mav_type::GCS, 8),
+            Version::V2,
+            false,
+        );
+        vehicle(&mut roster, SysComp::new(51, 68), PX4, Version::V2, false);
+        let hints = diagnose(&observed(&roster, 12));
+        assert_eq!(
+            codes(&hints),
+            [
+                HintCode::SignedNoKey,
+                HintCode::Mavlink1Only,
+                HintCode::TimesyncOnly,
+                HintCode::NeverAnswered
+            ],
+            "{hints:?}"
+        );
+        assert_eq!(
+            hints[0].text,
+            "frames from 8/1 are signed and we have no key: pass --signing-key"
+        );
+        // TIMESYNC unanswered by ArduPilot: its ground-station id check.
+        let o = Observed {
+            probe: "timesync",
+            ..observed(&roster, 12)
+        };
+        assert!(codes(&diagnose(&o)).contains(&HintCode::SysidEnforced));
+    }
+
+    #[test]
+    fn no_probe_hint_while_every_request_is_in_flight_nor_for_responders() {
+        let mut roster = Roster::default();
+        vehicle(
+            &mut roster,
+            SysComp::new(1, 1),
+            ARDUPILOT,
+            Version::V2,
+            false,
+        );
+        let o = Observed {
+            in_flight: 10,
+            ..observed(&roster, 5)
+        };
+        assert_eq!(codes(&diagnose(&o)), [HintCode::TooEarly]);
+        let responders = [ResponderSummary {
+            id: SysComp::new(1, 1),
+            counts: Counts {
+                sent: 8,
+                received: 8,
+                ..Counts::default()
+            },
+            loss_ratio: 0.0,
+            rtt: None,
+            histogram: vec![],
+            identity: None,
+            clock: None,
+        }];
+        let o = Observed {
+            responders: &responders,
+            ..observed(&roster, 5)
+        };
+        assert!(diagnose(&o).is_empty());
+    }
+}

@@ -1,0 +1,66 @@
+//! A hint: what the summary suggests, with a stable code scripts can
+//! branch on, and the sentence a person reads. Every hint names what was
+//! observed; none is a guess.
+
+use serde::Serialize;
+
+/// The stable, machine-readable kinds of hint (listed in the JSON schema).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HintCode {
+    /// A listening link heard no MAVLink system before it gave up.
+    NoPeerHeard,
+    /// Nothing at all came back on the link.
+    NothingHeard,
+    /// Bytes came, but no valid MAVLink frame.
+    NotMavlink,
+    /// Our ids are QGroundControl's, which MAVSDK ground stations ignore.
+    OurIdsAreQgcs,
+    /// A system's frames are signed and we have no key.
+    SignedNoKey,
+    /// Frames signed with another key than ours were refused.
+    SignedOtherKey,
+    /// Unsigned frames were refused (`--require-signed`) and none came signed.
+    UnsignedRefused,
+    /// A system speaks MAVLink 1 only; our requests are MAVLink 2.
+    Mavlink1Only,
+    /// An ArduPilot vehicle never answered PING: it answers only TIMESYNC.
+    TimesyncOnly,
+    /// An ArduPilot vehicle never answered: it may accept only its GCS's
+    /// system id (SYSID_ENFORCE).
+    SysidEnforced,
+    /// A system sends but never answered: a router may not forward our
+    /// requests, or it ignores our ids.
+    NeverAnswered,
+    /// Every request was still within its timeout when the run ended.
+    TooEarly,
+    /// Loss concentrated while the radio's transmit buffer was low.
+    RadioOverloaded,
+    /// A radio's fade margin fell below a safe level.
+    RadioWeakSignal,
+    /// A radio's receive errors grew during the run.
+    RadioErrors,
+    /// The rate was above what the serial link's baud rate carries, and the
+    /// run shows it.
+    WireOverrun,
+    /// Replies came back faster than the baud rate allows: the device
+    /// ignores it (USB CDC, a pty).
+    BaudNotInEffect,
+    /// A responder's causal clock-offset bounds do not intersect.
+    ClockInconsistent,
+}
+
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Hint {
+    pub code: HintCode,
+    pub text: String,
+}
+
+impl Hint {
+    pub fn new(code: HintCode, text: impl Into<String>) -> Self {
+        Hint {
+            code,
+            text: text.into(),
+        }
+    }
+}
