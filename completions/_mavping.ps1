@@ -55,6 +55,8 @@ Register-ArgumentCompleter -Native -CommandName 'mavping' -ScriptBlock {
             [CompletionResult]::new('--signing-key-file', '--signing-key-file', [CompletionResultType]::ParameterName, 'Read the signing key from FILE (its content, trimmed)')
             [CompletionResult]::new('--signing-link-id', '--signing-link-id', [CompletionResultType]::ParameterName, 'Link id in the signature of our frames (0-255)')
             [CompletionResult]::new('--generate', '--generate', [CompletionResultType]::ParameterName, 'Print shell completions or the man page (for packagers)')
+            [CompletionResult]::new('-4', '-4', [CompletionResultType]::ParameterName, 'Resolve host names to IPv4 addresses only')
+            [CompletionResult]::new('-6', '-6', [CompletionResultType]::ParameterName, 'Resolve host names to IPv6 addresses only')
             [CompletionResult]::new('-q', '-q', [CompletionResultType]::ParameterName, 'Print only the summary')
             [CompletionResult]::new('--quiet', '--quiet', [CompletionResultType]::ParameterName, 'Print only the summary')
             [CompletionResult]::new('--every-reply', '--every-reply', [CompletionResultType]::ParameterName, 'Print a line for every reply even above 100 requests/s (where one status line per second is printed instead)')

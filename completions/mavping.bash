@@ -35,7 +35,7 @@ _mavping() {
 
     case "${cmd}" in
         mavping)
-            opts="-c -i -w -W -q -v -h -V --count --interval --rate --deadline --wait --timeout --quiet --every-reply --sysid --compid --mavlink --no-heartbeat --first-seq --verbose --format --json --max-loss --max-rtt --max-jitter --expect --min-responders --hgrm --samples --baud --reconnect --probe --target --command --retry-interval --retries --live --prometheus --plot --signing-key --signing-key-file --signing-link-id --require-signed --generate --help --version respond help"
+            opts="-4 -6 -c -i -w -W -q -v -h -V --count --interval --rate --deadline --wait --timeout --quiet --every-reply --sysid --compid --mavlink --no-heartbeat --first-seq --verbose --format --json --max-loss --max-rtt --max-jitter --expect --min-responders --hgrm --samples --baud --reconnect --probe --target --command --retry-interval --retries --live --prometheus --plot --signing-key --signing-key-file --signing-link-id --require-signed --generate --help --version respond help"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0

@@ -52,6 +52,8 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand --signing-key-file 'Read the signing key from FILE (its content, trimmed)'
             cand --signing-link-id 'Link id in the signature of our frames (0-255)'
             cand --generate 'Print shell completions or the man page (for packagers)'
+            cand -4 'Resolve host names to IPv4 addresses only'
+            cand -6 'Resolve host names to IPv6 addresses only'
             cand -q 'Print only the summary'
             cand --quiet 'Print only the summary'
             cand --every-reply 'Print a line for every reply even above 100 requests/s (where one status line per second is printed instead)'

@@ -1,6 +1,6 @@
 # Print an optspec for argparse to handle cmd's options that are independent of any subcommand.
 function __fish_mavping_global_optspecs
-    string join \n c/count= i/interval= rate= w/deadline= wait= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= live prometheus= plot= signing-key= signing-key-file= signing-link-id= require-signed generate= h/help V/version
+    string join \n 4 6 c/count= i/interval= rate= w/deadline= wait= W/timeout= q/quiet every-reply sysid= compid= mavlink= no-heartbeat first-seq= v/verbose format= json max-loss= max-rtt= max-jitter= expect= min-responders= hgrm= samples= baud= reconnect probe= target= command= retry-interval= retries= live prometheus= plot= signing-key= signing-key-file= signing-link-id= require-signed generate= h/help V/version
 end
 
 function __fish_mavping_needs_command
@@ -62,6 +62,8 @@ complete-fish\t''
 complete-powershell\t''
 complete-elvish\t''
 man\t''"
+complete -c mavping -n "__fish_mavping_needs_command" -s 4 -d 'Resolve host names to IPv4 addresses only'
+complete -c mavping -n "__fish_mavping_needs_command" -s 6 -d 'Resolve host names to IPv6 addresses only'
 complete -c mavping -n "__fish_mavping_needs_command" -s q -l quiet -d 'Print only the summary'
 complete -c mavping -n "__fish_mavping_needs_command" -l every-reply -d 'Print a line for every reply even above 100 requests/s (where one status line per second is printed instead)'
 complete -c mavping -n "__fish_mavping_needs_command" -l no-heartbeat -d 'Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)'

@@ -8,6 +8,9 @@ use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 use crate::units::{parse_duration, parse_percent};
 use crate::verdict::{Expected, RttLimit};
 
+/// Options that take a value accept a negative number (`-i -1`), so it
+/// reaches the value parser and a clear error; positionals do not, so
+/// `-4` and `-6` stay flags.
 #[derive(Debug, Parser)]
 #[command(
     name = "mavping",
@@ -31,14 +34,18 @@ use crate::verdict::{Expected, RttLimit};
         or link errors (on any link)."
 )]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
-// `-i -1` reaches the value parser (and a clear error), not "unexpected argument".
-#[command(allow_negative_numbers = true)]
 pub struct Cli {
     #[command(flatten)]
     pub ping: PingArgs,
 
     /// Print shell completions or the man page (for packagers)
-    #[arg(long, value_enum, hide = true, value_name = "KIND")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_enum,
+        hide = true,
+        value_name = "KIND"
+    )]
     pub generate: Option<Generate>,
 
     #[command(subcommand)]
@@ -124,7 +131,6 @@ pub enum Generate {
 #[derive(Debug, Subcommand)]
 pub enum Mode {
     /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG
-    #[command(allow_negative_numbers = true)]
     Respond(RespondArgs),
 }
 
@@ -153,32 +159,51 @@ pub struct PingArgs {
     )]
     pub links: Vec<String>,
 
+    /// Resolve host names to IPv4 addresses only
+    #[arg(short = '4', conflicts_with = "ipv6")]
+    pub ipv4: bool,
+
+    /// Resolve host names to IPv6 addresses only
+    #[arg(short = '6')]
+    pub ipv6: bool,
+
     /// Stop after sending COUNT requests (and waiting for their replies)
-    #[arg(short = 'c', long, value_name = "COUNT", env = "MAVPING_COUNT")]
+    #[arg(
+        allow_negative_numbers = true,
+        short = 'c',
+        long,
+        value_name = "COUNT",
+        env = "MAVPING_COUNT"
+    )]
     pub count: Option<u64>,
 
     /// Time between requests, e.g. 1s, 100ms, 0.01
-    #[arg(short = 'i', long, value_name = "DURATION", value_parser = parse_duration,
+    #[arg(allow_negative_numbers = true, short = 'i', long, value_name = "DURATION", value_parser = parse_duration,
           conflicts_with = "rate", env = "MAVPING_INTERVAL")]
     pub interval: Option<Duration>,
 
     /// Requests per second (instead of --interval)
-    #[arg(long, value_name = "HZ", env = "MAVPING_RATE")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "HZ",
+        env = "MAVPING_RATE"
+    )]
     pub rate: Option<f64>,
 
     /// Stop after this long, whatever is still in flight
-    #[arg(short = 'w', long, value_name = "DURATION", value_parser = parse_duration,
+    #[arg(allow_negative_numbers = true, short = 'w', long, value_name = "DURATION", value_parser = parse_duration,
           env = "MAVPING_DEADLINE")]
     pub deadline: Option<Duration>,
 
     /// On a listening link (udpin:, udp:, tcpin:), give up when no MAVLink
     /// system is heard within DURATION (default with -c: the time the count
     /// takes plus the timeout; without -c: wait for ever)
-    #[arg(long, value_name = "DURATION", value_parser = parse_duration, env = "MAVPING_WAIT")]
+    #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, env = "MAVPING_WAIT")]
     pub wait: Option<Duration>,
 
     /// How long to wait for each reply before counting it lost
-    #[arg(short = 'W', long, value_name = "DURATION", value_parser = parse_duration,
+    #[arg(allow_negative_numbers = true, short = 'W', long, value_name = "DURATION", value_parser = parse_duration,
           default_value = "2s", env = "MAVPING_TIMEOUT")]
     pub timeout: Duration,
 
@@ -194,15 +219,27 @@ pub struct PingArgs {
     /// Our MAVLink system id (the header of our requests). Not 255: that is
     /// QGroundControl's and Mission Planner's (255/190), which MAVSDK-based
     /// ground stations ignore and ArduPilot's GCS failsafe listens to
-    #[arg(long, value_name = "ID", default_value_t = 250, env = "MAVPING_SYSID")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "ID",
+        default_value_t = 250,
+        env = "MAVPING_SYSID"
+    )]
     pub sysid: u8,
 
     /// Our MAVLink component id
-    #[arg(long, value_name = "ID", default_value_t = 190, env = "MAVPING_COMPID")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "ID",
+        default_value_t = 190,
+        env = "MAVPING_COMPID"
+    )]
     pub compid: u8,
 
     /// MAVLink version of our requests (replies of either version are accepted)
-    #[arg(long = "mavlink", value_name = "1|2", default_value_t = 2,
+    #[arg(allow_negative_numbers = true, long = "mavlink", value_name = "1|2", default_value_t = 2,
           value_parser = clap::value_parser!(u8).range(1..=2))]
     pub mavlink_version: u8,
 
@@ -211,7 +248,13 @@ pub struct PingArgs {
     pub no_heartbeat: bool,
 
     /// Sequence number of the first request (to test wrap-around)
-    #[arg(long, value_name = "SEQ", default_value_t = 0, hide = true)]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "SEQ",
+        default_value_t = 0,
+        hide = true
+    )]
     pub first_seq: u32,
 
     /// More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG
@@ -227,36 +270,36 @@ pub struct PingArgs {
     pub json: bool,
 
     /// Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5
-    #[arg(long, value_name = "PCT", value_parser = parse_percent, env = "MAVPING_MAX_LOSS")]
+    #[arg(allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent, env = "MAVPING_MAX_LOSS")]
     pub max_loss: Option<f64>,
 
     /// Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION
     /// (default figure: max); repeatable, e.g. --max-rtt p99=50ms
-    #[arg(long, value_name = "[FIGURE=]DURATION", value_parser = parse_rtt_limit)]
+    #[arg(allow_negative_numbers = true, long, value_name = "[FIGURE=]DURATION", value_parser = parse_rtt_limit)]
     pub max_rtt: Vec<RttLimit>,
 
     /// Fail when a responder's jitter is above DURATION
-    #[arg(long, value_name = "DURATION", value_parser = parse_duration)]
+    #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
     pub max_jitter: Option<Duration>,
 
     /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
     /// LINK=SYSID[/COMPID] (on that one of several links); repeatable
-    #[arg(long, value_name = "[LINK=]SYSID[/COMPID]", value_parser = parse_expect_arg)]
+    #[arg(allow_negative_numbers = true, long, value_name = "[LINK=]SYSID[/COMPID]", value_parser = parse_expect_arg)]
     pub expect: Vec<ExpectArg>,
 
     /// Fail unless at least N responders answer
-    #[arg(long, value_name = "N")]
+    #[arg(allow_negative_numbers = true, long, value_name = "N")]
     pub min_responders: Option<usize>,
 
     /// Write each responder's RTT distribution in HdrHistogram's .hgrm format
-    #[arg(long, value_name = "FILE")]
+    #[arg(allow_negative_numbers = true, long, value_name = "FILE")]
     pub hgrm: Option<PathBuf>,
 
     /// Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)
-    #[arg(long, value_name = "FILE")]
+    #[arg(allow_negative_numbers = true, long, value_name = "FILE")]
     pub samples: Option<PathBuf>,
     /// Baud rate of a serial device whose connection string names none
-    #[arg(long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
+    #[arg(allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
           env = "MAVPING_BAUD")]
     pub baud: u32,
 
@@ -266,24 +309,39 @@ pub struct PingArgs {
     #[arg(long, env = "MAVPING_RECONNECT")]
     pub reconnect: bool,
     /// What to send: ping, timesync (also ArduPilot; measures clock offset), command
-    #[arg(long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Ping,
+    #[arg(allow_negative_numbers = true, long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Ping,
           env = "MAVPING_PROBE")]
     pub probe: ProbeKind,
 
     /// Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)
-    #[arg(long, value_name = "SYS/COMP", env = "MAVPING_TARGET")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "SYS/COMP",
+        env = "MAVPING_TARGET"
+    )]
     pub target: Option<String>,
 
     /// --probe command: MAV_CMD name or id, then up to 7 params, comma-separated
-    #[arg(long, value_name = "CMD[,P1,...]", default_value = "REQUEST_MESSAGE,0")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "CMD[,P1,...]",
+        default_value = "REQUEST_MESSAGE,0"
+    )]
     pub command: String,
 
     /// --probe command: re-send an unacknowledged command this often
-    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "100ms")]
+    #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "100ms")]
     pub retry_interval: Duration,
 
     /// --probe command: re-sends after the first before a command counts as failed
-    #[arg(long, value_name = "N", default_value_t = 3)]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "N",
+        default_value_t = 3
+    )]
     pub retries: u8,
 
     /// Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal
@@ -291,11 +349,16 @@ pub struct PingArgs {
     pub live: bool,
 
     /// Serve Prometheus metrics at http://ADDR:PORT/metrics while the run goes on
-    #[arg(long, value_name = "ADDR:PORT", env = "MAVPING_PROMETHEUS")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "ADDR:PORT",
+        env = "MAVPING_PROMETHEUS"
+    )]
     pub prometheus: Option<String>,
 
     /// At the end, draw RTT over time and the RTT distribution to FILE.svg
-    #[arg(long, value_name = "FILE.svg")]
+    #[arg(allow_negative_numbers = true, long, value_name = "FILE.svg")]
     pub plot: Option<PathBuf>,
 
     #[command(flatten)]
@@ -316,6 +379,7 @@ pub struct SigningArgs {
     /// and checks what we receive. Prefer MAVPING_SIGNING_KEY or
     /// --signing-key-file: a command line ends up in shell history
     #[arg(
+        allow_negative_numbers = true,
         long,
         value_name = "KEY",
         env = "MAVPING_SIGNING_KEY",
@@ -324,11 +388,17 @@ pub struct SigningArgs {
     pub signing_key: Option<String>,
 
     /// Read the signing key from FILE (its content, trimmed)
-    #[arg(long, value_name = "FILE", env = "MAVPING_SIGNING_KEY_FILE")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "FILE",
+        env = "MAVPING_SIGNING_KEY_FILE"
+    )]
     pub signing_key_file: Option<PathBuf>,
 
     /// Link id in the signature of our frames (0-255)
     #[arg(
+        allow_negative_numbers = true,
         long,
         value_name = "ID",
         default_value_t = 0,
@@ -345,31 +415,56 @@ pub struct RespondArgs {
     pub link: String,
 
     /// Our MAVLink system id
-    #[arg(long, value_name = "ID", default_value_t = 1)]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "ID",
+        default_value_t = 1
+    )]
     pub sysid: u8,
 
     /// Our MAVLink component id
-    #[arg(long, value_name = "ID", default_value_t = 1)]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "ID",
+        default_value_t = 1
+    )]
     pub compid: u8,
 
     /// Hold every reply this long (one-way link emulation)
-    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
+    #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
     pub delay: Duration,
 
     /// Extra delay per reply, uniform in [0, jitter]
-    #[arg(long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
+    #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
     pub jitter: Duration,
 
     /// Drop this share of replies, e.g. 10 or 10%
-    #[arg(long, value_name = "PCT", default_value = "0")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "PCT",
+        default_value = "0"
+    )]
     pub drop: String,
 
     /// Send this share of replies twice
-    #[arg(long, value_name = "PCT", default_value = "0")]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "PCT",
+        default_value = "0"
+    )]
     pub dup: String,
 
     /// Random seed for --jitter, --drop and --dup
-    #[arg(long, value_name = "N", default_value_t = 1)]
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "N",
+        default_value_t = 1
+    )]
     pub seed: u64,
 
     /// Answer only TIMESYNC and commands, not PING (like ArduPilot)
@@ -377,7 +472,7 @@ pub struct RespondArgs {
     pub no_ping: bool,
 
     /// Baud rate of a serial device whose connection string names none
-    #[arg(long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD)]
+    #[arg(allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD)]
     pub baud: u32,
 
     /// With a key (below), sign our replies and answer only correctly

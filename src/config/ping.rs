@@ -15,7 +15,7 @@ use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
 use crate::frame::{codec, SysComp, Version};
 use crate::transport::address::LinkSpec;
-use crate::transport::LinkOptions;
+use crate::transport::{Family, LinkOptions};
 use crate::verdict::{Expected, Thresholds};
 
 /// More requests than this in flight at once would need an unreasonably
@@ -405,6 +405,11 @@ impl TryFrom<&PingArgs> for Config {
             link_options: LinkOptions {
                 baud: cli.baud,
                 reconnect: cli.reconnect,
+                family: match (cli.ipv4, cli.ipv6) {
+                    (true, _) => Some(Family::V4),
+                    (_, true) => Some(Family::V6),
+                    _ => None,
+                },
             },
             probe,
             output: OutputConfig {
@@ -476,7 +481,8 @@ mod tests {
             c.link_options,
             LinkOptions {
                 baud: 57600,
-                reconnect: true
+                reconnect: true,
+                family: None,
             }
         );
         assert_eq!(config("sim:").unwrap().probe, Probe::Ping);

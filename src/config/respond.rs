@@ -33,6 +33,7 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 // A responder outlives its pingers: one that is not up yet
                 // or restarts must not end it.
                 reconnect: true,
+                family: None,
             },
             settings: ResponderSettings {
                 id: validate_ids(cli.sysid, cli.compid)?,

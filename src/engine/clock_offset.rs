@@ -1,14 +1,23 @@
 //! Clock offset and drift of one TIMESYNC responder, in constant memory.
 //!
-//! Each exchange gives an NTP-style sample: the responder read its clock
-//! (`tc1`) somewhere between our send and our receive, so
-//! `offset = tc1 - (t_send + t_recv) / 2` is right within ± RTT/2. Queueing
-//! makes the two legs unequal, so the samples with the lowest RTT are the
-//! trustworthy ones: the estimate is taken from the [`BEST`] lowest-RTT
-//! samples. Drift is the slope of a least-squares line through the
-//! offsets against our time, kept as running co-moments; samples whose RTT
-//! is over twice the lowest seen so far are left out of the fit, since a
-//! queue on one leg biases them by up to half their extra RTT.
+//! Every exchange bounds the offset by causality alone: the responder read
+//! its clock (`tc1`) at some moment between our send and our receive, so
+//! at that moment `tc1 - t_recv <= offset <= tc1 - t_send` (on our clock).
+//! The bounds of all exchanges, referred to the start of the run, are
+//! intersected: the true offset lies inside unless a clock stepped or the
+//! responder stamps outside its receive-reply window (then they do not
+//! intersect, and the summary says so). Referring an exchange at time `t`
+//! back to the start widens it by what the clocks' rates can change the
+//! offset in `t`: by an assumed 200 ppm while drift is not measured, or
+//! by the measured drift's limit once it is.
+//!
+//! The estimate inside the bounds is NTP-style, `tc1 - (t_send + t_recv)
+//! / 2`, from the [`BEST`] lowest-RTT exchanges (queueing makes the two
+//! legs unequal, so they are the trustworthy ones), moved to the start of
+//! the run along the measured drift. Drift is the slope of a
+//! least-squares line through the offsets against our time (running
+//! co-moments), reported only once the exchanges span [`MIN_DRIFT_SPAN_S`]:
+//! over a shorter run the RTT's noise is larger than any real drift.
 //!
 //! Pure: times are passed in (ns on our clock), no clock is read here.
 
@@ -22,6 +31,14 @@ pub const BEST: usize = 8;
 /// on loopback, RTTs of a few hundred µs vary by more than 2x without any
 /// meaningful queue.
 const FIT_SLACK_NS: Nanos = 1_000_000;
+/// Drift is reported once the fitted exchanges span this long.
+pub const MIN_DRIFT_SPAN_S: f64 = 10.0;
+/// Limits on how fast the offset may change (ppm), each with its own
+/// running bounds: the smallest one that holds is used. Two crystals of
+/// ±100 ppm differ by at most 200 ppm, the limit assumed until drift is
+/// measured.
+const DRIFT_LIMITS_PPM: [i128; 6] = [50, 200, 1_000, 10_000, 100_000, 1_000_000];
+const ASSUMED_DRIFT_LIMIT: usize = 1;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct Sample {
@@ -35,19 +52,41 @@ struct Sample {
 /// The figures a report shows.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ClockSummary {
-    /// Their clock minus ours, in ns, referred to the start of the run
-    /// (our time 0) using the fitted drift.
+    /// Their clock minus ours at the start of the run (our time 0), ns;
+    /// inside the bounds when they intersect.
     pub offset_ns: i128,
-    /// The estimate's bound: half the lowest RTT seen.
+    /// Half the width of the bounds, or half the lowest RTT without them.
     pub uncertainty_ns: u64,
+    /// The causal bounds of the offset at the start of the run; `None`
+    /// when the exchanges' bounds do not intersect.
+    pub bounds_ns: Option<(i128, i128)>,
+    /// The limit on the clocks' relative rate the bounds assume, ppm.
+    pub bounds_drift_limit_ppm: u32,
     /// Standard deviation of the samples about the drift line, ns.
     pub spread_ns: f64,
     /// Their clock's rate relative to ours, parts per million (positive:
-    /// theirs runs fast), and its standard error. None until three samples
-    /// at different times: two points always fit a line exactly.
+    /// theirs runs fast), and its standard error; `None` until the
+    /// exchanges span [`MIN_DRIFT_SPAN_S`].
     pub drift_ppm: Option<f64>,
     pub drift_stderr_ppm: Option<f64>,
     pub samples: u64,
+}
+
+/// The running intersection of every exchange's bounds, referred to time
+/// 0 under one drift limit.
+#[derive(Debug, Clone, Copy)]
+struct Bounds {
+    lower: i128,
+    upper: i128,
+}
+
+impl Default for Bounds {
+    fn default() -> Self {
+        Bounds {
+            lower: i128::MIN,
+            upper: i128::MAX,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Default)]
@@ -60,23 +99,44 @@ pub struct ClockOffset {
     /// Samples seen, and samples in the fit.
     seen: u64,
     n: u64,
+    first_x: Option<f64>,
+    last_x: f64,
     mean_x: f64,
     mean_y: f64,
     c_xx: f64,
     c_xy: f64,
     c_yy: f64,
+    bounds: [Bounds; DRIFT_LIMITS_PPM.len()],
+}
+
+/// `t * ppm / 1e6` rounded up: how far the offset may move in `t` ns.
+fn drift_allowance(t: Nanos, ppm: i128) -> i128 {
+    (i128::from(t) * ppm + 999_999) / 1_000_000
 }
 
 impl ClockOffset {
-    /// Records one exchange: sent at `sent_at`, answered with their clock
-    /// `theirs`, received at `at`. `base` is what our clock read at time 0
-    /// (the value our request timestamps count from).
+    /// Records one exchange: the request left at `sent_at` (our session
+    /// time, ns; no later than the moment it was written), was answered
+    /// with their clock `theirs`, and the reply arrived at `at`. `base` is
+    /// what our clock read at time 0 (the value our timestamps count from).
     pub fn record(&mut self, sent_at: Nanos, at: Nanos, theirs: i64, base: i128) {
-        let rtt = at.saturating_sub(sent_at);
+        let at = at.max(sent_at);
+        let rtt = at - sent_at;
         let mid = sent_at + rtt / 2;
-        let offset = i128::from(theirs) - base - i128::from(sent_at) - i128::from(rtt) / 2;
+        let theirs = i128::from(theirs);
+        let offset = theirs - base - i128::from(sent_at) - i128::from(rtt) / 2;
         let origin = *self.origin.get_or_insert(offset);
         self.seen += 1;
+        // Causality: they read their clock between our send and receive.
+        let (lower, upper) = (
+            theirs - base - i128::from(at),
+            theirs - base - i128::from(sent_at),
+        );
+        for (b, &ppm) in self.bounds.iter_mut().zip(&DRIFT_LIMITS_PPM) {
+            let slack = drift_allowance(at, ppm);
+            b.lower = b.lower.max(lower - slack);
+            b.upper = b.upper.min(upper + slack);
+        }
         let min_rtt = self.min_rtt.map_or(rtt, |m| m.min(rtt));
         self.min_rtt = Some(min_rtt);
         self.keep_best(Sample { rtt, mid, offset });
@@ -87,6 +147,8 @@ impl ClockOffset {
         // Running co-moments (Welford), x in seconds, y in ns.
         let x = mid as f64 / 1e9;
         let y = (offset - origin) as f64;
+        self.first_x.get_or_insert(x);
+        self.last_x = x;
         self.n += 1;
         let n = self.n as f64;
         let dx = x - self.mean_x;
@@ -124,30 +186,56 @@ impl ClockOffset {
 
     pub fn summary(&self) -> Option<ClockSummary> {
         let min_rtt = self.best.iter().map(|s| s.rtt).min()?;
-        let slope = self.slope();
-        // Each of the best samples, moved back to time 0 along the drift
-        // line, then averaged.
-        let sum: f64 = self
-            .best
-            .iter()
-            .map(|s| (s.offset - self.origin.unwrap_or(0)) as f64 - slope * s.mid as f64)
-            .sum();
-        let offset_ns = self.origin.unwrap_or(0) + (sum / self.best.len() as f64).round() as i128;
+        let origin = self.origin.unwrap_or(0);
         let fitted = self.n >= 3 && self.c_xx > 0.0;
+        let slope = self.slope();
         let residual_var = if fitted {
             (self.c_yy - slope * 1e9 * self.c_xy).max(0.0) / (self.n - 2) as f64
         } else {
             0.0
         };
-        let spread_ns = residual_var.sqrt();
         // Standard error of the slope, in ns per s, then ppm.
-        let drift_stderr_ppm = fitted.then(|| (residual_var / self.c_xx).sqrt() / 1e3);
+        let stderr_ppm = (residual_var / self.c_xx).sqrt() / 1e3;
+        let span = self.first_x.map_or(0.0, |first| self.last_x - first);
+        let measured = fitted && self.n >= 10 && span >= MIN_DRIFT_SPAN_S;
+        let drift_ppm = measured.then_some(slope * 1e6);
+        // The bounds under the smallest drift limit that holds: assumed
+        // until drift is measured, then the measurement's own.
+        let needed = match drift_ppm {
+            Some(d) => d.abs() + 3.0 * stderr_ppm,
+            None => DRIFT_LIMITS_PPM[ASSUMED_DRIFT_LIMIT] as f64,
+        };
+        let limit = DRIFT_LIMITS_PPM
+            .iter()
+            .position(|&ppm| ppm as f64 >= needed)
+            .unwrap_or(DRIFT_LIMITS_PPM.len() - 1)
+            .max(if measured { 0 } else { ASSUMED_DRIFT_LIMIT });
+        let b = self.bounds[limit];
+        let bounds_ns = (b.lower <= b.upper).then_some((b.lower, b.upper));
+        // Each of the best samples, moved back to time 0 along the drift
+        // (none while it is not measured), then averaged.
+        let used_slope = if measured { slope } else { 0.0 };
+        let sum: f64 = self
+            .best
+            .iter()
+            .map(|s| (s.offset - origin) as f64 - used_slope * s.mid as f64)
+            .sum();
+        let estimate = origin + (sum / self.best.len() as f64).round() as i128;
+        let (offset_ns, uncertainty_ns) = match bounds_ns {
+            Some((lower, upper)) => (
+                estimate.clamp(lower, upper),
+                u64::try_from((upper - lower + 1) / 2).unwrap_or(u64::MAX),
+            ),
+            None => (estimate, min_rtt / 2),
+        };
         Some(ClockSummary {
             offset_ns,
-            uncertainty_ns: min_rtt / 2,
-            spread_ns,
-            drift_ppm: fitted.then_some(slope * 1e6),
-            drift_stderr_ppm,
+            uncertainty_ns,
+            bounds_ns,
+            bounds_drift_limit_ppm: DRIFT_LIMITS_PPM[limit] as u32,
+            spread_ns: residual_var.sqrt(),
+            drift_ppm,
+            drift_stderr_ppm: measured.then_some(stderr_ppm),
             samples: self.seen,
         })
     }
@@ -165,6 +253,11 @@ mod tests {
         c.record(t, arrival + down, theirs, 0);
     }
 
+    fn inside(s: &ClockSummary, truth: i128) -> bool {
+        s.bounds_ns
+            .is_some_and(|(lo, hi)| lo <= truth && truth <= hi)
+    }
+
     #[test]
     fn symmetric_exchanges_give_the_exact_offset() {
         let mut c = ClockOffset::default();
@@ -173,10 +266,28 @@ mod tests {
         }
         let s = c.summary().unwrap();
         assert_eq!(s.offset_ns, -7_000_000);
-        assert_eq!(s.uncertainty_ns, 500);
-        assert_eq!(s.drift_ppm, Some(0.0));
-        assert_eq!(s.spread_ns, 0.0);
+        assert!(inside(&s, -7_000_000), "{s:?}");
+        // The first exchange binds, widened by the 1 ns that 200 ppm can
+        // drift in its 1 µs (rounded up).
+        assert_eq!(s.bounds_ns, Some((-7_000_501, -6_999_499)));
+        assert_eq!(s.uncertainty_ns, 501);
+        assert_eq!(s.drift_ppm, None, "10 ms of exchanges tell no drift");
         assert_eq!(s.samples, 10);
+    }
+
+    #[test]
+    fn asymmetric_legs_keep_the_truth_inside_the_bounds() {
+        // The responder stamps late in each exchange (it reads its clock
+        // after a wake-up): the NTP midpoint is biased, the bounds are not.
+        let mut c = ClockOffset::default();
+        for i in 0..50u64 {
+            let up = 40_000 + (i * 7_919) % 30_000;
+            exchange(&mut c, i * 20_000_000, up, 5_000, 0, 0.0);
+        }
+        let s = c.summary().unwrap();
+        assert!(inside(&s, 0), "{s:?}");
+        let (lo, hi) = s.bounds_ns.unwrap();
+        assert!(lo <= s.offset_ns && s.offset_ns <= hi, "{s:?}");
     }
 
     #[test]
@@ -190,7 +301,7 @@ mod tests {
         }
         let s = c.summary().unwrap();
         assert_eq!(s.offset_ns, 3_000_000_000);
-        assert_eq!(s.uncertainty_ns, 100);
+        assert!(inside(&s, 3_000_000_000), "{s:?}");
     }
 
     #[test]
@@ -212,6 +323,19 @@ mod tests {
         assert!(s.drift_stderr_ppm.unwrap() < 1e-3, "{s:?}");
         assert!((s.offset_ns - 1_500_000_000).abs() <= 2, "{s:?}");
         assert!(s.spread_ns < 1.0, "{s:?}");
+        assert!(inside(&s, 1_500_000_000), "{s:?}");
+        assert_eq!(s.bounds_drift_limit_ppm, 50);
+    }
+
+    #[test]
+    fn a_stepped_clock_makes_the_bounds_disjoint() {
+        let mut c = ClockOffset::default();
+        for i in 0..20u64 {
+            let offset = if i < 10 { 0 } else { 5_000_000 };
+            exchange(&mut c, i * 10_000_000, 1_000, 1_000, offset, 0.0);
+        }
+        let s = c.summary().unwrap();
+        assert_eq!(s.bounds_ns, None, "{s:?}");
     }
 
     #[test]
@@ -225,7 +349,8 @@ mod tests {
         }
         let s = c.summary().unwrap();
         assert_eq!(s.offset_ns, 42_000_000_000 - base);
-        assert_eq!(s.drift_ppm, Some(0.0));
+        assert!(inside(&s, 42_000_000_000 - base), "{s:?}");
+        assert_eq!(s.drift_ppm, None);
     }
 
     #[test]
@@ -237,10 +362,5 @@ mod tests {
         assert_eq!(c.best.len(), BEST);
         assert!(c.best.iter().all(|s| s.rtt == 20));
         assert!(ClockOffset::default().summary().is_none());
-        // Two samples fit any line: no drift claimed.
-        let mut two = ClockOffset::default();
-        exchange(&mut two, 0, 10, 10, 0, 0.0);
-        exchange(&mut two, 1_000, 10, 30, 0, 0.0);
-        assert_eq!(two.summary().unwrap().drift_ppm, None);
     }
 }

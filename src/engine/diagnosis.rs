@@ -11,7 +11,7 @@ use super::radio;
 use super::roster::{Roster, Source};
 use super::summary::ResponderSummary;
 use crate::frame::signing::SigningCounts;
-use crate::frame::{ScanStats, SysComp, Version};
+use crate::frame::{mav_type, ScanStats, SysComp, Version};
 use crate::transport::LinkKind;
 
 /// QGroundControl's and Mission Planner's ids, which MAVSDK ground
@@ -94,7 +94,34 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
             format!("frames from {id} are signed and we have no key: pass --signing-key"),
         ));
     }
-    let identity = source.identity.as_ref().filter(|i| i.is_vehicle_like())?;
+    let identity = source.identity.as_ref()?;
+    if identity.mav_type == mav_type::GCS {
+        let vehicles = o
+            .roster
+            .iter()
+            .any(|(other, i)| *other != o.ours && i.is_vehicle_like());
+        if vehicles {
+            return None;
+        }
+        let timesync = if o.probe == "timesync" {
+            " (MAVProxy answers TIMESYNC with `module load system_time` and \
+             --target-system set to our system id)"
+        } else {
+            ""
+        };
+        return Some(Hint::new(
+            HintCode::GroundStationOnly,
+            format!(
+                "{id} is a ground station or router ({}): it forwards requests but does not \
+                 answer {} itself{timesync}, and no vehicle was heard behind it",
+                identity.autopilot_name,
+                o.probe.to_uppercase()
+            ),
+        ));
+    }
+    if !identity.is_vehicle_like() {
+        return None;
+    }
     let who = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_name);
     let probe = o.probe.to_uppercase();
     if source.v1 == source.frames && o.version == Version::V2 {
@@ -229,7 +256,6 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
 mod tests {
     use super::*;
     use crate::engine::matcher::Counts;
-    use crate::frame::mav_type;
 
     const ARDUPILOT: (u8, u8) = (2, 3);
     const PX4: (u8, u8) = (2, 12);
@@ -360,6 +386,28 @@ mod tests {
             ..observed(&roster, 12)
         };
         assert!(codes(&diagnose(&o)).contains(&HintCode::SysidEnforced));
+    }
+
+    #[test]
+    fn a_ground_station_alone_forwards_but_answers_nothing() {
+        let mut roster = Roster::default();
+        vehicle(
+            &mut roster,
+            SysComp::new(255, 230),
+            (mav_type::GCS, 8),
+            Version::V2,
+            false,
+        );
+        let o = Observed {
+            probe: "timesync",
+            ..observed(&roster, 12)
+        };
+        let hints = diagnose(&o);
+        assert_eq!(codes(&hints), [HintCode::GroundStationOnly]);
+        assert!(
+            hints[0].text.contains("module load system_time"),
+            "{hints:?}"
+        );
     }
 
     #[test]

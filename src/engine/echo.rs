@@ -9,6 +9,7 @@ use hdrhistogram::Histogram;
 use tokio::sync::Notify;
 
 use super::diagnosis::{diagnose, Observed};
+use super::hint::{Hint, HintCode};
 use super::link_io::{Clock, Sender};
 use super::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
 use super::observe::{tell_each, Event, Observer, StartInfo};
@@ -126,6 +127,10 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         }
     }
 
+    fn begin(&mut self, wall_at_zero: std::time::SystemTime) {
+        self.probe.begin(wall_at_zero);
+    }
+
     async fn send_due<T: Transport>(
         &mut self,
         schedule: &mut Schedule,
@@ -211,6 +216,18 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             no_peer_within: ended.no_peer_within,
         });
         hints.extend(radio_hints(&radios, loss_by_txbuf));
+        hints.extend(responders.iter().filter_map(|r| {
+            let clock = r.clock.filter(|c| c.bounds_ns.is_none())?;
+            Some(Hint::new(
+                HintCode::ClockInconsistent,
+                format!(
+                    "{}: the causal bounds of its clock offset do not intersect: a clock stepped \
+                     during the run, it stamps TIMESYNC outside its receive-reply window, or the \
+                     clocks' rates differ by more than {} ppm",
+                    r.id, clock.bounds_drift_limit_ppm
+                ),
+            ))
+        }));
         let summary = Summary {
             link: cfg.link_name.clone(),
             probe: name,

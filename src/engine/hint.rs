@@ -32,6 +32,10 @@ pub enum HintCode {
     /// A system sends but never answered: a router may not forward our
     /// requests, or it ignores our ids.
     NeverAnswered,
+    /// Only a ground station or router was heard (MAVProxy,
+    /// mavlink-router): it forwards, but answers nothing itself, and no
+    /// vehicle was heard behind it.
+    GroundStationOnly,
     /// Every request was still within its timeout when the run ended.
     TooEarly,
     /// Loss concentrated while the radio's transmit buffer was low.

@@ -16,13 +16,21 @@ use crate::transport::{LinkError, Transport};
 /// monotonic clock (tokio's, so a paused runtime's virtual time too).
 pub struct Clock {
     epoch: Instant,
+    /// The wall clock at `epoch`, read right after it.
+    wall_at_zero: std::time::SystemTime,
 }
 
 impl Clock {
     pub fn start() -> Self {
         Clock {
             epoch: Instant::now(),
+            wall_at_zero: std::time::SystemTime::now(),
         }
+    }
+
+    /// The wall clock at session time 0.
+    pub fn wall_at_zero(&self) -> std::time::SystemTime {
+        self.wall_at_zero
     }
 
     pub fn ns(&self, t: Instant) -> Nanos {

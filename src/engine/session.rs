@@ -55,6 +55,8 @@ pub struct Ended<'a> {
 pub trait Driver {
     /// What the run announces first.
     fn start_info(&self, cfg: &SessionConfig) -> StartInfo;
+    /// The session's time 0 is `wall_at_zero` on the wall clock.
+    fn begin(&mut self, _wall_at_zero: std::time::SystemTime) {}
     /// Puts what is due now on the wire: requests the schedule has due,
     /// re-sends.
     async fn send_due<T: Transport>(
@@ -205,6 +207,7 @@ pub async fn run<T: Transport, D: Driver>(
 ) -> Outcome {
     tighten_timer_slack();
     let clock = Clock::start();
+    driver.begin(clock.wall_at_zero());
     let mut sender = Sender::new(
         cfg.ours,
         cfg.version,

@@ -22,6 +22,10 @@ pub enum Classified {
 
 /// A request/reply probe whose replies echo a token (PING, TIMESYNC).
 pub trait EchoProbe {
+    /// The session starts: its time 0 is `wall_at_zero` on the wall clock
+    /// (both read together, so our clock is the wall clock, not late by
+    /// however long the run took to start).
+    fn begin(&mut self, _wall_at_zero: std::time::SystemTime) {}
     /// Name shown in reports ("ping").
     fn name(&self) -> &'static str;
     /// The token for a request sent at `now_ns` (session clock); tokens

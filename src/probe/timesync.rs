@@ -12,18 +12,24 @@ use crate::frame::{Frame, Msg, SysComp};
 
 pub struct TimesyncProbe {
     /// What our clock reads at session time 0, in ns: wall time on real
-    /// links (so a peer's logs make sense), advanced by the monotonic
-    /// session clock so a clock step cannot repeat a token.
+    /// links (so offsets against a responder's wall clock mean something),
+    /// advanced by the monotonic session clock so a clock step cannot
+    /// repeat a token. 0 on the simulated link, whose responders count
+    /// from its start.
     base_ns: i128,
+    wall: bool,
     target: SysComp,
     last_token: u64,
     clocks: HashMap<SysComp, ClockOffset>,
 }
 
 impl TimesyncProbe {
-    pub fn new(base_ns: u64, target: SysComp) -> Self {
+    /// Requests to `target`; our clock is the wall clock when `wall`, else
+    /// session time.
+    pub fn new(target: SysComp, wall: bool) -> Self {
         TimesyncProbe {
-            base_ns: i128::from(base_ns),
+            base_ns: 0,
+            wall,
             target,
             last_token: 0,
             clocks: HashMap::new(),
@@ -34,6 +40,14 @@ impl TimesyncProbe {
 impl EchoProbe for TimesyncProbe {
     fn name(&self) -> &'static str {
         "timesync"
+    }
+
+    fn begin(&mut self, wall_at_zero: std::time::SystemTime) {
+        if self.wall {
+            self.base_ns = wall_at_zero
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos() as i128);
+        }
     }
 
     fn token(&mut self, now_ns: u64) -> u64 {
@@ -76,9 +90,13 @@ impl EchoProbe for TimesyncProbe {
     }
 
     fn on_reply(&mut self, frame: &Frame, sent_at: Nanos, at: Nanos) {
-        let Msg::Timesync { tc1, .. } = frame.msg else {
+        let Msg::Timesync { tc1, ts1, .. } = frame.msg else {
             return;
         };
+        // ts1 is our clock when the request was made, before it was
+        // written: the earliest the responder can have read its clock.
+        let made = u64::try_from(i128::from(ts1) - self.base_ns).unwrap_or(sent_at);
+        let sent_at = sent_at.min(made);
         // The matcher tracks at most MAX_RESPONDERS; so do we.
         if self.clocks.len() >= MAX_RESPONDERS && !self.clocks.contains_key(&frame.source) {
             return;
@@ -119,7 +137,7 @@ mod tests {
 
     #[test]
     fn replies_match_by_ts1_and_unset_targets_are_ours() {
-        let p = TimesyncProbe::new(0, SysComp::new(0, 0));
+        let p = TimesyncProbe::new(SysComp::new(0, 0), false);
         assert_eq!(
             p.classify(&reply(9, 42, 0, 0), US),
             Classified::Reply(Lookup::Token(42))
@@ -146,7 +164,7 @@ mod tests {
 
     #[test]
     fn tokens_rise_strictly_and_are_never_zero() {
-        let mut p = TimesyncProbe::new(0, SysComp::new(1, 1));
+        let mut p = TimesyncProbe::new(SysComp::new(1, 1), false);
         assert_eq!(p.token(0), 1);
         assert_eq!(p.token(0), 2);
         assert_eq!(p.token(1_000), 1_000);
@@ -160,19 +178,29 @@ mod tests {
                 target_component: 1
             }
         );
-        let mut wall = TimesyncProbe::new(1_700_000_000_000_000_000, SysComp::new(0, 0));
+        let mut wall = TimesyncProbe::new(SysComp::new(0, 0), true);
+        let at_zero = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000);
+        wall.begin(at_zero);
         assert_eq!(wall.token(5), 1_700_000_000_000_000_005);
+        // Session time only, on the simulated link.
+        let mut sim = TimesyncProbe::new(SysComp::new(0, 0), false);
+        sim.begin(at_zero);
+        assert_eq!(sim.token(5), 5);
     }
 
     #[test]
     fn offsets_are_kept_per_responder() {
-        let mut p = TimesyncProbe::new(1_000, SysComp::new(0, 0));
-        // Sent at 100, answered at 300: their clock read 5_200 at our 200,
-        // which is 1_200 on the clock our ts1 counts.
+        let mut p = TimesyncProbe::new(SysComp::new(0, 0), true);
+        p.begin(std::time::UNIX_EPOCH + std::time::Duration::from_nanos(1_000));
+        // Made at 100 (ts1 1_100), answered at 300: their clock read 5_200
+        // between our 1_100 and 1_300.
         p.on_reply(&reply(5_200, 1_100, 0, 0), 100, 300);
         let c = p.clock(SysComp::new(1, 1)).unwrap();
         assert_eq!(c.offset_ns, 4_000);
-        assert_eq!(c.uncertainty_ns, 100);
+        // Widened by 1 ns: what 200 ppm of drift could do in 300 ns,
+        // rounded up.
+        assert_eq!(c.bounds_ns, Some((3_899, 4_101)));
+        assert_eq!(c.uncertainty_ns, 101);
         assert!(p.clock(SysComp::new(2, 1)).is_none());
     }
 }

@@ -1,7 +1,8 @@
 //! What a run writes besides its report: `--samples`, `--plot`, `--hgrm`
-//! and the `--prometheus` endpoint. Each is opened before the first
-//! request, so a bad path or a port in use fails before anything is sent;
-//! the plot and the histograms are written once every link has ended.
+//! and the `--prometheus` endpoint. Each is opened (files created) before
+//! the first request, so a bad path or a port in use fails before anything
+//! is sent and a long run's result is never lost to one; the plot and the
+//! histograms are written once every link has ended.
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
@@ -20,7 +21,7 @@ pub struct Exports {
     samples: Option<Shared<BufWriter<File>>>,
     plot: Option<(Plot, BufWriter<File>, PathBuf)>,
     prometheus: Option<PrometheusReporter>,
-    hgrm: Option<PathBuf>,
+    hgrm: Option<(BufWriter<File>, PathBuf)>,
     /// Several links: sample rows name their link.
     several: bool,
 }
@@ -56,11 +57,16 @@ impl Exports {
             .as_deref()
             .map(|p| create(p, "--plot").map(|f| (Plot::default(), f, p.to_path_buf())))
             .transpose()?;
+        let hgrm = out
+            .hgrm
+            .as_deref()
+            .map(|p| create(p, "--hgrm").map(|f| (f, p.to_path_buf())))
+            .transpose()?;
         Ok(Exports {
             samples,
             plot,
             prometheus,
-            hgrm: out.hgrm.clone(),
+            hgrm,
             several: config.links.len() > 1,
         })
     }
@@ -96,8 +102,8 @@ impl Exports {
             });
             written.map_err(|e| format!("cannot write --plot {}: {e}", path.display()))?;
         }
-        if let Some(path) = &self.hgrm {
-            write_hgrm(path, outcomes)
+        if let Some((file, path)) = self.hgrm {
+            write_hgrm(file, outcomes)
                 .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))?;
         }
         Ok(())
@@ -105,8 +111,10 @@ impl Exports {
 }
 
 /// Every link's responders, one section each, in one file.
-fn write_hgrm<'a>(path: &Path, outcomes: impl IntoIterator<Item = &'a Outcome>) -> io::Result<()> {
-    let mut out = BufWriter::new(File::create(path)?);
+fn write_hgrm<'a>(
+    mut out: BufWriter<File>,
+    outcomes: impl IntoIterator<Item = &'a Outcome>,
+) -> io::Result<()> {
     for outcome in outcomes {
         for (id, hist) in &outcome.histograms {
             hgrm::write_section(&mut out, outcome.summary.link(), *id, hist)?;

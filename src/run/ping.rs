@@ -101,12 +101,8 @@ async fn measure(
         Probe::Timesync { target } => {
             // The simulated link has no wall clock: its responders count
             // from its start, and so do we there (reproducible output).
-            let base = if matches!(config.spec, LinkSpec::Sim(_)) {
-                0
-            } else {
-                wall.micros_since_epoch() * 1_000
-            };
-            let probe = TimesyncProbe::new(base, *target);
+            let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
+            let probe = TimesyncProbe::new(*target, wall_clock);
             echo::run(session, &mut link, probe, observer, &stop).await
         }
         Probe::Ping => {

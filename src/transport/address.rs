@@ -48,11 +48,14 @@ impl LinkSpec {
     /// fast as they can, whatever the baud rate says.
     pub fn may_ignore_baud(&self) -> bool {
         match self {
-            LinkSpec::Serial { path, .. } => {
-                ["/dev/ttyACM", "/dev/pts/", "/dev/cu.usbmodem", "/dev/tty.usbmodem"]
-                    .iter()
-                    .any(|prefix| path.starts_with(prefix))
-            }
+            LinkSpec::Serial { path, .. } => [
+                "/dev/ttyACM",
+                "/dev/pts/",
+                "/dev/cu.usbmodem",
+                "/dev/tty.usbmodem",
+            ]
+            .iter()
+            .any(|prefix| path.starts_with(prefix)),
             _ => false,
         }
     }

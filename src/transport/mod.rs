@@ -148,6 +148,13 @@ pub(crate) fn push_datagram(
     frame::scan_datagram(data, stats, &mut |raw| out.push(Inbound::of(raw, at, path)));
 }
 
+/// An IP address family, for `-4` and `-6`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Family {
+    V4,
+    V6,
+}
+
 /// How to open a link, beyond its connection string.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LinkOptions {
@@ -156,6 +163,8 @@ pub struct LinkOptions {
     /// Reopen a tcp client or serial link that breaks, instead of ending;
     /// on `udpout:` an ICMP "port unreachable" does not end the link.
     pub reconnect: bool,
+    /// Resolve host names to this family only (`-4`, `-6`).
+    pub family: Option<Family>,
 }
 
 impl Default for LinkOptions {
@@ -163,6 +172,7 @@ impl Default for LinkOptions {
         LinkOptions {
             baud: serial::DEFAULT_BAUD,
             reconnect: false,
+            family: None,
         }
     }
 }
@@ -180,20 +190,24 @@ impl Link {
     /// Opens the link a connection string names.
     pub async fn open(spec: &LinkSpec, options: &LinkOptions) -> Result<Link, LinkError> {
         Ok(match spec {
-            LinkSpec::UdpIn(a) => Link::Udp(udp::UdpLink::listen(a).await?),
+            LinkSpec::UdpIn(a) => Link::Udp(udp::UdpLink::listen(a, options.family).await?),
             LinkSpec::UdpOut(a) => {
-                let link = udp::UdpLink::connect(a).await?;
+                let link = udp::UdpLink::connect(a, options.family).await?;
                 Link::Udp(if options.reconnect {
                     link.keep_going_when_refused()
                 } else {
                     link
                 })
             }
-            LinkSpec::UdpBcast(a) => Link::Udp(udp::UdpLink::broadcast(a).await?),
+            LinkSpec::UdpBcast(a) => Link::Udp(udp::UdpLink::broadcast(a, options.family).await?),
             LinkSpec::TcpOut(a) => Link::Tcp(
-                stream::StreamLink::open(tcp::TcpConnector::new(a), options.reconnect).await?,
+                stream::StreamLink::open(
+                    tcp::TcpConnector::new(a, options.family),
+                    options.reconnect,
+                )
+                .await?,
             ),
-            LinkSpec::TcpIn(a) => Link::TcpIn(tcp::TcpServer::listen(a).await?),
+            LinkSpec::TcpIn(a) => Link::TcpIn(tcp::TcpServer::listen(a, options.family).await?),
             LinkSpec::Serial { path, baud } => Link::Serial(
                 stream::StreamLink::open(
                     serial::SerialConnector::new(path, baud.unwrap_or(options.baud)),

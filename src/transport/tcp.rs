@@ -17,7 +17,7 @@ use tokio::time::Instant;
 use super::address::HostPort;
 use super::stream::Connect;
 use super::udp::resolve;
-use super::{Inbound, LinkError, LinkKind, PathId, Transport};
+use super::{Family, Inbound, LinkError, LinkKind, PathId, Transport};
 use crate::frame::{ScanStats, StreamScanner};
 
 /// Clients beyond this are refused: memory stays bounded.
@@ -30,13 +30,15 @@ const READ_BUF: usize = 16 * 1024;
 /// `tcp:HOST:PORT`: the connector behind a reconnecting [`super::stream::StreamLink`].
 pub struct TcpConnector {
     addr: HostPort,
+    family: Option<Family>,
     name: String,
 }
 
 impl TcpConnector {
-    pub fn new(addr: &HostPort) -> Self {
+    pub fn new(addr: &HostPort, family: Option<Family>) -> Self {
         TcpConnector {
             addr: addr.clone(),
+            family,
             name: format!("tcp:{addr}"),
         }
     }
@@ -52,7 +54,7 @@ impl Connect for TcpConnector {
 
     async fn connect(&self) -> io::Result<TcpStream> {
         // Resolved on every attempt: a router's address may change while down.
-        let peer = resolve(&self.addr)
+        let peer = resolve(&self.addr, self.family)
             .await
             .map_err(|e| io::Error::other(e.to_string()))?;
         let stream = TcpStream::connect(peer).await?;
@@ -80,8 +82,8 @@ pub struct TcpServer {
 }
 
 impl TcpServer {
-    pub async fn listen(addr: &HostPort) -> Result<Self, LinkError> {
-        let local = resolve(addr).await?;
+    pub async fn listen(addr: &HostPort, family: Option<Family>) -> Result<Self, LinkError> {
+        let local = resolve(addr, family).await?;
         let listener = TcpListener::bind(local)
             .await
             .map_err(|e| LinkError::io(format!("cannot listen on tcp {addr}"), e))?;

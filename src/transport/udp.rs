@@ -15,7 +15,7 @@ use tokio::net::{lookup_host, UdpSocket};
 use tokio::time::Instant;
 
 use super::address::HostPort;
-use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
+use super::{push_datagram, Family, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::frame::ScanStats;
 
 /// At most this many peers are remembered on a listening socket; more than
@@ -85,14 +85,29 @@ fn arrival(kernel: Option<TimeSpec>, now: Instant, now_wall: SystemTime) -> Inst
     }
 }
 
-pub(crate) async fn resolve(addr: &HostPort) -> Result<SocketAddr, LinkError> {
+/// The first address `addr` resolves to, of `family` when one is asked
+/// for (`-4`, `-6`).
+pub(crate) async fn resolve(
+    addr: &HostPort,
+    family: Option<Family>,
+) -> Result<SocketAddr, LinkError> {
     let mut addrs = lookup_host((addr.host.as_str(), addr.port))
         .await
         .map_err(|e| LinkError::io(format!("cannot resolve {addr}"), e))?;
-    addrs.next().ok_or_else(|| {
+    let wanted = |a: &SocketAddr| match family {
+        None => true,
+        Some(Family::V4) => a.is_ipv4(),
+        Some(Family::V6) => a.is_ipv6(),
+    };
+    addrs.find(wanted).ok_or_else(|| {
+        let why = match family {
+            None => "no address found",
+            Some(Family::V4) => "no IPv4 address (-4)",
+            Some(Family::V6) => "no IPv6 address (-6)",
+        };
         LinkError::io(
             format!("cannot resolve {addr}"),
-            io::Error::new(io::ErrorKind::NotFound, "no address found"),
+            io::Error::new(io::ErrorKind::NotFound, why),
         )
     })
 }
@@ -126,8 +141,8 @@ impl UdpLink {
     }
 
     /// `udpin:HOST:PORT`
-    pub async fn listen(addr: &HostPort) -> Result<Self, LinkError> {
-        let local = resolve(addr).await?;
+    pub async fn listen(addr: &HostPort, family: Option<Family>) -> Result<Self, LinkError> {
+        let local = resolve(addr, family).await?;
         let socket = UdpSocket::bind(local)
             .await
             .map_err(|e| LinkError::io(format!("cannot listen on udp {addr}"), e))?;
@@ -135,8 +150,8 @@ impl UdpLink {
     }
 
     /// `udpout:HOST:PORT`
-    pub async fn connect(addr: &HostPort) -> Result<Self, LinkError> {
-        let peer = resolve(addr).await?;
+    pub async fn connect(addr: &HostPort, family: Option<Family>) -> Result<Self, LinkError> {
+        let peer = resolve(addr, family).await?;
         let local: SocketAddr = if peer.is_ipv6() {
             "[::]:0".parse().expect("valid literal")
         } else {
@@ -173,8 +188,8 @@ impl UdpLink {
     }
 
     /// `udpbcast:ADDR:PORT`
-    pub async fn broadcast(addr: &HostPort) -> Result<Self, LinkError> {
-        let target = resolve(addr).await?;
+    pub async fn broadcast(addr: &HostPort, family: Option<Family>) -> Result<Self, LinkError> {
+        let target = resolve(addr, family).await?;
         if target.is_ipv6() {
             return Err(LinkError::io(
                 format!("cannot broadcast to udp {addr}"),
@@ -245,12 +260,10 @@ impl UdpLink {
     fn failed(&self, e: io::Error) -> LinkError {
         match &self.mode {
             Mode::Connected { peer, .. } if e.kind() == io::ErrorKind::ConnectionRefused => {
-                LinkError::io(
-                    format!(
-                        "udp {peer} is unreachable (ICMP port unreachable: nothing listening?)"
-                    ),
-                    e,
-                )
+                LinkError::Closed(format!(
+                    "nothing listening at {peer} (ICMP port unreachable); if the vehicle sends \
+                     to this port, listen: udp:{peer}"
+                ))
             }
             _ => LinkError::io("udp link failed", e),
         }

@@ -101,7 +101,13 @@ fn closed_udp_port_is_a_link_failure_with_summary() {
     let (code, out, err) =
         run_mavping(&["-c", "5", "-i", "0.05", &format!("udpout:127.0.0.1:{port}")]);
     assert_eq!(code, 2, "{out}\n{err}");
-    assert!(err.contains("unreachable"), "{err}");
+    assert_eq!(
+        err.trim(),
+        format!(
+            "mavping: nothing listening at 127.0.0.1:{port} (ICMP port unreachable); if the \
+             vehicle sends to this port, listen: udp:127.0.0.1:{port}"
+        )
+    );
     assert!(
         out.contains("mavping statistics"),
         "summary still printed: {out}"

@@ -138,7 +138,7 @@ fn killing_one_links_peer_ends_that_link_only() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(
         err.starts_with(&format!(
-            "mavping: {}: udp 127.0.0.1:{pb} is unreachable",
+            "mavping: {}: nothing listening at 127.0.0.1:{pb} (ICMP port unreachable)",
             links[1]
         )),
         "{err}"

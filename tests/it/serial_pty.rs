@@ -184,10 +184,7 @@ fn a_pty_ignores_the_baud_rate_and_the_summary_says_so() {
         text.contains("faster than 57600 baud allows (8.160 ms per round trip)"),
         "{text}"
     );
-    assert!(
-        !hints.iter().any(|h| h["code"] == "wire_overrun"),
-        "{s}"
-    );
+    assert!(!hints.iter().any(|h| h["code"] == "wire_overrun"), "{s}");
 }
 
 /// A serial device another program holds exclusively (TIOCEXCL, as

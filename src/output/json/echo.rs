@@ -134,9 +134,11 @@ fn responder_json(r: &ResponderSummary, verdict: &Verdict) -> Value {
         })),
         "histogram": r.histogram,
         "clock": r.clock.map(|c| json!({
-            // i64 holds ±292 years of ns: enough for any two clocks.
-            "offset_ns": i64::try_from(c.offset_ns).unwrap_or(if c.offset_ns < 0 { i64::MIN } else { i64::MAX }),
+            "offset_ns": ns(c.offset_ns),
             "uncertainty_ns": c.uncertainty_ns,
+            "lower_ns": c.bounds_ns.map(|(lower, _)| ns(lower)),
+            "upper_ns": c.bounds_ns.map(|(_, upper)| ns(upper)),
+            "bounds_drift_limit_ppm": c.bounds_drift_limit_ppm,
             "spread_ns": c.spread_ns,
             "drift_ppm": c.drift_ppm,
             "drift_stderr_ppm": c.drift_stderr_ppm,
@@ -144,6 +146,11 @@ fn responder_json(r: &ResponderSummary, verdict: &Verdict) -> Value {
         })),
         "failures": failures,
     })
+}
+
+/// i64 holds ±292 years of ns: enough for any two clocks.
+fn ns(v: i128) -> i64 {
+    i64::try_from(v).unwrap_or(if v < 0 { i64::MIN } else { i64::MAX })
 }
 
 /// The `summary` object.

@@ -311,13 +311,19 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
     if let Some(clock) = &r.clock {
         let drift = match (clock.drift_ppm, clock.drift_stderr_ppm) {
             (Some(d), Some(e)) => format!("{d:+.2} ± {e:.2} ppm"),
-            _ => "unknown (too few samples)".to_string(),
+            _ => format!(
+                "not measured (needs {} s of exchanges)",
+                crate::engine::clock_offset::MIN_DRIFT_SPAN_S
+            ),
+        };
+        let bounds = match clock.bounds_ns {
+            Some((lower, upper)) => format!("between {} and {}", offset(lower), offset(upper)),
+            None => "its causal bounds do not intersect".to_string(),
         };
         writeln!(
             out,
-            "  clock offset {} ± {} ms, spread {} ms, drift {drift} ({} samples)",
+            "  clock offset {} ({bounds}), spread {} ms, drift {drift} ({} samples)",
             offset(clock.offset_ns),
-            ms(clock.uncertainty_ns),
             ms_us(clock.spread_ns / 1e3),
             clock.samples
         )?;
