@@ -1,17 +1,31 @@
 #!/usr/bin/env bash
-# Runs the whole test suite on a fresh machine: puts pymavlink (the
-# third-party MAVLink peer the interop tests use) and pyserial (which
-# pymavlink needs to open a serial port) in .venv, promtool and tmux,
-# then cargo test.
+# Runs the whole test suite on a fresh machine: puts the third-party MAVLink
+# peers the interop tests use in .venv — pymavlink (and pyserial, which it
+# needs to open a serial port), MAVProxy, and MAVSDK's mavsdk_server (the
+# static binary inside the mavsdk-grpc wheel) — installs promtool and tmux,
+# then runs cargo test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 PYMAVLINK_VERSION=2.4.50
 PYSERIAL_VERSION=3.5
+MAVPROXY_VERSION=1.8.75
+MAVSDK_GRPC_VERSION=4.0.5
 if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pymavlink, serial" 2>/dev/null; then
   python3 -m venv .venv
   .venv/bin/pip install --quiet --disable-pip-version-check \
     "pymavlink==${PYMAVLINK_VERSION}" "pyserial==${PYSERIAL_VERSION}"
+fi
+# MAVProxy's console and map modules pull in OpenCV, wxPython and
+# matplotlib (over 1 GB); the router and its system_time module need only
+# pymavlink, so it is installed without its dependencies. mavsdk-grpc is
+# wanted for its mavsdk_server binary only.
+site=$(.venv/bin/python -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
+if [ ! -x .venv/bin/mavproxy.py ]; then
+  .venv/bin/pip install --quiet --disable-pip-version-check --no-deps "MAVProxy==${MAVPROXY_VERSION}"
+fi
+if [ ! -x "$site/mavsdk_grpc/bin/mavsdk_server" ]; then
+  .venv/bin/pip install --quiet --disable-pip-version-check --no-deps "mavsdk-grpc==${MAVSDK_GRPC_VERSION}"
 fi
 # promtool (Debian's prometheus package) checks the --prometheus exposition;
 # tmux runs --live in a real terminal. Installed only when missing.

@@ -35,7 +35,8 @@ pub struct Observed<'a> {
     /// Radios heard by their RADIO_STATUS: no answer is expected of them.
     pub radios: &'a [SysComp],
     pub requests: u64,
-    pub in_flight: u64,
+    /// Requests still within their timeout when the run ended.
+    pub undecided: u64,
     /// A listening link gave up after this long without a peer.
     pub no_peer_within: Option<Duration>,
 }
@@ -86,6 +87,16 @@ fn not_mavlink(o: &Observed<'_>) -> Hint {
     )
 }
 
+fn our_ids_are_qgcs(observed: &str) -> Hint {
+    Hint::new(
+        HintCode::OurIdsAreQgcs,
+        format!(
+            "{observed}our ids {QGC_IDS} are QGroundControl's: MAVSDK-based ground stations \
+             (mavsdk_server) ignore every frame from them; try --sysid 250"
+        ),
+    )
+}
+
 /// What one silent system's traffic says about its silence, if anything.
 fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint> {
     if source.signed > 0 && !o.key {
@@ -95,7 +106,12 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
         ));
     }
     let identity = source.identity.as_ref()?;
+    let who = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_name);
+    let probe = o.probe.to_uppercase();
     if identity.mav_type == mav_type::GCS {
+        if o.ours == QGC_IDS {
+            return Some(our_ids_are_qgcs(&format!("{who} never answered: ")));
+        }
         let vehicles = o
             .roster
             .iter()
@@ -112,18 +128,14 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
         return Some(Hint::new(
             HintCode::GroundStationOnly,
             format!(
-                "{id} is a ground station or router ({}): it forwards requests but does not \
-                 answer {} itself{timesync}, and no vehicle was heard behind it",
-                identity.autopilot_name,
-                o.probe.to_uppercase()
+                "{who} is a ground station or router: it forwards requests but does not \
+                 answer {probe} itself{timesync}, and no vehicle was heard behind it"
             ),
         ));
     }
     if !identity.is_vehicle_like() {
         return None;
     }
-    let who = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_name);
-    let probe = o.probe.to_uppercase();
     if source.v1 == source.frames && o.version == Version::V2 {
         return Some(Hint::new(
             HintCode::Mavlink1Only,
@@ -208,13 +220,7 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
             hints.push(nothing_heard(o));
         }
         if o.ours == QGC_IDS && o.kind != LinkKind::Serial {
-            hints.push(Hint::new(
-                HintCode::OurIdsAreQgcs,
-                format!(
-                    "our ids {QGC_IDS} are QGroundControl's: MAVSDK-based ground stations \
-                     (mavsdk_server) ignore every frame from them; try --sysid 250"
-                ),
-            ));
+            hints.push(our_ids_are_qgcs(""));
         }
         return hints;
     }
@@ -230,7 +236,7 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
         // A radio answers no probe: its silence says nothing about the link.
         .filter(|(id, _)| !o.radios.contains(id) && !radio::is_sik_default(**id))
         .collect();
-    let decided = o.requests.saturating_sub(o.in_flight);
+    let decided = o.requests.saturating_sub(o.undecided);
     if decided == 0 && o.requests > 0 && !silent.is_empty() {
         hints.push(Hint::new(
             HintCode::TooEarly,
@@ -277,7 +283,7 @@ mod tests {
             responders: &[],
             radios: &[],
             requests: 10,
-            in_flight: 2,
+            undecided: 2,
             no_peer_within: None,
         }
     }
@@ -421,7 +427,7 @@ mod tests {
             false,
         );
         let o = Observed {
-            in_flight: 10,
+            undecided: 10,
             ..observed(&roster, 5)
         };
         assert_eq!(codes(&diagnose(&o)), [HintCode::TooEarly]);

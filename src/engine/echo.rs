@@ -189,6 +189,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
 
     fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>) {
         let cfg = ended.cfg;
+        let undecided = self.matcher.undecided();
         let in_flight = self.matcher.finish();
         let mut responders = responder_summaries(&self.matcher, &ended.roster);
         for r in &mut responders {
@@ -212,7 +213,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             responders: &responders,
             radios: &radio_ids,
             requests: self.matcher.issued(),
-            in_flight,
+            undecided,
             no_peer_within: ended.no_peer_within,
         });
         hints.extend(radio_hints(&radios, loss_by_txbuf));

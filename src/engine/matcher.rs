@@ -420,6 +420,11 @@ impl Matcher {
             })
     }
 
+    /// Requests still within their timeout, whoever answered them.
+    pub fn undecided(&self) -> u64 {
+        self.next_n - self.next_expiry
+    }
+
     /// Requests issued so far.
     pub fn issued(&self) -> u64 {
         self.next_n

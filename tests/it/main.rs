@@ -6,6 +6,7 @@ mod common;
 
 mod cli;
 mod completions;
+mod diagnosis;
 mod high_rate;
 mod hostile;
 mod multilink;

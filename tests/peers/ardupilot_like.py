@@ -5,6 +5,8 @@ it started, and replies carry no target fields (pymavlink's common dialect,
 like ArduPilot, leaves them out).
 
 Can drop chosen requests (by arrival order, from 0) and delay every reply.
+With --clock unix its TIMESYNC clock is the wall clock (time.time_ns())
+plus --offset-s: the truth a bound on the offset is held against.
 Prints one JSON line of ground truth on SIGTERM/SIGINT, including the true
 offset of its clock against the wall clock (what mavping's ts1 counts).
 """
@@ -23,6 +25,9 @@ def main():
     ap.add_argument("--compid", type=int, default=1)
     ap.add_argument("--drop", default="", help="request numbers (from 0) not to answer")
     ap.add_argument("--delay-ms", type=float, default=0.0)
+    ap.add_argument("--clock", choices=["boot", "unix"], default="boot",
+                    help="boot: ns since start (as ArduPilot); unix: the wall clock")
+    ap.add_argument("--offset-s", type=float, default=0.0, help="added to the unix clock")
     args = ap.parse_args()
 
     os.environ["MAVLINK20"] = "1"
@@ -34,7 +39,11 @@ def main():
     drop = {int(x) for x in args.drop.split(",") if x.strip()}
     start = time.monotonic_ns()
 
+    offset_ns = int(round(args.offset_s * 1e9))
+
     def clock():
+        if args.clock == "unix":
+            return time.time_ns() + offset_ns
         return time.monotonic_ns() - start + 1
 
     truth = {"timesync_requests": 0, "replies": 0, "dropped": 0, "ping_ignored": 0}
@@ -74,8 +83,8 @@ def main():
         # ArduPilot reads its clock as it answers.
         mav.timesync_send(clock(), msg.ts1)
         truth["replies"] += 1
-    # Theirs minus ours, read back to back at exit.
-    truth["offset_ns"] = clock() - time.time_ns()
+    # Theirs minus ours, read back to back at exit (exact for --clock unix).
+    truth["offset_ns"] = offset_ns if args.clock == "unix" else clock() - time.time_ns()
     print(json.dumps(truth), flush=True)
     return 0
 

@@ -57,6 +57,82 @@ pub fn free_tcp_port() -> u16 {
         .port()
 }
 
+/// A program from .venv that scripts/test.sh installs (`mavproxy.py`, the
+/// `mavsdk_server` binary of the mavsdk-grpc wheel). A missing one fails
+/// the test loudly.
+pub fn venv_program(name: &str) -> PathBuf {
+    let python = python();
+    let path = if name == "mavsdk_server" {
+        let site = Command::new(&python)
+            .args([
+                "-c",
+                "import sysconfig; print(sysconfig.get_paths()['purelib'])",
+            ])
+            .output()
+            .expect("python runs");
+        PathBuf::from(String::from_utf8_lossy(&site.stdout).trim())
+            .join("mavsdk_grpc/bin/mavsdk_server")
+    } else {
+        python.with_file_name(name)
+    };
+    assert!(
+        path.exists(),
+        "{name} is not installed at {} — run `bash scripts/test.sh`",
+        path.display()
+    );
+    path
+}
+
+/// A third-party program run for a test; killed when dropped.
+pub struct Program(Child);
+
+impl Program {
+    /// Starts `program` with `args` in `dir`, its output discarded, and
+    /// waits until a socket of it is bound to UDP `port` on 127.0.0.1 (its
+    /// link is open). Watched in /proc/net/udp: binding the port to try it
+    /// could race the program for it.
+    pub fn start_on_udp(
+        program: &std::path::Path,
+        args: &[&str],
+        dir: &std::path::Path,
+        port: u16,
+    ) -> Program {
+        let child = Command::new(program)
+            .args(args)
+            .current_dir(dir)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap_or_else(|e| panic!("cannot start {}: {e}", program.display()));
+        let mut program_handle = Program(child);
+        let local = format!("0100007F:{port:04X} ");
+        let started = Instant::now();
+        loop {
+            let table = std::fs::read_to_string("/proc/net/udp").unwrap_or_default();
+            if table.lines().any(|l| l.contains(&local)) {
+                return program_handle;
+            }
+            if let Ok(Some(status)) = program_handle.0.try_wait() {
+                panic!("{} exited: {status}", program.display());
+            }
+            assert!(
+                started.elapsed() < Duration::from_secs(30),
+                "{} did not open udp port {port}",
+                program.display()
+            );
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
+impl Drop for Program {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 /// A pty pair joined by `tests/peers/pty_bridge.py` (with `args`): the
 /// bridge and the two device paths.
 pub fn pty_bridge(args: &[&str]) -> (Peer, String, String) {
