@@ -167,6 +167,6 @@ impl Driver for CommandDriver {
             .iter()
             .map(|t| (t.id, t.time_to_ack.histogram().clone()))
             .collect();
-        (LinkSummary::Command(summary), histograms)
+        (LinkSummary::Command(Box::new(summary)), histograms)
     }
 }

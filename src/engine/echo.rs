@@ -258,7 +258,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             .iter()
             .map(|r| (r.id, r.rtt.histogram().clone()))
             .collect();
-        (LinkSummary::Echo(summary), histograms)
+        (LinkSummary::Echo(Box::new(summary)), histograms)
     }
 }
 

@@ -213,9 +213,9 @@ impl CommandSummary {
 #[derive(Debug, Clone)]
 pub enum LinkSummary {
     /// PING or TIMESYNC.
-    Echo(Summary),
+    Echo(Box<Summary>),
     /// COMMAND_LONG until acknowledged.
-    Command(CommandSummary),
+    Command(Box<CommandSummary>),
 }
 
 impl LinkSummary {
