@@ -28,10 +28,13 @@ if [ ! -x "$site/mavsdk_grpc/bin/mavsdk_server" ]; then
   .venv/bin/pip install --quiet --disable-pip-version-check --no-deps "mavsdk-grpc==${MAVSDK_GRPC_VERSION}"
 fi
 # promtool (Debian's prometheus package) checks the --prometheus exposition;
-# tmux runs --live in a real terminal. Installed only when missing.
+# tmux runs --live in a real terminal; man renders the man pages. Installed
+# only when missing.
 missing=()
 command -v promtool >/dev/null || missing+=(prometheus)
 command -v tmux >/dev/null || missing+=(tmux)
+# man renders the committed man pages in a test (man-db brings groff).
+command -v man >/dev/null || missing+=(man-db)
 if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -63,6 +63,8 @@ pub struct LinkConfig {
 pub struct OutputConfig {
     pub format: Format,
     pub quiet: bool,
+    /// `-D`: event lines start with their Unix time.
+    pub timestamps: bool,
     pub every_reply: bool,
     /// `--live`; the run falls back to text when stdout is not a terminal.
     pub live: bool,

@@ -15,6 +15,7 @@ use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
 use crate::frame::{codec, SysComp, Version};
 use crate::transport::address::LinkSpec;
+use crate::transport::route::Route;
 use crate::transport::{Family, LinkOptions};
 use crate::verdict::{Expected, Thresholds};
 
@@ -29,13 +30,13 @@ const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
 /// form mavping prints it). Returns (index of the link, responder).
 fn validate_scoped_expect(
     cli: &PingArgs,
+    given: &[String],
     links: &[LinkSpec],
 ) -> Result<Vec<(usize, Expected)>, ConfigError> {
     let mut scoped = Vec::new();
     for e in &cli.expect {
         let Some(link) = &e.link else { continue };
-        let index = cli
-            .links
+        let index = given
             .iter()
             .zip(links)
             .position(|(given, spec)| given.trim() == link || spec.to_string() == *link)
@@ -50,14 +51,91 @@ fn validate_scoped_expect(
     Ok(scoped)
 }
 
+/// `-4`/`-6`, `--bind ADDR[:PORT]` (a numeric address: nothing resolved
+/// behind the user's back) for links that send first, `-I IFACE`.
+fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigError> {
+    let family = match (cli.ipv4, cli.ipv6) {
+        (true, _) => Some(Family::V4),
+        (_, true) => Some(Family::V6),
+        _ => None,
+    };
+    let bind = match cli.bind.as_deref() {
+        None => None,
+        Some(text) => {
+            let addr = text
+                .parse::<SocketAddr>()
+                .or_else(|_| text.parse::<std::net::IpAddr>().map(|ip| SocketAddr::new(ip, 0)))
+                .map_err(|_| {
+                    invalid(format!(
+                        "--bind {text}: expected ADDR or ADDR:PORT, e.g. 192.168.1.5 or 0.0.0.0:14551"
+                    ))
+                })?;
+            let outgoing = links.iter().any(|l| {
+                matches!(
+                    l.spec,
+                    LinkSpec::UdpOut(_) | LinkSpec::TcpOut(_) | LinkSpec::UdpBcast(_)
+                )
+            });
+            if !outgoing {
+                return Err(invalid(format!(
+                    "--bind {text}: only links that send first (udpout:, tcp:, udpbcast:) take a \
+                     local address; a listening link names its own"
+                )));
+            }
+            Some(addr)
+        }
+    };
+    let interface = match cli.interface.as_deref() {
+        None => None,
+        Some(name) if name.is_empty() || name.len() > 15 || name.contains(['/', ' ']) => {
+            return Err(invalid(format!(
+                "-I {name}: expected a network interface name (up to 15 characters), e.g. wlan0"
+            )))
+        }
+        Some(name) => Some(name.to_string()),
+    };
+    Ok(Route {
+        family,
+        bind,
+        interface,
+    })
+}
+
+/// `-f FILE` (`-` is standard input): a link a line, `#` starts a
+/// comment, blank lines are skipped. Errors name the line.
+fn links_from_file(path: &Path) -> Result<Vec<(String, LinkSpec)>, ConfigError> {
+    let shown = path.display();
+    let text = if path == Path::new("-") {
+        std::io::read_to_string(std::io::stdin())
+    } else {
+        std::fs::read_to_string(path)
+    }
+    .map_err(|e| invalid(format!("-f {shown}: cannot read it: {e}")))?;
+    let mut links = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let link = line.split('#').next().unwrap_or_default().trim();
+        if link.is_empty() {
+            continue;
+        }
+        let spec = link
+            .parse::<LinkSpec>()
+            .map_err(|e| invalid(format!("-f {shown}, line {}: {e}", n + 1)))?;
+        links.push((link.to_string(), spec));
+    }
+    if links.is_empty() {
+        return Err(invalid(format!("-f {shown}: no link in it")));
+    }
+    Ok(links)
+}
+
 /// Several links: each must be named once (reports are keyed by the
 /// connection string), and a virtual clock cannot drive real links.
-fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError> {
+fn validate_links(given: &[String], links: &[LinkSpec]) -> Result<(), ConfigError> {
     for (i, link) in links.iter().enumerate() {
         if links[..i].iter().any(|l| l.to_string() == link.to_string()) {
             return Err(invalid(format!(
                 "{} names the same link as an earlier one ({link}): name each link once",
-                cli.links[i]
+                given[i]
             )));
         }
     }
@@ -304,6 +382,9 @@ fn session(
     if cli.wait.is_some_and(|d| d.is_zero()) {
         return Err(invalid("--wait 0: expected more than 0"));
     }
+    if cli.interim.is_some_and(|d| d < Duration::from_millis(10)) {
+        return Err(invalid("-Q: expected an interval of at least 10ms"));
+    }
     let ours = validate_ids(cli.sysid, cli.compid)?;
     let signing = validate_signing(cli)?;
     let echo = !matches!(probe, Probe::Command(_));
@@ -315,6 +396,7 @@ fn session(
         deadline: cli.deadline,
         // Each link sets its own: only listening links wait for a peer.
         wait: None,
+        interim: cli.interim,
         timeout: cli.timeout,
         version: if cli.mavlink_version == 1 {
             Version::V1
@@ -336,17 +418,23 @@ impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
     fn try_from(cli: &PingArgs) -> Result<Self, ConfigError> {
-        if cli.links.is_empty() {
-            return Err(invalid(
-                "missing CONNECTION (e.g. udpout:127.0.0.1:14550 or sim:)",
-            ));
-        }
-        let specs = cli
-            .links
+        let mut given: Vec<String> = cli.links.iter().map(|l| l.trim().to_string()).collect();
+        let mut specs = given
             .iter()
             .map(|l| l.parse::<LinkSpec>())
             .collect::<Result<Vec<_>, _>>()?;
-        validate_links(cli, &specs)?;
+        if let Some(path) = &cli.file {
+            for (link, spec) in links_from_file(path)? {
+                given.push(link);
+                specs.push(spec);
+            }
+        }
+        if given.is_empty() {
+            return Err(invalid(
+                "missing CONNECTION (e.g. udp:127.0.0.1:14550 or sim:)",
+            ));
+        }
+        validate_links(&given, &specs)?;
         if cli.min_responders == Some(0) {
             return Err(invalid("--min-responders 0: expected at least 1"));
         }
@@ -366,14 +454,13 @@ impl TryFrom<&PingArgs> for Config {
                 .collect(),
             min_responders: cli.min_responders,
         };
-        let scoped = validate_scoped_expect(cli, &specs)?;
+        let scoped = validate_scoped_expect(cli, &given, &specs)?;
         let several = specs.len() > 1;
-        let links = specs
+        let links: Vec<LinkConfig> = specs
             .into_iter()
-            .zip(&cli.links)
+            .zip(given)
             .enumerate()
-            .map(|(index, (spec, given))| {
-                let name = given.trim().to_string();
+            .map(|(index, (spec, name))| {
                 let mut thresholds = everywhere.clone();
                 thresholds.expect.extend(
                     scoped
@@ -400,21 +487,20 @@ impl TryFrom<&PingArgs> for Config {
                 }
             })
             .collect();
+        let route = validate_route(cli, &links)?;
         Ok(Config {
             links,
             link_options: LinkOptions {
                 baud: cli.baud,
                 reconnect: cli.reconnect,
-                family: match (cli.ipv4, cli.ipv6) {
-                    (true, _) => Some(Family::V4),
-                    (_, true) => Some(Family::V6),
-                    _ => None,
-                },
+                route,
             },
             probe,
             output: OutputConfig {
                 format: if cli.json { Format::Json } else { cli.format },
-                quiet: cli.quiet,
+                // -Q is quiet with interim summaries, as fping's.
+                quiet: cli.quiet || cli.interim.is_some(),
+                timestamps: cli.timestamps,
                 every_reply: cli.every_reply,
                 live: cli.live,
                 hgrm: cli.hgrm.clone(),
@@ -482,7 +568,7 @@ mod tests {
             LinkOptions {
                 baud: 57600,
                 reconnect: true,
-                family: None,
+                route: Route::default(),
             }
         );
         assert_eq!(config("sim:").unwrap().probe, Probe::Ping);

@@ -13,7 +13,7 @@ use std::io;
 use std::time::{Duration, SystemTime};
 
 pub use crate::engine::observe::{Event, Observer, StartInfo};
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::verdict::Verdict;
 
@@ -74,6 +74,11 @@ impl Observer for Fanout<'_> {
     }
     fn flush(&mut self) -> io::Result<()> {
         self.reporters.iter_mut().try_for_each(|r| r.flush())
+    }
+    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
+        self.reporters
+            .iter_mut()
+            .try_for_each(|r| r.interim(figures))
     }
 }
 

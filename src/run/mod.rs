@@ -3,19 +3,17 @@
 //! ([`respond`]). `main` turns the [`Ending`] into the exit code.
 
 mod exports;
+pub mod generate;
 mod ping;
 mod respond;
 mod signals;
 
 use std::future::Future;
-use std::io::{self, Write};
-use std::sync::Arc;
+use std::io;
 
-use clap::CommandFactory;
-use tokio::sync::Notify;
-
-use crate::cli::{Cli, Generate, Mode};
+use crate::cli::{self, Cli, Mode};
 use crate::config::{Config, RespondConfig};
+use crate::engine::session::Controls;
 use crate::exit::Ending;
 use crate::stderr;
 
@@ -87,22 +85,6 @@ pub fn usage_error(error: &clap::Error) -> Ending {
     Ending::Refused
 }
 
-/// `--generate`: completions and the man page, from the clap definition.
-pub fn generate(kind: Generate, out: &mut dyn Write) -> io::Result<()> {
-    use clap_complete::Shell;
-    let mut cmd = Cli::command();
-    let shell = match kind {
-        Generate::CompleteBash => Shell::Bash,
-        Generate::CompleteZsh => Shell::Zsh,
-        Generate::CompleteFish => Shell::Fish,
-        Generate::CompletePowershell => Shell::PowerShell,
-        Generate::CompleteElvish => Shell::Elvish,
-        Generate::Man => return clap_mangen::Man::new(cmd).render(out),
-    };
-    clap_complete::generate(shell, &mut cmd, "mavping", out);
-    Ok(())
-}
-
 fn init_logging(verbose: u8) {
     use tracing_subscriber::EnvFilter;
     let default = match verbose {
@@ -122,7 +104,7 @@ fn init_logging(verbose: u8) {
 /// against the signals: the first Ctrl-C stops it, a second abandons it.
 fn block_on<F, R>(paused: bool, run: F) -> Ending
 where
-    F: FnOnce(Arc<Notify>) -> R,
+    F: FnOnce(Controls) -> R,
     R: Future<Output = Ending>,
 {
     let mut builder = tokio::runtime::Builder::new_current_thread();
@@ -137,21 +119,35 @@ where
             return Ending::Refused;
         }
     };
-    let stop = Arc::new(Notify::new());
-    let run = run(stop.clone());
+    let controls = Controls::default();
+    let run = run(controls.clone());
     runtime.block_on(async move {
         tokio::select! {
             biased;
-            () = signals::stop_then_leave(stop) => Ending::InterruptedTwice,
+            () = signals::watch(controls) => Ending::InterruptedTwice,
             ending = run => ending,
         }
     })
 }
 
+/// Answers the shell's completion request, when this run is one
+/// (`COMPLETE=bash mavping -- ...`, set by the completion scripts).
+pub fn completion() -> Option<Ending> {
+    let env = clap_complete::CompleteEnv::with_factory(cli::command)
+        .var(generate::COMPLETE_VAR)
+        .completer("mavping");
+    let current_dir = std::env::current_dir().ok();
+    match env.try_complete(std::env::args_os(), current_dir.as_deref()) {
+        Ok(true) => Some(Ending::Done),
+        Ok(false) => None,
+        Err(e) => Some(usage_error(&e)),
+    }
+}
+
 /// Validates, then runs what the command line asks for.
 pub fn main(cli: &Cli) -> Ending {
     if let Some(kind) = cli.generate {
-        return match generate(kind, &mut io::stdout()) {
+        return match generate::generate(kind, &mut io::stdout()) {
             Ok(()) => Ending::Done,
             Err(e) => {
                 stderr::error(&e);
@@ -178,7 +174,9 @@ pub fn main(cli: &Cli) -> Ending {
             Ok(config) => {
                 init_logging(config.verbose);
                 let paused = config.virtual_clock();
-                block_on(paused, |stop| async move { ping::run(&config, stop).await })
+                block_on(paused, |controls| async move {
+                    ping::run(&config, controls).await
+                })
             }
             Err(e) => {
                 stderr::error(&e);

@@ -7,6 +7,7 @@ mod common;
 mod cli;
 mod completions;
 mod diagnosis;
+mod habits;
 mod high_rate;
 mod hostile;
 mod multilink;
