@@ -3,6 +3,7 @@
 //! ([`respond`]). `main` turns the [`Ending`] into the exit code.
 
 mod exports;
+mod measure;
 mod ping;
 mod respond;
 mod signals;
@@ -95,7 +96,9 @@ where
     };
     let stop = Arc::new(Notify::new());
     let run = run(stop.clone());
-    runtime.block_on(async move {
+    // A LocalSet: the HTTP server's handlers run sessions, which stay on
+    // this one thread.
+    tokio::task::LocalSet::new().block_on(&runtime, async move {
         tokio::select! {
             biased;
             () = signals::stop_then_leave(stop) => Ending::InterruptedTwice,
