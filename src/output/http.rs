@@ -202,10 +202,7 @@ where
         .header_read_timeout(limits.header_read_timeout)
         .max_buf_size(limits.max_header_bytes.max(8192))
         .keep_alive(false);
-    if let Err(e) = http
-        .serve_connection(TokioIo::new(stream), service)
-        .await
-    {
+    if let Err(e) = http.serve_connection(TokioIo::new(stream), service).await {
         tracing::debug!("http connection: {e}");
     }
 }
@@ -293,7 +290,10 @@ mod tests {
         let head = exchange(addr, b"HEAD / HTTP/1.1\r\nHost: a\r\n\r\n");
         assert!(head.starts_with("HTTP/1.1 200 OK\r\n"), "{head}");
         assert!(head.ends_with("\r\n\r\n"), "HEAD has no body: {head}");
-        let post = exchange(addr, b"POST / HTTP/1.1\r\nHost: a\r\nContent-Length: 0\r\n\r\n");
+        let post = exchange(
+            addr,
+            b"POST / HTTP/1.1\r\nHost: a\r\nContent-Length: 0\r\n\r\n",
+        );
         assert!(post.starts_with("HTTP/1.1 405"), "{post}");
         assert!(post.contains("allow: GET, HEAD\r\n"), "{post}");
         let junk = exchange(addr, b"\x16\x03\x01 hello\r\n\r\n");

@@ -127,6 +127,11 @@ impl Metrics {
         state.up = up;
     }
 
+    /// Whether a continuous link is open now.
+    pub fn is_up(&self) -> bool {
+        self.state.is_some_and(|s| s.up)
+    }
+
     /// A continuous link is being reopened after it broke.
     pub fn restarted(&mut self) {
         self.state.get_or_insert_with(LinkState::default).restarts += 1;

@@ -1,11 +1,13 @@
 //! From parsed arguments to how the run ended: validation, logging, the
-//! runtime, signals, then a measurement ([`ping`]) or a responder
-//! ([`respond`]). `main` turns the [`Ending`] into the exit code.
+//! runtime, signals, then a measurement ([`ping`]), a responder
+//! ([`respond`]) or the Prometheus exporter ([`serve`]). `main` turns the
+//! [`Ending`] into the exit code.
 
 mod exports;
 mod measure;
 mod ping;
 mod respond;
+mod serve;
 mod signals;
 
 use std::future::Future;
@@ -16,7 +18,7 @@ use clap::CommandFactory;
 use tokio::sync::Notify;
 
 use crate::cli::{Cli, Generate, Mode};
-use crate::config::{Config, RespondConfig};
+use crate::config::{Config, RespondConfig, ServeConfig};
 use crate::exit::Ending;
 use crate::stderr;
 
@@ -127,6 +129,16 @@ pub fn main(cli: &Cli) -> Ending {
                     paused,
                     |stop| async move { respond::run(&config, stop).await },
                 )
+            }
+            Err(e) => {
+                stderr::error(&e);
+                Ending::Refused
+            }
+        },
+        Some(Mode::Serve(args)) => match ServeConfig::try_from(args) {
+            Ok(config) => {
+                init_logging(config.verbose);
+                block_on(false, |stop| async move { serve::run(&config, stop).await })
             }
             Err(e) => {
                 stderr::error(&e);

@@ -1,5 +1,6 @@
 //! Ctrl-C and SIGTERM: the first stops the run (it still reports, as ping
-//! does); a second one means "leave now".
+//! does); a second one means "leave now". SIGHUP asks `mavping serve` to
+//! reread its configuration.
 
 use std::sync::Arc;
 
@@ -33,5 +34,32 @@ pub async fn stop_then_leave(stop: Arc<Notify>) {
         if round == 0 {
             stop.notify_one();
         }
+    }
+}
+
+/// Each SIGHUP, as it comes (none where the system has no such signal,
+/// or its handler could not be set).
+pub struct Hangups {
+    #[cfg(unix)]
+    signal: Option<tokio::signal::unix::Signal>,
+}
+
+impl Hangups {
+    pub fn new() -> Self {
+        Hangups {
+            #[cfg(unix)]
+            signal: tokio::signal::unix::signal(tokio::signal::unix::SignalKind::hangup()).ok(),
+        }
+    }
+
+    /// Resolves at the next SIGHUP.
+    pub async fn next(&mut self) {
+        #[cfg(unix)]
+        if let Some(s) = self.signal.as_mut() {
+            if s.recv().await.is_some() {
+                return;
+            }
+        }
+        std::future::pending().await
     }
 }
