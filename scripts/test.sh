@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Runs the whole test suite on a fresh machine: puts pymavlink (the
 # third-party MAVLink peer the interop tests use) and pyserial (which
-# pymavlink needs to open a serial port) in .venv, promtool and tmux,
-# then cargo test.
+# pymavlink needs to open a serial port) in .venv, the Prometheus server
+# and promtool, and tmux, then cargo test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -13,10 +13,12 @@ if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pymavlink, serial"
   .venv/bin/pip install --quiet --disable-pip-version-check \
     "pymavlink==${PYMAVLINK_VERSION}" "pyserial==${PYSERIAL_VERSION}"
 fi
-# promtool (Debian's prometheus package) checks the --prometheus exposition;
-# tmux runs --live in a real terminal. Installed only when missing.
+# Debian's prometheus package: the server scrapes `mavping serve` in an
+# integration test, and promtool checks expositions and unit-tests the
+# alerting rules in contrib/. tmux runs --live in a real terminal.
+# Installed only when missing.
 missing=()
-command -v promtool >/dev/null || missing+=(prometheus)
+{ command -v prometheus && command -v promtool; } >/dev/null || missing+=(prometheus)
 command -v tmux >/dev/null || missing+=(tmux)
 if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq

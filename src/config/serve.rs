@@ -1048,6 +1048,22 @@ timeout = "1s"
     }
 
     #[test]
+    fn the_example_in_contrib_is_valid() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("contrib/mavping-serve.toml");
+        let (s, listen) = ServeSettings::load(&args(""), Some(&path)).unwrap();
+        assert_eq!(listen.as_deref(), Some("0.0.0.0:9465"));
+        assert_eq!(s.allow.len(), 3);
+        assert!(s.modules.contains_key("ardupilot") && s.modules.contains_key("radio"));
+        let names: Vec<&str> = s.links.iter().map(|l| l.link.name.as_str()).collect();
+        assert_eq!(names, ["sik-radio", "companion"]);
+        assert!(s.plan("target=serial:/dev/ttyUSB3&module=radio").is_ok());
+        assert!(s
+            .plan("target=udpout:10.0.0.9:14550&module=ardupilot")
+            .is_ok());
+        assert!(s.plan("target=udpout:10.0.1.9:14550").is_err());
+    }
+
+    #[test]
     fn bad_files_name_the_place() {
         for (toml, needle) in [
             ("allow = [\n\"udpout:1.2.3.4:*\",\n 7]", ":3: "),

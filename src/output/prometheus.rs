@@ -39,9 +39,9 @@ pub const BUCKETS_S: [f64; 14] = [
 pub enum Scope {
     /// A run or a continuous link: counters that only grow (`_total`).
     Run,
-    /// One `/probe`: that probe's counts, as gauges of their own names,
-    /// so `rate()` is never applied to figures that start afresh each
-    /// scrape.
+    /// One `/probe`: that probe's counts (as gauges) and histogram, under
+    /// names of their own, so `rate()` is never applied to figures that
+    /// start afresh each scrape.
     Probe,
 }
 
@@ -426,13 +426,16 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
     }
     if scope == Scope::Probe {
         out.family(
-            "mavping_loss_ratio",
+            "mavping_probe_loss_ratio",
             "gauge",
             "Lost over sent in this probe (0 to 1).",
             series().filter_map(|(l, s)| Some((l, s.loss_ratio()?))),
         );
     }
-    let name = "mavping_rtt_seconds";
+    let name = match scope {
+        Scope::Run => "mavping_rtt_seconds",
+        Scope::Probe => "mavping_probe_rtt_seconds",
+    };
     if series().next().is_some() {
         out.header(
             name,

@@ -6,15 +6,18 @@ mod common;
 
 mod cli;
 mod completions;
+mod contrib;
 mod high_rate;
 mod hostile;
 mod multilink;
 mod options;
 mod probes_pymavlink;
+mod prometheus_server;
 mod properties;
 mod radio;
 mod scripting;
 mod serial_pty;
+mod serve;
 mod signing;
 mod tcp_pymavlink;
 mod udp_bcast_ipv6;

@@ -114,8 +114,24 @@ impl Server {
     }
 }
 
+/// Each link, probe and client costs a file descriptor: take as many as
+/// the system allows (as Go programs do), so a fleet is not cut short by a
+/// default soft limit of 1024. Best effort.
+fn raise_descriptor_limit() {
+    #[cfg(unix)]
+    {
+        use nix::sys::resource::{getrlimit, setrlimit, Resource};
+        if let Ok((soft, hard)) = getrlimit(Resource::RLIMIT_NOFILE) {
+            if soft < hard {
+                let _ = setrlimit(Resource::RLIMIT_NOFILE, hard, hard);
+            }
+        }
+    }
+}
+
 /// Serves until Ctrl-C or SIGTERM.
 pub async fn run(config: &ServeConfig, stop: Arc<Notify>) -> Ending {
+    raise_descriptor_limit();
     let listener = match std::net::TcpListener::bind(config.listen).and_then(http::listener) {
         Ok(l) => l,
         Err(e) => {

@@ -75,7 +75,7 @@ pub async fn answer(server: &Server, query: &str, headers: &HeaderMap) -> Reply 
         return Reply::text(
             StatusCode::SERVICE_UNAVAILABLE,
             format!(
-                "{} probes are running already (max_concurrent); try again\n",
+                "too many probes at once: max_concurrent is {}; try again\n",
                 settings.max_concurrent
             ),
         );
