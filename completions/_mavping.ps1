@@ -69,6 +69,7 @@ Register-ArgumentCompleter -Native -CommandName 'mavping' -ScriptBlock {
             [CompletionResult]::new('-V', '-V ', [CompletionResultType]::ParameterName, 'Print version')
             [CompletionResult]::new('--version', '--version', [CompletionResultType]::ParameterName, 'Print version')
             [CompletionResult]::new('respond', 'respond', [CompletionResultType]::ParameterValue, 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG')
+            [CompletionResult]::new('serve', 'serve', [CompletionResultType]::ParameterValue, 'Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter pattern) and continuous links at /metrics')
             [CompletionResult]::new('help', 'help', [CompletionResultType]::ParameterValue, 'Print this message or the help of the given subcommand(s)')
             break
         }
@@ -91,12 +92,28 @@ Register-ArgumentCompleter -Native -CommandName 'mavping' -ScriptBlock {
             [CompletionResult]::new('--help', '--help', [CompletionResultType]::ParameterName, 'Print help')
             break
         }
+        'mavping;serve' {
+            [CompletionResult]::new('--listen', '--listen', [CompletionResultType]::ParameterName, 'Where to serve /probe and /metrics: a numeric ADDR:PORT [default: 127.0.0.1:9465, or listen in --config]')
+            [CompletionResult]::new('--config', '--config', [CompletionResultType]::ParameterName, 'TOML file with allowed targets, modules, continuous links and max_concurrent; reread on SIGHUP')
+            [CompletionResult]::new('--allow', '--allow', [CompletionResultType]::ParameterName, 'Let /probe open targets matching PATTERN, e.g. ''udpout:127.0.0.1:*'' (''*'' stands for one part of an address: a port, an octet, a name; ''**'' for anything); repeatable')
+            [CompletionResult]::new('--link', '--link', [CompletionResultType]::ParameterName, 'Probe LINK all the time (PING every second) and show it at /metrics; repeatable')
+            [CompletionResult]::new('--max-concurrent', '--max-concurrent', [CompletionResultType]::ParameterName, 'Most /probe requests running at once; more are answered 503 [default: 16, or max_concurrent in --config]')
+            [CompletionResult]::new('-v', '-v', [CompletionResultType]::ParameterName, 'More logs on stderr (-v info, -vv debug)')
+            [CompletionResult]::new('--verbose', '--verbose', [CompletionResultType]::ParameterName, 'More logs on stderr (-v info, -vv debug)')
+            [CompletionResult]::new('-h', '-h', [CompletionResultType]::ParameterName, 'Print help (see more with ''--help'')')
+            [CompletionResult]::new('--help', '--help', [CompletionResultType]::ParameterName, 'Print help (see more with ''--help'')')
+            break
+        }
         'mavping;help' {
             [CompletionResult]::new('respond', 'respond', [CompletionResultType]::ParameterValue, 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG')
+            [CompletionResult]::new('serve', 'serve', [CompletionResultType]::ParameterValue, 'Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter pattern) and continuous links at /metrics')
             [CompletionResult]::new('help', 'help', [CompletionResultType]::ParameterValue, 'Print this message or the help of the given subcommand(s)')
             break
         }
         'mavping;help;respond' {
+            break
+        }
+        'mavping;help;serve' {
             break
         }
         'mavping;help;help' {

@@ -22,11 +22,17 @@ _mavping() {
             mavping,respond)
                 cmd="mavping__subcmd__respond"
                 ;;
+            mavping,serve)
+                cmd="mavping__subcmd__serve"
+                ;;
             mavping__subcmd__help,help)
                 cmd="mavping__subcmd__help__subcmd__help"
                 ;;
             mavping__subcmd__help,respond)
                 cmd="mavping__subcmd__help__subcmd__respond"
+                ;;
+            mavping__subcmd__help,serve)
+                cmd="mavping__subcmd__help__subcmd__serve"
                 ;;
             *)
                 ;;
@@ -35,7 +41,7 @@ _mavping() {
 
     case "${cmd}" in
         mavping)
-            opts="-c -i -w -W -q -v -h -V --count --interval --rate --deadline --timeout --quiet --every-reply --sysid --compid --mavlink --no-heartbeat --first-seq --verbose --format --json --max-loss --max-rtt --max-jitter --expect --min-responders --hgrm --samples --baud --reconnect --probe --target --command --retry-interval --retries --live --prometheus --plot --signing-key --signing-key-file --signing-link-id --require-signed --generate --help --version respond help"
+            opts="-c -i -w -W -q -v -h -V --count --interval --rate --deadline --timeout --quiet --every-reply --sysid --compid --mavlink --no-heartbeat --first-seq --verbose --format --json --max-loss --max-rtt --max-jitter --expect --min-responders --hgrm --samples --baud --reconnect --probe --target --command --retry-interval --retries --live --prometheus --plot --signing-key --signing-key-file --signing-link-id --require-signed --generate --help --version respond serve help"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 1 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -181,7 +187,7 @@ _mavping() {
             return 0
             ;;
         mavping__subcmd__help)
-            opts="respond help"
+            opts="respond serve help"
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 2 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
                 return 0
@@ -209,6 +215,20 @@ _mavping() {
             return 0
             ;;
         mavping__subcmd__help__subcmd__respond)
+            opts=""
+            if [[ ${cur} == -* || ${COMP_CWORD} -eq 3 ]] ; then
+                COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
+                return 0
+            fi
+            case "${prev}" in
+                *)
+                    COMPREPLY=()
+                    ;;
+            esac
+            COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
+            return 0
+            ;;
+        mavping__subcmd__help__subcmd__serve)
             opts=""
             if [[ ${cur} == -* || ${COMP_CWORD} -eq 3 ]] ; then
                 COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
@@ -270,6 +290,40 @@ _mavping() {
                     return 0
                     ;;
                 --signing-link-id)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                *)
+                    COMPREPLY=()
+                    ;;
+            esac
+            COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
+            return 0
+            ;;
+        mavping__subcmd__serve)
+            opts="-v -h --listen --config --allow --link --max-concurrent --verbose --help"
+            if [[ ${cur} == -* || ${COMP_CWORD} -eq 2 ]] ; then
+                COMPREPLY=( $(compgen -W "${opts}" -- "${cur}") )
+                return 0
+            fi
+            case "${prev}" in
+                --listen)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --config)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --allow)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --link)
+                    COMPREPLY=($(compgen -f "${cur}"))
+                    return 0
+                    ;;
+                --max-concurrent)
                     COMPREPLY=($(compgen -f "${cur}"))
                     return 0
                     ;;

@@ -66,6 +66,7 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand -V 'Print version'
             cand --version 'Print version'
             cand respond 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'
+            cand serve 'Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter pattern) and continuous links at /metrics'
             cand help 'Print this message or the help of the given subcommand(s)'
         }
         &'mavping;respond'= {
@@ -86,11 +87,25 @@ set edit:completion:arg-completer[mavping] = {|@words|
             cand -h 'Print help'
             cand --help 'Print help'
         }
+        &'mavping;serve'= {
+            cand --listen 'Where to serve /probe and /metrics: a numeric ADDR:PORT [default: 127.0.0.1:9465, or listen in --config]'
+            cand --config 'TOML file with allowed targets, modules, continuous links and max_concurrent; reread on SIGHUP'
+            cand --allow 'Let /probe open targets matching PATTERN, e.g. ''udpout:127.0.0.1:*'' (''*'' stands for one part of an address: a port, an octet, a name; ''**'' for anything); repeatable'
+            cand --link 'Probe LINK all the time (PING every second) and show it at /metrics; repeatable'
+            cand --max-concurrent 'Most /probe requests running at once; more are answered 503 [default: 16, or max_concurrent in --config]'
+            cand -v 'More logs on stderr (-v info, -vv debug)'
+            cand --verbose 'More logs on stderr (-v info, -vv debug)'
+            cand -h 'Print help (see more with ''--help'')'
+            cand --help 'Print help (see more with ''--help'')'
+        }
         &'mavping;help'= {
             cand respond 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'
+            cand serve 'Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter pattern) and continuous links at /metrics'
             cand help 'Print this message or the help of the given subcommand(s)'
         }
         &'mavping;help;respond'= {
+        }
+        &'mavping;help;serve'= {
         }
         &'mavping;help;help'= {
         }

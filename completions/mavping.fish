@@ -72,6 +72,7 @@ complete -c mavping -n "__fish_mavping_needs_command" -l require-signed -d 'With
 complete -c mavping -n "__fish_mavping_needs_command" -s h -l help -d 'Print help (see more with \'--help\')'
 complete -c mavping -n "__fish_mavping_needs_command" -s V -l version -d 'Print version'
 complete -c mavping -n "__fish_mavping_needs_command" -a "respond" -d 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'
+complete -c mavping -n "__fish_mavping_needs_command" -a "serve" -d 'Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter pattern) and continuous links at /metrics'
 complete -c mavping -n "__fish_mavping_needs_command" -a "help" -d 'Print this message or the help of the given subcommand(s)'
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -l sysid -d 'Our MAVLink system id' -r
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -l compid -d 'Our MAVLink component id' -r
@@ -87,5 +88,13 @@ complete -c mavping -n "__fish_mavping_using_subcommand respond" -l signing-link
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -l no-ping -d 'Answer only TIMESYNC and commands, not PING (like ArduPilot)'
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -s v -l verbose -d 'More logs on stderr (-v info, -vv debug)'
 complete -c mavping -n "__fish_mavping_using_subcommand respond" -s h -l help -d 'Print help'
-complete -c mavping -n "__fish_mavping_using_subcommand help; and not __fish_seen_subcommand_from respond help" -f -a "respond" -d 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'
-complete -c mavping -n "__fish_mavping_using_subcommand help; and not __fish_seen_subcommand_from respond help" -f -a "help" -d 'Print this message or the help of the given subcommand(s)'
+complete -c mavping -n "__fish_mavping_using_subcommand serve" -l listen -d 'Where to serve /probe and /metrics: a numeric ADDR:PORT [default: 127.0.0.1:9465, or listen in --config]' -r
+complete -c mavping -n "__fish_mavping_using_subcommand serve" -l config -d 'TOML file with allowed targets, modules, continuous links and max_concurrent; reread on SIGHUP' -r -F
+complete -c mavping -n "__fish_mavping_using_subcommand serve" -l allow -d 'Let /probe open targets matching PATTERN, e.g. \'udpout:127.0.0.1:*\' (\'*\' stands for one part of an address: a port, an octet, a name; \'**\' for anything); repeatable' -r
+complete -c mavping -n "__fish_mavping_using_subcommand serve" -l link -d 'Probe LINK all the time (PING every second) and show it at /metrics; repeatable' -r
+complete -c mavping -n "__fish_mavping_using_subcommand serve" -l max-concurrent -d 'Most /probe requests running at once; more are answered 503 [default: 16, or max_concurrent in --config]' -r
+complete -c mavping -n "__fish_mavping_using_subcommand serve" -s v -l verbose -d 'More logs on stderr (-v info, -vv debug)'
+complete -c mavping -n "__fish_mavping_using_subcommand serve" -s h -l help -d 'Print help (see more with \'--help\')'
+complete -c mavping -n "__fish_mavping_using_subcommand help; and not __fish_seen_subcommand_from respond serve help" -f -a "respond" -d 'Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG'
+complete -c mavping -n "__fish_mavping_using_subcommand help; and not __fish_seen_subcommand_from respond serve help" -f -a "serve" -d 'Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter pattern) and continuous links at /metrics'
+complete -c mavping -n "__fish_mavping_using_subcommand help; and not __fish_seen_subcommand_from respond serve help" -f -a "help" -d 'Print this message or the help of the given subcommand(s)'

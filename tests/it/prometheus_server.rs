@@ -5,12 +5,14 @@
 //! ground truth.
 
 use std::path::PathBuf;
-use std::process::{Child, Command, Stdio};
+use std::process::{Child, Stdio};
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
 
-use crate::common::{free_tcp_port, free_udp_port, http_get, sample, Peer, Server};
+use crate::common::{
+    free_tcp_port, free_udp_port, http_get, prometheus_tool, sample, Peer, Server,
+};
 
 /// Prometheus starts, scrapes every two seconds and needs two scrapes of
 /// each job; far more than that means something is broken.
@@ -26,23 +28,13 @@ struct Prometheus {
 
 impl Prometheus {
     fn start(config: &str) -> Prometheus {
-        let found = Command::new("prometheus")
-            .arg("--version")
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .status()
-            .is_ok_and(|s| s.success());
-        assert!(
-            found,
-            "the prometheus server is missing — run `bash scripts/test.sh` (it installs Debian's prometheus package)"
-        );
         let dir = std::env::temp_dir().join(format!("mavping-prometheus-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("prometheus.yml");
         std::fs::write(&file, config).unwrap();
         let addr = format!("127.0.0.1:{}", free_tcp_port());
-        let child = Command::new("prometheus")
+        let child = prometheus_tool("prometheus")
             .arg(format!("--config.file={}", file.display()))
             .arg(format!(
                 "--storage.tsdb.path={}",

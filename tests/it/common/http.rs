@@ -111,9 +111,10 @@ pub fn sample(text: &str, name: &str, labels: &[(&str, &str)]) -> Option<f64> {
     found.first().map(|s| s.value)
 }
 
-/// promtool, from Debian's prometheus package (scripts/test.sh installs it).
-pub fn promtool() -> Command {
-    let found = Command::new("promtool")
+/// A program of Debian's prometheus package (`prometheus`, `promtool`),
+/// which scripts/test.sh installs; missing, the test fails saying so.
+pub fn prometheus_tool(name: &str) -> Command {
+    let found = Command::new(name)
         .arg("--version")
         .stdout(Stdio::null())
         .stderr(Stdio::null())
@@ -121,9 +122,13 @@ pub fn promtool() -> Command {
         .is_ok_and(|s| s.success());
     assert!(
         found,
-        "promtool is missing — run `bash scripts/test.sh` (it installs Debian's prometheus package)"
+        "{name} is missing — run `bash scripts/test.sh` (it installs Debian's prometheus package)"
     );
-    Command::new("promtool")
+    Command::new(name)
+}
+
+pub fn promtool() -> Command {
+    prometheus_tool("promtool")
 }
 
 /// `promtool check metrics` finds nothing to say about `text`.
