@@ -218,7 +218,7 @@ fn response(reply: Reply) -> Response<Full<Bytes>> {
     response
 }
 
-/// Binds nothing itself: turns a bound std listener into the runtime's.
+/// A bound std listener, handed to the runtime (non-blocking).
 pub fn listener(std: std::net::TcpListener) -> io::Result<TcpListener> {
     std.set_nonblocking(true)?;
     TcpListener::from_std(std)

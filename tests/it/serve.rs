@@ -311,12 +311,12 @@ fn continuous_links_come_back_and_reloads_keep_their_history() {
 fn excess_probes_are_turned_away_and_probes_end_within_the_scrape_timeout() {
     let server = Server::start(&["--allow", "sim:**", "--max-concurrent", "1"]);
     let addr = server.addr.clone();
-    // Ten seconds of requests, but the scrape allows one.
+    // Ten seconds of requests, but the scrape allows three.
     let long = std::thread::spawn(move || {
         crate::common::http_get(
             &addr,
             "/probe?target=sim%3A&count=100&interval=100ms",
-            &[("X-Prometheus-Scrape-Timeout-Seconds", "1")],
+            &[("X-Prometheus-Scrape-Timeout-Seconds", "3")],
         )
     });
     metrics_until(&server, "the running probe", |m| {
@@ -332,7 +332,7 @@ fn excess_probes_are_turned_away_and_probes_end_within_the_scrape_timeout() {
     assert_eq!(status, 200, "{body}");
     let duration = sample(&body, "mavping_probe_duration_seconds", &[]).unwrap();
     assert!(
-        duration < 1.0,
+        duration < 3.0,
         "the probe outlived the scrape: {duration} s"
     );
     let requests = sample(&body, "mavping_probe_requests", &[]).unwrap();
@@ -383,4 +383,42 @@ fn idle_and_hostile_clients_do_not_block_a_scrape() {
     assert!(send(&[b'G'; 200_000]).starts_with("HTTP/1.1 431"));
     assert!(send(b"POST /probe HTTP/1.1\r\nContent-Length: 0\r\n\r\n").starts_with("HTTP/1.1 405"));
     assert_eq!(server.get("/metrics").status, 200);
+}
+
+#[test]
+fn bad_command_lines_and_a_port_in_use_exit_2_with_one_line() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    for (args, needle) in [
+        (
+            vec!["serve", "--allow", "*"],
+            "--allow: allow pattern '*': start it with a link kind",
+        ),
+        (
+            vec!["serve", "--link", "nowhere"],
+            "--link: bad connection string 'nowhere'",
+        ),
+        (
+            vec!["serve", "--listen", "localhost:9465"],
+            "--listen localhost:9465: expected ADDR:PORT",
+        ),
+        (
+            vec!["serve", "--max-concurrent", "0"],
+            "max_concurrent 0: expected 1 to 1024",
+        ),
+        (
+            vec!["serve", "--config", "/nonexistent/serve.toml"],
+            "--config /nonexistent/serve.toml: cannot read it",
+        ),
+        (vec!["serve", "--listen", &addr], "Address already in use"),
+    ] {
+        let (code, out, err) = crate::common::run_mavping(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(out.is_empty(), "{out}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.starts_with("mavping: ") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+    }
 }
