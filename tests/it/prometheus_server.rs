@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 use crate::common::{
-    free_tcp_port, free_udp_port, http_get, prometheus_tool, sample, Peer, Server,
+    free_tcp_port, free_udp_port, http_get, prometheus_tool, sample, signal, Peer, Server,
 };
 
 /// Prometheus starts, scrapes every two seconds and needs two scrapes of
@@ -210,9 +210,11 @@ scrape_configs:
     );
     assert_eq!(sent, received + lost);
 
-    // No probe may be cut short by the responder's end: stop the scrapes,
-    // let the last probe finish, then read the ground truth.
-    drop(prometheus);
+    // No probe may be cut short, which killing Prometheus mid-scrape (its
+    // connection closed) or ending a responder would do: freeze Prometheus
+    // (no new scrape starts; one under way keeps its connection), let the
+    // last probe finish, then read the ground truth.
+    signal(prometheus.child.id(), "STOP");
     while sample(
         &server.get("/metrics").body,
         "mavping_exporter_probes_running",
@@ -235,4 +237,5 @@ scrape_configs:
         probe_truth["dropped"].as_f64().unwrap() / probe_truth["ping_requests"].as_f64().unwrap();
     assert_eq!(probe_loss, truth_ratio, "{probe_truth}");
     assert_eq!(probe_loss, 0.2);
+    drop(prometheus);
 }
