@@ -305,24 +305,28 @@ impl TryFrom<&ServeArgs> for ServeConfig {
     }
 }
 
+/// `mavping serve LINE` as clap parses it, for the tests here and below.
+#[cfg(test)]
+fn test_args(line: &str) -> ServeArgs {
+    use clap::Parser;
+    let cli = crate::cli::Cli::try_parse_from(
+        ["mavping", "serve"]
+            .into_iter()
+            .chain(line.split_whitespace()),
+    )
+    .unwrap();
+    match cli.mode {
+        Some(crate::cli::Mode::Serve(a)) => a,
+        _ => panic!("not serve"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use clap::Parser;
-
     use super::*;
-    use crate::cli::{Cli, Mode};
 
     fn args(line: &str) -> ServeArgs {
-        let cli = Cli::try_parse_from(
-            ["mavping", "serve"]
-                .into_iter()
-                .chain(line.split_whitespace()),
-        )
-        .unwrap();
-        match cli.mode {
-            Some(Mode::Serve(a)) => a,
-            _ => panic!("not serve"),
-        }
+        test_args(line)
     }
 
     fn with_file(toml: &str) -> Result<ServeConfig, String> {

@@ -143,22 +143,11 @@ impl ServeSettings {
 
 #[cfg(test)]
 mod tests {
+    use super::super::{test_args, ServeConfig};
     use super::*;
-    use crate::cli::{Cli, Mode};
-    use crate::config::ServeConfig;
-    use clap::Parser;
 
     fn settings(line: &str) -> ServeSettings {
-        let cli = Cli::try_parse_from(
-            ["mavping", "serve"]
-                .into_iter()
-                .chain(line.split_whitespace()),
-        )
-        .unwrap();
-        let Some(Mode::Serve(args)) = cli.mode else {
-            panic!("not serve")
-        };
-        ServeConfig::try_from(&args).unwrap().settings
+        ServeConfig::try_from(&test_args(line)).unwrap().settings
     }
 
     #[test]

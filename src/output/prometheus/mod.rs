@@ -327,28 +327,29 @@ impl PrometheusExporter {
     }
 }
 
+/// A PING run's start on `link`, for the tests here and in `render`.
+#[cfg(test)]
+fn test_start(link: &str) -> StartInfo {
+    use std::time::Duration;
+    StartInfo {
+        link: link.into(),
+        probe: "ping",
+        ours: SysComp::new(255, 190),
+        interval: Duration::from_secs(1),
+        timeout: Duration::from_secs(2),
+        count: None,
+        command: None,
+    }
+}
+
 #[cfg(test)]
 mod tests {
-    use std::time::Duration;
-
     use super::*;
-
-    fn info(link: &str) -> StartInfo {
-        StartInfo {
-            link: link.into(),
-            probe: "ping",
-            ours: SysComp::new(255, 190),
-            interval: Duration::from_secs(1),
-            timeout: Duration::from_secs(2),
-            count: None,
-            command: None,
-        }
-    }
 
     #[test]
     fn counters_and_histogram_follow_the_events() {
         let mut m = Metrics::default();
-        m.on_start(&info("udpout:\"a\\b\""));
+        m.on_start(&test_start("udpout:\"a\\b\""));
         let r = SysComp::new(1, 1);
         let reply = |seq, rtt| MatchEvent::Reply {
             responder: r,

@@ -419,24 +419,10 @@ fn escape(value: &str) -> String {
 
 #[cfg(test)]
 mod tests {
-    use std::time::Duration;
-
+    use super::super::test_start as info;
     use super::*;
     use crate::engine::matcher::MatchEvent;
-    use crate::frame::SysComp;
     use crate::output::StartInfo;
-
-    fn info(link: &str) -> StartInfo {
-        StartInfo {
-            link: link.into(),
-            probe: "ping",
-            ours: SysComp::new(255, 190),
-            interval: Duration::from_secs(1),
-            timeout: Duration::from_secs(2),
-            count: None,
-            command: None,
-        }
-    }
 
     #[test]
     fn several_links_are_series_of_one_family() {
