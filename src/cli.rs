@@ -241,6 +241,21 @@ pub enum Generate {
 pub enum Mode {
     /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG
     Respond(RespondArgs),
+    /// Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter
+    /// pattern) and continuous links at /metrics
+    #[command(
+        long_about = "Probe links for Prometheus.\n\n\
+            GET /probe?target=LINK[&module=NAME][&count=N&interval=D&timeout=D&probe=KIND] runs one \
+            bounded probe and answers with its metrics, within the scrape's timeout \
+            (X-Prometheus-Scrape-Timeout-Seconds). Only targets the configuration allows are \
+            opened (--allow, or allow = [...] in --config); with none, every target is refused. \
+            Continuous links (--link, or [[link]] in --config) are probed all the time and shown \
+            at /metrics with a `link` label, beside the exporter's own health. SIGHUP rereads \
+            --config; running links that did not change keep going, history and all.",
+        after_help = "See docs/monitoring.md for the configuration file, the metrics and a \
+            Prometheus scrape configuration."
+    )]
+    Serve(ServeArgs),
 }
 
 /// What to send.
@@ -681,6 +696,38 @@ pub struct RespondArgs {
     /// signed, not replayed requests
     #[command(flatten)]
     pub signing: SigningArgs,
+
+    /// More logs on stderr (-v info, -vv debug)
+    #[arg(short = 'v', long, action = ArgAction::Count)]
+    pub verbose: u8,
+}
+
+/// Options of `mavping serve`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ServeArgs {
+    /// Where to serve /probe and /metrics: a numeric ADDR:PORT [default: 127.0.0.1:9465, or
+    /// listen in --config]
+    #[arg(long, value_name = "ADDR:PORT", env = "MAVPING_LISTEN")]
+    pub listen: Option<String>,
+
+    /// TOML file with allowed targets, modules, continuous links and max_concurrent; reread
+    /// on SIGHUP
+    #[arg(long, value_name = "FILE", env = "MAVPING_SERVE_CONFIG")]
+    pub config: Option<PathBuf>,
+
+    /// Let /probe open targets matching PATTERN, e.g. 'udpout:127.0.0.1:*' ('*' stands for
+    /// one part of an address: a port, an octet, a name; '**' for anything); repeatable
+    #[arg(long, value_name = "PATTERN")]
+    pub allow: Vec<String>,
+
+    /// Probe LINK all the time (PING every second) and show it at /metrics; repeatable
+    #[arg(long = "link", value_name = "LINK")]
+    pub links: Vec<String>,
+
+    /// Most /probe requests running at once; more are answered 503 [default: 16, or
+    /// max_concurrent in --config]
+    #[arg(long, value_name = "N")]
+    pub max_concurrent: Option<usize>,
 
     /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]

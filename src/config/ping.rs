@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use super::{
-    invalid, signing, validate_baud, validate_ids, Config, ConfigError, LinkConfig, OutputConfig,
-    Probe, MAX_TIMEOUT,
+    invalid, signing, validate_baud, validate_ids, validate_listen, Config, ConfigError, Keys,
+    LinkConfig, OutputConfig, Probe, MAX_TIMEOUT,
 };
 use crate::cli::{Format, PingArgs, ProbeKind};
 use crate::engine::commands::CommandSpec;
@@ -147,16 +147,6 @@ fn validate_links(given: &[String], links: &[LinkSpec]) -> Result<(), ConfigErro
     Ok(())
 }
 
-/// `--prometheus`: a numeric address, so nothing is resolved behind the
-/// user's back (and `localhost` cannot silently mean IPv6 only).
-fn validate_listen(arg: &str) -> Result<SocketAddr, ConfigError> {
-    arg.parse().map_err(|_| {
-        invalid(format!(
-            "--prometheus {arg}: expected ADDR:PORT, e.g. 127.0.0.1:9090, 0.0.0.0:9090 or [::1]:9090"
-        ))
-    })
-}
-
 /// `--plot`: only SVG; the PNG backend needs system font libraries.
 fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
     let svg = path
@@ -245,7 +235,10 @@ fn validate_signing(cli: &PingArgs) -> Result<Option<SigningConfig>, ConfigError
 
 /// Ring size: twice the requests that can be in flight within one
 /// timeout, so a late reply is still recognised for about one more timeout.
-fn pending_capacity(interval: Duration, timeout: Duration) -> Result<usize, ConfigError> {
+pub(super) fn pending_capacity(
+    interval: Duration,
+    timeout: Duration,
+) -> Result<usize, ConfigError> {
     let in_flight = (timeout.as_nanos() / interval.as_nanos()) as u64 + 1;
     if in_flight > MAX_IN_FLIGHT {
         return Err(invalid(format!(
@@ -258,11 +251,13 @@ fn pending_capacity(interval: Duration, timeout: Duration) -> Result<usize, Conf
     Ok(((in_flight * 2 + 16) as usize).next_power_of_two().max(64))
 }
 
-/// "SYS/COMP", or "SYS" for every component of a system.
-fn parse_target(text: &str) -> Result<SysComp, ConfigError> {
+/// "SYS/COMP", or "SYS" for every component of a system; `key` names the
+/// option or configuration key in errors.
+fn parse_target(key: Keys, text: &str) -> Result<SysComp, ConfigError> {
     let bad = || {
         invalid(format!(
-            "--target {text}: expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)"
+            "{} {text}: expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)",
+            key.name("target")
         ))
     };
     let (sys, comp) = text.split_once('/').unwrap_or((text, "0"));
@@ -272,14 +267,15 @@ fn parse_target(text: &str) -> Result<SysComp, ConfigError> {
 }
 
 /// "REQUEST_MESSAGE,0" or "512,0": a MAV_CMD by name or id, then params.
-fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
+fn parse_command(key: Keys, text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
+    let key = key.name("command");
     let mut parts = text.split(',').map(str::trim);
     let name = parts.next().unwrap_or_default();
     let command = match name.parse::<u16>() {
         Ok(id) => id,
         Err(_) => codec::command_id_from_name(name).ok_or_else(|| {
             invalid(format!(
-                "--command {text}: '{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"
+                "{key} {text}: '{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"
             ))
         })?,
     };
@@ -287,7 +283,7 @@ fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
     for (i, p) in parts.enumerate() {
         if i >= params.len() {
             return Err(invalid(format!(
-                "--command {text}: at most 7 params after the command"
+                "{key} {text}: at most 7 params after the command"
             )));
         }
         params[i] = p
@@ -296,7 +292,7 @@ fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
             .filter(|v| v.is_finite())
             .ok_or_else(|| {
                 invalid(format!(
-                    "--command {text}: param {} '{p}' is not a number",
+                    "{key} {text}: param {} '{p}' is not a number",
                     i + 1
                 ))
             })?;
@@ -304,14 +300,28 @@ fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
     Ok((command, params))
 }
 
-fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
-    let target = cli.target.as_deref().map(parse_target).transpose()?;
-    match cli.probe {
+/// What a probe is given: its kind and, for TIMESYNC and commands, whom
+/// it addresses and how a command is re-sent.
+pub(super) struct ProbeChoice<'a> {
+    pub kind: ProbeKind,
+    pub target: Option<&'a str>,
+    pub command: &'a str,
+    pub retry_interval: Duration,
+    pub retries: u8,
+}
+
+/// The probe a choice names; `key` names options or configuration keys in errors.
+pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, ConfigError> {
+    let target = choice.target.map(|t| parse_target(key, t)).transpose()?;
+    let flag = |name| key.name(name);
+    match choice.kind {
         ProbeKind::Ping => {
             if target.is_some() {
-                return Err(invalid(
-                    "--target: PING requests are always broadcast; use it with --probe timesync or command",
-                ));
+                return Err(invalid(format!(
+                    "{}: PING requests are always broadcast; use it with {} timesync or command",
+                    flag("target"),
+                    flag("probe")
+                )));
             }
             Ok(Probe::Ping)
         }
@@ -321,23 +331,27 @@ fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
         ProbeKind::Command => {
             let target = target.unwrap_or(SysComp::new(1, 1));
             if target.sysid == 0 {
-                return Err(invalid(
-                    "--target 0: a command needs one target system (e.g. --target 1/1)",
-                ));
-            }
-            if cli.retry_interval.is_zero() || cli.retry_interval > MAX_TIMEOUT {
                 return Err(invalid(format!(
-                    "--retry-interval {}: expected more than 0 and at most 1h",
-                    humantime::format_duration(cli.retry_interval)
+                    "{} 0: a command needs one target system (e.g. {} 1/1)",
+                    flag("target"),
+                    flag("target")
                 )));
             }
-            let (command, params) = parse_command(&cli.command)?;
+            let retry = choice.retry_interval;
+            if retry.is_zero() || retry > MAX_TIMEOUT {
+                return Err(invalid(format!(
+                    "{} {}: expected more than 0 and at most 1h",
+                    flag("retry-interval"),
+                    humantime::format_duration(retry)
+                )));
+            }
+            let (command, params) = parse_command(key, choice.command)?;
             Ok(Probe::Command(CommandSpec {
                 target,
                 command,
                 params,
-                retry_interval: cli.retry_interval,
-                retries: cli.retries,
+                retry_interval: retry,
+                retries: choice.retries,
             }))
         }
     }
@@ -358,6 +372,19 @@ fn peer_wait(cli: &PingArgs, spec: &LinkSpec, session: &SessionConfig) -> Option
             .and_then(|d| d.checked_add(session.timeout))
             .map(|d| d.min(crate::units::MAX_DURATION))
     })
+}
+
+fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
+    probe_of(
+        Keys::Flags,
+        &ProbeChoice {
+            kind: cli.probe,
+            target: cli.target.as_deref(),
+            command: &cli.command,
+            retry_interval: cli.retry_interval,
+            retries: cli.retries,
+        },
+    )
 }
 
 /// The session settings every link shares; each link then names its own.
@@ -506,7 +533,11 @@ impl TryFrom<&PingArgs> for Config {
                 hgrm: cli.hgrm.clone(),
                 samples: cli.samples.clone(),
                 plot: cli.plot.as_deref().map(validate_plot).transpose()?,
-                prometheus: cli.prometheus.as_deref().map(validate_listen).transpose()?,
+                prometheus: cli
+                    .prometheus
+                    .as_deref()
+                    .map(|a| validate_listen("--prometheus", a))
+                    .transpose()?,
             },
             verbose: cli.verbose,
         })

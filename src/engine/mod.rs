@@ -30,7 +30,7 @@ use crate::frame::{SysComp, Version};
 pub type Nanos = u64;
 
 /// What a session needs to know, already validated.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SessionConfig {
     pub link_name: String,
     pub ours: SysComp,

@@ -2,6 +2,7 @@
 //! [`Observer`] and renders the judged summary at the end ([`Reporter`]).
 
 pub mod hgrm;
+pub mod http;
 pub mod json;
 pub mod live;
 pub mod plot;

@@ -1,18 +1,21 @@
 //! From parsed arguments to how the run ended: validation, logging, the
-//! runtime, signals, then a measurement ([`ping`]) or a responder
-//! ([`respond`]). `main` turns the [`Ending`] into the exit code.
+//! runtime, signals, then a measurement ([`ping`]), a responder
+//! ([`respond`]) or the Prometheus exporter ([`serve`]). `main` turns the
+//! [`Ending`] into the exit code.
 
 mod exports;
 pub mod generate;
+mod measure;
 mod ping;
 mod respond;
+mod serve;
 mod signals;
 
 use std::future::Future;
 use std::io;
 
 use crate::cli::{self, Cli, Mode};
-use crate::config::{Config, RespondConfig};
+use crate::config::{Config, RespondConfig, ServeConfig};
 use crate::engine::session::Controls;
 use crate::exit::Ending;
 use crate::stderr;
@@ -121,7 +124,9 @@ where
     };
     let controls = Controls::default();
     let run = run(controls.clone());
-    runtime.block_on(async move {
+    // A LocalSet: the HTTP server's handlers run sessions, which stay on
+    // this one thread.
+    tokio::task::LocalSet::new().block_on(&runtime, async move {
         tokio::select! {
             biased;
             () = signals::watch(controls) => Ending::InterruptedTwice,
@@ -164,6 +169,18 @@ pub fn main(cli: &Cli) -> Ending {
                     paused,
                     |stop| async move { respond::run(&config, stop).await },
                 )
+            }
+            Err(e) => {
+                stderr::error(&e);
+                Ending::Refused
+            }
+        },
+        Some(Mode::Serve(args)) => match ServeConfig::try_from(args) {
+            Ok(config) => {
+                init_logging(config.verbose);
+                block_on(false, |controls| async move {
+                    serve::run(&config, controls).await
+                })
             }
             Err(e) => {
                 stderr::error(&e);

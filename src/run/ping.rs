@@ -23,21 +23,19 @@ use std::task::Poll;
 use tokio::sync::Notify;
 
 use super::exports::Exports;
+use super::measure::measure;
 use crate::cli::Format;
 use crate::config::{Config, LinkConfig, Probe};
 use crate::engine::capacity::{self, WireBudget};
 use crate::engine::session::{Controls, Outcome};
 use crate::engine::summary::LinkSummary;
-use crate::engine::{command, echo};
 use crate::exit::Ending;
 use crate::output::json::JsonReporter;
 use crate::output::live::LiveView;
 use crate::output::text::TextReporter;
 use crate::output::{Fanout, Reporter, Shared, WallClock};
-use crate::probe::ping::PingProbe;
-use crate::probe::timesync::TimesyncProbe;
 use crate::stderr;
-use crate::transport::{Link, LinkSpec};
+use crate::transport::Link;
 use crate::verdict;
 
 /// Polls every future until all are done; outputs in the input order.
@@ -101,7 +99,7 @@ struct LinkRun<'a> {
 
 /// One link's session, from its open link to its outcome. With `announce`,
 /// prints the link's error line as soon as it fails, while others go on.
-async fn measure(
+async fn measure_announced(
     run: LinkRun<'_>,
     probe: &Probe,
     wall: WallClock,
@@ -109,42 +107,8 @@ async fn measure(
     controls: Controls,
     announce: bool,
 ) -> Outcome {
-    let LinkRun {
-        config, mut link, ..
-    } = run;
-    let session = &config.session;
-    let outcome = match probe {
-        Probe::Command(spec) => command::run(session, spec, &mut link, observer, &controls).await,
-        Probe::Timesync { target } => {
-            // The simulated link has no wall clock: its responders count
-            // from its start, and so do we there (reproducible output).
-            let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
-            let probe = TimesyncProbe::new(*target, wall_clock);
-            echo::run(session, &mut link, probe, observer, &controls).await
-        }
-        Probe::Ping => {
-            let probe = PingProbe::new(wall.micros_since_epoch());
-            echo::run(session, &mut link, probe, observer, &controls).await
-        }
-    };
-    // The simulated link's ground truth, for soak scripts (`-v`).
-    if let Link::Sim(sim) = &link {
-        for (id, t) in sim.truth() {
-            tracing::info!(
-                link = %config.name,
-                "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
-                 duplicated={} outage={} spiked={} spiked_before_first={}",
-                t.answered,
-                t.dropped,
-                t.dropped_before_first,
-                t.delivered,
-                t.duplicated,
-                t.outage,
-                t.spiked,
-                t.spiked_before_first
-            );
-        }
-    }
+    let LinkRun { config, link, .. } = run;
+    let outcome = measure(config, link, probe, wall, observer, &controls).await;
     if let Some(e) = outcome.summary.link_error().filter(|_| announce) {
         stderr::error(&error_line(true, &config.name, e));
     }
@@ -271,7 +235,7 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
     let announce = several && view.is_none();
     let mut sessions = Vec::new();
     for ((run, report), controls) in runs.into_iter().zip(reports.iter_mut()).zip(per_link) {
-        sessions.push(measure(
+        sessions.push(measure_announced(
             run,
             &config.probe,
             wall,

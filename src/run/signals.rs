@@ -1,6 +1,7 @@
 //! Signals: the first Ctrl-C or SIGTERM stops the run (it still reports,
 //! as ping does); a second one means "leave now". SIGQUIT (Ctrl-\) asks for
-//! an interim summary and the run goes on, as with Linux `ping`.
+//! an interim summary and the run goes on, as with Linux `ping`. SIGHUP
+//! asks `mavping serve` to reread its configuration.
 
 use std::future::pending;
 
@@ -42,5 +43,32 @@ pub async fn watch(controls: Controls) {
         } else {
             return;
         }
+    }
+}
+
+/// Each SIGHUP, as it comes (none where the system has no such signal,
+/// or its handler could not be set).
+pub struct Hangups {
+    #[cfg(unix)]
+    signal: Option<tokio::signal::unix::Signal>,
+}
+
+impl Hangups {
+    pub fn new() -> Self {
+        Hangups {
+            #[cfg(unix)]
+            signal: tokio::signal::unix::signal(tokio::signal::unix::SignalKind::hangup()).ok(),
+        }
+    }
+
+    /// Resolves at the next SIGHUP.
+    pub async fn next(&mut self) {
+        #[cfg(unix)]
+        if let Some(s) = self.signal.as_mut() {
+            if s.recv().await.is_some() {
+                return;
+            }
+        }
+        std::future::pending().await
     }
 }

@@ -1,10 +1,14 @@
 //! Shared by the integration tests: real peers (pymavlink processes),
 //! free loopback ports, running mavping, and parsing its summaries.
 
+pub mod http;
 pub mod json;
+pub mod serve;
 pub mod tmux;
 
+pub use http::*;
 pub use json::*;
+pub use serve::Server;
 pub use tmux::Tmux;
 
 use std::io::{BufRead, BufReader, Read};
