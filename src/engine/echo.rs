@@ -56,7 +56,14 @@ pub struct EchoDriver<P> {
     paths: HashMap<SysComp, (PathId, Nanos)>,
     wrong_path_replies: u64,
     pacing: Pacing,
+    /// When each responder's clock offset was last told (TIMESYNC), and
+    /// the ones due now.
+    clocks_told: HashMap<SysComp, Nanos>,
+    clocks_due: Vec<(SysComp, Nanos)>,
 }
+
+/// A responder's clock offset is told at most this often.
+const CLOCK_TOLD_EVERY: Nanos = 1_000_000_000;
 
 impl<P: EchoProbe> EchoDriver<P> {
     pub fn new(cfg: &SessionConfig, probe: P) -> Self {
@@ -72,6 +79,8 @@ impl<P: EchoProbe> EchoDriver<P> {
             paths: HashMap::new(),
             wrong_path_replies: 0,
             pacing: Pacing::default(),
+            clocks_told: HashMap::new(),
+            clocks_due: Vec::new(),
         }
     }
 
@@ -93,16 +102,19 @@ impl<P: EchoProbe> EchoDriver<P> {
         self.matcher
             .on_reply(frame.source, lookup, at, &mut |e| events.push(e));
         // Only an accepted in-time reply feeds the probe.
-        for e in &self.events[before..] {
+        for i in before..self.events.len() {
             if let MatchEvent::Reply {
                 responder,
                 sent_at,
                 at,
                 ..
-            } = *e
+            } = self.events[i]
             {
                 if responder == frame.source {
                     self.probe.on_reply(frame, sent_at, at);
+                    if self.probe.measures_clocks() {
+                        self.clock_may_be_due(responder, at);
+                    }
                     // Bound by accepted replies only, so stale forgeries
                     // cannot claim an id.
                     if self.paths.len() < MAX_RESPONDERS || self.paths.contains_key(&responder) {
@@ -110,6 +122,19 @@ impl<P: EchoProbe> EchoDriver<P> {
                     }
                 }
             }
+        }
+    }
+}
+
+impl<P: EchoProbe> EchoDriver<P> {
+    fn clock_may_be_due(&mut self, responder: SysComp, at: Nanos) {
+        let due = match self.clocks_told.get(&responder) {
+            Some(&told) => at >= told.saturating_add(CLOCK_TOLD_EVERY),
+            None => self.clocks_told.len() < MAX_RESPONDERS,
+        };
+        if due {
+            self.clocks_told.insert(responder, at);
+            self.clocks_due.push((responder, at));
         }
     }
 }
@@ -176,7 +201,17 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             MatchEvent::Lost { sent_at, .. } => radios.outcome(true, sent_at),
             _ => {}
         });
-        tell_each(observer, events.map(Event::Match))
+        let matched = tell_each(observer, events.map(Event::Match));
+        let probe = &self.probe;
+        let clocks = self.clocks_due.drain(..).filter_map(|(id, at)| {
+            Some(Event::Clock {
+                id,
+                at,
+                clock: probe.clock(id)?,
+            })
+        });
+        let told = tell_each(observer, clocks);
+        matched.and(told)
     }
 
     fn next_deadline(&self) -> Option<Nanos> {

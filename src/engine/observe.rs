@@ -5,6 +5,7 @@
 use std::io;
 use std::time::Duration;
 
+use super::clock_offset::ClockSummary;
 use super::commands::{CommandEvent, CommandSpec};
 use super::matcher::MatchEvent;
 use super::radio::RadioReport;
@@ -42,8 +43,18 @@ pub enum Event<'a> {
         report: RadioReport,
         first: bool,
     },
+    /// A TIMESYNC responder's clock offset so far: at its first reply,
+    /// then at most once a second.
+    Clock {
+        id: SysComp,
+        at: Nanos,
+        clock: ClockSummary,
+    },
     /// Nothing to send to yet (udpin before a peer is heard).
     WaitingForPeer,
+    /// The link failed; the session ends (told before its summary, so an
+    /// exporter shows it while a run's other links go on).
+    LinkFailed { at: Nanos, error: &'a str },
 }
 
 /// Follows a session. Write errors end the run quietly (a closed pipe, as

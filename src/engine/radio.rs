@@ -33,7 +33,7 @@ const MIN_LOSSES_FOR_HINT: u64 = 3;
 const MAX_BUFFER_CHANGES: usize = 256;
 
 /// One RADIO_STATUS as received.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
 pub struct RadioReport {
     pub rssi: u8,
     pub remrssi: u8,
@@ -108,20 +108,33 @@ impl Figure {
     }
 }
 
-/// A since-boot u16 counter: what it grew by over the run. Each step is
-/// taken modulo 2^16, so a wrap (65 530 → 5) counts as 11, not −65 525.
+/// A since-boot u16 counter: what it grew by since it was first seen.
+/// Each step is taken modulo 2^16, so a wrap (65 530 → 5) counts as 11,
+/// not −65 525; but a fall from well below the top is the radio counting
+/// again from 0 after a restart, and counts as the new value.
 #[derive(Debug, Clone, Copy, Default)]
-struct Counter {
+pub struct SinceBootCounter {
     last: Option<u16>,
     grown: u64,
 }
 
-impl Counter {
-    fn record(&mut self, v: u16) {
+/// A fall from at or above this is a wrap; from below, a restart.
+const WRAP_ZONE: u16 = 0xF000;
+
+impl SinceBootCounter {
+    pub fn record(&mut self, v: u16) {
         if let Some(last) = self.last {
-            self.grown += u64::from(v.wrapping_sub(last));
+            self.grown += u64::from(if v < last && last < WRAP_ZONE {
+                v
+            } else {
+                v.wrapping_sub(last)
+            });
         }
         self.last = Some(v);
+    }
+
+    pub fn grown(&self) -> u64 {
+        self.grown
     }
 }
 
@@ -137,8 +150,8 @@ struct Radio {
     fade: Figure,
     remfade: Figure,
     txbuf: Figure,
-    rxerrors: Counter,
-    fixed: Counter,
+    rxerrors: SinceBootCounter,
+    fixed: SinceBootCounter,
 }
 
 /// The end-of-run figures of one radio.
@@ -222,8 +235,8 @@ impl Radios {
             fade: Figure::default(),
             remfade: Figure::default(),
             txbuf: Figure::default(),
-            rxerrors: Counter::default(),
-            fixed: Counter::default(),
+            rxerrors: SinceBootCounter::default(),
+            fixed: SinceBootCounter::default(),
         });
         radio.reports += 1;
         radio.latest = r;
@@ -310,8 +323,8 @@ impl Radios {
                     fade_margin,
                     remote_fade_margin,
                     txbuf: r.txbuf.range(),
-                    rxerrors_delta: r.rxerrors.grown,
-                    fixed_delta: r.fixed.grown,
+                    rxerrors_delta: r.rxerrors.grown(),
+                    fixed_delta: r.fixed.grown(),
                     approx_dbm,
                     latest: r.latest,
                 }
@@ -426,6 +439,16 @@ mod tests {
         // 30 + 11 (65 530 → 5 through the wrap) + 15.
         assert_eq!(s.rxerrors_delta, 56);
         assert_eq!(s.fixed_delta, 2);
+    }
+
+    #[test]
+    fn a_radio_that_restarts_counts_from_zero_again() {
+        let mut c = SinceBootCounter::default();
+        for v in [900, 1000, 4, 10] {
+            c.record(v);
+        }
+        // 100, then 4 since the restart, then 6: not 65 540 through a wrap.
+        assert_eq!(c.grown(), 110);
     }
 
     #[test]

@@ -394,10 +394,18 @@ pub async fn run<T: Transport, D: Driver>(
 
     // Decide what is due before counting what is still in flight.
     driver.expire(clock.now());
-    let output_closed = match stopped {
+    let mut output_closed = match stopped {
         Some(Stopped::OutputClosed) => true,
         _ => driver.report(&mut heard.radios, observer).is_err(),
     };
+    if let Some(Stopped::LinkFailed(e)) = &stopped {
+        let error = e.to_string();
+        let failed = Event::LinkFailed {
+            at: clock.now(),
+            error: &error,
+        };
+        output_closed |= observer.event(&failed).is_err();
+    }
     let no_peer_within = match stopped {
         Some(Stopped::NoPeer) => cfg.wait,
         _ => None,

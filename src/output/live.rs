@@ -103,7 +103,10 @@ impl LiveState {
                     Some(format!("{} {}", identity.vehicle, identity.autopilot_name));
             }
             Event::Match(e) => self.on_match(e),
-            Event::Radio { .. } | Event::Command(_) => {}
+            Event::Radio { .. }
+            | Event::Command(_)
+            | Event::Clock { .. }
+            | Event::LinkFailed { .. } => {}
         }
     }
 

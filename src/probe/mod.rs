@@ -38,6 +38,10 @@ pub trait EchoProbe {
     /// Called with each in-time reply the matcher accepted (TIMESYNC reads
     /// the responder's clock from it).
     fn on_reply(&mut self, _frame: &Frame, _sent_at: Nanos, _at: Nanos) {}
+    /// Whether this probe measures the responders' clocks.
+    fn measures_clocks(&self) -> bool {
+        false
+    }
     /// The responder's clock offset, for probes that measure one.
     fn clock(&self, _responder: SysComp) -> Option<ClockSummary> {
         None

@@ -107,6 +107,10 @@ impl EchoProbe for TimesyncProbe {
             .record(sent_at, at, tc1, self.base_ns);
     }
 
+    fn measures_clocks(&self) -> bool {
+        true
+    }
+
     fn clock(&self, responder: SysComp) -> Option<ClockSummary> {
         self.clocks.get(&responder).and_then(ClockOffset::summary)
     }

@@ -12,7 +12,7 @@ use crate::config::Config;
 use crate::engine::session::Outcome;
 use crate::output::hgrm;
 use crate::output::plot::Plot;
-use crate::output::prometheus::PrometheusExporter;
+use crate::output::prometheus::{Metrics, PrometheusExporter};
 use crate::output::samples::SampleLog;
 use crate::output::{Reporter, Shared};
 use crate::stderr;
@@ -89,6 +89,14 @@ impl Exports {
             reporters.push(Box::new(plot.link()));
         }
         reporters
+    }
+
+    /// A link that could not be opened, given the `index` after every
+    /// opened one's: the exporter shows it down.
+    pub fn unopened(&self, index: usize, name: &str) {
+        if let Some(p) = &self.prometheus {
+            p.link(index).update(|m| *m = Metrics::unopened(name));
+        }
     }
 
     /// Writes the plot and the histograms of every link; an error says

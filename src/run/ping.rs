@@ -147,7 +147,7 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
     .await;
     let wall = WallClock::starting(config.virtual_clock());
     // Errors and warnings first, before a live view takes the screen.
-    let mut open_failed = 0;
+    let mut unopened = Vec::new();
     let mut runs = Vec::new();
     for (link_config, opened) in config.links.iter().zip(opened) {
         let name = &link_config.name;
@@ -155,7 +155,7 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
             Ok(link) => link,
             Err(e) => {
                 stderr::error(&error_line(several, name, &e.to_string()));
-                open_failed += 1;
+                unopened.push(name);
                 continue;
             }
         };
@@ -218,6 +218,9 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
         reporters.extend(exports.reporters(index, name));
         reports.push(Fanout { reporters });
     }
+    for (k, name) in unopened.iter().enumerate() {
+        exports.unopened(runs.len() + k, name);
+    }
     // Each session gets its own controls, all raised by the run's.
     let per_link: Vec<Controls> = runs.iter().map(|_| Controls::default()).collect();
     forward(
@@ -278,7 +281,7 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
             outcome.output_closed || report.summary(&outcome.summary, &verdict).is_err();
         links.push(verdict.end());
     }
-    links.extend((0..open_failed).map(|_| crate::exit::LinkEnd {
+    links.extend(unopened.iter().map(|_| crate::exit::LinkEnd {
         link_failed: true,
         checks_held: false,
     }));

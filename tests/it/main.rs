@@ -8,6 +8,7 @@ mod cli;
 mod completions;
 mod contrib;
 mod diagnosis;
+mod exporter;
 mod habits;
 mod high_rate;
 mod hostile;

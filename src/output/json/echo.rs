@@ -105,7 +105,9 @@ impl<W: Write> JsonReporter<W> {
                 Value::Object(m)
             }
             Event::WaitingForPeer => json!({"type": "waiting", "reason": "no peer heard yet"}),
-            Event::Command(_) => return None,
+            // The summary has each clock and the link's error; a stream
+            // of estimates is for the exporters.
+            Event::Command(_) | Event::Clock { .. } | Event::LinkFailed { .. } => return None,
             // The first report of each radio; the summary has the rest.
             Event::Radio {
                 id,

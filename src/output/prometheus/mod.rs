@@ -21,9 +21,10 @@ use hyper::StatusCode;
 
 use super::http::{self, Head, Limits, Reply, Replying};
 use super::{Event, Observer, Reporter, StartInfo};
+use crate::engine::clock_offset::ClockSummary;
 use crate::engine::commands::CommandEvent;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::radio::{RadioReport, MAX_RADIOS};
+use crate::engine::radio::{RadioReport, SinceBootCounter, MAX_RADIOS};
 use crate::engine::summary::{LinkSummary, Summary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -92,16 +93,34 @@ impl Series {
     }
 }
 
+/// One radio: its latest RADIO_STATUS, and its error counters turned into
+/// counters that only grow (the radio's own are 16 bits and wrap, and
+/// start again from 0 when it restarts).
+#[derive(Debug, Clone, Copy, Default)]
+struct RadioSeries {
+    latest: RadioReport,
+    rxerrors: SinceBootCounter,
+    fixed: SinceBootCounter,
+}
+
+impl RadioSeries {
+    fn record(&mut self, report: RadioReport) {
+        self.latest = report;
+        self.rxerrors.record(report.rxerrors);
+        self.fixed.record(report.fixed);
+    }
+}
+
 /// One link's metrics.
 #[derive(Debug, Default)]
 pub struct Metrics {
     link: String,
     probe: &'static str,
     responders: BTreeMap<SysComp, Series>,
-    /// The latest RADIO_STATUS of each radio heard.
-    radios: BTreeMap<SysComp, RadioReport>,
-    /// A continuous link of `mavping serve`: open now, and how often it
-    /// was reopened after breaking.
+    /// Each radio heard.
+    radios: BTreeMap<SysComp, RadioSeries>,
+    /// Open now, and (a continuous link of `mavping serve`) how often it
+    /// was reopened after breaking; `None` before a session starts.
     state: Option<LinkState>,
 }
 
@@ -123,7 +142,16 @@ impl Metrics {
         }
     }
 
-    /// A continuous link opened (`true`) or broke (`false`).
+    /// A run's link that could not be opened: down from the start.
+    pub fn unopened(link: &str) -> Self {
+        Metrics {
+            link: link.to_string(),
+            state: Some(LinkState::default()),
+            ..Metrics::default()
+        }
+    }
+
+    /// A link opened (`true`) or broke (`false`).
     pub fn set_up(&mut self, up: bool) {
         let state = self.state.get_or_insert_with(LinkState::default);
         state.up = up;
@@ -142,6 +170,7 @@ impl Metrics {
     pub fn on_start(&mut self, info: &StartInfo) {
         self.link = info.link.clone();
         self.probe = info.probe;
+        self.set_up(true);
     }
 
     pub fn on_event(&mut self, e: &MatchEvent) {
@@ -197,17 +226,26 @@ impl Metrics {
     /// A RADIO_STATUS: its figures replace the radio's last ones.
     pub fn on_radio(&mut self, id: SysComp, report: RadioReport) {
         if self.radios.len() < MAX_RADIOS || self.radios.contains_key(&id) {
-            self.radios.insert(id, report);
+            self.radios.entry(id).or_default().record(report);
+        }
+    }
+
+    /// A TIMESYNC responder's clock offset so far, carried from the run's
+    /// start to `at` along the measured drift (none until it is measured).
+    pub fn on_clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) {
+        if let Some(s) = self.responders.get_mut(&id) {
+            let drift_ns = clock.drift_ppm.unwrap_or(0.0) * 1e-6 * at as f64;
+            s.clock_offset_s = Some((clock.offset_ns as f64 + drift_ns) / 1e9);
         }
     }
 
     /// The figures known only at the end (percentiles from the HDR
-    /// histogram, TIMESYNC clock offsets), so a last scrape or a `/probe`
-    /// has them.
+    /// histogram), so a last scrape or a `/probe` has them.
     pub fn on_summary(&mut self, summary: &Summary) {
         for r in &summary.responders {
             let s = self.responders.entry(r.id).or_default();
-            if let Some(c) = &r.clock {
+            // The live figure, when there is one, is the later.
+            if let (None, Some(c)) = (s.clock_offset_s, &r.clock) {
                 s.clock_offset_s = Some(c.offset_ns as f64 / 1e9);
             }
             if let Some(rtt) = &r.rtt {
@@ -234,6 +272,8 @@ impl Observer for Metrics {
             Event::Match(e) => self.on_event(e),
             Event::Command(e) => self.on_command(e),
             Event::Radio { id, report, .. } => self.on_radio(*id, *report),
+            Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
+            Event::LinkFailed { .. } => self.set_up(false),
             Event::Heard { .. } | Event::WaitingForPeer => {}
         }
         Ok(())

@@ -5,8 +5,8 @@
 
 use std::fmt::{Display, Write as _};
 
-use super::{Metrics, Scope, Series, BUCKETS_S};
-use crate::engine::radio::{RadioReport, UNKNOWN};
+use super::{Metrics, RadioSeries, Scope, Series, BUCKETS_S};
+use crate::engine::radio::{is_sik, sik_dbm, UNKNOWN};
 use crate::frame::SysComp;
 
 impl Metrics {
@@ -123,54 +123,95 @@ const GAUGES: [Gauge; 4] = [
     ),
     (
         "mavping_clock_offset_seconds",
-        "Responder's clock minus ours (TIMESYNC probe, at the end of a run or probe).",
+        "Responder's clock minus ours at its latest reply (TIMESYNC probe; updated at most once a second).",
         |s| s.clock_offset_s,
     ),
 ];
 
-/// RADIO_STATUS figures, raw as the radio sends them (255: unknown, left out).
-type RadioGauge = (&'static str, &'static str, fn(&RadioReport) -> Option<u16>);
+/// A radio's figure: its name, type, help, and value (`None`: left out).
+type RadioFigure = (
+    &'static str,
+    &'static str,
+    &'static str,
+    fn(SysComp, &RadioSeries) -> Option<f64>,
+);
 
-const RADIO: [RadioGauge; 7] = [
+const RADIO: [RadioFigure; 11] = [
     (
         "mavping_radio_rssi",
-        "Local signal strength, raw RADIO_STATUS units (SiK: dBm = raw / 1.9 - 127).",
-        |r| known(r.rssi),
+        "gauge",
+        "Local signal strength, raw RADIO_STATUS units (255, unknown, left out).",
+        |_, r| known(r.latest.rssi),
     ),
     (
         "mavping_radio_remote_rssi",
+        "gauge",
         "Remote signal strength, raw RADIO_STATUS units.",
-        |r| known(r.remrssi),
+        |_, r| known(r.latest.remrssi),
     ),
     (
         "mavping_radio_noise",
+        "gauge",
         "Local background noise, raw RADIO_STATUS units.",
-        |r| known(r.noise),
+        |_, r| known(r.latest.noise),
     ),
     (
         "mavping_radio_remote_noise",
+        "gauge",
         "Remote background noise, raw RADIO_STATUS units.",
-        |r| known(r.remnoise),
+        |_, r| known(r.latest.remnoise),
+    ),
+    (
+        "mavping_radio_rssi_dbm",
+        "gauge",
+        "Local signal strength in dBm (SiK radios: raw / 1.9 - 127, the chip's curve, approximate).",
+        |id, r| sik_dbm_of(id, r.latest.rssi),
+    ),
+    (
+        "mavping_radio_remote_rssi_dbm",
+        "gauge",
+        "Remote signal strength in dBm (SiK radios, approximate).",
+        |id, r| sik_dbm_of(id, r.latest.remrssi),
+    ),
+    (
+        "mavping_radio_noise_dbm",
+        "gauge",
+        "Local background noise in dBm (SiK radios, approximate).",
+        |id, r| sik_dbm_of(id, r.latest.noise),
+    ),
+    (
+        "mavping_radio_remote_noise_dbm",
+        "gauge",
+        "Remote background noise in dBm (SiK radios, approximate).",
+        |id, r| sik_dbm_of(id, r.latest.remnoise),
     ),
     (
         "mavping_radio_txbuf_percent",
+        "gauge",
         "Free space in the radio's transmit buffer, percent.",
-        |r| known(r.txbuf),
+        |_, r| known(r.latest.txbuf),
     ),
     (
-        "mavping_radio_rxerrors",
-        "The radio's receive error count (its own 16-bit counter, which wraps).",
-        |r| Some(r.rxerrors),
+        "mavping_radio_rxerrors_total",
+        "counter",
+        "Receive errors the radio counted since mavping first heard it (its 16-bit counter's wraps and restarts followed).",
+        |_, r| Some(r.rxerrors.grown() as f64),
     ),
     (
-        "mavping_radio_fixed",
-        "Packets the radio's error correction repaired (its own 16-bit counter).",
-        |r| Some(r.fixed),
+        "mavping_radio_fixed_total",
+        "counter",
+        "Packets the radio's error correction repaired since mavping first heard it.",
+        |_, r| Some(r.fixed.grown() as f64),
     ),
 ];
 
-fn known(raw: u8) -> Option<u16> {
-    (raw != UNKNOWN).then_some(u16::from(raw))
+fn known(raw: u8) -> Option<f64> {
+    (raw != UNKNOWN).then_some(f64::from(raw))
+}
+
+/// dBm only where the scale is known: a SiK radio's.
+fn sik_dbm_of(id: SysComp, raw: u8) -> Option<f64> {
+    is_sik(id).then(|| known(raw).map(sik_dbm))?
 }
 
 /// Every link's per-responder and radio families, each family once with
@@ -231,19 +272,28 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
             series().filter_map(|(l, s)| Some((l, value(s)?))),
         );
     }
-    for (name, help, value) in RADIO {
+    for (name, kind, help, value) in RADIO {
         let radios = links.iter().flat_map(|m| {
             m.radios
                 .iter()
-                .filter_map(move |(id, r)| Some((m.radio_labels(*id), value(r)?)))
+                .filter_map(move |(id, r)| Some((m.radio_labels(*id), value(*id, r)?)))
         });
-        out.family(name, "gauge", help, radios);
+        out.family(name, kind, help, radios);
     }
 }
 
 /// The exposition of one or several links of a run (`--prometheus`).
 pub fn render(links: &[&Metrics]) -> String {
     let mut out = Exposition::default();
+    out.family(
+        "mavping_link_up",
+        "gauge",
+        "1 while the link is open, 0 after it failed (a run's other links go on).",
+        links.iter().filter_map(|m| {
+            let state = m.state?;
+            Some((format!("link=\"{}\"", escape(&m.link)), u8::from(state.up)))
+        }),
+    );
     write_links(&mut out, links, Scope::Run);
     out.0
 }
@@ -422,7 +472,8 @@ mod tests {
     use super::super::test_start as info;
     use super::*;
     use crate::engine::matcher::MatchEvent;
-    use crate::output::StartInfo;
+    use crate::engine::radio::RadioReport;
+    use crate::output::{Event, Observer, StartInfo};
 
     #[test]
     fn several_links_are_series_of_one_family() {
@@ -476,10 +527,123 @@ mod tests {
         has(&text, &format!("mavping_radio_rssi{{{l}}} 120"));
         has(&text, &format!("mavping_radio_remote_rssi{{{l}}} 150"));
         has(&text, &format!("mavping_radio_txbuf_percent{{{l}}} 80"));
-        has(&text, &format!("mavping_radio_rxerrors{{{l}}} 3"));
+        // A SiK radio's figures in dBm too: 120 / 1.9 - 127.
+        has(
+            &text,
+            &format!("mavping_radio_rssi_dbm{{{l}}} {}", 120.0 / 1.9 - 127.0),
+        );
         assert!(!text.contains("mavping_radio_remote_noise"), "{text}");
         // No responder: no responder families at all, not even their HELP.
         assert!(!text.contains("mavping_sent_total"), "{text}");
+    }
+
+    #[test]
+    fn radio_error_counters_only_grow() {
+        let mut m = Metrics::default();
+        m.on_start(&info("sim:"));
+        let id = SysComp::new(51, 68);
+        let with_errors = |rxerrors, fixed| RadioReport {
+            rxerrors,
+            fixed,
+            ..radio(100, 90)
+        };
+        // Grows 30, wraps (+11), grows 15, then the radio restarts (+4).
+        for (rx, fixed) in [(65_500, 7), (65_530, 7), (5, 9), (20, 9), (4, 1)] {
+            m.on_radio(id, with_errors(rx, fixed));
+        }
+        let text = render(&[&m]);
+        let l = r#"link="sim:",sysid="51",compid="68""#;
+        has(&text, "# TYPE mavping_radio_rxerrors_total counter");
+        has(&text, &format!("mavping_radio_rxerrors_total{{{l}}} 60"));
+        has(&text, &format!("mavping_radio_fixed_total{{{l}}} 3"));
+    }
+
+    #[test]
+    fn only_a_sik_radio_has_dbm() {
+        let mut m = Metrics::default();
+        m.on_start(&info("sim:"));
+        // Another maker's radio: its scale is not known.
+        m.on_radio(SysComp::new(1, 100), radio(100, 90));
+        let text = render(&[&m]);
+        assert!(text.contains("mavping_radio_rssi{"), "{text}");
+        assert!(!text.contains("_dbm"), "{text}");
+    }
+
+    #[test]
+    fn a_runs_links_are_up_until_they_fail_or_never_open() {
+        let mut open = Metrics::default();
+        open.on_start(&info("udp:a"));
+        let mut failed = Metrics::default();
+        failed.on_start(&info("udp:b"));
+        failed
+            .event(&Event::LinkFailed {
+                at: 5,
+                error: "gone",
+            })
+            .unwrap();
+        let never = Metrics::unopened("udp:c");
+        let text = render(&[&open, &failed, &never]);
+        has(&text, r#"mavping_link_up{link="udp:a"} 1"#);
+        has(&text, r#"mavping_link_up{link="udp:b"} 0"#);
+        has(&text, r#"mavping_link_up{link="udp:c"} 0"#);
+        // A serve link's restart counter is not a run's.
+        assert!(!text.contains("mavping_link_restarts_total"), "{text}");
+    }
+
+    #[test]
+    fn the_clock_offset_follows_the_replies() {
+        use crate::engine::clock_offset::ClockSummary;
+        let mut m = Metrics::default();
+        m.on_start(&StartInfo {
+            probe: "timesync",
+            ..info("sim:")
+        });
+        let id = SysComp::new(1, 1);
+        m.on_event(&MatchEvent::Reply {
+            responder: id,
+            seq: 0,
+            rtt: 1_000,
+            sent_at: 0,
+            at: 1_000,
+            out_of_order: false,
+            first_from_responder: true,
+        });
+        let clock = |drift_ppm| ClockSummary {
+            offset_ns: 2_000_000_000,
+            uncertainty_ns: 500,
+            bounds_ns: None,
+            bounds_drift_limit_ppm: 200,
+            spread_ns: 0.0,
+            drift_ppm,
+            drift_stderr_ppm: None,
+            samples: 1,
+        };
+        let offset = |m: &Metrics| {
+            render(&[m])
+                .lines()
+                .find_map(|l| {
+                    l.strip_prefix("mavping_clock_offset_seconds{")
+                        .and_then(|l| l.split_once("} "))
+                        .map(|(_, v)| v.parse::<f64>().unwrap())
+                })
+                .expect("an offset")
+        };
+        let at = 10_000_000_000;
+        m.event(&Event::Clock {
+            id,
+            at,
+            clock: clock(None),
+        })
+        .unwrap();
+        assert_eq!(offset(&m), 2.0);
+        // 50 ppm over 10 s: 0.5 ms later.
+        m.event(&Event::Clock {
+            id,
+            at,
+            clock: clock(Some(50.0)),
+        })
+        .unwrap();
+        assert!((offset(&m) - 2.0005).abs() < 1e-12);
     }
 
     #[test]
@@ -619,7 +783,7 @@ mod tests {
         ] {
             has(&text, line);
         }
-        // A run's links have no state to show.
+        // A link that has not started has no state to show.
         assert!(!render(&[&Metrics::default()]).contains("mavping_link_up"));
     }
 }

@@ -132,7 +132,10 @@ impl<W: Write> TextReporter<W> {
                 identity.vehicle, identity.autopilot_name
             ),
             Event::WaitingForPeer => writeln!(self.out, "waiting for a peer to send MAVLink..."),
-            Event::Radio { .. } | Event::Command(_) => Ok(()),
+            Event::Radio { .. }
+            | Event::Command(_)
+            | Event::Clock { .. }
+            | Event::LinkFailed { .. } => Ok(()),
         }
     }
 
