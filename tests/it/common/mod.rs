@@ -2,9 +2,11 @@
 //! free loopback ports, running mavping, and parsing its summaries.
 
 pub mod json;
+pub mod render;
 pub mod tmux;
 
 pub use json::*;
+pub use render::Rendered;
 pub use tmux::Tmux;
 
 use std::io::{BufRead, BufReader};
