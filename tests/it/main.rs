@@ -9,6 +9,7 @@ mod completions;
 mod diagnosis;
 mod high_rate;
 mod hostile;
+mod live;
 mod multilink;
 mod options;
 mod probes_pymavlink;

@@ -1,6 +1,6 @@
 //! The views beside the text output, run as a user runs them: `--prometheus`
 //! scraped over HTTP and checked by a real parser and by promtool, `--plot`
-//! written to a file, and `--live` in a real terminal (tmux).
+//! written to a file and rendered to pixels (`--live` is in `live.rs`).
 
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use assert_cmd::cargo::cargo_bin;
 
-use crate::common::{checked_summary, n, responder, Rendered, Tmux};
+use crate::common::{checked_summary, n, responder, Rendered};
 use prometheus_parse::{Scrape, Value};
 
 /// Generous bound for something that normally takes a fraction of a second;
@@ -267,50 +267,5 @@ fn the_plot_shows_each_responder_and_the_losses() {
         png.dark_in_rows(0..40) > 300,
         "no title text in {}",
         png.path.display()
-    );
-}
-
-#[test]
-fn live_falls_back_to_text_when_stdout_is_not_a_terminal() {
-    let out = Command::new(cargo_bin("mavping"))
-        .args(["--live", "-c", "3", "sim:?clock=virtual"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0));
-    assert_eq!(
-        String::from_utf8_lossy(&out.stderr),
-        "mavping: --live needs a terminal; printing text\n"
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("reply from 1/1: seq=2"), "{stdout}");
-    assert!(stdout.contains("mavping statistics"), "{stdout}");
-}
-
-#[test]
-fn live_view_in_a_real_terminal_stops_on_q_and_prints_the_summary() {
-    let command = format!(
-        "{} --live -i 0.02 -W 300ms 'sim:?responders=2&loss=20%&delay=2ms&seed=5'; echo exit=$?",
-        cargo_bin("mavping").display()
-    );
-    let tmux = Tmux::start("views", &command, 110, 20);
-
-    // Both responders have a row, and a loss shows in a row's strip.
-    let screen = tmux.wait_for("a loss in a row", |screen| {
-        let rows: Vec<&str> = screen
-            .lines()
-            .filter(|l| l.starts_with("│1/1") || l.starts_with("│2/1"))
-            .collect();
-        rows.len() == 2 && rows.iter().any(|r| r.contains('×'))
-    });
-    for text in ["responder", "loss%", "p99 ms", "1/1", "2/1", "q or Ctrl-C"] {
-        assert!(screen.contains(text), "{text:?} not on screen:\n{screen}");
-    }
-    tmux.send_keys("q");
-    let screen = tmux.wait_for("exit=", |s| s.contains("exit="));
-    assert!(screen.contains("mavping statistics"), "{screen}");
-    assert!(screen.contains("exit=0"), "{screen}");
-    assert!(
-        !screen.contains("q or Ctrl-C"),
-        "the view was not left:\n{screen}"
     );
 }
