@@ -4,6 +4,8 @@
 //! charts, so nothing is ever drawn under it. Each responder keeps one
 //! colour and one marker shape ([`Look`]) everywhere.
 
+use plotters::chart::MeshStyle;
+use plotters::coord::ranged1d::ValueFormatter;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -195,16 +197,7 @@ fn over_time(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
         .x_label_area_size(0)
         .y_label_area_size(Y_LABELS_W)
         .build_cartesian_2d(0f64..t_max, 0f64..rtt_max * 1.08)?;
-    chart
-        .configure_mesh()
-        .y_desc("RTT (ms)")
-        .label_style(axis_font())
-        .x_label_formatter(&tick)
-        .y_label_formatter(&tick)
-        .axis_desc_style(axis_font())
-        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
-        .max_light_lines(1)
-        .draw()?;
+    mesh(&mut chart).y_desc("RTT (ms)").draw()?;
     for (k, e) in entries.iter().enumerate() {
         let t = e.track;
         let line: Vec<(f64, f64)> = t
@@ -229,6 +222,25 @@ fn over_time(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
     Ok(())
 }
 
+/// The grid and axes every chart shares: its fonts, round tick labels, few
+/// and faint minor lines.
+fn mesh<'a, 'b, X, Y>(
+    chart: &'b mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+) -> MeshStyle<'a, 'b, X, Y, SVGBackend<'a>>
+where
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let mut mesh = chart.configure_mesh();
+    mesh.label_style(axis_font())
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .axis_desc_style(axis_font())
+        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
+        .max_light_lines(1);
+    mesh
+}
+
 /// The middle of span `i`, in seconds.
 fn at(t: &Track, i: usize) -> f64 {
     (i as f64 + 0.5) * t.span_ns as f64 / 1e9
@@ -244,17 +256,10 @@ fn losses(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
         .x_label_area_size(44)
         .y_label_area_size(Y_LABELS_W)
         .build_cartesian_2d(0f64..t_max, -0.6f64..n as f64 - 0.4)?;
-    chart
-        .configure_mesh()
+    mesh(&mut chart)
         .disable_y_mesh()
         .y_labels(0)
         .x_desc("time since start (s)")
-        .label_style(axis_font())
-        .x_label_formatter(&tick)
-        .y_label_formatter(&tick)
-        .axis_desc_style(axis_font())
-        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
-        .max_light_lines(1)
         .draw()?;
     let lane = |k: usize| (n - 1 - k) as f64;
     for (k, e) in entries.iter().enumerate() {
@@ -309,16 +314,9 @@ fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
             (from..to).log_scale().with_key_points(log_ticks(from, to)),
             0f64..top_share * 1.1,
         )?;
-    chart
-        .configure_mesh()
+    mesh(&mut chart)
         .x_desc("RTT (ms, log scale: each bin 4% wide)")
         .y_desc("replies (%)")
-        .label_style(axis_font())
-        .x_label_formatter(&tick)
-        .y_label_formatter(&tick)
-        .axis_desc_style(axis_font())
-        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
-        .max_light_lines(1)
         .draw()?;
     for e in entries {
         let t = e.track;
