@@ -20,6 +20,11 @@ impl Tmux {
             socket: format!("mavping-{name}-{}", std::process::id()),
         };
         let (w, h) = (width.to_string(), height.to_string());
+        // The shell stays a while after the command: tmux drops output it
+        // has not read yet when a pane's process exits (seen with a long
+        // summary on a loaded machine), and the window is dropped with the
+        // server at the end of the test anyway.
+        let command = format!("{command}; sleep 60");
         t.run(&[
             "new-session",
             "-d",
@@ -29,7 +34,7 @@ impl Tmux {
             &w,
             "-y",
             &h,
-            command,
+            &command,
         ]);
         t.run(&["set-option", "-t", "live", "remain-on-exit", "on"]);
         t
