@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Regenerates the committed shell completions and man page from the clap
+# Regenerates the committed shell completions and man pages from the clap
 # definition. tests/it/completions.rs fails when they are out of date.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -12,4 +12,5 @@ mkdir -p completions
 "$bin" --generate complete-powershell > completions/_mavping.ps1
 "$bin" --generate complete-elvish > completions/mavping.elv
 "$bin" --generate man > completions/mavping.1
+"$bin" --generate man-respond > completions/mavping-respond.1
 echo "completions/ regenerated"

@@ -2,8 +2,8 @@
 # Runs the whole test suite on a fresh machine: puts the third-party MAVLink
 # peers the interop tests use in .venv — pymavlink (and pyserial, which it
 # needs to open a serial port), MAVProxy, and MAVSDK's mavsdk_server (the
-# static binary inside the mavsdk-grpc wheel) — installs promtool, tmux and
-# the DejaVu fonts, then runs cargo test.
+# static binary inside the mavsdk-grpc wheel) — installs the Prometheus
+# server and promtool, tmux, man and the DejaVu fonts, then runs cargo test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -27,12 +27,16 @@ fi
 if [ ! -x "$site/mavsdk_grpc/bin/mavsdk_server" ]; then
   .venv/bin/pip install --quiet --disable-pip-version-check --no-deps "mavsdk-grpc==${MAVSDK_GRPC_VERSION}"
 fi
-# promtool (Debian's prometheus package) checks the --prometheus exposition;
-# tmux runs --live in a real terminal; resvg renders --plot's text in
-# DejaVu Sans. Installed only when missing.
+# Debian's prometheus package: the server scrapes `mavping serve` in an
+# integration test, and promtool checks expositions and unit-tests the
+# alerting rules in contrib/. tmux runs --live in a real terminal; man
+# renders the man pages; resvg renders --plot's text in DejaVu Sans.
+# Installed only when missing.
 missing=()
-command -v promtool >/dev/null || missing+=(prometheus)
+{ command -v prometheus && command -v promtool; } >/dev/null || missing+=(prometheus)
 command -v tmux >/dev/null || missing+=(tmux)
+# man renders the committed man pages in a test (man-db brings groff).
+command -v man >/dev/null || missing+=(man-db)
 [ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || missing+=(fonts-dejavu-core)
 if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq

@@ -8,6 +8,68 @@ use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 use crate::units::{parse_duration, parse_percent};
 use crate::verdict::{Expected, RttLimit};
 
+/// `mavping --help` ends with examples, the connection strings and the
+/// exit codes (the man page has the same).
+pub const EXAMPLES: &[(&str, &str)] = &[
+    (
+        "mavping udp:127.0.0.1:14550",
+        "listen where a SITL, vehicle or router sends; ping every system heard",
+    ),
+    (
+        "mavping udpout:192.168.1.10:14550",
+        "send to a system that listens (a router, a companion computer)",
+    ),
+    ("mavping serial:/dev/ttyUSB0:57600", "a SiK telemetry radio"),
+    (
+        "mavping -c 20 -i 100ms --json -q --max-loss 5% --max-rtt p99=50ms udp:0.0.0.0:14550",
+        "a CI health check: exit 0, 1 or 2",
+    ),
+    (
+        "mavping --probe timesync udp:127.0.0.1:14550",
+        "ArduPilot, which answers TIMESYNC only; also its clock offset",
+    ),
+    (
+        "mavping -f links.txt -Q 10s",
+        "every link in a file, an interim summary every 10 s",
+    ),
+    (
+        "mavping respond udpin:0.0.0.0:14550",
+        "the other end: answer PING, TIMESYNC and commands",
+    ),
+];
+
+/// Connection strings and exit codes, after the examples in `--help`.
+const FORMS_AND_STATUS: &str = "\
+Connection strings:
+  udp:HOST:PORT, udpin:HOST:PORT or HOST:PORT  listen; ping every system heard
+  udpout:HOST:PORT                             send to one address
+  udpbcast:ADDR:PORT                           broadcast; hear every system on the segment
+  tcp:HOST:PORT (tcpout:)                      connect; tcpin:HOST:PORT listens for clients
+  serial:DEVICE[:BAUD] or /dev/DEVICE          a serial port (--baud, default 115200)
+  sim:[?key=value&...]                         the built-in simulated link
+  IPv6 hosts go in brackets: udpout:[::1]:14550. Several connections are pinged side by
+  side, each with its own sequence numbers and report.
+
+Exit status:
+  0    a responder answered on every link and every threshold held
+  1    no reply, an expected responder missing, or a threshold broken
+  2    usage error, an output that cannot be written, or a link that could not be opened
+       or failed
+  130  a second Ctrl-C";
+
+/// The command line as parsed: the derive's, with the examples, connection
+/// strings and exit codes after the long help.
+pub fn command() -> clap::Command {
+    use clap::CommandFactory;
+    let mut text = String::from("Examples:\n");
+    for (line, what) in EXAMPLES {
+        text.push_str(&format!("  {line}\n      {what}\n"));
+    }
+    text.push('\n');
+    text.push_str(FORMS_AND_STATUS);
+    Cli::command().after_long_help(text)
+}
+
 /// Options that take a value accept a negative number (`-i -1`), so it
 /// reaches the value parser and a clear error; positionals do not, so
 /// `-4` and `-6` stay flags.
@@ -23,15 +85,7 @@ use crate::verdict::{Expected, RttLimit};
         answers nothing else) and also measures each responder's clock offset and drift; \
         --probe command re-sends a COMMAND_LONG until acknowledged. `mavping respond` is the \
         other end: a MAVLink system that answers all three.",
-    after_help = "Connection strings: udpin:HOST:PORT (also udp:HOST:PORT or HOST:PORT) listens and \
-        pings every peer heard; udpout:HOST:PORT sends to one address; udpbcast:ADDR:PORT broadcasts; \
-        tcp:HOST:PORT (tcpout:) connects, tcpin:HOST:PORT listens and pings every client; \
-        serial:DEVICE[:BAUD] or a bare /dev/... path opens a serial port; sim:[?key=value&...] \
-        is the built-in simulated link (see the README). IPv6 hosts go in brackets: [::1]:14550.\n\n\
-        Several connections are pinged side by side on the same schedule, each with its own \
-        sequence numbers and report; thresholds and --expect apply to each link.\n\n\
-        Exit status: 0 when a responder answered (on every link), 1 when none did, 2 on usage \
-        or link errors (on any link)."
+    after_help = "Examples, connection strings and exit codes: mavping --help"
 )]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Cli {
@@ -50,6 +104,58 @@ pub struct Cli {
 
     #[command(subcommand)]
     pub mode: Option<Mode>,
+}
+
+/// The schemes a connection string starts with, for completion.
+const SCHEMES: [&str; 9] = [
+    "udp:",
+    "udpin:",
+    "udpout:",
+    "udpbcast:",
+    "tcp:",
+    "tcpin:",
+    "tcpout:",
+    "serial:",
+    "sim:",
+];
+
+/// Shell completion of a connection string: the schemes, and serial
+/// devices (`/dev/tty*`, `/dev/serial/...`, `/dev/pts/...`) after
+/// `serial:` or for a bare path.
+pub fn complete_link(current: &std::ffi::OsStr) -> Vec<clap_complete::engine::CompletionCandidate> {
+    use clap_complete::engine::CompletionCandidate;
+    let current = current.to_string_lossy();
+    let (scheme, path) = match current.strip_prefix("serial:") {
+        Some(path) => ("serial:", path),
+        None if current.starts_with('/') => ("", current.as_ref()),
+        None => {
+            return SCHEMES
+                .iter()
+                .filter(|s| s.starts_with(current.as_ref()))
+                .map(|s| CompletionCandidate::new(*s))
+                .collect()
+        }
+    };
+    let (dir, prefix) = match path.rfind('/') {
+        Some(i) => (&path[..=i], &path[i + 1..]),
+        None => ("/dev/", path),
+    };
+    let serial_like =
+        |name: &str| dir != "/dev/" || name.starts_with("tty") || name == "serial" || name == "pts";
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut out: Vec<String> = entries
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+            (name.starts_with(prefix) && serial_like(&name))
+                .then(|| format!("{scheme}{dir}{name}{}", if is_dir { "/" } else { "" }))
+        })
+        .collect();
+    out.sort();
+    out.into_iter().map(CompletionCandidate::new).collect()
 }
 
 /// `[FIGURE=]DURATION`, e.g. `p99=50ms` or `200ms` (the maximum).
@@ -124,7 +230,10 @@ pub enum Generate {
     CompleteFish,
     CompletePowershell,
     CompleteElvish,
+    /// mavping(1)
     Man,
+    /// mavping-respond(1)
+    ManRespond,
 }
 
 /// Modes other than measuring.
@@ -132,6 +241,21 @@ pub enum Generate {
 pub enum Mode {
     /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG
     Respond(RespondArgs),
+    /// Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter
+    /// pattern) and continuous links at /metrics
+    #[command(
+        long_about = "Probe links for Prometheus.\n\n\
+            GET /probe?target=LINK[&module=NAME][&count=N&interval=D&timeout=D&probe=KIND] runs one \
+            bounded probe and answers with its metrics, within the scrape's timeout \
+            (X-Prometheus-Scrape-Timeout-Seconds). Only targets the configuration allows are \
+            opened (--allow, or allow = [...] in --config); with none, every target is refused. \
+            Continuous links (--link, or [[link]] in --config) are probed all the time and shown \
+            at /metrics with a `link` label, beside the exporter's own health. SIGHUP rereads \
+            --config; running links that did not change keep going, history and all.",
+        after_help = "See docs/monitoring.md for the configuration file, the metrics and a \
+            Prometheus scrape configuration."
+    )]
+    Serve(ServeArgs),
 }
 
 /// What to send.
@@ -148,78 +272,26 @@ pub enum ProbeKind {
 /// Options of a measurement run (the default command).
 #[derive(Debug, clap::Args)]
 pub struct PingArgs {
-    /// Where to ping: udpin:HOST:PORT, udpout:HOST:PORT, udpbcast:ADDR:PORT, tcp:HOST:PORT,
-    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...]; several links are pinged side by
-    /// side, each reported on its own
+    /// Where to ping (several: side by side, each reported on its own)
+    ///
+    /// udp:HOST:PORT (listen), udpout:HOST:PORT, udpbcast:ADDR:PORT, tcp:HOST:PORT,
+    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...]; see the list below
     #[arg(
         value_name = "CONNECTION",
         env = "MAVPING_LINK",
-        required_unless_present = "generate",
-        num_args = 1..
+        required_unless_present_any = ["generate", "file"],
+        num_args = 1..,
+        add = clap_complete::engine::ArgValueCompleter::new(complete_link)
     )]
     pub links: Vec<String>,
 
-    /// Resolve host names to IPv4 addresses only
-    #[arg(short = '4', conflicts_with = "ipv6")]
-    pub ipv4: bool,
-
-    /// Resolve host names to IPv6 addresses only
-    #[arg(short = '6')]
-    pub ipv6: bool,
-
-    /// Stop after sending COUNT requests (and waiting for their replies)
+    /// Our MAVLink system id
+    ///
+    /// The header of our requests. Not 255: 255/190 is QGroundControl's and
+    /// Mission Planner's, which MAVSDK-based ground stations ignore and
+    /// ArduPilot's GCS failsafe listens to
     #[arg(
-        allow_negative_numbers = true,
-        short = 'c',
-        long,
-        value_name = "COUNT",
-        env = "MAVPING_COUNT"
-    )]
-    pub count: Option<u64>,
-
-    /// Time between requests, e.g. 1s, 100ms, 0.01
-    #[arg(allow_negative_numbers = true, short = 'i', long, value_name = "DURATION", value_parser = parse_duration,
-          conflicts_with = "rate", env = "MAVPING_INTERVAL")]
-    pub interval: Option<Duration>,
-
-    /// Requests per second (instead of --interval)
-    #[arg(
-        allow_negative_numbers = true,
-        long,
-        value_name = "HZ",
-        env = "MAVPING_RATE"
-    )]
-    pub rate: Option<f64>,
-
-    /// Stop after this long, whatever is still in flight
-    #[arg(allow_negative_numbers = true, short = 'w', long, value_name = "DURATION", value_parser = parse_duration,
-          env = "MAVPING_DEADLINE")]
-    pub deadline: Option<Duration>,
-
-    /// On a listening link (udpin:, udp:, tcpin:), give up when no MAVLink
-    /// system is heard within DURATION (default with -c: the time the count
-    /// takes plus the timeout; without -c: wait for ever)
-    #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, env = "MAVPING_WAIT")]
-    pub wait: Option<Duration>,
-
-    /// How long to wait for each reply before counting it lost
-    #[arg(allow_negative_numbers = true, short = 'W', long, value_name = "DURATION", value_parser = parse_duration,
-          default_value = "2s", env = "MAVPING_TIMEOUT")]
-    pub timeout: Duration,
-
-    /// Print only the summary
-    #[arg(short = 'q', long)]
-    pub quiet: bool,
-
-    /// Print a line for every reply even above 100 requests/s (where one
-    /// status line per second is printed instead)
-    #[arg(long)]
-    pub every_reply: bool,
-
-    /// Our MAVLink system id (the header of our requests). Not 255: that is
-    /// QGroundControl's and Mission Planner's (255/190), which MAVSDK-based
-    /// ground stations ignore and ArduPilot's GCS failsafe listens to
-    #[arg(
+        help_heading = "What to send",
         allow_negative_numbers = true,
         long,
         value_name = "ID",
@@ -230,6 +302,7 @@ pub struct PingArgs {
 
     /// Our MAVLink component id
     #[arg(
+        help_heading = "What to send",
         allow_negative_numbers = true,
         long,
         value_name = "ID",
@@ -239,16 +312,17 @@ pub struct PingArgs {
     pub compid: u8,
 
     /// MAVLink version of our requests (replies of either version are accepted)
-    #[arg(allow_negative_numbers = true, long = "mavlink", value_name = "1|2", default_value_t = 2,
+    #[arg(help_heading = "What to send", allow_negative_numbers = true, long = "mavlink", value_name = "1|2", default_value_t = 2,
           value_parser = clap::value_parser!(u8).range(1..=2))]
     pub mavlink_version: u8,
 
     /// Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)
-    #[arg(long)]
+    #[arg(help_heading = "What to send", long)]
     pub no_heartbeat: bool,
 
     /// Sequence number of the first request (to test wrap-around)
     #[arg(
+        help_heading = "What to send",
         allow_negative_numbers = true,
         long,
         value_name = "SEQ",
@@ -256,65 +330,14 @@ pub struct PingArgs {
         hide = true
     )]
     pub first_seq: u32,
-
-    /// More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG
-    #[arg(short = 'v', long, action = ArgAction::Count)]
-    pub verbose: u8,
-
-    /// Output format
-    #[arg(long, value_enum, default_value = "text", env = "MAVPING_FORMAT")]
-    pub format: Format,
-
-    /// Same as --format json: newline-delimited JSON events on stdout
-    #[arg(long)]
-    pub json: bool,
-
-    /// Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5
-    #[arg(allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent, env = "MAVPING_MAX_LOSS")]
-    pub max_loss: Option<f64>,
-
-    /// Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION
-    /// (default figure: max); repeatable, e.g. --max-rtt p99=50ms
-    #[arg(allow_negative_numbers = true, long, value_name = "[FIGURE=]DURATION", value_parser = parse_rtt_limit)]
-    pub max_rtt: Vec<RttLimit>,
-
-    /// Fail when a responder's jitter is above DURATION
-    #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
-    pub max_jitter: Option<Duration>,
-
-    /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
-    /// LINK=SYSID[/COMPID] (on that one of several links); repeatable
-    #[arg(allow_negative_numbers = true, long, value_name = "[LINK=]SYSID[/COMPID]", value_parser = parse_expect_arg)]
-    pub expect: Vec<ExpectArg>,
-
-    /// Fail unless at least N responders answer
-    #[arg(allow_negative_numbers = true, long, value_name = "N")]
-    pub min_responders: Option<usize>,
-
-    /// Write each responder's RTT distribution in HdrHistogram's .hgrm format
-    #[arg(allow_negative_numbers = true, long, value_name = "FILE")]
-    pub hgrm: Option<PathBuf>,
-
-    /// Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)
-    #[arg(allow_negative_numbers = true, long, value_name = "FILE")]
-    pub samples: Option<PathBuf>,
-    /// Baud rate of a serial device whose connection string names none
-    #[arg(allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
-          env = "MAVPING_BAUD")]
-    pub baud: u32,
-
-    /// When a tcp or serial link breaks, reconnect with backoff instead of
-    /// ending the run; on udpout an ICMP "port unreachable" does not end it
-    /// (pings sent while down count as lost)
-    #[arg(long, env = "MAVPING_RECONNECT")]
-    pub reconnect: bool,
     /// What to send: ping, timesync (also ArduPilot; measures clock offset), command
-    #[arg(allow_negative_numbers = true, long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Ping,
+    #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Ping,
           env = "MAVPING_PROBE")]
     pub probe: ProbeKind,
 
     /// Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)
     #[arg(
+        help_heading = "What to send",
         allow_negative_numbers = true,
         long,
         value_name = "SYS/COMP",
@@ -324,6 +347,7 @@ pub struct PingArgs {
 
     /// --probe command: MAV_CMD name or id, then up to 7 params, comma-separated
     #[arg(
+        help_heading = "What to send",
         allow_negative_numbers = true,
         long,
         value_name = "CMD[,P1,...]",
@@ -332,11 +356,12 @@ pub struct PingArgs {
     pub command: String,
 
     /// --probe command: re-send an unacknowledged command this often
-    #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "100ms")]
+    #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "100ms")]
     pub retry_interval: Duration,
 
     /// --probe command: re-sends after the first before a command counts as failed
     #[arg(
+        help_heading = "What to send",
         allow_negative_numbers = true,
         long,
         value_name = "N",
@@ -344,12 +369,118 @@ pub struct PingArgs {
     )]
     pub retries: u8,
 
+    /// Stop after sending COUNT requests (and waiting for their replies)
+    #[arg(
+        help_heading = "Timing",
+        allow_negative_numbers = true,
+        short = 'c',
+        long,
+        value_name = "COUNT",
+        env = "MAVPING_COUNT"
+    )]
+    pub count: Option<u64>,
+
+    /// Time between requests, e.g. 1s, 100ms, 0.01
+    #[arg(help_heading = "Timing", allow_negative_numbers = true, short = 'i', long, value_name = "DURATION", value_parser = parse_duration,
+          conflicts_with = "rate", env = "MAVPING_INTERVAL")]
+    pub interval: Option<Duration>,
+
+    /// Requests per second (instead of --interval)
+    #[arg(
+        help_heading = "Timing",
+        allow_negative_numbers = true,
+        long,
+        value_name = "HZ",
+        env = "MAVPING_RATE"
+    )]
+    pub rate: Option<f64>,
+
+    /// Stop after this long, whatever is still in flight
+    #[arg(help_heading = "Timing", allow_negative_numbers = true, short = 'w', long, value_name = "DURATION", value_parser = parse_duration,
+          env = "MAVPING_DEADLINE")]
+    pub deadline: Option<Duration>,
+
+    /// On a listening link, give up when no system is heard in DURATION
+    ///
+    /// On udp:, udpin: and tcpin: links. Default with -c: the time the count
+    /// takes plus the timeout; without -c: wait for ever
+    #[arg(help_heading = "Timing", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, env = "MAVPING_WAIT")]
+    pub wait: Option<Duration>,
+
+    /// How long to wait for each reply before counting it lost
+    #[arg(help_heading = "Timing", allow_negative_numbers = true, short = 'W', long, value_name = "DURATION", value_parser = parse_duration,
+          default_value = "2s", env = "MAVPING_TIMEOUT")]
+    pub timeout: Duration,
+
+    /// Print only the summary
+    #[arg(help_heading = "Output", short = 'q', long)]
+    pub quiet: bool,
+
+    /// Quiet, and an interim summary every DURATION (also on Ctrl-\ / SIGQUIT)
+    #[arg(help_heading = "Output", allow_negative_numbers = true, short = 'Q', long = "interim", value_name = "DURATION",
+          value_parser = parse_duration)]
+    pub interim: Option<Duration>,
+
+    /// Start each reply and loss line with its Unix time, as ping -D
+    ///
+    /// [1764510000.123456] reply from 1/1: ...
+    #[arg(help_heading = "Output", short = 'D', long = "timestamps")]
+    pub timestamps: bool,
+
+    /// Accepted for ping users: overdue replies are always reported
+    ///
+    /// A "no reply from ..." line is printed when a request's timeout passes
+    #[arg(help_heading = "Output", short = 'O')]
+    pub report_outstanding: bool,
+
+    /// Print a line for every reply even above 100 requests/s (where one
+    /// status line per second is printed instead)
+    #[arg(help_heading = "Output", long)]
+    pub every_reply: bool,
+
+    /// More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG
+    #[arg(help_heading = "Output", short = 'v', long, action = ArgAction::Count)]
+    pub verbose: u8,
+
+    /// Output format
+    #[arg(
+        help_heading = "Output",
+        long,
+        value_enum,
+        default_value = "text",
+        env = "MAVPING_FORMAT"
+    )]
+    pub format: Format,
+
+    /// Same as --format json: newline-delimited JSON events on stdout
+    #[arg(help_heading = "Output", long)]
+    pub json: bool,
+
+    /// Write each responder's RTT distribution in HdrHistogram's .hgrm format
+    #[arg(
+        help_heading = "Output",
+        allow_negative_numbers = true,
+        long,
+        value_name = "FILE"
+    )]
+    pub hgrm: Option<PathBuf>,
+
+    /// Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)
+    #[arg(
+        help_heading = "Output",
+        allow_negative_numbers = true,
+        long,
+        value_name = "FILE"
+    )]
+    pub samples: Option<PathBuf>,
+
     /// Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal
-    #[arg(long, env = "MAVPING_LIVE")]
+    #[arg(help_heading = "Output", long, env = "MAVPING_LIVE")]
     pub live: bool,
 
     /// Serve Prometheus metrics at http://ADDR:PORT/metrics while the run goes on
     #[arg(
+        help_heading = "Output",
         allow_negative_numbers = true,
         long,
         value_name = "ADDR:PORT",
@@ -358,16 +489,102 @@ pub struct PingArgs {
     pub prometheus: Option<String>,
 
     /// At the end, draw RTT over time and the RTT distribution to FILE.svg
-    #[arg(allow_negative_numbers = true, long, value_name = "FILE.svg")]
+    #[arg(
+        help_heading = "Output",
+        allow_negative_numbers = true,
+        long,
+        value_name = "FILE.svg"
+    )]
     pub plot: Option<PathBuf>,
 
-    #[command(flatten)]
+    /// Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5
+    #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent, env = "MAVPING_MAX_LOSS")]
+    pub max_loss: Option<f64>,
+
+    /// Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION
+    /// (default figure: max); repeatable, e.g. --max-rtt p99=50ms
+    #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "[FIGURE=]DURATION", value_parser = parse_rtt_limit)]
+    pub max_rtt: Vec<RttLimit>,
+
+    /// Fail when a responder's jitter is above DURATION
+    #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
+    pub max_jitter: Option<Duration>,
+
+    /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
+    /// LINK=SYSID[/COMPID] (on that one of several links); repeatable
+    #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "[LINK=]SYSID[/COMPID]", value_parser = parse_expect_arg)]
+    pub expect: Vec<ExpectArg>,
+
+    /// Fail unless at least N responders answer
+    #[arg(
+        help_heading = "Thresholds",
+        allow_negative_numbers = true,
+        long,
+        value_name = "N"
+    )]
+    pub min_responders: Option<usize>,
+
+    /// Read links from FILE too (- is standard input), as fping -f
+    ///
+    /// One link per line; # starts a comment
+    #[arg(
+        help_heading = "Links",
+        allow_negative_numbers = true,
+        short = 'f',
+        long = "file",
+        value_name = "FILE"
+    )]
+    pub file: Option<PathBuf>,
+
+    /// Resolve host names to IPv4 addresses only
+    #[arg(help_heading = "Links", short = '4', conflicts_with = "ipv6")]
+    pub ipv4: bool,
+
+    /// Resolve host names to IPv6 addresses only
+    #[arg(help_heading = "Links", short = '6')]
+    pub ipv6: bool,
+
+    /// Send from this local address (udpout:, tcp:): ADDR or ADDR:PORT
+    #[arg(
+        help_heading = "Links",
+        allow_negative_numbers = true,
+        long,
+        value_name = "ADDR[:PORT]",
+        env = "MAVPING_BIND"
+    )]
+    pub bind: Option<String>,
+
+    /// Send and receive through this network interface only
+    ///
+    /// SO_BINDTODEVICE, e.g. wlan0 or an LTE modem's wwan0 (before Linux 5.7 it needs
+    /// CAP_NET_RAW)
+    #[arg(
+        help_heading = "Links",
+        allow_negative_numbers = true,
+        short = 'I',
+        long,
+        value_name = "IFACE",
+        env = "MAVPING_INTERFACE"
+    )]
+    pub interface: Option<String>,
+
+    /// When a tcp or serial link breaks, reconnect with backoff instead of
+    /// ending the run; on udpout an ICMP "port unreachable" does not end it
+    /// (pings sent while down count as lost)
+    #[arg(help_heading = "Links", long, env = "MAVPING_RECONNECT")]
+    pub reconnect: bool,
+    /// Baud rate of a serial device whose connection string names none
+    #[arg(help_heading = "Serial", allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
+          env = "MAVPING_BAUD")]
+    pub baud: u32,
+
+    #[command(flatten, next_help_heading = "Signing")]
     pub signing: SigningArgs,
 
     /// With a signing key: refuse unsigned replies too (wrongly signed and
     /// replayed ones are always refused); refused frames are counted, never
     /// measured
-    #[arg(long, env = "MAVPING_REQUIRE_SIGNED")]
+    #[arg(help_heading = "Signing", long, env = "MAVPING_REQUIRE_SIGNED")]
     pub require_signed: bool,
 }
 
@@ -479,6 +696,38 @@ pub struct RespondArgs {
     /// signed, not replayed requests
     #[command(flatten)]
     pub signing: SigningArgs,
+
+    /// More logs on stderr (-v info, -vv debug)
+    #[arg(short = 'v', long, action = ArgAction::Count)]
+    pub verbose: u8,
+}
+
+/// Options of `mavping serve`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ServeArgs {
+    /// Where to serve /probe and /metrics: a numeric ADDR:PORT [default: 127.0.0.1:9465, or
+    /// listen in --config]
+    #[arg(long, value_name = "ADDR:PORT", env = "MAVPING_LISTEN")]
+    pub listen: Option<String>,
+
+    /// TOML file with allowed targets, modules, continuous links and max_concurrent; reread
+    /// on SIGHUP
+    #[arg(long, value_name = "FILE", env = "MAVPING_SERVE_CONFIG")]
+    pub config: Option<PathBuf>,
+
+    /// Let /probe open targets matching PATTERN, e.g. 'udpout:127.0.0.1:*' ('*' stands for
+    /// one part of an address: a port, an octet, a name; '**' for anything); repeatable
+    #[arg(long, value_name = "PATTERN")]
+    pub allow: Vec<String>,
+
+    /// Probe LINK all the time (PING every second) and show it at /metrics; repeatable
+    #[arg(long = "link", value_name = "LINK")]
+    pub links: Vec<String>,
+
+    /// Most /probe requests running at once; more are answered 503 [default: 16, or
+    /// max_concurrent in --config]
+    #[arg(long, value_name = "N")]
+    pub max_concurrent: Option<usize>,
 
     /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]

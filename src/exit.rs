@@ -25,7 +25,7 @@ pub struct LinkEnd {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Ending {
     /// Nothing to judge went wrong: help, version, `--generate`, a
-    /// responder stopped by Ctrl-C.
+    /// responder or `mavping serve` stopped by Ctrl-C or SIGTERM.
     Done,
     /// The command line or configuration was refused, or something needed
     /// before the first request (an output file, the runtime, the

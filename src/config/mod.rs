@@ -4,12 +4,15 @@
 
 mod ping;
 mod respond;
+mod serve;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
 
 use thiserror::Error;
+
+pub use serve::{ContinuousLink, Module, Pattern, ProbePlan, ServeConfig, ServeSettings};
 
 use crate::cli::{Format, SigningArgs};
 use crate::engine::commands::CommandSpec;
@@ -45,7 +48,7 @@ pub struct Config {
 }
 
 /// One link of a run.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct LinkConfig {
     pub spec: LinkSpec,
     /// The connection string as typed: with several links, reply lines,
@@ -63,6 +66,8 @@ pub struct LinkConfig {
 pub struct OutputConfig {
     pub format: Format,
     pub quiet: bool,
+    /// `-D`: event lines start with their Unix time.
+    pub timestamps: bool,
     pub every_reply: bool,
     /// `--live`; the run falls back to text when stdout is not a terminal.
     pub live: bool,
@@ -80,6 +85,17 @@ pub enum Probe {
     Command(CommandSpec),
 }
 
+impl Probe {
+    /// The name reports give the probe (`probe="ping"`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Probe::Ping => "ping",
+            Probe::Timesync { .. } => "timesync",
+            Probe::Command(_) => "command",
+        }
+    }
+}
+
 /// `mavping respond`, validated.
 #[derive(Debug, Clone)]
 pub struct RespondConfig {
@@ -95,6 +111,35 @@ impl Config {
     pub fn virtual_clock(&self) -> bool {
         self.links.iter().all(|l| l.spec.is_virtual())
     }
+}
+
+/// How errors name a setting: as a command-line option (`--target`) or as
+/// a key of the `mavping serve` configuration file (`target`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Keys {
+    Flags,
+    File,
+}
+
+impl Keys {
+    /// `name` is the key's form in the file (`retry_interval` or
+    /// `retry-interval`, either); the option's form is derived from it.
+    pub(crate) fn name(self, name: &str) -> String {
+        match self {
+            Keys::Flags => format!("--{}", name.replace('_', "-")),
+            Keys::File => name.replace('-', "_"),
+        }
+    }
+}
+
+/// `--prometheus`, `--listen`: a numeric address, so nothing is resolved
+/// behind the user's back (and `localhost` cannot silently mean IPv6 only).
+fn validate_listen(flag: &str, arg: &str) -> Result<SocketAddr, ConfigError> {
+    arg.parse().map_err(|_| {
+        invalid(format!(
+            "{flag} {arg}: expected ADDR:PORT, e.g. 127.0.0.1:9090, 0.0.0.0:9090 or [::1]:9090"
+        ))
+    })
 }
 
 /// Longest reply timeout, retry interval or emulated delay.

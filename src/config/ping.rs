@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use super::{
-    invalid, signing, validate_baud, validate_ids, Config, ConfigError, LinkConfig, OutputConfig,
-    Probe, MAX_TIMEOUT,
+    invalid, signing, validate_baud, validate_ids, validate_listen, Config, ConfigError, Keys,
+    LinkConfig, OutputConfig, Probe, MAX_TIMEOUT,
 };
 use crate::cli::{Format, PingArgs, ProbeKind};
 use crate::engine::commands::CommandSpec;
@@ -15,6 +15,7 @@ use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
 use crate::frame::{codec, SysComp, Version};
 use crate::transport::address::LinkSpec;
+use crate::transport::route::Route;
 use crate::transport::{Family, LinkOptions};
 use crate::verdict::{Expected, Thresholds};
 
@@ -29,13 +30,13 @@ const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
 /// form mavping prints it). Returns (index of the link, responder).
 fn validate_scoped_expect(
     cli: &PingArgs,
+    given: &[String],
     links: &[LinkSpec],
 ) -> Result<Vec<(usize, Expected)>, ConfigError> {
     let mut scoped = Vec::new();
     for e in &cli.expect {
         let Some(link) = &e.link else { continue };
-        let index = cli
-            .links
+        let index = given
             .iter()
             .zip(links)
             .position(|(given, spec)| given.trim() == link || spec.to_string() == *link)
@@ -50,14 +51,91 @@ fn validate_scoped_expect(
     Ok(scoped)
 }
 
+/// `-4`/`-6`, `--bind ADDR[:PORT]` (a numeric address: nothing resolved
+/// behind the user's back) for links that send first, `-I IFACE`.
+fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigError> {
+    let family = match (cli.ipv4, cli.ipv6) {
+        (true, _) => Some(Family::V4),
+        (_, true) => Some(Family::V6),
+        _ => None,
+    };
+    let bind = match cli.bind.as_deref() {
+        None => None,
+        Some(text) => {
+            let addr = text
+                .parse::<SocketAddr>()
+                .or_else(|_| text.parse::<std::net::IpAddr>().map(|ip| SocketAddr::new(ip, 0)))
+                .map_err(|_| {
+                    invalid(format!(
+                        "--bind {text}: expected ADDR or ADDR:PORT, e.g. 192.168.1.5 or 0.0.0.0:14551"
+                    ))
+                })?;
+            let outgoing = links.iter().any(|l| {
+                matches!(
+                    l.spec,
+                    LinkSpec::UdpOut(_) | LinkSpec::TcpOut(_) | LinkSpec::UdpBcast(_)
+                )
+            });
+            if !outgoing {
+                return Err(invalid(format!(
+                    "--bind {text}: only links that send first (udpout:, tcp:, udpbcast:) take a \
+                     local address; a listening link names its own"
+                )));
+            }
+            Some(addr)
+        }
+    };
+    let interface = match cli.interface.as_deref() {
+        None => None,
+        Some(name) if name.is_empty() || name.len() > 15 || name.contains(['/', ' ']) => {
+            return Err(invalid(format!(
+                "-I {name}: expected a network interface name (up to 15 characters), e.g. wlan0"
+            )))
+        }
+        Some(name) => Some(name.to_string()),
+    };
+    Ok(Route {
+        family,
+        bind,
+        interface,
+    })
+}
+
+/// `-f FILE` (`-` is standard input): a link a line, `#` starts a
+/// comment, blank lines are skipped. Errors name the line.
+fn links_from_file(path: &Path) -> Result<Vec<(String, LinkSpec)>, ConfigError> {
+    let shown = path.display();
+    let text = if path == Path::new("-") {
+        std::io::read_to_string(std::io::stdin())
+    } else {
+        std::fs::read_to_string(path)
+    }
+    .map_err(|e| invalid(format!("-f {shown}: cannot read it: {e}")))?;
+    let mut links = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let link = line.split('#').next().unwrap_or_default().trim();
+        if link.is_empty() {
+            continue;
+        }
+        let spec = link
+            .parse::<LinkSpec>()
+            .map_err(|e| invalid(format!("-f {shown}, line {}: {e}", n + 1)))?;
+        links.push((link.to_string(), spec));
+    }
+    if links.is_empty() {
+        return Err(invalid(format!("-f {shown}: no link in it")));
+    }
+    Ok(links)
+}
+
 /// Several links: each must be named once (reports are keyed by the
 /// connection string), and a virtual clock cannot drive real links.
-fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError> {
+fn validate_links(given: &[String], links: &[LinkSpec]) -> Result<(), ConfigError> {
     for (i, link) in links.iter().enumerate() {
         if links[..i].iter().any(|l| l.to_string() == link.to_string()) {
             return Err(invalid(format!(
                 "{} names the same link as an earlier one ({link}): name each link once",
-                cli.links[i]
+                given[i]
             )));
         }
     }
@@ -67,16 +145,6 @@ fn validate_links(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError>
         ));
     }
     Ok(())
-}
-
-/// `--prometheus`: a numeric address, so nothing is resolved behind the
-/// user's back (and `localhost` cannot silently mean IPv6 only).
-fn validate_listen(arg: &str) -> Result<SocketAddr, ConfigError> {
-    arg.parse().map_err(|_| {
-        invalid(format!(
-            "--prometheus {arg}: expected ADDR:PORT, e.g. 127.0.0.1:9090, 0.0.0.0:9090 or [::1]:9090"
-        ))
-    })
 }
 
 /// `--plot`: only SVG; the PNG backend needs system font libraries.
@@ -167,7 +235,10 @@ fn validate_signing(cli: &PingArgs) -> Result<Option<SigningConfig>, ConfigError
 
 /// Ring size: twice the requests that can be in flight within one
 /// timeout, so a late reply is still recognised for about one more timeout.
-fn pending_capacity(interval: Duration, timeout: Duration) -> Result<usize, ConfigError> {
+pub(super) fn pending_capacity(
+    interval: Duration,
+    timeout: Duration,
+) -> Result<usize, ConfigError> {
     let in_flight = (timeout.as_nanos() / interval.as_nanos()) as u64 + 1;
     if in_flight > MAX_IN_FLIGHT {
         return Err(invalid(format!(
@@ -180,11 +251,13 @@ fn pending_capacity(interval: Duration, timeout: Duration) -> Result<usize, Conf
     Ok(((in_flight * 2 + 16) as usize).next_power_of_two().max(64))
 }
 
-/// "SYS/COMP", or "SYS" for every component of a system.
-fn parse_target(text: &str) -> Result<SysComp, ConfigError> {
+/// "SYS/COMP", or "SYS" for every component of a system; `key` names the
+/// option or configuration key in errors.
+fn parse_target(key: Keys, text: &str) -> Result<SysComp, ConfigError> {
     let bad = || {
         invalid(format!(
-            "--target {text}: expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)"
+            "{} {text}: expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)",
+            key.name("target")
         ))
     };
     let (sys, comp) = text.split_once('/').unwrap_or((text, "0"));
@@ -194,14 +267,15 @@ fn parse_target(text: &str) -> Result<SysComp, ConfigError> {
 }
 
 /// "REQUEST_MESSAGE,0" or "512,0": a MAV_CMD by name or id, then params.
-fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
+fn parse_command(key: Keys, text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
+    let key = key.name("command");
     let mut parts = text.split(',').map(str::trim);
     let name = parts.next().unwrap_or_default();
     let command = match name.parse::<u16>() {
         Ok(id) => id,
         Err(_) => codec::command_id_from_name(name).ok_or_else(|| {
             invalid(format!(
-                "--command {text}: '{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"
+                "{key} {text}: '{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"
             ))
         })?,
     };
@@ -209,7 +283,7 @@ fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
     for (i, p) in parts.enumerate() {
         if i >= params.len() {
             return Err(invalid(format!(
-                "--command {text}: at most 7 params after the command"
+                "{key} {text}: at most 7 params after the command"
             )));
         }
         params[i] = p
@@ -218,7 +292,7 @@ fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
             .filter(|v| v.is_finite())
             .ok_or_else(|| {
                 invalid(format!(
-                    "--command {text}: param {} '{p}' is not a number",
+                    "{key} {text}: param {} '{p}' is not a number",
                     i + 1
                 ))
             })?;
@@ -226,14 +300,28 @@ fn parse_command(text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
     Ok((command, params))
 }
 
-fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
-    let target = cli.target.as_deref().map(parse_target).transpose()?;
-    match cli.probe {
+/// What a probe is given: its kind and, for TIMESYNC and commands, whom
+/// it addresses and how a command is re-sent.
+pub(super) struct ProbeChoice<'a> {
+    pub kind: ProbeKind,
+    pub target: Option<&'a str>,
+    pub command: &'a str,
+    pub retry_interval: Duration,
+    pub retries: u8,
+}
+
+/// The probe a choice names; `key` names options or configuration keys in errors.
+pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, ConfigError> {
+    let target = choice.target.map(|t| parse_target(key, t)).transpose()?;
+    let flag = |name| key.name(name);
+    match choice.kind {
         ProbeKind::Ping => {
             if target.is_some() {
-                return Err(invalid(
-                    "--target: PING requests are always broadcast; use it with --probe timesync or command",
-                ));
+                return Err(invalid(format!(
+                    "{}: PING requests are always broadcast; use it with {} timesync or command",
+                    flag("target"),
+                    flag("probe")
+                )));
             }
             Ok(Probe::Ping)
         }
@@ -243,23 +331,27 @@ fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
         ProbeKind::Command => {
             let target = target.unwrap_or(SysComp::new(1, 1));
             if target.sysid == 0 {
-                return Err(invalid(
-                    "--target 0: a command needs one target system (e.g. --target 1/1)",
-                ));
-            }
-            if cli.retry_interval.is_zero() || cli.retry_interval > MAX_TIMEOUT {
                 return Err(invalid(format!(
-                    "--retry-interval {}: expected more than 0 and at most 1h",
-                    humantime::format_duration(cli.retry_interval)
+                    "{} 0: a command needs one target system (e.g. {} 1/1)",
+                    flag("target"),
+                    flag("target")
                 )));
             }
-            let (command, params) = parse_command(&cli.command)?;
+            let retry = choice.retry_interval;
+            if retry.is_zero() || retry > MAX_TIMEOUT {
+                return Err(invalid(format!(
+                    "{} {}: expected more than 0 and at most 1h",
+                    flag("retry-interval"),
+                    humantime::format_duration(retry)
+                )));
+            }
+            let (command, params) = parse_command(key, choice.command)?;
             Ok(Probe::Command(CommandSpec {
                 target,
                 command,
                 params,
-                retry_interval: cli.retry_interval,
-                retries: cli.retries,
+                retry_interval: retry,
+                retries: choice.retries,
             }))
         }
     }
@@ -280,6 +372,19 @@ fn peer_wait(cli: &PingArgs, spec: &LinkSpec, session: &SessionConfig) -> Option
             .and_then(|d| d.checked_add(session.timeout))
             .map(|d| d.min(crate::units::MAX_DURATION))
     })
+}
+
+fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
+    probe_of(
+        Keys::Flags,
+        &ProbeChoice {
+            kind: cli.probe,
+            target: cli.target.as_deref(),
+            command: &cli.command,
+            retry_interval: cli.retry_interval,
+            retries: cli.retries,
+        },
+    )
 }
 
 /// The session settings every link shares; each link then names its own.
@@ -304,6 +409,9 @@ fn session(
     if cli.wait.is_some_and(|d| d.is_zero()) {
         return Err(invalid("--wait 0: expected more than 0"));
     }
+    if cli.interim.is_some_and(|d| d < Duration::from_millis(10)) {
+        return Err(invalid("-Q: expected an interval of at least 10ms"));
+    }
     let ours = validate_ids(cli.sysid, cli.compid)?;
     let signing = validate_signing(cli)?;
     let echo = !matches!(probe, Probe::Command(_));
@@ -315,6 +423,7 @@ fn session(
         deadline: cli.deadline,
         // Each link sets its own: only listening links wait for a peer.
         wait: None,
+        interim: cli.interim,
         timeout: cli.timeout,
         version: if cli.mavlink_version == 1 {
             Version::V1
@@ -336,17 +445,23 @@ impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
     fn try_from(cli: &PingArgs) -> Result<Self, ConfigError> {
-        if cli.links.is_empty() {
-            return Err(invalid(
-                "missing CONNECTION (e.g. udpout:127.0.0.1:14550 or sim:)",
-            ));
-        }
-        let specs = cli
-            .links
+        let mut given: Vec<String> = cli.links.iter().map(|l| l.trim().to_string()).collect();
+        let mut specs = given
             .iter()
             .map(|l| l.parse::<LinkSpec>())
             .collect::<Result<Vec<_>, _>>()?;
-        validate_links(cli, &specs)?;
+        if let Some(path) = &cli.file {
+            for (link, spec) in links_from_file(path)? {
+                given.push(link);
+                specs.push(spec);
+            }
+        }
+        if given.is_empty() {
+            return Err(invalid(
+                "missing CONNECTION (e.g. udp:127.0.0.1:14550 or sim:)",
+            ));
+        }
+        validate_links(&given, &specs)?;
         if cli.min_responders == Some(0) {
             return Err(invalid("--min-responders 0: expected at least 1"));
         }
@@ -366,14 +481,13 @@ impl TryFrom<&PingArgs> for Config {
                 .collect(),
             min_responders: cli.min_responders,
         };
-        let scoped = validate_scoped_expect(cli, &specs)?;
+        let scoped = validate_scoped_expect(cli, &given, &specs)?;
         let several = specs.len() > 1;
-        let links = specs
+        let links: Vec<LinkConfig> = specs
             .into_iter()
-            .zip(&cli.links)
+            .zip(given)
             .enumerate()
-            .map(|(index, (spec, given))| {
-                let name = given.trim().to_string();
+            .map(|(index, (spec, name))| {
                 let mut thresholds = everywhere.clone();
                 thresholds.expect.extend(
                     scoped
@@ -400,27 +514,30 @@ impl TryFrom<&PingArgs> for Config {
                 }
             })
             .collect();
+        let route = validate_route(cli, &links)?;
         Ok(Config {
             links,
             link_options: LinkOptions {
                 baud: cli.baud,
                 reconnect: cli.reconnect,
-                family: match (cli.ipv4, cli.ipv6) {
-                    (true, _) => Some(Family::V4),
-                    (_, true) => Some(Family::V6),
-                    _ => None,
-                },
+                route,
             },
             probe,
             output: OutputConfig {
                 format: if cli.json { Format::Json } else { cli.format },
-                quiet: cli.quiet,
+                // -Q is quiet with interim summaries, as fping's.
+                quiet: cli.quiet || cli.interim.is_some(),
+                timestamps: cli.timestamps,
                 every_reply: cli.every_reply,
                 live: cli.live,
                 hgrm: cli.hgrm.clone(),
                 samples: cli.samples.clone(),
                 plot: cli.plot.as_deref().map(validate_plot).transpose()?,
-                prometheus: cli.prometheus.as_deref().map(validate_listen).transpose()?,
+                prometheus: cli
+                    .prometheus
+                    .as_deref()
+                    .map(|a| validate_listen("--prometheus", a))
+                    .transpose()?,
             },
             verbose: cli.verbose,
         })
@@ -482,7 +599,7 @@ mod tests {
             LinkOptions {
                 baud: 57600,
                 reconnect: true,
-                family: None,
+                route: Route::default(),
             }
         );
         assert_eq!(config("sim:").unwrap().probe, Probe::Ping);

@@ -6,6 +6,7 @@ use super::{
 use crate::cli::RespondArgs;
 use crate::responder::ResponderSettings;
 use crate::transport::address::LinkSpec;
+use crate::transport::route::Route;
 use crate::transport::LinkOptions;
 use crate::units::parse_percent;
 
@@ -33,7 +34,7 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 // A responder outlives its pingers: one that is not up yet
                 // or restarts must not end it.
                 reconnect: true,
-                family: None,
+                route: Route::default(),
             },
             settings: ResponderSettings {
                 id: validate_ids(cli.sysid, cli.compid)?,

@@ -175,6 +175,7 @@ mod tests {
                 count: Some(100),
                 deadline: None,
                 wait: None,
+                interim: None,
                 timeout: Duration::from_secs(2),
                 version: Version::V2,
                 heartbeat: true,

@@ -8,14 +8,13 @@
 use std::io;
 
 use hdrhistogram::Histogram;
-use tokio::sync::Notify;
 
 use super::commands::{CommandEvent, CommandSpec, CommandTracker};
 use super::link_io::{Clock, Sender};
 use super::observe::{tell_each, Event, Observer, StartInfo};
 use super::radio::Radios;
 use super::schedule::Schedule;
-use super::session::{self, Driver, Ended, Outcome};
+use super::session::{self, Controls, Driver, Ended, Outcome};
 use super::summary::{command_target_summaries, CommandSummary, LinkSummary};
 use super::Nanos;
 use super::SessionConfig;
@@ -28,9 +27,9 @@ pub async fn run<T: Transport>(
     spec: &CommandSpec,
     link: &mut T,
     observer: &mut dyn Observer,
-    stop: &Notify,
+    controls: &Controls,
 ) -> Outcome {
-    session::run(cfg, link, CommandDriver::new(cfg, spec), observer, stop).await
+    session::run(cfg, link, CommandDriver::new(cfg, spec), observer, controls).await
 }
 
 pub struct CommandDriver {

@@ -39,6 +39,8 @@ pub struct Observed<'a> {
     pub undecided: u64,
     /// A listening link gave up after this long without a peer.
     pub no_peer_within: Option<Duration>,
+    /// The link failed: its error says what happened.
+    pub link_failed: bool,
 }
 
 /// Seconds as a person writes them: "2.5 s", "20 s".
@@ -213,6 +215,9 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
         return hints;
     }
     let f = &o.frames;
+    if f.frames == 0 && o.link_failed {
+        return hints;
+    }
     if f.frames == 0 && hints.is_empty() {
         if f.skipped_bytes + f.bad_crc + f.truncated > 0 {
             hints.push(not_mavlink(o));
@@ -285,6 +290,7 @@ mod tests {
             requests: 10,
             undecided: 2,
             no_peer_within: None,
+            link_failed: false,
         }
     }
 
@@ -330,6 +336,12 @@ mod tests {
         let hints = diagnose(&o);
         assert_eq!(codes(&hints), [HintCode::NotMavlink]);
         assert!(hints[0].text.contains("wrong baud rate"), "{hints:?}");
+        // A link that failed has its error to say what happened.
+        let o = Observed {
+            link_failed: true,
+            ..observed(&roster, 0)
+        };
+        assert!(diagnose(&o).is_empty());
     }
 
     #[test]

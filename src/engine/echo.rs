@@ -6,7 +6,6 @@ use std::io;
 use std::time::Duration;
 
 use hdrhistogram::Histogram;
-use tokio::sync::Notify;
 
 use super::diagnosis::{diagnose, Observed};
 use super::hint::{Hint, HintCode};
@@ -14,10 +13,11 @@ use super::link_io::{Clock, Sender};
 use super::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
 use super::observe::{tell_each, Event, Observer, StartInfo};
 use super::radio::{radio_hints, Radios};
+use super::roster::Roster;
 use super::schedule::Schedule;
-use super::session::{self, Driver, Ended, Outcome};
+use super::session::{self, Controls, Driver, Ended, Outcome};
 use super::stats::RttStats;
-use super::summary::{responder_summaries, LinkSummary, ScheduleSummary, Summary};
+use super::summary::{responder_summaries, Interim, LinkSummary, ScheduleSummary, Summary};
 use super::Nanos;
 use super::SessionConfig;
 use crate::frame::{Frame, SysComp};
@@ -33,10 +33,10 @@ pub async fn run<T: Transport, P: EchoProbe>(
     link: &mut T,
     probe: P,
     observer: &mut dyn Observer,
-    stop: &Notify,
+    controls: &Controls,
 ) -> Outcome {
     let driver = EchoDriver::new(cfg, probe);
-    session::run(cfg, link, driver, observer, stop).await
+    session::run(cfg, link, driver, observer, controls).await
 }
 
 /// An echo probe's state in a session.
@@ -183,6 +183,14 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         self.matcher.next_deadline()
     }
 
+    fn interim(&self, roster: &Roster, at: Nanos) -> Option<Interim> {
+        Some(Interim {
+            at,
+            requests: self.matcher.issued(),
+            responders: responder_summaries(&self.matcher, roster),
+        })
+    }
+
     fn settled(&self) -> bool {
         self.matcher.next_deadline().is_none() || self.matcher.all_answered()
     }
@@ -215,6 +223,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             requests: self.matcher.issued(),
             undecided,
             no_peer_within: ended.no_peer_within,
+            link_failed: ended.link_error.is_some(),
         });
         hints.extend(radio_hints(&radios, loss_by_txbuf));
         hints.extend(responders.iter().filter_map(|r| {

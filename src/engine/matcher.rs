@@ -72,6 +72,19 @@ pub enum MatchEvent {
     },
 }
 
+impl MatchEvent {
+    /// When it was decided (session time).
+    pub fn at(&self) -> Nanos {
+        match *self {
+            MatchEvent::Reply { at, .. }
+            | MatchEvent::Late { at, .. }
+            | MatchEvent::Duplicate { at, .. }
+            | MatchEvent::Lost { at, .. }
+            | MatchEvent::Stale { at, .. } => at,
+        }
+    }
+}
+
 /// Exact per-responder counts.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct Counts {
@@ -418,6 +431,17 @@ impl Matcher {
                     .iter()
                     .all(|r| !r.in_window(n) || r.has_answered(idx, n))
             })
+    }
+
+    /// A responder's counts as if the run ended now, without ending it:
+    /// undecided requests it already answered count as sent (as
+    /// [`Matcher::finish`] counts them), the others not yet.
+    pub fn counts_now(&self, r: &Responder) -> Counts {
+        let mut counts = r.counts;
+        counts.sent += (self.next_expiry..self.next_n)
+            .filter(|&n| r.in_window(n) && r.has_answered(self.idx(n), n))
+            .count() as u64;
+        counts
     }
 
     /// Requests still within their timeout, whoever answered them.

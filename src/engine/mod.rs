@@ -30,7 +30,7 @@ use crate::frame::{SysComp, Version};
 pub type Nanos = u64;
 
 /// What a session needs to know, already validated.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SessionConfig {
     pub link_name: String,
     pub ours: SysComp,
@@ -41,6 +41,8 @@ pub struct SessionConfig {
     /// the run when none is heard within this (`--wait`, or what `-c`
     /// would take plus the timeout).
     pub wait: Option<Duration>,
+    /// An interim summary this often (`-Q`).
+    pub interim: Option<Duration>,
     pub timeout: Duration,
     pub version: Version,
     /// Send our own HEARTBEAT at 1 Hz (MAVSDK and routers need it).

@@ -9,6 +9,7 @@ use super::commands::{CommandEvent, CommandSpec};
 use super::matcher::MatchEvent;
 use super::radio::RadioReport;
 use super::roster::Identity;
+use super::summary::Interim;
 use super::Nanos;
 use crate::frame::SysComp;
 
@@ -53,6 +54,10 @@ pub trait Observer {
     /// Pushes buffered output to the reader (called before the session
     /// blocks, and every 50 ms while it is busy).
     fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+    /// The figures so far (`-Q`, SIGQUIT); the run goes on.
+    fn interim(&mut self, _figures: &Interim) -> io::Result<()> {
         Ok(())
     }
 }

@@ -10,6 +10,8 @@
 use std::io;
 use std::time::Duration;
 
+use std::sync::Arc;
+
 use hdrhistogram::Histogram;
 use tokio::sync::Notify;
 
@@ -18,11 +20,20 @@ use super::observe::{Event, Observer, StartInfo};
 use super::radio::{RadioReport, Radios};
 use super::roster::Roster;
 use super::schedule::Schedule;
-use super::summary::LinkSummary;
+use super::summary::{Interim, LinkSummary};
 use super::{Nanos, SessionConfig};
 use crate::frame::signing::{Gate, SigningConfig};
 use crate::frame::{Frame, Msg, ScanStats, SysComp};
 use crate::transport::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
+
+/// What may reach into a running session from outside: a stop (Ctrl-C,
+/// SIGTERM, `q` in the live view) and a request for an interim summary
+/// (SIGQUIT, as Linux `ping`).
+#[derive(Clone, Default)]
+pub struct Controls {
+    pub stop: Arc<Notify>,
+    pub interim: Arc<Notify>,
+}
 
 /// How the run ended. The caller judges it and reports the summary.
 pub struct Outcome {
@@ -78,6 +89,11 @@ pub trait Driver {
     fn settled(&self) -> bool;
     /// The summary and histograms of the run.
     fn finish(self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>);
+    /// The figures so far, for an interim summary; `None` where the probe
+    /// has none.
+    fn interim(&self, _roster: &Roster, _at: Nanos) -> Option<Interim> {
+        None
+    }
 }
 
 /// How close to a planned send the session stops trusting tokio's 1 ms
@@ -170,6 +186,19 @@ impl Heard {
     }
 }
 
+/// Tells the observer the figures so far, if the probe has an interim.
+fn interim<D: Driver>(
+    driver: &D,
+    roster: &Roster,
+    at: Nanos,
+    observer: &mut dyn Observer,
+) -> io::Result<()> {
+    match driver.interim(roster, at) {
+        Some(figures) => observer.interim(&figures),
+        None => Ok(()),
+    }
+}
+
 /// Polls a future once: its result if it is ready now. Used on cancel-safe
 /// futures only (link receive, the stop signal), between precise sleeps.
 fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
@@ -203,8 +232,9 @@ pub async fn run<T: Transport, D: Driver>(
     link: &mut T,
     mut driver: D,
     observer: &mut dyn Observer,
-    stop: &Notify,
+    controls: &Controls,
 ) -> Outcome {
+    let stop = &*controls.stop;
     tighten_timer_slack();
     let clock = Clock::start();
     driver.begin(clock.wall_at_zero());
@@ -222,6 +252,8 @@ pub async fn run<T: Transport, D: Driver>(
     let mut schedule: Option<Schedule> = None;
     let deadline_ns = cfg.deadline.map(|d| d.as_nanos() as Nanos);
     let wait_ns = cfg.wait.map(|d| d.as_nanos() as Nanos);
+    let interim_ns = cfg.interim.map(|d| d.as_nanos() as Nanos);
+    let mut next_interim = interim_ns;
     let mut inbound: Vec<Inbound> = Vec::new();
     let mut told_waiting = false;
     let mut last_flush: Nanos = 0;
@@ -258,6 +290,11 @@ pub async fn run<T: Transport, D: Driver>(
         }
         driver.expire(clock.now());
         output = output.and(driver.report(&mut heard.radios, observer));
+        let now = clock.now();
+        if next_interim.is_some_and(|due| now >= due) {
+            next_interim = next_interim.zip(interim_ns).map(|(due, every)| due + every);
+            output = output.and(interim(&driver, &heard.roster, now, observer));
+        }
         if output.is_err() {
             continue;
         }
@@ -327,6 +364,7 @@ pub async fn run<T: Transport, D: Driver>(
             heartbeat.next(),
             deadline_ns,
             wait_ns.filter(|_| schedule.is_none()),
+            next_interim,
         ]
         .into_iter()
         .flatten()
@@ -341,6 +379,9 @@ pub async fn run<T: Transport, D: Driver>(
         tokio::select! {
             biased;
             _ = stop.notified() => break Some(Stopped::Interrupted),
+            _ = controls.interim.notified() => {
+                output = interim(&driver, &heard.roster, clock.now(), observer);
+            }
             received = link.recv(&mut inbound) => {
                 if let Err(e) = received {
                     break Some(Stopped::LinkFailed(e));

@@ -141,10 +141,11 @@ pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderS
     let mut out: Vec<ResponderSummary> = matcher
         .responders()
         .iter()
-        .map(|r| ResponderSummary {
+        .map(|r| (r, matcher.counts_now(r)))
+        .map(|(r, counts)| ResponderSummary {
             id: r.id,
-            counts: r.counts,
-            loss_ratio: r.counts.loss_ratio(),
+            counts,
+            loss_ratio: counts.loss_ratio(),
             rtt: r.rtt.summary(),
             histogram: r.rtt.distribution(HISTOGRAM_ROWS),
             identity: roster.get(r.id).cloned(),
@@ -153,6 +154,16 @@ pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderS
         .collect();
     out.sort_by_key(|r| r.id);
     out
+}
+
+/// The figures of a run so far (`-Q`, SIGQUIT): each responder's counts
+/// of decided requests and its RTT figures.
+#[derive(Debug, Clone)]
+pub struct Interim {
+    /// Session time, ns.
+    pub at: super::Nanos,
+    pub requests: u64,
+    pub responders: Vec<ResponderSummary>,
 }
 
 /// `--probe command`: one target's figures.

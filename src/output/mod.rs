@@ -2,6 +2,7 @@
 //! [`Observer`] and renders the judged summary at the end ([`Reporter`]).
 
 pub mod hgrm;
+pub mod http;
 pub mod json;
 pub mod live;
 pub mod plot;
@@ -13,7 +14,7 @@ use std::io;
 use std::time::{Duration, SystemTime};
 
 pub use crate::engine::observe::{Event, Observer, StartInfo};
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::verdict::Verdict;
 
@@ -74,6 +75,11 @@ impl Observer for Fanout<'_> {
     }
     fn flush(&mut self) -> io::Result<()> {
         self.reporters.iter_mut().try_for_each(|r| r.flush())
+    }
+    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
+        self.reporters
+            .iter_mut()
+            .try_for_each(|r| r.interim(figures))
     }
 }
 

@@ -12,7 +12,7 @@ use crate::config::Config;
 use crate::engine::session::Outcome;
 use crate::output::hgrm;
 use crate::output::plot::Plot;
-use crate::output::prometheus::PrometheusReporter;
+use crate::output::prometheus::PrometheusExporter;
 use crate::output::samples::SampleLog;
 use crate::output::{Reporter, Shared};
 use crate::stderr;
@@ -20,7 +20,7 @@ use crate::stderr;
 pub struct Exports {
     samples: Option<Shared<BufWriter<File>>>,
     plot: Option<(Plot, BufWriter<File>, PathBuf)>,
-    prometheus: Option<PrometheusReporter>,
+    prometheus: Option<PrometheusExporter>,
     hgrm: Option<(BufWriter<File>, PathBuf)>,
     /// Several links: sample rows name their link.
     several: bool,
@@ -45,7 +45,7 @@ impl Exports {
             None => None,
             Some(addr) => {
                 let (exporter, bound) = std::net::TcpListener::bind(addr)
-                    .and_then(PrometheusReporter::serve)
+                    .and_then(PrometheusExporter::serve)
                     .map_err(|e| format!("--prometheus {addr}: {e}"))?;
                 // Says the port when 0 was asked for; scripts and tests read it.
                 stderr::error(&format_args!("serving metrics at http://{bound}/metrics"));

@@ -1,21 +1,22 @@
 //! From parsed arguments to how the run ended: validation, logging, the
-//! runtime, signals, then a measurement ([`ping`]) or a responder
-//! ([`respond`]). `main` turns the [`Ending`] into the exit code.
+//! runtime, signals, then a measurement ([`ping`]), a responder
+//! ([`respond`]) or the Prometheus exporter ([`serve`]). `main` turns the
+//! [`Ending`] into the exit code.
 
 mod exports;
+pub mod generate;
+mod measure;
 mod ping;
 mod respond;
+mod serve;
 mod signals;
 
 use std::future::Future;
-use std::io::{self, Write};
-use std::sync::Arc;
+use std::io;
 
-use clap::CommandFactory;
-use tokio::sync::Notify;
-
-use crate::cli::{Cli, Generate, Mode};
-use crate::config::{Config, RespondConfig};
+use crate::cli::{self, Cli, Mode};
+use crate::config::{Config, RespondConfig, ServeConfig};
+use crate::engine::session::Controls;
 use crate::exit::Ending;
 use crate::stderr;
 
@@ -87,22 +88,6 @@ pub fn usage_error(error: &clap::Error) -> Ending {
     Ending::Refused
 }
 
-/// `--generate`: completions and the man page, from the clap definition.
-pub fn generate(kind: Generate, out: &mut dyn Write) -> io::Result<()> {
-    use clap_complete::Shell;
-    let mut cmd = Cli::command();
-    let shell = match kind {
-        Generate::CompleteBash => Shell::Bash,
-        Generate::CompleteZsh => Shell::Zsh,
-        Generate::CompleteFish => Shell::Fish,
-        Generate::CompletePowershell => Shell::PowerShell,
-        Generate::CompleteElvish => Shell::Elvish,
-        Generate::Man => return clap_mangen::Man::new(cmd).render(out),
-    };
-    clap_complete::generate(shell, &mut cmd, "mavping", out);
-    Ok(())
-}
-
 fn init_logging(verbose: u8) {
     use tracing_subscriber::EnvFilter;
     let default = match verbose {
@@ -122,7 +107,7 @@ fn init_logging(verbose: u8) {
 /// against the signals: the first Ctrl-C stops it, a second abandons it.
 fn block_on<F, R>(paused: bool, run: F) -> Ending
 where
-    F: FnOnce(Arc<Notify>) -> R,
+    F: FnOnce(Controls) -> R,
     R: Future<Output = Ending>,
 {
     let mut builder = tokio::runtime::Builder::new_current_thread();
@@ -137,21 +122,37 @@ where
             return Ending::Refused;
         }
     };
-    let stop = Arc::new(Notify::new());
-    let run = run(stop.clone());
-    runtime.block_on(async move {
+    let controls = Controls::default();
+    let run = run(controls.clone());
+    // A LocalSet: the HTTP server's handlers run sessions, which stay on
+    // this one thread.
+    tokio::task::LocalSet::new().block_on(&runtime, async move {
         tokio::select! {
             biased;
-            () = signals::stop_then_leave(stop) => Ending::InterruptedTwice,
+            () = signals::watch(controls) => Ending::InterruptedTwice,
             ending = run => ending,
         }
     })
 }
 
+/// Answers the shell's completion request, when this run is one
+/// (`COMPLETE=bash mavping -- ...`, set by the completion scripts).
+pub fn completion() -> Option<Ending> {
+    let env = clap_complete::CompleteEnv::with_factory(cli::command)
+        .var(generate::COMPLETE_VAR)
+        .completer("mavping");
+    let current_dir = std::env::current_dir().ok();
+    match env.try_complete(std::env::args_os(), current_dir.as_deref()) {
+        Ok(true) => Some(Ending::Done),
+        Ok(false) => None,
+        Err(e) => Some(usage_error(&e)),
+    }
+}
+
 /// Validates, then runs what the command line asks for.
 pub fn main(cli: &Cli) -> Ending {
     if let Some(kind) = cli.generate {
-        return match generate(kind, &mut io::stdout()) {
+        return match generate::generate(kind, &mut io::stdout()) {
             Ok(()) => Ending::Done,
             Err(e) => {
                 stderr::error(&e);
@@ -174,11 +175,25 @@ pub fn main(cli: &Cli) -> Ending {
                 Ending::Refused
             }
         },
+        Some(Mode::Serve(args)) => match ServeConfig::try_from(args) {
+            Ok(config) => {
+                init_logging(config.verbose);
+                block_on(false, |controls| async move {
+                    serve::run(&config, controls).await
+                })
+            }
+            Err(e) => {
+                stderr::error(&e);
+                Ending::Refused
+            }
+        },
         None => match Config::try_from(&cli.ping) {
             Ok(config) => {
                 init_logging(config.verbose);
                 let paused = config.virtual_clock();
-                block_on(paused, |stop| async move { ping::run(&config, stop).await })
+                block_on(paused, |controls| async move {
+                    ping::run(&config, controls).await
+                })
             }
             Err(e) => {
                 stderr::error(&e);

@@ -23,21 +23,19 @@ use std::task::Poll;
 use tokio::sync::Notify;
 
 use super::exports::Exports;
+use super::measure::measure;
 use crate::cli::Format;
 use crate::config::{Config, LinkConfig, Probe};
 use crate::engine::capacity::{self, WireBudget};
-use crate::engine::session::Outcome;
+use crate::engine::session::{Controls, Outcome};
 use crate::engine::summary::LinkSummary;
-use crate::engine::{command, echo};
 use crate::exit::Ending;
 use crate::output::json::JsonReporter;
 use crate::output::live::LiveView;
 use crate::output::text::TextReporter;
 use crate::output::{Fanout, Reporter, Shared, WallClock};
-use crate::probe::ping::PingProbe;
-use crate::probe::timesync::TimesyncProbe;
 use crate::stderr;
-use crate::transport::{Link, LinkSpec};
+use crate::transport::Link;
 use crate::verdict;
 
 /// Polls every future until all are done; outputs in the input order.
@@ -65,6 +63,23 @@ async fn join_all<F: Future>(futures: Vec<F>) -> Vec<F::Output> {
     outputs.into_iter().flatten().collect()
 }
 
+/// Raises every one of `to` whenever `from` is raised (once, or each time
+/// when `repeat`): one signal reaches every link's session.
+fn forward(from: &Arc<Notify>, to: Vec<Arc<Notify>>, repeat: bool) {
+    let from = from.clone();
+    tokio::spawn(async move {
+        loop {
+            from.notified().await;
+            for n in &to {
+                n.notify_one();
+            }
+            if !repeat {
+                return;
+            }
+        }
+    });
+}
+
 /// An error line of one of several links: "LINK: ERROR", unless the error
 /// already names the link; one link's errors need no name.
 fn error_line(several: bool, link: &str, error: &str) -> String {
@@ -84,50 +99,16 @@ struct LinkRun<'a> {
 
 /// One link's session, from its open link to its outcome. With `announce`,
 /// prints the link's error line as soon as it fails, while others go on.
-async fn measure(
+async fn measure_announced(
     run: LinkRun<'_>,
     probe: &Probe,
     wall: WallClock,
     observer: &mut Fanout<'_>,
-    stop: Arc<Notify>,
+    controls: Controls,
     announce: bool,
 ) -> Outcome {
-    let LinkRun {
-        config, mut link, ..
-    } = run;
-    let session = &config.session;
-    let outcome = match probe {
-        Probe::Command(spec) => command::run(session, spec, &mut link, observer, &stop).await,
-        Probe::Timesync { target } => {
-            // The simulated link has no wall clock: its responders count
-            // from its start, and so do we there (reproducible output).
-            let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
-            let probe = TimesyncProbe::new(*target, wall_clock);
-            echo::run(session, &mut link, probe, observer, &stop).await
-        }
-        Probe::Ping => {
-            let probe = PingProbe::new(wall.micros_since_epoch());
-            echo::run(session, &mut link, probe, observer, &stop).await
-        }
-    };
-    // The simulated link's ground truth, for soak scripts (`-v`).
-    if let Link::Sim(sim) = &link {
-        for (id, t) in sim.truth() {
-            tracing::info!(
-                link = %config.name,
-                "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
-                 duplicated={} outage={} spiked={} spiked_before_first={}",
-                t.answered,
-                t.dropped,
-                t.dropped_before_first,
-                t.delivered,
-                t.duplicated,
-                t.outage,
-                t.spiked,
-                t.spiked_before_first
-            );
-        }
-    }
+    let LinkRun { config, link, .. } = run;
+    let outcome = measure(config, link, probe, wall, observer, &controls).await;
     if let Some(e) = outcome.summary.link_error().filter(|_| announce) {
         stderr::error(&error_line(true, &config.name, e));
     }
@@ -147,7 +128,7 @@ fn stdout(live: bool) -> Shared<Box<dyn Write>> {
 }
 
 /// Runs every link of `config` side by side; how it ended.
-pub async fn run(config: &Config, stop: Arc<Notify>) -> Ending {
+pub async fn run(config: &Config, controls: Controls) -> Ending {
     let exports = match Exports::open(config) {
         Ok(exports) => exports,
         Err(e) => {
@@ -204,7 +185,7 @@ pub async fn run(config: &Config, stop: Arc<Notify>) -> Ending {
     }
     let mut view = None;
     if live {
-        match LiveView::start(stop.clone()) {
+        match LiveView::start(controls.stop.clone()) {
             Ok(v) => view = Some(v),
             Err(e) => {
                 stderr::error(&format_args!("--live: {e}"));
@@ -226,6 +207,7 @@ pub async fn run(config: &Config, stop: Arc<Notify>) -> Ending {
             (Format::Text, None) => reporters.push(Box::new(
                 TextReporter::new(stdout.clone(), out.quiet)
                     .every_reply(out.every_reply)
+                    .timestamps(out.timestamps.then_some(wall))
                     .prefixed(several.then(|| format!("[{name}] "))),
             )),
             (Format::Json, _) => reporters.push(Box::new(
@@ -236,21 +218,31 @@ pub async fn run(config: &Config, stop: Arc<Notify>) -> Ending {
         reporters.extend(exports.reporters(index, name));
         reports.push(Fanout { reporters });
     }
-    // Each session gets its own stop signal, all raised by the one.
-    let stops: Vec<Arc<Notify>> = runs.iter().map(|_| Arc::new(Notify::new())).collect();
-    let forward = stops.clone();
-    tokio::spawn(async move {
-        stop.notified().await;
-        for s in &forward {
-            s.notify_one();
-        }
-    });
+    // Each session gets its own controls, all raised by the run's.
+    let per_link: Vec<Controls> = runs.iter().map(|_| Controls::default()).collect();
+    forward(
+        &controls.stop,
+        per_link.iter().map(|c| c.stop.clone()).collect(),
+        false,
+    );
+    forward(
+        &controls.interim,
+        per_link.iter().map(|c| c.interim.clone()).collect(),
+        true,
+    );
     let wires: Vec<Option<WireBudget>> = runs.iter().map(|r| r.wire).collect();
     let thresholds: Vec<_> = runs.iter().map(|r| &r.config.thresholds).collect();
     let announce = several && view.is_none();
     let mut sessions = Vec::new();
-    for ((run, report), stop) in runs.into_iter().zip(reports.iter_mut()).zip(stops) {
-        sessions.push(measure(run, &config.probe, wall, report, stop, announce));
+    for ((run, report), controls) in runs.into_iter().zip(reports.iter_mut()).zip(per_link) {
+        sessions.push(measure_announced(
+            run,
+            &config.probe,
+            wall,
+            report,
+            controls,
+            announce,
+        ));
     }
     let mut outcomes = join_all(sessions).await;
     if let Some(mut view) = view {

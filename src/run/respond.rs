@@ -1,18 +1,15 @@
 //! `mavping respond`: open the link, say so, answer until stopped, then
 //! print the ground truth.
 
-use std::io::{self, Write};
-use std::sync::Arc;
-
-use tokio::sync::Notify;
-
 use crate::config::RespondConfig;
+use crate::engine::session::Controls;
 use crate::exit::Ending;
 use crate::responder;
 use crate::stderr;
 use crate::transport::Link;
+use std::io::{self, Write};
 
-pub async fn run(config: &RespondConfig, stop: Arc<Notify>) -> Ending {
+pub async fn run(config: &RespondConfig, controls: Controls) -> Ending {
     let mut link = match Link::open(&config.link, &config.link_options).await {
         Ok(link) => link,
         Err(e) => {
@@ -30,7 +27,7 @@ pub async fn run(config: &RespondConfig, stop: Arc<Notify>) -> Ending {
         responder::describe(settings, &config.link.to_string())
     );
     let _ = out.flush();
-    let (counts, error) = responder::run(settings, &mut link, &stop).await;
+    let (counts, error) = responder::run(settings, &mut link, &controls.stop).await;
     let _ = writeln!(out, "respond {}: {counts}", settings.id);
     let _ = out.flush();
     match error {

@@ -1,37 +1,74 @@
-//! Ctrl-C and SIGTERM: the first stops the run (it still reports, as ping
-//! does); a second one means "leave now".
+//! Signals: the first Ctrl-C or SIGTERM stops the run (it still reports,
+//! as ping does); a second one means "leave now". SIGQUIT (Ctrl-\) asks for
+//! an interim summary and the run goes on, as with Linux `ping`. SIGHUP
+//! asks `mavping serve` to reread its configuration.
 
-use std::sync::Arc;
+use std::future::pending;
 
-use tokio::sync::Notify;
+use tokio::signal::unix::{signal, SignalKind};
 
-/// Raises `stop` at the first Ctrl-C or SIGTERM; resolves at the second.
-/// Raced against the run, so the run is dropped (and the terminal given
-/// back) when it wins.
-pub async fn stop_then_leave(stop: Arc<Notify>) {
-    #[cfg(unix)]
-    let mut term = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()).ok();
-    for round in 0..2 {
-        #[cfg(unix)]
-        let terminated = async {
-            match term.as_mut() {
-                Some(t) => {
-                    t.recv().await;
-                }
-                None => std::future::pending().await,
+use crate::engine::session::Controls;
+
+/// Raises `controls.stop` at the first Ctrl-C or SIGTERM and
+/// `controls.interim` at every SIGQUIT; resolves at the second Ctrl-C or
+/// SIGTERM. Raced against the run, so the run is dropped (and the terminal
+/// given back) when it wins.
+pub async fn watch(controls: Controls) {
+    let (Ok(mut int), Ok(mut term)) = (
+        signal(SignalKind::interrupt()),
+        signal(SignalKind::terminate()),
+    ) else {
+        // No signal handling here: never leave on our own.
+        return pending().await;
+    };
+    let mut quit = signal(SignalKind::quit()).ok();
+    let mut stops = 0;
+    loop {
+        let quit_now = async {
+            match quit.as_mut() {
+                Some(q) => q.recv().await,
+                None => pending().await,
             }
         };
-        #[cfg(not(unix))]
-        let terminated = std::future::pending::<()>();
         tokio::select! {
-            r = tokio::signal::ctrl_c() => if r.is_err() {
-                // No signal handling here: never leave on our own.
-                return std::future::pending().await;
-            },
-            _ = terminated => {}
+            _ = int.recv() => stops += 1,
+            _ = term.recv() => stops += 1,
+            _ = quit_now => {
+                controls.interim.notify_one();
+                continue;
+            }
         }
-        if round == 0 {
-            stop.notify_one();
+        if stops == 1 {
+            controls.stop.notify_one();
+        } else {
+            return;
         }
+    }
+}
+
+/// Each SIGHUP, as it comes (none where the system has no such signal,
+/// or its handler could not be set).
+pub struct Hangups {
+    #[cfg(unix)]
+    signal: Option<tokio::signal::unix::Signal>,
+}
+
+impl Hangups {
+    pub fn new() -> Self {
+        Hangups {
+            #[cfg(unix)]
+            signal: tokio::signal::unix::signal(tokio::signal::unix::SignalKind::hangup()).ok(),
+        }
+    }
+
+    /// Resolves at the next SIGHUP.
+    pub async fn next(&mut self) {
+        #[cfg(unix)]
+        if let Some(s) = self.signal.as_mut() {
+            if s.recv().await.is_some() {
+                return;
+            }
+        }
+        std::future::pending().await
     }
 }

@@ -6,6 +6,7 @@
 //! and hide CRC errors — each fatal to a ping tool.
 
 pub mod address;
+pub mod route;
 pub mod serial;
 pub mod sim;
 pub mod stream;
@@ -156,15 +157,15 @@ pub enum Family {
 }
 
 /// How to open a link, beyond its connection string.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct LinkOptions {
     /// Baud rate of a serial port whose connection string names none.
     pub baud: u32,
     /// Reopen a tcp client or serial link that breaks, instead of ending;
     /// on `udpout:` an ICMP "port unreachable" does not end the link.
     pub reconnect: bool,
-    /// Resolve host names to this family only (`-4`, `-6`).
-    pub family: Option<Family>,
+    /// Address family, local address and interface of IP links.
+    pub route: route::Route,
 }
 
 impl Default for LinkOptions {
@@ -172,7 +173,7 @@ impl Default for LinkOptions {
         LinkOptions {
             baud: serial::DEFAULT_BAUD,
             reconnect: false,
-            family: None,
+            route: route::Route::default(),
         }
     }
 }
@@ -190,24 +191,24 @@ impl Link {
     /// Opens the link a connection string names.
     pub async fn open(spec: &LinkSpec, options: &LinkOptions) -> Result<Link, LinkError> {
         Ok(match spec {
-            LinkSpec::UdpIn(a) => Link::Udp(udp::UdpLink::listen(a, options.family).await?),
+            LinkSpec::UdpIn(a) => Link::Udp(udp::UdpLink::listen(a, &options.route).await?),
             LinkSpec::UdpOut(a) => {
-                let link = udp::UdpLink::connect(a, options.family).await?;
+                let link = udp::UdpLink::connect(a, &options.route).await?;
                 Link::Udp(if options.reconnect {
                     link.keep_going_when_refused()
                 } else {
                     link
                 })
             }
-            LinkSpec::UdpBcast(a) => Link::Udp(udp::UdpLink::broadcast(a, options.family).await?),
+            LinkSpec::UdpBcast(a) => Link::Udp(udp::UdpLink::broadcast(a, &options.route).await?),
             LinkSpec::TcpOut(a) => Link::Tcp(
                 stream::StreamLink::open(
-                    tcp::TcpConnector::new(a, options.family),
+                    tcp::TcpConnector::new(a, options.route.clone()),
                     options.reconnect,
                 )
                 .await?,
             ),
-            LinkSpec::TcpIn(a) => Link::TcpIn(tcp::TcpServer::listen(a, options.family).await?),
+            LinkSpec::TcpIn(a) => Link::TcpIn(tcp::TcpServer::listen(a, &options.route).await?),
             LinkSpec::Serial { path, baud } => Link::Serial(
                 stream::StreamLink::open(
                     serial::SerialConnector::new(path, baud.unwrap_or(options.baud)),

@@ -15,9 +15,9 @@ use tokio::net::{TcpListener, TcpStream};
 use tokio::time::Instant;
 
 use super::address::HostPort;
+use super::route::{resolve, Route};
 use super::stream::Connect;
-use super::udp::resolve;
-use super::{Family, Inbound, LinkError, LinkKind, PathId, Transport};
+use super::{Inbound, LinkError, LinkKind, PathId, Transport};
 use crate::frame::{ScanStats, StreamScanner};
 
 /// Clients beyond this are refused: memory stays bounded.
@@ -30,15 +30,15 @@ const READ_BUF: usize = 16 * 1024;
 /// `tcp:HOST:PORT`: the connector behind a reconnecting [`super::stream::StreamLink`].
 pub struct TcpConnector {
     addr: HostPort,
-    family: Option<Family>,
+    route: Route,
     name: String,
 }
 
 impl TcpConnector {
-    pub fn new(addr: &HostPort, family: Option<Family>) -> Self {
+    pub fn new(addr: &HostPort, route: Route) -> Self {
         TcpConnector {
             addr: addr.clone(),
-            family,
+            route,
             name: format!("tcp:{addr}"),
         }
     }
@@ -54,10 +54,17 @@ impl Connect for TcpConnector {
 
     async fn connect(&self) -> io::Result<TcpStream> {
         // Resolved on every attempt: a router's address may change while down.
-        let peer = resolve(&self.addr, self.family)
-            .await
-            .map_err(|e| io::Error::other(e.to_string()))?;
-        let stream = TcpStream::connect(peer).await?;
+        let link = |e: LinkError| io::Error::other(e.to_string());
+        let peer = resolve(&self.addr, self.route.family).await.map_err(link)?;
+        let socket = self.route.tcp(peer).map_err(link)?;
+        if let Some(bind) = self.route.bind {
+            socket
+                .bind(self.route.local_for(peer).map_err(link)?)
+                .map_err(|e| {
+                    io::Error::new(e.kind(), format!("cannot send from tcp {bind}: {e}"))
+                })?;
+        }
+        let stream = socket.connect(peer).await?;
         // A PING is a few dozen bytes: Nagle would hold it back for an ACK.
         stream.set_nodelay(true)?;
         Ok(stream)
@@ -82,10 +89,15 @@ pub struct TcpServer {
 }
 
 impl TcpServer {
-    pub async fn listen(addr: &HostPort, family: Option<Family>) -> Result<Self, LinkError> {
-        let local = resolve(addr, family).await?;
-        let listener = TcpListener::bind(local)
-            .await
+    pub async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
+        let local = resolve(addr, route.family).await?;
+        let socket = route.tcp(local)?;
+        // As std's TcpListener::bind: a restarted server must not wait for
+        // its old connections' TIME_WAIT.
+        let listener = socket
+            .set_reuseaddr(true)
+            .and_then(|()| socket.bind(local))
+            .and_then(|()| socket.listen(1024))
             .map_err(|e| LinkError::io(format!("cannot listen on tcp {addr}"), e))?;
         Ok(TcpServer {
             listener,

@@ -11,11 +11,12 @@ use std::time::{Duration, SystemTime};
 use nix::sys::socket::{self as nixsock, ControlMessageOwned, MsgFlags, SockaddrStorage};
 use nix::sys::time::TimeSpec;
 use tokio::io::Interest;
-use tokio::net::{lookup_host, UdpSocket};
+use tokio::net::UdpSocket;
 use tokio::time::Instant;
 
 use super::address::HostPort;
-use super::{push_datagram, Family, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
+use super::route::{resolve, Route};
+use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::frame::ScanStats;
 
 /// At most this many peers are remembered on a listening socket; more than
@@ -85,33 +86,6 @@ fn arrival(kernel: Option<TimeSpec>, now: Instant, now_wall: SystemTime) -> Inst
     }
 }
 
-/// The first address `addr` resolves to, of `family` when one is asked
-/// for (`-4`, `-6`).
-pub(crate) async fn resolve(
-    addr: &HostPort,
-    family: Option<Family>,
-) -> Result<SocketAddr, LinkError> {
-    let mut addrs = lookup_host((addr.host.as_str(), addr.port))
-        .await
-        .map_err(|e| LinkError::io(format!("cannot resolve {addr}"), e))?;
-    let wanted = |a: &SocketAddr| match family {
-        None => true,
-        Some(Family::V4) => a.is_ipv4(),
-        Some(Family::V6) => a.is_ipv6(),
-    };
-    addrs.find(wanted).ok_or_else(|| {
-        let why = match family {
-            None => "no address found",
-            Some(Family::V4) => "no IPv4 address (-4)",
-            Some(Family::V6) => "no IPv6 address (-6)",
-        };
-        LinkError::io(
-            format!("cannot resolve {addr}"),
-            io::Error::new(io::ErrorKind::NotFound, why),
-        )
-    })
-}
-
 impl UdpLink {
     fn with(socket: UdpSocket, mode: Mode) -> Self {
         let sock = socket2::SockRef::from(&socket);
@@ -141,25 +115,17 @@ impl UdpLink {
     }
 
     /// `udpin:HOST:PORT`
-    pub async fn listen(addr: &HostPort, family: Option<Family>) -> Result<Self, LinkError> {
-        let local = resolve(addr, family).await?;
-        let socket = UdpSocket::bind(local)
-            .await
-            .map_err(|e| LinkError::io(format!("cannot listen on udp {addr}"), e))?;
+    pub async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
+        let local = resolve(addr, route.family).await?;
+        let socket = route.udp(local, &format!("cannot listen on udp {addr}"))?;
         Ok(Self::with(socket, Mode::Listen { peers: Vec::new() }))
     }
 
     /// `udpout:HOST:PORT`
-    pub async fn connect(addr: &HostPort, family: Option<Family>) -> Result<Self, LinkError> {
-        let peer = resolve(addr, family).await?;
-        let local: SocketAddr = if peer.is_ipv6() {
-            "[::]:0".parse().expect("valid literal")
-        } else {
-            "0.0.0.0:0".parse().expect("valid literal")
-        };
-        let socket = UdpSocket::bind(local)
-            .await
-            .map_err(|e| LinkError::io("cannot open a udp socket", e))?;
+    pub async fn connect(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
+        let peer = resolve(addr, route.family).await?;
+        let local = route.local_for(peer)?;
+        let socket = route.udp(local, &format!("cannot send from udp {local}"))?;
         socket
             .connect(peer)
             .await
@@ -188,8 +154,8 @@ impl UdpLink {
     }
 
     /// `udpbcast:ADDR:PORT`
-    pub async fn broadcast(addr: &HostPort, family: Option<Family>) -> Result<Self, LinkError> {
-        let target = resolve(addr, family).await?;
+    pub async fn broadcast(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
+        let target = resolve(addr, route.family).await?;
         if target.is_ipv6() {
             return Err(LinkError::io(
                 format!("cannot broadcast to udp {addr}"),
@@ -199,10 +165,8 @@ impl UdpLink {
                 ),
             ));
         }
-        let local: SocketAddr = "0.0.0.0:0".parse().expect("valid literal");
-        let socket = UdpSocket::bind(local)
-            .await
-            .map_err(|e| LinkError::io("cannot open a udp socket", e))?;
+        let local = route.local_for(target)?;
+        let socket = route.udp(local, &format!("cannot send from udp {local}"))?;
         // Without SO_BROADCAST the kernel refuses to send to a broadcast
         // address (EACCES).
         socket

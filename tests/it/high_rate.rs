@@ -9,12 +9,12 @@ use std::time::Duration;
 use crate::common::*;
 use mavping::engine::echo;
 use mavping::engine::observe::Unobserved;
+use mavping::engine::session::Controls;
 use mavping::engine::summary::LinkSummary;
 use mavping::engine::SessionConfig;
 use mavping::frame::{SysComp, Version};
 use mavping::probe::ping::PingProbe;
 use mavping::transport::sim::{SimLink, SimParams};
-use tokio::sync::Notify;
 
 #[test]
 fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
@@ -28,6 +28,7 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         count: Some(100_000),
         deadline: None,
         wait: None,
+        interim: None,
         timeout: Duration::from_millis(200),
         version: Version::V2,
         heartbeat: true,
@@ -44,8 +45,8 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
     let (outcome, truth) = runtime.block_on(async {
         let mut link = SimLink::new(params);
         let probe = PingProbe::new(0);
-        let stop = Notify::new();
-        let outcome = echo::run(&cfg, &mut link, probe, &mut Unobserved, &stop).await;
+        let controls = Controls::default();
+        let outcome = echo::run(&cfg, &mut link, probe, &mut Unobserved, &controls).await;
         (outcome, link.truth())
     });
     let LinkSummary::Echo(summary) = outcome.summary else {

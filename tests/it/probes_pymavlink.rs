@@ -1,8 +1,7 @@
 //! TIMESYNC and command probes against pymavlink peers, and `mavping
 //! respond` checked by pymavlink's own decoding, over real UDP sockets.
 
-use std::io::{BufRead, BufReader, Read};
-use std::process::{Child, Stdio};
+use std::process::Stdio;
 use std::time::Duration;
 
 use crate::common::*;
@@ -48,50 +47,6 @@ fn line_starting<'a>(stdout: &'a str, prefix: &str) -> &'a str {
         .lines()
         .find(|l| l.trim_start().starts_with(prefix))
         .unwrap_or_else(|| panic!("no line starting {prefix:?}: {stdout}"))
-}
-
-/// `mavping respond`, started and ready (its first line says so).
-struct Respond {
-    child: Child,
-    stdout: BufReader<std::process::ChildStdout>,
-}
-
-impl Respond {
-    fn start(args: &[&str]) -> Respond {
-        let mut child = mavping()
-            .arg("respond")
-            .args(args)
-            .stdout(Stdio::piped())
-            .stderr(Stdio::inherit())
-            .spawn()
-            .unwrap();
-        let mut stdout = BufReader::new(child.stdout.take().unwrap());
-        let mut line = String::new();
-        stdout.read_line(&mut line).unwrap();
-        assert!(line.starts_with("mavping respond: "), "{line:?}");
-        Respond { child, stdout }
-    }
-
-    /// SIGTERM; returns its exit code and its counts: requests, ping,
-    /// timesync, command, retransmissions, replies sent, dropped, duplicated.
-    fn finish(mut self) -> (i32, Vec<u64>) {
-        signal(self.child.id(), "TERM");
-        let mut rest = String::new();
-        self.stdout.read_to_string(&mut rest).unwrap();
-        let code = self.child.wait().unwrap().code().unwrap_or(-1);
-        let line = line_starting(&rest, "respond ");
-        let counts = numbers(line.split_once(": ").unwrap().1);
-        (code, counts)
-    }
-}
-
-impl Drop for Respond {
-    // A failing test must not leave a responder running (it would hold the
-    // test runner's output pipe open).
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
 }
 
 /// Runs a pymavlink script that exits by itself; returns its JSON line.

@@ -2,15 +2,15 @@
 //! scraped over HTTP and checked by a real parser and by promtool, `--plot`
 //! written to a file and rendered to pixels (`--live` is in `live.rs`).
 
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::TcpStream;
-use std::path::PathBuf;
+use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use assert_cmd::cargo::cargo_bin;
 
-use crate::common::{checked_summary, n, responder, Rendered};
+use crate::common::{
+    assert_promtool_clean, checked_summary, http_get, n, responder, Rendered, Response,
+};
 use prometheus_parse::{Scrape, Value};
 
 /// Generous bound for something that normally takes a fraction of a second;
@@ -27,15 +27,6 @@ impl Drop for Running {
     }
 }
 
-fn get(url_host: &str, path: &str) -> (String, String) {
-    let mut s = TcpStream::connect(url_host).expect("connect to the exporter");
-    write!(s, "GET {path} HTTP/1.1\r\nHost: {url_host}\r\n\r\n").unwrap();
-    let mut response = String::new();
-    s.read_to_string(&mut response).unwrap();
-    let (head, body) = response.split_once("\r\n\r\n").expect("an HTTP response");
-    (head.to_string(), body.to_string())
-}
-
 fn counter(scrape: &Scrape, name: &str, sysid: &str) -> f64 {
     scrape
         .samples
@@ -48,24 +39,8 @@ fn counter(scrape: &Scrape, name: &str, sysid: &str) -> f64 {
         .unwrap_or_else(|| panic!("no {name} for sysid {sysid}"))
 }
 
-fn promtool() -> PathBuf {
-    let path = PathBuf::from("promtool");
-    let found = Command::new(&path)
-        .arg("--version")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .status()
-        .is_ok_and(|s| s.success());
-    assert!(
-        found,
-        "promtool is missing — run `bash scripts/test.sh` (it installs Debian's prometheus package)"
-    );
-    path
-}
-
 #[test]
 fn prometheus_metrics_are_served_while_the_run_goes_on() {
-    let promtool = promtool();
     let mut child = Command::new(cargo_bin("mavping"))
         .args([
             "-q",
@@ -96,7 +71,7 @@ fn prometheus_metrics_are_served_while_the_run_goes_on() {
     // with no count, so the numbers only grow.
     let start = Instant::now();
     let (head, body) = loop {
-        let (head, body) = get(&host, "/metrics");
+        let Response { head, body, .. } = http_get(&host, "/metrics", &[]);
         let scrape = Scrape::parse(body.lines().map(|l| Ok(l.to_string()))).unwrap();
         let lost = |id| {
             let present = scrape
@@ -120,7 +95,8 @@ fn prometheus_metrics_are_served_while_the_run_goes_on() {
     };
     assert!(head.starts_with("HTTP/1.1 200 OK"), "{head}");
     assert!(
-        head.contains("Content-Type: text/plain; version=0.0.4"),
+        head.to_ascii_lowercase()
+            .contains("content-type: text/plain; version=0.0.4"),
         "{head}"
     );
 
@@ -160,29 +136,9 @@ fn prometheus_metrics_are_served_while_the_run_goes_on() {
         assert!(buckets.windows(2).all(|w| w[0].count <= w[1].count));
     }
 
-    let mut check = Command::new(promtool)
-        .args(["check", "metrics"])
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    check
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(body.as_bytes())
-        .unwrap();
-    let out = check.wait_with_output().unwrap();
-    assert!(
-        out.status.success() && out.stdout.is_empty() && out.stderr.is_empty(),
-        "promtool check metrics: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_promtool_clean(&body);
 
-    let (head, _) = get(&host, "/nothing");
-    assert!(head.starts_with("HTTP/1.1 404"), "{head}");
+    assert_eq!(http_get(&host, "/nothing", &[]).status, 404);
 }
 
 #[test]

@@ -6,11 +6,38 @@ use serde_json::{json, Value};
 
 use super::{us, JsonReporter, SCHEMA_VERSION};
 use crate::engine::matcher::MatchEvent;
-use crate::engine::summary::{ResponderSummary, Summary};
+use crate::engine::summary::{Interim, ResponderSummary, Summary};
 use crate::output::Event;
 use crate::verdict::Verdict;
 
 impl<W: Write> JsonReporter<W> {
+    /// The `interim` object: each responder's figures so far.
+    pub(super) fn interim_object(&self, figures: &Interim) -> Value {
+        json!({
+            "type": "interim",
+            "t_s": figures.at as f64 / 1e9,
+            "time": self.wall.rfc3339(figures.at),
+            "requests": figures.requests,
+            "responders": figures
+                .responders
+                .iter()
+                .map(|r| json!({
+                    "responder": r.id,
+                    "sent": r.counts.sent,
+                    "received": r.counts.received,
+                    "lost": r.counts.lost,
+                    "loss_ratio": r.loss_ratio,
+                    "late": r.counts.late,
+                    "duplicate": r.counts.duplicate,
+                    "rtt_us": r.rtt.map(|s| json!({
+                        "min": s.min_us, "mean": s.mean_us, "max": s.max_us,
+                        "p50": s.p50_us, "p90": s.p90_us, "p99": s.p99_us, "jitter": s.jitter_us,
+                    })),
+                }))
+                .collect::<Vec<_>>(),
+        })
+    }
+
     /// The object of an echo run's event, if it has one.
     pub(super) fn echo_event(&self, event: &Event<'_>) -> Option<Value> {
         let value = match *event {

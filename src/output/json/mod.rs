@@ -11,7 +11,7 @@ use std::io::{self, Write};
 use serde_json::{json, Value};
 
 use super::{Event, Observer, Reporter, StartInfo, WallClock};
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -120,6 +120,13 @@ impl<W: Write> Observer for JsonReporter<W> {
     }
 
     fn flush(&mut self) -> io::Result<()> {
+        self.out.flush()
+    }
+
+    /// Written in quiet mode too: that is what `-Q` is for.
+    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
+        let value = self.interim_object(figures);
+        self.emit(value)?;
         self.out.flush()
     }
 }

@@ -6,7 +6,7 @@ use super::{ms, ms_us, rate, write_histogram, write_signing, TextReporter};
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport, RadioSummary};
-use crate::engine::summary::{ResponderSummary, Summary};
+use crate::engine::summary::{Interim, ResponderSummary, Summary};
 use crate::engine::Nanos;
 use crate::output::{Event, StartInfo};
 use crate::verdict::Verdict;
@@ -52,13 +52,17 @@ impl<W: Write> TextReporter<W> {
 
     pub(super) fn echo_event(&mut self, event: &Event<'_>) -> io::Result<()> {
         if let Event::Radio {
-            id, report, first, ..
+            id,
+            report,
+            first,
+            at,
         } = *event
         {
             self.radio = Some((id, report));
             if !first {
                 return Ok(());
             }
+            self.stamp(at)?;
             return writeln!(
                 self.out,
                 "heard radio {id}: {}, noise={} remnoise={}",
@@ -70,6 +74,12 @@ impl<W: Write> TextReporter<W> {
         if let (Some(_), Event::Match(e)) = (&self.progress, event) {
             return self.tally(e);
         }
+        let at = match *event {
+            Event::Match(e) => e.at(),
+            Event::Heard { identity, .. } => identity.first_heard,
+            _ => 0,
+        };
+        self.stamp(at)?;
         match *event {
             Event::Match(MatchEvent::Reply {
                 responder,
@@ -126,6 +136,46 @@ impl<W: Write> TextReporter<W> {
         }
     }
 
+    /// `[12.0 s] 1/1: 120 sent, 118 received, 2 lost (1.67%), 0 late, 0
+    /// duplicate; rtt p50/p99 = 21.304/25.611 ms`, a line per responder.
+    pub(super) fn write_interim(&mut self, figures: &Interim) -> io::Result<()> {
+        if figures.responders.is_empty() {
+            self.stamp(figures.at)?;
+            return writeln!(
+                self.out,
+                "[{:.1} s] {} requests sent, no replies yet",
+                figures.at as f64 / 1e9,
+                figures.requests
+            );
+        }
+        for r in &figures.responders {
+            let c = &r.counts;
+            self.stamp(figures.at)?;
+            write!(
+                self.out,
+                "[{:.1} s] {}: {} sent, {} received, {} lost ({}), {} late, {} duplicate",
+                figures.at as f64 / 1e9,
+                r.id,
+                c.sent,
+                c.received,
+                c.lost,
+                percent(r.loss_ratio),
+                c.late,
+                c.duplicate
+            )?;
+            match &r.rtt {
+                Some(t) => writeln!(
+                    self.out,
+                    "; rtt p50/p99 = {}/{} ms",
+                    ms_us(t.p50_us),
+                    ms_us(t.p99_us)
+                )?,
+                None => writeln!(self.out)?,
+            }
+        }
+        self.out.flush()
+    }
+
     /// Counts a match event into the status line; prints it once a second.
     fn tally(&mut self, e: &MatchEvent) -> io::Result<()> {
         let Some(p) = self.progress.as_mut() else {
@@ -169,6 +219,7 @@ impl<W: Write> TextReporter<W> {
             ..Progress::default()
         };
         let note = self.radio_note(at);
+        self.stamp(at)?;
         writeln!(self.out, "{line}{note}")
     }
 

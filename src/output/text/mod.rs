@@ -8,10 +8,10 @@ mod echo;
 
 use std::io::{self, Write};
 
-use super::{Event, Observer, Prefixed, Reporter, StartInfo};
+use super::{Event, Observer, Prefixed, Reporter, StartInfo, WallClock};
 use crate::engine::radio::RadioReport;
 use crate::engine::stats::Bucket;
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::frame::signing::SigningSummary;
 use crate::frame::SysComp;
@@ -35,6 +35,8 @@ pub struct TextReporter<W: Write> {
     /// The latest RADIO_STATUS, and when a reply line last showed one.
     radio: Option<(SysComp, RadioReport)>,
     radio_shown: Option<Nanos>,
+    /// `-D`: each event line starts with its Unix time, as `ping -D`.
+    timestamps: Option<WallClock>,
 }
 
 impl<W: Write> TextReporter<W> {
@@ -48,7 +50,31 @@ impl<W: Write> TextReporter<W> {
             progress: None,
             radio: None,
             radio_shown: None,
+            timestamps: None,
         }
+    }
+
+    /// Event lines start with `[UNIX.MICROS] ` on `wall` (`-D`).
+    pub fn timestamps(mut self, wall: Option<WallClock>) -> Self {
+        self.timestamps = wall;
+        self
+    }
+
+    /// The `-D` stamp of an event at session time `at`, if asked for.
+    fn stamp(&mut self, at: Nanos) -> io::Result<()> {
+        let Some(wall) = self.timestamps else {
+            return Ok(());
+        };
+        let since = wall
+            .at(at)
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        write!(
+            self.out,
+            "[{}.{:06}] ",
+            since.as_secs(),
+            since.subsec_micros()
+        )
     }
 
     /// A line per reply whatever the rate.
@@ -95,6 +121,11 @@ impl<W: Write> Observer for TextReporter<W> {
 
     fn flush(&mut self) -> io::Result<()> {
         self.out.flush()
+    }
+
+    /// A line per responder, in quiet mode too: that is what `-Q` is for.
+    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
+        self.write_interim(figures)
     }
 }
 

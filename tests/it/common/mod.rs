@@ -1,15 +1,19 @@
 //! Shared by the integration tests: real peers (pymavlink processes),
 //! free loopback ports, running mavping, and parsing its summaries.
 
+pub mod http;
 pub mod json;
 pub mod render;
+pub mod serve;
 pub mod tmux;
 
+pub use http::*;
 pub use json::*;
 pub use render::Rendered;
+pub use serve::Server;
 pub use tmux::Tmux;
 
-use std::io::{BufRead, BufReader};
+use std::io::{BufRead, BufReader, Read};
 use std::net::UdpSocket;
 use std::path::PathBuf;
 use std::process::{Child, ChildStdout, Command, Stdio};
@@ -57,6 +61,60 @@ pub fn free_tcp_port() -> u16 {
         .local_addr()
         .unwrap()
         .port()
+}
+
+/// `mavping respond`, started and ready (its first line says so).
+pub struct Respond {
+    pub child: Child,
+    stdout: BufReader<std::process::ChildStdout>,
+}
+
+impl Respond {
+    pub fn start(args: &[&str]) -> Respond {
+        let mut child = mavping()
+            .arg("respond")
+            .args(args)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .unwrap();
+        let mut stdout = BufReader::new(child.stdout.take().unwrap());
+        let mut line = String::new();
+        stdout.read_line(&mut line).unwrap();
+        assert!(line.starts_with("mavping respond: "), "{line:?}");
+        Respond { child, stdout }
+    }
+
+    /// SIGTERM; returns its exit code and its counts: requests, ping,
+    /// timesync, command, retransmissions, replies sent, dropped, duplicated.
+    pub fn finish(mut self) -> (i32, Vec<u64>) {
+        signal(self.child.id(), "TERM");
+        let mut rest = String::new();
+        self.stdout.read_to_string(&mut rest).unwrap();
+        let code = self.child.wait().unwrap().code().unwrap_or(-1);
+        let line = rest
+            .lines()
+            .find(|l| l.starts_with("respond "))
+            .unwrap_or_else(|| panic!("no counts line: {rest}"));
+        let counts = line
+            .split_once(": ")
+            .unwrap()
+            .1
+            .split(|c: char| !c.is_ascii_digit())
+            .filter(|s| !s.is_empty())
+            .map(|s| s.parse().unwrap())
+            .collect();
+        (code, counts)
+    }
+}
+
+impl Drop for Respond {
+    // A failing test must not leave a responder running (it would hold the
+    // test runner's output pipe open).
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
 }
 
 /// A program from .venv that scripts/test.sh installs (`mavproxy.py`, the

@@ -1,0 +1,322 @@
+//! The `mavping serve` TOML file as written, and its tables into modules
+//! and continuous links. One table type serves both, so each key is parsed
+//! once; keys that belong to the other kind are refused by name.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use clap::ValueEnum;
+use serde::Deserialize;
+
+use super::{
+    refuse_virtual, session, validate_count, validate_probe_interval, validate_timeout, Common,
+    ContinuousLink, Module, MAX_PROBE_TIMEOUT, MIN_PROBE_INTERVAL,
+};
+use crate::cli::{parse_expected, parse_rtt_limit, ProbeKind, SigningArgs};
+use crate::config::ping::{probe_of, ProbeChoice};
+use crate::config::{
+    invalid, signing, validate_baud, validate_ids, ConfigError, Keys, LinkConfig, MAX_TIMEOUT,
+};
+use crate::frame::Version;
+use crate::transport::address::LinkSpec;
+use crate::transport::route::Route;
+use crate::transport::{serial, LinkOptions};
+use crate::units::{parse_duration, parse_percent};
+use crate::verdict::Thresholds;
+
+/// A duration in the file: `"250ms"`, `"2s"`, or a number of seconds.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(untagged)]
+enum FileDuration {
+    Text(String),
+    Seconds(f64),
+}
+
+impl FileDuration {
+    fn get(&self, key: &str) -> Result<Duration, ConfigError> {
+        match self {
+            FileDuration::Text(t) => parse_duration(t),
+            FileDuration::Seconds(s) => parse_duration(&s.to_string()),
+        }
+        .map_err(|e| invalid(format!("{key}: {e}")))
+    }
+}
+
+/// The file as written. One table type for modules and links, so each key
+/// is parsed once; keys that belong to the other kind are refused by name.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct File {
+    pub(super) listen: Option<String>,
+    pub(super) max_concurrent: Option<usize>,
+    #[serde(default)]
+    pub(super) allow: Vec<String>,
+    #[serde(default)]
+    pub(super) module: BTreeMap<String, Table>,
+    #[serde(default)]
+    pub(super) link: Vec<Table>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct Table {
+    // [[link]] only
+    link: Option<String>,
+    name: Option<String>,
+    rate: Option<f64>,
+    // [module.NAME] only
+    count: Option<u64>,
+    max_loss: Option<String>,
+    #[serde(default)]
+    max_rtt: Vec<String>,
+    max_jitter: Option<FileDuration>,
+    #[serde(default)]
+    expect: Vec<String>,
+    min_responders: Option<usize>,
+    // both
+    probe: Option<String>,
+    interval: Option<FileDuration>,
+    timeout: Option<FileDuration>,
+    target: Option<String>,
+    command: Option<String>,
+    retry_interval: Option<FileDuration>,
+    retries: Option<u8>,
+    sysid: Option<u8>,
+    compid: Option<u8>,
+    mavlink: Option<u8>,
+    heartbeat: Option<bool>,
+    signing_key_file: Option<PathBuf>,
+    signing_link_id: Option<u8>,
+    require_signed: Option<bool>,
+    baud: Option<u32>,
+}
+
+impl Table {
+    /// Keys set here that only the other kind of table takes.
+    pub(super) fn misplaced(&self, module: bool) -> Option<&'static str> {
+        let link_only = [
+            ("link", self.link.is_some()),
+            ("name", self.name.is_some()),
+            ("rate", self.rate.is_some()),
+        ];
+        let module_only = [
+            ("count", self.count.is_some()),
+            ("max_loss", self.max_loss.is_some()),
+            ("max_rtt", !self.max_rtt.is_empty()),
+            ("max_jitter", self.max_jitter.is_some()),
+            ("expect", !self.expect.is_empty()),
+            ("min_responders", self.min_responders.is_some()),
+        ];
+        let wrong: &[(&str, bool)] = if module { &link_only } else { &module_only };
+        wrong.iter().find(|(_, set)| *set).map(|(k, _)| *k)
+    }
+
+    pub(super) fn common(&self, default_timeout: Duration) -> Result<Common, ConfigError> {
+        let kind = match &self.probe {
+            None => ProbeKind::Ping,
+            Some(p) => ProbeKind::from_str(p, true)
+                .map_err(|_| invalid(format!("probe '{p}': expected ping, timesync or command")))?,
+        };
+        let retry_interval = match &self.retry_interval {
+            Some(d) => d.get("retry_interval")?,
+            None => Duration::from_millis(100),
+        };
+        let probe = probe_of(
+            Keys::File,
+            &ProbeChoice {
+                kind,
+                target: self.target.as_deref(),
+                command: self.command.as_deref().unwrap_or("REQUEST_MESSAGE,0"),
+                retry_interval,
+                retries: self.retries.unwrap_or(3),
+            },
+        )?;
+        let version = match self.mavlink.unwrap_or(2) {
+            1 => Version::V1,
+            2 => Version::V2,
+            v => return Err(invalid(format!("mavlink {v}: expected 1 or 2"))),
+        };
+        let signing = match &self.signing_key_file {
+            None if self.require_signed.is_some() => {
+                return Err(invalid("require_signed needs signing_key_file"))
+            }
+            None => None,
+            Some(path) => signing(
+                &SigningArgs {
+                    signing_key: None,
+                    signing_key_file: Some(path.clone()),
+                    signing_link_id: self.signing_link_id.unwrap_or(0),
+                },
+                self.require_signed.unwrap_or(false),
+            )?,
+        };
+        if signing.is_some() && version == Version::V1 {
+            return Err(invalid(
+                "mavlink 1 with a signing key: signing needs MAVLink 2",
+            ));
+        }
+        let timeout = match &self.timeout {
+            Some(d) => validate_timeout("timeout", d.get("timeout")?, MAX_TIMEOUT)?,
+            None => default_timeout,
+        };
+        Ok(Common {
+            probe,
+            kind,
+            ours: validate_ids(self.sysid.unwrap_or(255), self.compid.unwrap_or(190))?,
+            version,
+            heartbeat: self.heartbeat.unwrap_or(true),
+            signing,
+            baud: validate_baud(self.baud.unwrap_or(serial::DEFAULT_BAUD))?,
+            timeout,
+            retry_interval,
+        })
+    }
+
+    pub(super) fn module(&self) -> Result<Module, ConfigError> {
+        let c = self.common(Duration::from_secs(1))?;
+        let count = self.count.unwrap_or(10);
+        validate_count(count)?;
+        let interval = match &self.interval {
+            Some(d) => validate_probe_interval("interval", d.get("interval")?)?,
+            None => Duration::from_millis(100),
+        };
+        if c.timeout > MAX_PROBE_TIMEOUT {
+            return Err(invalid(format!(
+                "timeout {}: a probe's timeout is at most 1m",
+                humantime::format_duration(c.timeout)
+            )));
+        }
+        let thresholds = Thresholds {
+            max_loss: self
+                .max_loss
+                .as_deref()
+                .map(|p| parse_percent(p).map_err(|e| invalid(format!("max_loss: {e}"))))
+                .transpose()?,
+            max_rtt: self
+                .max_rtt
+                .iter()
+                .map(|r| parse_rtt_limit(r).map_err(|e| invalid(format!("max_rtt {r}: {e}"))))
+                .collect::<Result<_, _>>()?,
+            max_jitter: self
+                .max_jitter
+                .as_ref()
+                .map(|d| d.get("max_jitter"))
+                .transpose()?,
+            expect: self
+                .expect
+                .iter()
+                .map(|e| parse_expected(e).map_err(|m| invalid(format!("expect: {m}"))))
+                .collect::<Result<_, _>>()?,
+            min_responders: match self.min_responders {
+                Some(0) => return Err(invalid("min_responders 0: expected at least 1")),
+                n => n,
+            },
+        };
+        Ok(Module {
+            kind: c.kind,
+            target: self.target.clone(),
+            command: self
+                .command
+                .clone()
+                .unwrap_or_else(|| "REQUEST_MESSAGE,0".into()),
+            retry_interval: c.retry_interval,
+            retries: self.retries.unwrap_or(3),
+            count,
+            interval,
+            timeout: c.timeout,
+            thresholds,
+            ours: c.ours,
+            version: c.version,
+            heartbeat: c.heartbeat,
+            signing: c.signing,
+            baud: c.baud,
+        })
+    }
+
+    pub(super) fn continuous(&self) -> Result<ContinuousLink, ConfigError> {
+        let Some(given) = &self.link else {
+            return Err(invalid(
+                "a [[link]] needs link = \"CONNECTION\", e.g. link = \"udpout:10.0.0.2:14550\"",
+            ));
+        };
+        let c = self.common(Duration::from_secs(2))?;
+        let interval = match (self.rate, &self.interval) {
+            (Some(_), Some(_)) => return Err(invalid("rate and interval: give one, not both")),
+            (Some(rate), None) => {
+                if !rate.is_finite() || !(1.0 / 86_400.0..=1000.0).contains(&rate) {
+                    return Err(invalid(format!(
+                        "rate {rate}: expected at least one request a day and at most 1000 a second"
+                    )));
+                }
+                Duration::from_secs_f64(1.0 / rate)
+            }
+            (None, Some(d)) => {
+                let d = d.get("interval")?;
+                if d < MIN_PROBE_INTERVAL || d > Duration::from_secs(86_400) {
+                    return Err(invalid(format!(
+                        "interval {}: expected 1ms to 1 day",
+                        humantime::format_duration(d)
+                    )));
+                }
+                d
+            }
+            (None, None) => Duration::from_secs(1),
+        };
+        continuous_link(given, self.name.as_deref(), interval, c)
+    }
+}
+
+pub(super) fn continuous_link(
+    given: &str,
+    name: Option<&str>,
+    interval: Duration,
+    c: Common,
+) -> Result<ContinuousLink, ConfigError> {
+    let spec: LinkSpec = given.parse()?;
+    refuse_virtual(&spec)?;
+    let name = name.unwrap_or(given).trim().to_string();
+    if name.is_empty() {
+        return Err(invalid(format!("link {given}: its name is empty")));
+    }
+    Ok(ContinuousLink {
+        link: LinkConfig {
+            session: session(&name, None, interval, c.timeout, &c)?,
+            spec,
+            name,
+            thresholds: Thresholds::default(),
+        },
+        probe: c.probe,
+        options: LinkOptions {
+            baud: c.baud,
+            // A broken link is reopened by the server, with backoff, so
+            // it shows as down meanwhile.
+            reconnect: false,
+            route: Route::default(),
+        },
+    })
+}
+
+/// The built-in module: ten PINGs, 100 ms apart, 1 s timeout.
+pub(super) fn default_module() -> Module {
+    Table::default()
+        .module()
+        .expect("the default module is valid")
+}
+
+/// "FILE:LINE: message" from a TOML error, on one line.
+pub(super) fn file_error(path: &Path, text: &str, e: &toml::de::Error) -> ConfigError {
+    let line = e
+        .span()
+        .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let message = e.message().lines().next().unwrap_or("invalid TOML");
+    match line {
+        Some(line) => invalid(format!("{}:{line}: {message}", path.display())),
+        None => invalid(format!("{}: {message}", path.display())),
+    }
+}
+
+/// Names the file and the table an error is about.
+pub(super) fn within(path: &Path, table: &str, e: ConfigError) -> ConfigError {
+    invalid(format!("{}: {table}: {e}", path.display()))
+}

@@ -1,0 +1,545 @@
+//! `mavping serve [OPTIONS]` and its TOML file into a [`ServeConfig`], and
+//! each `/probe?target=...` request into a [`ProbePlan`]: the same rules as
+//! the command line, one function a rule, errors on one line.
+//!
+//! - [`allow`]: default deny, the patterns `/probe` targets must match;
+//! - [`file`]: the TOML file's tables into modules and continuous links;
+//! - [`request`]: a `/probe` query into a plan.
+
+mod allow;
+mod file;
+mod request;
+
+use std::collections::BTreeMap;
+use std::net::SocketAddr;
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use super::ping::pending_capacity;
+use super::{invalid, validate_listen, ConfigError, LinkConfig, Probe};
+use crate::cli::{ProbeKind, ServeArgs};
+use crate::engine::SessionConfig;
+use crate::frame::signing::SigningConfig;
+use crate::frame::{SysComp, Version};
+use crate::transport::address::LinkSpec;
+use crate::transport::LinkOptions;
+use crate::verdict::Thresholds;
+pub use allow::Pattern;
+use file::{continuous_link, default_module, file_error, within, File, Table};
+
+/// `mavping serve` listens here unless told otherwise: this machine only.
+pub const DEFAULT_LISTEN: &str = "127.0.0.1:9465";
+/// Probes at once unless told otherwise.
+pub const DEFAULT_MAX_CONCURRENT: usize = 16;
+const MAX_CONCURRENT: usize = 1024;
+/// The module `/probe` uses when none is named, unless the file defines one.
+pub const DEFAULT_MODULE: &str = "default";
+/// Bounds on what a `/probe` request may ask: a remote caller must not
+/// turn the exporter into a flood or tie it up for long.
+const MAX_PROBE_COUNT: u64 = 10_000;
+const MIN_PROBE_INTERVAL: Duration = Duration::from_millis(1);
+const MAX_PROBE_INTERVAL: Duration = Duration::from_secs(60);
+const MAX_PROBE_TIMEOUT: Duration = Duration::from_secs(60);
+/// Most continuous links one server runs.
+const MAX_LINKS: usize = 10_000;
+
+/// `mavping serve`, validated.
+#[derive(Debug)]
+pub struct ServeConfig {
+    pub listen: SocketAddr,
+    /// Reread on SIGHUP.
+    pub file: Option<PathBuf>,
+    pub settings: ServeSettings,
+    pub verbose: u8,
+    /// The command line, whose `--allow` and `--link` a reload keeps.
+    args: ServeArgs,
+}
+
+impl ServeConfig {
+    /// The settings as they are now: the file read again, beside the
+    /// command line's. The address stays what it was at the start.
+    pub fn reload(&self) -> Result<ServeSettings, ConfigError> {
+        ServeSettings::load(&self.args, self.file.as_deref()).map(|(settings, _)| settings)
+    }
+}
+
+/// What a reload may change (everything but the address).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ServeSettings {
+    pub allow: Vec<Pattern>,
+    pub modules: BTreeMap<String, Module>,
+    pub links: Vec<ContinuousLink>,
+    pub max_concurrent: usize,
+}
+
+/// How a `/probe` measures, unless its request says otherwise.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Module {
+    pub kind: ProbeKind,
+    pub target: Option<String>,
+    pub command: String,
+    pub retry_interval: Duration,
+    pub retries: u8,
+    pub count: u64,
+    pub interval: Duration,
+    pub timeout: Duration,
+    pub thresholds: Thresholds,
+    pub ours: SysComp,
+    pub version: Version,
+    pub heartbeat: bool,
+    pub signing: Option<SigningConfig>,
+    pub baud: u32,
+}
+
+/// A link probed all the time, shown at `/metrics` as `link="NAME"`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContinuousLink {
+    pub link: LinkConfig,
+    pub probe: Probe,
+    pub options: LinkOptions,
+}
+
+/// One `/probe` request, validated: what to open and how to measure it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProbePlan {
+    pub module: String,
+    pub link: LinkConfig,
+    pub probe: Probe,
+    pub options: LinkOptions,
+}
+
+/// What both a module and a link set: how requests are made.
+struct Common {
+    probe: Probe,
+    kind: ProbeKind,
+    ours: SysComp,
+    version: Version,
+    heartbeat: bool,
+    signing: Option<SigningConfig>,
+    baud: u32,
+    timeout: Duration,
+    retry_interval: Duration,
+}
+
+/// `sim:?clock=virtual` needs a runtime of its own, paused.
+fn refuse_virtual(spec: &LinkSpec) -> Result<(), ConfigError> {
+    if spec.is_virtual() {
+        return Err(invalid(
+            "sim:?clock=virtual cannot be served: drop clock=virtual (the server runs on real time)",
+        ));
+    }
+    Ok(())
+}
+
+fn session(
+    name: &str,
+    count: Option<u64>,
+    interval: Duration,
+    timeout: Duration,
+    c: &Common,
+) -> Result<SessionConfig, ConfigError> {
+    Ok(SessionConfig {
+        link_name: name.to_string(),
+        ours: c.ours,
+        interval,
+        count,
+        deadline: None,
+        // A probe's link sends first; a continuous link waits for ever.
+        wait: None,
+        interim: None,
+        timeout,
+        version: c.version,
+        heartbeat: c.heartbeat,
+        capacity: pending_capacity(interval, timeout)?,
+        first_seq: 0,
+        // Many sessions share the server's thread: none may spin.
+        precise_pacing: false,
+        signing: c.signing,
+    })
+}
+
+fn validate_count(count: u64) -> Result<u64, ConfigError> {
+    if count == 0 || count > MAX_PROBE_COUNT {
+        return Err(invalid(format!(
+            "count {count}: expected 1 to {MAX_PROBE_COUNT}"
+        )));
+    }
+    Ok(count)
+}
+
+fn validate_probe_interval(key: &str, d: Duration) -> Result<Duration, ConfigError> {
+    if d < MIN_PROBE_INTERVAL || d > MAX_PROBE_INTERVAL {
+        return Err(invalid(format!(
+            "{key} {}: a probe's interval is 1ms to 1m",
+            humantime::format_duration(d)
+        )));
+    }
+    Ok(d)
+}
+
+fn validate_timeout(key: &str, d: Duration, max: Duration) -> Result<Duration, ConfigError> {
+    if d.is_zero() || d > max {
+        return Err(invalid(format!(
+            "{key} {}: expected more than 0 and at most {}",
+            humantime::format_duration(d),
+            humantime::format_duration(max)
+        )));
+    }
+    Ok(d)
+}
+
+impl ServeSettings {
+    /// The settings from the command line and, when given, the file (read
+    /// again at each reload); also the file's `listen`.
+    pub fn load(
+        args: &ServeArgs,
+        path: Option<&Path>,
+    ) -> Result<(Self, Option<String>), ConfigError> {
+        let file = match path {
+            None => File::default(),
+            Some(path) => {
+                let text = std::fs::read_to_string(path).map_err(|e| {
+                    invalid(format!("--config {}: cannot read it: {e}", path.display()))
+                })?;
+                toml::from_str(&text).map_err(|e| file_error(path, &text, &e))?
+            }
+        };
+        let path = path.unwrap_or(Path::new("--config"));
+        let mut allow = Vec::new();
+        for p in &args.allow {
+            allow.push(Pattern::parse(p).map_err(|e| invalid(format!("--allow: {e}")))?);
+        }
+        for p in &file.allow {
+            allow.push(Pattern::parse(p).map_err(|e| within(path, "allow", e))?);
+        }
+        let mut modules = BTreeMap::new();
+        modules.insert(DEFAULT_MODULE.to_string(), default_module());
+        for (name, table) in &file.module {
+            let section = format!("[module.{name}]");
+            if let Some(key) = table.misplaced(true) {
+                return Err(within(
+                    path,
+                    &section,
+                    invalid(format!("{key} belongs in a [[link]], not a module")),
+                ));
+            }
+            let module = table.module().map_err(|e| within(path, &section, e))?;
+            modules.insert(name.clone(), module);
+        }
+        let mut links = Vec::new();
+        for given in &args.links {
+            let c = Table::default().common(Duration::from_secs(2))?;
+            links.push(
+                continuous_link(given, None, Duration::from_secs(1), c)
+                    .map_err(|e| invalid(format!("--link: {e}")))?,
+            );
+        }
+        for (i, table) in file.link.iter().enumerate() {
+            let section = format!("[[link]] #{}", i + 1);
+            if let Some(key) = table.misplaced(false) {
+                return Err(within(
+                    path,
+                    &section,
+                    invalid(format!(
+                        "{key} belongs in a [module.NAME]: a continuous link has no end to judge (alert in Prometheus instead)"
+                    )),
+                ));
+            }
+            links.push(table.continuous().map_err(|e| within(path, &section, e))?);
+        }
+        if links.len() > MAX_LINKS {
+            return Err(invalid(format!(
+                "{} continuous links: at most {MAX_LINKS}",
+                links.len()
+            )));
+        }
+        for (i, l) in links.iter().enumerate() {
+            if links[..i].iter().any(|o| o.link.name == l.link.name) {
+                return Err(invalid(format!(
+                    "two continuous links are named '{}': give each a name of its own (name = \"...\")",
+                    l.link.name
+                )));
+            }
+        }
+        let max_concurrent = args
+            .max_concurrent
+            .or(file.max_concurrent)
+            .unwrap_or(DEFAULT_MAX_CONCURRENT);
+        if max_concurrent == 0 || max_concurrent > MAX_CONCURRENT {
+            return Err(invalid(format!(
+                "max_concurrent {max_concurrent}: expected 1 to {MAX_CONCURRENT}"
+            )));
+        }
+        Ok((
+            ServeSettings {
+                allow,
+                modules,
+                links,
+                max_concurrent,
+            },
+            file.listen,
+        ))
+    }
+}
+
+impl TryFrom<&ServeArgs> for ServeConfig {
+    type Error = ConfigError;
+
+    fn try_from(args: &ServeArgs) -> Result<Self, ConfigError> {
+        let (settings, file_listen) = ServeSettings::load(args, args.config.as_deref())?;
+        let listen = match (&args.listen, file_listen) {
+            (Some(l), _) => validate_listen("--listen", l)?,
+            (None, Some(l)) => validate_listen("listen", &l).map_err(|e| {
+                within(
+                    args.config.as_deref().unwrap_or(Path::new("--config")),
+                    "listen",
+                    e,
+                )
+            })?,
+            (None, None) => DEFAULT_LISTEN.parse().expect("a valid address"),
+        };
+        Ok(ServeConfig {
+            listen,
+            file: args.config.clone(),
+            settings,
+            verbose: args.verbose,
+            args: args.clone(),
+        })
+    }
+}
+
+/// `mavping serve LINE` as clap parses it, for the tests here and below.
+#[cfg(test)]
+fn test_args(line: &str) -> ServeArgs {
+    use clap::Parser;
+    let cli = crate::cli::Cli::try_parse_from(
+        ["mavping", "serve"]
+            .into_iter()
+            .chain(line.split_whitespace()),
+    )
+    .unwrap();
+    match cli.mode {
+        Some(crate::cli::Mode::Serve(a)) => a,
+        _ => panic!("not serve"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn args(line: &str) -> ServeArgs {
+        test_args(line)
+    }
+
+    fn with_file(toml: &str) -> Result<ServeConfig, String> {
+        let path = std::env::temp_dir().join(format!(
+            "mavping-serve-{}-{}.toml",
+            std::process::id(),
+            toml.len()
+        ));
+        std::fs::write(&path, toml).unwrap();
+        let mut a = args("");
+        a.config = Some(path.clone());
+        let c = ServeConfig::try_from(&a).map_err(|e| e.to_string());
+        std::fs::remove_file(&path).unwrap();
+        c
+    }
+
+    #[test]
+    fn the_command_line_alone_needs_no_file() {
+        let c = ServeConfig::try_from(&args("")).unwrap();
+        assert_eq!(c.listen, "127.0.0.1:9465".parse().unwrap());
+        assert!(c.settings.allow.is_empty() && c.settings.links.is_empty());
+        assert_eq!(c.settings.max_concurrent, DEFAULT_MAX_CONCURRENT);
+        let e = c
+            .settings
+            .plan("target=udpout:127.0.0.1:14550")
+            .unwrap_err();
+        assert!(
+            e.contains("no target is; start mavping serve with --allow"),
+            "{e}"
+        );
+
+        let c = ServeConfig::try_from(&args(
+            "--listen [::1]:0 --allow udpout:127.0.0.1:* --link sim: --link udpout:10.0.0.2:14550 --max-concurrent 3",
+        ))
+        .unwrap();
+        assert_eq!(c.listen, "[::1]:0".parse().unwrap());
+        assert_eq!(c.settings.max_concurrent, 3);
+        let names: Vec<&str> = c
+            .settings
+            .links
+            .iter()
+            .map(|l| l.link.name.as_str())
+            .collect();
+        assert_eq!(names, ["sim:", "udpout:10.0.0.2:14550"]);
+        let l = &c.settings.links[1];
+        assert_eq!(l.link.session.interval, Duration::from_secs(1));
+        assert_eq!(l.link.session.timeout, Duration::from_secs(2));
+        assert_eq!(l.link.session.count, None);
+        assert_eq!(l.probe, Probe::Ping);
+
+        let p = c
+            .settings
+            .plan("target=udpout%3A127.0.0.1%3A14550")
+            .unwrap();
+        assert_eq!(p.module, "default");
+        assert_eq!(p.link.name, "udpout:127.0.0.1:14550");
+        assert_eq!(p.link.session.count, Some(10));
+        assert_eq!(p.link.session.interval, Duration::from_millis(100));
+        assert_eq!(p.link.session.timeout, Duration::from_secs(1));
+        assert!(!p.link.session.precise_pacing);
+        let p = c
+            .settings
+            .plan("target=udpout:127.0.0.1:9&count=3&interval=20ms&timeout=0.5&probe=timesync")
+            .unwrap();
+        assert_eq!(p.link.session.count, Some(3));
+        assert_eq!(p.link.session.interval, Duration::from_millis(20));
+        assert_eq!(p.link.session.timeout, Duration::from_millis(500));
+        assert_eq!(
+            p.probe,
+            Probe::Timesync {
+                target: SysComp::new(0, 0)
+            }
+        );
+    }
+
+    #[test]
+    fn the_file_sets_modules_links_and_limits() {
+        let key = std::env::temp_dir().join(format!("mavping-serve-key-{}", std::process::id()));
+        std::fs::write(&key, "secret\n").unwrap();
+        let c = with_file(&format!(
+            r#"
+listen = "127.0.0.1:0"
+max_concurrent = 4
+allow = ["udpout:127.0.0.1:*", "/dev/ttyUSB*"]
+
+[module.strict]
+probe = "timesync"
+target = "1/1"
+count = 20
+interval = "50ms"
+timeout = 0.5
+max_loss = "5%"
+max_rtt = ["p99=50ms", "200ms"]
+expect = ["1/1"]
+signing_key_file = "{}"
+
+[module.default]
+count = 3
+
+[[link]]
+link = "udpout:10.0.0.2:14550"
+name = "gcs-1"
+rate = 5
+probe = "timesync"
+
+[[link]]
+link = "sim:?loss=5%"
+interval = "200ms"
+timeout = "1s"
+"#,
+            key.display()
+        ));
+        std::fs::remove_file(&key).unwrap();
+        let c = c.unwrap();
+        assert_eq!(c.listen, "127.0.0.1:0".parse().unwrap());
+        let s = &c.settings;
+        assert_eq!(s.max_concurrent, 4);
+        assert_eq!(s.allow.len(), 2);
+        let strict = &s.modules["strict"];
+        assert_eq!((strict.count, strict.kind), (20, ProbeKind::Timesync));
+        assert_eq!(strict.timeout, Duration::from_millis(500));
+        assert_eq!(strict.thresholds.max_loss, Some(0.05));
+        assert_eq!(strict.thresholds.max_rtt.len(), 2);
+        assert!(strict.signing.is_some());
+        assert_eq!(s.modules["default"].count, 3);
+        let p = s.plan("target=udpout:127.0.0.1:5&module=strict").unwrap();
+        assert_eq!(
+            p.probe,
+            Probe::Timesync {
+                target: SysComp::new(1, 1)
+            }
+        );
+        assert_eq!(p.link.thresholds.expect.len(), 1);
+        assert!(p.link.session.signing.is_some());
+        // PING addresses no one, whatever the module's target.
+        let p = s
+            .plan("target=/dev/ttyUSB0&module=strict&probe=ping")
+            .unwrap();
+        assert_eq!(p.probe, Probe::Ping);
+        assert_eq!(s.links[0].link.name, "gcs-1");
+        assert_eq!(s.links[0].link.session.interval, Duration::from_millis(200));
+        assert!(matches!(s.links[0].probe, Probe::Timesync { .. }));
+        assert_eq!(s.links[1].link.name, "sim:?loss=5%");
+        assert_eq!(s.links[1].link.session.timeout, Duration::from_secs(1));
+    }
+
+    #[test]
+    fn the_example_in_contrib_is_valid() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("contrib/mavping-serve.toml");
+        let (s, listen) = ServeSettings::load(&args(""), Some(&path)).unwrap();
+        assert_eq!(listen.as_deref(), Some("0.0.0.0:9465"));
+        assert_eq!(s.allow.len(), 3);
+        assert!(s.modules.contains_key("ardupilot") && s.modules.contains_key("radio"));
+        let names: Vec<&str> = s.links.iter().map(|l| l.link.name.as_str()).collect();
+        assert_eq!(names, ["sik-radio", "companion"]);
+        assert!(s.plan("target=serial:/dev/ttyUSB3&module=radio").is_ok());
+        assert!(s
+            .plan("target=udpout:10.0.0.9:14550&module=ardupilot")
+            .is_ok());
+        assert!(s.plan("target=udpout:10.0.1.9:14550").is_err());
+    }
+
+    #[test]
+    fn bad_files_name_the_place() {
+        for (toml, needle) in [
+            ("allow = [\n\"udpout:1.2.3.4:*\",\n 7]", ":3: "),
+            ("colour = 1", "unknown field `colour`"),
+            ("[module.a]\ncount = 0", "[module.a]: count 0"),
+            ("[module.a]\nlink = \"sim:\"", "link belongs in a [[link]]"),
+            (
+                "[[link]]\nlink = \"sim:\"\nmax_loss = \"5%\"",
+                "[[link]] #1: max_loss belongs in a [module.NAME]",
+            ),
+            ("[[link]]\nname = \"x\"", "needs link ="),
+            (
+                "[[link]]\nlink = \"sim:\"\nrate = 1\ninterval = 1",
+                "give one, not both",
+            ),
+            (
+                "[[link]]\nlink = \"sim:\"\n[[link]]\nlink = \"sim:\"",
+                "two continuous links are named 'sim:'",
+            ),
+            ("[module.a]\nprobe = \"echo\"", "probe 'echo'"),
+            (
+                "[module.a]\ntarget = \"1/1\"",
+                "[module.a]: target: PING requests are always broadcast",
+            ),
+            ("[module.a]\nsysid = 0", "sysid 0"),
+            ("[module.a]\ninterval = \"soon\"", "interval: 'soon'"),
+            (
+                "[module.a]\nsigning_key_file = \"/nonexistent/k\"",
+                "cannot read it",
+            ),
+            ("max_concurrent = 0", "max_concurrent 0"),
+            (
+                "listen = \"localhost:1\"",
+                "listen: listen localhost:1: expected ADDR:PORT",
+            ),
+            ("allow = [\"*\"]", "start it with a link kind"),
+        ] {
+            let e = with_file(toml).unwrap_err();
+            assert!(e.contains(needle), "{toml}: {e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+        let mut a = args("");
+        a.config = Some(PathBuf::from("/nonexistent/serve.toml"));
+        let e = ServeConfig::try_from(&a).unwrap_err().to_string();
+        assert!(
+            e.contains("--config /nonexistent/serve.toml: cannot read it"),
+            "{e}"
+        );
+    }
+}

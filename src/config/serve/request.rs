@@ -1,0 +1,193 @@
+//! One `/probe?target=...` query into a [`ProbePlan`], or the one line
+//! that says why not (the HTTP 400 body).
+
+use std::collections::BTreeMap;
+use std::time::Duration;
+
+use clap::ValueEnum;
+
+use super::{
+    refuse_virtual, session, validate_count, validate_probe_interval, validate_timeout, Common,
+    Pattern, ProbePlan, ServeSettings, DEFAULT_MODULE, MAX_PROBE_TIMEOUT,
+};
+use crate::cli::ProbeKind;
+use crate::config::ping::{probe_of, ProbeChoice};
+use crate::config::{ConfigError, Keys, LinkConfig};
+use crate::transport::address::LinkSpec;
+use crate::transport::route::Route;
+use crate::transport::LinkOptions;
+use crate::units::parse_duration;
+
+impl ServeSettings {
+    /// A `/probe` request's query string into what to run, or the one line
+    /// that says why not (the HTTP 400 body).
+    pub fn plan(&self, query: &str) -> Result<ProbePlan, String> {
+        let mut params: BTreeMap<String, String> = BTreeMap::new();
+        for (key, value) in form_urlencoded::parse(query.as_bytes()) {
+            if !["target", "module", "count", "interval", "timeout", "probe"].contains(&&*key) {
+                return Err(format!(
+                    "unknown parameter '{key}'; /probe takes target, module, count, interval, timeout and probe"
+                ));
+            }
+            if params.insert(key.to_string(), value.to_string()).is_some() {
+                return Err(format!("parameter '{key}' is given twice"));
+            }
+        }
+        let Some(target) = params.get("target").map(|t| t.trim()) else {
+            return Err(
+                "missing target: /probe?target=LINK, e.g. /probe?target=udpout:127.0.0.1:14550"
+                    .into(),
+            );
+        };
+        let module_name = params.get("module").map_or(DEFAULT_MODULE, String::as_str);
+        let Some(module) = self.modules.get(module_name) else {
+            let known: Vec<&str> = self.modules.keys().map(String::as_str).collect();
+            return Err(format!(
+                "unknown module '{module_name}'; known: {}",
+                known.join(", ")
+            ));
+        };
+        let spec: LinkSpec = target
+            .parse()
+            .map_err(|e: crate::transport::address::AddressError| format!("target: {e}"))?;
+        self.admit(target, &spec)?;
+        let plan = |e: ConfigError| e.to_string();
+        let count = match params.get("count") {
+            Some(c) => validate_count(
+                c.parse()
+                    .map_err(|_| format!("count '{c}': expected a whole number"))?,
+            )
+            .map_err(plan)?,
+            None => module.count,
+        };
+        let duration = |key: &str| -> Result<Option<Duration>, String> {
+            params
+                .get(key)
+                .map(|d| parse_duration(d).map_err(|e| format!("{key}: {e}")))
+                .transpose()
+        };
+        let interval = match duration("interval")? {
+            Some(d) => validate_probe_interval("interval", d).map_err(plan)?,
+            None => module.interval,
+        };
+        let timeout = match duration("timeout")? {
+            Some(d) => validate_timeout("timeout", d, MAX_PROBE_TIMEOUT).map_err(plan)?,
+            None => module.timeout,
+        };
+        let kind = match params.get("probe") {
+            Some(p) => ProbeKind::from_str(p, true)
+                .map_err(|_| format!("probe '{p}': expected ping, timesync or command"))?,
+            None => module.kind,
+        };
+        let probe = probe_of(
+            Keys::File,
+            &ProbeChoice {
+                kind,
+                // A module's target is for its own kind of probe; PING has none.
+                target: module.target.as_deref().filter(|_| kind != ProbeKind::Ping),
+                command: &module.command,
+                retry_interval: module.retry_interval,
+                retries: module.retries,
+            },
+        )
+        .map_err(plan)?;
+        let common = Common {
+            probe: probe.clone(),
+            kind,
+            ours: module.ours,
+            version: module.version,
+            heartbeat: module.heartbeat,
+            signing: module.signing,
+            baud: module.baud,
+            timeout,
+            retry_interval: module.retry_interval,
+        };
+        Ok(ProbePlan {
+            module: module_name.to_string(),
+            link: LinkConfig {
+                session: session(target, Some(count), interval, timeout, &common).map_err(plan)?,
+                spec,
+                name: target.to_string(),
+                thresholds: module.thresholds.clone(),
+            },
+            probe,
+            options: LinkOptions {
+                baud: module.baud,
+                reconnect: false,
+                route: Route::default(),
+            },
+        })
+    }
+
+    /// Default deny: the target must match an allow pattern.
+    fn admit(&self, given: &str, spec: &LinkSpec) -> Result<(), String> {
+        refuse_virtual(spec).map_err(|e| e.to_string())?;
+        if self.allow.is_empty() {
+            return Err(format!(
+                "target {given} is not allowed: no target is; start mavping serve with \
+                 --allow PATTERN (e.g. --allow 'udpout:127.0.0.1:*') or list patterns in \
+                 allow = [...] of --config"
+            ));
+        }
+        if !self.allow.iter().any(|p| p.admits(spec)) {
+            return Err(format!(
+                "target {given} is not allowed: it matches no allow pattern ({})",
+                self.allow
+                    .iter()
+                    .map(Pattern::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{test_args, ServeConfig};
+    use super::*;
+
+    fn settings(line: &str) -> ServeSettings {
+        ServeConfig::try_from(&test_args(line)).unwrap().settings
+    }
+
+    #[test]
+    fn bad_probe_requests_say_why_on_one_line() {
+        let s = settings("--allow udpout:127.0.0.1:* --allow sim:**");
+        for (query, needle) in [
+            ("", "missing target"),
+            (
+                "target=udpout:10.0.0.1:14550",
+                "matches no allow pattern (udpout:127.0.0.1:*, sim:**)",
+            ),
+            ("target=nowhere", "accepted forms"),
+            (
+                "target=udpout:127.0.0.1:1&module=fast",
+                "unknown module 'fast'; known: default",
+            ),
+            ("target=udpout:127.0.0.1:1&count=0", "count 0"),
+            ("target=udpout:127.0.0.1:1&count=many", "count 'many'"),
+            (
+                "target=udpout:127.0.0.1:1&count=99999",
+                "expected 1 to 10000",
+            ),
+            ("target=udpout:127.0.0.1:1&interval=0", "1ms to 1m"),
+            ("target=udpout:127.0.0.1:1&timeout=2h", "at most 1m"),
+            ("target=udpout:127.0.0.1:1&probe=echo", "probe 'echo'"),
+            ("target=udpout:127.0.0.1:1&target=sim:", "given twice"),
+            (
+                "target=udpout:127.0.0.1:1&debug=1",
+                "unknown parameter 'debug'",
+            ),
+            (
+                "target=sim:?clock=virtual",
+                "clock=virtual cannot be served",
+            ),
+        ] {
+            let e = s.plan(query).unwrap_err();
+            assert!(e.contains(needle), "{query}: {e}");
+            assert!(!e.contains('\n'), "{e}");
+        }
+    }
+}

@@ -1,0 +1,412 @@
+//! Metrics in the Prometheus text format: per-responder counters and RTT
+//! histogram, RADIO_STATUS gauges, and what `mavping serve` adds (a
+//! continuous link's state, one `/probe`'s result, the exporter's health).
+//! The one renderer of every exposition mavping serves.
+//!
+//! A [`Metrics`] follows one link's session as an engine [`Observer`].
+//! `--prometheus` serves the run's links at `/metrics` while it goes on
+//! ([`PrometheusExporter`]); memory is fixed per responder and radio (the
+//! matcher and the radio table bound how many there are), whatever the run
+//! length.
+
+mod render;
+
+use std::cell::{Ref, RefCell};
+use std::collections::BTreeMap;
+use std::io;
+use std::net::SocketAddr;
+use std::rc::Rc;
+
+use hyper::StatusCode;
+
+use super::http::{self, Head, Limits, Reply, Replying};
+use super::{Event, Observer, Reporter, StartInfo};
+use crate::engine::commands::CommandEvent;
+use crate::engine::matcher::MatchEvent;
+use crate::engine::radio::{RadioReport, MAX_RADIOS};
+use crate::engine::summary::{LinkSummary, Summary};
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+use crate::verdict::Verdict;
+pub use render::{render, render_probe, render_serve, Health, ProbeResult};
+
+/// Upper bounds of the RTT histogram, in seconds: from loopback (sub-ms)
+/// to a congested 57600-baud radio (seconds).
+pub const BUCKETS_S: [f64; 14] = [
+    0.000_5, 0.001, 0.002_5, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0,
+];
+
+/// What a [`Metrics`] stands for, which decides how its counts are typed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scope {
+    /// A run or a continuous link: counters that only grow (`_total`).
+    Run,
+    /// One `/probe`: that probe's counts (as gauges) and histogram, under
+    /// names of their own, so `rate()` is never applied to figures that
+    /// start afresh each scrape.
+    Probe,
+}
+
+#[derive(Debug, Default, Clone)]
+struct Series {
+    sent: u64,
+    received: u64,
+    lost: u64,
+    late: u64,
+    duplicate: u64,
+    /// Non-cumulative counts per bucket; the last one is +Inf.
+    buckets: [u64; BUCKETS_S.len() + 1],
+    rtt_sum_s: f64,
+    last_rtt_s: Option<f64>,
+    /// From the summary at the end (the HDR histogram's figures).
+    p50_s: Option<f64>,
+    p99_s: Option<f64>,
+    clock_offset_s: Option<f64>,
+}
+
+impl Series {
+    fn observe(&mut self, rtt: Nanos) {
+        let s = rtt as f64 / 1e9;
+        let i = BUCKETS_S
+            .iter()
+            .position(|&b| s <= b)
+            .unwrap_or(BUCKETS_S.len());
+        self.buckets[i] += 1;
+        self.rtt_sum_s += s;
+        self.last_rtt_s = Some(s);
+    }
+
+    fn decided(&mut self, received: Option<Nanos>) {
+        self.sent += 1;
+        match received {
+            Some(rtt) => {
+                self.received += 1;
+                self.observe(rtt);
+            }
+            None => self.lost += 1,
+        }
+    }
+
+    fn loss_ratio(&self) -> Option<f64> {
+        (self.sent > 0).then(|| self.lost as f64 / self.sent as f64)
+    }
+}
+
+/// One link's metrics.
+#[derive(Debug, Default)]
+pub struct Metrics {
+    link: String,
+    probe: &'static str,
+    responders: BTreeMap<SysComp, Series>,
+    /// The latest RADIO_STATUS of each radio heard.
+    radios: BTreeMap<SysComp, RadioReport>,
+    /// A continuous link of `mavping serve`: open now, and how often it
+    /// was reopened after breaking.
+    state: Option<LinkState>,
+}
+
+#[derive(Debug, Default, Clone, Copy)]
+struct LinkState {
+    up: bool,
+    restarts: u64,
+}
+
+impl Metrics {
+    /// A continuous link's metrics, named `link` before its first session
+    /// (so a link that never opens still shows `mavping_link_up 0`).
+    pub fn continuous(link: &str, probe: &'static str) -> Self {
+        Metrics {
+            link: link.to_string(),
+            probe,
+            state: Some(LinkState::default()),
+            ..Metrics::default()
+        }
+    }
+
+    /// A continuous link opened (`true`) or broke (`false`).
+    pub fn set_up(&mut self, up: bool) {
+        let state = self.state.get_or_insert_with(LinkState::default);
+        state.up = up;
+    }
+
+    /// Whether a continuous link is open now.
+    pub fn is_up(&self) -> bool {
+        self.state.is_some_and(|s| s.up)
+    }
+
+    /// A continuous link is being reopened after it broke.
+    pub fn restarted(&mut self) {
+        self.state.get_or_insert_with(LinkState::default).restarts += 1;
+    }
+
+    pub fn on_start(&mut self, info: &StartInfo) {
+        self.link = info.link.clone();
+        self.probe = info.probe;
+    }
+
+    pub fn on_event(&mut self, e: &MatchEvent) {
+        match *e {
+            MatchEvent::Reply { responder, rtt, .. } => {
+                self.responders
+                    .entry(responder)
+                    .or_default()
+                    .decided(Some(rtt));
+            }
+            MatchEvent::Lost { responder, .. } => {
+                self.responders.entry(responder).or_default().decided(None);
+            }
+            // A late reply was already counted sent and lost when its
+            // timeout passed.
+            MatchEvent::Late { responder, .. } => {
+                self.responders.entry(responder).or_default().late += 1;
+            }
+            MatchEvent::Duplicate { responder, .. } => {
+                self.responders.entry(responder).or_default().duplicate += 1;
+            }
+            MatchEvent::Stale { .. } => {}
+        }
+    }
+
+    /// `--probe command`: a command target is a responder whose requests
+    /// are commands; acknowledged is received, failed is lost, and the
+    /// time to ACK its RTT.
+    pub fn on_command(&mut self, e: &CommandEvent) {
+        match *e {
+            CommandEvent::Acked {
+                target,
+                time_to_ack,
+                ..
+            } => self
+                .responders
+                .entry(target)
+                .or_default()
+                .decided(Some(time_to_ack)),
+            CommandEvent::Failed { target, .. } => {
+                self.responders.entry(target).or_default().decided(None);
+            }
+            CommandEvent::LateAck { from, .. } => {
+                self.responders.entry(from).or_default().late += 1;
+            }
+            CommandEvent::DuplicateAck { from, .. } => {
+                self.responders.entry(from).or_default().duplicate += 1;
+            }
+            CommandEvent::Send { .. } | CommandEvent::Skipped { .. } => {}
+        }
+    }
+
+    /// A RADIO_STATUS: its figures replace the radio's last ones.
+    pub fn on_radio(&mut self, id: SysComp, report: RadioReport) {
+        if self.radios.len() < MAX_RADIOS || self.radios.contains_key(&id) {
+            self.radios.insert(id, report);
+        }
+    }
+
+    /// The figures known only at the end (percentiles from the HDR
+    /// histogram, TIMESYNC clock offsets), so a last scrape or a `/probe`
+    /// has them.
+    pub fn on_summary(&mut self, summary: &Summary) {
+        for r in &summary.responders {
+            let s = self.responders.entry(r.id).or_default();
+            if let Some(c) = &r.clock {
+                s.clock_offset_s = Some(c.offset_ns as f64 / 1e9);
+            }
+            if let Some(rtt) = &r.rtt {
+                s.p50_s = Some(rtt.p50_us / 1e6);
+                s.p99_s = Some(rtt.p99_us / 1e6);
+            }
+        }
+    }
+
+    /// The exposition of this link alone, as `--prometheus` serves it.
+    pub fn render(&self) -> String {
+        render(&[self])
+    }
+}
+
+impl Observer for Metrics {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        self.on_start(info);
+        Ok(())
+    }
+
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        match event {
+            Event::Match(e) => self.on_event(e),
+            Event::Command(e) => self.on_command(e),
+            Event::Radio { id, report, .. } => self.on_radio(*id, *report),
+            Event::Heard { .. } | Event::WaitingForPeer => {}
+        }
+        Ok(())
+    }
+}
+
+impl Reporter for Metrics {
+    fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
+        if let LinkSummary::Echo(summary) = summary {
+            self.on_summary(summary);
+        }
+        Ok(())
+    }
+}
+
+/// One link's metrics, written by its session and read by scrapes; every
+/// part of a run or a server lives on one thread.
+#[derive(Debug, Clone, Default)]
+pub struct SharedMetrics(Rc<RefCell<Metrics>>);
+
+impl SharedMetrics {
+    pub fn new(metrics: Metrics) -> Self {
+        SharedMetrics(Rc::new(RefCell::new(metrics)))
+    }
+
+    pub fn get(&self) -> Ref<'_, Metrics> {
+        self.0.borrow()
+    }
+
+    pub fn update(&self, f: impl FnOnce(&mut Metrics)) {
+        f(&mut self.0.borrow_mut());
+    }
+}
+
+impl Observer for SharedMetrics {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        self.0.borrow_mut().start(info)
+    }
+
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        self.0.borrow_mut().event(event)
+    }
+}
+
+impl Reporter for SharedMetrics {
+    fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
+        self.0.borrow_mut().summary(summary, verdict)
+    }
+}
+
+/// Renders several shared links at once.
+pub fn borrow_all(links: &[SharedMetrics]) -> Vec<Ref<'_, Metrics>> {
+    links.iter().map(SharedMetrics::get).collect()
+}
+
+/// `--prometheus`: the run's links at `/metrics` while the run goes on.
+pub struct PrometheusExporter {
+    links: Rc<RefCell<Vec<SharedMetrics>>>,
+}
+
+impl PrometheusExporter {
+    /// Starts serving `listener` on the current `LocalSet`.
+    pub fn serve(listener: std::net::TcpListener) -> io::Result<(Self, SocketAddr)> {
+        let listener = http::listener(listener)?;
+        let addr = listener.local_addr()?;
+        let links: Rc<RefCell<Vec<SharedMetrics>>> = Rc::default();
+        let shared = links.clone();
+        http::serve(listener, Limits::default(), move |head: Head| -> Replying {
+            let reply = match head.uri.path() {
+                "/metrics" => {
+                    let links = shared.borrow();
+                    let all = borrow_all(&links);
+                    let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();
+                    Reply::metrics(render(&refs))
+                }
+                "/" => Reply::text(StatusCode::OK, "mavping: metrics at /metrics\n"),
+                _ => Reply::text(StatusCode::NOT_FOUND, "not found\n"),
+            };
+            Box::pin(std::future::ready(reply))
+        });
+        Ok((PrometheusExporter { links }, addr))
+    }
+
+    /// The reporter of the `index`-th link, served at the same address.
+    pub fn link(&self, index: usize) -> SharedMetrics {
+        let mut links = self.links.borrow_mut();
+        if links.len() <= index {
+            links.resize_with(index + 1, SharedMetrics::default);
+        }
+        links[index].clone()
+    }
+}
+
+/// A PING run's start on `link`, for the tests here and in `render`.
+#[cfg(test)]
+fn test_start(link: &str) -> StartInfo {
+    use std::time::Duration;
+    StartInfo {
+        link: link.into(),
+        probe: "ping",
+        ours: SysComp::new(255, 190),
+        interval: Duration::from_secs(1),
+        timeout: Duration::from_secs(2),
+        count: None,
+        command: None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn counters_and_histogram_follow_the_events() {
+        let mut m = Metrics::default();
+        m.on_start(&test_start("udpout:\"a\\b\""));
+        let r = SysComp::new(1, 1);
+        let reply = |seq, rtt| MatchEvent::Reply {
+            responder: r,
+            seq,
+            rtt,
+            sent_at: 0,
+            at: rtt,
+            out_of_order: false,
+            first_from_responder: seq == 0,
+        };
+        m.on_event(&reply(0, 800_000));
+        m.on_event(&reply(1, 30_000_000));
+        m.on_event(&MatchEvent::Lost {
+            responder: r,
+            seq: 2,
+            sent_at: 0,
+            at: 0,
+        });
+        m.on_event(&MatchEvent::Late {
+            responder: r,
+            seq: 2,
+            rtt: 20_000_000_000,
+            sent_at: 0,
+            at: 0,
+        });
+        m.on_event(&MatchEvent::Duplicate {
+            responder: r,
+            seq: 1,
+            rtt: 1,
+            sent_at: 0,
+            at: 0,
+        });
+        let text = m.render();
+        let l = r#"link="udpout:\"a\\b\"",probe="ping",sysid="1",compid="1""#;
+        for line in [
+            format!("mavping_sent_total{{{l}}} 3"),
+            format!("mavping_received_total{{{l}}} 2"),
+            format!("mavping_lost_total{{{l}}} 1"),
+            format!("mavping_late_total{{{l}}} 1"),
+            format!("mavping_duplicate_total{{{l}}} 1"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"0.0005\"}} 0"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"0.001\"}} 1"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"0.025\"}} 1"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"0.05\"}} 2"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"+Inf\"}} 2"),
+            format!("mavping_rtt_seconds_count{{{l}}} 2"),
+            format!("mavping_last_rtt_seconds{{{l}}} 0.03"),
+        ] {
+            assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
+        }
+        let sum: f64 = text
+            .lines()
+            .find_map(|x| x.strip_prefix(&format!("mavping_rtt_seconds_sum{{{l}}} ")))
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!((sum - 0.0308).abs() < 1e-12, "{sum}");
+        assert!(!text.contains("mavping_clock_offset_seconds{"));
+    }
+}

@@ -1,0 +1,625 @@
+//! The exposition text: each family once, its `HELP` and `TYPE` lines,
+//! then a series per link and responder (or radio); families with no
+//! series are left out. What a run, `mavping serve`'s `/metrics` and one
+//! `/probe` show differs only in which families are written.
+
+use std::fmt::{Display, Write as _};
+
+use super::{Metrics, Scope, Series, BUCKETS_S};
+use crate::engine::radio::{RadioReport, UNKNOWN};
+use crate::frame::SysComp;
+
+impl Metrics {
+    fn labels(&self, id: SysComp) -> String {
+        format!(
+            "link=\"{}\",probe=\"{}\",sysid=\"{}\",compid=\"{}\"",
+            escape(&self.link),
+            self.probe,
+            id.sysid,
+            id.compid
+        )
+    }
+
+    fn radio_labels(&self, id: SysComp) -> String {
+        format!(
+            "link=\"{}\",sysid=\"{}\",compid=\"{}\"",
+            escape(&self.link),
+            id.sysid,
+            id.compid
+        )
+    }
+}
+
+/// Text being written in the exposition format: a family's `HELP` and
+/// `TYPE` lines, then its samples.
+#[derive(Default)]
+struct Exposition(String);
+
+impl Exposition {
+    fn header(&mut self, name: &str, kind: &str, help: &str) {
+        let _ = writeln!(self.0, "# HELP {name} {help}\n# TYPE {name} {kind}");
+    }
+
+    fn sample(&mut self, name: &str, labels: &str, value: impl Display) {
+        let _ = if labels.is_empty() {
+            writeln!(self.0, "{name} {value}")
+        } else {
+            writeln!(self.0, "{name}{{{labels}}} {value}")
+        };
+    }
+
+    /// A family with its samples; nothing at all when it has none.
+    fn family<V: Display>(
+        &mut self,
+        name: &str,
+        kind: &str,
+        help: &str,
+        samples: impl IntoIterator<Item = (String, V)>,
+    ) {
+        let mut samples = samples.into_iter().peekable();
+        if samples.peek().is_none() {
+            return;
+        }
+        self.header(name, kind, help);
+        for (labels, value) in samples {
+            self.sample(name, &labels, value);
+        }
+    }
+}
+
+/// A per-responder figure: its names as a run and as a probe, its help,
+/// and its value.
+type Count = (&'static str, &'static str, &'static str, fn(&Series) -> u64);
+type Gauge = (&'static str, &'static str, fn(&Series) -> Option<f64>);
+
+const COUNTS: [Count; 5] = [
+    (
+        "mavping_sent_total",
+        "mavping_probe_sent",
+        "Requests in the responder's window whose fate is decided (received + lost).",
+        |s| s.sent,
+    ),
+    (
+        "mavping_received_total",
+        "mavping_probe_received",
+        "Replies received within the timeout.",
+        |s| s.received,
+    ),
+    (
+        "mavping_lost_total",
+        "mavping_probe_lost",
+        "Requests not answered within the timeout.",
+        |s| s.lost,
+    ),
+    (
+        "mavping_late_total",
+        "mavping_probe_late",
+        "First replies after the timeout (each also counted lost).",
+        |s| s.late,
+    ),
+    (
+        "mavping_duplicate_total",
+        "mavping_probe_duplicate",
+        "Second and later replies to the same request.",
+        |s| s.duplicate,
+    ),
+];
+
+const GAUGES: [Gauge; 4] = [
+    (
+        "mavping_last_rtt_seconds",
+        "Round-trip time of the latest reply within the timeout.",
+        |s| s.last_rtt_s,
+    ),
+    (
+        "mavping_rtt_p50_seconds",
+        "Median round-trip time (HDR histogram; at the end of a run or probe).",
+        |s| s.p50_s,
+    ),
+    (
+        "mavping_rtt_p99_seconds",
+        "99th percentile round-trip time (HDR histogram; at the end of a run or probe).",
+        |s| s.p99_s,
+    ),
+    (
+        "mavping_clock_offset_seconds",
+        "Responder's clock minus ours (TIMESYNC probe, at the end of a run or probe).",
+        |s| s.clock_offset_s,
+    ),
+];
+
+/// RADIO_STATUS figures, raw as the radio sends them (255: unknown, left out).
+type RadioGauge = (&'static str, &'static str, fn(&RadioReport) -> Option<u16>);
+
+const RADIO: [RadioGauge; 7] = [
+    (
+        "mavping_radio_rssi",
+        "Local signal strength, raw RADIO_STATUS units (SiK: dBm = raw / 1.9 - 127).",
+        |r| known(r.rssi),
+    ),
+    (
+        "mavping_radio_remote_rssi",
+        "Remote signal strength, raw RADIO_STATUS units.",
+        |r| known(r.remrssi),
+    ),
+    (
+        "mavping_radio_noise",
+        "Local background noise, raw RADIO_STATUS units.",
+        |r| known(r.noise),
+    ),
+    (
+        "mavping_radio_remote_noise",
+        "Remote background noise, raw RADIO_STATUS units.",
+        |r| known(r.remnoise),
+    ),
+    (
+        "mavping_radio_txbuf_percent",
+        "Free space in the radio's transmit buffer, percent.",
+        |r| known(r.txbuf),
+    ),
+    (
+        "mavping_radio_rxerrors",
+        "The radio's receive error count (its own 16-bit counter, which wraps).",
+        |r| Some(r.rxerrors),
+    ),
+    (
+        "mavping_radio_fixed",
+        "Packets the radio's error correction repaired (its own 16-bit counter).",
+        |r| Some(r.fixed),
+    ),
+];
+
+fn known(raw: u8) -> Option<u16> {
+    (raw != UNKNOWN).then_some(u16::from(raw))
+}
+
+/// Every link's per-responder and radio families, each family once with
+/// a series per link and responder told apart by their labels.
+fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
+    let series = || {
+        links
+            .iter()
+            .flat_map(|m| m.responders.iter().map(move |(id, s)| (m.labels(*id), s)))
+    };
+    for (run_name, probe_name, help, value) in COUNTS {
+        let (name, kind) = match scope {
+            Scope::Run => (run_name, "counter"),
+            Scope::Probe => (probe_name, "gauge"),
+        };
+        out.family(name, kind, help, series().map(|(l, s)| (l, value(s))));
+    }
+    if scope == Scope::Probe {
+        out.family(
+            "mavping_probe_loss_ratio",
+            "gauge",
+            "Lost over sent in this probe (0 to 1).",
+            series().filter_map(|(l, s)| Some((l, s.loss_ratio()?))),
+        );
+    }
+    let name = match scope {
+        Scope::Run => "mavping_rtt_seconds",
+        Scope::Probe => "mavping_probe_rtt_seconds",
+    };
+    if series().next().is_some() {
+        out.header(
+            name,
+            "histogram",
+            "Round-trip time of replies within the timeout.",
+        );
+    }
+    for (labels, s) in series() {
+        let mut cumulative = 0;
+        for (i, count) in s.buckets.iter().enumerate() {
+            cumulative += count;
+            let le = BUCKETS_S
+                .get(i)
+                .map_or_else(|| "+Inf".to_string(), |b| b.to_string());
+            out.sample(
+                &format!("{name}_bucket"),
+                &format!("{labels},le=\"{le}\""),
+                cumulative,
+            );
+        }
+        out.sample(&format!("{name}_sum"), &labels, s.rtt_sum_s);
+        out.sample(&format!("{name}_count"), &labels, s.received);
+    }
+    for (name, help, value) in GAUGES {
+        out.family(
+            name,
+            "gauge",
+            help,
+            series().filter_map(|(l, s)| Some((l, value(s)?))),
+        );
+    }
+    for (name, help, value) in RADIO {
+        let radios = links.iter().flat_map(|m| {
+            m.radios
+                .iter()
+                .filter_map(move |(id, r)| Some((m.radio_labels(*id), value(r)?)))
+        });
+        out.family(name, "gauge", help, radios);
+    }
+}
+
+/// The exposition of one or several links of a run (`--prometheus`).
+pub fn render(links: &[&Metrics]) -> String {
+    let mut out = Exposition::default();
+    write_links(&mut out, links, Scope::Run);
+    out.0
+}
+
+/// The continuous links' state (`mavping serve`).
+fn write_link_states(out: &mut Exposition, links: &[&Metrics]) {
+    let states = || {
+        links.iter().filter_map(|m| {
+            let state = m.state?;
+            Some((format!("link=\"{}\"", escape(&m.link)), state))
+        })
+    };
+    out.family(
+        "mavping_link_up",
+        "gauge",
+        "1 while the continuous link is open, 0 while it is down and being retried.",
+        states().map(|(l, s)| (l, u8::from(s.up))),
+    );
+    out.family(
+        "mavping_link_restarts_total",
+        "counter",
+        "Times the continuous link was reopened after it broke or could not be opened.",
+        states().map(|(l, s)| (l, s.restarts)),
+    );
+}
+
+/// What `mavping serve` says about itself at `/metrics`.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Health {
+    /// `/probe` requests that ran a probe...
+    pub probes: u64,
+    /// ...of which failed (`mavping_probe_success` 0).
+    pub probes_failed: u64,
+    /// `/probe` requests refused (400: bad or forbidden; 503: too many).
+    pub probes_refused: u64,
+    pub probes_running: u64,
+    /// Links open now: continuous links up and probes' links.
+    pub open_links: u64,
+    pub reloads: u64,
+    pub reloads_failed: u64,
+    pub last_reload_ok: bool,
+}
+
+/// `mavping serve`'s `/metrics`: its health, then its continuous links.
+pub fn render_serve(links: &[&Metrics], health: &Health) -> String {
+    let mut out = Exposition::default();
+    let one = |v: u64| [(String::new(), v)];
+    for (name, kind, help, value) in [
+        (
+            "mavping_exporter_probes_total",
+            "counter",
+            "/probe requests that ran a probe.",
+            health.probes,
+        ),
+        (
+            "mavping_exporter_probes_failed_total",
+            "counter",
+            "Probes that ran and failed (mavping_probe_success 0).",
+            health.probes_failed,
+        ),
+        (
+            "mavping_exporter_probes_refused_total",
+            "counter",
+            "/probe requests refused: bad or forbidden (400) or too many at once (503).",
+            health.probes_refused,
+        ),
+        (
+            "mavping_exporter_probes_running",
+            "gauge",
+            "Probes running now.",
+            health.probes_running,
+        ),
+        (
+            "mavping_exporter_open_links",
+            "gauge",
+            "Links open now: continuous links that are up and the links of running probes.",
+            health.open_links,
+        ),
+        (
+            "mavping_exporter_config_reloads_total",
+            "counter",
+            "Configuration reloads asked for (SIGHUP).",
+            health.reloads,
+        ),
+        (
+            "mavping_exporter_config_reloads_failed_total",
+            "counter",
+            "Reloads refused because the new configuration was invalid (the old one stays).",
+            health.reloads_failed,
+        ),
+        (
+            "mavping_exporter_config_last_reload_successful",
+            "gauge",
+            "1 when the configuration in use is the one last read from the file.",
+            u64::from(health.last_reload_ok),
+        ),
+    ] {
+        out.family(name, kind, help, one(value));
+    }
+    write_link_states(&mut out, links);
+    write_links(&mut out, links, Scope::Run);
+    out.0
+}
+
+/// How one `/probe` ended.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProbeResult {
+    pub success: bool,
+    pub duration_s: f64,
+    /// Why it failed: `open_failed`, `link_failed`, or a broken check
+    /// (`no_reply`, `max_loss`, ...), each once.
+    pub reasons: Vec<&'static str>,
+    /// Requests put on the wire, and those still undecided when the
+    /// probe's time was up.
+    pub requests: u64,
+    pub in_flight: u64,
+    /// The error, for a person reading the exposition (a comment line).
+    pub message: Option<String>,
+}
+
+/// One `/probe`'s answer: its result, then its link's figures.
+pub fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
+    let mut out = Exposition::default();
+    if let Some(message) = &result.message {
+        // A comment: ignored by Prometheus, read by whoever curls.
+        let _ = writeln!(out.0, "# mavping: {}", message.replace('\n', " "));
+    }
+    let one = |v: f64| [(String::new(), v)];
+    out.family(
+        "mavping_probe_success",
+        "gauge",
+        "1 when a responder answered and every threshold of the module held.",
+        one(f64::from(u8::from(result.success))),
+    );
+    out.family(
+        "mavping_probe_failure",
+        "gauge",
+        "1 for each reason the probe failed (open_failed, link_failed, no_reply, max_loss, ...).",
+        result
+            .reasons
+            .iter()
+            .map(|r| (format!("reason=\"{r}\""), 1)),
+    );
+    out.family(
+        "mavping_probe_duration_seconds",
+        "gauge",
+        "How long the probe took, opening the link included.",
+        one(result.duration_s),
+    );
+    out.family(
+        "mavping_probe_requests",
+        "gauge",
+        "Requests the probe put on the wire.",
+        one(result.requests as f64),
+    );
+    out.family(
+        "mavping_probe_in_flight",
+        "gauge",
+        "Requests still undecided when the probe's time was up (counted neither received nor lost).",
+        one(result.in_flight as f64),
+    );
+    write_links(&mut out, &[metrics], Scope::Probe);
+    out.0
+}
+
+/// Label values escape backslash, double quote and newline.
+fn escape(value: &str) -> String {
+    value
+        .replace('\\', "\\\\")
+        .replace('"', "\\\"")
+        .replace('\n', "\\n")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_start as info;
+    use super::*;
+    use crate::engine::matcher::MatchEvent;
+    use crate::output::StartInfo;
+
+    #[test]
+    fn several_links_are_series_of_one_family() {
+        let mut a = Metrics::default();
+        a.on_start(&info("sim:"));
+        let mut b = Metrics::default();
+        b.on_start(&info("udpout:127.0.0.1:1"));
+        for m in [&mut a, &mut b] {
+            m.on_event(&MatchEvent::Lost {
+                responder: SysComp::new(1, 1),
+                seq: 0,
+                sent_at: 0,
+                at: 0,
+            });
+        }
+        let text = render(&[&a, &b]);
+        assert_eq!(text.matches("# TYPE mavping_lost_total counter").count(), 1);
+        for link in ["sim:", "udpout:127.0.0.1:1"] {
+            let line = format!(
+                "mavping_lost_total{{link=\"{link}\",probe=\"ping\",sysid=\"1\",compid=\"1\"}} 1"
+            );
+            assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
+        }
+    }
+
+    fn has(text: &str, line: &str) {
+        assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
+    }
+
+    fn radio(rssi: u8, txbuf: u8) -> RadioReport {
+        RadioReport {
+            rssi,
+            remrssi: 150,
+            txbuf,
+            noise: 40,
+            remnoise: UNKNOWN,
+            rxerrors: 3,
+            fixed: 1,
+        }
+    }
+
+    #[test]
+    fn radios_show_their_latest_report_and_leave_unknowns_out() {
+        let mut m = Metrics::default();
+        m.on_start(&info("sim:"));
+        let id = SysComp::new(51, 68);
+        m.on_radio(id, radio(100, 90));
+        m.on_radio(id, radio(120, 80));
+        let text = render(&[&m]);
+        let l = r#"link="sim:",sysid="51",compid="68""#;
+        has(&text, &format!("mavping_radio_rssi{{{l}}} 120"));
+        has(&text, &format!("mavping_radio_remote_rssi{{{l}}} 150"));
+        has(&text, &format!("mavping_radio_txbuf_percent{{{l}}} 80"));
+        has(&text, &format!("mavping_radio_rxerrors{{{l}}} 3"));
+        assert!(!text.contains("mavping_radio_remote_noise"), "{text}");
+        // No responder: no responder families at all, not even their HELP.
+        assert!(!text.contains("mavping_sent_total"), "{text}");
+    }
+
+    #[test]
+    fn a_command_target_counts_as_a_responder() {
+        use crate::engine::commands::CommandEvent;
+        let mut m = Metrics::default();
+        m.on_start(&StartInfo {
+            probe: "command",
+            ..info("sim:")
+        });
+        let target = SysComp::new(1, 1);
+        m.on_command(&CommandEvent::Acked {
+            n: 0,
+            target,
+            from: target,
+            command: 512,
+            result: 0,
+            attempts: 2,
+            time_to_ack: 3_000_000,
+        });
+        m.on_command(&CommandEvent::Failed {
+            n: 1,
+            target,
+            command: 512,
+            attempts: 4,
+        });
+        m.on_command(&CommandEvent::DuplicateAck {
+            from: target,
+            command: 512,
+            result: 0,
+        });
+        let text = render(&[&m]);
+        let l = r#"link="sim:",probe="command",sysid="1",compid="1""#;
+        has(&text, &format!("mavping_sent_total{{{l}}} 2"));
+        has(&text, &format!("mavping_received_total{{{l}}} 1"));
+        has(&text, &format!("mavping_lost_total{{{l}}} 1"));
+        has(&text, &format!("mavping_duplicate_total{{{l}}} 1"));
+        has(
+            &text,
+            &format!("mavping_rtt_seconds_bucket{{{l},le=\"0.005\"}} 1"),
+        );
+    }
+
+    #[test]
+    fn a_probe_is_written_as_its_own_figures() {
+        let mut m = Metrics::default();
+        m.on_start(&info("udpout:127.0.0.1:9"));
+        let r = SysComp::new(1, 1);
+        for seq in 0..4 {
+            m.on_event(&MatchEvent::Reply {
+                responder: r,
+                seq,
+                rtt: 2_000_000,
+                sent_at: 0,
+                at: 0,
+                out_of_order: false,
+                first_from_responder: seq == 0,
+            });
+        }
+        m.on_event(&MatchEvent::Lost {
+            responder: r,
+            seq: 4,
+            sent_at: 0,
+            at: 0,
+        });
+        let result = ProbeResult {
+            success: false,
+            duration_s: 1.5,
+            reasons: vec!["max_loss", "max_rtt"],
+            requests: 5,
+            in_flight: 0,
+            message: Some("1/1: loss 20.00% is above --max-loss 5.00%\nsecond line".into()),
+        };
+        let text = render_probe(&m, &result);
+        assert!(
+            text.starts_with("# mavping: 1/1: loss 20.00% is above --max-loss 5.00% second line\n"),
+            "{text}"
+        );
+        has(&text, "mavping_probe_success 0");
+        has(&text, r#"mavping_probe_failure{reason="max_loss"} 1"#);
+        has(&text, r#"mavping_probe_failure{reason="max_rtt"} 1"#);
+        has(&text, "mavping_probe_duration_seconds 1.5");
+        has(&text, "mavping_probe_requests 5");
+        let l = r#"link="udpout:127.0.0.1:9",probe="ping",sysid="1",compid="1""#;
+        has(&text, "# TYPE mavping_probe_sent gauge");
+        has(&text, &format!("mavping_probe_sent{{{l}}} 5"));
+        has(&text, &format!("mavping_probe_lost{{{l}}} 1"));
+        has(&text, &format!("mavping_probe_loss_ratio{{{l}}} 0.2"));
+        has(&text, &format!("mavping_probe_rtt_seconds_count{{{l}}} 4"));
+        assert!(!text.contains("_total"), "{text}");
+        assert!(!text.contains("mavping_rtt_seconds"), "{text}");
+        // A probe that succeeded names no reason and no message.
+        let ok = render_probe(
+            &m,
+            &ProbeResult {
+                success: true,
+                reasons: vec![],
+                message: None,
+                ..result
+            },
+        );
+        assert!(ok.starts_with("# HELP mavping_probe_success"), "{ok}");
+        assert!(!ok.contains("mavping_probe_failure"), "{ok}");
+    }
+
+    #[test]
+    fn the_server_shows_its_health_and_its_links_state() {
+        let mut up = Metrics::continuous("radio", "ping");
+        up.set_up(true);
+        let mut down = Metrics::continuous("gcs \"2\"", "timesync");
+        down.restarted();
+        down.restarted();
+        let health = Health {
+            probes: 7,
+            probes_failed: 2,
+            probes_refused: 1,
+            probes_running: 1,
+            open_links: 2,
+            reloads: 1,
+            reloads_failed: 1,
+            last_reload_ok: false,
+        };
+        let text = render_serve(&[&up, &down], &health);
+        for line in [
+            "mavping_exporter_probes_total 7",
+            "mavping_exporter_probes_failed_total 2",
+            "mavping_exporter_probes_refused_total 1",
+            "mavping_exporter_probes_running 1",
+            "mavping_exporter_open_links 2",
+            "mavping_exporter_config_reloads_total 1",
+            "mavping_exporter_config_reloads_failed_total 1",
+            "mavping_exporter_config_last_reload_successful 0",
+            r#"mavping_link_up{link="radio"} 1"#,
+            r#"mavping_link_up{link="gcs \"2\""} 0"#,
+            r#"mavping_link_restarts_total{link="radio"} 0"#,
+            r#"mavping_link_restarts_total{link="gcs \"2\""} 2"#,
+        ] {
+            has(&text, line);
+        }
+        // A run's links have no state to show.
+        assert!(!render(&[&Metrics::default()]).contains("mavping_link_up"));
+    }
+}

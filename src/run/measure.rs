@@ -1,0 +1,56 @@
+//! One link's session, whatever the probe: the piece every run path
+//! shares (`mavping LINK...` and each link and probe of `mavping serve`).
+
+use crate::config::{LinkConfig, Probe};
+use crate::engine::observe::Observer;
+use crate::engine::session::{Controls, Outcome};
+use crate::engine::{command, echo};
+use crate::output::WallClock;
+use crate::probe::ping::PingProbe;
+use crate::probe::timesync::TimesyncProbe;
+use crate::transport::{Link, LinkSpec};
+
+/// Runs `probe` on the opened `link` until the session ends; its outcome.
+pub async fn measure(
+    config: &LinkConfig,
+    mut link: Link,
+    probe: &Probe,
+    wall: WallClock,
+    observer: &mut dyn Observer,
+    controls: &Controls,
+) -> Outcome {
+    let session = &config.session;
+    let outcome = match probe {
+        Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,
+        Probe::Timesync { target } => {
+            // The simulated link has no wall clock: its responders count
+            // from its start, and so do we there (reproducible output).
+            let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
+            let probe = TimesyncProbe::new(*target, wall_clock);
+            echo::run(session, &mut link, probe, observer, controls).await
+        }
+        Probe::Ping => {
+            let probe = PingProbe::new(wall.micros_since_epoch());
+            echo::run(session, &mut link, probe, observer, controls).await
+        }
+    };
+    // The simulated link's ground truth, for soak scripts (`-v`).
+    if let Link::Sim(sim) = &link {
+        for (id, t) in sim.truth() {
+            tracing::info!(
+                link = %config.name,
+                "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
+                 duplicated={} outage={} spiked={} spiked_before_first={}",
+                t.answered,
+                t.dropped,
+                t.dropped_before_first,
+                t.delivered,
+                t.duplicated,
+                t.outage,
+                t.spiked,
+                t.spiked_before_first
+            );
+        }
+    }
+    outcome
+}

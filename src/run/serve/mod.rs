@@ -1,0 +1,168 @@
+//! `mavping serve`: Prometheus's multi-target exporter pattern for MAVLink.
+//! `/probe?target=...` runs one bounded probe ([`probe`]); continuous links
+//! are measured all the time ([`links`]) and shown at `/metrics` with the
+//! exporter's own health. SIGHUP rereads the configuration: an invalid one
+//! is refused and the old one kept.
+//!
+//! Everything runs on one thread: the HTTP server's handlers, every probe
+//! and every link's session share it, none of them spinning.
+
+mod links;
+mod probe;
+
+use std::cell::RefCell;
+use std::rc::Rc;
+use std::sync::Arc;
+
+use hyper::StatusCode;
+use tokio::sync::Semaphore;
+
+use crate::engine::session::Controls;
+
+use super::signals::Hangups;
+use crate::config::{ServeConfig, ServeSettings};
+use crate::exit::Ending;
+use crate::output::http::{self, Head, Limits, Reply, Replying};
+use crate::output::prometheus::{borrow_all, render_serve, Health, Metrics};
+use crate::stderr;
+use links::Links;
+
+/// What the handlers and the reload share.
+pub struct Server {
+    settings: RefCell<Rc<ServeSettings>>,
+    /// `max_concurrent` probe slots; a reload that changes the number
+    /// starts a new set (running probes keep theirs).
+    slots: RefCell<Arc<Semaphore>>,
+    health: RefCell<Health>,
+    links: RefCell<Links>,
+}
+
+impl Server {
+    fn new(settings: ServeSettings) -> Self {
+        let server = Server {
+            slots: RefCell::new(Arc::new(Semaphore::new(settings.max_concurrent))),
+            settings: RefCell::new(Rc::new(settings)),
+            health: RefCell::new(Health {
+                last_reload_ok: true,
+                ..Health::default()
+            }),
+            links: RefCell::default(),
+        };
+        server
+            .links
+            .borrow_mut()
+            .reconcile(&server.settings().links);
+        server
+    }
+
+    pub fn settings(&self) -> Rc<ServeSettings> {
+        self.settings.borrow().clone()
+    }
+
+    pub fn slots(&self) -> Arc<Semaphore> {
+        self.slots.borrow().clone()
+    }
+
+    pub fn health(&self, f: impl FnOnce(&mut Health)) {
+        f(&mut self.health.borrow_mut());
+    }
+
+    /// Takes the settings a reload read, or keeps the old ones and says why.
+    fn apply(&self, reloaded: Result<ServeSettings, String>) {
+        self.health(|h| h.reloads += 1);
+        let settings = match reloaded {
+            Ok(settings) => settings,
+            Err(e) => {
+                self.health(|h| {
+                    h.reloads_failed += 1;
+                    h.last_reload_ok = false;
+                });
+                stderr::error(&format_args!(
+                    "reload refused, the old configuration stays: {e}"
+                ));
+                return;
+            }
+        };
+        if settings.max_concurrent != self.settings().max_concurrent {
+            *self.slots.borrow_mut() = Arc::new(Semaphore::new(settings.max_concurrent));
+        }
+        self.links.borrow_mut().reconcile(&settings.links);
+        *self.settings.borrow_mut() = Rc::new(settings);
+        self.health(|h| h.last_reload_ok = true);
+        stderr::error(&"configuration reloaded");
+    }
+
+    /// `/metrics`: the exporter's health and every continuous link.
+    fn metrics(&self) -> Reply {
+        let links = self.links.borrow().metrics();
+        let all = borrow_all(&links);
+        let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();
+        let mut health = *self.health.borrow();
+        health.open_links += refs.iter().filter(|m| m.is_up()).count() as u64;
+        Reply::metrics(render_serve(&refs, &health))
+    }
+
+    async fn handle(self: Rc<Self>, head: Head) -> Reply {
+        match head.uri.path() {
+            "/probe" => probe::answer(&self, head.uri.query().unwrap_or(""), &head.headers).await,
+            "/metrics" => self.metrics(),
+            "/" => Reply::text(
+                StatusCode::OK,
+                "mavping serve: /probe?target=LINK[&module=NAME] probes a link; /metrics shows \
+                 the continuous links and the exporter's health\n",
+            ),
+            _ => Reply::text(StatusCode::NOT_FOUND, "not found: try /probe or /metrics\n"),
+        }
+    }
+}
+
+/// Each link, probe and client costs a file descriptor: take as many as
+/// the system allows (as Go programs do), so a fleet is not cut short by a
+/// default soft limit of 1024. Best effort.
+fn raise_descriptor_limit() {
+    #[cfg(unix)]
+    {
+        use nix::sys::resource::{getrlimit, setrlimit, Resource};
+        if let Ok((soft, hard)) = getrlimit(Resource::RLIMIT_NOFILE) {
+            if soft < hard {
+                let _ = setrlimit(Resource::RLIMIT_NOFILE, hard, hard);
+            }
+        }
+    }
+}
+
+/// Serves until Ctrl-C or SIGTERM.
+pub async fn run(config: &ServeConfig, controls: Controls) -> Ending {
+    let stop = controls.stop;
+    raise_descriptor_limit();
+    let listener = match std::net::TcpListener::bind(config.listen).and_then(http::listener) {
+        Ok(l) => l,
+        Err(e) => {
+            stderr::error(&format_args!("--listen {}: {e}", config.listen));
+            return Ending::Refused;
+        }
+    };
+    let addr = match listener.local_addr() {
+        Ok(a) => a,
+        Err(e) => {
+            stderr::error(&format_args!("--listen {}: {e}", config.listen));
+            return Ending::Refused;
+        }
+    };
+    let server = Rc::new(Server::new(config.settings.clone()));
+    let handler = server.clone();
+    http::serve(listener, Limits::default(), move |head: Head| -> Replying {
+        Box::pin(handler.clone().handle(head))
+    });
+    // Says the port when 0 was asked for; scripts and tests read it.
+    stderr::error(&format_args!(
+        "serving /probe and /metrics at http://{addr}/"
+    ));
+    let mut hangups = Hangups::new();
+    loop {
+        tokio::select! {
+            () = stop.notified() => return Ending::Done,
+            () = hangups.next() => server.apply(config.reload().map_err(|e| e.to_string())),
+        }
+    }
+}

@@ -1,0 +1,202 @@
+//! One `/probe?target=...`: the request checked against the configuration
+//! (a 400 with one line when it is bad or forbidden), then the target
+//! opened and measured by the one run path within the time the scrape
+//! allows, judged by the module's thresholds, and answered with that
+//! probe's metrics. A probe that fails is an answer too:
+//! `mavping_probe_success 0` and `mavping_probe_failure{reason=...}`.
+
+use std::time::{Duration, Instant};
+
+use crate::engine::session::Controls;
+use hyper::header::HeaderMap;
+use hyper::StatusCode;
+
+use super::Server;
+use crate::engine::summary::LinkSummary;
+use crate::output::http::Reply;
+use crate::output::prometheus::{render_probe, Metrics, ProbeResult};
+use crate::output::{Reporter, WallClock};
+use crate::run::measure::measure;
+use crate::transport::Link;
+use crate::verdict;
+
+/// Prometheus's own default scrape timeout, for a request that names none.
+const DEFAULT_SCRAPE_TIMEOUT_S: f64 = 10.0;
+/// The longest a probe may run whatever the scrape says.
+const MAX_SCRAPE_TIMEOUT_S: f64 = 300.0;
+/// Left of the scrape's timeout for the answer to reach Prometheus.
+const MARGIN_S: f64 = 0.5;
+
+/// How long a probe may take: the scrape's timeout
+/// (`X-Prometheus-Scrape-Timeout-Seconds`) less a margin (at most a
+/// quarter of it).
+pub fn budget(headers: &HeaderMap) -> Duration {
+    let timeout = headers
+        .get("x-prometheus-scrape-timeout-seconds")
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .unwrap_or(DEFAULT_SCRAPE_TIMEOUT_S)
+        .min(MAX_SCRAPE_TIMEOUT_S);
+    Duration::from_secs_f64(timeout - MARGIN_S.min(timeout / 4.0))
+}
+
+/// Keeps the health counters right however the probe ends, the client
+/// hanging up (which drops the probe) included.
+struct Running<'a> {
+    server: &'a Server,
+    link_open: bool,
+}
+
+impl Drop for Running<'_> {
+    fn drop(&mut self) {
+        self.server.health(|h| {
+            h.probes_running -= 1;
+            if self.link_open {
+                h.open_links -= 1;
+            }
+        });
+    }
+}
+
+/// Answers one `/probe` request.
+pub async fn answer(server: &Server, query: &str, headers: &HeaderMap) -> Reply {
+    let started = Instant::now();
+    let settings = server.settings();
+    let plan = match settings.plan(query) {
+        Ok(plan) => plan,
+        Err(line) => {
+            server.health(|h| h.probes_refused += 1);
+            return Reply::text(StatusCode::BAD_REQUEST, format!("{line}\n"));
+        }
+    };
+    let Ok(_slot) = server.slots().try_acquire_owned() else {
+        server.health(|h| h.probes_refused += 1);
+        return Reply::text(
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!(
+                "too many probes at once: max_concurrent is {}; try again\n",
+                settings.max_concurrent
+            ),
+        );
+    };
+    server.health(|h| {
+        h.probes += 1;
+        h.probes_running += 1;
+    });
+    let mut running = Running {
+        server,
+        link_open: false,
+    };
+    let budget = budget(headers);
+    let mut metrics = Metrics::default();
+    let result =
+        match tokio::time::timeout(budget, Link::open(&plan.link.spec, &plan.options)).await {
+            Err(_) => failed(
+                started,
+                "open_failed",
+                format!(
+                    "opening {} took longer than the scrape allows ({})",
+                    plan.link.name,
+                    humantime::format_duration(budget)
+                ),
+            ),
+            Ok(Err(e)) => failed(started, "open_failed", e.to_string()),
+            Ok(Ok(link)) => {
+                running.link_open = true;
+                server.health(|h| h.open_links += 1);
+                let mut config = plan.link.clone();
+                // The session stops when the scrape's time is up, whatever is
+                // still in flight.
+                config.session.deadline = Some(budget.saturating_sub(started.elapsed()));
+                let wall = WallClock::starting(false);
+                let never = Controls::default();
+                let outcome = measure(&config, link, &plan.probe, wall, &mut metrics, &never).await;
+                let verdict = verdict::judge_link(&outcome.summary, &plan.link.thresholds);
+                let _ = metrics.summary(&outcome.summary, &verdict);
+                judged(started, &outcome.summary, &verdict)
+            }
+        };
+    drop(running);
+    if !result.success {
+        server.health(|h| h.probes_failed += 1);
+    }
+    Reply::metrics(render_probe(&metrics, &result))
+}
+
+fn failed(started: Instant, reason: &'static str, message: String) -> ProbeResult {
+    ProbeResult {
+        success: false,
+        duration_s: started.elapsed().as_secs_f64(),
+        reasons: vec![reason],
+        requests: 0,
+        in_flight: 0,
+        message: Some(message),
+    }
+}
+
+/// A measured probe's result: success is the verdict's; each broken check
+/// is a reason.
+fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -> ProbeResult {
+    let mut reasons = Vec::new();
+    if summary.link_error().is_some() {
+        reasons.push("link_failed");
+    }
+    for f in &verdict.failures {
+        let reason = match f.check {
+            "reply" => "no_reply",
+            "ack" => "no_ack",
+            "max-loss" => "max_loss",
+            "max-rtt" => "max_rtt",
+            "max-jitter" => "max_jitter",
+            "expect" => "expect",
+            "min-responders" => "min_responders",
+            _ => "check_failed",
+        };
+        if !reasons.contains(&reason) {
+            reasons.push(reason);
+        }
+    }
+    let (requests, in_flight) = match summary {
+        LinkSummary::Echo(s) => (s.requests, s.in_flight),
+        LinkSummary::Command(s) => (s.targets.iter().map(|t| t.commands).sum(), s.in_flight),
+    };
+    let message = summary
+        .link_error()
+        .map(str::to_string)
+        .or_else(|| verdict.failures.first().map(|f| f.message.clone()));
+    ProbeResult {
+        success: verdict.ok,
+        duration_s: started.elapsed().as_secs_f64(),
+        reasons,
+        requests,
+        in_flight,
+        message,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_budget_follows_the_scrape_timeout() {
+        let mut h = HeaderMap::new();
+        assert_eq!(budget(&h), Duration::from_millis(9_500));
+        for (header, ms) in [
+            ("10", 9_500),
+            ("2.000000", 1_500),
+            ("1", 750),
+            ("0.2", 150),
+            ("1e9", 299_500),
+            ("-1", 9_500),
+            ("soon", 9_500),
+        ] {
+            h.insert(
+                "x-prometheus-scrape-timeout-seconds",
+                header.parse().unwrap(),
+            );
+            assert_eq!(budget(&h), Duration::from_millis(ms), "{header}");
+        }
+    }
+}

@@ -1,0 +1,241 @@
+//! `mavping serve` scraped by a real Prometheus server (Debian's
+//! `prometheus` package): a continuous link and a `/probe` target, each
+//! against a pymavlink responder with known drops. What Prometheus stores
+//! and answers through its HTTP query API must equal the responders'
+//! ground truth.
+
+use std::path::PathBuf;
+use std::process::{Child, Stdio};
+use std::time::{Duration, Instant};
+
+use serde_json::Value;
+
+use crate::common::{
+    free_tcp_port, free_udp_port, http_get, prometheus_tool, sample, signal, Peer, Server,
+};
+
+/// Prometheus starts, scrapes every two seconds and needs two scrapes of
+/// each job; far more than that means something is broken.
+const PATIENCE: Duration = Duration::from_secs(90);
+
+/// A Prometheus server with its own data directory; killed and cleaned
+/// up when dropped.
+struct Prometheus {
+    child: Child,
+    dir: PathBuf,
+    addr: String,
+}
+
+impl Prometheus {
+    fn start(config: &str) -> Prometheus {
+        let dir = std::env::temp_dir().join(format!("mavping-prometheus-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("prometheus.yml");
+        std::fs::write(&file, config).unwrap();
+        let addr = format!("127.0.0.1:{}", free_tcp_port());
+        let child = prometheus_tool("prometheus")
+            .arg(format!("--config.file={}", file.display()))
+            .arg(format!(
+                "--storage.tsdb.path={}",
+                dir.join("data").display()
+            ))
+            .arg(format!("--web.listen-address={addr}"))
+            .arg("--log.level=warn")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        Prometheus { child, dir, addr }
+    }
+
+    /// An instant query through the HTTP API, evaluated at `time` (Unix
+    /// seconds) when given: its result vector.
+    fn query(&self, promql: &str, time: Option<f64>) -> Vec<Value> {
+        let mut path = format!(
+            "/api/v1/query?query={}",
+            form_urlencoded::byte_serialize(promql.as_bytes()).collect::<String>()
+        );
+        if let Some(t) = time {
+            path.push_str(&format!("&time={t}"));
+        }
+        let r = http_get(&self.addr, &path, &[]);
+        assert_eq!(r.status, 200, "{promql}: {}", r.body);
+        let v: Value = serde_json::from_str(&r.body).unwrap();
+        assert_eq!(v["status"], "success", "{promql}: {v}");
+        v["data"]["result"].as_array().unwrap().clone()
+    }
+
+    /// The one value `promql` gives at `time`.
+    fn value(&self, promql: &str, time: f64) -> f64 {
+        let result = self.query(promql, Some(time));
+        assert_eq!(result.len(), 1, "{promql}: {result:?}");
+        result[0]["value"][1].as_str().unwrap().parse().unwrap()
+    }
+
+    fn ready(&self) -> bool {
+        std::net::TcpStream::connect(&self.addr).is_ok()
+            && http_get(&self.addr, "/-/ready", &[]).status == 200
+    }
+}
+
+impl Drop for Prometheus {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
+
+#[test]
+fn a_real_prometheus_scrapes_links_and_probes_and_sees_the_ground_truth() {
+    // The continuous link's responder drops three early requests; the probe
+    // target's drops two of the ten requests of every probe.
+    let (link_port, probe_port) = (free_udp_port(), free_udp_port());
+    let link_responder = Peer::start(
+        "responder.py",
+        &[&format!("udpin:127.0.0.1:{link_port}"), "--drop", "2,5,9"],
+    );
+    let probe_responder = Peer::start(
+        "responder.py",
+        &[&format!("udpin:127.0.0.1:{probe_port}"), "--drop", "1,4"],
+    );
+    let config = std::env::temp_dir().join(format!("mavping-serve-{}.toml", std::process::id()));
+    std::fs::write(
+        &config,
+        format!(
+            r#"
+allow = ["udpout:127.0.0.1:*"]
+
+[module.fleet]
+count = 10
+interval = "20ms"
+timeout = "300ms"
+max_loss = "50%"
+
+[[link]]
+link = "udpout:127.0.0.1:{link_port}"
+name = "radio-a"
+interval = "100ms"
+timeout = "300ms"
+"#
+        ),
+    )
+    .unwrap();
+    let server = Server::start(&["--config", config.to_str().unwrap()]);
+    std::fs::remove_file(&config).unwrap();
+    let probe_target = format!("udpout:127.0.0.1:{probe_port}");
+    // Both patterns of contrib/prometheus/prometheus.yml, on loopback.
+    let prometheus = Prometheus::start(&format!(
+        r#"
+global:
+  scrape_interval: 2s
+  scrape_timeout: 2s
+scrape_configs:
+  - job_name: mavping_links
+    static_configs:
+      - targets: ['{serve}']
+  - job_name: mavping_probe
+    metrics_path: /probe
+    params:
+      module: [fleet]
+    static_configs:
+      - targets: ['{probe_target}']
+    relabel_configs:
+      - source_labels: [__address__]
+        target_label: __param_target
+      - source_labels: [__param_target]
+        target_label: instance
+      - target_label: __address__
+        replacement: {serve}
+"#,
+        serve = server.addr
+    ));
+
+    let start = Instant::now();
+    while !prometheus.ready() {
+        assert!(start.elapsed() < PATIENCE, "prometheus did not start");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    // Two scrapes of each job, and enough requests on the link that its
+    // three drops are decided (request 9's timeout is long past once 15
+    // requests are).
+    let now = loop {
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap()
+            .as_secs_f64();
+        let scrapes = prometheus.query("count_over_time(up[5m]) >= 2", Some(now));
+        let sent = prometheus.query(r#"mavping_sent_total{link="radio-a"} >= 15"#, Some(now));
+        if scrapes.len() == 2 && sent.len() == 1 {
+            break now;
+        }
+        assert!(
+            start.elapsed() < PATIENCE,
+            "no two scrapes of each job within {PATIENCE:?}: {scrapes:?} {sent:?}\n{}",
+            server.stderr()
+        );
+        std::thread::sleep(Duration::from_millis(500));
+    };
+
+    for job in ["mavping_links", "mavping_probe"] {
+        assert_eq!(
+            prometheus.value(&format!("up{{job=\"{job}\"}}"), now),
+            1.0,
+            "{job}"
+        );
+    }
+    assert_eq!(
+        prometheus.value(
+            &format!("mavping_probe_success{{instance=\"{probe_target}\"}}"),
+            now
+        ),
+        1.0
+    );
+    assert_eq!(
+        prometheus.value(r#"mavping_link_up{link="radio-a"}"#, now),
+        1.0
+    );
+    let probe_loss = prometheus.value(
+        &format!("mavping_probe_loss_ratio{{instance=\"{probe_target}\",sysid=\"1\"}}"),
+        now,
+    );
+    let link = r#"{link="radio-a",sysid="1",compid="1"}"#;
+    let lost = prometheus.value(&format!("mavping_lost_total{link}"), now);
+    let sent = prometheus.value(&format!("mavping_sent_total{link}"), now);
+    let received = prometheus.value(&format!("mavping_received_total{link}"), now);
+    let link_loss = prometheus.value(
+        &format!("mavping_lost_total{link} / mavping_sent_total{link}"),
+        now,
+    );
+    assert_eq!(sent, received + lost);
+
+    // No probe may be cut short, which killing Prometheus mid-scrape (its
+    // connection closed) or ending a responder would do: freeze Prometheus
+    // (no new scrape starts; one under way keeps its connection), let the
+    // last probe finish, then read the ground truth.
+    signal(prometheus.child.id(), "STOP");
+    while sample(
+        &server.get("/metrics").body,
+        "mavping_exporter_probes_running",
+        &[],
+    ) != Some(0.0)
+    {
+        assert!(start.elapsed() < PATIENCE, "a probe never ended");
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let link_truth = link_responder.finish();
+    let probe_truth = probe_responder.finish();
+    // Exactly the requests the responders did not answer.
+    assert_eq!(
+        lost,
+        link_truth["dropped"].as_f64().unwrap(),
+        "{link_truth}"
+    );
+    assert_eq!(link_loss, link_truth["dropped"].as_f64().unwrap() / sent);
+    let truth_ratio =
+        probe_truth["dropped"].as_f64().unwrap() / probe_truth["ping_requests"].as_f64().unwrap();
+    assert_eq!(probe_loss, truth_ratio, "{probe_truth}");
+    assert_eq!(probe_loss, 0.2);
+    drop(prometheus);
+}

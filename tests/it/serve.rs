@@ -1,0 +1,426 @@
+//! `mavping serve` as Prometheus and an operator use it: `/probe` against a
+//! pymavlink responder with known drops, bad and forbidden requests, probes
+//! that fail, continuous links that break and come back, reloads on SIGHUP,
+//! bounded concurrency, the scrape's timeout, and hostile clients.
+
+use std::io::{Read, Write};
+use std::net::TcpStream;
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+
+use crate::common::{
+    assert_promtool_clean, free_udp_port, sample, samples, Peer, Response, Server,
+};
+
+/// Generous bound for something that normally takes a second or two;
+/// reaching it fails the test instead of hanging it.
+const PATIENCE: Duration = Duration::from_secs(30);
+
+/// Scrapes `/metrics` until `done` holds for it.
+fn metrics_until(server: &Server, what: &str, done: impl Fn(&str) -> bool) -> String {
+    let start = Instant::now();
+    loop {
+        let r = server.get("/metrics");
+        assert_eq!(r.status, 200, "{}", r.body);
+        if done(&r.body) {
+            return r.body;
+        }
+        assert!(
+            start.elapsed() < PATIENCE,
+            "{what} not seen within {PATIENCE:?}:\n{}\nstderr:\n{}",
+            r.body,
+            server.stderr()
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// A query string value, percent-encoded.
+fn enc(value: &str) -> String {
+    form_urlencoded::byte_serialize(value.as_bytes()).collect()
+}
+
+/// A config file in the temp directory, removed when dropped.
+struct TempFile(PathBuf);
+
+impl TempFile {
+    fn new(name: &str, text: &str) -> Self {
+        let path = std::env::temp_dir().join(format!("mavping-{}-{name}", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        TempFile(path)
+    }
+
+    fn write(&self, text: &str) {
+        std::fs::write(&self.0, text).unwrap();
+    }
+
+    fn path(&self) -> &str {
+        self.0.to_str().unwrap()
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
+#[test]
+fn a_probe_counts_exactly_what_the_responder_dropped() {
+    let port = free_udp_port();
+    let responder = Peer::start(
+        "responder.py",
+        &[
+            &format!("udpin:127.0.0.1:{port}"),
+            "--drop",
+            "1,4",
+            "--dup",
+            "6",
+        ],
+    );
+    let server = Server::start(&["--allow", "udpout:127.0.0.1:*"]);
+    let target = format!("udpout:127.0.0.1:{port}");
+    let path = format!(
+        "/probe?target={}&count=10&interval=20ms&timeout=500ms",
+        enc(&target)
+    );
+    let r1 = server.get(&path);
+    let r2 = server.get(&path);
+    let truth = responder.finish();
+    for r in [&r1, &r2] {
+        assert_eq!(r.status, 200, "{}", r.body);
+        assert!(
+            r.head
+                .to_ascii_lowercase()
+                .contains("content-type: text/plain; version=0.0.4"),
+            "{}",
+            r.head
+        );
+        let b = &r.body;
+        let one = [("link", target.as_str()), ("sysid", "1"), ("compid", "1")];
+        let v = |name| sample(b, name, &one).unwrap_or_else(|| panic!("no {name} in\n{b}"));
+        assert_eq!(sample(b, "mavping_probe_success", &[]), Some(1.0), "{b}");
+        assert_eq!(sample(b, "mavping_probe_requests", &[]), Some(10.0));
+        assert_eq!(sample(b, "mavping_probe_in_flight", &[]), Some(0.0));
+        // Each probe is a session of its own: sequences 0-9, the same two
+        // dropped and one duplicated each time.
+        assert_eq!(v("mavping_probe_sent"), 10.0);
+        assert_eq!(v("mavping_probe_received"), 8.0);
+        assert_eq!(v("mavping_probe_lost"), 2.0);
+        assert_eq!(v("mavping_probe_duplicate"), 1.0);
+        assert_eq!(v("mavping_probe_late"), 0.0);
+        assert_eq!(v("mavping_probe_loss_ratio"), 0.2);
+        assert_eq!(v("mavping_probe_rtt_seconds_count"), 8.0);
+        let p50 = v("mavping_rtt_p50_seconds");
+        let p99 = v("mavping_rtt_p99_seconds");
+        assert!(0.0 < p50 && p50 <= p99 && p99 < 0.5, "{p50} {p99}");
+        let duration = sample(b, "mavping_probe_duration_seconds", &[]).unwrap();
+        assert!(duration > 0.18 && duration < 9.5, "{duration}");
+        assert!(sample(b, "mavping_probe_failure", &[]).is_none());
+        // A probe's figures never pose as counters.
+        assert!(!b.contains("_total"), "{b}");
+        assert_promtool_clean(b);
+    }
+    assert_eq!(truth["ping_requests"], 20, "{truth}");
+    assert_eq!(truth["dropped"], 4, "{truth}");
+    assert_eq!(truth["duplicated"], 2, "{truth}");
+    let m = server.get("/metrics").body;
+    assert_eq!(sample(&m, "mavping_exporter_probes_total", &[]), Some(2.0));
+    assert_eq!(
+        sample(&m, "mavping_exporter_probes_failed_total", &[]),
+        Some(0.0)
+    );
+    assert_eq!(
+        sample(&m, "mavping_exporter_probes_running", &[]),
+        Some(0.0)
+    );
+    assert_eq!(sample(&m, "mavping_exporter_open_links", &[]), Some(0.0));
+    assert_promtool_clean(&m);
+}
+
+#[test]
+fn bad_requests_get_one_line_and_failed_probes_a_reason() {
+    let server = Server::start(&[
+        "--allow",
+        "udpout:127.0.0.1:*",
+        "--allow",
+        "/dev/mavping-test-missing*",
+    ]);
+    for (query, needle) in [
+        (
+            format!("target={}&module=fast", enc("udpout:127.0.0.1:9")),
+            "unknown module 'fast'; known: default",
+        ),
+        (
+            format!("target={}", enc("udpout:10.9.8.7:14550")),
+            "target udpout:10.9.8.7:14550 is not allowed: it matches no allow pattern",
+        ),
+        (
+            format!("target={}", enc("udpout:nowhere")),
+            "bad connection string 'udpout:nowhere'",
+        ),
+        ("".to_string(), "missing target"),
+        (
+            format!("target={}&count=-1", enc("udpout:127.0.0.1:9")),
+            "count '-1'",
+        ),
+        (
+            format!("target={}&probe=echo", enc("udpout:127.0.0.1:9")),
+            "probe 'echo'",
+        ),
+    ] {
+        let r = server.get(&format!("/probe?{query}"));
+        assert_eq!(r.status, 400, "{query}: {}", r.body);
+        assert!(r.body.contains(needle), "{query}: {}", r.body);
+        assert_eq!(r.body.lines().count(), 1, "{}", r.body);
+    }
+    // Probes that run and fail are answered with why.
+    let closed = format!("udpout:127.0.0.1:{}", free_udp_port());
+    for (target, reason) in [
+        (closed.as_str(), "link_failed"),
+        ("/dev/mavping-test-missing0", "open_failed"),
+    ] {
+        let r = server.get(&format!("/probe?target={}&count=3", enc(target)));
+        assert_eq!(r.status, 200, "{target}: {}", r.body);
+        assert_eq!(
+            sample(&r.body, "mavping_probe_success", &[]),
+            Some(0.0),
+            "{}",
+            r.body
+        );
+        assert_eq!(
+            sample(&r.body, "mavping_probe_failure", &[("reason", reason)]),
+            Some(1.0),
+            "{}",
+            r.body
+        );
+        // The error itself, for whoever reads the answer.
+        assert!(r.body.starts_with("# mavping: "), "{}", r.body);
+        assert_promtool_clean(&r.body);
+    }
+    assert_eq!(server.get("/nothing").status, 404);
+    let m = server.get("/metrics").body;
+    assert_eq!(
+        sample(&m, "mavping_exporter_probes_refused_total", &[]),
+        Some(6.0)
+    );
+    assert_eq!(sample(&m, "mavping_exporter_probes_total", &[]), Some(2.0));
+    assert_eq!(
+        sample(&m, "mavping_exporter_probes_failed_total", &[]),
+        Some(2.0)
+    );
+
+    // With nothing allowed, every target is refused, with how to allow one.
+    let closed_door = Server::start(&[]);
+    let r = closed_door.get("/probe?target=sim%3A");
+    assert_eq!(r.status, 400);
+    assert!(
+        r.body
+            .contains("no target is; start mavping serve with --allow PATTERN"),
+        "{}",
+        r.body
+    );
+}
+
+#[test]
+fn continuous_links_come_back_and_reloads_keep_their_history() {
+    let port = free_udp_port();
+    let link = format!("udpout:127.0.0.1:{port}");
+    let config = |extra: &str| {
+        format!(
+            "[[link]]\nlink = \"{link}\"\nname = \"radio\"\ninterval = \"50ms\"\ntimeout = \"300ms\"\n{extra}"
+        )
+    };
+    let file = TempFile::new("serve-reload.toml", &config(""));
+    let server = Server::start(&["--config", file.path()]);
+    let radio = [("link", "radio")];
+    // Nobody answers yet: ICMP port unreachable breaks the link, which is
+    // shown down and retried.
+    metrics_until(&server, "the link down and retried", |m| {
+        sample(m, "mavping_link_up", &radio) == Some(0.0)
+            && sample(m, "mavping_link_restarts_total", &radio).unwrap_or(0.0) >= 1.0
+    });
+    assert!(server
+        .stderr()
+        .contains("link radio: nothing listening at 127.0.0.1:"));
+    let responder = Peer::start("responder.py", &[&format!("udpin:127.0.0.1:{port}")]);
+    let one = [("link", "radio"), ("sysid", "1"), ("compid", "1")];
+    let m = metrics_until(&server, "replies on the reopened link", |m| {
+        sample(m, "mavping_link_up", &radio) == Some(1.0)
+            && sample(m, "mavping_received_total", &one).unwrap_or(0.0) >= 5.0
+    });
+    let restarts = sample(&m, "mavping_link_restarts_total", &radio).unwrap();
+    let before = sample(&m, "mavping_sent_total", &one).unwrap();
+
+    // A reload that adds a link leaves this one running: its counters go
+    // on from where they were, and it is not restarted.
+    file.write(&config(
+        "[[link]]\nlink = \"sim:\"\nname = \"sim\"\ninterval = \"50ms\"\n",
+    ));
+    server.signal("HUP");
+    let m = metrics_until(&server, "the new link", |m| {
+        sample(m, "mavping_received_total", &[("link", "sim")]).unwrap_or(0.0) > 0.0
+    });
+    assert!(sample(&m, "mavping_sent_total", &one).unwrap() >= before);
+    assert_eq!(
+        sample(&m, "mavping_link_restarts_total", &radio),
+        Some(restarts)
+    );
+    assert_eq!(
+        sample(&m, "mavping_exporter_config_reloads_total", &[]),
+        Some(1.0)
+    );
+
+    // An invalid file is refused; everything goes on as it was.
+    file.write("[[link]]\nlink = \"nowhere\"\n");
+    server.signal("HUP");
+    let m = metrics_until(&server, "the refused reload", |m| {
+        sample(m, "mavping_exporter_config_reloads_failed_total", &[]) == Some(1.0)
+    });
+    assert_eq!(
+        sample(&m, "mavping_exporter_config_last_reload_successful", &[]),
+        Some(0.0)
+    );
+    assert!(server
+        .stderr()
+        .contains("reload refused, the old configuration stays:"));
+    let kept = sample(&m, "mavping_sent_total", &one).unwrap();
+
+    // A changed link is restarted under its name, history kept; a link
+    // taken out of the file goes.
+    file.write(&config("").replace("50ms", "20ms"));
+    server.signal("HUP");
+    let m = metrics_until(&server, "the sim link gone", |m| {
+        sample(m, "mavping_link_up", &[("link", "sim")]).is_none()
+            && sample(m, "mavping_exporter_config_last_reload_successful", &[]) == Some(1.0)
+    });
+    assert!(sample(&m, "mavping_sent_total", &one).unwrap() >= kept);
+    let m = metrics_until(&server, "the changed link measuring again", |m| {
+        sample(m, "mavping_sent_total", &one).unwrap() > kept + 20.0
+    });
+    let (sent, received, lost) = (
+        sample(&m, "mavping_sent_total", &one).unwrap(),
+        sample(&m, "mavping_received_total", &one).unwrap(),
+        sample(&m, "mavping_lost_total", &one).unwrap(),
+    );
+    assert_eq!(sent, received + lost, "{m}");
+    assert_promtool_clean(&m);
+    drop(responder);
+    assert_eq!(server.stop(), Some(0));
+}
+
+#[test]
+fn excess_probes_are_turned_away_and_probes_end_within_the_scrape_timeout() {
+    let server = Server::start(&["--allow", "sim:**", "--max-concurrent", "1"]);
+    let addr = server.addr.clone();
+    // Ten seconds of requests, but the scrape allows three.
+    let long = std::thread::spawn(move || {
+        crate::common::http_get(
+            &addr,
+            "/probe?target=sim%3A&count=100&interval=100ms",
+            &[("X-Prometheus-Scrape-Timeout-Seconds", "3")],
+        )
+    });
+    metrics_until(&server, "the running probe", |m| {
+        sample(m, "mavping_exporter_probes_running", &[]) == Some(1.0)
+    });
+    let r = server.get("/probe?target=sim%3A");
+    assert_eq!(r.status, 503, "{}", r.body);
+    assert_eq!(
+        r.body,
+        "too many probes at once: max_concurrent is 1; try again\n"
+    );
+    let Response { status, body, .. } = long.join().unwrap();
+    assert_eq!(status, 200, "{body}");
+    let duration = sample(&body, "mavping_probe_duration_seconds", &[]).unwrap();
+    assert!(
+        duration < 3.0,
+        "the probe outlived the scrape: {duration} s"
+    );
+    let requests = sample(&body, "mavping_probe_requests", &[]).unwrap();
+    assert!((1.0..100.0).contains(&requests), "{requests}");
+    assert_eq!(sample(&body, "mavping_probe_success", &[]), Some(1.0));
+    // The slot is free again.
+    let r = server.get("/probe?target=sim%3A&count=2&interval=10ms");
+    assert_eq!(r.status, 200, "{}", r.body);
+}
+
+/// Lets this test process hold a few thousand sockets.
+fn raise_descriptor_limit() {
+    use nix::sys::resource::{getrlimit, setrlimit, Resource};
+    let (soft, hard) = getrlimit(Resource::RLIMIT_NOFILE).unwrap();
+    if soft < 4096 {
+        setrlimit(Resource::RLIMIT_NOFILE, hard.min(8192), hard).unwrap();
+    }
+}
+
+#[test]
+fn idle_and_hostile_clients_do_not_block_a_scrape() {
+    raise_descriptor_limit();
+    let server = Server::start(&["--link", "sim:"]);
+    let idle: Vec<TcpStream> = (0..2000)
+        .map(|_| TcpStream::connect(&server.addr).expect("connect"))
+        .collect();
+    let r = server.get("/metrics");
+    assert_eq!(r.status, 200);
+    assert!(
+        samples(&r.body).iter().any(|s| s.name == "mavping_link_up"),
+        "{}",
+        r.body
+    );
+    drop(idle);
+
+    let send = |bytes: &[u8]| -> String {
+        let mut s = TcpStream::connect(&server.addr).unwrap();
+        s.set_read_timeout(Some(PATIENCE)).unwrap();
+        let _ = s.write_all(bytes);
+        let mut out = Vec::new();
+        let _ = s.read_to_end(&mut out);
+        String::from_utf8_lossy(&out).into_owned()
+    };
+    let mut huge = b"GET /metrics HTTP/1.1\r\nX-Junk: ".to_vec();
+    huge.extend(std::iter::repeat_n(b'x', 1 << 20));
+    huge.extend_from_slice(b"\r\n\r\n");
+    assert!(send(&huge).starts_with("HTTP/1.1 431"));
+    assert!(send(&[b'G'; 200_000]).starts_with("HTTP/1.1 431"));
+    assert!(send(b"POST /probe HTTP/1.1\r\nContent-Length: 0\r\n\r\n").starts_with("HTTP/1.1 405"));
+    assert_eq!(server.get("/metrics").status, 200);
+}
+
+#[test]
+fn bad_command_lines_and_a_port_in_use_exit_2_with_one_line() {
+    let taken = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+    let addr = taken.local_addr().unwrap().to_string();
+    for (args, needle) in [
+        (
+            vec!["serve", "--allow", "*"],
+            "--allow: allow pattern '*': start it with a link kind",
+        ),
+        (
+            vec!["serve", "--link", "nowhere"],
+            "--link: bad connection string 'nowhere'",
+        ),
+        (
+            vec!["serve", "--listen", "localhost:9465"],
+            "--listen localhost:9465: expected ADDR:PORT",
+        ),
+        (
+            vec!["serve", "--max-concurrent", "0"],
+            "max_concurrent 0: expected 1 to 1024",
+        ),
+        (
+            vec!["serve", "--config", "/nonexistent/serve.toml"],
+            "--config /nonexistent/serve.toml: cannot read it",
+        ),
+        (vec!["serve", "--listen", &addr], "Address already in use"),
+    ] {
+        let (code, out, err) = crate::common::run_mavping(&args);
+        assert_eq!(code, 2, "{args:?}: {err}");
+        assert!(out.is_empty(), "{out}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.starts_with("mavping: ") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+    }
+}
