@@ -3,7 +3,7 @@
 # peers the interop tests use in .venv — pymavlink (and pyserial, which it
 # needs to open a serial port), MAVProxy, and MAVSDK's mavsdk_server (the
 # static binary inside the mavsdk-grpc wheel) — installs the Prometheus
-# server and promtool, tmux and man, then runs cargo test.
+# server and promtool, tmux, man and the DejaVu fonts, then runs cargo test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -30,12 +30,14 @@ fi
 # Debian's prometheus package: the server scrapes `mavping serve` in an
 # integration test, and promtool checks expositions and unit-tests the
 # alerting rules in contrib/. tmux runs --live in a real terminal; man
-# renders the man pages. Installed only when missing.
+# renders the man pages; resvg renders --plot's text in DejaVu Sans.
+# Installed only when missing.
 missing=()
 { command -v prometheus && command -v promtool; } >/dev/null || missing+=(prometheus)
 command -v tmux >/dev/null || missing+=(tmux)
 # man renders the committed man pages in a test (man-db brings groff).
 command -v man >/dev/null || missing+=(man-db)
+[ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || missing+=(fonts-dejavu-core)
 if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"

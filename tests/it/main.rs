@@ -12,6 +12,7 @@ mod exporter;
 mod habits;
 mod high_rate;
 mod hostile;
+mod live;
 mod multilink;
 mod options;
 mod probes_pymavlink;

@@ -319,6 +319,12 @@ fn several_links_take_the_plot_and_the_command_probe() {
         let label = label.replace('&', "&amp;");
         assert!(drawn.contains(&label), "{label} not in the plot");
     }
+    // Each link's responder has a colour of its own (Okabe–Ito blue and
+    // vermillion), seen in the rendered picture.
+    let png = Rendered::of(&drawn, "two-links");
+    for rgb in [0x0072B2, 0xD55E00] {
+        assert!(png.count(rgb) > 100, "{rgb:06X} in {}", png.path.display());
+    }
 
     let (code, out, err) = run_mavping(&[
         "--probe", "command", "-c", "3", "-i", "200ms", SIMS[0], SIMS[1],

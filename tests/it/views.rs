@@ -1,6 +1,6 @@
 //! The views beside the text output, run as a user runs them: `--prometheus`
 //! scraped over HTTP and checked by a real parser and by promtool, `--plot`
-//! written to a file, and `--live` in a real terminal (tmux).
+//! written to a file and rendered to pixels (`--live` is in `live.rs`).
 
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
@@ -8,7 +8,9 @@ use std::time::{Duration, Instant};
 
 use assert_cmd::cargo::cargo_bin;
 
-use crate::common::{assert_promtool_clean, http_get, Response, Tmux};
+use crate::common::{
+    assert_promtool_clean, checked_summary, http_get, n, responder, Rendered, Response,
+};
 use prometheus_parse::{Scrape, Value};
 
 /// Generous bound for something that normally takes a fraction of a second;
@@ -155,13 +157,17 @@ fn a_port_in_use_is_a_usage_error_with_the_os_reason() {
     assert!(out.stdout.is_empty(), "nothing is sent before the check");
 }
 
+/// Okabe–Ito blue and vermillion: the first two responders' colours.
+const BLUE: u32 = 0x0072B2;
+const VERMILLION: u32 = 0xD55E00;
+
 #[test]
 fn the_plot_shows_each_responder_and_the_losses() {
     let dir = std::env::temp_dir().join(format!("mavping-plot-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("rtt.svg");
     let out = Command::new(cargo_bin("mavping"))
-        .args(["-q", "-c", "200", "-i", "0.05", "--plot"])
+        .args(["--json", "-c", "200", "-i", "0.05", "--plot"])
         .arg(&path)
         .arg("sim:?responders=2&loss=10%&jitter=5ms&seed=3&clock=virtual")
         .output()
@@ -173,51 +179,49 @@ fn the_plot_shows_each_responder_and_the_losses() {
     for text in ["1/1", "2/1", "RTT over time", "RTT distribution", "lost"] {
         assert!(svg.contains(text), "{text} is not in the plot");
     }
-    // Lost requests are drawn as red crosses (two strokes each).
-    assert!(svg.matches("#FF0000").count() >= 2, "no loss marked");
-}
-
-#[test]
-fn live_falls_back_to_text_when_stdout_is_not_a_terminal() {
-    let out = Command::new(cargo_bin("mavping"))
-        .args(["--live", "-c", "3", "sim:?clock=virtual"])
-        .output()
-        .unwrap();
-    assert_eq!(out.status.code(), Some(0));
-    assert_eq!(
-        String::from_utf8_lossy(&out.stderr),
-        "mavping: --live needs a terminal; printing text\n"
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("reply from 1/1: seq=2"), "{stdout}");
-    assert!(stdout.contains("mavping statistics"), "{stdout}");
-}
-
-#[test]
-fn live_view_in_a_real_terminal_stops_on_q_and_prints_the_summary() {
-    let command = format!(
-        "{} --live -i 0.02 -W 300ms 'sim:?responders=2&loss=20%&delay=2ms&seed=5'; echo exit=$?",
-        cargo_bin("mavping").display()
-    );
-    let tmux = Tmux::start("views", &command, 110, 20);
-
-    // Both responders have a row, and a loss shows in a row's strip.
-    let screen = tmux.wait_for("a loss in a row", |screen| {
-        let rows: Vec<&str> = screen
-            .lines()
-            .filter(|l| l.starts_with("│1/1") || l.starts_with("│2/1"))
-            .collect();
-        rows.len() == 2 && rows.iter().any(|r| r.contains('×'))
-    });
-    for text in ["responder", "loss%", "p99 ms", "1/1", "2/1", "q or Ctrl-C"] {
-        assert!(screen.contains(text), "{text:?} not on screen:\n{screen}");
+    // The legend has the run's own figures: the summary's loss and
+    // percentiles, as the JSON summary gives them.
+    let summary = checked_summary(&String::from_utf8_lossy(&out.stdout));
+    for id in ["1/1", "2/1"] {
+        let r = responder(&summary, id);
+        let sent = n(r, "sent");
+        let loss = 100.0 * r["loss_ratio"].as_f64().unwrap();
+        let p50 = r["rtt_us"]["p50"].as_f64().unwrap() / 1e3;
+        let p99 = r["rtt_us"]["p99"].as_f64().unwrap() / 1e3;
+        assert!(loss > 0.0, "{id} lost nothing: {r}");
+        for figure in [
+            sent.to_string(),
+            format!("{loss:.2}"),
+            format!("{p50:.3}"),
+            format!("{p99:.3}"),
+        ] {
+            assert!(
+                svg.contains(&format!("\n{figure}\n")),
+                "{id}: {figure} not in the legend"
+            );
+        }
     }
-    tmux.send_keys("q");
-    let screen = tmux.wait_for("exit=", |s| s.contains("exit="));
-    assert!(screen.contains("mavping statistics"), "{screen}");
-    assert!(screen.contains("exit=0"), "{screen}");
+
+    // As a viewer shows it: text drawn, each responder in its own colour,
+    // nothing in the pure red every loss used to be.
+    let png = Rendered::of(&svg, "two-responders");
     assert!(
-        !screen.contains("q or Ctrl-C"),
-        "the view was not left:\n{screen}"
+        png.png.starts_with(b"\x89PNG") && png.png.len() > 20_000,
+        "{}",
+        png.path.display()
+    );
+    assert!(png.colours.len() > 50, "{} colours", png.colours.len());
+    for (name, rgb) in [("blue", BLUE), ("vermillion", VERMILLION)] {
+        assert!(
+            png.count(rgb) > 200,
+            "little {name} in {}",
+            png.path.display()
+        );
+    }
+    assert_eq!(png.count(0xFF0000), 0, "{}", png.path.display());
+    assert!(
+        png.dark_in_rows(0..40) > 300,
+        "no title text in {}",
+        png.path.display()
     );
 }

@@ -3,11 +3,13 @@
 
 pub mod http;
 pub mod json;
+pub mod render;
 pub mod serve;
 pub mod tmux;
 
 pub use http::*;
 pub use json::*;
+pub use render::Rendered;
 pub use serve::Server;
 pub use tmux::Tmux;
 

@@ -20,6 +20,11 @@ impl Tmux {
             socket: format!("mavping-{name}-{}", std::process::id()),
         };
         let (w, h) = (width.to_string(), height.to_string());
+        // The shell stays a while after the command: tmux drops output it
+        // has not read yet when a pane's process exits (seen with a long
+        // summary on a loaded machine), and the window is dropped with the
+        // server at the end of the test anyway.
+        let command = format!("{command}; sleep 60");
         t.run(&[
             "new-session",
             "-d",
@@ -29,7 +34,7 @@ impl Tmux {
             &w,
             "-y",
             &h,
-            command,
+            &command,
         ]);
         t.run(&["set-option", "-t", "live", "remain-on-exit", "on"]);
         t
@@ -50,11 +55,24 @@ impl Tmux {
         self.run(&["send-keys", "-t", "live", keys]);
     }
 
-    /// The screen (and 200 lines of history) once `found` holds.
+    /// The screen (and 200 lines of history) once `found` holds, lines
+    /// the terminal wrapped joined again.
     pub fn wait_for(&self, what: &str, found: impl Fn(&str) -> bool) -> String {
+        self.wait(&["-J", "-S", "-200"], what, found)
+    }
+
+    /// The screen alone, line for line as the terminal shows it, once
+    /// `found` holds.
+    pub fn wait_for_screen(&self, what: &str, found: impl Fn(&str) -> bool) -> String {
+        self.wait(&[], what, found)
+    }
+
+    fn wait(&self, history: &[&str], what: &str, found: impl Fn(&str) -> bool) -> String {
         let start = Instant::now();
         loop {
-            let screen = self.run(&["capture-pane", "-p", "-S", "-200", "-t", "live"]);
+            let mut capture = vec!["capture-pane", "-p", "-t", "live"];
+            capture.extend_from_slice(history);
+            let screen = self.run(&capture);
             if found(&screen) {
                 return screen;
             }

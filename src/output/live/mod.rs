@@ -6,6 +6,9 @@
 //! small state under a mutex, and a separate thread draws it a few times a
 //! second and reads the keyboard. When the run ends, the terminal is
 //! restored and the normal text summary printed (by the run, as text).
+//! The frame itself is drawn by `view.rs`.
+
+mod view;
 
 use std::collections::{BTreeMap, VecDeque};
 use std::io;
@@ -15,10 +18,6 @@ use std::thread::JoinHandle;
 use std::time::Duration;
 
 use crossterm::event::{self, KeyCode, KeyEventKind, KeyModifiers};
-use ratatui::layout::{Constraint, Layout};
-use ratatui::style::{Color, Modifier, Style};
-use ratatui::text::{Line, Span};
-use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
 use ratatui::Frame;
 use tokio::sync::Notify;
 
@@ -34,7 +33,6 @@ use crate::verdict::Verdict;
 pub const RECENT: usize = 240;
 /// Redraw period: a few times a second is enough to watch a link.
 const REFRESH: Duration = Duration::from_millis(200);
-const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
 
 /// One request's outcome for one responder, as the strip shows it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -147,13 +145,8 @@ impl LiveState {
     pub fn screen(&self) -> Screen {
         Screen {
             link: self.link.clone(),
+            probe: self.probe,
             now: self.now,
-            title: format!(
-                "mavping {} · {} · {:.1} s",
-                self.link,
-                self.probe,
-                self.now as f64 / 1e9
-            ),
             waiting: self.waiting,
             rows: self
                 .tracks
@@ -201,185 +194,11 @@ pub struct RowView {
 #[derive(Debug, Clone)]
 pub struct Screen {
     pub link: String,
+    pub probe: &'static str,
     /// Session time of the latest event.
     pub now: Nanos,
-    pub title: String,
     pub waiting: bool,
     pub rows: Vec<RowView>,
-}
-
-fn ms(v: Option<f64>) -> String {
-    v.map_or_else(|| "-".into(), |v| format!("{v:.2}"))
-}
-
-/// The recent outcomes, newest on the right, scaled between the lowest and
-/// highest RTT shown: `×` lost (red), `!` late (yellow).
-fn strip(recent: &[Mark], width: usize) -> Line<'static> {
-    let shown = &recent[recent.len().saturating_sub(width)..];
-    let rtts = shown.iter().filter_map(|m| match m {
-        Mark::Rtt(ns) => Some(*ns),
-        _ => None,
-    });
-    let lo = rtts.clone().min().unwrap_or(0);
-    let hi = rtts.max().unwrap_or(0);
-    let spans: Vec<Span<'static>> = shown
-        .iter()
-        .map(|m| match *m {
-            Mark::Rtt(ns) => {
-                let level = if hi > lo {
-                    ((ns - lo) as f64 / (hi - lo) as f64 * 7.0).round() as usize
-                } else {
-                    0
-                };
-                Span::styled(BARS[level].to_string(), Style::new().fg(Color::Green))
-            }
-            Mark::Lost => Span::styled(
-                "×",
-                Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
-            ),
-            Mark::Late => Span::styled("!", Style::new().fg(Color::Yellow)),
-        })
-        .collect();
-    Line::from(spans)
-}
-
-/// Draws one frame; pure over `screen`, so it is tested on a test backend.
-/// Title line, body, key help.
-fn frame_areas(
-    frame: &mut Frame<'_>,
-    title: &str,
-) -> (ratatui::layout::Rect, ratatui::layout::Rect) {
-    let [head, body, foot] = Layout::vertical([
-        Constraint::Length(1),
-        Constraint::Min(3),
-        Constraint::Length(1),
-    ])
-    .areas(frame.area());
-    frame.render_widget(
-        Paragraph::new(title).style(Style::new().add_modifier(Modifier::BOLD)),
-        head,
-    );
-    (body, foot)
-}
-
-fn key_help(frame: &mut Frame<'_>, foot: ratatui::layout::Rect) {
-    frame.render_widget(
-        Paragraph::new("q or Ctrl-C: stop and print the summary")
-            .style(Style::new().fg(Color::DarkGray)),
-        foot,
-    );
-}
-
-pub fn render(frame: &mut Frame<'_>, screen: &Screen) {
-    let (body, foot) = frame_areas(frame, &screen.title);
-    let title = if screen.waiting {
-        " waiting for a peer ".to_string()
-    } else {
-        " responders ".to_string()
-    };
-    table(frame, body, screen, title);
-    key_help(frame, foot);
-}
-
-/// Several links: a table per link, titled with the link.
-pub fn render_links(frame: &mut Frame<'_>, screens: &[Screen]) {
-    let now = screens.iter().map(|s| s.now).max().unwrap_or(0);
-    let probe = screens
-        .first()
-        .map_or("", |s| s.title.split(" · ").nth(1).unwrap_or_default());
-    let title = format!(
-        "mavping · {} links · {probe} · {:.1} s",
-        screens.len(),
-        now as f64 / 1e9
-    );
-    let (body, foot) = frame_areas(frame, &title);
-    let areas = Layout::vertical(
-        screens
-            .iter()
-            .map(|s| Constraint::Length(s.rows.len().max(1) as u16 + 3)),
-    )
-    .split(body);
-    for (screen, area) in screens.iter().zip(areas.iter()) {
-        let title = if screen.waiting {
-            format!(" {}: waiting for a peer ", screen.link)
-        } else {
-            format!(" {} ", screen.link)
-        };
-        table(frame, *area, screen, title);
-    }
-    key_help(frame, foot);
-}
-
-/// One link's responders.
-fn table(frame: &mut Frame<'_>, body: ratatui::layout::Rect, screen: &Screen, title: String) {
-    let widths = [
-        Constraint::Length(9),
-        Constraint::Length(7),
-        Constraint::Length(7),
-        Constraint::Length(6),
-        Constraint::Length(5),
-        Constraint::Length(5),
-        Constraint::Length(8),
-        Constraint::Length(8),
-        Constraint::Length(8),
-        Constraint::Length(7),
-        Constraint::Min(8),
-    ];
-    let fixed: u16 = 9 + 7 + 7 + 6 + 5 + 5 + 8 + 8 + 8 + 7 + 10 + 2;
-    let strip_width = usize::from(body.width.saturating_sub(fixed)).max(8);
-    let header = Row::new([
-        "responder",
-        "sent",
-        "recv",
-        "loss%",
-        "late",
-        "dup",
-        "last ms",
-        "p50 ms",
-        "p99 ms",
-        "jitter",
-        "recent (× lost, ! late)",
-    ])
-    .style(Style::new().add_modifier(Modifier::UNDERLINED));
-    let rows = screen.rows.iter().map(|r| {
-        let loss = if r.sent == 0 {
-            0.0
-        } else {
-            100.0 * r.lost as f64 / r.sent as f64
-        };
-        let alarm = |bad: bool| {
-            if bad {
-                Style::new().fg(Color::Red).add_modifier(Modifier::BOLD)
-            } else {
-                Style::new()
-            }
-        };
-        let last = if r.received == 0 && r.heard_as.is_some() {
-            Cell::from(Line::from(format!(
-                "heard ({}), no reply",
-                r.heard_as.as_deref().unwrap_or_default()
-            )))
-        } else {
-            Cell::from(strip(&r.recent, strip_width))
-        };
-        Row::new([
-            Cell::from(r.id.clone()),
-            Cell::from(r.sent.to_string()),
-            Cell::from(r.received.to_string()),
-            Cell::from(format!("{loss:.1}")).style(alarm(r.lost > 0)),
-            Cell::from(r.late.to_string()).style(alarm(r.late > 0)),
-            Cell::from(r.duplicate.to_string()),
-            Cell::from(ms(r.last_ms)),
-            Cell::from(ms(r.p50_ms)),
-            Cell::from(ms(r.p99_ms)),
-            Cell::from(ms(r.jitter_ms)),
-            last,
-        ])
-    });
-    let table = Table::new(rows, widths)
-        .header(header)
-        .block(Block::bordered().title(title));
-    frame.render_widget(table, body);
 }
 
 fn lock<T>(state: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -443,10 +262,7 @@ impl LiveView {
         // The state is locked only while the figures are computed.
         let draw = move |f: &mut Frame<'_>| {
             let screens: Vec<Screen> = lock(&shown).iter().map(LiveState::screen).collect();
-            match screens.as_slice() {
-                [one] => render(f, one),
-                several => render_links(f, several),
-            }
+            view::render(f, &screens);
         };
         let thread = std::thread::Builder::new()
             .name("live view".into())
@@ -542,15 +358,7 @@ mod tests {
 
     fn state() -> LiveState {
         let mut s = LiveState::default();
-        s.on_start(&StartInfo {
-            link: "sim:?responders=2".into(),
-            probe: "ping",
-            ours: SysComp::new(255, 190),
-            interval: Duration::from_millis(100),
-            timeout: Duration::from_secs(2),
-            count: None,
-            command: None,
-        });
+        s.on_start(&start("sim:?responders=2"));
         let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));
         for seq in 0..30 {
             s.on_event(&reply(a, seq, 10 + u64::from(seq % 5)));
@@ -570,31 +378,53 @@ mod tests {
         s
     }
 
-    #[test]
-    fn a_frame_shows_counts_figures_and_losses() {
-        let mut terminal = Terminal::new(TestBackend::new(110, 8)).unwrap();
-        let screen = state().screen();
-        terminal.draw(|f| render(f, &screen)).unwrap();
-        insta::assert_snapshot!(terminal.backend().to_string());
-    }
-
-    #[test]
-    fn several_links_get_a_section_each() {
-        let mut terminal = Terminal::new(TestBackend::new(110, 12)).unwrap();
-        let mut other = LiveState::default();
-        other.on_start(&StartInfo {
-            link: "udpout:10.8.0.2:14550".into(),
+    fn start(link: &str) -> StartInfo {
+        StartInfo {
+            link: link.into(),
             probe: "ping",
             ours: SysComp::new(255, 190),
             interval: Duration::from_millis(100),
             timeout: Duration::from_secs(2),
             count: None,
             command: None,
-        });
+        }
+    }
+
+    /// The frame drawn in a `width` x `height` terminal.
+    fn frame(width: u16, height: u16, screens: &[Screen]) -> String {
+        let mut terminal = Terminal::new(TestBackend::new(width, height)).unwrap();
+        terminal.draw(|f| view::render(f, screens)).unwrap();
+        terminal.backend().to_string()
+    }
+
+    #[test]
+    fn a_frame_shows_counts_figures_and_losses() {
+        let screen = state().screen();
+        insta::assert_snapshot!("80_columns", frame(80, 8, std::slice::from_ref(&screen)));
+        // A wider terminal shows more of the recent outcomes.
+        insta::assert_snapshot!("120_columns", frame(120, 8, &[screen]));
+    }
+
+    #[test]
+    fn several_links_get_a_section_each() {
+        let mut other = LiveState::default();
+        other.on_start(&start(
+            "udpout:10.8.0.2:14550?a-very-long-name-that-does-not-fit-in-eighty-columns",
+        ));
         other.on_event(&Event::WaitingForPeer);
         let screens = [state().screen(), other.screen()];
-        terminal.draw(|f| render_links(f, &screens)).unwrap();
-        insta::assert_snapshot!(terminal.backend().to_string());
+        insta::assert_snapshot!(frame(80, 11, &screens));
+    }
+
+    #[test]
+    fn responders_beyond_the_screen_are_counted() {
+        let mut many = LiveState::default();
+        many.on_start(&start("sim:?responders=12"));
+        for sysid in 1..=12 {
+            many.on_event(&reply(SysComp::new(sysid, 1), 0, 10));
+        }
+        let screens = [state().screen(), many.screen()];
+        insta::assert_snapshot!(frame(80, 12, &screens));
     }
 
     #[test]
@@ -607,17 +437,5 @@ mod tests {
         let t = &s.tracks[&a];
         assert_eq!(t.recent.len(), RECENT);
         assert_eq!(t.sent, 10_030);
-        let line = strip(
-            &[
-                Mark::Rtt(9),
-                Mark::Rtt(1),
-                Mark::Lost,
-                Mark::Rtt(8),
-                Mark::Late,
-            ],
-            4,
-        );
-        let text: String = line.spans.iter().map(|s| s.content.as_ref()).collect();
-        assert_eq!(text, "▁×█!");
     }
 }

@@ -1,21 +1,23 @@
-//! `--plot FILE.svg`: RTT over time per responder of every link (losses
-//! marked) above the RTT distribution, drawn when the run ends.
+//! `--plot FILE.svg`: collects what the plot shows while the run goes on.
+//! The drawing is in `draw.rs`, colours and markers in `style.rs`.
 //!
 //! Memory is constant: each responder keeps [`SPANS`] time spans. When a
 //! sample falls past the last span, every span doubles in width and
 //! neighbours merge, so a long run is drawn at a coarser time resolution
 //! (the mean RTT of each span, and whether it lost anything), never dropped.
+//! The legend's loss and percentiles are the run's own summary figures.
+
+mod draw;
+mod style;
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::io;
 use std::rc::Rc;
 
-use plotters::prelude::*;
-
 use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::{LinkSummary, ResponderSummary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -28,7 +30,6 @@ const FIRST_SPAN_NS: Nanos = 1_000_000;
 const BINS_PER_DECADE: usize = 60;
 const LOWEST_US: f64 = 10.0;
 const BINS: usize = 7 * BINS_PER_DECADE;
-const SIZE: (u32, u32) = (1000, 720);
 
 #[derive(Debug, Clone, Copy, Default)]
 struct Span {
@@ -47,11 +48,22 @@ impl Span {
     }
 }
 
+/// A responder's figures from the run's summary, shown in the legend.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Figures {
+    sent: u64,
+    loss_pct: f64,
+    p50_ms: Option<f64>,
+    p99_ms: Option<f64>,
+}
+
 #[derive(Debug, Clone)]
 struct Track {
     span_ns: Nanos,
     spans: Vec<Span>,
     bins: [u64; BINS],
+    /// Known once the link's summary came.
+    figures: Option<Figures>,
 }
 
 impl Track {
@@ -60,6 +72,7 @@ impl Track {
             span_ns: FIRST_SPAN_NS,
             spans: Vec::new(),
             bins: [0; BINS],
+            figures: None,
         }
     }
 
@@ -152,112 +165,22 @@ impl PlotData {
 
     /// Draws the SVG document.
     pub fn svg(&self) -> Result<String, String> {
-        let mut svg = String::new();
-        draw(self, SVGBackend::with_string(&mut svg, SIZE)).map_err(|e| e.to_string())?;
-        Ok(svg)
+        draw::svg(self)
     }
-}
 
-type DrawResult = Result<(), Box<dyn std::error::Error>>;
-
-fn draw(data: &PlotData, backend: SVGBackend<'_>) -> DrawResult {
-    let root = backend.into_drawing_area();
-    root.fill(&WHITE)?;
-    let root = root.titled(&data.title(), ("sans-serif", 18).into_font())?;
-    let (top, bottom) = root.split_vertically(SIZE.1 * 3 / 5);
-
-    let mut t_max = 1e-3f64;
-    let mut rtt_max = 1e-3f64;
-    for t in data.tracks.values() {
-        t_max = t_max.max(t.spans.len() as f64 * t.span_ns as f64 / 1e9);
-        for s in t.spans.iter().filter(|s| s.replies > 0) {
-            rtt_max = rtt_max.max(s.rtt_sum as f64 / s.replies as f64 / 1e6);
+    /// The run's own figures for each responder of `link`, for the legend.
+    pub fn on_summary(&mut self, link: usize, responders: &[ResponderSummary]) {
+        for r in responders {
+            if let Some(t) = self.tracks.get_mut(&(link, r.id)) {
+                t.figures = Some(Figures {
+                    sent: r.counts.sent,
+                    loss_pct: 100.0 * r.loss_ratio,
+                    p50_ms: r.rtt.map(|s| s.p50_us / 1e3),
+                    p99_ms: r.rtt.map(|s| s.p99_us / 1e3),
+                });
+            }
         }
     }
-    let mut chart = ChartBuilder::on(&top)
-        .caption(
-            "RTT over time (x: lost, drawn at the top)",
-            ("sans-serif", 15),
-        )
-        .margin(10)
-        .x_label_area_size(35)
-        .y_label_area_size(60)
-        .build_cartesian_2d(0f64..t_max, 0f64..rtt_max * 1.1)?;
-    chart
-        .configure_mesh()
-        .x_desc("time since start (s)")
-        .y_desc("RTT (ms)")
-        .draw()?;
-    for (n, (&(link, id), t)) in data.tracks.iter().enumerate() {
-        let color = Palette99::pick(n).to_rgba();
-        let at = |i: usize| (i as f64 + 0.5) * t.span_ns as f64 / 1e9;
-        let line: Vec<(f64, f64)> = t
-            .spans
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.replies > 0)
-            .map(|(i, s)| (at(i), s.rtt_sum as f64 / s.replies as f64 / 1e6))
-            .collect();
-        chart
-            .draw_series(LineSeries::new(line, color.stroke_width(1)))?
-            .label(data.label(link, id))
-            .legend(move |(x, y)| PathElement::new([(x, y), (x + 16, y)], color.stroke_width(2)));
-        chart.draw_series(
-            t.spans
-                .iter()
-                .enumerate()
-                .filter(|(_, s)| s.lost > 0)
-                .map(|(i, _)| Cross::new((at(i), rtt_max * 1.05), 4, RED.stroke_width(2))),
-        )?;
-    }
-    chart
-        .configure_series_labels()
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .position(SeriesLabelPosition::UpperRight)
-        .draw()?;
-
-    let used: Vec<usize> = data
-        .tracks
-        .values()
-        .flat_map(|t| t.bins.iter().enumerate().filter(|(_, &c)| c > 0))
-        .map(|(i, _)| i)
-        .collect();
-    let lo = used.iter().min().copied().unwrap_or(0);
-    let hi = used.iter().max().copied().unwrap_or(0) + 1;
-    let share = |t: &Track, i: usize| {
-        let total: u64 = t.bins.iter().sum();
-        100.0 * t.bins[i] as f64 / total.max(1) as f64
-    };
-    let top_share = data
-        .tracks
-        .values()
-        .flat_map(|t| (lo..hi).map(move |i| share(t, i)))
-        .fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(&bottom)
-        .caption("RTT distribution", ("sans-serif", 15))
-        .margin(10)
-        .x_label_area_size(35)
-        .y_label_area_size(60)
-        .build_cartesian_2d(bin_low_ms(lo)..bin_low_ms(hi), 0f64..top_share * 1.1)?;
-    chart
-        .configure_mesh()
-        .x_desc("RTT (ms)")
-        .y_desc("replies (%)")
-        .draw()?;
-    for (n, t) in data.tracks.values().enumerate() {
-        let color = Palette99::pick(n).to_rgba();
-        // A step outline per responder, so several stay readable overlaid.
-        let mut steps = vec![(bin_low_ms(lo), 0.0)];
-        for i in lo..hi {
-            steps.push((bin_low_ms(i), share(t, i)));
-            steps.push((bin_low_ms(i + 1), share(t, i)));
-        }
-        steps.push((bin_low_ms(hi), 0.0));
-        chart.draw_series(LineSeries::new(steps, color.stroke_width(2)))?;
-    }
-    root.present()?;
-    Ok(())
 }
 
 /// `--plot`: collects every link's samples during the run; the run draws
@@ -305,7 +228,11 @@ impl Observer for PlotLink {
 }
 
 impl Reporter for PlotLink {
-    fn summary(&mut self, _: &LinkSummary, _: &Verdict) -> io::Result<()> {
+    fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
+        // The command probe sends no echo requests, so it has no lines.
+        if let LinkSummary::Echo(s) = summary {
+            self.data.borrow_mut().on_summary(self.index, &s.responders);
+        }
         Ok(())
     }
 }
@@ -395,6 +322,76 @@ mod tests {
             assert!(svg.contains(text), "{text} missing");
         }
         assert!(svg.matches("<polyline").count() >= 4);
+        // Every loss is marked in its responder's own colour and shape
+        // (a cross in blue, a triangle in vermillion), none in pure red.
+        assert!(!svg.contains("#FF0000"), "a loss drawn in red");
+        assert!(svg.contains(r##"stroke="#0072B2""##));
+        assert!(svg.contains(r##"fill="#D55E00""##));
+    }
+
+    fn figures(received: u64, lost: u64, rtt_ms: &[u64]) -> ResponderSummary {
+        let mut rtt = crate::engine::stats::RttStats::new();
+        for &ms in rtt_ms {
+            rtt.record(ms * 1_000_000);
+        }
+        let counts = crate::engine::matcher::Counts {
+            sent: received + lost,
+            received,
+            lost,
+            ..Default::default()
+        };
+        ResponderSummary {
+            id: SysComp::new(1, 1),
+            counts,
+            loss_ratio: counts.loss_ratio(),
+            rtt: rtt.summary(),
+            histogram: Vec::new(),
+            identity: None,
+            clock: None,
+        }
+    }
+
+    #[test]
+    fn the_legend_shows_the_summary_figures_beside_the_charts() {
+        let r = SysComp::new(1, 1);
+        let mut d = PlotData {
+            links: vec!["sim:".into()],
+            ..PlotData::default()
+        };
+        let rtts: Vec<u64> = (1..=100).collect();
+        for (i, &ms) in rtts.iter().enumerate() {
+            d.on_event(0, &reply(r, i as u64 * 100_000_000, ms * 1_000_000));
+        }
+        let svg = d.svg().unwrap();
+        // Before the summary, the figures are unknown, not made up.
+        assert!(svg.contains("\n-\n"), "no placeholder");
+
+        d.on_summary(0, &[figures(100, 300, &rtts)]);
+        let svg = d.svg().unwrap();
+        for text in ["responder", "sent", "loss %", "p50 ms", "p99 ms"] {
+            assert!(svg.contains(&format!("\n{text}\n")), "{text} missing");
+        }
+        // 400 sent, 75 % lost; the percentiles are the summary's own.
+        let p50 = figures(100, 300, &rtts).rtt.unwrap().p50_us / 1e3;
+        for text in ["400", "75.00", &format!("{p50:.3}")] {
+            assert!(svg.contains(&format!("\n{text}\n")), "{text} missing");
+        }
+        // The legend has a band of its own below the charts: its first row
+        // is lower than anything a chart draws.
+        let legend_y = y_of(&svg, "\nresponder\n");
+        let lowest_chart_text = y_of(&svg, "RTT (ms, log scale");
+        assert!(
+            legend_y > lowest_chart_text + 20,
+            "{legend_y} {lowest_chart_text}"
+        );
+    }
+
+    /// The `y` of the `<text>` element holding `text`.
+    fn y_of(svg: &str, text: &str) -> i64 {
+        let at = svg.find(text).unwrap_or_else(|| panic!("{text} missing"));
+        let tag = &svg[svg[..at].rfind("<text").unwrap()..at];
+        let y = tag.split(" y=\"").nth(1).unwrap();
+        y[..y.find('"').unwrap()].parse().unwrap()
     }
 
     #[test]

@@ -1,0 +1,387 @@
+//! Draws one `--live` frame from the links' [`Screen`]s; pure over its
+//! input, so it is tested on ratatui's test backend.
+//!
+//! It fits the terminal it is given, down to 80×24: a column is as wide as
+//! its header or its widest figure, the strip of recent outcomes takes what
+//! is left, and when too little is left the least needed columns go first.
+//! Headers are short and never cut (units and the strip's marks are in the
+//! key line). A link's section shows as many responders as fit and says how
+//! many more there are; with several links each section gets a row before
+//! any gets a second.
+
+use ratatui::layout::{Alignment, Constraint, Layout, Rect};
+use ratatui::style::{Color, Modifier, Style};
+use ratatui::text::{Line, Span};
+use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
+use ratatui::Frame;
+
+use super::{Mark, RowView, Screen};
+
+const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
+/// The key line: the keys, then what the figures and marks mean.
+pub const KEYS: &str = "q or Ctrl-C: stop and print the summary · RTT in ms · × lost · ! late";
+/// The strip is dropped last, and kept at least this wide.
+const STRIP_MIN: u16 = 8;
+/// ratatui's default gap between table columns.
+const SPACING: u16 = 1;
+/// A section's lines besides its responders: two borders and the header.
+const SECTION_FRAME: u16 = 3;
+
+/// The figure columns, in display order, then the strip.
+const HEADERS: [&str; 10] = [
+    "responder",
+    "sent",
+    "recv",
+    "loss%",
+    "late",
+    "dup",
+    "last",
+    "p50",
+    "p99",
+    "jitter",
+];
+const STRIP_HEADER: &str = "recent";
+/// Room for the usual figures (5-digit counts, RTTs under 100 ms), so
+/// columns do not shift as the figures change; wider figures widen them.
+const MIN_WIDTHS: [u16; 10] = [9, 5, 5, 5, 4, 3, 5, 5, 5, 6];
+/// When the terminal is too narrow, columns go in falling order of this;
+/// 0 is never given up (who, how much is lost, how long it takes).
+const GIVE_UP: [u8; 10] = [0, 5, 6, 0, 9, 10, 7, 0, 0, 8];
+
+/// Draws every link's section under one title line, with the keys below.
+pub fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
+    let [head, body, foot] = Layout::vertical([
+        Constraint::Length(1),
+        Constraint::Min(0),
+        Constraint::Length(1),
+    ])
+    .areas(frame.area());
+    frame.render_widget(
+        Paragraph::new(title(screens)).style(Style::new().add_modifier(Modifier::BOLD)),
+        head,
+    );
+    let needs: Vec<u16> = screens
+        .iter()
+        .map(|s| SECTION_FRAME + s.rows.len().max(1) as u16)
+        .collect();
+    let heights = section_heights(body.height, &needs);
+    let areas = Layout::vertical(heights.iter().map(|&h| Constraint::Length(h))).split(body);
+    // One set of columns for every section, so they line up.
+    let cells: Vec<Vec<[(String, bool); 10]>> = screens
+        .iter()
+        .map(|s| s.rows.iter().map(figures).collect())
+        .collect();
+    let widths: Vec<u16> = (0..HEADERS.len())
+        .map(|c| {
+            cells
+                .iter()
+                .flatten()
+                .map(|row| width(&row[c].0))
+                .chain([width(HEADERS[c]), MIN_WIDTHS[c]])
+                .max()
+                .unwrap_or(0)
+        })
+        .collect();
+    let columns = fit(&widths, body.width.saturating_sub(2));
+    for ((screen, cells), area) in screens.iter().zip(&cells).zip(areas.iter()) {
+        if area.height >= SECTION_FRAME {
+            section(frame, *area, screen, cells, &columns);
+        }
+    }
+    frame.render_widget(
+        Paragraph::new(KEYS).style(Style::new().fg(Color::DarkGray)),
+        foot,
+    );
+}
+
+/// `mavping · ping · 4.4 s`, with the number of links when there are several.
+fn title(screens: &[Screen]) -> String {
+    let now = screens.iter().map(|s| s.now).max().unwrap_or(0);
+    let probe = screens.first().map_or("", |s| s.probe);
+    let links = match screens.len() {
+        1 => String::new(),
+        n => format!("{n} links · "),
+    };
+    format!("mavping · {links}{probe} · {:.1} s", now as f64 / 1e9)
+}
+
+/// Each section's height out of `available` lines: all it needs when that
+/// fits; otherwise each a frame and one row in turn, then one more row each
+/// in turn, so no link is pushed off the screen by another's responders.
+fn section_heights(available: u16, needs: &[u16]) -> Vec<u16> {
+    let mut left = available;
+    let mut heights: Vec<u16> = needs
+        .iter()
+        .map(|&need| {
+            let h = need.min(SECTION_FRAME + 1).min(left);
+            left -= h;
+            h
+        })
+        .collect();
+    while left > 0 && heights.iter().zip(needs).any(|(h, n)| h < n) {
+        for (h, &need) in heights.iter_mut().zip(needs) {
+            if *h < need && left > 0 {
+                *h += 1;
+                left -= 1;
+            }
+        }
+    }
+    heights
+}
+
+/// One link: its responders as a table, titled with the link.
+fn section(
+    frame: &mut Frame<'_>,
+    area: Rect,
+    screen: &Screen,
+    cells: &[[(String, bool); 10]],
+    columns: &Columns,
+) {
+    let inner = area.width.saturating_sub(2);
+    let Columns {
+        shown,
+        widths,
+        strip: strip_width,
+    } = columns;
+    let strip_width = *strip_width;
+
+    let slots = usize::from(area.height.saturating_sub(SECTION_FRAME));
+    let hidden = screen.rows.len().saturating_sub(slots);
+    let status = if screen.waiting {
+        ": waiting for a peer"
+    } else {
+        ""
+    };
+    let mut block = Block::bordered().title(format!(
+        " {}{status} ",
+        ellipsis(
+            &screen.link,
+            usize::from(inner.saturating_sub(4 + width(status)))
+        )
+    ));
+    if hidden > 0 {
+        block = block.title_bottom(format!(" {hidden} more responders "));
+    }
+
+    let alarm = Style::new().fg(Color::Red).add_modifier(Modifier::BOLD);
+    let rows = screen.rows.iter().zip(cells).take(slots).map(|(r, cells)| {
+        let mut row: Vec<Cell<'_>> = shown
+            .iter()
+            .map(|&c| {
+                let (text, bad) = &cells[c];
+                let cell = Cell::from(aligned(c, text.clone()));
+                if *bad {
+                    cell.style(alarm)
+                } else {
+                    cell
+                }
+            })
+            .collect();
+        row.push(recent(r, strip_width));
+        Row::new(row)
+    });
+    let header = Row::new(
+        shown
+            .iter()
+            .map(|&c| Cell::from(aligned(c, HEADERS[c].to_string())))
+            .chain([Cell::from(STRIP_HEADER)]),
+    )
+    .style(Style::new().add_modifier(Modifier::UNDERLINED));
+    let constraints = shown
+        .iter()
+        .map(|&c| Constraint::Length(widths[c]))
+        .chain([Constraint::Length(strip_width)]);
+    let table = Table::new(rows, constraints)
+        .header(header)
+        .column_spacing(SPACING)
+        .block(block);
+    frame.render_widget(table, area);
+}
+
+/// Figures (every column after the responder) right-aligned, so their
+/// digits line up.
+fn aligned(column: usize, text: String) -> Line<'static> {
+    let line = Line::from(text);
+    if column == 0 {
+        line
+    } else {
+        line.alignment(Alignment::Right)
+    }
+}
+
+/// A row's figures, each with whether it is bad news.
+fn figures(r: &RowView) -> [(String, bool); 10] {
+    let loss = if r.sent == 0 {
+        0.0
+    } else {
+        100.0 * r.lost as f64 / r.sent as f64
+    };
+    [
+        (r.id.clone(), false),
+        (r.sent.to_string(), false),
+        (r.received.to_string(), false),
+        (format!("{loss:.1}"), r.lost > 0),
+        (r.late.to_string(), r.late > 0),
+        (r.duplicate.to_string(), false),
+        (ms(r.last_ms), false),
+        (ms(r.p50_ms), false),
+        (ms(r.p99_ms), false),
+        (ms(r.jitter_ms), false),
+    ]
+}
+
+fn ms(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.2}"))
+}
+
+fn width(text: &str) -> u16 {
+    text.chars().count().try_into().unwrap_or(u16::MAX)
+}
+
+/// The columns a table shows.
+#[derive(Debug, PartialEq)]
+struct Columns {
+    /// Indices into [`HEADERS`], in display order.
+    shown: Vec<usize>,
+    /// Of every figure column, shown or not.
+    widths: Vec<u16>,
+    strip: u16,
+}
+
+/// Which figure columns are shown in `inner` columns, and the strip's
+/// width: columns are given up (see [`GIVE_UP`]) until the strip has
+/// [`STRIP_MIN`].
+fn fit(widths: &[u16], inner: u16) -> Columns {
+    let mut shown: Vec<usize> = (0..widths.len()).collect();
+    loop {
+        // Each column is followed by a gap: the last one's is the strip's.
+        let used: u16 = shown.iter().map(|&c| widths[c] + SPACING).sum();
+        let strip = inner.saturating_sub(used);
+        let next = shown
+            .iter()
+            .enumerate()
+            .filter(|(_, &c)| GIVE_UP[c] > 0)
+            .max_by_key(|(_, &c)| GIVE_UP[c])
+            .map(|(i, _)| i);
+        match next {
+            Some(i) if strip < STRIP_MIN => {
+                shown.remove(i);
+            }
+            _ => {
+                return Columns {
+                    shown,
+                    widths: widths.to_vec(),
+                    strip,
+                }
+            }
+        }
+    }
+}
+
+/// `text`, cut to `max` characters with an ellipsis when longer.
+fn ellipsis(text: &str, max: usize) -> String {
+    if text.chars().count() <= max {
+        return text.to_string();
+    }
+    let kept: String = text.chars().take(max.saturating_sub(1)).collect();
+    format!("{kept}…")
+}
+
+/// The strip of recent outcomes, or what was heard from a responder that
+/// never answered.
+fn recent(r: &RowView, width: u16) -> Cell<'static> {
+    match (&r.heard_as, r.received) {
+        (Some(heard), 0) => {
+            let long = format!("heard ({heard}), no reply");
+            let text = if long.chars().count() <= usize::from(width) {
+                long
+            } else {
+                "heard, no reply".to_string()
+            };
+            Cell::from(text)
+        }
+        _ => Cell::from(strip(&r.recent, usize::from(width))),
+    }
+}
+
+/// The recent outcomes, newest on the right, scaled between the lowest and
+/// highest RTT shown: `×` lost (red), `!` late (yellow).
+pub(super) fn strip(recent: &[Mark], width: usize) -> Line<'static> {
+    let shown = &recent[recent.len().saturating_sub(width)..];
+    let rtts = shown.iter().filter_map(|m| match m {
+        Mark::Rtt(ns) => Some(*ns),
+        _ => None,
+    });
+    let lo = rtts.clone().min().unwrap_or(0);
+    let hi = rtts.max().unwrap_or(0);
+    let spans: Vec<Span<'static>> = shown
+        .iter()
+        .map(|m| match *m {
+            Mark::Rtt(ns) => {
+                let level = if hi > lo {
+                    ((ns - lo) as f64 / (hi - lo) as f64 * 7.0).round() as usize
+                } else {
+                    0
+                };
+                Span::styled(BARS[level].to_string(), Style::new().fg(Color::Green))
+            }
+            Mark::Lost => Span::styled(
+                "×",
+                Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
+            ),
+            Mark::Late => Span::styled("!", Style::new().fg(Color::Yellow)),
+        })
+        .collect();
+    Line::from(spans)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_strip_scales_between_the_lowest_and_highest_rtt_shown() {
+        let line = strip(
+            &[
+                Mark::Rtt(9),
+                Mark::Rtt(1),
+                Mark::Lost,
+                Mark::Rtt(8),
+                Mark::Late,
+            ],
+            4,
+        );
+        let text: String = line.spans.iter().map(|s| s.content.as_ref()).collect();
+        assert_eq!(text, "▁×█!");
+    }
+
+    #[test]
+    fn columns_are_given_up_least_needed_first() {
+        let widths = [9, 4, 4, 5, 4, 3, 5, 5, 5, 6];
+        // 80 columns less the borders: everything, and a strip.
+        let all = fit(&widths, 78);
+        assert_eq!(all.shown, (0..10).collect::<Vec<_>>());
+        assert_eq!(all.strip, 78 - 50 - 10);
+        // Narrower: dup, then late, go first.
+        let narrow = fit(&widths, 60);
+        assert_eq!(narrow.shown, [0, 1, 2, 3, 6, 7, 8, 9]);
+        assert_eq!(narrow.strip, 9);
+        // Far too narrow: only the columns never given up remain.
+        assert_eq!(fit(&widths, 20).shown, [0, 3, 7, 8]);
+    }
+
+    #[test]
+    fn sections_each_get_a_row_before_any_gets_two() {
+        assert_eq!(section_heights(22, &[5, 4]), [5, 4]);
+        assert_eq!(section_heights(10, &[13, 4]), [6, 4]);
+        assert_eq!(section_heights(12, &[13, 13, 13]), [4, 4, 4]);
+        assert_eq!(section_heights(14, &[13, 13, 13]), [5, 5, 4]);
+        assert_eq!(section_heights(6, &[5, 5]), [4, 2]);
+    }
+
+    #[test]
+    fn long_links_end_in_an_ellipsis() {
+        assert_eq!(ellipsis("udp:0.0.0.0:14550", 40), "udp:0.0.0.0:14550");
+        assert_eq!(ellipsis("sim:?responders=2&loss=5%", 10), "sim:?resp…");
+    }
+}

@@ -1,0 +1,421 @@
+//! Draws the plot from the collected samples: RTT over time, a row of lost
+//! requests per responder under it, the RTT distribution, and a legend
+//! table (responder, sent, loss %, p50, p99) in a band of its own below the
+//! charts, so nothing is ever drawn under it. Each responder keeps one
+//! colour and one marker shape ([`Look`]) everywhere.
+
+use plotters::chart::MeshStyle;
+use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::style::Look;
+use super::{bin, bin_low_ms, PlotData, Track, BINS_PER_DECADE};
+use crate::engine::Nanos;
+
+const WIDTH: u32 = 1000;
+const TITLE_H: u32 = 44;
+const TIME_H: u32 = 300;
+/// Height of one responder's row of lost requests.
+const LANE_H: u32 = 24;
+/// The lost-requests chart besides its rows: the time axis and its labels.
+const LANES_AXIS_H: u32 = 66;
+const DIST_H: u32 = 270;
+const ROW_H: u32 = 26;
+const MARGIN: u32 = 14;
+/// Room for the y axis labels, the same for every chart so their time and
+/// RTT axes line up.
+const Y_LABELS_W: u32 = 70;
+/// Width of a number column in the legend.
+const NUMBER_W: i32 = 110;
+const FONT: &str = "sans-serif";
+const TITLE_SIZE: f64 = 24.0;
+/// Markers along a line of RTT over time.
+const MARKS_PER_LINE: usize = 12;
+
+/// An axis label without trailing zeros: `10`, `2.5`, `0.125`.
+fn tick(v: &f64) -> String {
+    let s = format!("{v:.3}");
+    s.trim_end_matches('0').trim_end_matches('.').to_string()
+}
+
+/// Ticks for a log axis from `from` to `to`: 1, 2, 5 (or 1, 2, 3, 5)
+/// times the powers of ten inside it; a range too narrow for four of those
+/// gets evenly spaced ticks, as a linear axis would.
+fn log_ticks(from: f64, to: f64) -> Vec<f64> {
+    let within = |steps: &[f64]| -> Vec<f64> {
+        let first = from.log10().floor() as i32;
+        let last = to.log10().ceil() as i32;
+        (first..=last)
+            .flat_map(|e| steps.iter().map(move |m| m * 10f64.powi(e)))
+            .filter(|v| (from..=to).contains(v))
+            .collect()
+    };
+    for steps in [&[1.0, 2.0, 5.0][..], &[1.0, 2.0, 3.0, 5.0]] {
+        let ticks = within(steps);
+        if ticks.len() >= 4 {
+            return ticks;
+        }
+    }
+    // About six ticks (five to eight), a step of 1, 2 or 5 times a power
+    // of ten.
+    let rough = (to - from) / 6.0;
+    let power = 10f64.powf(rough.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0]
+        .into_iter()
+        .map(|m| m * power)
+        .find(|&s| s >= rough * 0.75)
+        .unwrap_or(10.0 * power);
+    let first = (from / step).ceil() as i64;
+    let last = (to / step).floor() as i64;
+    (first..=last).map(|k| k as f64 * step).collect()
+}
+
+type DrawResult = Result<(), Box<dyn std::error::Error>>;
+type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+/// One responder, in drawing order.
+struct Entry<'a> {
+    label: String,
+    look: Look,
+    track: &'a Track,
+}
+
+pub(super) fn svg(data: &PlotData) -> Result<String, String> {
+    let entries: Vec<Entry<'_>> = data
+        .tracks
+        .iter()
+        .enumerate()
+        .map(|(n, (&(link, id), track))| Entry {
+            label: data.label(link, id),
+            look: Look::nth(n),
+            track,
+        })
+        .collect();
+    let label_w = entries
+        .iter()
+        .map(|e| e.label.as_str())
+        .chain(["responder"])
+        .map(|l| text_width(l, legend_font()))
+        .max()
+        .unwrap_or(0);
+    // The legend's columns after the labels, and wider when a label is long.
+    let numbers_x = 70 + label_w as i32 + 20;
+    let width = WIDTH.max((numbers_x + 4 * NUMBER_W + 30) as u32);
+    // A long title (a simulated link with every parameter) gets a smaller
+    // font before the plot gets wider.
+    let title = data.title();
+    let title_size = fit(&title, TITLE_SIZE, width - 2 * MARGIN);
+    let width = width.max(text_width(&title, title_font(title_size)) + 2 * MARGIN);
+    let rows = entries.len().max(1) as u32;
+    let height = TITLE_H + TIME_H + LANE_H * rows + LANES_AXIS_H + DIST_H + ROW_H * (rows + 1) + 20;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
+        let title = (title.as_str(), title_size);
+        draw(title, &entries, &root, numbers_x).map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
+
+fn title_font(size: f64) -> FontDesc<'static> {
+    (FONT, size).into_font()
+}
+
+/// The font size, from `size` down to three fifths of it, at which `text`
+/// fits in `width`.
+fn fit(text: &str, size: f64, width: u32) -> f64 {
+    let wide = text_width(text, title_font(size)).max(1);
+    (size * f64::from(width) / f64::from(wide)).clamp(size * 0.6, size)
+}
+
+fn legend_font() -> FontDesc<'static> {
+    (FONT, 17).into_font()
+}
+
+/// The width `text` takes. plotters can only estimate it for SVG (the
+/// viewer picks the font), and its estimate runs short for DejaVu Sans,
+/// the usual sans-serif on Linux: a fifth is added.
+fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
+    font.box_size(text).map_or(0, |(w, _)| w * 6 / 5)
+}
+
+fn draw(
+    (title, title_size): (&str, f64),
+    entries: &[Entry<'_>],
+    root: &Area<'_>,
+    numbers_x: i32,
+) -> DrawResult {
+    root.fill(&WHITE)?;
+    let (head, rest) = root.split_vertically(TITLE_H);
+    head.draw(&Text::new(
+        title,
+        (MARGIN as i32, TITLE_H as i32 / 2),
+        title_font(title_size)
+            .into_text_style(root)
+            .pos(Pos::new(HPos::Left, VPos::Center)),
+    ))?;
+    let rows = entries.len().max(1) as u32;
+    let (time, rest) = rest.split_vertically(TIME_H);
+    let (lanes, rest) = rest.split_vertically(LANE_H * rows + LANES_AXIS_H);
+    let (distribution, legend) = rest.split_vertically(DIST_H);
+
+    let t_max = entries
+        .iter()
+        .map(|e| e.track.spans.len() as f64 * e.track.span_ns as f64 / 1e9)
+        .reduce(f64::max)
+        .unwrap_or(1.0);
+    over_time(entries, &time, t_max)?;
+    losses(entries, &lanes, t_max)?;
+    distribution_chart(entries, &distribution)?;
+    legend_table(entries, &legend, numbers_x)?;
+    root.present()?;
+    Ok(())
+}
+
+fn axis_font() -> TextStyle<'static> {
+    (FONT, 15).into()
+}
+
+fn caption_font() -> TextStyle<'static> {
+    (FONT, 19).into()
+}
+
+/// Each responder's mean RTT per span, one line each.
+fn over_time(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
+    let rtt_max = entries
+        .iter()
+        .flat_map(|e| e.track.spans.iter().filter(|s| s.replies > 0))
+        .map(|s| s.rtt_sum as f64 / s.replies as f64 / 1e6)
+        .reduce(f64::max)
+        .unwrap_or(1.0);
+    let mut chart = ChartBuilder::on(area)
+        .caption("RTT over time", caption_font())
+        .margin(MARGIN)
+        .margin_bottom(0)
+        .x_label_area_size(0)
+        .y_label_area_size(Y_LABELS_W)
+        .build_cartesian_2d(0f64..t_max, 0f64..rtt_max * 1.08)?;
+    mesh(&mut chart).y_desc("RTT (ms)").draw()?;
+    for (k, e) in entries.iter().enumerate() {
+        let t = e.track;
+        let line: Vec<(f64, f64)> = t
+            .spans
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.replies > 0)
+            .map(|(i, s)| (at(t, i), s.rtt_sum as f64 / s.replies as f64 / 1e6))
+            .collect();
+        chart.draw_series(LineSeries::new(
+            line.iter().copied(),
+            e.look.color.mix(0.85).stroke_width(2),
+        ))?;
+        // A few of its markers along each line, staggered between
+        // responders, tell the lines apart without their colour.
+        let every = (line.len() / MARKS_PER_LINE).max(1);
+        let offset = k * every / entries.len().max(1);
+        for &p in line.iter().skip(offset).step_by(every) {
+            chart.plotting_area().draw(&e.look.marker(p, 5))?;
+        }
+    }
+    Ok(())
+}
+
+/// The grid and axes every chart shares: its fonts, round tick labels, few
+/// and faint minor lines.
+fn mesh<'a, 'b, X, Y>(
+    chart: &'b mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
+) -> MeshStyle<'a, 'b, X, Y, SVGBackend<'a>>
+where
+    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let mut mesh = chart.configure_mesh();
+    mesh.label_style(axis_font())
+        .x_label_formatter(&tick)
+        .y_label_formatter(&tick)
+        .axis_desc_style(axis_font())
+        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
+        .max_light_lines(1);
+    mesh
+}
+
+/// The middle of span `i`, in seconds.
+fn at(t: &Track, i: usize) -> f64 {
+    (i as f64 + 0.5) * t.span_ns as f64 / 1e9
+}
+
+/// A row per responder, in legend order, with its marker where a span lost
+/// a request; it carries the time axis of the chart above.
+fn losses(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
+    let n = entries.len().max(1);
+    let mut chart = ChartBuilder::on(area)
+        .margin(MARGIN)
+        .margin_top(4)
+        .x_label_area_size(44)
+        .y_label_area_size(Y_LABELS_W)
+        .build_cartesian_2d(0f64..t_max, -0.6f64..n as f64 - 0.4)?;
+    mesh(&mut chart)
+        .disable_y_mesh()
+        .y_labels(0)
+        .x_desc("time since start (s)")
+        .draw()?;
+    let lane = |k: usize| (n - 1 - k) as f64;
+    for (k, e) in entries.iter().enumerate() {
+        let guide = [(0.0, lane(k)), (t_max, lane(k))];
+        chart.draw_series(LineSeries::new(guide, RGBColor(0xDD, 0xDD, 0xDD)))?;
+        let t = e.track;
+        let lost = t.spans.iter().enumerate().filter(|(_, s)| s.lost > 0);
+        for (i, _) in lost {
+            chart
+                .plotting_area()
+                .draw(&e.look.marker((at(t, i), lane(k)), 5))?;
+        }
+    }
+    // The rows' name, where the other charts have their y axis title.
+    let (xs, ys) = chart.plotting_area().get_pixel_range();
+    let (ox, oy) = area.get_base_pixel();
+    area.draw(&Text::new(
+        "lost",
+        (xs.start - ox - 12, (ys.start + ys.end) / 2 - oy),
+        axis_font().pos(Pos::new(HPos::Right, VPos::Center)),
+    ))?;
+    Ok(())
+}
+
+/// Each responder's share of replies per RTT bin, as a step outline so
+/// several stay readable overlaid.
+fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
+    let used: Vec<usize> = entries
+        .iter()
+        .flat_map(|e| e.track.bins.iter().enumerate().filter(|(_, &c)| c > 0))
+        .map(|(i, _)| i)
+        .collect();
+    // Without replies, 1 to 100 ms: an empty chart with sensible ticks.
+    let lo = used.iter().min().copied().unwrap_or(2 * BINS_PER_DECADE);
+    let hi = used.iter().max().map_or(4 * BINS_PER_DECADE, |i| i + 1);
+    let share = |t: &Track, i: usize| {
+        let total: u64 = t.bins.iter().sum();
+        100.0 * t.bins[i] as f64 / total.max(1) as f64
+    };
+    let top_share = entries
+        .iter()
+        .flat_map(|e| (lo..hi).map(move |i| share(e.track, i)))
+        .fold(1.0f64, f64::max);
+    // A bin of room either side, so no outline sits on the frame.
+    let (from, to) = (bin_low_ms(lo.saturating_sub(1)), bin_low_ms(hi + 1));
+    let mut chart = ChartBuilder::on(area)
+        .caption("RTT distribution (marker: median)", caption_font())
+        .margin(MARGIN)
+        .x_label_area_size(44)
+        .y_label_area_size(Y_LABELS_W)
+        .build_cartesian_2d(
+            (from..to).log_scale().with_key_points(log_ticks(from, to)),
+            0f64..top_share * 1.1,
+        )?;
+    mesh(&mut chart)
+        .x_desc("RTT (ms, log scale: each bin 4% wide)")
+        .y_desc("replies (%)")
+        .draw()?;
+    for e in entries {
+        let t = e.track;
+        let mut steps = vec![(bin_low_ms(lo), 0.0)];
+        for i in lo..hi {
+            steps.push((bin_low_ms(i), share(t, i)));
+            steps.push((bin_low_ms(i + 1), share(t, i)));
+        }
+        steps.push((bin_low_ms(hi), 0.0));
+        chart.draw_series(LineSeries::new(steps, e.look.color.stroke_width(2)))?;
+        if let Some(p50) = t.figures.and_then(|f| f.p50_ms) {
+            let i = bin((p50 * 1e6) as Nanos).clamp(lo, hi - 1);
+            chart
+                .plotting_area()
+                .draw(&e.look.marker((p50, share(t, i)), 6))?;
+        }
+    }
+    Ok(())
+}
+
+/// The legend: a header and a row per responder with its line and marker,
+/// its label and the run's figures for it.
+fn legend_table(entries: &[Entry<'_>], area: &Area<'_>, numbers_x: i32) -> DrawResult {
+    let font = legend_font();
+    let left = font
+        .clone()
+        .into_text_style(area)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let right = font
+        .into_text_style(area)
+        .pos(Pos::new(HPos::Right, VPos::Center));
+    let row_y = |r: usize| ROW_H as i32 * r as i32 + ROW_H as i32 / 2 + 4;
+    let column = |j: i32| numbers_x + NUMBER_W * (j + 1);
+    let header = Pos::new(HPos::Right, VPos::Center);
+    let bold = legend_font()
+        .style(FontStyle::Bold)
+        .into_text_style(area)
+        .pos(header);
+    area.draw(&Text::new(
+        "responder",
+        (70, row_y(0)),
+        bold.pos(Pos::new(HPos::Left, VPos::Center)),
+    ))?;
+    for (j, name) in ["sent", "loss %", "p50 ms", "p99 ms"]
+        .into_iter()
+        .enumerate()
+    {
+        area.draw(&Text::new(name, (column(j as i32), row_y(0)), bold.clone()))?;
+    }
+    let rule = row_y(0) + ROW_H as i32 / 2;
+    area.draw(&PathElement::new(
+        [(MARGIN as i32, rule), (column(3), rule)],
+        BLACK.stroke_width(1),
+    ))?;
+    if entries.is_empty() {
+        area.draw(&Text::new("no responder answered", (70, row_y(1)), left))?;
+        return Ok(());
+    }
+    for (r, e) in entries.iter().enumerate() {
+        let y = row_y(r + 1);
+        area.draw(&PathElement::new(
+            [(18, y), (58, y)],
+            e.look.color.stroke_width(2),
+        ))?;
+        area.draw(&e.look.marker((38, y), 5))?;
+        area.draw(&Text::new(e.label.as_str(), (70, y), left.clone()))?;
+        let f = e.track.figures;
+        let cells = [
+            f.map(|f| f.sent.to_string()),
+            f.map(|f| format!("{:.2}", f.loss_pct)),
+            f.and_then(|f| f.p50_ms).map(|v| format!("{v:.3}")),
+            f.and_then(|f| f.p99_ms).map(|v| format!("{v:.3}")),
+        ];
+        for (j, cell) in cells.into_iter().enumerate() {
+            let text = cell.unwrap_or_else(|| "-".into());
+            area.draw(&Text::new(text, (column(j as i32), y), right.clone()))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn log_ticks_are_round_and_within_the_range() {
+        assert_eq!(
+            log_ticks(0.9, 120.0),
+            [1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0]
+        );
+        assert_eq!(log_ticks(19.2, 160.0), [20.0, 30.0, 50.0, 100.0]);
+        assert_eq!(log_ticks(19.2, 31.6), [20.0, 22.0, 24.0, 26.0, 28.0, 30.0]);
+    }
+
+    #[test]
+    fn tick_labels_have_no_trailing_zeros() {
+        assert_eq!(tick(&10.0), "10");
+        assert_eq!(tick(&2.5), "2.5");
+        assert_eq!(tick(&0.125), "0.125");
+    }
+}

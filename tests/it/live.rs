@@ -1,0 +1,190 @@
+//! `--live` in a real terminal (a tmux pane of a set size), as a user sees
+//! it: at 80×24 every column header is whole and every row fits inside its
+//! borders, with one link or several; a wider terminal shows more of the
+//! recent outcomes; responders beyond the screen are counted; `q` leaves the
+//! view and prints the summary.
+
+use std::process::Command;
+
+use assert_cmd::cargo::cargo_bin;
+
+use crate::common::Tmux;
+
+/// The column headers, in order, as the header line must show them.
+const HEADERS: [&str; 11] = [
+    "responder",
+    "sent",
+    "recv",
+    "loss%",
+    "late",
+    "dup",
+    "last",
+    "p50",
+    "p99",
+    "jitter",
+    "recent",
+];
+const KEYS: &str = "q or Ctrl-C: stop and print the summary · RTT in ms · × lost · ! late";
+
+/// Runs `mavping --live ARGS` in a `width` x `height` pane; the shell
+/// prints the exit code when it ends.
+fn live(name: &str, args: &str, width: u16, height: u16) -> Tmux {
+    let command = format!(
+        "{} --live -i 0.02 -W 300ms {args}; echo exit=$?",
+        cargo_bin("mavping").display()
+    );
+    Tmux::start(name, &command, width, height)
+}
+
+/// A responder's row: `│1/1   ... strip│`.
+fn is_row(line: &str) -> bool {
+    line.strip_prefix('│')
+        .and_then(|l| l.split_whitespace().next())
+        .is_some_and(|id| {
+            id.split('/').count() == 2 && id.split('/').all(|n| n.parse::<u16>().is_ok())
+        })
+}
+
+fn rows(screen: &str) -> Vec<&str> {
+    screen.lines().filter(|l| is_row(l)).collect()
+}
+
+/// The strip of recent outcomes at the end of a row.
+fn strip(row: &str) -> &str {
+    let last = row.split_whitespace().last().unwrap_or_default();
+    last.trim_end_matches('│')
+}
+
+/// Everything a screen of `width` x `height` must hold to fit: no line
+/// wider than the terminal or beyond its height, every header line with
+/// every header whole and in order, every row closed by its right border,
+/// and the key line whole at the bottom. Returns the number of sections.
+fn assert_fits(screen: &str, width: usize, height: usize) -> usize {
+    let lines: Vec<&str> = screen.lines().collect();
+    assert!(lines.len() <= height, "{} lines:\n{screen}", lines.len());
+    for l in &lines {
+        assert!(l.chars().count() <= width, "wider than {width}: {l:?}");
+    }
+    let headers: Vec<&&str> = lines
+        .iter()
+        .filter(|l| l.starts_with("│responder"))
+        .collect();
+    assert!(!headers.is_empty(), "no header line:\n{screen}");
+    for h in &headers {
+        let words: Vec<&str> = h.trim_matches('│').split_whitespace().collect();
+        assert_eq!(words, HEADERS, "a header is cut or missing:\n{screen}");
+        assert!(h.ends_with('│'), "{h:?}");
+    }
+    for r in rows(screen) {
+        assert!(r.ends_with('│'), "a row overflows: {r:?}");
+        assert_eq!(r.chars().count(), width, "{r:?}");
+    }
+    let keys = lines.iter().rev().find(|l| !l.trim().is_empty());
+    assert_eq!(keys, Some(&KEYS), "{screen}");
+    headers.len()
+}
+
+/// Presses `q` and checks the view is left for the text summary of the
+/// links named `links...`.
+fn quit(tmux: &Tmux, links: &[&str]) {
+    tmux.send_keys("q");
+    let screen = tmux.wait_for("exit=", |s| s.contains("exit="));
+    assert!(screen.contains("exit=0"), "{screen}");
+    for link in links {
+        let summary = screen.lines().any(|l| {
+            l.starts_with(&format!("--- {link}"))
+                && l.trim_end().ends_with(" mavping statistics ---")
+        });
+        assert!(summary, "no summary of {link}:\n{screen}");
+    }
+    assert!(!screen.contains(KEYS), "the view was not left:\n{screen}");
+}
+
+#[test]
+fn one_link_fits_80x24_and_a_wider_terminal_shows_more() {
+    let link = "sim:?responders=2&loss=20%&delay=2ms&seed=5";
+    // The figure columns take 62 characters (and 2 the borders); the strip
+    // of recent outcomes has the rest: 16 of 80, 56 of 120.
+    for (width, height, full) in [(80u16, 24u16, 16usize), (120, 40, 56)] {
+        let tmux = live(&format!("one-{width}"), &format!("'{link}'"), width, height);
+        // Both rows, a loss shown, and enough outcomes to fill the strip.
+        let screen = tmux.wait_for_screen("two full rows with a loss", |s| {
+            let rows = rows(s);
+            rows.len() == 2
+                && rows.iter().any(|r| r.contains('×'))
+                && rows.iter().all(|r| strip(r).chars().count() >= full)
+        });
+        assert_eq!(assert_fits(&screen, width.into(), height.into()), 1);
+        for text in ["mavping · ping · ", "┌ sim:?responders=2&"] {
+            assert!(screen.contains(text), "{text:?} not on screen:\n{screen}");
+        }
+        quit(&tmux, &["sim:?responders=2&"]);
+    }
+}
+
+#[test]
+fn several_links_fit_80x24() {
+    let links = [
+        "sim:?responders=3&loss=20%&seed=5",
+        "sim:?delay=30ms&loss=10%&seed=2",
+        "sim:?responders=2&delay=5ms",
+    ];
+    let args = links.map(|l| format!("'{l}'")).join(" ");
+    let tmux = live("several", &args, 80, 24);
+    let screen = tmux.wait_for_screen("six rows", |s| rows(s).len() == 6);
+    assert_eq!(assert_fits(&screen, 80, 24), 3, "{screen}");
+    assert!(
+        screen.starts_with("mavping · 3 links · ping · "),
+        "{screen}"
+    );
+    for link in links {
+        let title = format!("┌ {link} ─");
+        assert!(
+            screen.contains(&title),
+            "{title:?} not on screen:\n{screen}"
+        );
+    }
+    quit(
+        &tmux,
+        &[
+            "sim:?responders=3&",
+            "sim:?delay=30ms&",
+            "sim:?responders=2&",
+        ],
+    );
+}
+
+#[test]
+fn responders_beyond_the_screen_are_counted_at_80x24() {
+    let tmux = live(
+        "many",
+        "'sim:?responders=40&delay=2ms' 'sim:?delay=30ms'",
+        80,
+        24,
+    );
+    // The first link shows the responders that fit and counts the rest
+    // (once all 40 answered); the second keeps its section and its row.
+    let more = |s: &str| format!("└ {} more responders ─", 40 + 1 - rows(s).len());
+    let screen = tmux.wait_for_screen("40 responders counted", |s| s.contains(&more(s)));
+    assert_eq!(assert_fits(&screen, 80, 24), 2, "{screen}");
+    assert!(rows(&screen).len() > 10, "{screen}");
+    assert!(screen.contains("┌ sim:?delay=30ms ─"), "{screen}");
+    // 40 responders' summaries scroll the first link's off the history.
+    quit(&tmux, &["sim:?delay=30ms"]);
+}
+
+#[test]
+fn live_falls_back_to_text_when_stdout_is_not_a_terminal() {
+    let out = Command::new(cargo_bin("mavping"))
+        .args(["--live", "-c", "3", "sim:?clock=virtual"])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0));
+    assert_eq!(
+        String::from_utf8_lossy(&out.stderr),
+        "mavping: --live needs a terminal; printing text\n"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("reply from 1/1: seq=2"), "{stdout}");
+    assert!(stdout.contains("mavping statistics"), "{stdout}");
+}
