@@ -8,6 +8,7 @@ mod cli;
 mod completions;
 mod contrib;
 mod diagnosis;
+mod docs;
 mod exporter;
 mod habits;
 mod high_rate;
