@@ -5,6 +5,7 @@ use std::time::Duration;
 
 use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 
+use crate::engine::load::LoadSpec;
 use crate::units::{parse_duration, parse_percent};
 use crate::verdict::{Expected, RttLimit};
 
@@ -411,6 +412,43 @@ pub struct PingArgs {
     #[arg(help_heading = "Timing", allow_negative_numbers = true, short = 'W', long, value_name = "DURATION", value_parser = parse_duration,
           default_value = "2s", env = "MAVPING_TIMEOUT")]
     pub timeout: Duration,
+
+    /// Find the link's capacity: ramp the rate in steps until it loses, and name the knee
+    ///
+    /// Steps at 2, 5, 10, 20, 50, ... requests/s (from --rate or -i when given) up to
+    /// --sweep-max, each --step long; then bisects around the knee: the highest rate that
+    /// lost under 1% with a p99 under twice the first step's. Also says whether the link
+    /// queues before it drops (bufferbloat). Ctrl-C stops at once with the steps so far
+    #[arg(help_heading = "Capacity", long, env = "MAVPING_SWEEP")]
+    pub sweep: bool,
+
+    /// --sweep: the highest rate to offer [default: twice what a serial link's baud rate
+    /// carries, else 1000]
+    #[arg(
+        help_heading = "Capacity",
+        allow_negative_numbers = true,
+        long,
+        value_name = "HZ"
+    )]
+    pub sweep_max: Option<f64>,
+
+    /// --sweep: stop ramping once a step loses more than PCT [default: 20%]
+    #[arg(help_heading = "Capacity", allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent)]
+    pub sweep_loss: Option<f64>,
+
+    /// How long each step of --sweep or --load sends [default: 5s]
+    #[arg(help_heading = "Capacity", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
+    pub step: Option<Duration>,
+
+    /// Background load beside the probes: MSG@RATE, repeatable
+    ///
+    /// ATTITUDE@HZ, GLOBAL_POSITION_INT@HZ (telemetry as a vehicle sends it) or
+    /// BYTES@BYTES_PER_S (filler), messages no system answers. Without --sweep: one step
+    /// without the load, one with it, at --rate (default 10/s), and by how much the load
+    /// raised the RTT
+    #[arg(help_heading = "Capacity", allow_negative_numbers = true, long, value_name = "MSG@RATE",
+          value_parser = clap::value_parser!(LoadSpec))]
+    pub load: Vec<LoadSpec>,
 
     /// Print only the summary
     #[arg(help_heading = "Output", short = 'q', long)]

@@ -5,6 +5,7 @@
 mod ping;
 mod respond;
 mod serve;
+mod sweep;
 
 use std::net::SocketAddr;
 use std::path::PathBuf;

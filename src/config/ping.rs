@@ -22,7 +22,7 @@ use crate::verdict::{Expected, Thresholds};
 /// More requests than this in flight at once would need an unreasonably
 /// large pending table: lower the rate or the timeout.
 pub const MAX_IN_FLIGHT: u64 = 1 << 21;
-const MAX_RATE: f64 = 1_000_000.0;
+pub(super) const MAX_RATE: f64 = 1_000_000.0;
 /// The longest interval between requests (the lowest rate).
 const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
 
@@ -201,7 +201,10 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
             Duration::from_secs_f64(1.0 / rate)
         }
         (None, Some(interval)) => interval,
-        (None, None) => Duration::from_secs(1),
+        (None, None) => match super::sweep::default_rate(cli) {
+            Some(rate) => Duration::from_secs_f64(1.0 / rate),
+            None => Duration::from_secs(1),
+        },
     };
     if interval < Duration::from_micros(1) {
         return Err(invalid(format!(
@@ -393,6 +396,7 @@ fn session(
     links: &[LinkSpec],
     probe: &Probe,
 ) -> Result<SessionConfig, ConfigError> {
+    super::sweep::validate_flags(cli)?;
     let interval = validate_interval(cli)?;
     if cli.count == Some(0) {
         return Err(invalid("--count 0: expected at least 1"));
@@ -438,6 +442,7 @@ fn session(
         // ms: tokio's timer is precise enough.
         precise_pacing: echo && links.len() == 1 && !matches!(links[0], LinkSpec::Sim(_)),
         signing,
+        sweep: None,
     })
 }
 
@@ -483,37 +488,44 @@ impl TryFrom<&PingArgs> for Config {
         };
         let scoped = validate_scoped_expect(cli, &given, &specs)?;
         let several = specs.len() > 1;
-        let links: Vec<LinkConfig> = specs
-            .into_iter()
-            .zip(given)
-            .enumerate()
-            .map(|(index, (spec, name))| {
-                let mut thresholds = everywhere.clone();
-                thresholds.expect.extend(
-                    scoped
-                        .iter()
-                        .filter(|(i, _)| *i == index)
-                        .map(|(_, id)| *id),
-                );
-                LinkConfig {
-                    session: SessionConfig {
-                        wait: peer_wait(cli, &spec, &session),
-                        // Alone, a link is headed by its full form (the
-                        // defaults of `sim:` spelled out); beside others,
-                        // by the name it was given.
-                        link_name: if several {
-                            name.clone()
-                        } else {
-                            spec.to_string()
-                        },
-                        ..session.clone()
+        let mut links: Vec<LinkConfig> = Vec::new();
+        for (index, (spec, name)) in specs.into_iter().zip(given).enumerate() {
+            let mut thresholds = everywhere.clone();
+            thresholds.expect.extend(
+                scoped
+                    .iter()
+                    .filter(|(i, _)| *i == index)
+                    .map(|(_, id)| *id),
+            );
+            let sweep = super::sweep::for_link(cli, &spec, &session)?;
+            // The pending table holds what the fastest step keeps in flight.
+            let capacity = match &sweep {
+                Some(s) => pending_capacity(
+                    Duration::from_secs_f64(1.0 / super::sweep::fastest_hz(s)),
+                    session.timeout,
+                )?,
+                None => session.capacity,
+            };
+            links.push(LinkConfig {
+                session: SessionConfig {
+                    wait: peer_wait(cli, &spec, &session),
+                    // Alone, a link is headed by its full form (the
+                    // defaults of `sim:` spelled out); beside others, by
+                    // the name it was given.
+                    link_name: if several {
+                        name.clone()
+                    } else {
+                        spec.to_string()
                     },
-                    spec,
-                    name,
-                    thresholds,
-                }
-            })
-            .collect();
+                    capacity,
+                    sweep,
+                    ..session.clone()
+                },
+                spec,
+                name,
+                thresholds,
+            });
+        }
         let route = validate_route(cli, &links)?;
         Ok(Config {
             links,

@@ -183,6 +183,7 @@ mod tests {
                 first_seq: 0,
                 precise_pacing: true,
                 signing,
+                sweep: None,
             };
             let link: LinkSpec = "serial:/dev/ttyUSB0:57600".parse().unwrap();
             for_link(&link, &LinkOptions::default(), &session).unwrap()

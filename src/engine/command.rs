@@ -64,6 +64,7 @@ impl Driver for CommandDriver {
             timeout: self.spec.retry_interval,
             count: cfg.count,
             command: Some(self.spec.clone()),
+            sweep: None,
         }
     }
 

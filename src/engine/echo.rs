@@ -149,6 +149,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             timeout: cfg.timeout,
             count: cfg.count,
             command: None,
+            sweep: cfg.sweep.clone(),
         }
     }
 
@@ -295,6 +296,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             radios,
             wire: None,
             signing,
+            sweep: None,
         };
         let histograms = self
             .matcher

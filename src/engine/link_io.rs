@@ -120,6 +120,8 @@ pub struct Sender {
     ours: SysComp,
     version: Version,
     signer: Option<Signer>,
+    /// Bytes of every frame built, for throughput figures.
+    bytes: u64,
 }
 
 impl Sender {
@@ -130,7 +132,13 @@ impl Sender {
             ours,
             version,
             signer,
+            bytes: 0,
         }
+    }
+
+    /// Bytes of every frame built so far (each is sent once built).
+    pub fn bytes(&self) -> u64 {
+        self.bytes
     }
 
     /// `msg` as our next frame (no allocation per frame).
@@ -155,6 +163,7 @@ impl Sender {
             }
             None => frame::encode(&mut self.buf, version, header, msg),
         }
+        self.bytes += self.buf.len() as u64;
         &self.buf
     }
 

@@ -11,6 +11,7 @@ pub mod diagnosis;
 pub mod echo;
 pub mod hint;
 pub mod link_io;
+pub mod load;
 pub mod matcher;
 pub mod observe;
 pub mod radio;
@@ -19,6 +20,7 @@ pub mod schedule;
 pub mod session;
 pub mod stats;
 pub mod summary;
+pub mod sweep;
 
 use std::time::Duration;
 
@@ -58,4 +60,6 @@ pub struct SessionConfig {
     /// MAVLink 2 signing (`--signing-key`): sign what we send, check what
     /// we receive.
     pub signing: Option<SigningConfig>,
+    /// `--sweep` or `--load`: the run goes in steps (echo probes only).
+    pub sweep: Option<sweep::SweepConfig>,
 }

@@ -11,6 +11,8 @@ use super::matcher::MatchEvent;
 use super::radio::RadioReport;
 use super::roster::Identity;
 use super::summary::Interim;
+use super::sweep::step::StepFigures;
+use super::sweep::SweepConfig;
 use super::Nanos;
 use crate::frame::SysComp;
 
@@ -26,6 +28,8 @@ pub struct StartInfo {
     pub count: Option<u64>,
     /// `--probe command`: what is sent, and how it is re-sent.
     pub command: Option<CommandSpec>,
+    /// `--sweep` or `--load`: the steps planned, the load sent.
+    pub sweep: Option<SweepConfig>,
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -52,6 +56,8 @@ pub enum Event<'a> {
     },
     /// Nothing to send to yet (udpin before a peer is heard).
     WaitingForPeer,
+    /// A step of a sweep (or of a `--load` run) ended.
+    Step(&'a StepFigures),
     /// The link failed; the session ends (told before its summary, so an
     /// exporter shows it while a run's other links go on).
     LinkFailed { at: Nanos, error: &'a str },

@@ -81,6 +81,9 @@ pub trait Driver {
     fn expire(&mut self, now: Nanos);
     /// A received frame that is neither a HEARTBEAT nor a RADIO_STATUS.
     fn on_frame(&mut self, frame: &Frame, path: PathId, at: Nanos);
+    /// A radio's RADIO_STATUS (the session keeps the run's figures; a
+    /// driver may follow them too).
+    fn on_radio(&mut self, _id: SysComp, _report: &RadioReport, _at: Nanos) {}
     /// Hands what was decided since the last call to the observer.
     fn report(&mut self, radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()>;
     /// The next time something may become overdue.
@@ -172,6 +175,7 @@ impl Heard {
                         fixed,
                     };
                     let first = self.radios.record(frame.source, report, at);
+                    driver.on_radio(frame.source, &report, at);
                     output = output.and(observer.event(&Event::Radio {
                         id: frame.source,
                         at,

@@ -10,6 +10,7 @@ use super::matcher::{Counts, Matcher};
 use super::radio::RadioSummary;
 use super::roster::{Identity, Roster};
 use super::stats::{Bucket, RttSummary};
+use super::sweep::verdict::SweepSummary;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
 
@@ -79,6 +80,8 @@ pub struct Summary {
     /// What the signing gate accepted and refused, or, without a key, what
     /// came signed unchecked.
     pub signing: SigningSummary,
+    /// `--sweep` or `--load`: the steps and what they say.
+    pub sweep: Option<Box<SweepSummary>>,
 }
 
 impl Summary {
@@ -304,6 +307,7 @@ impl Summary {
             radios: vec![],
             wire: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
+            sweep: None,
         }
     }
 }

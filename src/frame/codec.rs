@@ -23,6 +23,12 @@ pub struct Header {
     pub seq: u8,
 }
 
+/// V2_EXTENSION's message types from 32768 up are for local experiments
+/// and never registered: a system that meets one ignores the message.
+pub const FILLER_MESSAGE_TYPE: u16 = 0xFFFF;
+/// Non-zero, so MAVLink 2 trims none of the filler.
+const FILLER_BYTE: u8 = 0x55;
+
 // PING is marked superseded by TIMESYNC, yet PX4, QGC and MAVSDK answer it.
 #[allow(deprecated)]
 fn to_mavlink(msg: &Msg) -> dialect::MavMessage {
@@ -107,6 +113,40 @@ fn to_mavlink(msg: &Msg) -> dialect::MavMessage {
             noise,
             remnoise,
         }),
+        Msg::Attitude { time_boot_ms } => M::ATTITUDE(dialect::ATTITUDE_DATA {
+            time_boot_ms,
+            roll: 0.05,
+            pitch: -0.02,
+            yaw: 1.57,
+            rollspeed: 0.001,
+            pitchspeed: -0.002,
+            yawspeed: 0.003,
+        }),
+        Msg::GlobalPositionInt { time_boot_ms } => {
+            M::GLOBAL_POSITION_INT(dialect::GLOBAL_POSITION_INT_DATA {
+                time_boot_ms,
+                lat: 473_977_420,
+                lon: 85_455_940,
+                alt: 488_000,
+                relative_alt: 20_000,
+                vx: 120,
+                vy: -35,
+                vz: 4,
+                hdg: 27_000,
+            })
+        }
+        Msg::Filler { len } => {
+            let mut payload = [0u8; 249];
+            let len = usize::from(len).min(payload.len());
+            payload[..len].fill(FILLER_BYTE);
+            M::V2_EXTENSION(dialect::V2_EXTENSION_DATA {
+                message_type: FILLER_MESSAGE_TYPE,
+                target_network: 0,
+                target_system: 0,
+                target_component: 0,
+                payload,
+            })
+        }
         Msg::Other => unreachable!("Msg::Other is never sent"),
     }
 }
@@ -367,6 +407,36 @@ mod tests {
             target_component: 1,
         };
         assert_eq!(round_trip(Version::V2, msg).msg, msg);
+    }
+
+    #[test]
+    fn load_frames_are_full_length_and_decode_as_other_messages() {
+        let len = |version, msg: Msg| {
+            let mut bytes = Vec::new();
+            let header = Header {
+                sysid: 250,
+                compid: 190,
+                seq: 0,
+            };
+            encode(&mut bytes, version, header, &msg);
+            bytes.len()
+        };
+        // 28-byte payloads, nothing trimmed: 12 + 28 in MAVLink 2.
+        assert_eq!(len(Version::V2, Msg::Attitude { time_boot_ms: 1 }), 40);
+        assert_eq!(len(Version::V1, Msg::Attitude { time_boot_ms: 1 }), 36);
+        assert_eq!(
+            len(Version::V2, Msg::GlobalPositionInt { time_boot_ms: 1 }),
+            40
+        );
+        // Filler: 5 bytes of type and targets, then `len` bytes.
+        assert_eq!(len(Version::V2, Msg::Filler { len: 100 }), 12 + 5 + 100);
+        for msg in [
+            Msg::Attitude { time_boot_ms: 7 },
+            Msg::GlobalPositionInt { time_boot_ms: 7 },
+            Msg::Filler { len: 249 },
+        ] {
+            assert_eq!(round_trip(Version::V2, msg).msg, Msg::Other);
+        }
     }
 
     #[test]

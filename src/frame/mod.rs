@@ -71,6 +71,22 @@ pub enum Msg {
         rxerrors: u16,
         fixed: u16,
     },
+    /// Telemetry a vehicle streams (`--load ATTITUDE@HZ`): plausible,
+    /// non-zero figures, so MAVLink 2 trims nothing and the frame is as
+    /// long as a real one.
+    Attitude {
+        time_boot_ms: u32,
+    },
+    /// `--load GLOBAL_POSITION_INT@HZ`, as [`Msg::Attitude`].
+    GlobalPositionInt {
+        time_boot_ms: u32,
+    },
+    /// Filler bytes (`--load BYTES@RATE`): a V2_EXTENSION of `len` payload
+    /// bytes with a message type from the range MAVLink leaves to local
+    /// experiments, so no system acts on it.
+    Filler {
+        len: u8,
+    },
     /// Any other message: valid frame, contents not needed.
     Other,
 }

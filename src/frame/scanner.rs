@@ -41,6 +41,10 @@ pub struct ScanStats {
     pub skipped_bytes: u64,
     /// Datagrams (or stream ends) that stopped in the middle of a frame.
     pub truncated: u64,
+    /// Bytes of the frames with a valid CRC: what the link delivered, for
+    /// throughput figures (a sweep's bytes/s per step).
+    #[serde(skip)]
+    pub frame_bytes: u64,
 }
 
 impl ScanStats {
@@ -50,6 +54,7 @@ impl ScanStats {
         self.unknown_id += other.unknown_id;
         self.skipped_bytes += other.skipped_bytes;
         self.truncated += other.truncated;
+        self.frame_bytes += other.frame_bytes;
     }
 }
 
@@ -248,6 +253,7 @@ fn scan(
         match judge(buf, pos, at_end, inner) {
             Step::Frame(len) => {
                 stats.frames += 1;
+                stats.frame_bytes += len as u64;
                 on_frame(&buf[pos..pos + len]);
                 pos += len;
             }
@@ -371,6 +377,7 @@ mod tests {
         assert_eq!(frames.len(), 2);
         assert_eq!(stats.frames, 2);
         assert_eq!(stats.skipped_bytes, 0);
+        assert_eq!(stats.frame_bytes, data.len() as u64);
     }
 
     #[test]

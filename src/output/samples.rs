@@ -196,6 +196,7 @@ mod tests {
             timeout: std::time::Duration::from_secs(1),
             count: None,
             command: None,
+            sweep: None,
         };
         let lost = Event::Match(MatchEvent::Lost {
             responder: SysComp::new(1, 1),

@@ -4,11 +4,26 @@
 use crate::config::{LinkConfig, Probe};
 use crate::engine::observe::Observer;
 use crate::engine::session::{Controls, Outcome};
-use crate::engine::{command, echo};
+use crate::engine::{command, echo, sweep, SessionConfig};
 use crate::output::WallClock;
 use crate::probe::ping::PingProbe;
 use crate::probe::timesync::TimesyncProbe;
+use crate::probe::EchoProbe;
 use crate::transport::{Link, LinkSpec};
+
+/// An echo probe's run, in steps when `--sweep` or `--load` asks.
+async fn echo_or_steps<P: EchoProbe>(
+    session: &SessionConfig,
+    link: &mut Link,
+    probe: P,
+    observer: &mut dyn Observer,
+    controls: &Controls,
+) -> Outcome {
+    match &session.sweep {
+        Some(steps) => sweep::run(session, steps, link, probe, observer, controls).await,
+        None => echo::run(session, link, probe, observer, controls).await,
+    }
+}
 
 /// Runs `probe` on the opened `link` until the session ends; its outcome.
 pub async fn measure(
@@ -27,11 +42,11 @@ pub async fn measure(
             // from its start, and so do we there (reproducible output).
             let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
             let probe = TimesyncProbe::new(*target, wall_clock);
-            echo::run(session, &mut link, probe, observer, controls).await
+            echo_or_steps(session, &mut link, probe, observer, controls).await
         }
         Probe::Ping => {
             let probe = PingProbe::new(wall.micros_since_epoch());
-            echo::run(session, &mut link, probe, observer, controls).await
+            echo_or_steps(session, &mut link, probe, observer, controls).await
         }
     };
     // The simulated link's ground truth, for soak scripts (`-v`).

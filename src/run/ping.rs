@@ -166,8 +166,9 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
         };
         // A USB CDC port or a pty passes what it gets at once: the warning
         // is for a real UART (the summary says which it was, from the RTTs).
+        // A sweep means to go past it; its first line says how far.
         let warning = wire
-            .filter(|_| !link_config.spec.may_ignore_baud())
+            .filter(|_| !link_config.spec.may_ignore_baud() && session.sweep.is_none())
             .and_then(|w| w.warning(1.0 / session.interval.as_secs_f64()));
         if let Some(w) = warning {
             stderr::warning(&error_line(several, name, &w));

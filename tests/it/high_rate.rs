@@ -36,6 +36,7 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         first_seq: u32::MAX - 10_000, // and the sequence wraps on the way
         precise_pacing: false,
         signing: None,
+        sweep: None,
     };
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()

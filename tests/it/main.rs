@@ -24,6 +24,7 @@ mod scripting;
 mod serial_pty;
 mod serve;
 mod signing;
+mod sweep;
 mod tcp_pymavlink;
 mod udp_bcast_ipv6;
 mod udp_pymavlink;

@@ -155,6 +155,7 @@ fn session(
         // Many sessions share the server's thread: none may spin.
         precise_pacing: false,
         signing: c.signing,
+        sweep: None,
     })
 }
 

@@ -105,6 +105,7 @@ impl<W: Write> JsonReporter<W> {
                 Value::Object(m)
             }
             Event::WaitingForPeer => json!({"type": "waiting", "reason": "no peer heard yet"}),
+            Event::Step(step) => self.step_object(step),
             // The summary has each clock and the link's error; a stream
             // of estimates is for the exporters.
             Event::Command(_) | Event::Clock { .. } | Event::LinkFailed { .. } => return None,
@@ -184,7 +185,7 @@ fn ns(v: i128) -> i64 {
 
 /// The `summary` object.
 pub(super) fn summary(s: &Summary, verdict: &Verdict) -> Value {
-    json!({
+    let mut v = json!({
         "type": "summary",
         "schema_version": SCHEMA_VERSION,
         "link": s.link,
@@ -210,5 +211,9 @@ pub(super) fn summary(s: &Summary, verdict: &Verdict) -> Value {
         "responders": s.responders.iter().map(|r| responder_json(r, verdict)).collect::<Vec<_>>(),
         "verdict": verdict,
         "exit_code": verdict.exit_code,
-    })
+    });
+    if let Some(sweep) = &s.sweep {
+        v["sweep"] = super::sweep::summary(sweep, s.wire.as_ref());
+    }
+    v
 }

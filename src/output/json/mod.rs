@@ -5,6 +5,7 @@
 
 mod command;
 mod echo;
+mod sweep;
 
 use std::io::{self, Write};
 
@@ -99,6 +100,9 @@ impl<W: Write> Observer for JsonReporter<W> {
         let mut value = self.start_object(info);
         if let Some(spec) = &info.command {
             value.insert("command".into(), command::spec(spec));
+        }
+        if let Some(plan) = &info.sweep {
+            value.insert("sweep".into(), sweep::plan(plan));
         }
         self.emit(Value::Object(value))
     }

@@ -104,6 +104,7 @@ impl LiveState {
             Event::Radio { .. }
             | Event::Command(_)
             | Event::Clock { .. }
+            | Event::Step(_)
             | Event::LinkFailed { .. } => {}
         }
     }
@@ -387,6 +388,7 @@ mod tests {
             timeout: Duration::from_secs(2),
             count: None,
             command: None,
+            sweep: None,
         }
     }
 

@@ -14,7 +14,7 @@ use super::style::Look;
 use super::{bin, bin_low_ms, PlotData, Track, BINS_PER_DECADE};
 use crate::engine::Nanos;
 
-const WIDTH: u32 = 1000;
+pub(super) const WIDTH: u32 = 1000;
 const TITLE_H: u32 = 44;
 const TIME_H: u32 = 300;
 /// Height of one responder's row of lost requests.
@@ -23,14 +23,14 @@ const LANE_H: u32 = 24;
 const LANES_AXIS_H: u32 = 66;
 const DIST_H: u32 = 270;
 const ROW_H: u32 = 26;
-const MARGIN: u32 = 14;
+pub(super) const MARGIN: u32 = 14;
 /// Room for the y axis labels, the same for every chart so their time and
 /// RTT axes line up.
-const Y_LABELS_W: u32 = 70;
+pub(super) const Y_LABELS_W: u32 = 70;
 /// Width of a number column in the legend.
 const NUMBER_W: i32 = 110;
-const FONT: &str = "sans-serif";
-const TITLE_SIZE: f64 = 24.0;
+pub(super) const FONT: &str = "sans-serif";
+pub(super) const TITLE_SIZE: f64 = 24.0;
 /// Markers along a line of RTT over time.
 const MARKS_PER_LINE: usize = 12;
 
@@ -43,7 +43,7 @@ fn tick(v: &f64) -> String {
 /// Ticks for a log axis from `from` to `to`: 1, 2, 5 (or 1, 2, 3, 5)
 /// times the powers of ten inside it; a range too narrow for four of those
 /// gets evenly spaced ticks, as a linear axis would.
-fn log_ticks(from: f64, to: f64) -> Vec<f64> {
+pub(super) fn log_ticks(from: f64, to: f64) -> Vec<f64> {
     let within = |steps: &[f64]| -> Vec<f64> {
         let first = from.log10().floor() as i32;
         let last = to.log10().ceil() as i32;
@@ -72,7 +72,7 @@ fn log_ticks(from: f64, to: f64) -> Vec<f64> {
     (first..=last).map(|k| k as f64 * step).collect()
 }
 
-type DrawResult = Result<(), Box<dyn std::error::Error>>;
+pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
 type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 
 /// One responder, in drawing order.
@@ -119,25 +119,25 @@ pub(super) fn svg(data: &PlotData) -> Result<String, String> {
     Ok(svg)
 }
 
-fn title_font(size: f64) -> FontDesc<'static> {
+pub(super) fn title_font(size: f64) -> FontDesc<'static> {
     (FONT, size).into_font()
 }
 
 /// The font size, from `size` down to three fifths of it, at which `text`
 /// fits in `width`.
-fn fit(text: &str, size: f64, width: u32) -> f64 {
+pub(super) fn fit(text: &str, size: f64, width: u32) -> f64 {
     let wide = text_width(text, title_font(size)).max(1);
     (size * f64::from(width) / f64::from(wide)).clamp(size * 0.6, size)
 }
 
-fn legend_font() -> FontDesc<'static> {
+pub(super) fn legend_font() -> FontDesc<'static> {
     (FONT, 17).into_font()
 }
 
 /// The width `text` takes. plotters can only estimate it for SVG (the
 /// viewer picks the font), and its estimate runs short for DejaVu Sans,
 /// the usual sans-serif on Linux: a fifth is added.
-fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
+pub(super) fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
     font.box_size(text).map_or(0, |(w, _)| w * 6 / 5)
 }
 
@@ -178,7 +178,7 @@ fn axis_font() -> TextStyle<'static> {
     (FONT, 15).into()
 }
 
-fn caption_font() -> TextStyle<'static> {
+pub(super) fn caption_font() -> TextStyle<'static> {
     (FONT, 19).into()
 }
 
@@ -224,7 +224,7 @@ fn over_time(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
 
 /// The grid and axes every chart shares: its fonts, round tick labels, few
 /// and faint minor lines.
-fn mesh<'a, 'b, X, Y>(
+pub(super) fn mesh<'a, 'b, X, Y>(
     chart: &'b mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
 ) -> MeshStyle<'a, 'b, X, Y, SVGBackend<'a>>
 where

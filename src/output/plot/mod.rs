@@ -9,6 +9,7 @@
 
 mod draw;
 mod style;
+mod sweep;
 
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -18,6 +19,7 @@ use std::rc::Rc;
 use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::{LinkSummary, ResponderSummary};
+use crate::engine::sweep::verdict::SweepSummary;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -120,6 +122,8 @@ pub struct PlotData {
     /// Each link's name, by its place on the command line.
     links: Vec<String>,
     tracks: BTreeMap<(usize, SysComp), Track>,
+    /// Each sweeping link's steps, once its summary came.
+    sweeps: BTreeMap<usize, SweepSummary>,
 }
 
 impl PlotData {
@@ -163,9 +167,34 @@ impl PlotData {
         }
     }
 
-    /// Draws the SVG document.
+    /// Draws the SVG document: RTT and loss against the offered rate for
+    /// a sweep, else RTT over time and its distribution.
     pub fn svg(&self) -> Result<String, String> {
-        draw::svg(self)
+        if self.sweeps.is_empty() {
+            return draw::svg(self);
+        }
+        let entries: Vec<sweep::SweepEntry<'_>> = self
+            .sweeps
+            .iter()
+            .enumerate()
+            .map(|(n, (&link, s))| sweep::SweepEntry {
+                label: self.links.get(link).cloned().unwrap_or_default(),
+                look: style::Look::nth(n),
+                sweep: s,
+            })
+            .collect();
+        let title = match self.links.as_slice() {
+            [one] => format!("mavping sweep {one}"),
+            several => format!("mavping sweep, {} links", several.len()),
+        };
+        sweep::svg(&title, &entries)
+    }
+
+    /// A link's sweep, drawn instead of its RTT over time.
+    pub fn on_sweep(&mut self, link: usize, sweep: &SweepSummary) {
+        if sweep.kind == "sweep" {
+            self.sweeps.insert(link, sweep.clone());
+        }
     }
 
     /// The run's own figures for each responder of `link`, for the legend.
@@ -231,7 +260,11 @@ impl Reporter for PlotLink {
     fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
         // The command probe sends no echo requests, so it has no lines.
         if let LinkSummary::Echo(s) = summary {
-            self.data.borrow_mut().on_summary(self.index, &s.responders);
+            let mut data = self.data.borrow_mut();
+            data.on_summary(self.index, &s.responders);
+            if let Some(sweep) = &s.sweep {
+                data.on_sweep(self.index, sweep);
+            }
         }
         Ok(())
     }

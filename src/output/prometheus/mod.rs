@@ -274,7 +274,7 @@ impl Observer for Metrics {
             Event::Radio { id, report, .. } => self.on_radio(*id, *report),
             Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
             Event::LinkFailed { .. } => self.set_up(false),
-            Event::Heard { .. } | Event::WaitingForPeer => {}
+            Event::Heard { .. } | Event::WaitingForPeer | Event::Step(_) => {}
         }
         Ok(())
     }
@@ -379,6 +379,7 @@ fn test_start(link: &str) -> StartInfo {
         timeout: Duration::from_secs(2),
         count: None,
         command: None,
+        sweep: None,
     }
 }
 

@@ -30,6 +30,9 @@ pub(super) struct Progress {
 
 impl<W: Write> TextReporter<W> {
     pub(super) fn echo_start(&mut self, info: &StartInfo) -> io::Result<()> {
+        if let Some(plan) = &info.sweep {
+            return self.sweep_start(info, plan);
+        }
         let summarised = !self.every_reply && 1.0 / info.interval.as_secs_f64() > MAX_LINE_RATE;
         if summarised {
             self.progress = Some(Progress::default());
@@ -70,6 +73,12 @@ impl<W: Write> TextReporter<W> {
                 raw(report.noise),
                 raw(report.remnoise)
             );
+        }
+        match event {
+            Event::Step(step) => return self.step_row(step),
+            // A run in steps shows each step, not each reply.
+            Event::Match(_) if self.steps => return Ok(()),
+            _ => {}
         }
         if let (Some(_), Event::Match(e)) = (&self.progress, event) {
             return self.tally(e);
@@ -135,6 +144,7 @@ impl<W: Write> TextReporter<W> {
             Event::Radio { .. }
             | Event::Command(_)
             | Event::Clock { .. }
+            | Event::Step(_)
             | Event::LinkFailed { .. } => Ok(()),
         }
     }
@@ -389,6 +399,7 @@ pub(super) fn write_summary(
     out: &mut impl Write,
     s: &Summary,
     verdict: &Verdict,
+    steps_shown: usize,
 ) -> io::Result<()> {
     write!(out, "{} requests sent in {:.3} s", s.requests, s.duration_s)?;
     if s.in_flight > 0 {
@@ -408,6 +419,9 @@ pub(super) fn write_summary(
     }
     for r in &s.radios {
         write_radio(out, r)?;
+    }
+    if let Some(sweep) = &s.sweep {
+        super::sweep::write_summary(out, sweep, s.wire.as_ref(), steps_shown)?;
     }
     if let Some(w) = &s.wire {
         write!(

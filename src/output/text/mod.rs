@@ -5,6 +5,7 @@
 
 mod command;
 mod echo;
+mod sweep;
 
 use std::io::{self, Write};
 
@@ -37,6 +38,11 @@ pub struct TextReporter<W: Write> {
     radio_shown: Option<Nanos>,
     /// `-D`: each event line starts with its Unix time, as `ping -D`.
     timestamps: Option<WallClock>,
+    /// A run in steps (`--sweep`, `--load`): a row per step instead of a
+    /// line per reply.
+    steps: bool,
+    /// Step rows printed as the steps ended; the summary shows the rest.
+    steps_shown: usize,
 }
 
 impl<W: Write> TextReporter<W> {
@@ -51,6 +57,8 @@ impl<W: Write> TextReporter<W> {
             radio: None,
             radio_shown: None,
             timestamps: None,
+            steps: false,
+            steps_shown: 0,
         }
     }
 
@@ -98,6 +106,7 @@ impl<W: Write> Observer for TextReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.timeout = info.timeout;
         self.command = info.command.is_some();
+        self.steps = info.sweep.is_some();
         if self.quiet {
             return Ok(());
         }
@@ -132,13 +141,15 @@ impl<W: Write> Observer for TextReporter<W> {
 impl<W: Write> Reporter for TextReporter<W> {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
         let quiet = self.quiet;
+        let steps_shown = self.steps_shown;
         let out = self.out.inner();
         if !quiet {
             writeln!(out)?;
         }
         writeln!(out, "--- {} mavping statistics ---", summary.link())?;
         match summary {
-            LinkSummary::Echo(s) => echo::write_summary(out, s, verdict)?,
+            // Steps not shown as they ended (-q, or cut short) are shown here.
+            LinkSummary::Echo(s) => echo::write_summary(out, s, verdict, steps_shown)?,
             LinkSummary::Command(s) => command::write_summary(out, s)?,
         }
         out.flush()

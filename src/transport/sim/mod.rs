@@ -17,9 +17,11 @@ use tokio::time::{sleep_until, Instant};
 use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::frame::{self, Header, Msg, ScanStats, SysComp, Version};
 use crate::responder::core::ResponderCore;
+use radio::RadioPair;
 
 mod params;
-pub use params::{SimParams, SIM_KEYS};
+pub mod radio;
+pub use params::{SimParams, DEFAULT_BUFFER_BYTES, SIM_KEYS};
 
 struct SimResponder {
     core: ResponderCore,
@@ -78,10 +80,6 @@ struct Delivery {
 /// memory without bound; past it, replies are dropped like a full queue.
 const MAX_QUEUED: usize = 1 << 20;
 
-/// The simulated radio's transmit buffer (`baud=`): bytes waiting for the
-/// wire beyond this are dropped, as a radio drops what its buffer cannot
-/// hold.
-pub const RADIO_BUFFER_BYTES: u64 = 1024;
 pub const RADIO_ID: SysComp = SysComp::new(51, 68);
 
 /// The shared wire of a `baud=` link: when it is next free.
@@ -102,6 +100,9 @@ pub struct SimLink {
     wire: Wire,
     next_radio: Instant,
     radio_seq: u8,
+    /// `air=`: a radio pair with its own air and buffers, instead of one
+    /// shared wire.
+    pair: Option<Box<RadioPair>>,
 }
 
 impl SimLink {
@@ -119,6 +120,10 @@ impl SimLink {
                 }
             })
             .collect();
+        let pair = params
+            .air
+            .zip(params.baud)
+            .map(|(air, baud)| Box::new(RadioPair::new(baud, &air, params.buffer)));
         SimLink {
             rng: SmallRng::seed_from_u64(params.seed),
             params,
@@ -131,6 +136,7 @@ impl SimLink {
             wire: Wire::default(),
             next_radio: now,
             radio_seq: 0,
+            pair,
         }
     }
 
@@ -244,13 +250,51 @@ impl SimLink {
         if self.params.baud.is_none() {
             return Some(now);
         }
-        if self.backlog_bytes(now) + bytes as u64 > RADIO_BUFFER_BYTES {
+        if self.backlog_bytes(now) + bytes as u64 > self.params.buffer {
             return None;
         }
         let start = self.wire.free_at.map_or(now, |t| t.max(now));
         let done = start + self.wire_time(bytes);
         self.wire.free_at = Some(done);
         Some(done)
+    }
+
+    /// Nanoseconds since the link opened: the radio pair's time.
+    fn ns(&self, t: Instant) -> u64 {
+        t.saturating_duration_since(self.started).as_nanos() as u64
+    }
+
+    fn instant(&self, ns: u64) -> Instant {
+        self.started + Duration::from_nanos(ns)
+    }
+
+    /// A frame we send at `now`: when the responders have it, or `None`
+    /// when a full buffer drops it.
+    fn uplink(&mut self, now: Instant, bytes: usize) -> Option<Instant> {
+        let at = self.ns(now);
+        match self.pair.as_mut() {
+            Some(pair) => {
+                let done = pair.uplink(at, bytes as u64).ok()?;
+                Some(self.instant(done))
+            }
+            None => self.serialise(now, bytes),
+        }
+    }
+
+    /// A reply to a request the responder has from `request_done` on,
+    /// answered `up` later: when it reaches us but for the return leg's
+    /// delay, or `None` when a full buffer drops it.
+    fn downlink(&mut self, request_done: Instant, up: Duration, bytes: usize) -> Option<Instant> {
+        let at = self.ns(request_done + up);
+        match self.pair.as_mut() {
+            Some(pair) => {
+                let done = pair.downlink(at, bytes as u64).ok()?;
+                Some(self.instant(done))
+            }
+            // One shared wire: the reply is queued for it when the request
+            // is, so the wire's order is the requests' order.
+            None => self.serialise(request_done, bytes).map(|done| done + up),
+        }
     }
 
     /// RADIO_STATUS once a second: RSSI falls with the simulated loss,
@@ -260,8 +304,15 @@ impl SimLink {
             let sent = self.next_radio;
             self.next_radio += Duration::from_secs(1);
             let rssi = (200.0 - 300.0 * self.params.loss).clamp(0.0, 254.0) as u8;
-            let free = RADIO_BUFFER_BYTES.saturating_sub(self.backlog_bytes(sent));
-            let txbuf = (free * 100 / RADIO_BUFFER_BYTES) as u8;
+            let at = self.ns(sent);
+            let txbuf = match self.pair.as_mut() {
+                Some(pair) => pair.ground_free_percent(at),
+                None => {
+                    let buffer = self.params.buffer;
+                    let free = buffer.saturating_sub(self.backlog_bytes(sent));
+                    (free * 100 / buffer) as u8
+                }
+            };
             let dropped = self.responders.iter().map(|r| r.truth.dropped).sum::<u64>();
             self.radio_seq = self.radio_seq.wrapping_add(1);
             let header = Header {
@@ -300,7 +351,7 @@ impl Transport for SimLink {
         let mut ignored = ScanStats::default();
         push_datagram(bytes, now, 0, &mut ignored, &mut requests);
         // The request's own wire time; a full buffer loses it for everyone.
-        let Some(sent_done) = self.serialise(now, bytes.len()) else {
+        let Some(sent_done) = self.uplink(now, bytes.len()) else {
             for request in &requests {
                 for i in 0..self.responders.len() {
                     if self.responders[i].core.answer(&request.frame, 0).is_some() {
@@ -340,21 +391,22 @@ impl Transport for SimLink {
                 // one leg after we sent it: that is what makes the NTP
                 // offset estimate unbiased.
                 if let Msg::Timesync { tc1, .. } = &mut reply {
-                    *tc1 = self.clock_ns(now + up);
+                    // Through a radio pair the request arrives once it is
+                    // through the air.
+                    let read_at = if self.pair.is_some() { sent_done } else { now };
+                    *tc1 = self.clock_ns(read_at + up);
                 }
                 let header = self.responders[i].header();
                 let mut out = Vec::new();
                 frame::encode(&mut out, request.frame.version, header, &reply);
-                // Simplification: the reply is queued for the wire when the
-                // request is, so the wire's order is the requests' order.
-                let Some(reply_done) = self.serialise(sent_done, out.len()) else {
+                let Some(reply_done) = self.downlink(sent_done, up, out.len()) else {
                     let truth = &mut self.responders[i].truth;
                     truth.dropped += 1;
                     truth.overflowed += 1;
                     truth.dropped_before_first += u64::from(truth.delivered == 0);
                     continue;
                 };
-                let mut at = reply_done + up + self.one_way();
+                let mut at = reply_done + self.one_way();
                 // Drawn only when asked for, so seeds keep their faults.
                 if self.chance(self.params.spike) {
                     let truth = &mut self.responders[i].truth;

@@ -4,8 +4,12 @@
 use std::fmt;
 use std::time::Duration;
 
+use super::radio::{AirParams, DEFAULT_TDM_ROUND};
 use crate::frame::SysComp;
 use crate::units::{parse_duration_up_to, parse_percent};
+
+/// The radio's transmit buffer when `buffer=` does not say.
+pub const DEFAULT_BUFFER_BYTES: u64 = 1024;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimParams {
@@ -40,6 +44,13 @@ pub struct SimParams {
     pub baud: Option<u32>,
     /// Emit RADIO_STATUS as 51/68 once a second, following the link.
     pub radio: bool,
+    /// The radio's transmit buffer: what waits for the wire (or the air)
+    /// beyond it is dropped.
+    pub buffer: u64,
+    /// A radio pair with its own air rate, TDM and ECC behind UARTs at
+    /// `baud` ([`super::radio`]); without it, `baud` is one half-duplex
+    /// wire.
+    pub air: Option<AirParams>,
     /// A link outage: from `start` after the link opened, for `length`,
     /// every request and reply is lost.
     pub outage: Option<(Duration, Duration)>,
@@ -68,6 +79,8 @@ impl Default for SimParams {
             drift_ppm: 0.0,
             baud: None,
             radio: false,
+            buffer: DEFAULT_BUFFER_BYTES,
+            air: None,
             outage: None,
             spike: 0.0,
             spike_delay: Duration::from_millis(500),
@@ -79,7 +92,28 @@ impl Default for SimParams {
 pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURATION, \
 jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
 ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
-outage=START+LENGTH, spike=PCT, spike_delay=DURATION";
+buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, spike=PCT, \
+spike_delay=DURATION";
+
+/// `64000`, `64k`, `1.5M`: bits per second.
+fn bit_rate(key: &str, value: &str) -> Result<u32, String> {
+    let (number, scale) = match value.strip_suffix(['k', 'K']) {
+        Some(n) => (n, 1e3),
+        None => match value.strip_suffix('M') {
+            Some(n) => (n, 1e6),
+            None => (value, 1.0),
+        },
+    };
+    number
+        .parse::<f64>()
+        .ok()
+        .map(|v| v * scale)
+        .filter(|v| (1_000.0..=10_000_000.0).contains(v))
+        .map(|v| v.round() as u32)
+        .ok_or_else(|| {
+            format!("{key}={value}: expected an air rate from 1k to 10M bits per second, e.g. 64k")
+        })
+}
 
 fn percent(key: &str, value: &str) -> Result<f64, String> {
     parse_percent(value).map_err(|e| format!("{key}={value}: {e}"))
@@ -108,6 +142,7 @@ impl SimParams {
     /// Parses the part after `sim:`: empty, or `?key=value&key=value`.
     pub fn parse(query: &str) -> Result<Self, String> {
         let mut p = SimParams::default();
+        let (mut air, mut duty, mut ecc, mut tdm) = (None, None, None, None);
         let query = query.strip_prefix('?').unwrap_or(query);
         for pair in query.split('&').filter(|s| !s.is_empty()) {
             let (key, value) = pair
@@ -178,6 +213,28 @@ impl SimParams {
                     p.baud = Some(baud);
                 }
                 "radio" => p.radio = switch(key, value)?,
+                "buffer" => {
+                    p.buffer = number(key, value, "16 to 1048576 bytes")?;
+                    if !(16..=1 << 20).contains(&p.buffer) {
+                        return Err(format!("{key}={value}: expected 16 to 1048576 bytes"));
+                    }
+                }
+                "air" => air = Some(bit_rate(key, value)?),
+                "duty" => {
+                    let d = percent(key, value)?;
+                    if d <= 0.0 {
+                        return Err(format!("{key}={value}: expected more than 0%"));
+                    }
+                    duty = Some(d);
+                }
+                "ecc" => ecc = Some(switch(key, value)?),
+                "tdm" => {
+                    let round = duration(key, value)?;
+                    if !(Duration::from_millis(1)..=Duration::from_secs(1)).contains(&round) {
+                        return Err(format!("{key}={value}: expected 1ms to 1s"));
+                    }
+                    tdm = Some(round);
+                }
                 "outage" => {
                     let (start, length) = value.split_once('+').ok_or_else(|| {
                         format!("{key}={value}: expected START+LENGTH, e.g. outage=30s+5s")
@@ -188,6 +245,37 @@ impl SimParams {
                 "spike_delay" => p.spike_delay = duration(key, value)?,
                 _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
             }
+        }
+        p.air = match air {
+            Some(air_bps) => {
+                if p.baud.is_none() {
+                    return Err(format!(
+                        "air={air_bps} needs baud=N: the radios' serial side (e.g. baud=57600&air=64k)"
+                    ));
+                }
+                Some(AirParams {
+                    air_bps,
+                    duty: duty.unwrap_or(1.0),
+                    ecc: ecc.unwrap_or(false),
+                    tdm_round: tdm.unwrap_or(DEFAULT_TDM_ROUND),
+                })
+            }
+            None => {
+                let given = [
+                    (duty.is_some(), "duty"),
+                    (ecc.is_some(), "ecc"),
+                    (tdm.is_some(), "tdm"),
+                ];
+                if let Some((_, key)) = given.iter().find(|(set, _)| *set) {
+                    return Err(format!(
+                        "{key}= needs air=BITS_PER_S (e.g. baud=57600&air=64k)"
+                    ));
+                }
+                None
+            }
+        };
+        if p.baud.is_none() && p.buffer != DEFAULT_BUFFER_BYTES {
+            return Err("buffer= needs baud=N: only a serial radio link has a buffer".into());
         }
         // Responders are numbered by sysid; the last one must still fit.
         if usize::from(p.first_sysid) + usize::from(p.responders) - 1 > 255 * 255 {
@@ -229,6 +317,21 @@ impl fmt::Display for SimParams {
         }
         if let Some(baud) = self.baud {
             write!(f, "&baud={baud}")?;
+        }
+        if let Some(air) = &self.air {
+            write!(f, "&air={}", air.air_bps)?;
+            if air.duty != 1.0 {
+                write!(f, "&duty={}%", air.duty * 100.0)?;
+            }
+            if air.ecc {
+                write!(f, "&ecc=on")?;
+            }
+            if air.tdm_round != DEFAULT_TDM_ROUND {
+                write!(f, "&tdm={}", humantime::format_duration(air.tdm_round))?;
+            }
+        }
+        if self.buffer != DEFAULT_BUFFER_BYTES {
+            write!(f, "&buffer={}", self.buffer)?;
         }
         if self.radio {
             write!(f, "&radio=on")?;
@@ -333,6 +436,39 @@ mod tests {
         assert!(p.to_string().ends_with("&baud=57600&radio=on"));
         for bad in ["?baud=0", "?baud=fast", "?radio=maybe"] {
             assert!(SimParams::parse(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn radio_physics_keys_parse_print_back_and_need_their_partners() {
+        let p =
+            SimParams::parse("?baud=57600&air=64k&duty=50%&ecc=on&tdm=40ms&buffer=200").unwrap();
+        let air = p.air.unwrap();
+        assert_eq!((air.air_bps, air.duty, air.ecc), (64_000, 0.5, true));
+        assert_eq!((air.tdm_round, p.buffer), (Duration::from_millis(40), 200));
+        let printed = p.to_string();
+        assert!(
+            printed.ends_with("&baud=57600&air=64000&duty=50%&ecc=on&tdm=40ms&buffer=200"),
+            "{printed}"
+        );
+        assert_eq!(SimParams::parse(&printed[4..]).unwrap(), p);
+        // Defaults are left out of the name.
+        let p = SimParams::parse("?baud=115200&air=1.5M").unwrap();
+        assert!(p.to_string().ends_with("&baud=115200&air=1500000"), "{p}");
+        assert_eq!(p.air.unwrap().tdm_round, DEFAULT_TDM_ROUND);
+        for (q, needle) in [
+            ("?air=64k", "needs baud=N"),
+            ("?baud=57600&duty=50%", "duty= needs air="),
+            ("?baud=57600&ecc=on", "ecc= needs air="),
+            ("?buffer=200", "buffer= needs baud=N"),
+            ("?baud=57600&air=fast", "expected an air rate"),
+            ("?baud=57600&air=20M", "expected an air rate"),
+            ("?baud=57600&air=64k&duty=0", "more than 0%"),
+            ("?baud=57600&air=64k&tdm=5s", "1ms to 1s"),
+            ("?baud=57600&buffer=2", "16 to 1048576"),
+        ] {
+            let err = SimParams::parse(q).unwrap_err();
+            assert!(err.contains(needle), "{q}: {err}");
         }
     }
 }

@@ -1,0 +1,461 @@
+//! One step of a sweep: what it sent and what came back, and the figures
+//! it is reported with. Pure: events and byte counters are handed in with
+//! their times. Memory is one RTT histogram per step being measured.
+
+use serde::Serialize;
+
+use super::plan::{Phase, PlannedStep};
+use crate::engine::matcher::MatchEvent;
+use crate::engine::radio::{RadioReport, SinceBootCounter, UNKNOWN};
+use crate::engine::stats::RttStats;
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+
+/// A step passes the knee test when it loses less than this share...
+pub const KNEE_MAX_LOSS: f64 = 0.01;
+/// ...and its p99 stays under this many times the first step's.
+pub const KNEE_MAX_P99_RATIO: f64 = 2.0;
+
+/// A step's RTT figures over every responder's in-time replies, in µs.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepRtt {
+    pub p50_us: f64,
+    pub p99_us: f64,
+    pub max_us: f64,
+}
+
+/// The radio's own figures during a step (the first radio heard).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct StepRadio {
+    pub id: SysComp,
+    pub reports: u64,
+    /// Least and mean % of its transmit buffer free.
+    pub txbuf_min: Option<u8>,
+    pub txbuf_mean: Option<f64>,
+    pub rssi_mean: Option<f64>,
+    pub remrssi_mean: Option<f64>,
+    /// What its since-boot receive-error counter grew by during the step.
+    pub rxerrors_delta: u64,
+}
+
+/// One step as reported.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct StepFigures {
+    /// 1 for the first step.
+    pub index: u32,
+    pub phase: Phase,
+    /// The `--load` streams were on.
+    pub load: bool,
+    pub offered_hz: f64,
+    /// Requests sent over the time from the first to the last.
+    pub achieved_hz: f64,
+    /// When its first request went out, in seconds since the run started.
+    pub start_s: f64,
+    /// From its first request to its last.
+    pub duration_s: f64,
+    pub requests: u64,
+    /// In-time replies, summed over responders.
+    pub received: u64,
+    pub lost: u64,
+    pub late: u64,
+    /// lost / (received + lost).
+    pub loss_ratio: f64,
+    pub rtt: Option<StepRtt>,
+    /// Bytes per second we sent (probes, load, HEARTBEAT) while the step
+    /// sent, and received (every valid frame) from its start until its
+    /// replies were in, both over the time it sent: the step's own traffic
+    /// each way.
+    pub tx_bytes_per_s: f64,
+    pub rx_bytes_per_s: f64,
+    pub radio: Option<StepRadio>,
+    /// False when the run ended (Ctrl-C, deadline, link failure) before the
+    /// step did: it is shown, never judged.
+    pub complete: bool,
+    /// The knee test (sweep steps only): loss under 1 % and p99 under
+    /// twice the first sweep step's.
+    pub passed: Option<bool>,
+}
+
+impl StepFigures {
+    /// Whether these figures pass the knee test against the first sweep
+    /// step's p99.
+    pub fn passes(&self, reference_p99_us: f64) -> bool {
+        self.complete
+            && self.received > 0
+            && self.loss_ratio < KNEE_MAX_LOSS
+            && self
+                .rtt
+                .is_some_and(|r| r.p99_us < KNEE_MAX_P99_RATIO * reference_p99_us)
+    }
+
+    /// Bytes per second both ways.
+    pub fn wire_bytes_per_s(&self) -> f64 {
+        self.tx_bytes_per_s + self.rx_bytes_per_s
+    }
+
+    #[cfg(test)]
+    pub fn test(phase: Phase, rate: f64, loss: f64) -> Self {
+        StepFigures {
+            index: 0,
+            phase,
+            load: false,
+            offered_hz: rate,
+            achieved_hz: rate,
+            start_s: 0.0,
+            duration_s: 1.0,
+            requests: 100,
+            received: (100.0 * (1.0 - loss)) as u64,
+            lost: (100.0 * loss) as u64,
+            late: 0,
+            loss_ratio: loss,
+            rtt: Some(StepRtt {
+                p50_us: 10_000.0,
+                p99_us: 12_000.0,
+                max_us: 13_000.0,
+            }),
+            tx_bytes_per_s: rate * 21.0,
+            rx_bytes_per_s: rate * 26.0,
+            radio: None,
+            complete: true,
+            passed: None,
+        }
+    }
+}
+
+/// The radio's reports during a step.
+#[derive(Debug, Clone, Copy)]
+struct RadioTally {
+    id: SysComp,
+    reports: u64,
+    txbuf_min: Option<u8>,
+    txbuf: (u64, u64),
+    rssi: (u64, u64),
+    remrssi: (u64, u64),
+    rxerrors: SinceBootCounter,
+}
+
+fn add(sum: &mut (u64, u64), v: u8) {
+    if v != UNKNOWN {
+        sum.0 += u64::from(v);
+        sum.1 += 1;
+    }
+}
+
+fn mean(sum: (u64, u64)) -> Option<f64> {
+    (sum.1 > 0).then(|| sum.0 as f64 / sum.1 as f64)
+}
+
+/// A step being measured.
+#[derive(Clone)]
+pub struct StepTally {
+    pub plan: PlannedStep,
+    /// When the step began (its requests are those sent from then on).
+    pub start: Nanos,
+    requests: u64,
+    first_sent: Option<Nanos>,
+    last_sent: Nanos,
+    received: u64,
+    lost: u64,
+    late: u64,
+    rtt: RttStats,
+    /// Byte counters at the start (sent, received), and when it sent its
+    /// last request (then, sent).
+    bytes_at_start: (u64, u64),
+    sending_end: Option<(Nanos, u64)>,
+    radio: Option<RadioTally>,
+}
+
+impl StepTally {
+    /// A step beginning at `start`, with the link's byte counters then
+    /// (sent, received) and the latest rxerrors of the radio followed.
+    pub fn new(
+        plan: PlannedStep,
+        start: Nanos,
+        bytes: (u64, u64),
+        radio: Option<(SysComp, u16)>,
+    ) -> Self {
+        StepTally {
+            plan,
+            start,
+            requests: 0,
+            first_sent: None,
+            last_sent: start,
+            received: 0,
+            lost: 0,
+            late: 0,
+            rtt: RttStats::new(),
+            bytes_at_start: bytes,
+            sending_end: None,
+            radio: radio.map(|(id, rxerrors)| {
+                let mut counter = SinceBootCounter::default();
+                counter.record(rxerrors);
+                RadioTally {
+                    id,
+                    reports: 0,
+                    txbuf_min: None,
+                    txbuf: (0, 0),
+                    rssi: (0, 0),
+                    remrssi: (0, 0),
+                    rxerrors: counter,
+                }
+            }),
+        }
+    }
+
+    /// `n` requests went out at `at`.
+    pub fn sent(&mut self, n: u64, at: Nanos) {
+        if n == 0 {
+            return;
+        }
+        self.first_sent.get_or_insert(at);
+        self.last_sent = at;
+        self.requests += n;
+    }
+
+    /// The last request went out at `at`, with `tx_bytes` sent by then.
+    pub fn sending_done(&mut self, at: Nanos, tx_bytes: u64) {
+        if self.sending_end.is_none() {
+            self.sending_end = Some((at, tx_bytes));
+        }
+    }
+
+    pub fn sending_finished(&self) -> bool {
+        self.sending_end.is_some()
+    }
+
+    /// When the step's time is up: its requests at its rate take that long
+    /// (the load, if any, runs until then).
+    pub fn nominal_end(&self) -> Nanos {
+        self.start + self.plan.count * self.plan.interval_ns()
+    }
+
+    /// Some request of it was lost (or answered late): its replies may
+    /// still be queued somewhere on the link.
+    pub fn lost_any(&self) -> bool {
+        self.lost + self.late > 0
+    }
+
+    /// Whether an event about a request sent at `sent_at` is this step's.
+    pub fn owns(&self, sent_at: Nanos) -> bool {
+        sent_at >= self.start
+    }
+
+    pub fn on_event(&mut self, e: &MatchEvent) {
+        match *e {
+            MatchEvent::Reply { rtt, .. } => {
+                self.received += 1;
+                self.rtt.record(rtt);
+            }
+            MatchEvent::Lost { .. } => self.lost += 1,
+            MatchEvent::Late { .. } => self.late += 1,
+            MatchEvent::Duplicate { .. } | MatchEvent::Stale { .. } => {}
+        }
+    }
+
+    /// A RADIO_STATUS from `id`; only the radio the step follows counts.
+    pub fn on_radio(&mut self, id: SysComp, r: &RadioReport) {
+        let tally = self.radio.get_or_insert_with(|| RadioTally {
+            id,
+            reports: 0,
+            txbuf_min: None,
+            txbuf: (0, 0),
+            rssi: (0, 0),
+            remrssi: (0, 0),
+            rxerrors: SinceBootCounter::default(),
+        });
+        if tally.id != id {
+            return;
+        }
+        tally.reports += 1;
+        if r.txbuf != UNKNOWN {
+            tally.txbuf_min = Some(tally.txbuf_min.map_or(r.txbuf, |m| m.min(r.txbuf)));
+        }
+        add(&mut tally.txbuf, r.txbuf);
+        add(&mut tally.rssi, r.rssi);
+        add(&mut tally.remrssi, r.remrssi);
+        tally.rxerrors.record(r.rxerrors);
+    }
+
+    /// The figures as of `now` (the step's end), with the link's byte
+    /// counters then.
+    pub fn figures(
+        &self,
+        index: u32,
+        complete: bool,
+        now: Nanos,
+        bytes_now: (u64, u64),
+    ) -> StepFigures {
+        let first = self.first_sent.unwrap_or(self.start);
+        let span = self.last_sent.saturating_sub(first) as f64 / 1e9;
+        // The time it sent: to its last request and one interval more (N
+        // requests at rate r take N / r), or until now if cut short.
+        let (end, tx) = match self.sending_end {
+            Some((at, tx)) => (at + self.plan.interval_ns(), tx),
+            None => (now, bytes_now.0),
+        };
+        let rx = bytes_now.1;
+        let window = end.saturating_sub(self.start) as f64 / 1e9;
+        let per_s = |bytes: u64| {
+            if window > 0.0 {
+                bytes as f64 / window
+            } else {
+                0.0
+            }
+        };
+        let decided = self.received + self.lost;
+        StepFigures {
+            index,
+            phase: self.plan.phase,
+            load: self.plan.load,
+            offered_hz: self.plan.rate_hz,
+            // One request is no rate; two or more over their span are.
+            achieved_hz: if self.requests > 1 && span > 0.0 {
+                (self.requests - 1) as f64 / span
+            } else {
+                0.0
+            },
+            start_s: first as f64 / 1e9,
+            duration_s: span,
+            requests: self.requests,
+            received: self.received,
+            lost: self.lost,
+            late: self.late,
+            loss_ratio: if decided == 0 {
+                0.0
+            } else {
+                self.lost as f64 / decided as f64
+            },
+            rtt: self.rtt.summary().map(|s| StepRtt {
+                p50_us: s.p50_us,
+                p99_us: s.p99_us,
+                max_us: s.max_us,
+            }),
+            tx_bytes_per_s: per_s(tx.saturating_sub(self.bytes_at_start.0)),
+            rx_bytes_per_s: per_s(rx.saturating_sub(self.bytes_at_start.1)),
+            radio: self.radio.filter(|r| r.reports > 0).map(|r| StepRadio {
+                id: r.id,
+                reports: r.reports,
+                txbuf_min: r.txbuf_min,
+                txbuf_mean: mean(r.txbuf),
+                rssi_mean: mean(r.rssi),
+                remrssi_mean: mean(r.remrssi),
+                rxerrors_delta: r.rxerrors.grown(),
+            }),
+            complete,
+            passed: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plan(rate: f64) -> PlannedStep {
+        PlannedStep {
+            phase: Phase::Ramp,
+            rate_hz: rate,
+            load: false,
+            count: 10,
+        }
+    }
+
+    const R: SysComp = SysComp::new(1, 1);
+
+    fn reply(sent_at: Nanos, rtt_ms: u64) -> MatchEvent {
+        MatchEvent::Reply {
+            responder: R,
+            seq: 0,
+            rtt: rtt_ms * 1_000_000,
+            sent_at,
+            at: sent_at + rtt_ms * 1_000_000,
+            out_of_order: false,
+            first_from_responder: false,
+        }
+    }
+
+    #[test]
+    fn counts_rates_and_bytes_are_exact() {
+        // 10 requests at 10/s from t = 1 s; bytes counted from (500, 900).
+        let mut t = StepTally::new(plan(10.0), 1_000_000_000, (500, 900), None);
+        for i in 0..10u64 {
+            let at = 1_000_000_000 + i * 100_000_000;
+            t.sent(1, at);
+            if i == 3 {
+                t.on_event(&MatchEvent::Lost {
+                    responder: R,
+                    seq: 3,
+                    sent_at: at,
+                    at: at + 2_000_000_000,
+                });
+                t.on_event(&MatchEvent::Late {
+                    responder: R,
+                    seq: 3,
+                    rtt: 2_500_000_000,
+                    sent_at: at,
+                    at: at + 2_500_000_000,
+                });
+            } else {
+                t.on_event(&reply(at, 20 + i));
+            }
+        }
+        // Sending ended at 1.9 s, after 210 B sent; 334 B came in until
+        // the step ended at 5 s.
+        t.sending_done(1_900_000_000, 710);
+        assert!(t.owns(1_000_000_000) && !t.owns(999_999_999));
+        let f = t.figures(3, true, 5_000_000_000, (9_999, 1_234));
+        assert_eq!(
+            (f.index, f.requests, f.received, f.lost, f.late),
+            (3, 10, 9, 1, 1)
+        );
+        assert!((f.loss_ratio - 0.1).abs() < 1e-12);
+        assert!((f.achieved_hz - 10.0).abs() < 1e-9, "{}", f.achieved_hz);
+        assert!((f.duration_s - 0.9).abs() < 1e-9);
+        // 210 B and 334 B over the 1 s it sent (10 requests at 10/s).
+        assert!((f.tx_bytes_per_s - 210.0).abs() < 1e-9);
+        assert!((f.rx_bytes_per_s - 334.0).abs() < 1e-9);
+        let rtt = f.rtt.unwrap();
+        // The histogram keeps three significant digits.
+        assert!((rtt.p50_us - 25_000.0).abs() < 25.0, "{rtt:?}");
+        assert_eq!(rtt.max_us, 29_000.0);
+        assert_eq!(f.start_s, 1.0);
+    }
+
+    #[test]
+    fn the_knee_test_needs_low_loss_and_a_p99_under_twice_the_first() {
+        let mut f = StepFigures::test(Phase::Ramp, 10.0, 0.0);
+        assert!(f.passes(6_001.0));
+        assert!(!f.passes(6_000.0), "p99 12 ms is twice 6 ms");
+        f.loss_ratio = 0.01;
+        assert!(!f.passes(100_000.0), "1 % loss is not under 1 %");
+        f.loss_ratio = 0.0;
+        f.complete = false;
+        assert!(!f.passes(100_000.0), "an interrupted step is never judged");
+    }
+
+    #[test]
+    fn the_radio_figures_are_the_steps_own() {
+        let radio = SysComp::new(51, 68);
+        let report = |txbuf, rxerrors| RadioReport {
+            rssi: 180,
+            remrssi: UNKNOWN,
+            txbuf,
+            noise: 40,
+            remnoise: 40,
+            rxerrors,
+            fixed: 0,
+        };
+        // The radio had counted 100 errors before this step.
+        let mut t = StepTally::new(plan(5.0), 0, (0, 0), Some((radio, 100)));
+        t.on_radio(radio, &report(90, 103));
+        t.on_radio(SysComp::new(52, 68), &report(1, 60_000));
+        t.on_radio(radio, &report(40, 110));
+        let r = t.figures(1, true, 1, (0, 0)).radio.unwrap();
+        assert_eq!((r.id, r.reports, r.txbuf_min), (radio, 2, Some(40)));
+        assert_eq!((r.txbuf_mean, r.rssi_mean), (Some(65.0), Some(180.0)));
+        assert_eq!((r.remrssi_mean, r.rxerrors_delta), (None, 10));
+        // A step with no report has no radio figures.
+        let quiet = StepTally::new(plan(5.0), 0, (0, 0), Some((radio, 110)));
+        assert!(quiet.figures(2, true, 1, (0, 0)).radio.is_none());
+    }
+}

@@ -1,0 +1,250 @@
+//! What a sweep's steps say about the link, pure arithmetic over them: the
+//! knee (the measured capacity), whether the link queues before it drops
+//! (bufferbloat), and how much the background load raised the RTT.
+
+use serde::Serialize;
+
+use super::plan::Phase;
+use super::step::{StepFigures, KNEE_MAX_LOSS, KNEE_MAX_P99_RATIO};
+use crate::engine::load::LoadSummary;
+
+/// The highest rate the link carried cleanly: the step with the highest
+/// offered rate that passed the knee test.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Knee {
+    pub step: u32,
+    pub rate_hz: f64,
+    pub achieved_hz: f64,
+    /// Bytes per second on the wire, both ways and each way.
+    pub bytes_per_s: f64,
+    pub tx_bytes_per_s: f64,
+    pub rx_bytes_per_s: f64,
+    pub p99_us: f64,
+    pub loss_ratio: f64,
+    /// The lowest rate above it that failed; none when every rate tried
+    /// above passed or none was tried (then the capacity is higher still).
+    pub failed_above_hz: Option<f64>,
+}
+
+/// Whether the link queues before it drops: the highest p99 of a step
+/// that still lost under 1 %, against the first sweep step's.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Queueing {
+    /// Some step lost under 1 % yet its p99 reached twice the first's.
+    pub bufferbloat: bool,
+    pub reference_p99_us: f64,
+    pub worst_p99_us: f64,
+    pub worst_at_hz: f64,
+    /// `worst_p99_us - reference_p99_us`: the delay the queue added
+    /// before the link dropped anything.
+    pub added_us: f64,
+    /// The lowest rate at which a step lost 1 % or more, if any did.
+    pub lost_at_hz: Option<f64>,
+}
+
+/// The RTT with the `--load` streams on against without, at one rate.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LoadEffect {
+    pub rate_hz: f64,
+    pub unloaded_p50_us: f64,
+    pub unloaded_p99_us: f64,
+    pub loaded_p50_us: f64,
+    pub loaded_p99_us: f64,
+    pub p99_rise_us: f64,
+    pub p99_ratio: f64,
+}
+
+/// Why the steps ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Ending {
+    /// Every step planned was run.
+    Planned,
+    /// A ramp step lost more than the limit; the steps after it refined
+    /// below it.
+    LossLimit,
+    Interrupted,
+    Deadline,
+    LinkFailed,
+}
+
+/// A sweep's (or a `--load` run's) steps and what they say.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct SweepSummary {
+    /// `sweep`, or `load` for `--load` without `--sweep`.
+    pub kind: &'static str,
+    pub steps: Vec<StepFigures>,
+    /// The first sweep step's p99, which the knee test compares against.
+    pub reference_p99_us: Option<f64>,
+    pub knee: Option<Knee>,
+    pub queueing: Option<Queueing>,
+    pub load: Vec<LoadSummary>,
+    pub load_effect: Option<LoadEffect>,
+    pub ending: Ending,
+}
+
+/// The first sweep step's p99: the knee test's reference.
+pub fn reference_p99(steps: &[StepFigures]) -> Option<f64> {
+    steps
+        .iter()
+        .find(|s| s.phase.sweeps() && s.complete)
+        .and_then(|s| s.rtt)
+        .map(|r| r.p99_us)
+}
+
+pub fn knee(steps: &[StepFigures]) -> Option<Knee> {
+    let best = steps
+        .iter()
+        .filter(|s| s.phase.sweeps() && s.passed == Some(true))
+        .max_by(|a, b| a.offered_hz.total_cmp(&b.offered_hz))?;
+    let failed_above_hz = steps
+        .iter()
+        .filter(|s| s.phase.sweeps() && s.passed == Some(false) && s.offered_hz > best.offered_hz)
+        .map(|s| s.offered_hz)
+        .reduce(f64::min);
+    Some(Knee {
+        step: best.index,
+        rate_hz: best.offered_hz,
+        achieved_hz: best.achieved_hz,
+        bytes_per_s: best.wire_bytes_per_s(),
+        tx_bytes_per_s: best.tx_bytes_per_s,
+        rx_bytes_per_s: best.rx_bytes_per_s,
+        p99_us: best.rtt.map_or(0.0, |r| r.p99_us),
+        loss_ratio: best.loss_ratio,
+        failed_above_hz,
+    })
+}
+
+pub fn queueing(steps: &[StepFigures]) -> Option<Queueing> {
+    let reference = reference_p99(steps)?;
+    let (worst_p99_us, worst_at_hz) = steps
+        .iter()
+        .filter(|s| s.phase.sweeps() && s.complete && s.loss_ratio < KNEE_MAX_LOSS)
+        .filter_map(|s| Some((s.rtt?.p99_us, s.offered_hz)))
+        .max_by(|a, b| a.0.total_cmp(&b.0))?;
+    let lost_at_hz = steps
+        .iter()
+        .filter(|s| s.phase.sweeps() && s.complete && s.loss_ratio >= KNEE_MAX_LOSS)
+        .map(|s| s.offered_hz)
+        .reduce(f64::min);
+    Some(Queueing {
+        bufferbloat: worst_p99_us >= KNEE_MAX_P99_RATIO * reference,
+        reference_p99_us: reference,
+        worst_p99_us,
+        worst_at_hz,
+        added_us: (worst_p99_us - reference).max(0.0),
+        lost_at_hz,
+    })
+}
+
+/// The unloaded baseline against the first loaded step (the same rate).
+pub fn load_effect(steps: &[StepFigures]) -> Option<LoadEffect> {
+    let base = steps
+        .iter()
+        .find(|s| s.phase == Phase::Baseline && s.complete)?;
+    let loaded = steps
+        .iter()
+        .find(|s| s.load && s.complete && s.offered_hz == base.offered_hz)?;
+    let (b, l) = (base.rtt?, loaded.rtt?);
+    Some(LoadEffect {
+        rate_hz: base.offered_hz,
+        unloaded_p50_us: b.p50_us,
+        unloaded_p99_us: b.p99_us,
+        loaded_p50_us: l.p50_us,
+        loaded_p99_us: l.p99_us,
+        p99_rise_us: l.p99_us - b.p99_us,
+        p99_ratio: l.p99_us / b.p99_us,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::sweep::step::StepRtt;
+
+    fn step(index: u32, phase: Phase, rate: f64, loss: f64, p99_ms: f64) -> StepFigures {
+        let mut s = StepFigures::test(phase, rate, loss);
+        s.index = index;
+        s.rtt = Some(StepRtt {
+            p50_us: p99_ms * 800.0,
+            p99_us: p99_ms * 1000.0,
+            max_us: p99_ms * 1100.0,
+        });
+        s
+    }
+
+    /// Judges every sweep step as the driver does.
+    fn judged(mut steps: Vec<StepFigures>) -> Vec<StepFigures> {
+        let reference = reference_p99(&steps).unwrap();
+        for s in steps.iter_mut().filter(|s| s.phase.sweeps()) {
+            s.passed = Some(s.passes(reference));
+        }
+        steps
+    }
+
+    #[test]
+    fn the_knee_is_the_highest_rate_that_passed() {
+        let steps = judged(vec![
+            step(1, Phase::Ramp, 10.0, 0.0, 30.0),
+            step(2, Phase::Ramp, 100.0, 0.0, 40.0),
+            step(3, Phase::Ramp, 200.0, 0.3, 300.0),
+            step(4, Phase::Refine, 141.0, 0.0, 45.0),
+            step(5, Phase::Refine, 168.0, 0.05, 200.0),
+            step(6, Phase::Refine, 154.0, 0.0, 50.0),
+        ]);
+        let k = knee(&steps).unwrap();
+        assert_eq!((k.step, k.rate_hz, k.p99_us), (6, 154.0, 50_000.0));
+        assert_eq!(k.failed_above_hz, Some(168.0));
+        assert_eq!(k.bytes_per_s, 154.0 * 47.0);
+        // Dropping before queueing: no step under 1 % loss reached 60 ms.
+        let q = queueing(&steps).unwrap();
+        assert!(!q.bufferbloat);
+        assert_eq!((q.worst_p99_us, q.worst_at_hz), (50_000.0, 154.0));
+        assert_eq!((q.added_us, q.lost_at_hz), (20_000.0, Some(168.0)));
+    }
+
+    #[test]
+    fn a_link_that_queues_without_loss_is_bufferbloat() {
+        let steps = judged(vec![
+            step(1, Phase::Ramp, 10.0, 0.0, 30.0),
+            step(2, Phase::Ramp, 100.0, 0.0, 35.0),
+            step(3, Phase::Ramp, 200.0, 0.0, 900.0),
+            step(4, Phase::Ramp, 500.0, 0.4, 2000.0),
+        ]);
+        assert_eq!(knee(&steps).unwrap().rate_hz, 100.0);
+        let q = queueing(&steps).unwrap();
+        assert!(q.bufferbloat);
+        assert_eq!((q.worst_at_hz, q.added_us), (200.0, 870_000.0));
+    }
+
+    #[test]
+    fn nothing_passed_means_no_knee() {
+        let steps = judged(vec![step(1, Phase::Ramp, 10.0, 0.5, 30.0)]);
+        assert!(knee(&steps).is_none());
+        // Every rate passed: the knee is the top, nothing failed above it.
+        let steps = judged(vec![
+            step(1, Phase::Ramp, 10.0, 0.0, 30.0),
+            step(2, Phase::Ramp, 20.0, 0.0, 31.0),
+        ]);
+        assert_eq!(knee(&steps).unwrap().failed_above_hz, None);
+    }
+
+    #[test]
+    fn the_load_effect_compares_one_rate_with_and_without_load() {
+        let mut steps = vec![
+            step(1, Phase::Baseline, 10.0, 0.0, 40.0),
+            step(2, Phase::Ramp, 10.0, 0.0, 52.0),
+            step(3, Phase::Ramp, 20.0, 0.0, 70.0),
+        ];
+        steps[1].load = true;
+        steps[2].load = true;
+        let e = load_effect(&steps).unwrap();
+        assert_eq!((e.unloaded_p99_us, e.loaded_p99_us), (40_000.0, 52_000.0));
+        assert_eq!(e.p99_rise_us, 12_000.0);
+        assert!((e.p99_ratio - 1.3).abs() < 1e-12);
+        // The baseline is not a sweep step: the reference is the first
+        // loaded one.
+        assert_eq!(reference_p99(&steps), Some(52_000.0));
+        assert!(load_effect(&steps[1..]).is_none());
+    }
+}

@@ -1,0 +1,379 @@
+//! Text of a sweep (`--sweep`) or a `--load` run: the first line says
+//! what will be sent, a table row per step as it ends, and the summary's
+//! verdict lines (the knee beside what the baud rate alone allows,
+//! queueing, the load's effect).
+
+use std::io::{self, Write};
+
+use super::{ms_us, TextReporter};
+use crate::engine::capacity::WireBudget;
+use crate::engine::sweep::plan::Phase;
+use crate::engine::sweep::step::{StepFigures, KNEE_MAX_LOSS};
+use crate::engine::sweep::verdict::{Ending, SweepSummary};
+use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
+use crate::output::StartInfo;
+
+/// A rate as people write it: `2`, `12.5`, `153.8`.
+fn hz(v: f64) -> String {
+    if (v - v.round()).abs() < 0.05 {
+        format!("{v:.0}")
+    } else {
+        format!("{v:.1}")
+    }
+}
+
+fn pct(ratio: f64) -> String {
+    format!("{:.0}%", ratio * 100.0)
+}
+
+/// What the `--load` streams send, e.g. `ATTITUDE@50/s + BYTES@1000 B/s
+/// (3000 B/s on the wire)`.
+fn load_line(c: &SweepConfig) -> String {
+    let streams: Vec<String> = c
+        .load
+        .iter()
+        .map(|l| match l.kind {
+            crate::engine::load::LoadKind::Bytes => format!("BYTES@{} B/s", hz(l.rate)),
+            _ => format!("{}@{}/s", l.kind.name(), hz(l.rate)),
+        })
+        .collect();
+    format!(
+        "{} ({:.0} B/s on the wire)",
+        streams.join(" + "),
+        c.load_bytes_per_s
+    )
+}
+
+/// The table's columns: title and width (the phase is left-aligned, the
+/// figures right-aligned), so the header and the rows share one layout.
+const COLUMNS: [(&str, usize); 13] = [
+    ("step", 4),
+    ("phase", 11),
+    ("rate/s", 7),
+    ("achieved", 9),
+    ("sent", 7),
+    ("recv", 7),
+    ("lost", 6),
+    ("loss%", 7),
+    ("late", 5),
+    ("p50 ms", 10),
+    ("p99 ms", 10),
+    ("tx B/s", 9),
+    ("rx B/s", 9),
+];
+
+/// One line of the table: each value in its column, then the knee test.
+fn columns(values: [&str; 13], knee: &str) -> String {
+    let mut line = String::new();
+    for (i, ((_, width), value)) in COLUMNS.iter().zip(values).enumerate() {
+        match i {
+            0 => line.push_str(&format!("{value:>width$}")),
+            1 => line.push_str(&format!(" {value:<width$}")),
+            _ => line.push_str(&format!("{value:>width$}")),
+        }
+    }
+    line.push_str("  ");
+    line.push_str(knee);
+    line
+}
+
+fn header() -> String {
+    columns(COLUMNS.map(|(title, _)| title), "knee")
+}
+
+impl<W: Write> TextReporter<W> {
+    /// The first line: what will be sent.
+    pub(super) fn sweep_start(&mut self, info: &StartInfo, c: &SweepConfig) -> io::Result<()> {
+        let step = humantime::format_duration(c.step);
+        let what = match c.plan {
+            PlanKind::Sweep {
+                first_hz,
+                max_hz,
+                max_from,
+                loss_limit,
+            } => {
+                let why = match max_from {
+                    MaxFrom::Given => String::new(),
+                    MaxFrom::Baud { baud, capacity_hz } => format!(
+                        " (twice the ~{}/s that {baud} baud carries; --sweep-max to change)",
+                        hz(capacity_hz.floor())
+                    ),
+                    MaxFrom::Default => {
+                        " (the default for links without a baud rate; --sweep-max to change)".into()
+                    }
+                };
+                let baseline = if c.load.is_empty() {
+                    String::new()
+                } else {
+                    format!(", first {step} at {}/s without the load", hz(first_hz))
+                };
+                format!(
+                    "{} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {} loss{baseline}",
+                    info.probe.to_uppercase(),
+                    hz(first_hz),
+                    hz(max_hz),
+                    pct(loss_limit),
+                )
+            }
+            PlanKind::Load { rate_hz } => format!(
+                "{} {}/s, {step} without the load then {step} with it",
+                info.probe.to_uppercase(),
+                hz(rate_hz)
+            ),
+        };
+        let load = if c.load.is_empty() {
+            String::new()
+        } else {
+            format!("; load {}", load_line(c))
+        };
+        writeln!(
+            self.out,
+            "MAVPING {} from {}: {what}{load}, timeout {}",
+            info.link,
+            info.ours,
+            humantime::format_duration(info.timeout)
+        )
+    }
+
+    /// A step's row; the first comes under the table's header.
+    pub(super) fn step_row(&mut self, s: &StepFigures) -> io::Result<()> {
+        if self.steps_shown == 0 {
+            writeln!(self.out, "{}", header())?;
+        }
+        self.steps_shown += 1;
+        let row = row(s);
+        writeln!(self.out, "{row}")
+    }
+}
+
+/// Why a step failed the knee test, or that it passed.
+fn knee_mark(s: &StepFigures) -> &'static str {
+    match s.passed {
+        Some(true) => "ok",
+        Some(false) if s.received == 0 => "no replies",
+        Some(false) if s.loss_ratio >= KNEE_MAX_LOSS => "loss",
+        Some(false) => "p99",
+        None if !s.complete => "cut short",
+        None => "-",
+    }
+}
+
+fn row(s: &StepFigures) -> String {
+    let phase = match (s.phase, s.load) {
+        (Phase::Ramp | Phase::Refine, true) => format!("{}+load", s.phase.name()),
+        _ => s.phase.name().to_string(),
+    };
+    let (p50, p99) = match s.rtt {
+        Some(r) => (ms_us(r.p50_us), ms_us(r.p99_us)),
+        None => ("-".into(), "-".into()),
+    };
+    let mut line = columns(
+        [
+            &s.index.to_string(),
+            &phase,
+            &hz(s.offered_hz),
+            &format!("{:.1}", s.achieved_hz),
+            &s.requests.to_string(),
+            &s.received.to_string(),
+            &s.lost.to_string(),
+            &format!("{:.2}", s.loss_ratio * 100.0),
+            &s.late.to_string(),
+            &p50,
+            &p99,
+            &format!("{:.0}", s.tx_bytes_per_s),
+            &format!("{:.0}", s.rx_bytes_per_s),
+        ],
+        knee_mark(s),
+    );
+    if let Some(r) = &s.radio {
+        let figure = |v: Option<f64>| v.map_or("?".into(), |v| format!("{v:.0}"));
+        line.push_str(&format!(
+            "  radio {} txbuf min {}% mean {}%, rssi {} remrssi {}, rxerrors +{}",
+            r.id,
+            r.txbuf_min.map_or("?".into(), |v| v.to_string()),
+            figure(r.txbuf_mean),
+            figure(r.rssi_mean),
+            figure(r.remrssi_mean),
+            r.rxerrors_delta
+        ));
+    }
+    line
+}
+
+/// The summary's part: the rows not shown as the run went (all of them
+/// with `-q`; the step cut short by Ctrl-C), then what the steps say.
+pub(super) fn write_summary(
+    out: &mut impl Write,
+    s: &SweepSummary,
+    wire: Option<&WireBudget>,
+    shown: usize,
+) -> io::Result<()> {
+    let rest = s.steps.get(shown..).unwrap_or_default();
+    if !rest.is_empty() {
+        writeln!(out, "{}", header())?;
+        for step in rest {
+            writeln!(out, "{}", row(step))?;
+        }
+    }
+    let ending = match s.ending {
+        Ending::Planned => "every step planned was run",
+        Ending::LossLimit => "the ramp stopped where a step lost more than the limit",
+        Ending::Interrupted => "interrupted; the steps so far are above",
+        Ending::Deadline => "the deadline ended it; the steps so far are above",
+        Ending::LinkFailed => "the link failed; the steps so far are above",
+    };
+    writeln!(out, "{}: {} steps, {ending}", s.kind, s.steps.len())?;
+    let baud = wire.map(|w| {
+        format!(
+            "; the baud rate alone says ~{}/s ({} baud)",
+            hz(w.max_rate_hz.floor()),
+            w.baud
+        )
+    });
+    if s.kind == "sweep" {
+        match &s.knee {
+            Some(k) => {
+                let above = match k.failed_above_hz {
+                    Some(f) => format!("; {}/s failed", hz(f)),
+                    None => {
+                        "; every rate tried passed, so the link carries more: raise --sweep-max"
+                            .into()
+                    }
+                };
+                writeln!(
+                    out,
+                    "knee: {} PINGs/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, \
+                     loss {:.2}%, p99 {} ms{above}{}",
+                    hz(k.rate_hz),
+                    k.bytes_per_s,
+                    k.tx_bytes_per_s,
+                    k.rx_bytes_per_s,
+                    k.step,
+                    k.loss_ratio * 100.0,
+                    ms_us(k.p99_us),
+                    baud.unwrap_or_default()
+                )?;
+            }
+            None => writeln!(
+                out,
+                "knee: none: no step lost under 1% with a p99 under twice the first step's{}",
+                baud.unwrap_or_default()
+            )?,
+        }
+        if let Some(q) = &s.queueing {
+            if q.bufferbloat {
+                writeln!(
+                    out,
+                    "queueing: bufferbloat: at {}/s the link lost under 1% yet its p99 reached {} ms, \
+                     {} ms over the first step's {} ms: it queues before it drops",
+                    hz(q.worst_at_hz),
+                    ms_us(q.worst_p99_us),
+                    ms_us(q.added_us),
+                    ms_us(q.reference_p99_us)
+                )?;
+            } else {
+                let then = match q.lost_at_hz {
+                    Some(rate) => format!(
+                        "; from {}/s it lost instead: the link drops before it queues",
+                        hz(rate)
+                    ),
+                    None => "; no step lost 1% or more".into(),
+                };
+                writeln!(
+                    out,
+                    "queueing: none to speak of: while it lost under 1%, the p99 stayed under twice the \
+                     first step's {} ms (at most {} ms, at {}/s){then}",
+                    ms_us(q.reference_p99_us),
+                    ms_us(q.worst_p99_us),
+                    hz(q.worst_at_hz)
+                )?;
+            }
+        }
+    }
+    for l in &s.load {
+        writeln!(
+            out,
+            "load {}@{}: {} frames of {} B, {} B sent",
+            l.message,
+            hz(l.rate),
+            l.frames,
+            l.frame_bytes,
+            l.bytes
+        )?;
+    }
+    if let Some(e) = &s.load_effect {
+        writeln!(
+            out,
+            "under load: PING p99 at {}/s {} from {} ms to {} ms: {:+.3} ms ({:+.0}%); p50 {} -> {} ms",
+            hz(e.rate_hz),
+            if e.p99_rise_us >= 0.0 { "rose" } else { "fell" },
+            ms_us(e.unloaded_p99_us),
+            ms_us(e.loaded_p99_us),
+            e.p99_rise_us / 1e3,
+            (e.p99_ratio - 1.0) * 100.0,
+            ms_us(e.unloaded_p50_us),
+            ms_us(e.loaded_p50_us)
+        )?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::sweep::verdict;
+
+    fn summary() -> SweepSummary {
+        let mut steps = vec![
+            StepFigures::test(Phase::Ramp, 10.0, 0.0),
+            StepFigures::test(Phase::Ramp, 20.0, 0.0),
+            StepFigures::test(Phase::Ramp, 50.0, 0.3),
+        ];
+        for (i, s) in steps.iter_mut().enumerate() {
+            s.index = i as u32 + 1;
+            s.passed = Some(s.loss_ratio == 0.0);
+        }
+        SweepSummary {
+            kind: "sweep",
+            knee: verdict::knee(&steps),
+            queueing: verdict::queueing(&steps),
+            reference_p99_us: verdict::reference_p99(&steps),
+            steps,
+            load: vec![],
+            load_effect: None,
+            ending: Ending::LossLimit,
+        }
+    }
+
+    #[test]
+    fn the_summary_names_the_knee_beside_the_baud_capacity() {
+        let mut out = Vec::new();
+        let wire = crate::engine::capacity::budget(57_600, crate::frame::Version::V2, 99, 1);
+        write_summary(&mut out, &summary(), Some(&wire), 0).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        let header = header();
+        assert_eq!(lines[0], header);
+        assert_eq!(lines.len(), 1 + 3 + 3, "{text}");
+        assert!(lines[3].ends_with(" loss"), "{text}");
+        assert!(
+            lines[1].contains(" ramp ") && lines[1].ends_with(" ok"),
+            "{text}"
+        );
+        assert!(
+            text.contains("knee: 20 PINGs/s (940 B/s on the wire: 420 out, 520 in) at step 2")
+                && text.contains("; 50/s failed; the baud rate alone says ~122/s (57600 baud)"),
+            "{text}"
+        );
+        assert!(text.contains("drops before it queues"), "{text}");
+        // Rows line up under the header: every column ends where its
+        // header does.
+        for col in ["rate/s", "p99 ms", "rx B/s"] {
+            let end = header.find(col).unwrap() + col.len();
+            for row in &lines[1..4] {
+                assert_ne!(row.as_bytes()[end - 1], b' ', "{col}: {row}");
+                assert_eq!(row.as_bytes()[end], b' ', "{col}: {row}");
+            }
+        }
+    }
+}
