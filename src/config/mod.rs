@@ -143,6 +143,9 @@ fn validate_listen(flag: &str, arg: &str) -> Result<SocketAddr, ConfigError> {
     })
 }
 
+/// The highest request rate (requests per second).
+const MAX_RATE: f64 = 1_000_000.0;
+
 /// Longest reply timeout, retry interval or emulated delay.
 const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
 

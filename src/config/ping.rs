@@ -7,7 +7,7 @@ use std::time::Duration;
 
 use super::{
     invalid, signing, validate_baud, validate_ids, validate_listen, Config, ConfigError, Keys,
-    LinkConfig, OutputConfig, Probe, MAX_TIMEOUT,
+    LinkConfig, OutputConfig, Probe, MAX_RATE, MAX_TIMEOUT,
 };
 use crate::cli::{Format, PingArgs, ProbeKind};
 use crate::engine::commands::CommandSpec;
@@ -22,7 +22,6 @@ use crate::verdict::{Expected, Thresholds};
 /// More requests than this in flight at once would need an unreasonably
 /// large pending table: lower the rate or the timeout.
 pub const MAX_IN_FLIGHT: u64 = 1 << 21;
-pub(super) const MAX_RATE: f64 = 1_000_000.0;
 /// The longest interval between requests (the lowest rate).
 const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
 

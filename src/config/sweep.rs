@@ -4,7 +4,7 @@
 
 use std::time::Duration;
 
-use super::{invalid, ConfigError};
+use super::{invalid, ConfigError, MAX_RATE};
 use crate::cli::{PingArgs, ProbeKind};
 use crate::engine::capacity;
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
@@ -132,11 +132,11 @@ pub(super) fn for_link(
     let first_hz = 1.0 / session.interval.as_secs_f64();
     let plan = if cli.sweep {
         let (max_hz, max_from) = sweep_max(cli, spec, session);
-        if !max_hz.is_finite() || max_hz <= first_hz || max_hz > super::ping::MAX_RATE {
+        if !max_hz.is_finite() || max_hz <= first_hz || max_hz > MAX_RATE {
             return Err(invalid(format!(
                 "--sweep-max {max_hz}: expected more than the first step's {first_hz}/s and at \
                  most {} requests per second",
-                super::ping::MAX_RATE
+                MAX_RATE
             )));
         }
         PlanKind::Sweep {

@@ -20,7 +20,7 @@ async fn echo_or_steps<P: EchoProbe>(
     controls: &Controls,
 ) -> Outcome {
     match &session.sweep {
-        Some(steps) => sweep::run(session, steps, link, probe, observer, controls).await,
+        Some(steps) => sweep::driver::run(session, steps, link, probe, observer, controls).await,
         None => echo::run(session, link, probe, observer, controls).await,
     }
 }

@@ -27,7 +27,7 @@ use crate::engine::observe::{Event, Observer, StartInfo};
 use crate::engine::radio::{RadioReport, Radios};
 use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
-use crate::engine::session::{Driver, Ended};
+use crate::engine::session::{self, Controls, Driver, Ended, Outcome};
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{Frame, SysComp};
@@ -335,4 +335,17 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
     fn interim(&self, roster: &Roster, at: Nanos) -> Option<Interim> {
         self.inner.interim(roster, at)
     }
+}
+
+/// Runs an echo probe in steps on `link` until the steps or the run end.
+pub async fn run<T: Transport, P: EchoProbe>(
+    cfg: &SessionConfig,
+    sweep: &SweepConfig,
+    link: &mut T,
+    probe: P,
+    observer: &mut dyn Observer,
+    controls: &Controls,
+) -> Outcome {
+    let driver = SweepDriver::new(cfg, sweep, EchoDriver::new(cfg, probe));
+    session::run(cfg, link, driver, observer, controls).await
 }

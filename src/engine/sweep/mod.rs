@@ -6,7 +6,10 @@
 //!   around the knee).
 //! - [`step`]: one step's counts, RTT, bytes per second and radio figures.
 //! - [`verdict`]: the knee, bufferbloat and the load's effect.
-//! - [`driver`]: the session driver that runs the steps.
+//! - [`driver`]: the session driver that runs the steps, and [`driver::run`].
+//!
+//! This file and the pure parts name nothing of the session, so the
+//! session's events and summary can carry a sweep's figures.
 
 pub mod driver;
 pub mod plan;
@@ -17,13 +20,7 @@ use std::time::Duration;
 
 use serde::Serialize;
 
-use super::echo::EchoDriver;
 use super::load::LoadSpec;
-use super::observe::Observer;
-use super::session::{self, Controls, Outcome};
-use super::SessionConfig;
-use crate::probe::EchoProbe;
-use crate::transport::Transport;
 
 /// Where a sweep's highest rate came from.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -64,17 +61,4 @@ pub struct SweepConfig {
     /// What the load puts on the wire, in this session's MAVLink version
     /// and signing.
     pub load_bytes_per_s: f64,
-}
-
-/// Runs an echo probe in steps on `link` until the steps or the run end.
-pub async fn run<T: Transport, P: EchoProbe>(
-    cfg: &SessionConfig,
-    sweep: &SweepConfig,
-    link: &mut T,
-    probe: P,
-    observer: &mut dyn Observer,
-    controls: &Controls,
-) -> Outcome {
-    let driver = driver::SweepDriver::new(cfg, sweep, EchoDriver::new(cfg, probe));
-    session::run(cfg, link, driver, observer, controls).await
 }

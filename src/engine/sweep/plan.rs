@@ -9,11 +9,7 @@
 //! the region in a handful of steps; bisecting pins the knee there without
 //! flooding the link at every rate in between.
 
-use std::time::Duration;
-
-use serde::Serialize;
-
-use super::step::StepFigures;
+use super::step::{Phase, PlannedStep, StepFigures};
 use super::{PlanKind, SweepConfig};
 
 /// The refine stops when the bracket around the knee is this narrow (a
@@ -24,62 +20,6 @@ const MAX_REFINES: usize = 6;
 /// A 1-2-5 value this close above the first rate is skipped: it would
 /// measure almost the same rate again.
 const MIN_RAMP_RATIO: f64 = 1.2;
-
-/// What a step is for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Phase {
-    /// With `--load`: the first rate without the load, for comparison.
-    Baseline,
-    /// Climbing the 1-2-5 series.
-    Ramp,
-    /// Bisecting around the knee.
-    Refine,
-    /// `--load` without a sweep: the same rate as the baseline, loaded.
-    Loaded,
-}
-
-impl Phase {
-    pub fn name(self) -> &'static str {
-        match self {
-            Phase::Baseline => "baseline",
-            Phase::Ramp => "ramp",
-            Phase::Refine => "refine",
-            Phase::Loaded => "loaded",
-        }
-    }
-
-    /// Steps that take part in finding the knee.
-    pub fn sweeps(self) -> bool {
-        matches!(self, Phase::Ramp | Phase::Refine)
-    }
-}
-
-/// One step to run.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlannedStep {
-    pub phase: Phase,
-    pub rate_hz: f64,
-    /// The `--load` streams are on during it.
-    pub load: bool,
-    /// Requests it sends: the rate over the step's duration, at least one.
-    pub count: u64,
-}
-
-impl PlannedStep {
-    fn new(phase: Phase, rate_hz: f64, load: bool, duration: Duration) -> Self {
-        PlannedStep {
-            phase,
-            rate_hz,
-            load,
-            count: ((rate_hz * duration.as_secs_f64()).round() as u64).max(1),
-        }
-    }
-
-    pub fn interval_ns(&self) -> u64 {
-        (1e9 / self.rate_hz).round().max(1.0) as u64
-    }
-}
 
 /// The rates of the ramp: `first`, the 1-2-5 values above it, and `max`.
 pub fn ramp(first: f64, max: f64) -> Vec<f64> {
@@ -194,9 +134,10 @@ fn three_digits(v: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    use std::time::Duration;
+
     use super::*;
     use crate::engine::load::LoadSpec;
-    use crate::engine::sweep::step::StepFigures;
     use crate::engine::sweep::MaxFrom;
 
     fn sweep(first: f64, max: f64, load: &[&str]) -> SweepConfig {

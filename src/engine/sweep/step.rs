@@ -2,14 +2,71 @@
 //! it is reported with. Pure: events and byte counters are handed in with
 //! their times. Memory is one RTT histogram per step being measured.
 
+use std::time::Duration;
+
 use serde::Serialize;
 
-use super::plan::{Phase, PlannedStep};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{RadioReport, SinceBootCounter, UNKNOWN};
 use crate::engine::stats::RttStats;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
+
+/// What a step is for.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Phase {
+    /// With `--load`: the first rate without the load, for comparison.
+    Baseline,
+    /// Climbing the 1-2-5 series.
+    Ramp,
+    /// Bisecting around the knee.
+    Refine,
+    /// `--load` without a sweep: the same rate as the baseline, loaded.
+    Loaded,
+}
+
+impl Phase {
+    pub fn name(self) -> &'static str {
+        match self {
+            Phase::Baseline => "baseline",
+            Phase::Ramp => "ramp",
+            Phase::Refine => "refine",
+            Phase::Loaded => "loaded",
+        }
+    }
+
+    /// Steps that take part in finding the knee.
+    pub fn sweeps(self) -> bool {
+        matches!(self, Phase::Ramp | Phase::Refine)
+    }
+}
+
+/// One step to run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlannedStep {
+    pub phase: Phase,
+    pub rate_hz: f64,
+    /// The `--load` streams are on during it.
+    pub load: bool,
+    /// Requests it sends: the rate over the step's duration, at least one.
+    pub count: u64,
+}
+
+impl PlannedStep {
+    pub fn new(phase: Phase, rate_hz: f64, load: bool, duration: Duration) -> Self {
+        PlannedStep {
+            phase,
+            rate_hz,
+            load,
+            count: ((rate_hz * duration.as_secs_f64()).round() as u64).max(1),
+        }
+    }
+
+    pub fn interval_ns(&self) -> u64 {
+        (1e9 / self.rate_hz).round().max(1.0) as u64
+    }
+}
 
 /// A step passes the knee test when it loses less than this share...
 pub const KNEE_MAX_LOSS: f64 = 0.01;

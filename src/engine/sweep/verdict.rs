@@ -4,8 +4,7 @@
 
 use serde::Serialize;
 
-use super::plan::Phase;
-use super::step::{StepFigures, KNEE_MAX_LOSS, KNEE_MAX_P99_RATIO};
+use super::step::{Phase, StepFigures, KNEE_MAX_LOSS, KNEE_MAX_P99_RATIO};
 use crate::engine::load::LoadSummary;
 
 /// The highest rate the link carried cleanly: the step with the highest

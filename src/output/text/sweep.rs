@@ -7,7 +7,7 @@ use std::io::{self, Write};
 
 use super::{ms_us, TextReporter};
 use crate::engine::capacity::WireBudget;
-use crate::engine::sweep::plan::Phase;
+use crate::engine::sweep::step::Phase;
 use crate::engine::sweep::step::{StepFigures, KNEE_MAX_LOSS};
 use crate::engine::sweep::verdict::{Ending, SweepSummary};
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
