@@ -691,6 +691,107 @@ mod tests {
     }
 
     #[test]
+    fn sweep_and_load_lines() {
+        use crate::engine::sweep::{MaxFrom, PlanKind};
+        let c = config("--sweep sim:?baud=57600").unwrap();
+        let session = &c.links[0].session;
+        let sweep = session.sweep.as_ref().unwrap();
+        // From 2/s up to twice what 57600 baud carries (5760 B/s over a
+        // 24-byte request and a 26-byte reply: 115.2/s).
+        let PlanKind::Sweep {
+            first_hz,
+            max_hz,
+            max_from,
+            loss_limit,
+        } = sweep.plan
+        else {
+            panic!("not a sweep")
+        };
+        assert_eq!((first_hz, max_hz, loss_limit), (2.0, 230.0, 0.2));
+        assert!(matches!(max_from, MaxFrom::Baud { baud: 57_600, .. }));
+        assert_eq!(sweep.step, Duration::from_secs(5));
+        assert_eq!(session.interval, Duration::from_millis(500));
+        // The pending table holds what 230/s keeps in flight for 2 s.
+        assert_eq!(session.capacity, 1024);
+        assert_eq!(session.count, None);
+        let c = config(
+            "--sweep --rate 10 --sweep-max 500 --step 2s --sweep-loss 5% udpout:127.0.0.1:14550",
+        )
+        .unwrap();
+        let sweep = c.links[0].session.sweep.clone().unwrap();
+        assert_eq!(
+            sweep.plan,
+            PlanKind::Sweep {
+                first_hz: 10.0,
+                max_hz: 500.0,
+                max_from: MaxFrom::Given,
+                loss_limit: 0.05
+            }
+        );
+        assert_eq!(sweep.step, Duration::from_secs(2));
+        let c = config("--sweep udpout:127.0.0.1:14550").unwrap();
+        let PlanKind::Sweep {
+            max_hz, max_from, ..
+        } = c.links[0].session.sweep.as_ref().unwrap().plan
+        else {
+            panic!("not a sweep")
+        };
+        assert_eq!((max_hz, max_from), (1000.0, MaxFrom::Default));
+        // --load alone: 10/s unless told, one step without, one with.
+        let c = config("--load ATTITUDE@50 --load BYTES@1170 sim:").unwrap();
+        let sweep = c.links[0].session.sweep.as_ref().unwrap();
+        assert_eq!(sweep.plan, PlanKind::Load { rate_hz: 10.0 });
+        assert_eq!(sweep.load.len(), 2);
+        assert_eq!(sweep.load_bytes_per_s, 50.0 * 40.0 + 1170.0);
+        let c = config("--load ATTITUDE@50 -i 0.05 sim:").unwrap();
+        let sweep = c.links[0].session.sweep.as_ref().unwrap();
+        assert_eq!(sweep.plan, PlanKind::Load { rate_hz: 20.0 });
+        assert!(config("sim:").unwrap().links[0].session.sweep.is_none());
+        // Signed, every load frame is 13 bytes longer.
+        let c = config("--load ATTITUDE@50 --signing-key k sim:").unwrap();
+        assert_eq!(
+            c.links[0].session.sweep.as_ref().unwrap().load_bytes_per_s,
+            50.0 * 53.0
+        );
+
+        for (line, error) in [
+            ("--sweep -c 5 sim:", "-c does not apply"),
+            ("--load ATTITUDE@5 -c 5 sim:", "--load runs in steps"),
+            ("--sweep-max 100 sim:", "--sweep-max needs --sweep"),
+            ("--sweep-loss 5% sim:", "--sweep-loss needs --sweep"),
+            ("--step 2s sim:", "--step needs --sweep or --load"),
+            (
+                "--sweep --probe command sim:",
+                "with --probe ping and timesync",
+            ),
+            (
+                "--load ATTITUDE@5 --probe command sim:",
+                "--load works with",
+            ),
+            ("--sweep --max-loss 5% sim:", "loses on purpose"),
+            ("--sweep --max-rtt 1s sim:", "loses on purpose"),
+            (
+                "--sweep --rate 100 --sweep-max 50 sim:",
+                "--sweep-max 50: expected more than the first step's 100/s",
+            ),
+            ("--sweep --sweep-max 1e9 sim:", "at most 1000000"),
+            (
+                "--sweep --step 10ms sim:",
+                "--step 10ms: expected 100ms to 1h",
+            ),
+            (
+                "--sweep --sweep-loss 0 sim:",
+                "--sweep-loss 0: expected more than 0%",
+            ),
+            ("--load FOO@5 sim:", "unknown message FOO"),
+            ("--load ATTITUDE@0 sim:", "above 0"),
+        ] {
+            let e = config(line).unwrap_err();
+            assert!(e.contains(error), "{line}: {e}");
+        }
+    }
+
+    #[test]
     fn signing_lines() {
         let hex = "000102030405060708090a0b0c0d0e0f101112131415161718191a1b1c1d1e1f";
         let c = config(&format!("--signing-key {hex} sim:")).unwrap();

@@ -310,6 +310,12 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
         } else if self
             .steps
             .iter()
+            .any(|s| s.phase.sweeps() && s.received == 0)
+        {
+            Ending::NoReplies
+        } else if self
+            .steps
+            .iter()
             .any(|s| s.phase.sweeps() && s.loss_ratio > loss_limit)
         {
             Ending::LossLimit

@@ -92,7 +92,10 @@ impl Planner {
                 }
                 let sweep: Vec<&StepFigures> = done.iter().filter(|s| s.phase.sweeps()).collect();
                 let ramped = sweep.iter().filter(|s| s.phase == Phase::Ramp).count();
-                let over_limit = sweep.iter().any(|s| s.loss_ratio > loss_limit);
+                // Nothing answered: more of the same floods a silent link.
+                let over_limit = sweep
+                    .iter()
+                    .any(|s| s.loss_ratio > loss_limit || s.received == 0);
                 if !over_limit && ramped < self.ramp.len() && sweep.len() == ramped {
                     return self.step(Phase::Ramp, self.ramp[ramped], loaded);
                 }
@@ -230,6 +233,15 @@ mod tests {
         let phases: Vec<Phase> = steps.iter().map(|s| s.phase).collect();
         assert_eq!(phases, [Phase::Baseline, Phase::Loaded]);
         assert_eq!((steps[0].load, steps[1].load), (false, true));
+    }
+
+    #[test]
+    fn a_link_that_never_answers_gets_one_step() {
+        let config = sweep(2.0, 100.0, &[]);
+        let planner = Planner::new(&config);
+        let mut s = StepFigures::test(Phase::Ramp, 2.0, 0.0);
+        (s.received, s.lost, s.passed) = (0, 0, Some(false));
+        assert_eq!(planner.next(&[s]), None);
     }
 
     #[test]

@@ -119,9 +119,10 @@ pub struct StepFigures {
     pub loss_ratio: f64,
     pub rtt: Option<StepRtt>,
     /// Bytes per second we sent (probes, load, HEARTBEAT) while the step
-    /// sent, and received (every valid frame) from its start until its
-    /// replies were in, both over the time it sent: the step's own traffic
-    /// each way.
+    /// sent, and received (every valid frame) from its start until it
+    /// ended, over the time it sent or until its last reply came, whichever
+    /// is longer (a queue delivers after the sending ends): the step's own
+    /// traffic each way.
     pub tx_bytes_per_s: f64,
     pub rx_bytes_per_s: f64,
     pub radio: Option<StepRadio>,
@@ -215,6 +216,7 @@ pub struct StepTally {
     lost: u64,
     late: u64,
     rtt: RttStats,
+    last_reply: Option<Nanos>,
     /// Byte counters at the start (sent, received), and when it sent its
     /// last request (then, sent).
     bytes_at_start: (u64, u64),
@@ -241,6 +243,7 @@ impl StepTally {
             lost: 0,
             late: 0,
             rtt: RttStats::new(),
+            last_reply: None,
             bytes_at_start: bytes,
             sending_end: None,
             radio: radio.map(|(id, rxerrors)| {
@@ -299,9 +302,10 @@ impl StepTally {
 
     pub fn on_event(&mut self, e: &MatchEvent) {
         match *e {
-            MatchEvent::Reply { rtt, .. } => {
+            MatchEvent::Reply { rtt, at, .. } => {
                 self.received += 1;
                 self.rtt.record(rtt);
+                self.last_reply = Some(self.last_reply.map_or(at, |t| t.max(at)));
             }
             MatchEvent::Lost { .. } => self.lost += 1,
             MatchEvent::Late { .. } => self.late += 1,
@@ -351,8 +355,9 @@ impl StepTally {
             None => (now, bytes_now.0),
         };
         let rx = bytes_now.1;
-        let window = end.saturating_sub(self.start) as f64 / 1e9;
-        let per_s = |bytes: u64| {
+        let rx_end = end.max(self.last_reply.unwrap_or(0));
+        let per_s = |bytes: u64, until: Nanos| {
+            let window = until.saturating_sub(self.start) as f64 / 1e9;
             if window > 0.0 {
                 bytes as f64 / window
             } else {
@@ -387,8 +392,8 @@ impl StepTally {
                 p99_us: s.p99_us,
                 max_us: s.max_us,
             }),
-            tx_bytes_per_s: per_s(tx.saturating_sub(self.bytes_at_start.0)),
-            rx_bytes_per_s: per_s(rx.saturating_sub(self.bytes_at_start.1)),
+            tx_bytes_per_s: per_s(tx.saturating_sub(self.bytes_at_start.0), end),
+            rx_bytes_per_s: per_s(rx.saturating_sub(self.bytes_at_start.1), rx_end),
             radio: self.radio.filter(|r| r.reports > 0).map(|r| StepRadio {
                 id: r.id,
                 reports: r.reports,
@@ -468,9 +473,20 @@ mod tests {
         assert!((f.loss_ratio - 0.1).abs() < 1e-12);
         assert!((f.achieved_hz - 10.0).abs() < 1e-9, "{}", f.achieved_hz);
         assert!((f.duration_s - 0.9).abs() < 1e-9);
-        // 210 B and 334 B over the 1 s it sent (10 requests at 10/s).
+        // 210 B and 334 B over the 1 s it sent (10 requests at 10/s); the
+        // last reply (29 ms after 1.9 s) came within it.
         assert!((f.tx_bytes_per_s - 210.0).abs() < 1e-9);
         assert!((f.rx_bytes_per_s - 334.0).abs() < 1e-9);
+        // A reply that came after the sending time stretches the window
+        // over which the replies are counted.
+        let mut queued = t.clone();
+        queued.on_event(&reply(1_900_000_000, 1_100));
+        let g = queued.figures(3, true, 5_000_000_000, (9_999, 1_234));
+        assert!(
+            (g.rx_bytes_per_s - 334.0 / 2.0).abs() < 1e-9,
+            "{}",
+            g.rx_bytes_per_s
+        );
         let rtt = f.rtt.unwrap();
         // The histogram keeps three significant digits.
         assert!((rtt.p50_us - 25_000.0).abs() < 25.0, "{rtt:?}");

@@ -62,6 +62,8 @@ pub enum Ending {
     /// A ramp step lost more than the limit; the steps after it refined
     /// below it.
     LossLimit,
+    /// Nothing answered a step: the sweep went no further.
+    NoReplies,
     Interrupted,
     Deadline,
     LinkFailed,

@@ -218,11 +218,14 @@ pub(super) fn write_summary(
     let ending = match s.ending {
         Ending::Planned => "every step planned was run",
         Ending::LossLimit => "the ramp stopped where a step lost more than the limit",
+        Ending::NoReplies => "nothing answered, so the ramp went no further",
         Ending::Interrupted => "interrupted; the steps so far are above",
         Ending::Deadline => "the deadline ended it; the steps so far are above",
         Ending::LinkFailed => "the link failed; the steps so far are above",
     };
-    writeln!(out, "{}: {} steps, {ending}", s.kind, s.steps.len())?;
+    let n = s.steps.len();
+    let steps = if n == 1 { "step" } else { "steps" };
+    writeln!(out, "{}: {n} {steps}, {ending}", s.kind)?;
     let baud = wire.map(|w| {
         format!(
             "; the baud rate alone says ~{}/s ({} baud)",

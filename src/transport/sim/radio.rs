@@ -307,7 +307,10 @@ mod tests {
         // the window finishes in the next one (from 30 ms).
         let late = 20_000_000 - 3_000_000 - uart;
         assert_eq!(pair.downlink(late, 26).unwrap(), 30_250_000 + uart);
-        assert_eq!(pair.ground_free_percent(0), 100);
+        // The request sat in the ground radio's buffer until it was on the
+        // air: 26 of 1024 bytes, 97 % free; then all of it is.
+        assert_eq!(pair.ground_free_percent(uart + 1_000_000), 97);
+        assert_eq!(pair.ground_free_percent(done), 100);
     }
 
     #[test]
