@@ -302,14 +302,20 @@ impl StepTally {
 
     pub fn on_event(&mut self, e: &MatchEvent) {
         match *e {
-            MatchEvent::Reply { rtt, at, .. } => {
+            MatchEvent::Reply { rtt, .. } => {
                 self.received += 1;
                 self.rtt.record(rtt);
-                self.last_reply = Some(self.last_reply.map_or(at, |t| t.max(at)));
             }
             MatchEvent::Lost { .. } => self.lost += 1,
             MatchEvent::Late { .. } => self.late += 1,
             MatchEvent::Duplicate { .. } | MatchEvent::Stale { .. } => {}
+        }
+        // Every reply that came, in time or not, is traffic the step drew.
+        if let MatchEvent::Reply { at, .. }
+        | MatchEvent::Late { at, .. }
+        | MatchEvent::Duplicate { at, .. } = *e
+        {
+            self.last_reply = Some(self.last_reply.map_or(at, |t| t.max(at)));
         }
     }
 
@@ -473,17 +479,20 @@ mod tests {
         assert!((f.loss_ratio - 0.1).abs() < 1e-12);
         assert!((f.achieved_hz - 10.0).abs() < 1e-9, "{}", f.achieved_hz);
         assert!((f.duration_s - 0.9).abs() < 1e-9);
-        // 210 B and 334 B over the 1 s it sent (10 requests at 10/s); the
-        // last reply (29 ms after 1.9 s) came within it.
+        // 210 B over the 1 s it sent (10 requests at 10/s); 334 B over the
+        // time until its last reply, the late one at 3.8 s.
         assert!((f.tx_bytes_per_s - 210.0).abs() < 1e-9);
-        assert!((f.rx_bytes_per_s - 334.0).abs() < 1e-9);
-        // A reply that came after the sending time stretches the window
-        // over which the replies are counted.
-        let mut queued = t.clone();
-        queued.on_event(&reply(1_900_000_000, 1_100));
-        let g = queued.figures(3, true, 5_000_000_000, (9_999, 1_234));
+        assert!((f.rx_bytes_per_s - 334.0 / 2.8).abs() < 1e-9);
+        // Replies that all came within the sending time are counted over it.
+        let mut prompt = StepTally::new(plan(10.0), 1_000_000_000, (500, 900), None);
+        for i in 0..10u64 {
+            prompt.sent(1, 1_000_000_000 + i * 100_000_000);
+            prompt.on_event(&reply(1_000_000_000 + i * 100_000_000, 20));
+        }
+        prompt.sending_done(1_900_000_000, 710);
+        let g = prompt.figures(1, true, 2_000_000_000, (710, 1_160));
         assert!(
-            (g.rx_bytes_per_s - 334.0 / 2.0).abs() < 1e-9,
+            (g.rx_bytes_per_s - 260.0).abs() < 1e-9,
             "{}",
             g.rx_bytes_per_s
         );
