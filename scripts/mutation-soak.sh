@@ -33,7 +33,7 @@ for seed in $(seq 1 "$SEEDS"); do
       echo "FAILED: $transport seed $seed"
       grep -E "panicked|seq [0-9]+:|left|right" "$LOG.run" | head -20 || true
     fi
-    grep '^mutants:' "$LOG.run" | tee -a "$LOG"
+    grep '^mutants: ' "$LOG.run" | tee -a "$LOG"
   done
 done
 rm -f "$LOG.run"
