@@ -25,35 +25,25 @@ fn replies_among_mutants(transport: &str, default_exchanges: u64) {
     let seed = env_or("MAVPING_MUTANT_SEED", "21");
     let exchanges = env_or("MAVPING_MUTANT_EXCHANGES", &default_exchanges.to_string());
     let interval = env_or("MAVPING_MUTANT_INTERVAL", "2ms");
-    let peer_args = ["--seed", &seed, "--count", &exchanges];
+    // The pty bridge lives until mavping is done.
     let mut bridge = None;
-    let (peer, link) = match transport {
+    let (option, endpoint, link) = match transport {
         "udp" => {
             let port = free_udp_port().to_string();
-            let peer = Peer::start(
-                "mutant_peer.py",
-                &[&peer_args[..], &["--port", &port]].concat(),
-            );
-            (peer, format!("udpout:127.0.0.1:{port}"))
+            ("--port", port.clone(), format!("udpout:127.0.0.1:{port}"))
         }
         "tcp" => {
             let port = free_tcp_port().to_string();
-            let peer = Peer::start(
-                "mutant_peer.py",
-                &[&peer_args[..], &["--tcp", &port]].concat(),
-            );
-            (peer, format!("tcp:127.0.0.1:{port}"))
+            ("--tcp", port.clone(), format!("tcp:127.0.0.1:{port}"))
         }
         _ => {
             let (b, ours, theirs) = pty_bridge(&[]);
             bridge = Some(b);
-            let peer = Peer::start(
-                "mutant_peer.py",
-                &[&peer_args[..], &["--serial", &theirs]].concat(),
-            );
-            (peer, format!("serial:{ours}:57600"))
+            ("--serial", theirs, format!("serial:{ours}:57600"))
         }
     };
+    let args = ["--seed", &seed, "--count", &exchanges, option, &endpoint];
+    let peer = Peer::start("mutant_peer.py", &args);
     let started = Instant::now();
     let (code, out, err) = run_mavping(&["--json", "-c", &exchanges, "-i", &interval, &link]);
     let wall = started.elapsed();
