@@ -440,6 +440,10 @@ mod tests {
     use crate::frame::Msg;
 
     fn ping_frame(version: Version, seq: u32) -> Vec<u8> {
+        ping_at(version, seq, 123_456)
+    }
+
+    fn ping_at(version: Version, seq: u32, time_usec: u64) -> Vec<u8> {
         let mut out = Vec::new();
         encode(
             &mut out,
@@ -450,7 +454,7 @@ mod tests {
                 seq: 7,
             },
             &Msg::Ping {
-                time_usec: 123_456,
+                time_usec,
                 seq,
                 target_system: 255,
                 target_component: 190,
@@ -628,24 +632,9 @@ mod tests {
         unknown
     }
 
+    /// A PING whose `time_usec` is all 0xFD bytes.
     fn fd_ping() -> Vec<u8> {
-        let mut out = Vec::new();
-        encode(
-            &mut out,
-            Version::V2,
-            Header {
-                sysid: 1,
-                compid: 1,
-                seq: 0,
-            },
-            &Msg::Ping {
-                time_usec: u64::MAX / 0xFF * 0xFD,
-                seq: 5,
-                target_system: 255,
-                target_component: 190,
-            },
-        );
-        out
+        ping_at(Version::V2, 5, u64::MAX / 0xFF * 0xFD)
     }
 
     #[test]
