@@ -1,7 +1,9 @@
 //! Per-packet costs of mavping's hot path, each beside a baseline measured
 //! in the same run:
 //! - frame scanning: mavping's scanner vs the `mavlink` crate's own reader
-//!   on the same bytes (the crate mavping would otherwise use);
+//!   on the same bytes (the crate mavping would otherwise use), and on
+//!   hostile bytes (each reply among mutated copies of itself, as the
+//!   mutation test sends them) as a stream and as datagrams;
 //! - matching and statistics per reply, the work done for every PING.
 //!
 //! Run: `cargo bench --bench core` (or `bash scripts/bench.sh` for the
@@ -101,6 +103,66 @@ fn frames(c: &mut Criterion) {
     g.finish();
 }
 
+/// Each of 1,000 replies with 8 mutated copies of itself (cut short, a
+/// junk prefix rich in start bytes, bit flips, a random length byte,
+/// random bytes), seeded: one datagram per piece.
+fn mutated_pieces() -> Vec<Vec<u8>> {
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = move || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut pieces = Vec::new();
+    for reply in ping_stream(1000).chunks(26) {
+        pieces.push(reply.to_vec());
+        for k in 0..8 {
+            let mut copy = reply.to_vec();
+            match k % 5 {
+                0 => copy.truncate(1 + next() as usize % (reply.len() - 1)),
+                1 => {
+                    let junk = 1 + next() as usize % 20;
+                    let stx = [0xFD, 0xFE, next() as u8];
+                    copy = (0..junk).map(|_| stx[next() as usize % 3]).collect();
+                    copy.extend_from_slice(reply);
+                }
+                2 => copy[next() as usize % reply.len()] ^= 1 << (next() % 8),
+                3 => copy[1] = next() as u8,
+                _ => copy = (0..1 + next() % 300).map(|_| next() as u8).collect(),
+            }
+            pieces.push(copy);
+        }
+    }
+    pieces
+}
+
+fn hostile(c: &mut Criterion) {
+    let pieces = mutated_pieces();
+    let stream = pieces.concat();
+    let mut g = c.benchmark_group("hostile");
+    g.throughput(Throughput::Bytes(stream.len() as u64));
+    g.bench_function("StreamScanner: 1000 replies among 8000 mutants", |b| {
+        b.iter(|| {
+            let mut scanner = StreamScanner::new();
+            let mut n = 0u32;
+            scanner.push(black_box(&stream), &mut |_| n += 1);
+            black_box(n);
+        })
+    });
+    g.bench_function("scan_datagram: 1000 replies among 8000 mutants", |b| {
+        let mut stats = ScanStats::default();
+        b.iter(|| {
+            let mut n = 0u32;
+            for piece in &pieces {
+                frame::scan_datagram(black_box(piece), &mut stats, &mut |_| n += 1);
+            }
+            black_box(n);
+        })
+    });
+    g.finish();
+}
+
 fn matching(c: &mut Criterion) {
     let mut g = c.benchmark_group("engine");
     g.throughput(Throughput::Elements(1));
@@ -143,5 +205,5 @@ fn matching(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, frames, matching);
+criterion_group!(benches, frames, hostile, matching);
 criterion_main!(benches);

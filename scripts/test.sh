@@ -13,7 +13,7 @@ MAVPROXY_VERSION=1.8.75
 MAVSDK_GRPC_VERSION=4.0.5
 if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pymavlink, serial" 2>/dev/null; then
   python3 -m venv .venv
-  .venv/bin/pip install --quiet --disable-pip-version-check \
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check \
     "pymavlink==${PYMAVLINK_VERSION}" "pyserial==${PYSERIAL_VERSION}"
 fi
 # MAVProxy's console and map modules pull in OpenCV, wxPython and
@@ -22,10 +22,10 @@ fi
 # wanted for its mavsdk_server binary only.
 site=$(.venv/bin/python -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
 if [ ! -x .venv/bin/mavproxy.py ]; then
-  .venv/bin/pip install --quiet --disable-pip-version-check --no-deps "MAVProxy==${MAVPROXY_VERSION}"
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "MAVProxy==${MAVPROXY_VERSION}"
 fi
 if [ ! -x "$site/mavsdk_grpc/bin/mavsdk_server" ]; then
-  .venv/bin/pip install --quiet --disable-pip-version-check --no-deps "mavsdk-grpc==${MAVSDK_GRPC_VERSION}"
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "mavsdk-grpc==${MAVSDK_GRPC_VERSION}"
 fi
 # Debian's prometheus package: the server scrapes `mavping serve` in an
 # integration test, and promtool checks expositions and unit-tests the

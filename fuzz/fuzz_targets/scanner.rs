@@ -6,12 +6,18 @@
 //!   frames + the carried tail = all bytes fed;
 //! - the stream's frames are a prefix of the frames the datagram scan
 //!   (which knows where the data ends) finds in the same bytes, and the
-//!   datagram scan accounts for every byte with nothing left over.
+//!   datagram scan accounts for every byte with nothing left over;
+//! - every good frame that overlaps no other good frame (by the oracle the
+//!   property tests use) is delivered by the datagram scan, and nothing
+//!   else (issue 21).
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use mavping::frame::scanner::MAX_FRAME_LEN;
+use mavping::frame::scanner::{MAX_FRAME_LEN, MAX_PENDING};
 use mavping::frame::{decode, scan_datagram, ScanStats, StreamScanner};
+
+#[path = "../../tests/it/common/frame_oracle.rs"]
+mod frame_oracle;
 
 /// Smallest frame the scanner can accept as an unknown id (v1, no payload).
 const MIN_FRAME: u64 = 8;
@@ -37,7 +43,7 @@ fn stream(data: &[u8], splits: &[u8]) -> (Vec<Vec<u8>>, ScanStats, usize) {
         };
         let (now, later) = rest.split_at(size);
         scanner.push(now, &mut |f| frames.push(f.to_vec()));
-        assert!(scanner.pending_bytes() <= MAX_FRAME_LEN);
+        assert!(scanner.pending_bytes() <= MAX_PENDING);
         rest = later;
     }
     (frames, scanner.stats, scanner.pending_bytes())
@@ -86,8 +92,22 @@ fuzz_target!(|input: &[u8]| {
 
     let mut dgram_stats = ScanStats::default();
     let mut dgram = Vec::new();
-    scan_datagram(data, &mut dgram_stats, &mut |f| dgram.push(f.to_vec()));
+    let mut at = Vec::new();
+    let base = data.as_ptr() as usize;
+    scan_datagram(data, &mut dgram_stats, &mut |f| {
+        dgram.push(f.to_vec());
+        let start = f.as_ptr() as usize - base;
+        at.push(start..start + f.len());
+    });
     check_accounting(&dgram, &dgram_stats, 0, data.len());
     assert!(dgram.len() >= whole.len());
     assert_eq!(&dgram[..whole.len()], &whole[..]);
+
+    let good = frame_oracle::good_frames(data);
+    for f in frame_oracle::isolated(&good) {
+        assert!(at.contains(&f), "good frame {f:?} not delivered");
+    }
+    for f in &at {
+        assert!(good.contains(f), "{f:?} is not a good frame");
+    }
 });

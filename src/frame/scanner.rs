@@ -7,12 +7,18 @@
 //! - [`StreamScanner`]: serial and TCP carry a byte stream; a frame may be
 //!   split across reads, so the unfinished tail is kept for the next read.
 //!
-//! A candidate that fails (bad CRC, unsupported flags, unknown id that does
-//! not line up with a following frame) is rejected and the scan restarts one
-//! byte after its start byte, so a real frame that overlaps junk is found.
+//! A candidate that fails (bad CRC, a MAVLink 1 length its message never
+//! has, unsupported flags, an unknown id that does not line up with a
+//! following frame or has a good frame starting inside it) is rejected and
+//! the scan restarts one byte after its start byte, so a real frame that
+//! overlaps junk is found. The rule this gives: every whole good frame that
+//! overlaps no other good frame is delivered (on a stream, by the read that
+//! brings its last byte).
+
+use std::sync::OnceLock;
 
 use mavlink::dialects::ardupilotmega::MavMessage;
-use mavlink::Message;
+use mavlink::{MavlinkVersion, Message};
 
 /// MAVLink 1 start-of-frame marker.
 pub const STX_V1: u8 = 0xFE;
@@ -26,6 +32,15 @@ const V2_HEADER: usize = 10; // STX, len, incompat, compat, seq, sys, comp, msgi
 const CHECKSUM_LEN: usize = 2;
 /// The largest possible frame: v2 header, 255 payload bytes, CRC, signature.
 pub const MAX_FRAME_LEN: usize = V2_HEADER + 255 + CHECKSUM_LEN + SIGNATURE_LEN;
+/// The most a [`StreamScanner`] keeps between reads. The tail is one
+/// unfinished candidate (at most one frame; exactly one whole frame when an
+/// unknown id waits for the next byte to show it lines up, found by the
+/// fuzzer), or a lined-up unknown id waiting for a candidate that starts
+/// inside it to be whole: at most 279 bytes of the unknown one before a
+/// candidate on its last byte, whose length byte is then the start byte
+/// that lines it up (253 or 254), so at most 279 bytes long, less the byte
+/// still missing.
+pub const MAX_PENDING: usize = 2 * MAX_FRAME_LEN - 3;
 
 /// What the scanner saw besides good frames. Every byte that is not part of
 /// a good frame or an unknown-but-aligned frame is counted in `skipped_bytes`.
@@ -33,7 +48,8 @@ pub const MAX_FRAME_LEN: usize = V2_HEADER + 255 + CHECKSUM_LEN + SIGNATURE_LEN;
 pub struct ScanStats {
     /// Frames with a valid CRC.
     pub frames: u64,
-    /// Candidates of a known message whose CRC did not match.
+    /// Candidates of a known message whose CRC did not match (or, in
+    /// MAVLink 1, whose length is not that message's).
     pub bad_crc: u64,
     /// Well-aligned frames of a message id this build does not know.
     pub unknown_id: u64,
@@ -131,10 +147,44 @@ enum Step {
     NeedMore,
 }
 
-/// True when `frame` (exactly one frame long) is a known message with a
-/// matching CRC.
-fn is_good_frame(frame: &[u8]) -> bool {
-    extra_crc(message_id(frame)).is_some_and(|extra| crc_matches(frame, extra))
+/// The MAVLink 1 payload length of a message id the dialect knows. A
+/// MAVLink 1 frame carries exactly the message's base fields (the ones
+/// CRC_EXTRA covers), so any other length is junk; checking it makes a
+/// chance CRC match in junk (1 in 65,536 for each false start byte with a
+/// known id) 256 times rarer. Junk whose extent takes in the first bytes of
+/// a real frame and passes the CRC by chance costs that frame (issue 21).
+fn v1_payload_len(msgid: u8) -> Option<u8> {
+    static LENGTHS: OnceLock<[Option<u8>; 256]> = OnceLock::new();
+    LENGTHS.get_or_init(|| {
+        let mut payload = [0u8; 255];
+        std::array::from_fn(|id| {
+            let msg = MavMessage::default_message_from_id(id as u32)?;
+            u8::try_from(msg.ser(MavlinkVersion::V1, &mut payload)).ok()
+        })
+    })[usize::from(msgid)]
+}
+
+/// What a whole candidate is.
+enum Check {
+    /// A known message, right length, matching CRC.
+    Good,
+    /// A known message that fails its CRC or its MAVLink 1 length.
+    Bad,
+    /// An id the dialect does not know: nothing to check it against.
+    Unknown,
+}
+
+/// Checks `frame` (exactly one claimed frame long).
+fn check(frame: &[u8]) -> Check {
+    let Some(extra) = extra_crc(message_id(frame)) else {
+        return Check::Unknown;
+    };
+    let length_ok = frame[0] != STX_V1 || v1_payload_len(frame[5]) == Some(frame[1]);
+    if length_ok && crc_matches(frame, extra) {
+        Check::Good
+    } else {
+        Check::Bad
+    }
 }
 
 /// Whether a good frame starts at each offset of the scanned bytes, worked
@@ -149,9 +199,18 @@ struct Inner {
     known: Vec<u16>,
 }
 
+/// What starts at an offset, as far as the bytes there tell.
+enum At {
+    /// A whole good frame of this length.
+    Good(usize),
+    /// Never a good frame, whatever follows.
+    NotGood,
+    /// A candidate whose bytes are not all there yet.
+    NotYet,
+}
+
 impl Inner {
-    /// True when a good frame starts at `buf[at]` and ends by `end`.
-    fn good_at(&mut self, buf: &[u8], at: usize, end: usize) -> bool {
+    fn frame_at(&mut self, buf: &[u8], at: usize) -> At {
         if self.known.len() < buf.len() {
             self.known.resize(buf.len(), 0);
         }
@@ -159,17 +218,25 @@ impl Inner {
             self.known[at] = match frame_len(&buf[at..]) {
                 Err(()) => 1,
                 Ok(Some(len)) if at + len <= buf.len() => {
-                    if is_good_frame(&buf[at..at + len]) {
+                    if matches!(check(&buf[at..at + len]), Check::Good) {
                         2 + len as u16
                     } else {
                         1
                     }
                 }
                 // Not all there yet: decided when more bytes come.
-                Ok(_) => return false,
+                Ok(_) => return At::NotYet,
             };
         }
-        self.known[at] >= 2 && at + usize::from(self.known[at] - 2) <= end
+        match self.known[at] {
+            1 => At::NotGood,
+            k => At::Good(usize::from(k - 2)),
+        }
+    }
+
+    /// True when a good frame starts at `buf[at]` and ends by `end`.
+    fn good_at(&mut self, buf: &[u8], at: usize, end: usize) -> bool {
+        matches!(self.frame_at(buf, at), At::Good(len) if at + len <= end)
     }
 
     /// The first `done` bytes of the stream buffer were consumed.
@@ -182,6 +249,15 @@ impl Inner {
     }
 }
 
+/// Offsets of the start bytes in `buf[from..to]`.
+fn start_bytes(buf: &[u8], from: usize, to: usize) -> impl Iterator<Item = usize> + '_ {
+    buf[from..to]
+        .iter()
+        .enumerate()
+        .filter(|&(_, &b)| b == STX_V1 || b == STX_V2)
+        .map(move |(i, _)| from + i)
+}
+
 /// True when a whole good frame lies inside the candidate at `buf[start]`
 /// whose claimed extent is `len` bytes (as far as the bytes are there). Such a candidate is junk
 /// whose length field lies (or a frame tunnelled in a payload, which loses
@@ -192,15 +268,41 @@ impl Inner {
 /// gives the same frames whatever its read splits.
 fn hides_a_good_frame(buf: &[u8], start: usize, len: usize, inner: &mut Inner) -> bool {
     let end = (start + len).min(buf.len());
-    let mut i = start + 1;
-    while let Some(offset) = buf[i..end].iter().position(|&b| b == STX_V1 || b == STX_V2) {
-        let at = i + offset;
-        if inner.good_at(buf, at, end) {
-            return true;
+    start_bytes(buf, start + 1, end).any(|at| inner.good_at(buf, at, end))
+}
+
+/// Whether a good frame starts inside the whole candidate of `len` bytes at
+/// `buf[start]`, even one that runs on past its end: `Some(true)` yes,
+/// `Some(false)` no, `None` not known until more bytes come. An unknown id
+/// cannot be checked, so its extent is believed only when no checked frame
+/// starts inside it: junk whose claimed extent ends inside a real frame,
+/// where that frame happens to hold a start byte, otherwise "lines up" and
+/// swallows the frame's first bytes (issue 21). A start byte inside whose
+/// frame is not all there yet is decided by the bytes that complete it, or
+/// at once when its extent already holds a whole good frame (it can never
+/// be delivered then), so a good frame that follows is never held back.
+fn good_frame_starts_inside(
+    buf: &[u8],
+    start: usize,
+    len: usize,
+    at_end: bool,
+    inner: &mut Inner,
+) -> Option<bool> {
+    let mut undecided = false;
+    for at in start_bytes(buf, start + 1, start + len) {
+        match inner.frame_at(buf, at) {
+            At::Good(_) => return Some(true),
+            At::NotGood => {}
+            At::NotYet if at_end => {}
+            At::NotYet => {
+                undecided |= match frame_len(&buf[at..]) {
+                    Ok(Some(claimed)) => !hides_a_good_frame(buf, at, claimed, inner),
+                    _ => true,
+                };
+            }
         }
-        i = at + 1;
     }
-    false
+    (!undecided).then_some(false)
 }
 
 /// Judges the candidate at `whole[start]` (a start byte). `at_end` says
@@ -219,16 +321,20 @@ fn judge(whole: &[u8], start: usize, at_end: bool, inner: &mut Inner) -> Step {
         return Step::NeedMore;
     }
     let frame = &buf[..len];
-    match extra_crc(message_id(frame)) {
-        Some(extra) if crc_matches(frame, extra) => Step::Frame(len),
-        Some(_) => Step::Reject { bad_crc: true },
-        // An id we cannot check: believe its length only when the frame ends
-        // exactly where the data ends or another start byte follows.
-        None => match buf.get(len) {
-            Some(&next) if next == STX_V1 || next == STX_V2 => Step::Unknown(len),
-            Some(_) => Step::Reject { bad_crc: false },
-            None if at_end => Step::Unknown(len),
-            None => Step::NeedMore,
+    match check(frame) {
+        Check::Good => Step::Frame(len),
+        Check::Bad => Step::Reject { bad_crc: true },
+        // An id we cannot check: believe its length only when the frame
+        // ends exactly where the data ends or another start byte follows,
+        // and no checked frame starts inside it.
+        Check::Unknown => match buf.get(len) {
+            Some(&next) if next != STX_V1 && next != STX_V2 => Step::Reject { bad_crc: false },
+            None if !at_end => Step::NeedMore,
+            _ => match good_frame_starts_inside(whole, start, len, at_end, inner) {
+                Some(false) => Step::Unknown(len),
+                Some(true) => Step::Reject { bad_crc: false },
+                None => Step::NeedMore,
+            },
         },
     }
 }
@@ -289,7 +395,7 @@ pub fn scan_datagram(datagram: &[u8], stats: &mut ScanStats, on_frame: &mut dyn 
 }
 
 /// Scanner for a byte stream: keeps an unfinished frame between reads.
-/// Its buffer never grows past a few frames, whatever the input.
+/// Its buffer never holds more than [`MAX_PENDING`] bytes, whatever the input.
 pub struct StreamScanner {
     buf: Vec<u8>,
     inner: Inner,
@@ -324,10 +430,7 @@ impl StreamScanner {
             self.inner.consumed(done);
             self.buf.drain(..done);
         }
-        // The tail is one unfinished candidate, so it is at most one frame
-        // (exactly one whole frame when an unknown id waits for the next
-        // byte to show it lines up; found by the fuzzer).
-        debug_assert!(self.buf.len() <= MAX_FRAME_LEN);
+        debug_assert!(self.buf.len() <= MAX_PENDING);
     }
 
     /// Bytes held back waiting for the rest of a frame.
@@ -343,6 +446,10 @@ mod tests {
     use crate::frame::Msg;
 
     fn ping_frame(version: Version, seq: u32) -> Vec<u8> {
+        ping_at(version, seq, 123_456)
+    }
+
+    fn ping_at(version: Version, seq: u32, time_usec: u64) -> Vec<u8> {
         let mut out = Vec::new();
         encode(
             &mut out,
@@ -353,7 +460,7 @@ mod tests {
                 seq: 7,
             },
             &Msg::Ping {
-                time_usec: 123_456,
+                time_usec,
                 seq,
                 target_system: 255,
                 target_component: 190,
@@ -444,6 +551,176 @@ mod tests {
         assert_eq!(frames.len(), 1);
         assert_eq!(stats.unknown_id, 1);
         assert_eq!(stats.skipped_bytes, 0);
+    }
+
+    /// Scans `data` as a datagram and as a stream split at every byte
+    /// (and in one piece): the frames found, the same each way.
+    fn frames_every_way(data: &[u8]) -> Vec<Vec<u8>> {
+        let (frames, _) = collect_datagram(data);
+        for chunk in 1..=data.len() {
+            let mut scanner = StreamScanner::new();
+            let mut found = Vec::new();
+            for piece in data.chunks(chunk) {
+                scanner.push(piece, &mut |f| found.push(f.to_vec()));
+            }
+            assert_eq!(found, frames, "read size {chunk}");
+        }
+        frames
+    }
+
+    /// Issue 21, the exact bytes of a failure found by a seeded search of
+    /// junk-prefixed PING replies: `FE 0D` claims 6 + 13 + 2 = 21 bytes
+    /// with MAVLink 1 id 0x0E, which the dialect does not know, so its CRC
+    /// cannot be checked. Its extent ends inside the real frame on a 0xFD
+    /// of the frame's payload, so it "lined up" with a following start
+    /// byte, was skipped whole as an unknown message and took the first 17
+    /// bytes of the reply with it.
+    #[test]
+    fn unknown_id_junk_ending_inside_a_frame_does_not_swallow_it() {
+        let junk = [0xFE, 0x0D, 0xD8, 0x59];
+        let reply = [
+            0xFD, 0x0E, 0x00, 0x00, 0xC2, 0x01, 0x01, 0x04, 0x00, 0x00, 0xF3, 0x56, 0x47, 0x4F,
+            0x4D, 0x02, 0xBD, 0xFD, 0x9E, 0x04, 0xEE, 0xE7, 0xFF, 0xBE, 0x34, 0xAD,
+        ];
+        assert_eq!(collect_datagram(&reply).0, [reply.to_vec()]);
+        let data = [&junk[..], &reply[..]].concat();
+        assert_eq!(junk.len() + 21, 4 + 17 + 4, "the junk's extent ends inside");
+        assert_eq!(data[junk.len() + 17], STX_V2, "on a start byte");
+        assert_eq!(frames_every_way(&data), [reply.to_vec()]);
+        let (_, stats) = collect_datagram(&data);
+        assert_eq!(
+            (stats.unknown_id, stats.skipped_bytes, stats.truncated),
+            (0, 4, 0)
+        );
+    }
+
+    /// Issue 21, the exact bytes of the second failure the search found:
+    /// `FE 0E 82 FE FE FD` is a MAVLink 1 header of STATUSTEXT (id 253)
+    /// claiming 14 payload bytes, whose 22-byte extent takes in the first 9
+    /// bytes of the reply and whose CRC matches by chance (1 in 65,536). It
+    /// was delivered as a frame and the reply was lost. STATUSTEXT is 51
+    /// bytes in MAVLink 1, so the length now rules it out.
+    #[test]
+    fn chance_crc_match_with_a_wrong_v1_length_does_not_swallow_a_frame() {
+        let junk = [
+            0xA5, 0x25, 0xFD, 0xFE, 0x0E, 0x82, 0xFE, 0xFE, 0xFD, 0xFD, 0x51, 0x57, 0xF2,
+        ];
+        let reply = [
+            0xFD, 0x0E, 0x00, 0x00, 0xA3, 0x01, 0x01, 0x04, 0x00, 0x00, 0x24, 0x9E, 0x52, 0x54,
+            0x12, 0x6C, 0x19, 0xDE, 0x18, 0x32, 0xA9, 0x53, 0xFF, 0xBE, 0x20, 0xF6,
+        ];
+        let data = [&junk[..], &reply[..]].concat();
+        let false_frame = &data[3..3 + 22];
+        assert_eq!(message_id(false_frame), 253);
+        assert!(crc_matches(false_frame, extra_crc(253).unwrap()));
+        assert_eq!(v1_payload_len(253), Some(51));
+        assert_eq!(frames_every_way(&data), [reply.to_vec()]);
+        let (_, stats) = collect_datagram(&data);
+        assert_eq!((stats.bad_crc, stats.skipped_bytes), (1, 13));
+    }
+
+    #[test]
+    fn v1_lengths_come_from_the_dialect() {
+        assert_eq!(v1_payload_len(0), Some(9)); // HEARTBEAT
+        assert_eq!(v1_payload_len(4), Some(14)); // PING
+        assert_eq!(v1_payload_len(77), Some(3)); // COMMAND_ACK: base fields only
+        assert_eq!(v1_payload_len(14), None);
+        assert_eq!(ping_frame(Version::V1, 1)[1], 14);
+    }
+
+    /// An unknown message (lined up with the start byte that follows it)
+    /// whose last 12 bytes are the start of a real frame: `time_usec` of
+    /// all 0xFD puts a start byte right after the unknown one's extent.
+    fn unknown_holding_the_start_of(frame: &[u8]) -> Vec<u8> {
+        let mut unknown = vec![STX_V2, 20, 0, 0, 0, 1, 1, 0xEE, 0xEE, 0xEE];
+        unknown.extend([0x11; 10]);
+        unknown.extend(&frame[..12]);
+        assert_eq!(frame_len(&unknown), Ok(Some(unknown.len())));
+        unknown
+    }
+
+    /// A PING whose `time_usec` is all 0xFD bytes.
+    fn fd_ping() -> Vec<u8> {
+        ping_at(Version::V2, 5, u64::MAX / 0xFF * 0xFD)
+    }
+
+    #[test]
+    fn a_frame_starting_inside_an_unknown_message_is_found() {
+        let frame = fd_ping();
+        let unknown = unknown_holding_the_start_of(&frame);
+        let data = [&unknown[..], &frame[12..]].concat();
+        assert_eq!(frames_every_way(&data), std::slice::from_ref(&frame));
+        let (_, stats) = collect_datagram(&data);
+        assert_eq!((stats.unknown_id, stats.skipped_bytes), (0, 20));
+    }
+
+    #[test]
+    fn stream_waits_for_a_frame_starting_inside_an_unknown_message() {
+        let frame = fd_ping();
+        let unknown = unknown_holding_the_start_of(&frame);
+        let mut scanner = StreamScanner::new();
+        let mut found = Vec::new();
+        // The unknown message and the byte after it are there, the frame
+        // starting inside it not yet: neither is decided.
+        scanner.push(&unknown, &mut |f| found.push(f.to_vec()));
+        scanner.push(&frame[12..13], &mut |f| found.push(f.to_vec()));
+        assert!(found.is_empty());
+        assert_eq!(scanner.pending_bytes(), unknown.len() + 1);
+        assert_eq!(scanner.stats.unknown_id, 0);
+        // Its last byte comes: the frame is delivered with it.
+        scanner.push(&frame[13..], &mut |f| found.push(f.to_vec()));
+        assert_eq!(found, [frame]);
+        assert_eq!(scanner.pending_bytes(), 0);
+        assert_eq!(
+            (scanner.stats.unknown_id, scanner.stats.skipped_bytes),
+            (0, 20)
+        );
+    }
+
+    #[test]
+    fn a_lying_start_inside_an_unknown_message_does_not_hold_back_the_next_frame() {
+        // The unknown message ends in `FE FF` (a MAVLink 1 start claiming
+        // 263 bytes); the frame after it is delivered at once, because the
+        // false start's extent already holds it whole.
+        let mut unknown = vec![STX_V2, 12, 0, 0, 0, 1, 1, 0xEE, 0xEE, 0xEE];
+        unknown.extend([0x11; 10]);
+        unknown.extend([STX_V1, 0xFF, 0x22, 0x33]);
+        let frame = ping_frame(Version::V2, 4);
+        let mut scanner = StreamScanner::new();
+        let mut found = Vec::new();
+        scanner.push(&[&unknown[..], &frame[..]].concat(), &mut |f| {
+            found.push(f.to_vec())
+        });
+        assert_eq!(found, [frame]);
+        assert_eq!(scanner.pending_bytes(), 0);
+        assert_eq!(
+            (scanner.stats.unknown_id, scanner.stats.skipped_bytes),
+            (1, 0)
+        );
+    }
+
+    #[test]
+    fn the_longest_tail_a_stream_keeps_is_max_pending() {
+        // A maximal unknown message (signed, 255 payload bytes) lined up
+        // with the `FE` after it, whose last byte starts a signed MAVLink 2
+        // candidate of 254 payload bytes (the `FE`): both wait until that
+        // candidate is whole, 279 + 279 bytes from the first start byte.
+        let header = [STX_V2, 255, IFLAG_SIGNED, 0, 0, 1, 1, 0xEE, 0xEE, 0xEE];
+        let mut data = header.to_vec();
+        data.resize(MAX_FRAME_LEN - 1, 0x42);
+        data.extend([STX_V2, STX_V1, IFLAG_SIGNED]);
+        data.extend(&header[3..]);
+        data.resize(MAX_PENDING, 0x42);
+        let mut scanner = StreamScanner::new();
+        for byte in &data {
+            scanner.push(std::slice::from_ref(byte), &mut |_| panic!("no frame"));
+        }
+        assert_eq!(scanner.pending_bytes(), MAX_PENDING);
+        assert_eq!(scanner.stats.unknown_id, 0);
+        // Whole now, and not a good frame: the unknown message is skipped.
+        scanner.push(&[0x42], &mut |_| panic!("no frame"));
+        assert_eq!(scanner.stats.unknown_id, 1);
+        assert_eq!(scanner.pending_bytes(), 0);
     }
 
     #[test]

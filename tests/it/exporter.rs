@@ -3,67 +3,7 @@
 //! TIMESYNC clock offset that follows the run instead of waiting for its
 //! end. Scraped over HTTP from real pymavlink peers, checked by promtool.
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Stdio};
-use std::time::{Duration, Instant};
-
-use crate::common::{assert_promtool_clean, free_tcp_port, http_get, mavping, sample, Peer};
-
-const PATIENCE: Duration = Duration::from_secs(20);
-
-/// A `--prometheus` run, killed when the test ends.
-struct Exporting {
-    child: Child,
-    host: String,
-}
-
-impl Exporting {
-    fn start(args: &[&str]) -> Exporting {
-        let mut child = mavping()
-            .args(["-q", "--prometheus", "127.0.0.1:0"])
-            .args(args)
-            .stdout(Stdio::null())
-            .stderr(Stdio::piped())
-            .spawn()
-            .unwrap();
-        let mut line = String::new();
-        BufReader::new(child.stderr.take().unwrap())
-            .read_line(&mut line)
-            .unwrap();
-        let host = line
-            .trim()
-            .strip_prefix("mavping: serving metrics at http://")
-            .and_then(|l| l.strip_suffix("/metrics"))
-            .unwrap_or_else(|| panic!("no address announced: {line:?}"))
-            .to_string();
-        Exporting { child, host }
-    }
-
-    /// Scrapes until `ready` holds of the exposition.
-    fn scrape_until(&self, what: &str, ready: impl Fn(&str) -> bool) -> String {
-        let start = Instant::now();
-        loop {
-            let body = http_get(&self.host, "/metrics", &[]).body;
-            if ready(&body) {
-                return body;
-            }
-            assert!(start.elapsed() < PATIENCE, "not {what}:\n{body}");
-            std::thread::sleep(Duration::from_millis(50));
-        }
-    }
-
-    /// Still measuring (the run has no count: only a signal ends it).
-    fn running(&mut self) -> bool {
-        self.child.try_wait().unwrap().is_none()
-    }
-}
-
-impl Drop for Exporting {
-    fn drop(&mut self) {
-        let _ = self.child.kill();
-        let _ = self.child.wait();
-    }
-}
+use crate::common::{assert_promtool_clean, free_tcp_port, sample, Exporting, Peer};
 
 #[test]
 fn radios_and_link_state_are_exported_as_a_run_goes_on() {

@@ -15,6 +15,7 @@ mod high_rate;
 mod hostile;
 mod live;
 mod multilink;
+mod mutants;
 mod options;
 mod probes_pymavlink;
 mod prometheus_server;

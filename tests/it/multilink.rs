@@ -379,80 +379,26 @@ fn live_view_has_a_section_per_link() {
 
 #[test]
 fn prometheus_serves_a_series_per_link() {
-    use std::io::{BufRead, BufReader, Read, Write};
     let links = ["sim:?loss=20%&seed=4&delay=1ms", "sim:?delay=3ms"];
-    let child = mavping()
-        .args(["-q", "-i", "0.01", "--prometheus", "127.0.0.1:0"])
-        .args(links)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    struct Kill(std::process::Child);
-    impl Drop for Kill {
-        fn drop(&mut self) {
-            let _ = self.0.kill();
-            let _ = self.0.wait();
-        }
-    }
-    let mut child = Kill(child);
-    let mut line = String::new();
-    BufReader::new(child.0.stderr.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
-    let host = line
-        .trim()
-        .strip_prefix("mavping: serving metrics at http://")
-        .and_then(|l| l.strip_suffix("/metrics"))
-        .unwrap_or_else(|| panic!("no address announced: {line:?}"))
-        .to_string();
+    let run = Exporting::start(&["-i", "0.01", links[0], links[1]]);
     let series = |link: &str| {
         format!(
             "mavping_received_total{{link=\"{link}\",probe=\"ping\",sysid=\"1\",compid=\"1\"}} "
         )
     };
-    let start = std::time::Instant::now();
-    let body = loop {
-        let mut s = std::net::TcpStream::connect(&host).unwrap();
-        write!(s, "GET /metrics HTTP/1.1\r\nHost: {host}\r\n\r\n").unwrap();
-        let mut response = String::new();
-        s.read_to_string(&mut response).unwrap();
-        let body = response.split_once("\r\n\r\n").unwrap().1.to_string();
-        // Both links have answered and the lossy one has lost a request.
+    // Both links have answered and the lossy one has lost a request.
+    let body = run.scrape_until("both links answering, the lossy one losing", |body| {
         let answered = links.iter().all(|l| {
             body.lines()
                 .any(|x| x.starts_with(&series(l)) && !x.ends_with(" 0"))
         });
-        if answered && body.contains(&format!("mavping_lost_total{{link=\"{}\"", links[0])) {
-            break body;
-        }
-        assert!(start.elapsed() < Duration::from_secs(20), "{body}");
-        std::thread::sleep(Duration::from_millis(50));
-    };
+        answered && body.contains(&format!("mavping_lost_total{{link=\"{}\"", links[0]))
+    });
     assert_eq!(
         body.matches("# TYPE mavping_received_total counter")
             .count(),
         1,
         "{body}"
     );
-    let mut check = std::process::Command::new("promtool")
-        .args(["check", "metrics"])
-        .stdin(std::process::Stdio::piped())
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .expect("promtool — run `bash scripts/test.sh`");
-    check
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(body.as_bytes())
-        .unwrap();
-    let out = check.wait_with_output().unwrap();
-    assert!(
-        out.status.success() && out.stdout.is_empty() && out.stderr.is_empty(),
-        "promtool check metrics: {}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_promtool_clean(&body);
 }

@@ -2,30 +2,19 @@
 //! scraped over HTTP and checked by a real parser and by promtool, `--plot`
 //! written to a file and rendered to pixels (`--live` is in `live.rs`).
 
-use std::io::{BufRead, BufReader};
-use std::process::{Child, Command, Stdio};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use assert_cmd::cargo::cargo_bin;
 
 use crate::common::{
-    assert_promtool_clean, checked_summary, http_get, n, responder, Rendered, Response,
+    assert_promtool_clean, checked_summary, http_get, n, responder, Exporting, Rendered, Response,
 };
 use prometheus_parse::{Scrape, Value};
 
 /// Generous bound for something that normally takes a fraction of a second;
 /// reaching it fails the test instead of hanging it.
 const PATIENCE: Duration = Duration::from_secs(20);
-
-/// Kills the process when the test ends, whatever happens.
-struct Running(Child);
-
-impl Drop for Running {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 fn counter(scrape: &Scrape, name: &str, sysid: &str) -> f64 {
     scrape
@@ -41,31 +30,14 @@ fn counter(scrape: &Scrape, name: &str, sysid: &str) -> f64 {
 
 #[test]
 fn prometheus_metrics_are_served_while_the_run_goes_on() {
-    let mut child = Command::new(cargo_bin("mavping"))
-        .args([
-            "-q",
-            "-i",
-            "0.01",
-            "-W",
-            "200ms",
-            "--prometheus",
-            "127.0.0.1:0",
-            "sim:?responders=2&loss=20%&delay=1ms&jitter=1ms&seed=4",
-        ])
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut stderr = BufReader::new(child.stderr.take().unwrap());
-    let _running = Running(child);
-    let mut line = String::new();
-    stderr.read_line(&mut line).unwrap();
-    let host = line
-        .trim()
-        .strip_prefix("mavping: serving metrics at http://")
-        .and_then(|l| l.strip_suffix("/metrics"))
-        .unwrap_or_else(|| panic!("no address announced: {line:?}"))
-        .to_string();
+    let run = Exporting::start(&[
+        "-i",
+        "0.01",
+        "-W",
+        "200ms",
+        "sim:?responders=2&loss=20%&delay=1ms&jitter=1ms&seed=4",
+    ]);
+    let host = run.host.clone();
 
     // Scrape until both responders have lost something: the run goes on
     // with no count, so the numbers only grow.

@@ -3,10 +3,10 @@
 //! values whole (connection strings hold `=`, `&` and `,`), and promtool.
 
 use std::collections::BTreeMap;
-use std::io::{Read, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
-use std::process::{Command, Stdio};
-use std::time::Duration;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
 
 /// An HTTP response.
 #[derive(Debug)]
@@ -165,4 +165,63 @@ fn label_values_stay_whole() {
     assert_eq!(sample(text, "n", &[]), Some(1.5));
     assert_eq!(sample(text, "m", &[("link", "sim:?a=1&b=2,c")]), Some(3.0));
     assert_eq!(sample(text, "m", &[("link", "sim:")]), None);
+}
+
+/// A `mavping -q --prometheus 127.0.0.1:0 ARGS...` run, killed when the
+/// test ends; `host` is the address it announced.
+pub struct Exporting {
+    pub child: Child,
+    pub host: String,
+}
+
+impl Exporting {
+    pub fn start(args: &[&str]) -> Exporting {
+        let mut child = super::mavping()
+            .args(["-q", "--prometheus", "127.0.0.1:0"])
+            .args(args)
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut line = String::new();
+        BufReader::new(child.stderr.take().unwrap())
+            .read_line(&mut line)
+            .unwrap();
+        let host = line
+            .trim()
+            .strip_prefix("mavping: serving metrics at http://")
+            .and_then(|l| l.strip_suffix("/metrics"))
+            .unwrap_or_else(|| panic!("no address announced: {line:?}"))
+            .to_string();
+        Exporting { child, host }
+    }
+
+    /// Scrapes `/metrics` until `ready` holds of the exposition (20 s at
+    /// most, then the test fails showing the last one).
+    pub fn scrape_until(&self, what: &str, ready: impl Fn(&str) -> bool) -> String {
+        let start = Instant::now();
+        loop {
+            let body = http_get(&self.host, "/metrics", &[]).body;
+            if ready(&body) {
+                return body;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(20),
+                "not {what}:\n{body}"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
+
+    /// Still measuring (a run with no count ends only on a signal).
+    pub fn running(&mut self) -> bool {
+        self.child.try_wait().unwrap().is_none()
+    }
+}
+
+impl Drop for Exporting {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
 }

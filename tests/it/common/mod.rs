@@ -1,6 +1,7 @@
 //! Shared by the integration tests: real peers (pymavlink processes),
 //! free loopback ports, running mavping, and parsing its summaries.
 
+pub mod frame_oracle;
 pub mod http;
 pub mod json;
 pub mod render;
