@@ -16,10 +16,10 @@ import collections
 import json
 import os
 import select
-import signal
 import sys
 import time
-import tty
+
+import ptys
 
 
 def main():
@@ -31,25 +31,11 @@ def main():
                     help="delay of every read after its last byte is through the channel")
     args = ap.parse_args()
 
-    ends = []
-    for _ in range(2):
-        master, slave = os.openpty()
-        # Raw, no echo: a pty is a line-editing terminal by default.
-        tty.setraw(slave)
-        tty.setraw(master)
-        ends.append((master, slave, os.ttyname(slave)))
-    (ma, _sa, pa), (mb, _sb, pb) = ends
+    (ma, pa), (mb, pb) = ptys.open_raw_pair()
     other = {ma: mb, mb: ma}
     name = {ma: "a_to_b", mb: "b_to_a"}
 
-    running = True
-
-    def stop(*_):
-        nonlocal running
-        running = False
-
-    signal.signal(signal.SIGTERM, stop)
-    signal.signal(signal.SIGINT, stop)
+    until = ptys.UntilSignalled()
     print("ready", flush=True)
     print(pa, pb, flush=True)
 
@@ -61,7 +47,7 @@ def main():
     # Reads not yet through the channel: (when through, length).
     held = collections.deque()
     truth = {"a_to_b": 0, "b_to_a": 0, "dropped_a_to_b": 0, "dropped_b_to_a": 0}
-    while running:
+    while until.running:
         now = time.monotonic()
         while in_flight and in_flight[0][0] <= now:
             _, fd, data = in_flight.popleft()

@@ -13,10 +13,10 @@ import argparse
 import json
 import os
 import select
-import signal
 import sys
 import time
-import tty
+
+import ptys
 
 
 def main():
@@ -26,15 +26,7 @@ def main():
     ap.add_argument("--link-a", default="", help="symlink to A's device path")
     args = ap.parse_args()
 
-    ends = []
-    for _ in range(2):
-        master, slave = os.openpty()
-        # Raw, no echo: a pty is a line-editing terminal by default, which
-        # would echo our frames back and mangle bytes like 0x0D and 0x03.
-        tty.setraw(slave)
-        tty.setraw(master)
-        ends.append((master, slave, os.ttyname(slave)))
-    (ma, _sa, pa), (mb, _sb, pb) = ends
+    (ma, pa), (mb, pb) = ptys.open_raw_pair()
     if args.link_a:
         tmp = args.link_a + ".tmp"
         if os.path.lexists(tmp):
@@ -42,18 +34,11 @@ def main():
         os.symlink(pa, tmp)
         os.replace(tmp, args.link_a)
 
-    running = True
-
-    def stop(*_):
-        nonlocal running
-        running = False
-
-    signal.signal(signal.SIGTERM, stop)
-    signal.signal(signal.SIGINT, stop)
+    until = ptys.UntilSignalled()
     print("ready", flush=True)
     print(pa, pb, flush=True)
     truth = {"a_to_b": 0, "b_to_a": 0}
-    while running:
+    while until.running:
         try:
             ready, _, _ = select.select([ma, mb], [], [], 0.05)
         except InterruptedError:

@@ -6,23 +6,21 @@
 
 use plotters::chart::MeshStyle;
 use plotters::coord::ranged1d::ValueFormatter;
-use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
+use super::frame::{self, Area, Layout, LegendRow, ROW_H, TITLE_H};
 use super::style::Look;
 use super::{bin, bin_low_ms, PlotData, Track, BINS_PER_DECADE};
 use crate::engine::Nanos;
 
 pub(super) const WIDTH: u32 = 1000;
-const TITLE_H: u32 = 44;
 const TIME_H: u32 = 300;
 /// Height of one responder's row of lost requests.
 const LANE_H: u32 = 24;
 /// The lost-requests chart besides its rows: the time axis and its labels.
 const LANES_AXIS_H: u32 = 66;
 const DIST_H: u32 = 270;
-const ROW_H: u32 = 26;
 pub(super) const MARGIN: u32 = 14;
 /// Room for the y axis labels, the same for every chart so their time and
 /// RTT axes line up.
@@ -73,7 +71,6 @@ pub(super) fn log_ticks(from: f64, to: f64) -> Vec<f64> {
 }
 
 pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 
 /// One responder, in drawing order.
 struct Entry<'a> {
@@ -93,30 +90,19 @@ pub(super) fn svg(data: &PlotData) -> Result<String, String> {
             track,
         })
         .collect();
-    let label_w = entries
-        .iter()
-        .map(|e| e.label.as_str())
-        .chain(["responder"])
-        .map(|l| text_width(l, legend_font()))
-        .max()
-        .unwrap_or(0);
-    // The legend's columns after the labels, and wider when a label is long.
-    let numbers_x = 70 + label_w as i32 + 20;
-    let width = WIDTH.max((numbers_x + 4 * NUMBER_W + 30) as u32);
-    // A long title (a simulated link with every parameter) gets a smaller
-    // font before the plot gets wider.
     let title = data.title();
-    let title_size = fit(&title, TITLE_SIZE, width - 2 * MARGIN);
-    let width = width.max(text_width(&title, title_font(title_size)) + 2 * MARGIN);
+    let layout = Layout::new(
+        &title,
+        "responder",
+        entries.iter().map(|e| e.label.as_str()),
+        4,
+        NUMBER_W,
+    );
     let rows = entries.len().max(1) as u32;
     let height = TITLE_H + TIME_H + LANE_H * rows + LANES_AXIS_H + DIST_H + ROW_H * (rows + 1) + 20;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
-        let title = (title.as_str(), title_size);
-        draw(title, &entries, &root, numbers_x).map_err(|e| e.to_string())?;
-    }
-    Ok(svg)
+    frame::svg(&title, &layout, height, |area| {
+        draw(&entries, area, &layout)
+    })
 }
 
 pub(super) fn title_font(size: f64) -> FontDesc<'static> {
@@ -141,21 +127,7 @@ pub(super) fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
     font.box_size(text).map_or(0, |(w, _)| w * 6 / 5)
 }
 
-fn draw(
-    (title, title_size): (&str, f64),
-    entries: &[Entry<'_>],
-    root: &Area<'_>,
-    numbers_x: i32,
-) -> DrawResult {
-    root.fill(&WHITE)?;
-    let (head, rest) = root.split_vertically(TITLE_H);
-    head.draw(&Text::new(
-        title,
-        (MARGIN as i32, TITLE_H as i32 / 2),
-        title_font(title_size)
-            .into_text_style(root)
-            .pos(Pos::new(HPos::Left, VPos::Center)),
-    ))?;
+fn draw(entries: &[Entry<'_>], rest: &Area<'_>, layout: &Layout) -> DrawResult {
     let rows = entries.len().max(1) as u32;
     let (time, rest) = rest.split_vertically(TIME_H);
     let (lanes, rest) = rest.split_vertically(LANE_H * rows + LANES_AXIS_H);
@@ -169,9 +141,7 @@ fn draw(
     over_time(entries, &time, t_max)?;
     losses(entries, &lanes, t_max)?;
     distribution_chart(entries, &distribution)?;
-    legend_table(entries, &legend, numbers_x)?;
-    root.present()?;
-    Ok(())
+    legend_table(entries, &legend, layout)
 }
 
 fn axis_font() -> TextStyle<'static> {
@@ -337,65 +307,33 @@ fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
     Ok(())
 }
 
-/// The legend: a header and a row per responder with its line and marker,
-/// its label and the run's figures for it.
-fn legend_table(entries: &[Entry<'_>], area: &Area<'_>, numbers_x: i32) -> DrawResult {
-    let font = legend_font();
-    let left = font
-        .clone()
-        .into_text_style(area)
-        .pos(Pos::new(HPos::Left, VPos::Center));
-    let right = font
-        .into_text_style(area)
-        .pos(Pos::new(HPos::Right, VPos::Center));
-    let row_y = |r: usize| ROW_H as i32 * r as i32 + ROW_H as i32 / 2 + 4;
-    let column = |j: i32| numbers_x + NUMBER_W * (j + 1);
-    let header = Pos::new(HPos::Right, VPos::Center);
-    let bold = legend_font()
-        .style(FontStyle::Bold)
-        .into_text_style(area)
-        .pos(header);
-    area.draw(&Text::new(
-        "responder",
-        (70, row_y(0)),
-        bold.pos(Pos::new(HPos::Left, VPos::Center)),
-    ))?;
-    for (j, name) in ["sent", "loss %", "p50 ms", "p99 ms"]
-        .into_iter()
-        .enumerate()
-    {
-        area.draw(&Text::new(name, (column(j as i32), row_y(0)), bold.clone()))?;
-    }
-    let rule = row_y(0) + ROW_H as i32 / 2;
-    area.draw(&PathElement::new(
-        [(MARGIN as i32, rule), (column(3), rule)],
-        BLACK.stroke_width(1),
-    ))?;
-    if entries.is_empty() {
-        area.draw(&Text::new("no responder answered", (70, row_y(1)), left))?;
-        return Ok(());
-    }
-    for (r, e) in entries.iter().enumerate() {
-        let y = row_y(r + 1);
-        area.draw(&PathElement::new(
-            [(18, y), (58, y)],
-            e.look.color.stroke_width(2),
-        ))?;
-        area.draw(&e.look.marker((38, y), 5))?;
-        area.draw(&Text::new(e.label.as_str(), (70, y), left.clone()))?;
-        let f = e.track.figures;
-        let cells = [
-            f.map(|f| f.sent.to_string()),
-            f.map(|f| format!("{:.2}", f.loss_pct)),
-            f.and_then(|f| f.p50_ms).map(|v| format!("{v:.3}")),
-            f.and_then(|f| f.p99_ms).map(|v| format!("{v:.3}")),
-        ];
-        for (j, cell) in cells.into_iter().enumerate() {
-            let text = cell.unwrap_or_else(|| "-".into());
-            area.draw(&Text::new(text, (column(j as i32), y), right.clone()))?;
-        }
-    }
-    Ok(())
+/// The legend: a row per responder with its line and marker, its label
+/// and the run's figures for it.
+fn legend_table(entries: &[Entry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
+    let rows: Vec<LegendRow<'_>> = entries
+        .iter()
+        .map(|e| {
+            let f = e.track.figures;
+            LegendRow {
+                look: e.look,
+                label: &e.label,
+                cells: vec![
+                    f.map(|f| f.sent.to_string()),
+                    f.map(|f| format!("{:.2}", f.loss_pct)),
+                    f.and_then(|f| f.p50_ms).map(|v| format!("{v:.3}")),
+                    f.and_then(|f| f.p99_ms).map(|v| format!("{v:.3}")),
+                ],
+            }
+        })
+        .collect();
+    let columns = ["sent", "loss %", "p50 ms", "p99 ms"];
+    frame::legend(
+        area,
+        layout,
+        ("responder", &columns),
+        &rows,
+        "no responder answered",
+    )
 }
 
 #[cfg(test)]

@@ -8,6 +8,7 @@
 //! The legend's loss and percentiles are the run's own summary figures.
 
 mod draw;
+mod frame;
 mod style;
 mod sweep;
 

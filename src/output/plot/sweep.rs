@@ -3,25 +3,18 @@
 //! steps come from the run's summary, so the picture shows exactly the
 //! figures the text and JSON reports give.
 
-use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::draw::{
-    caption_font, fit, legend_font, log_ticks, mesh, text_width, title_font, DrawResult, FONT,
-    MARGIN, TITLE_SIZE, WIDTH, Y_LABELS_W,
-};
+use super::draw::{caption_font, log_ticks, mesh, DrawResult, FONT, MARGIN, Y_LABELS_W};
+use super::frame::{self, Area, Layout, LegendRow, ROW_H, TITLE_H};
 use super::style::Look;
 use crate::engine::sweep::step::StepFigures;
 use crate::engine::sweep::verdict::SweepSummary;
 
-const TITLE_H: u32 = 44;
 const RTT_H: u32 = 340;
 const LOSS_H: u32 = 230;
-const ROW_H: u32 = 26;
 const NUMBER_W: i32 = 130;
-
-type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 
 /// One link's sweep, in drawing order.
 pub(super) struct SweepEntry<'a> {
@@ -45,43 +38,20 @@ impl SweepEntry<'_> {
 }
 
 pub(super) fn svg(title: &str, entries: &[SweepEntry<'_>]) -> Result<String, String> {
-    let label_w = entries
-        .iter()
-        .map(|e| e.label.as_str())
-        .chain(["link"])
-        .map(|l| text_width(l, legend_font()))
-        .max()
-        .unwrap_or(0);
-    let numbers_x = 70 + label_w as i32 + 20;
-    let width = WIDTH.max((numbers_x + 4 * NUMBER_W + 30) as u32);
-    let title_size = fit(title, TITLE_SIZE, width - 2 * MARGIN);
-    let width = width.max(text_width(title, title_font(title_size)) + 2 * MARGIN);
+    let layout = Layout::new(
+        title,
+        "link",
+        entries.iter().map(|e| e.label.as_str()),
+        4,
+        NUMBER_W,
+    );
     let rows = entries.len().max(1) as u32;
     let height = TITLE_H + RTT_H + LOSS_H + ROW_H * (rows + 1) + 20;
-    let mut svg = String::new();
-    {
-        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
-        draw((title, title_size), entries, &root, numbers_x).map_err(|e| e.to_string())?;
-    }
-    Ok(svg)
+    frame::svg(title, &layout, height, |area| draw(entries, area, &layout))
 }
 
-fn draw(
-    (title, title_size): (&str, f64),
-    entries: &[SweepEntry<'_>],
-    root: &Area<'_>,
-    numbers_x: i32,
-) -> DrawResult {
-    root.fill(&WHITE)?;
-    let (head, rest) = root.split_vertically(TITLE_H);
-    head.draw(&Text::new(
-        title,
-        (MARGIN as i32, TITLE_H as i32 / 2),
-        title_font(title_size)
-            .into_text_style(root)
-            .pos(Pos::new(HPos::Left, VPos::Center)),
-    ))?;
-    let (rtt, rest) = rest.split_vertically(RTT_H);
+fn draw(entries: &[SweepEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
+    let (rtt, rest) = area.split_vertically(RTT_H);
     let (loss, legend) = rest.split_vertically(LOSS_H);
     let rates: Vec<f64> = entries
         .iter()
@@ -93,9 +63,7 @@ fn draw(
     let (from, to) = (lo / 1.15, (hi * 1.15).max(lo * 2.0));
     rtt_chart(entries, &rtt, (from, to))?;
     loss_chart(entries, &loss, (from, to))?;
-    legend_table(entries, &legend, numbers_x)?;
-    root.present()?;
-    Ok(())
+    legend_table(entries, &legend, layout)
 }
 
 /// p99 as a solid line and p50 dashed, on log axes; the knee as a
@@ -209,58 +177,24 @@ fn loss_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64
 
 /// A row per link: its knee (rate and bytes per second), the first step's
 /// p99 it was judged against, and whether it queues before it drops.
-fn legend_table(entries: &[SweepEntry<'_>], area: &Area<'_>, numbers_x: i32) -> DrawResult {
-    let font = legend_font();
-    let left = font
-        .clone()
-        .into_text_style(area)
-        .pos(Pos::new(HPos::Left, VPos::Center));
-    let right = font
-        .into_text_style(area)
-        .pos(Pos::new(HPos::Right, VPos::Center));
-    let bold = legend_font().style(FontStyle::Bold).into_text_style(area);
-    let row_y = |r: usize| ROW_H as i32 * r as i32 + ROW_H as i32 / 2 + 4;
-    let column = |j: i32| numbers_x + NUMBER_W * (j + 1);
-    area.draw(&Text::new(
-        "link",
-        (70, row_y(0)),
-        bold.clone().pos(Pos::new(HPos::Left, VPos::Center)),
-    ))?;
-    for (j, name) in ["knee /s", "knee B/s", "first p99 ms", "bufferbloat"]
-        .into_iter()
-        .enumerate()
-    {
-        area.draw(&Text::new(
-            name,
-            (column(j as i32), row_y(0)),
-            bold.clone().pos(Pos::new(HPos::Right, VPos::Center)),
-        ))?;
-    }
-    let rule = row_y(0) + ROW_H as i32 / 2;
-    area.draw(&PathElement::new(
-        [(MARGIN as i32, rule), (column(3), rule)],
-        BLACK.stroke_width(1),
-    ))?;
-    for (r, e) in entries.iter().enumerate() {
-        let y = row_y(r + 1);
-        area.draw(&PathElement::new(
-            [(18, y), (58, y)],
-            e.look.color.stroke_width(2),
-        ))?;
-        area.draw(&e.look.marker((38, y), 5))?;
-        area.draw(&Text::new(e.label.as_str(), (70, y), left.clone()))?;
-        let s = e.sweep;
-        let cells = [
-            s.knee.map(|k| format!("{:.1}", k.rate_hz)),
-            s.knee.map(|k| format!("{:.0}", k.bytes_per_s)),
-            s.reference_p99_us.map(|p| format!("{:.3}", p / 1e3)),
-            s.queueing
-                .map(|q| if q.bufferbloat { "yes" } else { "no" }.to_string()),
-        ];
-        for (j, cell) in cells.into_iter().enumerate() {
-            let text = cell.unwrap_or_else(|| "-".into());
-            area.draw(&Text::new(text, (column(j as i32), y), right.clone()))?;
-        }
-    }
-    Ok(())
+fn legend_table(entries: &[SweepEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
+    let rows: Vec<LegendRow<'_>> = entries
+        .iter()
+        .map(|e| {
+            let s = e.sweep;
+            LegendRow {
+                look: e.look,
+                label: &e.label,
+                cells: vec![
+                    s.knee.map(|k| format!("{:.1}", k.rate_hz)),
+                    s.knee.map(|k| format!("{:.0}", k.bytes_per_s)),
+                    s.reference_p99_us.map(|p| format!("{:.3}", p / 1e3)),
+                    s.queueing
+                        .map(|q| if q.bufferbloat { "yes" } else { "no" }.to_string()),
+                ],
+            }
+        })
+        .collect();
+    let columns = ["knee /s", "knee B/s", "first p99 ms", "bufferbloat"];
+    frame::legend(area, layout, ("link", &columns), &rows, "no sweep")
 }

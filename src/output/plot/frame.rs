@@ -1,0 +1,157 @@
+//! What every picture `--plot` draws shares: its width (the legend's
+//! labels and the title decide it), the title across the top, and the
+//! legend table below the charts (a row per line: its colour and marker,
+//! its label, its figures).
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+use super::draw::{
+    fit, legend_font, text_width, title_font, DrawResult, MARGIN, TITLE_SIZE, WIDTH,
+};
+use super::style::Look;
+
+/// Height of the title band.
+pub(super) const TITLE_H: u32 = 44;
+/// Height of a legend row.
+pub(super) const ROW_H: u32 = 26;
+
+pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+/// How wide the picture is, where the legend's figures start, and the
+/// title's font size.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Layout {
+    pub width: u32,
+    pub numbers_x: i32,
+    pub number_w: i32,
+    pub title_size: f64,
+}
+
+impl Layout {
+    /// For `title` over a legend whose first column (headed `first`) holds
+    /// `labels`, then `columns` columns of figures `number_w` wide.
+    pub fn new<'a>(
+        title: &str,
+        first: &'a str,
+        labels: impl Iterator<Item = &'a str>,
+        columns: i32,
+        number_w: i32,
+    ) -> Self {
+        let label_w = labels
+            .chain([first])
+            .map(|l| text_width(l, legend_font()))
+            .max()
+            .unwrap_or(0);
+        // The legend's columns after the labels, and wider when a label
+        // is long.
+        let numbers_x = 70 + label_w as i32 + 20;
+        let width = WIDTH.max((numbers_x + columns * number_w + 30) as u32);
+        // A long title (a simulated link with every parameter) gets a
+        // smaller font before the picture gets wider.
+        let title_size = fit(title, TITLE_SIZE, width - 2 * MARGIN);
+        let width = width.max(text_width(title, title_font(title_size)) + 2 * MARGIN);
+        Layout {
+            width,
+            numbers_x,
+            number_w,
+            title_size,
+        }
+    }
+}
+
+/// An SVG document `height` high: white, `title` across the top, and
+/// `body` drawn in the area below it.
+pub(super) fn svg(
+    title: &str,
+    layout: &Layout,
+    height: u32,
+    body: impl FnOnce(&Area<'_>) -> DrawResult,
+) -> Result<String, String> {
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (layout.width, height)).into_drawing_area();
+        let drawn = (|| -> DrawResult {
+            root.fill(&WHITE)?;
+            let (head, rest) = root.split_vertically(TITLE_H);
+            head.draw(&Text::new(
+                title,
+                (MARGIN as i32, TITLE_H as i32 / 2),
+                title_font(layout.title_size)
+                    .into_text_style(&root)
+                    .pos(Pos::new(HPos::Left, VPos::Center)),
+            ))?;
+            body(&rest)?;
+            root.present()?;
+            Ok(())
+        })();
+        drawn.map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}
+
+/// One row of the legend.
+pub(super) struct LegendRow<'a> {
+    pub look: Look,
+    pub label: &'a str,
+    /// Its figures, in the columns' order; `-` where unknown.
+    pub cells: Vec<Option<String>>,
+}
+
+/// The legend: a header (`first`, then `columns`), a rule, and a row per
+/// line; `empty` in place of the rows when there are none.
+pub(super) fn legend(
+    area: &Area<'_>,
+    layout: &Layout,
+    (first, columns): (&str, &[&str]),
+    rows: &[LegendRow<'_>],
+    empty: &str,
+) -> DrawResult {
+    let font = legend_font();
+    let left = font
+        .clone()
+        .into_text_style(area)
+        .pos(Pos::new(HPos::Left, VPos::Center));
+    let right = font
+        .into_text_style(area)
+        .pos(Pos::new(HPos::Right, VPos::Center));
+    let row_y = |r: usize| ROW_H as i32 * r as i32 + ROW_H as i32 / 2 + 4;
+    let column = |j: usize| layout.numbers_x + layout.number_w * (j as i32 + 1);
+    let bold = legend_font().style(FontStyle::Bold).into_text_style(area);
+    area.draw(&Text::new(
+        first,
+        (70, row_y(0)),
+        bold.clone().pos(Pos::new(HPos::Left, VPos::Center)),
+    ))?;
+    for (j, name) in columns.iter().enumerate() {
+        area.draw(&Text::new(
+            *name,
+            (column(j), row_y(0)),
+            bold.clone().pos(Pos::new(HPos::Right, VPos::Center)),
+        ))?;
+    }
+    let rule = row_y(0) + ROW_H as i32 / 2;
+    area.draw(&PathElement::new(
+        [(MARGIN as i32, rule), (column(columns.len() - 1), rule)],
+        BLACK.stroke_width(1),
+    ))?;
+    if rows.is_empty() {
+        area.draw(&Text::new(empty, (70, row_y(1)), left))?;
+        return Ok(());
+    }
+    for (r, row) in rows.iter().enumerate() {
+        let y = row_y(r + 1);
+        area.draw(&PathElement::new(
+            [(18, y), (58, y)],
+            row.look.color.stroke_width(2),
+        ))?;
+        area.draw(&row.look.marker((38, y), 5))?;
+        area.draw(&Text::new(row.label, (70, y), left.clone()))?;
+        for (j, cell) in row.cells.iter().enumerate() {
+            let text = cell.clone().unwrap_or_else(|| "-".into());
+            area.draw(&Text::new(text, (column(j), y), right.clone()))?;
+        }
+    }
+    Ok(())
+}
