@@ -15,7 +15,6 @@ import argparse
 import collections
 import json
 import os
-import select
 import sys
 import time
 
@@ -58,19 +57,11 @@ def main():
         timeout = 0.05
         if in_flight:
             timeout = max(0.0, min(timeout, in_flight[0][0] - now))
-        try:
-            ready, _, _ = select.select([ma, mb], [], [], timeout)
-        except InterruptedError:
-            continue
+        ready = ptys.read_ready([ma, mb], timeout)
         now = time.monotonic()
         while held and held[0][0] <= now:
             held.popleft()
-        for fd in ready:
-            try:
-                data = os.read(fd, 4096)
-            except OSError:
-                time.sleep(0.01)
-                continue
+        for fd, data in ready:
             room = max(0, args.buffer - sum(length for _, length in held))
             if len(data) > room:
                 truth["dropped_" + name[fd]] += len(data) - room

@@ -12,7 +12,6 @@ Prints one JSON line of ground truth on SIGTERM.
 import argparse
 import json
 import os
-import select
 import sys
 import time
 
@@ -39,17 +38,7 @@ def main():
     print(pa, pb, flush=True)
     truth = {"a_to_b": 0, "b_to_a": 0}
     while until.running:
-        try:
-            ready, _, _ = select.select([ma, mb], [], [], 0.05)
-        except InterruptedError:
-            continue
-        for fd in ready:
-            try:
-                data = os.read(fd, 4096)
-            except OSError:
-                # Nobody has the other side open yet: nothing to carry.
-                time.sleep(0.01)
-                continue
+        for fd, data in ptys.read_ready([ma, mb], 0.05):
             if fd == ma:
                 os.write(mb, data)
                 truth["a_to_b"] += len(data)

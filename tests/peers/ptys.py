@@ -1,7 +1,9 @@
 """What the peers that play a cable or a radio between two pseudo-terminals
 share: the pair of raw terminals, and running until SIGTERM or SIGINT."""
 import os
+import select
 import signal
+import time
 import tty
 
 
@@ -29,3 +31,20 @@ class UntilSignalled:
 
     def stop(self, *_):
         self.running = False
+
+
+def read_ready(fds, timeout):
+    """[(fd, bytes)] for each of `fds` with something to read within
+    `timeout` seconds. A master whose slave nobody has opened yet reads as
+    an error: nothing to carry, so it is left out after a short pause."""
+    try:
+        ready, _, _ = select.select(fds, [], [], timeout)
+    except InterruptedError:
+        return []
+    out = []
+    for fd in ready:
+        try:
+            out.append((fd, os.read(fd, 4096)))
+        except OSError:
+            time.sleep(0.01)
+    return out

@@ -192,6 +192,26 @@ struct RadioTally {
     rxerrors: SinceBootCounter,
 }
 
+impl RadioTally {
+    /// Following `id`, whose rxerrors read `rxerrors` before the step
+    /// (unknown: counted from its first report in the step).
+    fn new(id: SysComp, rxerrors: Option<u16>) -> Self {
+        let mut counter = SinceBootCounter::default();
+        if let Some(v) = rxerrors {
+            counter.record(v);
+        }
+        RadioTally {
+            id,
+            reports: 0,
+            txbuf_min: None,
+            txbuf: (0, 0),
+            rssi: (0, 0),
+            remrssi: (0, 0),
+            rxerrors: counter,
+        }
+    }
+}
+
 fn add(sum: &mut (u64, u64), v: u8) {
     if v != UNKNOWN {
         sum.0 += u64::from(v);
@@ -246,19 +266,7 @@ impl StepTally {
             last_reply: None,
             bytes_at_start: bytes,
             sending_end: None,
-            radio: radio.map(|(id, rxerrors)| {
-                let mut counter = SinceBootCounter::default();
-                counter.record(rxerrors);
-                RadioTally {
-                    id,
-                    reports: 0,
-                    txbuf_min: None,
-                    txbuf: (0, 0),
-                    rssi: (0, 0),
-                    remrssi: (0, 0),
-                    rxerrors: counter,
-                }
-            }),
+            radio: radio.map(|(id, rxerrors)| RadioTally::new(id, Some(rxerrors))),
         }
     }
 
@@ -321,15 +329,7 @@ impl StepTally {
 
     /// A RADIO_STATUS from `id`; only the radio the step follows counts.
     pub fn on_radio(&mut self, id: SysComp, r: &RadioReport) {
-        let tally = self.radio.get_or_insert_with(|| RadioTally {
-            id,
-            reports: 0,
-            txbuf_min: None,
-            txbuf: (0, 0),
-            rssi: (0, 0),
-            remrssi: (0, 0),
-            rxerrors: SinceBootCounter::default(),
-        });
+        let tally = self.radio.get_or_insert_with(|| RadioTally::new(id, None));
         if tally.id != id {
             return;
         }

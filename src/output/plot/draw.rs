@@ -9,26 +9,22 @@ use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::frame::{self, Area, Layout, LegendRow, ROW_H, TITLE_H};
+use super::frame::{self, Area, DrawResult, Layout, LegendRow, FONT, MARGIN, ROW_H, TITLE_H};
 use super::style::Look;
 use super::{bin, bin_low_ms, PlotData, Track, BINS_PER_DECADE};
 use crate::engine::Nanos;
 
-pub(super) const WIDTH: u32 = 1000;
 const TIME_H: u32 = 300;
 /// Height of one responder's row of lost requests.
 const LANE_H: u32 = 24;
 /// The lost-requests chart besides its rows: the time axis and its labels.
 const LANES_AXIS_H: u32 = 66;
 const DIST_H: u32 = 270;
-pub(super) const MARGIN: u32 = 14;
 /// Room for the y axis labels, the same for every chart so their time and
 /// RTT axes line up.
 pub(super) const Y_LABELS_W: u32 = 70;
 /// Width of a number column in the legend.
 const NUMBER_W: i32 = 110;
-pub(super) const FONT: &str = "sans-serif";
-pub(super) const TITLE_SIZE: f64 = 24.0;
 /// Markers along a line of RTT over time.
 const MARKS_PER_LINE: usize = 12;
 
@@ -70,8 +66,6 @@ pub(super) fn log_ticks(from: f64, to: f64) -> Vec<f64> {
     (first..=last).map(|k| k as f64 * step).collect()
 }
 
-pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
-
 /// One responder, in drawing order.
 struct Entry<'a> {
     label: String,
@@ -103,28 +97,6 @@ pub(super) fn svg(data: &PlotData) -> Result<String, String> {
     frame::svg(&title, &layout, height, |area| {
         draw(&entries, area, &layout)
     })
-}
-
-pub(super) fn title_font(size: f64) -> FontDesc<'static> {
-    (FONT, size).into_font()
-}
-
-/// The font size, from `size` down to three fifths of it, at which `text`
-/// fits in `width`.
-pub(super) fn fit(text: &str, size: f64, width: u32) -> f64 {
-    let wide = text_width(text, title_font(size)).max(1);
-    (size * f64::from(width) / f64::from(wide)).clamp(size * 0.6, size)
-}
-
-pub(super) fn legend_font() -> FontDesc<'static> {
-    (FONT, 17).into_font()
-}
-
-/// The width `text` takes. plotters can only estimate it for SVG (the
-/// viewer picks the font), and its estimate runs short for DejaVu Sans,
-/// the usual sans-serif on Linux: a fifth is added.
-pub(super) fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
-    font.box_size(text).map_or(0, |(w, _)| w * 6 / 5)
 }
 
 fn draw(entries: &[Entry<'_>], rest: &Area<'_>, layout: &Layout) -> DrawResult {

@@ -7,10 +7,15 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::draw::{
-    fit, legend_font, text_width, title_font, DrawResult, MARGIN, TITLE_SIZE, WIDTH,
-};
 use super::style::Look;
+
+pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
+
+/// The narrowest picture; a long title or legend label widens it.
+pub(super) const WIDTH: u32 = 1000;
+pub(super) const MARGIN: u32 = 14;
+pub(super) const FONT: &str = "sans-serif";
+pub(super) const TITLE_SIZE: f64 = 24.0;
 
 /// Height of the title band.
 pub(super) const TITLE_H: u32 = 44;
@@ -18,6 +23,28 @@ pub(super) const TITLE_H: u32 = 44;
 pub(super) const ROW_H: u32 = 26;
 
 pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
+
+pub(super) fn title_font(size: f64) -> FontDesc<'static> {
+    (FONT, size).into_font()
+}
+
+/// The font size, from `size` down to three fifths of it, at which `text`
+/// fits in `width`.
+pub(super) fn fit(text: &str, size: f64, width: u32) -> f64 {
+    let wide = text_width(text, title_font(size)).max(1);
+    (size * f64::from(width) / f64::from(wide)).clamp(size * 0.6, size)
+}
+
+pub(super) fn legend_font() -> FontDesc<'static> {
+    (FONT, 17).into_font()
+}
+
+/// The width `text` takes. plotters can only estimate it for SVG (the
+/// viewer picks the font), and its estimate runs short for DejaVu Sans,
+/// the usual sans-serif on Linux: a fifth is added.
+pub(super) fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
+    font.box_size(text).map_or(0, |(w, _)| w * 6 / 5)
+}
 
 /// How wide the picture is, where the legend's figures start, and the
 /// title's font size.

@@ -6,8 +6,8 @@
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::draw::{caption_font, log_ticks, mesh, DrawResult, FONT, MARGIN, Y_LABELS_W};
-use super::frame::{self, Area, Layout, LegendRow, ROW_H, TITLE_H};
+use super::draw::{caption_font, log_ticks, mesh, Y_LABELS_W};
+use super::frame::{self, Area, DrawResult, Layout, LegendRow, FONT, MARGIN, ROW_H, TITLE_H};
 use super::style::Look;
 use crate::engine::sweep::step::StepFigures;
 use crate::engine::sweep::verdict::SweepSummary;
