@@ -118,7 +118,16 @@ fn each_step_is_reported_and_the_ramp_stops_past_the_loss_limit() {
     assert_eq!(f(&start["sweep"], "max_hz"), 230.0);
     assert_eq!(f(&start["sweep"], "loss_limit"), 0.1);
     let steps: Vec<&Value> = events.iter().filter(|e| e["type"] == "step").collect();
+    // The schema is not vacuous: a step without its rate, or a summary
+    // whose sweep has an unknown ending, is rejected.
+    let validator = schema();
+    let mut bad = steps[0].clone();
+    bad.as_object_mut().unwrap().remove("offered_hz");
+    assert!(!validator.is_valid(&bad), "{bad}");
     let summary = events.last().unwrap();
+    let mut bad = summary.clone();
+    bad["sweep"]["ending"] = "tired".into();
+    assert!(!validator.is_valid(&bad));
     let all = summary["sweep"]["steps"].as_array().unwrap();
     // A step event for each step of the summary, in order, the same figures.
     assert_eq!(steps.len(), all.len());
