@@ -419,7 +419,7 @@ pub struct PingArgs {
     /// --sweep-max, each --step long; then bisects around the knee: the highest rate that
     /// lost under 1% with a p99 under twice the first step's. Also says whether the link
     /// queues before it drops (bufferbloat). Ctrl-C stops at once with the steps so far
-    #[arg(help_heading = "Capacity", long, env = "MAVPING_SWEEP")]
+    #[arg(help_heading = "Capacity", long)]
     pub sweep: bool,
 
     /// --sweep: the highest rate to offer [default: twice what a serial link's baud rate
