@@ -31,7 +31,12 @@ fn f(v: &Value, key: &str) -> f64 {
 
 /// The knee, within ±15 % of `capacity`, on a simulated radio.
 fn assert_knee(link: &str, capacity: f64) -> Value {
-    let s = sweep(&format!("sim:?{link}&clock=virtual&radio=on"), &["-q"]);
+    // Steps of 2 s: enough for a queue past the capacity to show, and
+    // less work than the default 5 s.
+    let s = sweep(
+        &format!("sim:?{link}&clock=virtual&radio=on"),
+        &["-q", "--step", "2s"],
+    );
     let knee = f(&s["knee"], "rate_hz");
     assert!(
         (knee - capacity).abs() <= 0.15 * capacity,
