@@ -19,6 +19,7 @@ pub mod schedule;
 pub mod session;
 pub mod stats;
 pub mod summary;
+pub mod wait;
 
 use std::time::Duration;
 
