@@ -2,8 +2,11 @@
 # mavping's benchmark: builds in release mode, starts the responders itself,
 # runs irtt, a pymavlink pinger (the baseline) and mavping in the same run,
 # and prints a table of figures and ratios. Usage:
-#   bash scripts/bench.sh          # full run (about 6 minutes)
-#   bash scripts/bench.sh --quick  # shorter trials (about 2 minutes)
+#   bash scripts/bench.sh          # full run (about 9 minutes)
+#   bash scripts/bench.sh --quick  # shorter trials (about 4 minutes)
+#   bash scripts/bench.sh --binary /tmp/before/target/release/mavping
+#                                  # the same bench against another build
+#                                  # (for a before/after table)
 # Micro-benchmarks of the parser, matcher and statistics: cargo bench --bench core
 set -euo pipefail
 cd "$(dirname "$0")/.."
