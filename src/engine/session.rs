@@ -308,6 +308,8 @@ pub async fn run<T: Transport, D: Driver>(
             cfg.precise_pacing && kernel_stamped && due.saturating_sub(now) <= FINE_WINDOW_NS
         });
         if let Some(due) = close {
+            // Spaced from the last planned wake-up, not the actual one, so
+            // a late wake-up does not push the next one later.
             let wake_at = due.max(last_wake.saturating_add(MIN_WAKE_GAP_NS));
             loop {
                 if ready_now(stop.notified()).is_some() {
@@ -345,7 +347,7 @@ pub async fn run<T: Transport, D: Driver>(
                     break;
                 }
             }
-            last_wake = clock.now();
+            last_wake = wake_at;
             continue;
         }
 
