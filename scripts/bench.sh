@@ -11,6 +11,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --quiet
+# The baseline of the CPU-per-PING rows: a loop that only sleeps, reads and
+# sends once per PING (examples/wake_floor.rs).
+cargo build --release --quiet --example wake_floor
 if [ ! -x /usr/bin/time ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
   apt-get install -y -qq time >/dev/null  # GNU time: per-process peak RSS and CPU
 fi
