@@ -100,14 +100,16 @@ pub trait Driver {
 
 /// On a link whose datagrams the kernel dates (UDP), a send due within this
 /// is waited for by sleeping straight to it ([`wait::block_until`]),
-/// reading what arrived on waking: at 1,000 requests a second and more the
-/// session then wakes once per send instead of once more per reply.
-const FINE_WINDOW_NS: Nanos = 1_500_000;
+/// reading what arrived on waking: at 50 requests a second and more the
+/// session then wakes once per send instead of once more per reply, and a
+/// reply is reported at most this much later than it came (its RTT is the
+/// kernel's). Slower schedules report each reply as it comes.
+const SLEEP_THROUGH_NS: Nanos = 20_000_000;
 /// Sleeping that way, the session wakes at most this often: requests that
 /// fall due in between leave together, in one system call.
 const MIN_WAKE_GAP_NS: Nanos = 100_000;
 /// ...and gives the runtime a turn this often (signals, other tasks).
-const YIELD_EVERY_NS: Nanos = 10_000_000;
+const YIELD_EVERY_NS: Nanos = 50_000_000;
 /// Output is buffered; while busy, it reaches the reader this often.
 const FLUSH_EVERY_NS: Nanos = 50_000_000;
 
@@ -305,7 +307,7 @@ pub async fn run<T: Transport, D: Driver>(
         let next_send = schedule.as_ref().and_then(|s| s.next_due());
         let now = clock.now();
         let close = next_send.filter(|&due| {
-            cfg.precise_pacing && kernel_stamped && due.saturating_sub(now) <= FINE_WINDOW_NS
+            cfg.precise_pacing && kernel_stamped && due.saturating_sub(now) <= SLEEP_THROUGH_NS
         });
         if let Some(due) = close {
             // Spaced from the last planned wake-up, not the actual one, so
