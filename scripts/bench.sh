@@ -2,12 +2,18 @@
 # mavping's benchmark: builds in release mode, starts the responders itself,
 # runs irtt, a pymavlink pinger (the baseline) and mavping in the same run,
 # and prints a table of figures and ratios. Usage:
-#   bash scripts/bench.sh          # full run (about 6 minutes)
-#   bash scripts/bench.sh --quick  # shorter trials (about 2 minutes)
+#   bash scripts/bench.sh          # full run (about 9 minutes)
+#   bash scripts/bench.sh --quick  # shorter trials (about 4 minutes)
+#   bash scripts/bench.sh --binary /tmp/before/target/release/mavping
+#                                  # the same bench against another build
+#                                  # (for a before/after table)
 # Micro-benchmarks of the parser, matcher and statistics: cargo bench --bench core
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --quiet
+# The baseline of the CPU-per-PING rows: a loop that only sleeps, reads and
+# sends once per PING (examples/wake_floor.rs).
+cargo build --release --quiet --example wake_floor
 if [ ! -x /usr/bin/time ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
   apt-get install -y -qq time >/dev/null  # GNU time: per-process peak RSS and CPU
 fi

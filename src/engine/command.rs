@@ -7,7 +7,7 @@
 
 use std::io;
 
-use hdrhistogram::Histogram;
+use super::stats::RttStats;
 
 use super::commands::{CommandEvent, CommandSpec, CommandTracker};
 use super::link_io::{Clock, Sender};
@@ -145,7 +145,7 @@ impl Driver for CommandDriver {
         self.tracker.idle()
     }
 
-    fn finish(self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>) {
+    fn finish(self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let cfg = ended.cfg;
         let summary = CommandSummary {
             link: cfg.link_name.clone(),
@@ -165,7 +165,7 @@ impl Driver for CommandDriver {
             .tracker
             .targets()
             .iter()
-            .map(|t| (t.id, t.time_to_ack.histogram().clone()))
+            .map(|t| (t.id, t.time_to_ack.clone()))
             .collect();
         (LinkSummary::Command(Box::new(summary)), histograms)
     }

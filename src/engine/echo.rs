@@ -5,8 +5,6 @@ use std::collections::HashMap;
 use std::io;
 use std::time::Duration;
 
-use hdrhistogram::Histogram;
-
 use super::diagnosis::{diagnose, Observed};
 use super::hint::{Hint, HintCode};
 use super::link_io::{Clock, Sender};
@@ -22,7 +20,7 @@ use super::Nanos;
 use super::SessionConfig;
 use crate::frame::{Frame, SysComp};
 use crate::probe::{Classified, EchoProbe};
-use crate::transport::{LinkError, PathId, Transport};
+use crate::transport::{LinkError, Outbox, PathId, To, Transport};
 
 /// Most requests sent back to back before the session reads the link.
 const MAX_BURST: usize = 256;
@@ -56,6 +54,10 @@ pub struct EchoDriver<P> {
     paths: HashMap<SysComp, (PathId, Nanos)>,
     wrong_path_replies: u64,
     pacing: Pacing,
+    /// The burst being sent: its frames, and each request's planned time
+    /// and token (kept between bursts so sending does not allocate).
+    outbox: Outbox,
+    burst: Vec<(Nanos, u64)>,
     /// When each responder's clock offset was last told (TIMESYNC), and
     /// the ones due now.
     clocks_told: HashMap<SysComp, Nanos>,
@@ -79,6 +81,8 @@ impl<P: EchoProbe> EchoDriver<P> {
             paths: HashMap::new(),
             wrong_path_replies: 0,
             pacing: Pacing::default(),
+            outbox: Outbox::default(),
+            burst: Vec::with_capacity(MAX_BURST),
             clocks_told: HashMap::new(),
             clocks_due: Vec::new(),
         }
@@ -167,16 +171,31 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         // At most a burst per turn: a machine too slow for the rate falls
         // behind (and the lateness figures say so) but still reads replies
         // and honours the deadline between bursts.
-        for _ in 0..MAX_BURST {
-            let Some((_, planned)) = schedule.take_due(clock.now()) else {
+        let now = clock.now();
+        let issued = self.matcher.issued();
+        self.outbox.clear();
+        self.burst.clear();
+        while self.burst.len() < MAX_BURST {
+            let Some((_, planned)) = schedule.take_due(now) else {
                 break;
             };
-            let token = self.probe.token(clock.now());
-            let seq = self.first_seq.wrapping_add(self.matcher.issued() as u32);
+            let token = self.probe.token(now);
+            let seq = self
+                .first_seq
+                .wrapping_add((issued + self.burst.len() as u64) as u32);
             let request = self.probe.request(seq, token);
-            let sent = clock.ns(link.send(sender.frame(&request)).await?);
+            self.outbox.push(sender.frame(&request), To::Every);
+            self.burst.push((planned, token));
+        }
+        if self.burst.is_empty() {
+            return Ok(());
+        }
+        // Requests due together leave together, with one system call where
+        // the link allows, and share the stamp taken before the first write.
+        let sent = clock.ns(link.send_all(&self.outbox).await?);
+        let events = &mut self.events;
+        for &(planned, token) in &self.burst {
             self.pacing.sent(planned, sent);
-            let events = &mut self.events;
             self.matcher.on_send(token, sent, &mut |e| events.push(e));
         }
         Ok(())
@@ -231,7 +250,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         self.matcher.next_deadline().is_none() || self.matcher.all_answered()
     }
 
-    fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>) {
+    fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let cfg = ended.cfg;
         let undecided = self.matcher.undecided();
         let in_flight = self.matcher.finish();
@@ -298,11 +317,13 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             signing,
             sweep: None,
         };
+        // Moved, not copied: a thousand responders' histograms are tens
+        // of MiB.
         let histograms = self
             .matcher
-            .responders()
-            .iter()
-            .map(|r| (r.id, r.rtt.histogram().clone()))
+            .into_responders()
+            .into_iter()
+            .map(|r| (r.id, r.rtt))
             .collect();
         (LinkSummary::Echo(Box::new(summary)), histograms)
     }

@@ -2,8 +2,9 @@
 //!
 //! Pure and synchronous: every call takes the time as an argument, so tests
 //! drive it with exact timestamps. Memory is fixed at construction: requests
-//! live in a ring of `capacity` slots, and each responder keeps one tag per
-//! slot saying which request it last answered there.
+//! live in a ring of `capacity` slots, and each responder keeps one bit per
+//! slot saying whether it answered the request held there (cleared when the
+//! slot takes a new request).
 //!
 //! Rules (from the MAVLink PING protocol and mavping's spec):
 //! - A responder's accounting window starts at the first request it answered
@@ -117,8 +118,9 @@ pub struct Responder {
     pub id: SysComp,
     pub counts: Counts,
     pub rtt: RttStats,
-    /// Per ring slot: n + 1 of the request this responder answered there.
-    /// Empty until its first matched reply, so spoofed ids cost little.
+    /// One bit per ring slot: this responder answered the request held
+    /// there. Empty until its first matched reply, so spoofed ids cost
+    /// little.
     answered: Vec<u64>,
     window_start: Option<u64>,
     highest: Option<u64>,
@@ -140,8 +142,22 @@ impl Responder {
         self.window_start.is_some_and(|start| start <= n)
     }
 
-    fn has_answered(&self, idx: usize, n: u64) -> bool {
-        self.answered.get(idx) == Some(&(n + 1))
+    /// Whether it answered the request held in slot `idx`.
+    fn has_answered(&self, idx: usize) -> bool {
+        self.answered
+            .get(idx / 64)
+            .is_some_and(|word| word & (1 << (idx % 64)) != 0)
+    }
+
+    fn set_answered(&mut self, idx: usize, answered: bool) {
+        if let Some(word) = self.answered.get_mut(idx / 64) {
+            let bit = 1 << (idx % 64);
+            if answered {
+                *word |= bit;
+            } else {
+                *word &= !bit;
+            }
+        }
     }
 }
 
@@ -225,6 +241,9 @@ impl Matcher {
             self.decide_through(n - capacity, sent_at, out);
         }
         let idx = self.idx(n);
+        for r in &mut self.responders {
+            r.set_answered(idx, false);
+        }
         self.slots[idx] = Slot {
             n1: n + 1,
             token,
@@ -267,7 +286,7 @@ impl Matcher {
         let sent_at = self.slots[idx].sent_at;
         for r in self.responders.iter_mut().filter(|r| r.in_window(n)) {
             r.counts.sent += 1;
-            if !r.has_answered(idx, n) {
+            if !r.has_answered(idx) {
                 r.counts.lost += 1;
                 out(MatchEvent::Lost {
                     responder: r.id,
@@ -347,9 +366,9 @@ impl Matcher {
         let expired = n < self.next_expiry;
         let r = &mut self.responders[ri];
         if r.answered.is_empty() {
-            r.answered = vec![0; capacity];
+            r.answered = vec![0; capacity.div_ceil(64)];
         }
-        if r.has_answered(idx, n) {
+        if r.has_answered(idx) {
             r.counts.duplicate += 1;
             out(MatchEvent::Duplicate {
                 responder,
@@ -360,7 +379,7 @@ impl Matcher {
             });
             return;
         }
-        r.answered[idx] = n + 1;
+        r.set_answered(idx, true);
         if expired {
             r.counts.late += 1;
             out(MatchEvent::Late {
@@ -403,7 +422,7 @@ impl Matcher {
             let idx = self.idx(n);
             let mut unanswered = false;
             for r in self.responders.iter_mut().filter(|r| r.in_window(n)) {
-                if r.has_answered(idx, n) {
+                if r.has_answered(idx) {
                     r.counts.sent += 1;
                 } else {
                     unanswered = true;
@@ -429,7 +448,7 @@ impl Matcher {
                 let idx = self.idx(n);
                 active
                     .iter()
-                    .all(|r| !r.in_window(n) || r.has_answered(idx, n))
+                    .all(|r| !r.in_window(n) || r.has_answered(idx))
             })
     }
 
@@ -439,7 +458,7 @@ impl Matcher {
     pub fn counts_now(&self, r: &Responder) -> Counts {
         let mut counts = r.counts;
         counts.sent += (self.next_expiry..self.next_n)
-            .filter(|&n| r.in_window(n) && r.has_answered(self.idx(n), n))
+            .filter(|&n| r.in_window(n) && r.has_answered(self.idx(n)))
             .count() as u64;
         counts
     }
@@ -456,6 +475,11 @@ impl Matcher {
 
     pub fn responders(&self) -> &[Responder] {
         &self.responders
+    }
+
+    /// The responders, for a summary that keeps them once the run is over.
+    pub fn into_responders(self) -> Vec<Responder> {
+        self.responders
     }
 
     pub fn responder(&self, id: SysComp) -> Option<&Responder> {

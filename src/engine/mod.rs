@@ -21,6 +21,7 @@ pub mod session;
 pub mod stats;
 pub mod summary;
 pub mod sweep;
+pub mod wait;
 
 use std::time::Duration;
 

@@ -12,7 +12,6 @@ use std::time::Duration;
 
 use std::sync::Arc;
 
-use hdrhistogram::Histogram;
 use tokio::sync::Notify;
 
 use super::link_io::{admitted, Clock, Heartbeat, Sender};
@@ -20,7 +19,9 @@ use super::observe::{Event, Observer, StartInfo};
 use super::radio::{RadioReport, Radios};
 use super::roster::Roster;
 use super::schedule::Schedule;
+use super::stats::RttStats;
 use super::summary::{Interim, LinkSummary};
+use super::wait::{self, Waiter};
 use super::{Nanos, SessionConfig};
 use crate::frame::signing::{Gate, SigningConfig};
 use crate::frame::{Frame, Msg, ScanStats, SysComp};
@@ -38,8 +39,9 @@ pub struct Controls {
 /// How the run ended. The caller judges it and reports the summary.
 pub struct Outcome {
     pub summary: LinkSummary,
-    /// Each responder's RTT (or time-to-ACK) histogram (µs), for exports.
-    pub histograms: Vec<(SysComp, Histogram<u64>)>,
+    /// Each responder's RTT (or time-to-ACK) statistics, whose histograms
+    /// (µs) the exports write.
+    pub histograms: Vec<(SysComp, RttStats)>,
     /// The observer's output went away (closed pipe): stop quietly.
     pub output_closed: bool,
 }
@@ -91,7 +93,7 @@ pub trait Driver {
     /// Once every request is sent: nothing left worth waiting for.
     fn settled(&self) -> bool;
     /// The summary and histograms of the run.
-    fn finish(self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>);
+    fn finish(self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>);
     /// The figures so far, for an interim summary; `None` where the probe
     /// has none.
     fn interim(&self, _roster: &Roster, _at: Nanos) -> Option<Interim> {
@@ -99,15 +101,18 @@ pub trait Driver {
     }
 }
 
-/// How close to a planned send the session stops trusting tokio's 1 ms
-/// timer and waits precisely instead.
-const FINE_WINDOW_NS: Nanos = 1_500_000;
-/// On links whose replies are stamped when read, the precise wait sleeps
-/// in slices of at most this, so a reply waits little to be read...
-const SLICE: Duration = Duration::from_micros(200);
-/// ...and it spins for the last stretch, which nanosleep (with 1 µs timer
-/// slack) overshoots by a few µs.
-const SPIN_NS: Nanos = 20_000;
+/// On a link whose datagrams the kernel dates (UDP), a send due within this
+/// is waited for by sleeping straight to it ([`wait::block_until`]),
+/// reading what arrived on waking: at 50 requests a second and more the
+/// session then wakes once per send instead of once more per reply, and a
+/// reply is reported at most this much later than it came (its RTT is the
+/// kernel's). Slower schedules report each reply as it comes.
+const SLEEP_THROUGH_NS: Nanos = 20_000_000;
+/// Sleeping that way, the session wakes at most this often: requests that
+/// fall due in between leave together, in one system call.
+const MIN_WAKE_GAP_NS: Nanos = 100_000;
+/// ...and gives the runtime a turn this often (signals, other tasks).
+const YIELD_EVERY_NS: Nanos = 50_000_000;
 /// Output is buffered; while busy, it reaches the reader this often.
 const FLUSH_EVERY_NS: Nanos = 50_000_000;
 
@@ -204,7 +209,7 @@ fn interim<D: Driver>(
 }
 
 /// Polls a future once: its result if it is ready now. Used on cancel-safe
-/// futures only (link receive, the stop signal), between precise sleeps.
+/// futures only (the stop and interim signals), between precise sleeps.
 fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
     let mut f = std::pin::pin!(f);
     let mut cx = std::task::Context::from_waker(std::task::Waker::noop());
@@ -212,13 +217,6 @@ fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
         std::task::Poll::Ready(v) => Some(v),
         std::task::Poll::Pending => None,
     }
-}
-
-/// Lets the OS wake us within a few µs of a requested time instead of the
-/// default 50 µs slack (Linux); harmless where it is not supported.
-fn tighten_timer_slack() {
-    #[cfg(target_os = "linux")]
-    let _ = nix::sys::prctl::set_timerslack(1_000);
 }
 
 /// Why the loop stopped early.
@@ -239,7 +237,8 @@ pub async fn run<T: Transport, D: Driver>(
     controls: &Controls,
 ) -> Outcome {
     let stop = &*controls.stop;
-    tighten_timer_slack();
+    wait::tighten_timer_slack();
+    let mut waiter = Waiter::new(cfg.precise_pacing);
     let clock = Clock::start();
     driver.begin(clock.wall_at_zero());
     let mut sender = Sender::new(
@@ -261,6 +260,9 @@ pub async fn run<T: Transport, D: Driver>(
     let mut inbound: Vec<Inbound> = Vec::new();
     let mut told_waiting = false;
     let mut last_flush: Nanos = 0;
+    let mut last_wake: Nanos = 0;
+    let mut last_yield: Nanos = 0;
+    let kernel_stamped = link.rx_clock() == RxClock::Kernel;
     let mut output = observer.start(&driver.start_info(cfg));
 
     let stopped: Option<Stopped> = 'run: loop {
@@ -308,62 +310,55 @@ pub async fn run<T: Transport, D: Driver>(
 
         let next_send = schedule.as_ref().and_then(|s| s.next_due());
         let now = clock.now();
-        // A send is due within the timer's resolution: wait for it
-        // precisely, still reading the link between short sleeps.
-        let fine = next_send
-            .filter(|&due| cfg.precise_pacing && due.saturating_sub(now) <= FINE_WINDOW_NS);
-        if let Some(due) = fine {
-            // Kernel-stamped replies keep their arrival time however late
-            // they are read: sleep in one go and save the wake-ups.
-            let slice = if link.rx_clock() == RxClock::Kernel {
-                Duration::from_nanos(FINE_WINDOW_NS)
-            } else {
-                SLICE
-            };
+        let close = next_send.filter(|&due| {
+            cfg.precise_pacing && kernel_stamped && due.saturating_sub(now) <= SLEEP_THROUGH_NS
+        });
+        if let Some(due) = close {
+            // Spaced from the last planned wake-up, not the actual one, so
+            // a late wake-up does not push the next one later.
+            let wake_at = due.max(last_wake.saturating_add(MIN_WAKE_GAP_NS));
             loop {
-                let now = clock.now();
-                if now >= due {
-                    break;
-                }
                 if ready_now(stop.notified()).is_some() {
                     break 'run Some(Stopped::Interrupted);
                 }
-                match ready_now(link.recv(&mut inbound)) {
-                    Some(Err(e)) => break 'run Some(Stopped::LinkFailed(e)),
-                    Some(Ok(())) => {
-                        output = heard.take(&clock, &mut inbound, &mut driver, observer);
-                        if output.is_err() {
-                            continue 'run;
-                        }
-                        continue;
-                    }
-                    None => {}
+                if ready_now(controls.interim.notified()).is_some() {
+                    output = output.and(interim(&driver, &heard.roster, clock.now(), observer));
                 }
+                if clock.now() < wake_at {
+                    wait::block_until(&clock, wake_at);
+                }
+                match link.read_waiting(&mut inbound) {
+                    Err(e) => break 'run Some(Stopped::LinkFailed(e)),
+                    Ok(true) => {
+                        let taken = heard.take(&clock, &mut inbound, &mut driver, observer);
+                        output = output.and(taken);
+                    }
+                    Ok(false) => {}
+                }
+                let now = clock.now();
                 if now.saturating_sub(last_flush) > FLUSH_EVERY_NS {
                     last_flush = now;
-                    output = observer.flush();
-                    if output.is_err() {
-                        continue 'run;
-                    }
+                    output = output.and(observer.flush());
                 }
-                let left = due - now;
-                if left > SPIN_NS {
-                    std::thread::sleep(slice.min(Duration::from_nanos(left - SPIN_NS)));
-                } else {
-                    std::hint::spin_loop();
+                if output.is_err() {
+                    continue 'run;
+                }
+                // The runtime runs nothing while the thread sleeps here:
+                // let it handle signals now and then.
+                if now.saturating_sub(last_yield) > YIELD_EVERY_NS {
+                    last_yield = now;
+                    tokio::task::yield_now().await;
+                }
+                if now >= wake_at {
+                    break;
                 }
             }
+            last_wake = wake_at;
             continue;
         }
 
         let wake = [
-            next_send.map(|due| {
-                if cfg.precise_pacing {
-                    due.saturating_sub(FINE_WINDOW_NS)
-                } else {
-                    due
-                }
-            }),
+            next_send,
             driver.next_deadline(),
             heartbeat.next(),
             deadline_ns,
@@ -379,7 +374,7 @@ pub async fn run<T: Transport, D: Driver>(
         if output.is_err() {
             continue;
         }
-        let sleep = clock.sleep_until(wake);
+        let sleep = waiter.until(&clock, wake);
         tokio::select! {
             biased;
             _ = stop.notified() => break Some(Stopped::Interrupted),

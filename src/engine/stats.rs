@@ -1,6 +1,6 @@
 //! RTT statistics for one responder, in constant memory.
 
-use hdrhistogram::Histogram;
+use hdrhistogram::{Counter, Histogram};
 use serde::Serialize;
 
 use super::Nanos;
@@ -14,7 +14,7 @@ const HIST_MAX_US: u64 = 3_600_000_000;
 /// jitter as the mean absolute difference of consecutive RTTs (RFC 3550).
 #[derive(Clone)]
 pub struct RttStats {
-    hist: Histogram<u64>,
+    hist: Counts,
     count: u64,
     min: Nanos,
     max: Nanos,
@@ -23,6 +23,32 @@ pub struct RttStats {
     last: Option<Nanos>,
     jitter_sum: f64,
     jitter_count: u64,
+}
+
+/// The histogram's counts: 4 bytes a bucket, half what 8 take, so a
+/// thousand responders fit in a few tens of MiB. A bucket cannot overflow
+/// before the run has recorded `u32::MAX` samples in all; then the counts
+/// widen to 8 bytes, so every count stays exact.
+#[derive(Clone)]
+enum Counts {
+    Narrow(Histogram<u32>),
+    Wide(Histogram<u64>),
+}
+
+/// The same buckets with 8-byte counts.
+fn widened<T: Counter>(narrow: &Histogram<T>) -> Histogram<u64> {
+    let mut wide = Histogram::new_from(narrow);
+    for v in narrow.iter_recorded() {
+        // Cannot fail: the value is within the auto-resizing histogram's range.
+        let _ = wide.record_n(v.value_iterated_to(), v.count_at_value().as_u64());
+    }
+    wide
+}
+
+/// Each recorded value's bucket and count, for any counter size.
+fn recorded<T: Counter>(h: &Histogram<T>) -> impl Iterator<Item = (u64, u64)> + '_ {
+    h.iter_recorded()
+        .map(|v| (v.value_iterated_to(), v.count_at_value().as_u64()))
 }
 
 impl Default for RttStats {
@@ -55,12 +81,11 @@ pub struct RttSummary {
 
 impl RttStats {
     pub fn new() -> Self {
-        let mut hist = Histogram::new(3).expect("3 significant digits is a valid histogram");
         // Grows with the largest RTT seen (capped at HIST_MAX_US), so a
-        // responder on loopback costs a few KiB, not the 1-hour worst case.
-        hist.auto(true);
+        // responder on loopback costs 8 KiB, not the 1-hour worst case.
+        let hist = Histogram::new(3).expect("3 significant digits is a valid histogram");
         RttStats {
-            hist,
+            hist: Counts::Narrow(hist),
             count: 0,
             min: Nanos::MAX,
             max: 0,
@@ -74,8 +99,16 @@ impl RttStats {
 
     pub fn record(&mut self, rtt: Nanos) {
         let us = (rtt / 1_000).clamp(1, HIST_MAX_US);
+        if self.count == u64::from(u32::MAX) {
+            if let Counts::Narrow(narrow) = &self.hist {
+                self.hist = Counts::Wide(widened(narrow));
+            }
+        }
         // Cannot fail: the value is within the auto-resizing histogram's range.
-        let _ = self.hist.record(us);
+        let _ = match &mut self.hist {
+            Counts::Narrow(h) => h.record(us),
+            Counts::Wide(h) => h.record(us),
+        };
         self.count += 1;
         self.min = self.min.min(rtt);
         self.max = self.max.max(rtt);
@@ -98,13 +131,28 @@ impl RttStats {
         self.last
     }
 
-    pub fn histogram(&self) -> &Histogram<u64> {
-        &self.hist
+    /// The histogram (µs), with 8-byte counts: a copy, for exports.
+    pub fn histogram(&self) -> Histogram<u64> {
+        match &self.hist {
+            Counts::Narrow(h) => widened(h),
+            Counts::Wide(h) => h.clone(),
+        }
+    }
+
+    /// Each recorded bucket's highest value (µs) and count.
+    fn buckets(&self) -> Box<dyn Iterator<Item = (u64, u64)> + '_> {
+        match &self.hist {
+            Counts::Narrow(h) => Box::new(recorded(h)),
+            Counts::Wide(h) => Box::new(recorded(h)),
+        }
     }
 
     /// Value at a quantile in µs, kept inside the exact [min, max].
     pub fn quantile_us(&self, q: f64) -> f64 {
-        let v = self.hist.value_at_quantile(q) as f64;
+        let v = match &self.hist {
+            Counts::Narrow(h) => h.value_at_quantile(q),
+            Counts::Wide(h) => h.value_at_quantile(q),
+        } as f64;
         v.clamp(self.min as f64 / 1e3, self.max as f64 / 1e3)
     }
 
@@ -165,13 +213,13 @@ impl RttStats {
                 count: 0,
             })
             .collect();
-        for v in self.hist.iter_recorded() {
-            let value = v.value_iterated_to() as f64;
+        for (value, count) in self.buckets() {
+            let value = value as f64;
             let idx = buckets
                 .iter()
                 .position(|b| value < b.high_us)
                 .unwrap_or(rows - 1);
-            buckets[idx].count += v.count_at_value();
+            buckets[idx].count += count;
         }
         buckets
     }
@@ -237,6 +285,25 @@ mod tests {
         let buckets = s.distribution(8);
         assert_eq!(buckets.len(), 3, "{buckets:?}");
         assert_eq!(buckets.iter().map(|b| b.count).sum::<u64>(), 3);
+    }
+
+    #[test]
+    fn counts_widen_before_any_could_overflow_and_stay_exact() {
+        let mut s = RttStats::new();
+        for us in [7, 7, 900, 35_000] {
+            s.record(us * 1_000);
+        }
+        let narrow = s.histogram();
+        // As if the run had recorded u32::MAX samples already.
+        s.count = u64::from(u32::MAX);
+        s.record(7_000);
+        assert!(matches!(s.hist, Counts::Wide(_)));
+        let wide = s.histogram();
+        assert_eq!(wide.len(), narrow.len() + 1);
+        assert_eq!(wide.count_at(7), 3);
+        assert_eq!(wide.count_at(35_000), 1);
+        assert_eq!(wide.max(), narrow.max());
+        assert_eq!(s.quantile_us(0.5), 7.0);
     }
 
     #[test]

@@ -21,7 +21,7 @@ use self::core::{ResponderCore, ResponderCounts};
 use crate::engine::link_io::{admitted, Clock, Heartbeat, Sender};
 use crate::frame::signing::{Gate, SigningConfig, SigningCounts};
 use crate::frame::{SysComp, Version};
-use crate::transport::{Inbound, LinkError, PathId, Transport};
+use crate::transport::{Inbound, LinkError, Outbox, PathId, To, Transport};
 
 /// Replies held back by `--delay` at once; past it they are dropped (and
 /// counted), so memory stays bounded whatever the request rate.
@@ -106,18 +106,35 @@ struct Responder {
     /// With a signing key: refuses requests not signed with it (or
     /// replayed).
     gate: Gate,
+    /// What answers one batch of requests: written together once the batch
+    /// is handled (one system call on UDP), and how many of them are
+    /// replies (the rest are greetings).
+    outbox: Outbox,
+    replies_queued: u64,
 }
 
 impl Responder {
     /// A new peer gets our HEARTBEAT at once rather than within a second:
     /// a GCS or router discovers systems by their HEARTBEAT.
-    async fn greet<T: Transport>(&mut self, link: &mut T, path: PathId) -> Result<(), LinkError> {
+    fn greet(&mut self, path: PathId) {
         if path == PathId::MAX || self.greeted.is_some_and(|g| path <= g) {
-            return Ok(());
+            return;
         }
         self.greeted = Some(path);
         let bytes = self.sender.frame_as(Version::V2, self.heartbeat.msg());
-        link.send_to(path, bytes).await.map(|_| ())
+        self.outbox.push(bytes, To::Path(path));
+    }
+
+    /// Writes what the last batch queued; its replies count as sent once
+    /// the link took them.
+    async fn flush<T: Transport>(&mut self, link: &mut T) -> Result<(), LinkError> {
+        if self.outbox.is_empty() {
+            return Ok(());
+        }
+        link.send_all(&self.outbox).await?;
+        self.outbox.clear();
+        self.counts.replies_sent += std::mem::take(&mut self.replies_queued);
+        Ok(())
     }
 
     fn chance(&mut self, p: f64) -> bool {
@@ -134,24 +151,21 @@ impl Responder {
         self.settings.delay + Duration::from_nanos(extra)
     }
 
-    /// Answers one inbound frame: sends now, holds for later, or drops.
-    async fn handle<T: Transport>(
-        &mut self,
-        link: &mut T,
-        inbound: &Inbound,
-    ) -> Result<(), LinkError> {
+    /// Answers one inbound frame: queues the answer, holds it for later,
+    /// or drops it.
+    fn handle(&mut self, inbound: &Inbound) {
         // Our clock for TIMESYNC: ns since we started (like an autopilot's
         // boot time), read when the request arrived.
         let clock_ns = self.clock.ns(inbound.at) as i64 + 1;
         if !admitted(&mut self.gate, &inbound.frame, inbound.signature.as_ref()) {
-            return Ok(());
+            return;
         }
         let Some(reply) = self.core.answer(&inbound.frame, clock_ns) else {
-            return Ok(());
+            return;
         };
         if self.chance(self.settings.drop) {
             self.counts.dropped += 1;
-            return Ok(());
+            return;
         }
         let copies = if self.chance(self.settings.dup) {
             self.counts.duplicated += 1;
@@ -165,8 +179,8 @@ impl Responder {
         for _ in 0..copies {
             let hold = self.hold_time();
             if hold.is_zero() {
-                link.send_to(inbound.path, self.sender.last()).await?;
-                self.counts.replies_sent += 1;
+                self.outbox.push(self.sender.last(), To::Path(inbound.path));
+                self.replies_queued += 1;
             } else if self.held.len() >= MAX_HELD {
                 self.counts.overflow += 1;
             } else {
@@ -179,20 +193,15 @@ impl Responder {
                 }));
             }
         }
-        Ok(())
     }
 
-    async fn send_due<T: Transport>(
-        &mut self,
-        link: &mut T,
-        now: Instant,
-    ) -> Result<(), LinkError> {
+    /// Queues the held replies that are due.
+    fn release_due(&mut self, now: Instant) {
         while self.held.peek().is_some_and(|h| h.0.due <= now) {
             let Reverse(h) = self.held.pop().expect("peeked");
-            link.send_to(h.path, &h.bytes).await?;
-            self.counts.replies_sent += 1;
+            self.outbox.push(&h.bytes, To::Path(h.path));
+            self.replies_queued += 1;
         }
-        Ok(())
     }
 
     /// When the loop must wake at the latest: the next held reply or
@@ -233,6 +242,8 @@ pub async fn run<T: Transport>(
         counts: RespondCounts::default(),
         greeted: None,
         gate: Gate::new(settings.signing),
+        outbox: Outbox::default(),
+        replies_queued: 0,
     };
     let mut inbound: Vec<Inbound> = Vec::new();
     let error = loop {
@@ -240,7 +251,8 @@ pub async fn run<T: Transport>(
         if let Err(e) = r.heartbeat.send_if_due(link, &mut r.sender, now).await {
             break Some(e);
         }
-        if let Err(e) = r.send_due(link, Instant::now()).await {
+        r.release_due(Instant::now());
+        if let Err(e) = r.flush(link).await {
             break Some(e);
         }
         tokio::select! {
@@ -250,24 +262,13 @@ pub async fn run<T: Transport>(
                 if let Err(e) = received {
                     break Some(e);
                 }
-                // Taken out and put back so the buffer is reused, not
-                // reallocated per datagram.
-                let batch = std::mem::take(&mut inbound);
-                let mut failed = None;
-                for i in &batch {
-                    if let Err(e) = r.greet(link, i.path).await {
-                        failed = Some(e);
-                        break;
-                    }
-                    if let Err(e) = r.handle(link, i).await {
-                        failed = Some(e);
-                        break;
-                    }
+                for i in inbound.drain(..) {
+                    r.greet(i.path);
+                    r.handle(&i);
                 }
-                inbound = batch;
-                inbound.clear();
-                if failed.is_some() {
-                    break failed;
+                // Answered together: one write for the whole batch.
+                if let Err(e) = r.flush(link).await {
+                    break Some(e);
                 }
             }
             _ = sleep_until(r.wake()) => {}

@@ -6,6 +6,8 @@
 //! and hide CRC errors — each fatal to a ping tool.
 
 pub mod address;
+mod mmsg;
+pub mod outbox;
 pub mod route;
 pub mod serial;
 pub mod sim;
@@ -13,6 +15,7 @@ pub mod stream;
 pub mod tcp;
 pub mod udp;
 
+use std::future::Future;
 use std::io;
 use std::time::Duration;
 
@@ -22,6 +25,7 @@ use tokio::time::Instant;
 use crate::frame::signing::SignedBytes;
 use crate::frame::{self, Frame, ScanStats};
 pub use address::LinkSpec;
+pub use outbox::{Outbox, To};
 
 /// Which peer of a link a frame came from (a UDP peer address, a TCP
 /// client), so an answer can go back the same way. Links with one peer use 0.
@@ -118,8 +122,36 @@ pub trait Transport {
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError>;
     /// Sends one frame to one path only (answers: never amplify).
     async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError>;
+    /// Sends every frame in `outbox`, in order, each to its destination;
+    /// returns the time taken just before the first write. A link that can
+    /// write them with one system call does; this default writes them one
+    /// by one.
+    async fn send_all(&mut self, outbox: &Outbox) -> Result<Instant, LinkError> {
+        let mut first = None;
+        for (frame, to) in outbox.frames() {
+            let at = match to {
+                To::Every => self.send(frame).await?,
+                To::Path(path) => self.send_to(path, frame).await?,
+            };
+            first.get_or_insert(at);
+        }
+        Ok(first.unwrap_or_else(Instant::now))
+    }
     /// Waits for data and appends the frames in it to `out`.
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError>;
+    /// Appends the frames already waiting, without blocking; `Ok(false)`
+    /// when nothing was. Called while the session sleeps on its own clock
+    /// rather than in the runtime, so a link whose readiness the runtime
+    /// tracks should read the socket itself (UDP does); this default polls
+    /// `recv` once.
+    fn read_waiting(&mut self, out: &mut Vec<Inbound>) -> Result<bool, LinkError> {
+        let mut recv = std::pin::pin!(self.recv(out));
+        let mut cx = std::task::Context::from_waker(std::task::Waker::noop());
+        match recv.as_mut().poll(&mut cx) {
+            std::task::Poll::Ready(r) => r.map(|()| true),
+            std::task::Poll::Pending => Ok(false),
+        }
+    }
     /// False while there is nobody to send to (udpin before a peer is heard).
     fn has_peers(&self) -> bool {
         true
@@ -243,8 +275,16 @@ impl Transport for Link {
         each_link!(self, l => l.send_to(path, frame).await)
     }
 
+    async fn send_all(&mut self, outbox: &Outbox) -> Result<Instant, LinkError> {
+        each_link!(self, l => l.send_all(outbox).await)
+    }
+
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
         each_link!(self, l => l.recv(out).await)
+    }
+
+    fn read_waiting(&mut self, out: &mut Vec<Inbound>) -> Result<bool, LinkError> {
+        each_link!(self, l => l.read_waiting(out))
     }
 
     fn has_peers(&self) -> bool {

@@ -8,22 +8,24 @@ use std::net::SocketAddr;
 use std::os::fd::AsRawFd;
 use std::time::{Duration, SystemTime};
 
-use nix::sys::socket::{self as nixsock, ControlMessageOwned, MsgFlags, SockaddrStorage};
+use nix::sys::socket::{self as nixsock, SockaddrStorage};
 use nix::sys::time::TimeSpec;
 use tokio::io::Interest;
 use tokio::net::UdpSocket;
 use tokio::time::Instant;
 
 use super::address::HostPort;
+use super::mmsg::{self, Datagram, RecvBatch, SendBatch, RECV_BATCH, SEND_BATCH};
 use super::route::{resolve, Route};
-use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
+use super::{push_datagram, Inbound, LinkError, LinkKind, Outbox, PathId, RxClock, To, Transport};
 use crate::frame::ScanStats;
 
 /// At most this many peers are remembered on a listening socket; more than
 /// that is a flood or a misconfiguration, and memory must stay bounded.
 const MAX_PEERS: usize = 64;
-/// Datagrams drained per wake-up before yielding to the timers.
-const DRAIN_BATCH: usize = 64;
+/// Messages read per wake-up at most, before the session sends what is
+/// due and checks its timers.
+const DRAIN_LIMIT: usize = 4 * RECV_BATCH;
 /// Socket buffers asked for: at 150k PINGs/s the default 208 KiB receive
 /// buffer drops 0.1-3 % of replies, 4 MiB none (FIELD-NOTES). The kernel
 /// caps it at net.core.rmem_max; what was granted is logged.
@@ -52,8 +54,11 @@ enum Mode {
 pub struct UdpLink {
     socket: UdpSocket,
     mode: Mode,
-    buf: Box<[u8]>,
-    stats: ScanStats,
+    rx: Receiver,
+    send_batch: SendBatch,
+    /// Equal-sized datagrams to one address leave as one GSO send, until
+    /// the kernel refuses one.
+    gso: bool,
     recv_buffer: usize,
     kernel_timestamps: bool,
 }
@@ -98,11 +103,20 @@ impl UdpLink {
         // got round to reading it.
         let kernel_timestamps =
             nixsock::setsockopt(&socket, nixsock::sockopt::ReceiveTimestampns, &true).is_ok();
+        // Same-sized datagrams from one sender that arrive together (a GSO
+        // send, or what a NIC coalesces) come up as one message, cut apart
+        // again in `drain`: one read for a whole burst. They share one
+        // receive timestamp, as they arrived together.
+        let _ = nixsock::setsockopt(&socket, nixsock::sockopt::UdpGroSegment, &true);
         UdpLink {
             socket,
             mode,
-            buf: vec![0; 65536].into_boxed_slice(),
-            stats: ScanStats::default(),
+            rx: Receiver {
+                batch: RecvBatch::new(),
+                stats: ScanStats::default(),
+            },
+            send_batch: SendBatch::new(),
+            gso: true,
             recv_buffer,
             kernel_timestamps,
         }
@@ -185,10 +199,78 @@ impl UdpLink {
         self.socket.local_addr()
     }
 
+    /// Whether `e` is an ICMP "port unreachable" that this link shrugs off
+    /// (see [`UdpLink::keep_going_when_refused`]).
+    fn refused_is_transient(&self, e: &io::Error) -> bool {
+        self.mode.refused_is_transient(e)
+    }
+
+    fn failed(&self, e: io::Error) -> LinkError {
+        match &self.mode {
+            Mode::Connected { peer, .. } if e.kind() == io::ErrorKind::ConnectionRefused => {
+                LinkError::Closed(format!(
+                    "nothing listening at {peer} (ICMP port unreachable); if the vehicle sends \
+                     to this port, listen: udp:{peer}"
+                ))
+            }
+            _ => LinkError::io("udp link failed", e),
+        }
+    }
+
+    /// Writes `datagrams` with as few system calls as the kernel allows,
+    /// waiting when the socket buffer is full. A send the kernel refuses
+    /// is judged alone: the others still go.
+    async fn write(&mut self, datagrams: &[Datagram<'_>]) -> Result<(), LinkError> {
+        let fd = self.socket.as_raw_fd();
+        let mut done = 0;
+        while done < datagrams.len() {
+            let (len, grouped) = mmsg::next_send(&datagrams[done..], self.gso);
+            let next = &datagrams[done..done + len];
+            let UdpLink {
+                socket, send_batch, ..
+            } = self;
+            let sent = socket.try_io(Interest::WRITABLE, || {
+                if grouped {
+                    send_batch.send_group(fd, next)
+                } else {
+                    send_batch.send(fd, next)
+                }
+            });
+            match sent {
+                Ok(n) => done += n,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    socket.writable().await.map_err(|e| self.failed(e))?;
+                }
+                Err(e) if grouped && mmsg::gso_unsupported(&e) => {
+                    tracing::info!(error = %e, "no UDP GSO on this socket: datagrams go one by one");
+                    self.gso = false;
+                }
+                Err(e) => {
+                    match &self.mode {
+                        Mode::Connected { .. } if self.refused_is_transient(&e) => {}
+                        Mode::Connected { .. } => return Err(self.failed(e)),
+                        // One vanished peer must not end a listening link.
+                        Mode::Listen { .. } => tracing::debug!(error = %e, "send failed"),
+                        Mode::Broadcast { target, .. } => {
+                            return Err(LinkError::io(
+                                format!("cannot broadcast to udp {target}"),
+                                e,
+                            ))
+                        }
+                    }
+                    done += if grouped { len } else { 1 };
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+impl Mode {
     /// The path of a sender, learning it as a peer if it is new. Senders
     /// beyond MAX_PEERS get a path that `send_to` ignores.
     fn path_of(&mut self, from: SocketAddr) -> PathId {
-        match &mut self.mode {
+        match self {
             Mode::Connected { .. } => 0,
             Mode::Listen { peers } | Mode::Broadcast { peers, .. } => {
                 match peers.iter().position(|p| *p == from) {
@@ -204,12 +286,36 @@ impl UdpLink {
         }
     }
 
-    /// Whether `e` is an ICMP "port unreachable" that this link shrugs off
-    /// (see [`UdpLink::keep_going_when_refused`]).
+    /// How many datagrams a frame for `to` becomes, and the address of the
+    /// `k`-th (`None`: the connected peer).
+    fn destinations(&self, to: To) -> usize {
+        match (self, to) {
+            (Mode::Connected { .. }, _) | (Mode::Broadcast { .. }, To::Every) => 1,
+            (Mode::Listen { peers }, To::Every) => peers.len(),
+            (Mode::Listen { peers } | Mode::Broadcast { peers, .. }, To::Path(p)) => {
+                usize::from((p as usize) < peers.len())
+            }
+        }
+    }
+
+    fn destination(&self, to: To, k: usize) -> Option<SockaddrStorage> {
+        let addr = match (self, to) {
+            (Mode::Connected { .. }, _) => return None,
+            (Mode::Broadcast { target, .. }, To::Every) => *target,
+            (Mode::Listen { peers }, To::Every) => peers[k],
+            (Mode::Listen { peers } | Mode::Broadcast { peers, .. }, To::Path(p)) => {
+                peers[p as usize]
+            }
+        };
+        Some(SockaddrStorage::from(addr))
+    }
+
+    /// Whether `e` is an ICMP "port unreachable" that a connected link
+    /// shrugs off (see [`UdpLink::keep_going_when_refused`]).
     fn refused_is_transient(&self, e: &io::Error) -> bool {
         let transient = e.kind() == io::ErrorKind::ConnectionRefused
             && matches!(
-                self.mode,
+                self,
                 Mode::Connected {
                     refused_is_transient: true,
                     ..
@@ -221,69 +327,70 @@ impl UdpLink {
         transient
     }
 
-    fn failed(&self, e: io::Error) -> LinkError {
-        match &self.mode {
-            Mode::Connected { peer, .. } if e.kind() == io::ErrorKind::ConnectionRefused => {
-                LinkError::Closed(format!(
-                    "nothing listening at {peer} (ICMP port unreachable); if the vehicle sends \
-                     to this port, listen: udp:{peer}"
-                ))
-            }
-            _ => LinkError::io("udp link failed", e),
-        }
+    /// A read error that is no reason to stop: a listening socket can see
+    /// ECONNREFUSED from an ICMP error to one of its peers.
+    fn read_error_is_harmless(&self, e: &io::Error) -> bool {
+        e.kind() == io::ErrorKind::ConnectionRefused
+            && (!matches!(self, Mode::Connected { .. }) || self.refused_is_transient(e))
     }
+}
 
-    /// One datagram if one is waiting, without blocking, with the time it
-    /// reached the socket.
-    fn try_one(&mut self) -> io::Result<Option<(usize, SocketAddr, Instant)>> {
-        let UdpLink {
-            socket, buf, mode, ..
-        } = self;
-        let fd = socket.as_raw_fd();
-        let r = socket.try_io(Interest::READABLE, || {
-            let mut iov = [io::IoSliceMut::new(&mut buf[..])];
-            let mut cmsg = nix::cmsg_space!(TimeSpec);
-            let msg = nixsock::recvmsg::<SockaddrStorage>(
-                fd,
-                &mut iov,
-                Some(&mut cmsg),
-                MsgFlags::MSG_DONTWAIT,
-            )
-            .map_err(io::Error::from)?;
-            let kernel = msg.cmsgs().ok().and_then(|mut c| {
-                c.find_map(|c| match c {
-                    ControlMessageOwned::ScmTimestampns(ts) => Some(ts),
-                    _ => None,
-                })
-            });
-            let from = msg.address.as_ref().and_then(socket_addr);
-            Ok((msg.bytes, from, kernel))
-        });
-        let (now, now_wall) = (Instant::now(), SystemTime::now());
-        match r {
-            Ok((len, from, kernel)) => {
-                let from = match (from, &*mode) {
+/// The receiving half of a UDP link: batched reads and what the frame
+/// scanner made of them.
+struct Receiver {
+    batch: RecvBatch,
+    stats: ScanStats,
+}
+
+impl Receiver {
+    /// Reads what is waiting, up to DRAIN_LIMIT messages, without blocking
+    /// and without asking the runtime (its idea of readiness is stale while
+    /// the session sleeps on its own clock). Each message carries its own
+    /// arrival time: one stamp for a whole batch would date late arrivals
+    /// too early. Returns how many messages were read and whether the
+    /// socket was found empty.
+    fn drain(
+        &mut self,
+        fd: std::os::fd::RawFd,
+        mode: &mut Mode,
+        out: &mut Vec<Inbound>,
+    ) -> io::Result<(usize, bool)> {
+        let mut read = 0;
+        while read < DRAIN_LIMIT {
+            let n = match self.batch.recv(fd) {
+                Ok(n) => n,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok((read, true)),
+                Err(e) if mode.read_error_is_harmless(&e) => continue,
+                Err(e) => return Err(e),
+            };
+            let (now, now_wall) = (Instant::now(), SystemTime::now());
+            for i in 0..n {
+                let (data, r) = self.batch.message(i);
+                let from = match (r.from.as_ref().and_then(socket_addr), &*mode) {
                     (Some(from), _) => from,
                     (None, Mode::Connected { peer, .. }) => *peer,
-                    (None, _) => return Ok(None),
+                    (None, _) => continue,
                 };
-                Ok(Some((len, from, arrival(kernel, now, now_wall))))
+                let at = arrival(r.kernel, now, now_wall);
+                let before = out.len();
+                // Each datagram on its own, also those GRO joined.
+                for datagram in data.chunks(r.segment.unwrap_or(data.len()).max(1)) {
+                    push_datagram(datagram, at, PathId::MAX, &mut self.stats, out);
+                }
+                // Only a sender of real MAVLink becomes a peer, not a port scanner.
+                if out.len() > before {
+                    let path = mode.path_of(from);
+                    for inbound in &mut out[before..] {
+                        inbound.path = path;
+                    }
+                }
             }
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(None),
-            Err(e) => Err(e),
-        }
-    }
-
-    fn take(&mut self, len: usize, from: SocketAddr, at: Instant, out: &mut Vec<Inbound>) {
-        let before = out.len();
-        push_datagram(&self.buf[..len], at, PathId::MAX, &mut self.stats, out);
-        // Only a sender of real MAVLink becomes a peer, not a port scanner.
-        if out.len() > before {
-            let path = self.path_of(from);
-            for inbound in &mut out[before..] {
-                inbound.path = path;
+            read += n;
+            if n < RECV_BATCH {
+                return Ok((read, true));
             }
         }
+        Ok((read, false))
     }
 }
 
@@ -339,35 +446,60 @@ impl Transport for UdpLink {
         Ok(sent)
     }
 
+    /// The whole box in as few system calls as the kernel allows (GSO,
+    /// `sendmmsg`).
+    async fn send_all(&mut self, outbox: &Outbox) -> Result<Instant, LinkError> {
+        let sent = Instant::now();
+        const QUEUE: usize = 4 * SEND_BATCH;
+        let mut queue: [Datagram<'_>; QUEUE] = [(&[], None); QUEUE];
+        let mut queued = 0;
+        for (frame, to) in outbox.frames() {
+            for k in 0..self.mode.destinations(to) {
+                queue[queued] = (frame, self.mode.destination(to, k));
+                queued += 1;
+                if queued == QUEUE {
+                    self.write(&queue).await?;
+                    queued = 0;
+                }
+            }
+        }
+        self.write(&queue[..queued]).await?;
+        Ok(sent)
+    }
+
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
+        let fd = self.socket.as_raw_fd();
         loop {
             let readable = self.socket.readable().await;
             readable.map_err(|e| self.failed(e))?;
-            let mut got_any = false;
-            for _ in 0..DRAIN_BATCH {
-                // Each datagram carries its own arrival time: one stamp for a
-                // whole batch would date late arrivals too early.
-                match self.try_one() {
-                    Ok(Some((len, from, at))) => {
-                        got_any = true;
-                        self.take(len, from, at, out);
-                    }
-                    Ok(None) => break,
-                    // A listening socket can see ECONNREFUSED from an ICMP
-                    // error to one of its peers: not a reason to stop.
-                    Err(e)
-                        if e.kind() == io::ErrorKind::ConnectionRefused
-                            && (!matches!(self.mode, Mode::Connected { .. })
-                                || self.refused_is_transient(&e)) =>
-                    {
-                        continue
-                    }
-                    Err(e) => return Err(self.failed(e)),
+            let UdpLink {
+                socket, mode, rx, ..
+            } = self;
+            let mut read = 0;
+            // Through try_io: a WouldBlock clears the runtime's readiness,
+            // so a socket found empty is waited for again, not polled.
+            let drained = socket.try_io(Interest::READABLE, || {
+                let (n, emptied) = rx.drain(fd, mode, out)?;
+                read = n;
+                if emptied {
+                    Err(io::ErrorKind::WouldBlock.into())
+                } else {
+                    Ok(())
                 }
+            });
+            match drained {
+                Err(e) if e.kind() != io::ErrorKind::WouldBlock => return Err(self.failed(e)),
+                _ if read > 0 => return Ok(()),
+                _ => {}
             }
-            if got_any {
-                return Ok(());
-            }
+        }
+    }
+
+    fn read_waiting(&mut self, out: &mut Vec<Inbound>) -> Result<bool, LinkError> {
+        let fd = self.socket.as_raw_fd();
+        match self.rx.drain(fd, &mut self.mode, out) {
+            Ok((read, _)) => Ok(read > 0),
+            Err(e) => Err(self.failed(e)),
         }
     }
 
@@ -387,7 +519,7 @@ impl Transport for UdpLink {
     }
 
     fn scan_stats(&self) -> ScanStats {
-        self.stats
+        self.rx.stats
     }
 
     fn rx_clock(&self) -> RxClock {

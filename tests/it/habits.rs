@@ -156,6 +156,28 @@ fn sigquit_prints_an_interim_summary_and_the_run_goes_on() {
 }
 
 #[test]
+fn signals_reach_a_fast_schedule_that_sleeps_on_its_own_clock() {
+    // At 2,000/s on UDP the session sleeps between sends outside the
+    // runtime (clock_nanosleep): SIGQUIT and Ctrl-C must still be heard.
+    let (_respond, link) = respond();
+    let run = start_mavping(&["--rate", "2000", &link]);
+    std::thread::sleep(Duration::from_millis(500));
+    signal(run.child.id(), "QUIT");
+    std::thread::sleep(Duration::from_millis(300));
+    signal(run.child.id(), "INT");
+    let (code, out, err) = run.wait(Duration::from_secs(30));
+    assert_eq!(code, 0, "{out}\n{err}");
+    let interim = out
+        .lines()
+        .filter(|l| l.starts_with('[') && l.contains("] 1/1: "))
+        .count();
+    assert_eq!(interim, 1, "{out}");
+    let c = text_counts(&out, "1/1").expect(&out);
+    assert!(c.received > 100, "{out}");
+    assert_eq!(c.sent, c.received + c.lost, "{out}");
+}
+
+#[test]
 fn bind_sends_from_the_local_address_given() {
     let server = UdpSocket::bind("127.0.0.1:0").unwrap();
     server

@@ -12,7 +12,7 @@
 
 use std::io;
 
-use hdrhistogram::Histogram;
+use crate::engine::stats::RttStats;
 
 use super::plan::Planner;
 use super::step::{StepFigures, StepTally};
@@ -294,7 +294,7 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
         self.finished && self.inner.settled()
     }
 
-    fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, Histogram<u64>)>) {
+    fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let now = (ended.duration_s * 1e9) as Nanos;
         self.close(false, now, ended.frames.frame_bytes);
         let loss_limit = match self.config.plan {
