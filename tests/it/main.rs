@@ -13,6 +13,7 @@ mod exporter;
 mod habits;
 mod high_rate;
 mod hostile;
+mod late_heard;
 mod live;
 mod multilink;
 mod options;

@@ -303,7 +303,9 @@ proptest! {
                     } else if !r.answered.insert(n) {
                         r.duplicate += 1;
                     } else if now >= sent_at + TIMEOUT {
+                        // A late first answer opens the window too.
                         r.late += 1;
+                        r.window_start = Some(r.window_start.map_or(n, |w| w.min(n)));
                     } else {
                         r.received += 1;
                         r.window_start = Some(r.window_start.map_or(n, |w| w.min(n)));
@@ -343,11 +345,20 @@ proptest! {
             prop_assert_eq!(c.duplicate, want.duplicate, "{}", r.id);
             prop_assert_eq!(c.stale, want.stale, "{}", r.id);
             prop_assert_eq!(c.sent, window.len() as u64, "{}", r.id);
-            // Every in-time reply lies in the window (it starts at the
+            // Every answered request lies in the window (it starts at the
             // oldest one), so the rest of the window is lost, late or not.
             prop_assert_eq!(c.lost, window.len() as u64 - want.received, "{}", r.id);
             prop_assert_eq!(c.sent, c.received + c.lost, "{}", r.id);
             prop_assert_eq!(lost_events.get(&r.id).copied().unwrap_or(0), c.lost, "{}", r.id);
+            prop_assert!(c.late <= c.lost, "{}", r.id);
+        }
+        // Every request is charged, or before the window, exactly once.
+        prop_assert_eq!(m.finish(), 0);
+        for r in m.responders() {
+            let c = r.counts;
+            let before = model[&r.id].window_start.unwrap_or(sent.len() as u64);
+            prop_assert_eq!(c.not_charged, before, "{}", r.id);
+            prop_assert_eq!(c.not_charged + c.sent + c.in_flight, sent.len() as u64, "{}", r.id);
         }
     }
 }
