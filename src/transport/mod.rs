@@ -7,6 +7,7 @@
 
 pub mod address;
 pub mod route;
+pub mod rx_time;
 pub mod serial;
 pub mod sim;
 pub mod stream;

@@ -6,7 +6,6 @@ use std::io;
 use std::net::SocketAddr;
 
 use std::os::fd::AsRawFd;
-use std::time::{Duration, SystemTime};
 
 use nix::sys::socket::{self as nixsock, ControlMessageOwned, MsgFlags, SockaddrStorage};
 use nix::sys::time::TimeSpec;
@@ -16,6 +15,7 @@ use tokio::time::Instant;
 
 use super::address::HostPort;
 use super::route::{resolve, Route};
+use super::rx_time::RxTime;
 use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::frame::ScanStats;
 
@@ -28,9 +28,6 @@ const DRAIN_BATCH: usize = 64;
 /// buffer drops 0.1-3 % of replies, 4 MiB none (FIELD-NOTES). The kernel
 /// caps it at net.core.rmem_max; what was granted is logged.
 const SOCKET_BUFFER: usize = 4 << 20;
-/// A kernel timestamp older than this is not trusted (the wall clock was
-/// stepped between the kernel's stamp and our read).
-const MAX_QUEUE_AGE: Duration = Duration::from_secs(10);
 
 enum Mode {
     /// Peers learned from what we hear.
@@ -56,6 +53,8 @@ pub struct UdpLink {
     stats: ScanStats,
     recv_buffer: usize,
     kernel_timestamps: bool,
+    /// Kernel stamps (wall clock) to the monotonic clock, steps excluded.
+    rx_time: RxTime,
 }
 
 fn socket_addr(addr: &SockaddrStorage) -> Option<SocketAddr> {
@@ -64,25 +63,6 @@ fn socket_addr(addr: &SockaddrStorage) -> Option<SocketAddr> {
     } else {
         addr.as_sockaddr_in6()
             .map(|v6| SocketAddr::from((v6.ip(), v6.port())))
-    }
-}
-
-/// When a datagram stamped `kernel` (wall clock) arrived, on the monotonic
-/// clock: its age now, taken from `now` (monotonic). Only a difference of
-/// two wall-clock readings a moment apart is used, so a clock step during
-/// the run does not bend RTTs.
-fn arrival(kernel: Option<TimeSpec>, now: Instant, now_wall: SystemTime) -> Instant {
-    let Some(ts) = kernel else {
-        return now;
-    };
-    let stamped = SystemTime::UNIX_EPOCH
-        + Duration::new(
-            ts.tv_sec().max(0) as u64,
-            ts.tv_nsec().clamp(0, 999_999_999) as u32,
-        );
-    match now_wall.duration_since(stamped) {
-        Ok(age) if age <= MAX_QUEUE_AGE => now.checked_sub(age).unwrap_or(now),
-        _ => now,
     }
 }
 
@@ -105,6 +85,7 @@ impl UdpLink {
             stats: ScanStats::default(),
             recv_buffer,
             kernel_timestamps,
+            rx_time: RxTime::new(),
         }
     }
 
@@ -237,7 +218,11 @@ impl UdpLink {
     /// reached the socket.
     fn try_one(&mut self) -> io::Result<Option<(usize, SocketAddr, Instant)>> {
         let UdpLink {
-            socket, buf, mode, ..
+            socket,
+            buf,
+            mode,
+            rx_time,
+            ..
         } = self;
         let fd = socket.as_raw_fd();
         let r = socket.try_io(Interest::READABLE, || {
@@ -259,17 +244,20 @@ impl UdpLink {
             let from = msg.address.as_ref().and_then(socket_addr);
             Ok((msg.bytes, from, kernel))
         });
-        let (now, now_wall) = (Instant::now(), SystemTime::now());
         match r {
             Ok((len, from, kernel)) => {
+                let at = rx_time.arrival(kernel);
                 let from = match (from, &*mode) {
                     (Some(from), _) => from,
                     (None, Mode::Connected { peer, .. }) => *peer,
                     (None, _) => return Ok(None),
                 };
-                Ok(Some((len, from, arrival(kernel, now, now_wall))))
+                Ok(Some((len, from, at)))
             }
-            Err(e) if e.kind() == io::ErrorKind::WouldBlock => Ok(None),
+            Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                rx_time.drained();
+                Ok(None)
+            }
             Err(e) => Err(e),
         }
     }
