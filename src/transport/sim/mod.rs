@@ -190,11 +190,20 @@ impl SimLink {
             .saturating_add(drift)
     }
 
-    /// True while the `outage=` window is on.
+    /// True while an `outage=` window is on (`outage_every=` repeats it).
     fn in_outage(&self, now: Instant) -> bool {
         self.params.outage.is_some_and(|(start, length)| {
-            let t = now.saturating_duration_since(self.started);
-            t >= start && t < start + length
+            let Some(t) = now
+                .saturating_duration_since(self.started)
+                .checked_sub(start)
+            else {
+                return false;
+            };
+            let into = match self.params.outage_every {
+                Some(every) => Duration::from_nanos((t.as_nanos() % every.as_nanos()) as u64),
+                None => t,
+            };
+            into < length
         })
     }
 

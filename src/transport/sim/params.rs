@@ -5,7 +5,7 @@ use std::fmt;
 use std::time::Duration;
 
 use crate::frame::SysComp;
-use crate::units::{parse_duration_up_to, parse_percent};
+use crate::units::{parse_duration, parse_duration_up_to, parse_percent};
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimParams {
@@ -41,8 +41,11 @@ pub struct SimParams {
     /// Emit RADIO_STATUS as 51/68 once a second, following the link.
     pub radio: bool,
     /// A link outage: from `start` after the link opened, for `length`,
-    /// every request and reply is lost.
+    /// every request and reply is lost...
     pub outage: Option<(Duration, Duration)>,
+    /// ...and again every `outage_every` after that (weeks of simulated
+    /// monitoring with an outage every few hours).
+    pub outage_every: Option<Duration>,
     /// Share of replies hit by a delay spike of `spike_delay` extra.
     pub spike: f64,
     pub spike_delay: Duration,
@@ -69,6 +72,7 @@ impl Default for SimParams {
             baud: None,
             radio: false,
             outage: None,
+            outage_every: None,
             spike: 0.0,
             spike_delay: Duration::from_millis(500),
         }
@@ -79,7 +83,7 @@ impl Default for SimParams {
 pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURATION, \
 jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
 ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
-outage=START+LENGTH, spike=PCT, spike_delay=DURATION";
+outage=START+LENGTH, outage_every=DURATION, spike=PCT, spike_delay=DURATION";
 
 fn percent(key: &str, value: &str) -> Result<f64, String> {
     parse_percent(value).map_err(|e| format!("{key}={value}: {e}"))
@@ -184,10 +188,25 @@ impl SimParams {
                     })?;
                     p.outage = Some((duration(key, start)?, duration(key, length)?));
                 }
+                "outage_every" => {
+                    p.outage_every =
+                        Some(parse_duration(value).map_err(|e| format!("{key}={value}: {e}"))?)
+                }
                 "spike" => p.spike = percent(key, value)?,
                 "spike_delay" => p.spike_delay = duration(key, value)?,
                 _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
             }
+        }
+        match (p.outage, p.outage_every) {
+            (None, Some(_)) => return Err("outage_every needs outage=START+LENGTH".into()),
+            (Some((_, length)), Some(every)) if every <= length => {
+                return Err(format!(
+                    "outage_every={}: must be longer than the outage ({})",
+                    humantime::format_duration(every),
+                    humantime::format_duration(length)
+                ))
+            }
+            _ => {}
         }
         // Responders are numbered by sysid; the last one must still fit.
         if usize::from(p.first_sysid) + usize::from(p.responders) - 1 > 255 * 255 {
@@ -241,6 +260,9 @@ impl fmt::Display for SimParams {
                 humantime::format_duration(length)
             )?;
         }
+        if let Some(every) = self.outage_every {
+            write!(f, "&outage_every={}", humantime::format_duration(every))?;
+        }
         if self.spike > 0.0 {
             write!(
                 f,
@@ -293,6 +315,9 @@ mod tests {
             SimParams::parse(&p.to_string()[4..]).unwrap().outage,
             p.outage
         );
+        let p = SimParams::parse("?outage=30m+45s&outage_every=6h").unwrap();
+        assert_eq!(p.outage_every, Some(Duration::from_secs(6 * 3600)));
+        assert!(p.to_string().ends_with("&outage=30m+45s&outage_every=6h"));
     }
 
     #[test]
@@ -301,6 +326,9 @@ mod tests {
             ("?loss=120%", "percentage"),
             ("?outage=5s", "START+LENGTH"),
             ("?outage=5s+2h", "at most 1h"),
+            ("?outage_every=6h", "needs outage"),
+            ("?outage=1h+5s&outage_every=5s", "longer than the outage"),
+            ("?outage=1h+5s&outage_every=400d", "at most 365 days"),
             ("?spike=-1", "percentage"),
             ("?responders=0", "1 to 1000"),
             ("?delay=soon", "delay=soon"),
