@@ -1,18 +1,22 @@
 #!/usr/bin/env bash
-# Bounded coverage-guided fuzzing of the frame scanner and the matcher.
-#   scripts/fuzz.sh [SECONDS] [TARGET...]   (default 60 s per target; both targets)
+# Bounded coverage-guided fuzzing of the frame scanner, the matcher, the
+# text parsers (connection strings, `sim:` queries, durations, allow
+# patterns) and the HTTP server of `mavping serve` and `--prometheus`.
+#   scripts/fuzz.sh [SECONDS] [TARGET...]   (default 60 s per target; all targets)
 # Needs cargo-fuzz (`cargo install cargo-fuzz`) and a nightly toolchain, or
 # the stable one with RUSTC_BOOTSTRAP=1 (set here when no nightly exists).
-# The committed seeds (fuzz/seeds/<target>, real v1, v2 and signed frames
-# made by pymavlink: fuzz/seed_corpus.py) are read only; what the fuzzer
-# learns goes to fuzz/corpus/<target> (ignored by git). A crash leaves its
-# input in fuzz/artifacts/<target> and makes this script exit non-zero.
+# The committed seeds (fuzz/seeds/<target>: real v1, v2 and signed frames
+# made by pymavlink, fuzz/seed_corpus.py; connection strings and requests
+# written by hand; the minimised corpora of the long runs) are read only;
+# what the fuzzer learns goes to fuzz/corpus/<target> (ignored by git). A
+# crash leaves its input in fuzz/artifacts/<target> and makes this script
+# exit non-zero.
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
 SECONDS_PER_TARGET=${1:-60}
 shift || true
 TARGETS=("$@")
-[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(scanner matcher)
+[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(scanner matcher parse http)
 
 if rustup toolchain list 2>/dev/null | grep -q '^nightly'; then
   CARGO=(cargo +nightly)

@@ -5,8 +5,10 @@
 //! - every byte is accounted for: good frames + skipped + unknown-id
 //!   frames + the carried tail = all bytes fed;
 //! - the stream's frames are a prefix of the frames the datagram scan
-//!   (which knows where the data ends) finds in the same bytes, and the
-//!   datagram scan accounts for every byte with nothing left over;
+//!   (which knows where the data ends) finds in the same bytes, unless the
+//!   datagram scan kept a good frame whose payload holds another good frame
+//!   (a stream lets the inner one win), and the datagram scan accounts for
+//!   every byte with nothing left over;
 //! - every good frame that overlaps no other good frame (by the oracle the
 //!   property tests use) is delivered by the datagram scan, and nothing
 //!   else (issue 21).
@@ -100,8 +102,15 @@ fuzz_target!(|input: &[u8]| {
         at.push(start..start + f.len());
     });
     check_accounting(&dgram, &dgram_stats, 0, data.len());
-    assert!(dgram.len() >= whole.len());
-    assert_eq!(&dgram[..whole.len()], &whole[..]);
+    let holds_a_good_frame = |f: &Vec<u8>| {
+        let mut inside = false;
+        scan_datagram(&f[1..], &mut ScanStats::default(), &mut |_| inside = true);
+        inside
+    };
+    if !dgram.iter().any(holds_a_good_frame) {
+        assert!(dgram.len() >= whole.len());
+        assert_eq!(&dgram[..whole.len()], &whole[..]);
+    }
 
     let good = frame_oracle::good_frames(data);
     for f in frame_oracle::isolated(&good) {

@@ -7,15 +7,26 @@
 //! slot takes a new request).
 //!
 //! Rules (from the MAVLink PING protocol and mavping's spec):
-//! - A responder's accounting window starts at the first request it answered
-//!   in time (the seed: "do not start detecting dropped packets until after
-//!   the first responses"). Requests before it are not counted for it.
+//! - A responder's accounting window starts at the first request it
+//!   answered, in time or late (the seed: "do not start detecting dropped
+//!   packets until after the first responses"). Requests before it are not
+//!   charged to it (`not_charged`): a system that boots, or a link that
+//!   comes up, after the run started is not blamed for the time before.
+//!   A late first answer opens the window too: a responder whose every
+//!   reply is late (a satellite link's 70 s round trip against a 2 s
+//!   timeout) is 100 % lost with its late replies, not "0 sent". The
+//!   window moves back to an older request answered later (reordering),
+//!   and the requests from there that were already decided are charged
+//!   then, as lost (nothing of them came in time: it would have opened
+//!   the window earlier).
 //! - When a request's timeout passes, every responder whose window includes
 //!   it and that has not answered it gets it counted as lost.
 //! - A first reply after the timeout is late (the request stays lost); a
 //!   second reply to the same request is a duplicate; a reply whose request
 //!   is unknown, overwritten, or whose echoed token differs is stale.
-//! - For each responder, `sent = received + lost` once requests are decided.
+//! - For each responder, `sent = received + lost` once requests are decided,
+//!   and every request issued is exactly one of: not charged (before its
+//!   window), sent (decided, or answered while still in time), in flight.
 
 use std::collections::HashMap;
 
@@ -86,11 +97,18 @@ impl MatchEvent {
     }
 }
 
-/// Exact per-responder counts.
+/// Exact per-responder counts. Every request issued is counted once in
+/// `not_charged`, `sent` or `in_flight`.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Serialize)]
 pub struct Counts {
     /// Requests in this responder's window whose fate is decided.
     pub sent: u64,
+    /// Requests before its window, i.e. before the first request it
+    /// answered (in time or late): not charged to it.
+    pub not_charged: u64,
+    /// Requests in its window still within their timeout, unanswered by
+    /// it: neither received nor lost (yet).
+    pub in_flight: u64,
     pub received: u64,
     pub lost: u64,
     /// First replies that came after the timeout (each also counted lost).
@@ -381,6 +399,8 @@ impl Matcher {
         }
         r.set_answered(idx, true);
         if expired {
+            self.open_window_at(ri, n, at, out);
+            let r = &mut self.responders[ri];
             r.counts.late += 1;
             out(MatchEvent::Late {
                 responder,
@@ -391,7 +411,7 @@ impl Matcher {
             });
             return;
         }
-        let first = r.window_start.is_none();
+        let first = r.counts.received == 0;
         // A reordered reply to an older, still undecided request moves the
         // window back: nothing from it on has been decided yet.
         if r.window_start.is_none_or(|start| n < start) {
@@ -413,9 +433,36 @@ impl Matcher {
         });
     }
 
+    /// A late reply to the decided request `n` from responder `ri`: if `n`
+    /// lies before its window, the window opens (or moves back) to `n`,
+    /// and the requests from `n` that were decided without it are charged
+    /// now, each lost (a reply in time to any of them would have opened
+    /// the window there). All of them are still in the ring: `n` is.
+    fn open_window_at(&mut self, ri: usize, n: u64, at: Nanos, out: &mut impl FnMut(MatchEvent)) {
+        let r = &self.responders[ri];
+        if r.in_window(n) {
+            return;
+        }
+        let charged_from = r.window_start.unwrap_or(u64::MAX).min(self.next_expiry);
+        for m in n..charged_from {
+            let (seq, sent_at) = (self.seq_of(m), self.slots[self.idx(m)].sent_at);
+            let r = &mut self.responders[ri];
+            r.counts.sent += 1;
+            r.counts.lost += 1;
+            out(MatchEvent::Lost {
+                responder: r.id,
+                seq,
+                sent_at,
+                at,
+            });
+        }
+        self.responders[ri].window_start = Some(n);
+    }
+
     /// Ends the run: requests still within their timeout are counted for the
     /// responders that already answered them, and otherwise left out (they
-    /// are neither received nor lost). Returns how many were in flight.
+    /// are neither received nor lost: each responder's `in_flight`).
+    /// Returns how many were unanswered by at least one responder.
     pub fn finish(&mut self) -> u64 {
         let mut in_flight = 0;
         for n in self.next_expiry..self.next_n {
@@ -425,12 +472,17 @@ impl Matcher {
                 if r.has_answered(idx) {
                     r.counts.sent += 1;
                 } else {
+                    r.counts.in_flight += 1;
                     unanswered = true;
                 }
             }
             in_flight += u64::from(unanswered);
         }
         self.next_expiry = self.next_n;
+        let issued = self.next_n;
+        for r in &mut self.responders {
+            r.counts.not_charged = r.window_start.unwrap_or(issued);
+        }
         in_flight
     }
 
@@ -454,12 +506,18 @@ impl Matcher {
 
     /// A responder's counts as if the run ended now, without ending it:
     /// undecided requests it already answered count as sent (as
-    /// [`Matcher::finish`] counts them), the others not yet.
+    /// [`Matcher::finish`] counts them), the others in flight; and the
+    /// requests before its window, not charged.
     pub fn counts_now(&self, r: &Responder) -> Counts {
         let mut counts = r.counts;
-        counts.sent += (self.next_expiry..self.next_n)
-            .filter(|&n| r.in_window(n) && r.has_answered(self.idx(n)))
-            .count() as u64;
+        for n in (self.next_expiry..self.next_n).filter(|&n| r.in_window(n)) {
+            if r.has_answered(self.idx(n)) {
+                counts.sent += 1;
+            } else {
+                counts.in_flight += 1;
+            }
+        }
+        counts.not_charged = r.window_start.unwrap_or(self.next_n);
         counts
     }
 

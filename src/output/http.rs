@@ -28,7 +28,7 @@ use http_body_util::Full;
 use hyper::header::{HeaderValue, ALLOW, CONTENT_TYPE};
 use hyper::{Method, Request, Response, StatusCode};
 use hyper_util::rt::{TokioIo, TokioTimer};
-use tokio::net::{TcpListener, TcpStream};
+use tokio::net::TcpListener;
 use tokio::sync::oneshot;
 
 pub use hyper::http::request::Parts as Head;
@@ -169,7 +169,7 @@ where
                 continue;
             }
             let (id, waiting, evicted) = connections.borrow_mut().add();
-            let task = connection(stream, limits, waiting, handler.clone());
+            let task = connection(TokioIo::new(stream), limits, waiting, handler.clone());
             let connections = connections.clone();
             tokio::task::spawn_local(async move {
                 tokio::select! {
@@ -183,9 +183,26 @@ where
     });
 }
 
-/// One connection: a request head, the handler's reply, then close.
-async fn connection<H>(stream: TcpStream, limits: Limits, waiting: Rc<Cell<bool>>, handler: Rc<H>)
+/// Serves one connection of any byte stream (a socket; the fuzz target's
+/// in-memory pipe) as the server serves each client: a request head
+/// within the limits, the handler's reply, then close.
+pub async fn serve_one<S, H>(stream: S, limits: Limits, handler: H)
 where
+    S: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + 'static,
+    H: Fn(Head) -> Replying + 'static,
+{
+    let waiting = Rc::new(Cell::new(true));
+    connection(TokioIo::new(stream), limits, waiting, Rc::new(handler)).await;
+}
+
+/// One connection: a request head, the handler's reply, then close.
+async fn connection<S, H>(
+    stream: TokioIo<S>,
+    limits: Limits,
+    waiting: Rc<Cell<bool>>,
+    handler: Rc<H>,
+) where
+    S: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + 'static,
     H: Fn(Head) -> Replying + 'static,
 {
     let service = hyper::service::service_fn(move |request: Request<hyper::body::Incoming>| {
@@ -202,7 +219,7 @@ where
         .header_read_timeout(limits.header_read_timeout)
         .max_buf_size(limits.max_header_bytes.max(8192))
         .keep_alive(false);
-    if let Err(e) = http.serve_connection(TokioIo::new(stream), service).await {
+    if let Err(e) = http.serve_connection(stream, service).await {
         tracing::debug!("http connection: {e}");
     }
 }

@@ -55,15 +55,16 @@ pub async fn measure(
             tracing::info!(
                 link = %config.name,
                 "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
-                 duplicated={} outage={} spiked={} spiked_before_first={}",
+                 duplicated={} duplicates_arrived={} outage={} spiked={} spiked_arrived={}",
                 t.answered,
                 t.dropped,
                 t.dropped_before_first,
                 t.delivered,
                 t.duplicated,
+                t.duplicates_arrived,
                 t.outage,
                 t.spiked,
-                t.spiked_before_first
+                t.spiked_arrived
             );
         }
     }

@@ -11,6 +11,8 @@ mod respond;
 mod serve;
 mod signals;
 
+pub use serve::handler_for as serve_handler;
+
 use std::future::Future;
 use std::io;
 

@@ -9,6 +9,7 @@ pub mod address;
 mod mmsg;
 pub mod outbox;
 pub mod route;
+pub mod rx_time;
 pub mod serial;
 pub mod sim;
 pub mod stream;

@@ -6,10 +6,8 @@ use std::io;
 use std::net::SocketAddr;
 
 use std::os::fd::AsRawFd;
-use std::time::{Duration, SystemTime};
 
 use nix::sys::socket::{self as nixsock, SockaddrStorage};
-use nix::sys::time::TimeSpec;
 use tokio::io::Interest;
 use tokio::net::UdpSocket;
 use tokio::time::Instant;
@@ -17,6 +15,7 @@ use tokio::time::Instant;
 use super::address::HostPort;
 use super::mmsg::{self, Datagram, RecvBatch, SendBatch, RECV_BATCH, SEND_BATCH};
 use super::route::{resolve, Route};
+use super::rx_time::RxTime;
 use super::{push_datagram, Inbound, LinkError, LinkKind, Outbox, PathId, RxClock, To, Transport};
 use crate::frame::ScanStats;
 
@@ -30,10 +29,6 @@ const DRAIN_LIMIT: usize = 4 * RECV_BATCH;
 /// buffer drops 0.1-3 % of replies, 4 MiB none (FIELD-NOTES). The kernel
 /// caps it at net.core.rmem_max; what was granted is logged.
 const SOCKET_BUFFER: usize = 4 << 20;
-/// A kernel timestamp older than this is not trusted (the wall clock was
-/// stepped between the kernel's stamp and our read).
-const MAX_QUEUE_AGE: Duration = Duration::from_secs(10);
-
 enum Mode {
     /// Peers learned from what we hear.
     Listen { peers: Vec<SocketAddr> },
@@ -72,25 +67,6 @@ fn socket_addr(addr: &SockaddrStorage) -> Option<SocketAddr> {
     }
 }
 
-/// When a datagram stamped `kernel` (wall clock) arrived, on the monotonic
-/// clock: its age now, taken from `now` (monotonic). Only a difference of
-/// two wall-clock readings a moment apart is used, so a clock step during
-/// the run does not bend RTTs.
-fn arrival(kernel: Option<TimeSpec>, now: Instant, now_wall: SystemTime) -> Instant {
-    let Some(ts) = kernel else {
-        return now;
-    };
-    let stamped = SystemTime::UNIX_EPOCH
-        + Duration::new(
-            ts.tv_sec().max(0) as u64,
-            ts.tv_nsec().clamp(0, 999_999_999) as u32,
-        );
-    match now_wall.duration_since(stamped) {
-        Ok(age) if age <= MAX_QUEUE_AGE => now.checked_sub(age).unwrap_or(now),
-        _ => now,
-    }
-}
-
 impl UdpLink {
     fn with(socket: UdpSocket, mode: Mode) -> Self {
         let sock = socket2::SockRef::from(&socket);
@@ -114,6 +90,7 @@ impl UdpLink {
             rx: Receiver {
                 batch: RecvBatch::new(),
                 stats: ScanStats::default(),
+                time: RxTime::new(),
             },
             send_batch: SendBatch::new(),
             gso: true,
@@ -340,6 +317,8 @@ impl Mode {
 struct Receiver {
     batch: RecvBatch,
     stats: ScanStats,
+    /// Kernel stamps (wall clock) to the monotonic clock, steps excluded.
+    time: RxTime,
 }
 
 impl Receiver {
@@ -359,11 +338,14 @@ impl Receiver {
         while read < DRAIN_LIMIT {
             let n = match self.batch.recv(fd) {
                 Ok(n) => n,
-                Err(e) if e.kind() == io::ErrorKind::WouldBlock => return Ok((read, true)),
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => {
+                    self.time.drained();
+                    return Ok((read, true));
+                }
                 Err(e) if mode.read_error_is_harmless(&e) => continue,
                 Err(e) => return Err(e),
             };
-            let (now, now_wall) = (Instant::now(), SystemTime::now());
+            let reading = self.time.read();
             for i in 0..n {
                 let (data, r) = self.batch.message(i);
                 let from = match (r.from.as_ref().and_then(socket_addr), &*mode) {
@@ -371,7 +353,7 @@ impl Receiver {
                     (None, Mode::Connected { peer, .. }) => *peer,
                     (None, _) => continue,
                 };
-                let at = arrival(r.kernel, now, now_wall);
+                let at = self.time.arrival_at(reading, r.kernel);
                 let before = out.len();
                 // Each datagram on its own, also those GRO joined.
                 for datagram in data.chunks(r.segment.unwrap_or(data.len()).max(1)) {
@@ -387,6 +369,8 @@ impl Receiver {
             }
             read += n;
             if n < RECV_BATCH {
+                // The read came back short: the socket was empty then.
+                self.time.empty_at(reading);
                 return Ok((read, true));
             }
         }

@@ -66,7 +66,8 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         assert_eq!(c.sent, t.answered - t.dropped_before_first, "{id}");
         assert_eq!(c.received, t.delivered, "{id}");
         assert_eq!(c.lost, t.dropped - t.dropped_before_first, "{id}");
-        assert_eq!(c.duplicate, t.duplicated, "{id}");
+        assert_eq!(c.duplicate, t.duplicates_arrived, "{id}");
+        assert!(t.duplicated - t.duplicates_arrived <= 3, "{id}: {t:?}");
         assert_eq!((c.late, c.stale), (0, 0), "{id}");
         assert!(
             c.out_of_order > 0 && c.lost > 2_000 && c.duplicate > 1_000,

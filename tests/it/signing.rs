@@ -314,6 +314,53 @@ fn mavping_respond_with_a_key_answers_signed_pings_and_ignores_the_rest() {
 }
 
 #[test]
+fn a_replayed_signed_request_to_mavping_respond_is_refused() {
+    // pymavlink signs five requests, then sends the recorded bytes of
+    // three of them again: mavping respond answers each request once.
+    let port = free_udp_port();
+    let respond = start_mavping(&[
+        "respond",
+        "--signing-key",
+        HEX_KEY,
+        &format!("udpin:127.0.0.1:{port}"),
+    ]);
+    let mut pinger = Peer::start(
+        "signed_pinger.py",
+        &[
+            &format!("udpout:127.0.0.1:{port}"),
+            "--key",
+            HEX_KEY,
+            "--count",
+            "5",
+            "--replay",
+            "1,3,4",
+        ],
+    );
+    let truth: Value = serde_json::from_str(&pinger.read_line()).unwrap();
+    assert_eq!(truth["replayed"], 3, "{truth}");
+    assert_eq!(
+        truth["replies"],
+        serde_json::json!({"0": 1, "1": 1, "2": 1, "3": 1, "4": 1}),
+        "one signed reply per request, none to a replay: {truth}"
+    );
+    signal(respond.child.id(), "TERM");
+    let (code, out, err) = respond.wait(Duration::from_secs(10));
+    assert_eq!(code, 0, "{out}\n{err}");
+    let last = out.lines().last().unwrap_or_default();
+    assert!(
+        last.starts_with("respond 1/1: 5 requests (5 ping,") && last.contains(", 5 replies sent,"),
+        "{out}"
+    );
+    assert!(
+        last.ends_with(
+            "signing: 5 signed and 0 unsigned frames accepted; \
+             rejected 0 unsigned, 0 with a bad signature, 3 replayed"
+        ),
+        "{out}"
+    );
+}
+
+#[test]
 fn bad_signing_options_are_one_line_errors() {
     for (args, needle) in [
         (

@@ -60,6 +60,10 @@ def main():
     ap.add_argument("--mavlink1", action="store_true", help="reply in MAVLink 1")
     ap.add_argument("--drop", default="", help="PING seqs not to answer, e.g. 2,5")
     ap.add_argument("--dup", default="", help="PING seqs to answer twice")
+    ap.add_argument("--drop-every", type=int, default=0,
+                    help="also drop every PING whose seq is a multiple of N (long soaks)")
+    ap.add_argument("--dup-every", type=int, default=0,
+                    help="also answer twice every PING whose seq is 1 more than a multiple of N")
     ap.add_argument("--delay-ms", type=float, default=0.0, help="delay every reply")
     ap.add_argument("--junk-before", default="", help="PING seqs whose reply is preceded by junk")
     ap.add_argument("--bad-crc", default="", help="PING seqs answered with a corrupted frame only")
@@ -142,7 +146,7 @@ def main():
         if radio is not None and truth["radio_status"] < len(radio_schedule):
             radio.radio_status_send(*radio_schedule[truth["radio_status"]])
             truth["radio_status"] += 1
-        if seq in drop:
+        if seq in drop or (args.drop_every and seq % args.drop_every == 0):
             truth["dropped"] += 1
             continue
         if args.delay_ms:
@@ -162,7 +166,7 @@ def main():
             continue
         mav.send(reply)
         truth["replies"] += 1
-        if seq in dup:
+        if seq in dup or (args.dup_every and seq % args.dup_every == 1):
             mav.send(mav.ping_encode(msg.time_usec, seq, src_sys, src_comp))
             truth["duplicated"] += 1
     print(json.dumps(truth), flush=True)

@@ -256,7 +256,8 @@ proptest! {
         }
         h.expire(u64::MAX / 2);
 
-        let first = fates.iter().position(|f| !matches!(f, Fate::Lost | Fate::Late { .. }));
+        // The window opens at the first request answered at all, late too.
+        let first = fates.iter().position(|f| !matches!(f, Fate::Lost));
         let c = h.m.responder(A).map(|r| r.counts).unwrap_or_default();
         let in_window = |i: usize| first.is_some_and(|f| i >= f);
         let expect_received = fates.iter().filter(|f| matches!(f, Fate::Once { .. } | Fate::Twice { .. })).count() as u64;
@@ -273,5 +274,107 @@ proptest! {
         prop_assert_eq!(c.lost, expect_lost);
         prop_assert_eq!(c.sent, c.received + c.lost);
         prop_assert_eq!(c.stale, 0);
+        prop_assert_eq!(h.m.finish(), 0);
+        let c = h.m.responder(A).map(|r| r.counts);
+        if let Some(c) = c {
+            prop_assert_eq!(c.not_charged + c.sent + c.in_flight, fates.len() as u64);
+        }
     }
+}
+
+/// The satellite link: every reply comes 70 s after its request, the
+/// timeout is 2 s, a request goes every 30 s. The first late reply opens
+/// the window; the requests decided before it are charged then.
+#[test]
+fn a_responder_whose_every_reply_is_late_is_all_lost_not_uncounted() {
+    let mut h = Harness::new(2_000 * MS, 64, 0);
+    let s = 30_000 * MS;
+    let rtt = 70_000 * MS;
+    let r0 = h.send(0);
+    let r1 = h.send(s);
+    h.expire(2 * s);
+    let _r2 = h.send(2 * s);
+    h.reply(A, r0, 0, rtt);
+    // Requests 0, 1 and 2 were decided (2 at 62 s) before A was heard at
+    // 70 s: charged now, lost.
+    let lost: Vec<u32> = h
+        .events
+        .iter()
+        .filter_map(|e| match e {
+            MatchEvent::Lost { seq, at, .. } if *at == rtt => Some(*seq),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(lost, vec![0, 1, 2]);
+    assert!(matches!(
+        h.events.last(),
+        Some(MatchEvent::Late { seq: 0, .. })
+    ));
+    let _r3 = h.send(3 * s);
+    h.reply(A, r1, s, s + rtt);
+    let _r4 = h.send(4 * s);
+    h.expire(4 * s + 2_000 * MS);
+    assert_eq!(h.m.finish(), 0);
+    let c = h.counts(A);
+    assert_eq!(
+        (
+            c.not_charged,
+            c.sent,
+            c.received,
+            c.lost,
+            c.late,
+            c.in_flight
+        ),
+        (0, 5, 0, 5, 2, 0)
+    );
+    let lost_events = h
+        .events
+        .iter()
+        .filter(|e| matches!(e, MatchEvent::Lost { .. }))
+        .count() as u64;
+    assert_eq!(lost_events, c.lost);
+}
+
+#[test]
+fn requests_before_the_first_answer_are_not_charged_and_counted_as_such() {
+    let mut h = Harness::new(100 * MS, 64, 0);
+    let reqs: Vec<_> = (0..6).map(|i| h.send(i * 10 * MS)).collect();
+    // A is first heard answering request 3; request 5 is still in flight.
+    h.reply(A, reqs[3], 30 * MS, 31 * MS);
+    h.reply(A, reqs[4], 40 * MS, 41 * MS);
+    let now = h.m.counts_now(h.m.responder(A).unwrap());
+    assert_eq!(
+        (now.not_charged, now.sent, now.in_flight),
+        (3, 2, 1),
+        "{now:?}"
+    );
+    assert_eq!(h.m.finish(), 1);
+    let c = h.counts(A);
+    assert_eq!(
+        (c.not_charged, c.sent, c.received, c.lost, c.in_flight),
+        (3, 2, 2, 0, 1)
+    );
+    assert_eq!(c.not_charged + c.sent + c.in_flight, 6);
+}
+
+#[test]
+fn a_late_reply_older_than_the_window_moves_it_back_and_charges_the_gap() {
+    let mut h = Harness::new(10 * MS, 64, 0);
+    let reqs: Vec<_> = (0..4).map(|i| h.send(i * MS)).collect();
+    // Request 2 answered in time; 0 and 1 decided lost to nobody.
+    h.reply(A, reqs[2], 2 * MS, 3 * MS);
+    h.expire(12 * MS);
+    assert_eq!(h.counts(A).sent, 1);
+    // Then request 0's reply comes, late: the window opens at 0, and 0 and
+    // 1 are charged (lost); 2 was charged already.
+    h.reply(A, reqs[0], 0, 12 * MS + 1);
+    let c = h.counts(A);
+    assert_eq!((c.sent, c.received, c.lost, c.late), (3, 1, 2, 1));
+    h.expire(100 * MS);
+    h.m.finish();
+    let c = h.counts(A);
+    assert_eq!(
+        (c.not_charged, c.sent, c.received, c.lost, c.late),
+        (0, 4, 1, 3, 1)
+    );
 }

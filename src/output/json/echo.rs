@@ -29,6 +29,8 @@ impl<W: Write> JsonReporter<W> {
                     "loss_ratio": r.loss_ratio,
                     "late": r.counts.late,
                     "duplicate": r.counts.duplicate,
+                    "not_charged": r.counts.not_charged,
+                    "in_flight": r.counts.in_flight,
                     "rtt_us": r.rtt.map(|s| json!({
                         "min": s.min_us, "mean": s.mean_us, "max": s.max_us,
                         "p50": s.p50_us, "p90": s.p90_us, "p99": s.p99_us, "jitter": s.jitter_us,
@@ -151,6 +153,8 @@ fn responder_json(r: &ResponderSummary, verdict: &Verdict) -> Value {
         "duplicate": r.counts.duplicate,
         "out_of_order": r.counts.out_of_order,
         "stale": r.counts.stale,
+        "not_charged": r.counts.not_charged,
+        "in_flight": r.counts.in_flight,
         "rtt_us": r.rtt.map(|s| json!({
             "min": s.min_us,
             "mean": s.mean_us,

@@ -330,6 +330,7 @@ pub fn borrow_all(links: &[SharedMetrics]) -> Vec<Ref<'_, Metrics>> {
 }
 
 /// `--prometheus`: the run's links at `/metrics` while the run goes on.
+#[derive(Default)]
 pub struct PrometheusExporter {
     links: Rc<RefCell<Vec<SharedMetrics>>>,
 }
@@ -339,12 +340,19 @@ impl PrometheusExporter {
     pub fn serve(listener: std::net::TcpListener) -> io::Result<(Self, SocketAddr)> {
         let listener = http::listener(listener)?;
         let addr = listener.local_addr()?;
-        let links: Rc<RefCell<Vec<SharedMetrics>>> = Rc::default();
-        let shared = links.clone();
-        http::serve(listener, Limits::default(), move |head: Head| -> Replying {
+        let exporter = PrometheusExporter::default();
+        http::serve(listener, Limits::default(), exporter.handler());
+        Ok((exporter, addr))
+    }
+
+    /// What answers each request: `/metrics` renders every link as it is
+    /// now. Also the fuzz target's way in.
+    pub fn handler(&self) -> impl Fn(Head) -> Replying + 'static {
+        let links = self.links.clone();
+        move |head: Head| -> Replying {
             let reply = match head.uri.path() {
                 "/metrics" => {
-                    let links = shared.borrow();
+                    let links = links.borrow();
                     let all = borrow_all(&links);
                     let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();
                     Reply::metrics(render(&refs))
@@ -353,8 +361,7 @@ impl PrometheusExporter {
                 _ => Reply::text(StatusCode::NOT_FOUND, "not found\n"),
             };
             Box::pin(std::future::ready(reply))
-        });
-        Ok((PrometheusExporter { links }, addr))
+        }
     }
 
     /// The reporter of the `index`-th link, served at the same address.

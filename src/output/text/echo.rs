@@ -351,6 +351,26 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
     if c.stale > 0 {
         write!(out, ", {} stale", c.stale)?;
     }
+    if c.in_flight > 0 {
+        write!(out, ", {} in flight", c.in_flight)?;
+    }
+    // Said, so that the requests add up: not charged + sent + in flight.
+    let requests = |n: u64| if n == 1 { "request" } else { "requests" };
+    if c.not_charged > 0 && c.sent + c.in_flight == 0 {
+        write!(
+            out,
+            "; {} {} not charged (it answered none)",
+            c.not_charged,
+            requests(c.not_charged)
+        )?;
+    } else if c.not_charged > 0 {
+        write!(
+            out,
+            "; {} earlier {} not charged (sent before its first answer)",
+            c.not_charged,
+            requests(c.not_charged)
+        )?;
+    }
     writeln!(out)?;
     let Some(rtt) = &r.rtt else {
         return Ok(());

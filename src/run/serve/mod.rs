@@ -131,6 +131,19 @@ fn raise_descriptor_limit() {
     }
 }
 
+/// What answers each request: `/probe`, `/metrics`, `/`.
+fn handler(server: &Rc<Server>) -> impl Fn(Head) -> Replying + 'static {
+    let server = server.clone();
+    move |head: Head| -> Replying { Box::pin(server.clone().handle(head)) }
+}
+
+/// The handler of a server with `settings` that is not listening anywhere
+/// (its continuous links do run, on the current `LocalSet`): the HTTP
+/// fuzz target's way in.
+pub fn handler_for(settings: ServeSettings) -> impl Fn(Head) -> Replying + 'static {
+    handler(&Rc::new(Server::new(settings)))
+}
+
 /// Serves until Ctrl-C or SIGTERM.
 pub async fn run(config: &ServeConfig, controls: Controls) -> Ending {
     let stop = controls.stop;
@@ -150,10 +163,7 @@ pub async fn run(config: &ServeConfig, controls: Controls) -> Ending {
         }
     };
     let server = Rc::new(Server::new(config.settings.clone()));
-    let handler = server.clone();
-    http::serve(listener, Limits::default(), move |head: Head| -> Replying {
-        Box::pin(handler.clone().handle(head))
-    });
+    http::serve(listener, Limits::default(), handler(&server));
     // Says the port when 0 was asked for; scripts and tests read it.
     stderr::error(&format_args!(
         "serving /probe and /metrics at http://{addr}/"

@@ -28,6 +28,9 @@ struct SimResponder {
     packet_seq: u8,
     next_heartbeat: Instant,
     truth: SimTruth,
+    /// A reply of its has been put on its way (delivered or spiked): the
+    /// pinger's window for it opens at the first such exchange.
+    replied: bool,
 }
 
 /// What the simulated link did to one responder's exchanges: the ground
@@ -38,12 +41,15 @@ pub struct SimTruth {
     pub answered: u64,
     /// Exchanges the link dropped...
     pub dropped: u64,
-    /// ...of which before the first delivered reply (outside the window).
+    /// ...of which before the first exchange whose reply was put on its
+    /// way, in time or spiked (outside the pinger's window: not charged).
     pub dropped_before_first: u64,
-    /// Replies delivered (first copies).
+    /// Replies delivered (first copies), not spiked.
     pub delivered: u64,
-    /// Extra copies delivered.
+    /// Extra copies put on their way.
     pub duplicated: u64,
+    /// ...of which handed to the pinger before it stopped reading.
+    pub duplicates_arrived: u64,
     /// Exchanges the radio's full buffer dropped (`baud=`), also counted
     /// in `dropped`.
     pub overflowed: u64,
@@ -52,8 +58,16 @@ pub struct SimTruth {
     /// Replies delayed by a spike (`spike=`); not in `delivered`: with a
     /// `spike_delay` past the timeout they arrive late.
     pub spiked: u64,
-    /// ...of which before the first delivered reply.
-    pub spiked_before_first: u64,
+    /// ...of which handed to the pinger before it stopped reading (the
+    /// late replies it can have seen).
+    pub spiked_arrived: u64,
+}
+
+impl SimTruth {
+    fn dropped(&mut self, replied: bool) {
+        self.dropped += 1;
+        self.dropped_before_first += u64::from(!replied);
+    }
 }
 
 impl SimResponder {
@@ -74,6 +88,19 @@ struct Delivery {
     at: Instant,
     order: u64,
     bytes: Vec<u8>,
+    /// What it is, for the ground truth of what arrived.
+    payload: Payload,
+}
+
+/// What a delivery carries, for the ground truth.
+#[derive(PartialEq, Eq, PartialOrd, Ord, Clone, Copy)]
+enum Payload {
+    /// HEARTBEAT, RADIO_STATUS, a reply's first copy on time.
+    Plain,
+    /// A reply's first copy, spiked (responder index).
+    Spiked(usize),
+    /// A reply's extra copy (responder index).
+    Duplicate(usize),
 }
 
 /// Queued deliveries are capped so an absurd rate x delay cannot grow
@@ -117,6 +144,7 @@ impl SimLink {
                     packet_seq: 0,
                     next_heartbeat: now,
                     truth: SimTruth::default(),
+                    replied: false,
                 }
             })
             .collect();
@@ -168,11 +196,20 @@ impl SimLink {
             .saturating_add(drift)
     }
 
-    /// True while the `outage=` window is on.
+    /// True while an `outage=` window is on (`outage_every=` repeats it).
     fn in_outage(&self, now: Instant) -> bool {
         self.params.outage.is_some_and(|(start, length)| {
-            let t = now.saturating_duration_since(self.started);
-            t >= start && t < start + length
+            let Some(t) = now
+                .saturating_duration_since(self.started)
+                .checked_sub(start)
+            else {
+                return false;
+            };
+            let into = match self.params.outage_every {
+                Some(every) => Duration::from_nanos((t.as_nanos() % every.as_nanos()) as u64),
+                None => t,
+            };
+            into < length
         })
     }
 
@@ -180,13 +217,14 @@ impl SimLink {
         p > 0.0 && self.rng.gen::<f64>() < p
     }
 
-    fn enqueue(&mut self, at: Instant, bytes: Vec<u8>) {
+    fn enqueue(&mut self, at: Instant, bytes: Vec<u8>, payload: Payload) {
         if self.queue.len() < MAX_QUEUED {
             self.order += 1;
             self.queue.push(Reverse(Delivery {
                 at,
                 order: self.order,
                 bytes,
+                payload,
             }));
         }
     }
@@ -211,7 +249,7 @@ impl SimLink {
                     },
                 );
                 let at = sent + self.params.delay;
-                self.enqueue(at, bytes);
+                self.enqueue(at, bytes, Payload::Plain);
             }
         }
     }
@@ -337,7 +375,7 @@ impl SimLink {
                 },
             );
             // The radio is the near end: no link delay.
-            self.enqueue(sent, bytes);
+            self.enqueue(sent, bytes, Payload::Plain);
         }
     }
 }
@@ -355,11 +393,10 @@ impl Transport for SimLink {
             for request in &requests {
                 for i in 0..self.responders.len() {
                     if self.responders[i].core.answer(&request.frame, 0).is_some() {
-                        let truth = &mut self.responders[i].truth;
-                        truth.answered += 1;
-                        truth.dropped += 1;
-                        truth.overflowed += 1;
-                        truth.dropped_before_first += u64::from(truth.delivered == 0);
+                        let r = &mut self.responders[i];
+                        r.truth.answered += 1;
+                        r.truth.dropped(r.replied);
+                        r.truth.overflowed += 1;
                     }
                 }
             }
@@ -373,17 +410,15 @@ impl Transport for SimLink {
                 };
                 self.responders[i].truth.answered += 1;
                 if self.in_outage(now) {
-                    let truth = &mut self.responders[i].truth;
-                    truth.dropped += 1;
-                    truth.outage += 1;
-                    truth.dropped_before_first += u64::from(truth.delivered == 0);
+                    let r = &mut self.responders[i];
+                    r.truth.dropped(r.replied);
+                    r.truth.outage += 1;
                     continue;
                 }
                 // Loss is drawn once per exchange: request or reply leg.
                 if self.chance(self.params.loss) {
-                    let truth = &mut self.responders[i].truth;
-                    truth.dropped += 1;
-                    truth.dropped_before_first += u64::from(truth.delivered == 0);
+                    let r = &mut self.responders[i];
+                    r.truth.dropped(r.replied);
                     continue;
                 }
                 let up = self.one_way();
@@ -400,31 +435,31 @@ impl Transport for SimLink {
                 let mut out = Vec::new();
                 frame::encode(&mut out, request.frame.version, header, &reply);
                 let Some(reply_done) = self.downlink(sent_done, up, out.len()) else {
-                    let truth = &mut self.responders[i].truth;
-                    truth.dropped += 1;
-                    truth.overflowed += 1;
-                    truth.dropped_before_first += u64::from(truth.delivered == 0);
+                    let r = &mut self.responders[i];
+                    r.truth.dropped(r.replied);
+                    r.truth.overflowed += 1;
                     continue;
                 };
+                self.responders[i].replied = true;
                 let mut at = reply_done + self.one_way();
                 // Drawn only when asked for, so seeds keep their faults.
-                if self.chance(self.params.spike) {
-                    let truth = &mut self.responders[i].truth;
-                    truth.spiked += 1;
-                    truth.spiked_before_first += u64::from(truth.delivered == 0);
+                let payload = if self.chance(self.params.spike) {
+                    self.responders[i].truth.spiked += 1;
                     at += self.params.spike_delay;
+                    Payload::Spiked(i)
                 } else {
                     self.responders[i].truth.delivered += 1;
-                }
+                    Payload::Plain
+                };
                 if self.chance(self.params.reorder) {
                     at += self.params.hold;
                 }
                 if self.chance(self.params.dup) {
                     self.responders[i].truth.duplicated += 1;
                     let again = at + self.one_way();
-                    self.enqueue(again, out.clone());
+                    self.enqueue(again, out.clone(), Payload::Duplicate(i));
                 }
-                self.enqueue(at, out);
+                self.enqueue(at, out, payload);
             }
         }
         self.scratch = requests;
@@ -453,6 +488,11 @@ impl Transport for SimLink {
             let before = out.len();
             while self.queue.peek().is_some_and(|d| d.0.at <= now) {
                 let Reverse(d) = self.queue.pop().expect("peeked");
+                match d.payload {
+                    Payload::Plain => {}
+                    Payload::Spiked(i) => self.responders[i].truth.spiked_arrived += 1,
+                    Payload::Duplicate(i) => self.responders[i].truth.duplicates_arrived += 1,
+                }
                 // Stamped with the simulated arrival time: the RTT is
                 // exactly the simulated delay, free of scheduler noise.
                 push_datagram(&d.bytes, d.at, 0, &mut self.stats, out);

@@ -6,7 +6,7 @@ use std::time::Duration;
 
 use super::radio::{AirParams, DEFAULT_TDM_ROUND};
 use crate::frame::SysComp;
-use crate::units::{parse_duration_up_to, parse_percent};
+use crate::units::{parse_duration, parse_duration_up_to, parse_percent};
 
 /// The radio's transmit buffer when `buffer=` does not say.
 pub const DEFAULT_BUFFER_BYTES: u64 = 1024;
@@ -52,8 +52,11 @@ pub struct SimParams {
     /// wire.
     pub air: Option<AirParams>,
     /// A link outage: from `start` after the link opened, for `length`,
-    /// every request and reply is lost.
+    /// every request and reply is lost...
     pub outage: Option<(Duration, Duration)>,
+    /// ...and again every `outage_every` after that (weeks of simulated
+    /// monitoring with an outage every few hours).
+    pub outage_every: Option<Duration>,
     /// Share of replies hit by a delay spike of `spike_delay` extra.
     pub spike: f64,
     pub spike_delay: Duration,
@@ -82,6 +85,7 @@ impl Default for SimParams {
             buffer: DEFAULT_BUFFER_BYTES,
             air: None,
             outage: None,
+            outage_every: None,
             spike: 0.0,
             spike_delay: Duration::from_millis(500),
         }
@@ -92,8 +96,8 @@ impl Default for SimParams {
 pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURATION, \
 jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
 ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
-buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, spike=PCT, \
-spike_delay=DURATION";
+buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, \
+outage_every=DURATION, spike=PCT, spike_delay=DURATION";
 
 /// `64000`, `64k`, `1.5M`: bits per second.
 fn bit_rate(key: &str, value: &str) -> Result<u32, String> {
@@ -241,6 +245,10 @@ impl SimParams {
                     })?;
                     p.outage = Some((duration(key, start)?, duration(key, length)?));
                 }
+                "outage_every" => {
+                    p.outage_every =
+                        Some(parse_duration(value).map_err(|e| format!("{key}={value}: {e}"))?)
+                }
                 "spike" => p.spike = percent(key, value)?,
                 "spike_delay" => p.spike_delay = duration(key, value)?,
                 _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
@@ -276,6 +284,17 @@ impl SimParams {
         };
         if p.baud.is_none() && p.buffer != DEFAULT_BUFFER_BYTES {
             return Err("buffer= needs baud=N: only a serial radio link has a buffer".into());
+        }
+        match (p.outage, p.outage_every) {
+            (None, Some(_)) => return Err("outage_every needs outage=START+LENGTH".into()),
+            (Some((_, length)), Some(every)) if every <= length => {
+                return Err(format!(
+                    "outage_every={}: must be longer than the outage ({})",
+                    humantime::format_duration(every),
+                    humantime::format_duration(length)
+                ))
+            }
+            _ => {}
         }
         // Responders are numbered by sysid; the last one must still fit.
         if usize::from(p.first_sysid) + usize::from(p.responders) - 1 > 255 * 255 {
@@ -344,6 +363,9 @@ impl fmt::Display for SimParams {
                 humantime::format_duration(length)
             )?;
         }
+        if let Some(every) = self.outage_every {
+            write!(f, "&outage_every={}", humantime::format_duration(every))?;
+        }
         if self.spike > 0.0 {
             write!(
                 f,
@@ -396,6 +418,9 @@ mod tests {
             SimParams::parse(&p.to_string()[4..]).unwrap().outage,
             p.outage
         );
+        let p = SimParams::parse("?outage=30m+45s&outage_every=6h").unwrap();
+        assert_eq!(p.outage_every, Some(Duration::from_secs(6 * 3600)));
+        assert!(p.to_string().ends_with("&outage=30m+45s&outage_every=6h"));
     }
 
     #[test]
@@ -404,6 +429,9 @@ mod tests {
             ("?loss=120%", "percentage"),
             ("?outage=5s", "START+LENGTH"),
             ("?outage=5s+2h", "at most 1h"),
+            ("?outage_every=6h", "needs outage"),
+            ("?outage=1h+5s&outage_every=5s", "longer than the outage"),
+            ("?outage=1h+5s&outage_every=400d", "at most 365 days"),
             ("?spike=-1", "percentage"),
             ("?responders=0", "1 to 1000"),
             ("?delay=soon", "delay=soon"),

@@ -409,3 +409,16 @@ pub fn text_counts(stdout: &str, responder: &str) -> Option<TextCounts> {
     }
     Some(c)
 }
+
+/// One figure of the simulated link's ground truth for `responder`, from
+/// the `sim truth 1/1: answered=.. dropped=..` line a `-v` run logs.
+pub fn sim_truth(stderr: &str, responder: &str, key: &str) -> u64 {
+    let line = stderr
+        .lines()
+        .find(|l| l.contains(&format!("sim truth {responder}:")))
+        .unwrap_or_else(|| panic!("no sim truth for {responder} in {stderr}"));
+    line.split_whitespace()
+        .find_map(|p| p.strip_prefix(&format!("{key}=")))
+        .and_then(|v| v.trim_matches(|c: char| !c.is_ascii_digit()).parse().ok())
+        .unwrap_or_else(|| panic!("no {key} in {line}"))
+}
