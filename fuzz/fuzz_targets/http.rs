@@ -56,6 +56,7 @@ fn exporter() -> PrometheusExporter {
         timeout: Duration::from_secs(1),
         count: None,
         command: None,
+        sweep: None,
     });
     for seq in 0..3u32 {
         let _ = link.event(&Event::Match(MatchEvent::Reply {
