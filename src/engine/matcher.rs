@@ -167,6 +167,24 @@ impl Responder {
             .is_some_and(|word| word & (1 << (idx % 64)) != 0)
     }
 
+    /// A request in its window decided without its answer: sent, lost.
+    fn charge_lost(
+        &mut self,
+        seq: u32,
+        sent_at: Nanos,
+        at: Nanos,
+        out: &mut impl FnMut(MatchEvent),
+    ) {
+        self.counts.sent += 1;
+        self.counts.lost += 1;
+        out(MatchEvent::Lost {
+            responder: self.id,
+            seq,
+            sent_at,
+            at,
+        });
+    }
+
     fn set_answered(&mut self, idx: usize, answered: bool) {
         if let Some(word) = self.answered.get_mut(idx / 64) {
             let bit = 1 << (idx % 64);
@@ -303,15 +321,10 @@ impl Matcher {
         let seq = self.seq_of(n);
         let sent_at = self.slots[idx].sent_at;
         for r in self.responders.iter_mut().filter(|r| r.in_window(n)) {
-            r.counts.sent += 1;
             if !r.has_answered(idx) {
-                r.counts.lost += 1;
-                out(MatchEvent::Lost {
-                    responder: r.id,
-                    seq,
-                    sent_at,
-                    at,
-                });
+                r.charge_lost(seq, sent_at, at, out);
+            } else {
+                r.counts.sent += 1;
             }
         }
     }
@@ -446,15 +459,7 @@ impl Matcher {
         let charged_from = r.window_start.unwrap_or(u64::MAX).min(self.next_expiry);
         for m in n..charged_from {
             let (seq, sent_at) = (self.seq_of(m), self.slots[self.idx(m)].sent_at);
-            let r = &mut self.responders[ri];
-            r.counts.sent += 1;
-            r.counts.lost += 1;
-            out(MatchEvent::Lost {
-                responder: r.id,
-                seq,
-                sent_at,
-                at,
-            });
+            self.responders[ri].charge_lost(seq, sent_at, at, out);
         }
         self.responders[ri].window_start = Some(n);
     }

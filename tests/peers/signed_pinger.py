@@ -11,22 +11,12 @@ Prints one JSON line: requests and replays sent, and the replies seen per
 seq (each checked with pymavlink's signature check).
 """
 import argparse
-import hashlib
 import json
 import os
 import sys
 import time
 
-
-def secret(text):
-    """64 hex characters are the key; anything else is a passphrase hashed
-    as MAVProxy's `signing setup` does."""
-    if len(text) == 64:
-        try:
-            return bytes.fromhex(text)
-        except ValueError:
-            pass
-    return hashlib.sha256(text.encode()).digest()
+from signed_peer import secret  # the key as signed_peer.py reads it
 
 
 def main():
