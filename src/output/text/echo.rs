@@ -495,9 +495,9 @@ pub(super) fn write_summary(
     if let Some(p) = &s.schedule {
         writeln!(
             out,
-            "schedule: {:.1}/s achieved of {:.1}/s, send lateness p50/p99/max = {}/{}/{} ms; {}",
-            p.achieved_rate_hz,
-            p.requested_rate_hz,
+            "schedule: {}/s achieved of {}/s, send lateness p50/p99/max = {}/{}/{} ms; {}",
+            per_second(p.achieved_rate_hz),
+            per_second(p.requested_rate_hz),
             ms_us(p.lateness_p50_us),
             ms_us(p.lateness_p99_us),
             ms_us(p.lateness_max_us),
@@ -514,11 +514,31 @@ pub(super) fn write_summary(
     Ok(())
 }
 
+/// A rate with one decimal, or three significant digits below 0.1/s (a
+/// PING every 30 s is 0.0333/s, not "0.0/s").
+fn per_second(hz: f64) -> String {
+    if hz >= 0.1 || hz <= 0.0 || !hz.is_finite() {
+        format!("{hz:.1}")
+    } else {
+        let decimals = (-hz.log10()).ceil() as usize + 2;
+        format!("{hz:.decimals$}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::frame::SysComp;
     use crate::output::Observer;
+
+    #[test]
+    fn slow_rates_keep_three_significant_digits() {
+        assert_eq!(per_second(5.0), "5.0");
+        assert_eq!(per_second(0.1), "0.1");
+        assert_eq!(per_second(1.0 / 30.0), "0.0333");
+        assert_eq!(per_second(1.0 / 3600.0), "0.000278");
+        assert_eq!(per_second(0.0), "0.0");
+    }
 
     fn reply(seq: u32, at: Nanos) -> Event<'static> {
         Event::Match(MatchEvent::Reply {
