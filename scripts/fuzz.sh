@@ -7,9 +7,10 @@
 # the stable one with RUSTC_BOOTSTRAP=1 (set here when no nightly exists).
 # The committed seeds (fuzz/seeds/<target>: real v1, v2 and signed frames
 # made by pymavlink, fuzz/seed_corpus.py; connection strings and requests
-# written by hand; the minimised corpora of the long runs) are read only;
-# what the fuzzer learns goes to fuzz/corpus/<target> (ignored by git). A
-# crash leaves its input in fuzz/artifacts/<target> and makes this script
+# written by hand) are read only. What the fuzzer learns goes to
+# fuzz/corpus/<target> (ignored by git), which starts from the minimised
+# corpus of the 30-minute runs (fuzz/corpora/<target>.tar.gz) when empty.
+# A crash leaves its input in fuzz/artifacts/<target> and makes this script
 # exit non-zero.
 set -euo pipefail
 cd "$(dirname "$0")/../fuzz"
@@ -28,6 +29,9 @@ fi
 
 for target in "${TARGETS[@]}"; do
   mkdir -p "corpus/$target"
+  if [ -f "corpora/$target.tar.gz" ] && [ -z "$(ls -A "corpus/$target")" ]; then
+    tar -xzf "corpora/$target.tar.gz" -C "corpus/$target"
+  fi
   echo "== $target: ${SECONDS_PER_TARGET}s"
   set +e
   "${CARGO[@]}" fuzz run -O "$target" "corpus/$target" "seeds/$target" -- \

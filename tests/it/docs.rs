@@ -117,6 +117,7 @@ fn the_readme_is_short_and_lists_every_page() {
         "## Habits from ping, fping and irtt",
         "## For scripts and CI",
         "## Watching and monitoring",
+        "## Figures measured here",
         "## Completions and man pages",
         "## License",
     ];
