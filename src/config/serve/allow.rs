@@ -170,8 +170,12 @@ mod tests {
                 [c, rest @ ..] => text.first() == Some(c) && slow(rest, &text[1..]),
             }
         }
-        let patterns = ["a*b", "**b", "*.*", "a**", "*", "**", "*:**:*", "a*.*b", "***", "****.*"];
-        let texts = ["", "ab", "a.b", "axxb", "a:b.c", "b", "a..b", ":.", "aab.b", "x.y:z"];
+        let patterns = [
+            "a*b", "**b", "*.*", "a**", "*", "**", "*:**:*", "a*.*b", "***", "****.*",
+        ];
+        let texts = [
+            "", "ab", "a.b", "axxb", "a:b.c", "b", "a..b", ":.", "aab.b", "x.y:z",
+        ];
         for p in patterns {
             for t in texts {
                 let (p, t) = (p.as_bytes(), t.as_bytes());
