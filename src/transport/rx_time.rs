@@ -120,8 +120,10 @@ impl<C: Clocks> RxTime<C> {
     }
 
     /// When a datagram just read, stamped `kernel` by the kernel (if it
-    /// was), reached the socket, on the monotonic clock.
-    pub fn arrival(&mut self, kernel: Option<TimeSpec>) -> Instant {
+    /// was), reached the socket, on the monotonic clock. (The socket reads
+    /// a batch with one [`RxTime::read`] and [`RxTime::arrival_at`] each.)
+    #[cfg(test)]
+    fn arrival(&mut self, kernel: Option<TimeSpec>) -> Instant {
         let reading = self.read();
         self.arrival_at(reading, kernel)
     }
@@ -132,8 +134,9 @@ impl<C: Clocks> RxTime<C> {
         Reading { now, wall }
     }
 
-    /// As [`RxTime::arrival`], for one datagram of the batch read before
-    /// `reading` was taken.
+    /// When a datagram of the batch read just before `reading` was taken,
+    /// stamped `kernel` by the kernel (if it was), reached the socket, on
+    /// the monotonic clock.
     pub fn arrival_at(&self, reading: Reading, kernel: Option<TimeSpec>) -> Instant {
         let Reading { now, wall } = reading;
         let Some(ts) = kernel else {

@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use super::{ms, ms_us, rate, write_histogram, write_signing, TextReporter};
+use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, TextReporter};
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport, RadioSummary};
@@ -514,31 +514,11 @@ pub(super) fn write_summary(
     Ok(())
 }
 
-/// A rate with one decimal, or three significant digits below 0.1/s (a
-/// PING every 30 s is 0.0333/s, not "0.0/s").
-fn per_second(hz: f64) -> String {
-    if hz >= 0.1 || hz <= 0.0 || !hz.is_finite() {
-        format!("{hz:.1}")
-    } else {
-        let decimals = (-hz.log10()).ceil() as usize + 2;
-        format!("{hz:.decimals$}")
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::frame::SysComp;
     use crate::output::Observer;
-
-    #[test]
-    fn slow_rates_keep_three_significant_digits() {
-        assert_eq!(per_second(5.0), "5.0");
-        assert_eq!(per_second(0.1), "0.1");
-        assert_eq!(per_second(1.0 / 30.0), "0.0333");
-        assert_eq!(per_second(1.0 / 3600.0), "0.000278");
-        assert_eq!(per_second(0.0), "0.0");
-    }
 
     fn reply(seq: u32, at: Nanos) -> Event<'static> {
         Event::Match(MatchEvent::Reply {
