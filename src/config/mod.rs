@@ -2,7 +2,7 @@
 //! and transports get from it are their own plain types ([`SessionConfig`],
 //! [`CommandSpec`], [`LinkSpec`], [`ResponderSettings`]).
 
-mod ping;
+mod measure;
 mod respond;
 mod serve;
 mod sweep;
@@ -16,7 +16,7 @@ use thiserror::Error;
 pub use serve::{ContinuousLink, Module, Pattern, ProbePlan, ServeConfig, ServeSettings};
 
 use crate::cli::{Format, SigningArgs};
-use crate::engine::commands::CommandSpec;
+use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::{SecretKey, SigningConfig};
 use crate::frame::SysComp;

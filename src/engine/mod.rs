@@ -5,15 +5,13 @@
 
 pub mod capacity;
 pub mod clock_offset;
-pub mod command;
-pub mod commands;
 pub mod diagnosis;
-pub mod echo;
 pub mod hint;
 pub mod link_io;
 pub mod load;
 pub mod matcher;
 pub mod observe;
+pub mod probe;
 pub mod radio;
 pub mod roster;
 pub mod schedule;
@@ -63,4 +61,15 @@ pub struct SessionConfig {
     pub signing: Option<SigningConfig>,
     /// `--sweep` or `--load`: the run goes in steps (echo probes only).
     pub sweep: Option<sweep::SweepConfig>,
+}
+
+/// The command probe's request and retry policy.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CommandSpec {
+    pub target: SysComp,
+    pub command: u16,
+    pub params: [f32; 7],
+    pub retry_interval: Duration,
+    /// Re-sends after the first transmission.
+    pub retries: u8,
 }

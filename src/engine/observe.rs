@@ -6,13 +6,13 @@ use std::io;
 use std::time::Duration;
 
 use super::clock_offset::ClockSummary;
-use super::commands::{CommandEvent, CommandSpec};
 use super::matcher::MatchEvent;
 use super::radio::RadioReport;
 use super::roster::Identity;
 use super::summary::Interim;
 use super::sweep::step::StepFigures;
 use super::sweep::SweepConfig;
+use super::CommandSpec;
 use super::Nanos;
 use crate::frame::SysComp;
 
@@ -105,4 +105,47 @@ impl Observer for Unobserved {
     fn event(&mut self, _: &Event<'_>) -> io::Result<()> {
         Ok(())
     }
+}
+
+/// What the command probe decided (its tracker is pure; the driver turns
+/// `Send` into a frame on the wire).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CommandEvent {
+    /// Put attempt `attempt` (1-based) of command `n` on the wire.
+    Send {
+        n: u64,
+        target: SysComp,
+        command: u16,
+        attempt: u32,
+    },
+    Skipped {
+        target: SysComp,
+        command: u16,
+        at: Nanos,
+    },
+    Acked {
+        n: u64,
+        target: SysComp,
+        from: SysComp,
+        command: u16,
+        result: u8,
+        attempts: u32,
+        time_to_ack: Nanos,
+    },
+    Failed {
+        n: u64,
+        target: SysComp,
+        command: u16,
+        attempts: u32,
+    },
+    LateAck {
+        from: SysComp,
+        command: u16,
+        result: u8,
+    },
+    DuplicateAck {
+        from: SysComp,
+        command: u16,
+        result: u8,
+    },
 }

@@ -248,38 +248,6 @@ impl LinkSummary {
     }
 }
 
-pub fn command_target_summaries(
-    tracker: &super::commands::CommandTracker,
-    roster: &Roster,
-) -> Vec<CommandTargetSummary> {
-    tracker
-        .targets()
-        .iter()
-        .map(|t| CommandTargetSummary {
-            id: t.id,
-            commands: t.commands,
-            acknowledged: t.acknowledged,
-            failed: t.failed,
-            skipped: t.skipped,
-            late_acks: t.late_acks,
-            duplicate_acks: t.duplicate_acks,
-            attempts: t.by_attempts.clone(),
-            time_to_ack: t.time_to_ack.summary(),
-            histogram: t.time_to_ack.distribution(HISTOGRAM_ROWS),
-            results: t
-                .results
-                .iter()
-                .map(|(&result, &count)| AckResult {
-                    result,
-                    name: crate::frame::codec::result_name(result),
-                    count,
-                })
-                .collect(),
-            identity: roster.get(t.id).cloned(),
-        })
-        .collect()
-}
-
 #[cfg(test)]
 impl Summary {
     /// A run of `requests` PINGs on `link` with nothing in it, for tests

@@ -5,8 +5,6 @@
 //! Every answer goes back only on the path its request came from
 //! (`send_to`): one reply per request, never amplified to other peers.
 
-pub mod core;
-
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 use std::time::Duration;
@@ -17,7 +15,7 @@ use serde::Serialize;
 use tokio::sync::Notify;
 use tokio::time::{sleep_until, Instant};
 
-use self::core::{ResponderCore, ResponderCounts};
+use crate::answering::{ResponderCore, ResponderCounts};
 use crate::engine::link_io::{admitted, Clock, Heartbeat, Sender};
 use crate::frame::signing::{Gate, SigningConfig, SigningCounts};
 use crate::frame::{SysComp, Version};

@@ -1,12 +1,12 @@
 //! From parsed arguments to how the run ended: validation, logging, the
-//! runtime, signals, then a measurement ([`ping`]), a responder
+//! runtime, signals, then a measurement ([`measure`]), a responder
 //! ([`respond`]) or the Prometheus exporter ([`serve`]). `main` turns the
 //! [`Ending`] into the exit code.
 
 mod exports;
 pub mod generate;
 mod measure;
-mod ping;
+mod one_link;
 mod respond;
 mod serve;
 mod signals;
@@ -194,7 +194,7 @@ pub fn main(cli: &Cli) -> Ending {
                 init_logging(config.verbose);
                 let paused = config.virtual_clock();
                 block_on(paused, |controls| async move {
-                    ping::run(&config, controls).await
+                    measure::run(&config, controls).await
                 })
             }
             Err(e) => {

@@ -8,13 +8,13 @@ use std::process::Stdio;
 use std::time::Duration;
 
 use crate::common::*;
-use mavping::engine::echo;
 use mavping::engine::observe::Unobserved;
+use mavping::engine::probe::echo;
+use mavping::engine::probe::ping::PingProbe;
 use mavping::engine::session::Controls;
 use mavping::engine::summary::LinkSummary;
 use mavping::engine::SessionConfig;
 use mavping::frame::{SysComp, Version};
-use mavping::probe::ping::PingProbe;
 use mavping::transport::sim::{SimLink, SimParams};
 
 #[test]

@@ -14,7 +14,7 @@ use super::{
     ContinuousLink, Module, MAX_PROBE_TIMEOUT, MIN_PROBE_INTERVAL,
 };
 use crate::cli::{parse_expected, parse_rtt_limit, ProbeKind, SigningArgs};
-use crate::config::ping::{probe_of, ProbeChoice};
+use crate::config::measure::{probe_of, ProbeChoice};
 use crate::config::{
     invalid, signing, validate_baud, validate_ids, ConfigError, Keys, LinkConfig, MAX_TIMEOUT,
 };

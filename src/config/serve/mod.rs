@@ -15,7 +15,7 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::ping::pending_capacity;
+use super::measure::pending_capacity;
 use super::{invalid, validate_listen, ConfigError, LinkConfig, Probe};
 use crate::cli::{ProbeKind, ServeArgs};
 use crate::engine::SessionConfig;

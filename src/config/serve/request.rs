@@ -11,7 +11,7 @@ use super::{
     Pattern, ProbePlan, ServeSettings, DEFAULT_MODULE, MAX_PROBE_TIMEOUT,
 };
 use crate::cli::ProbeKind;
-use crate::config::ping::{probe_of, ProbeChoice};
+use crate::config::measure::{probe_of, ProbeChoice};
 use crate::config::{ConfigError, Keys, LinkConfig};
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;

@@ -18,12 +18,13 @@ use super::plan::Planner;
 use super::step::{StepFigures, StepTally};
 use super::verdict::{self, Ending, SweepSummary};
 use super::{PlanKind, SweepConfig};
-use crate::engine::echo::EchoDriver;
 use crate::engine::hint::HintCode;
 use crate::engine::link_io::{Clock, Sender};
 use crate::engine::load::Load;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{Event, Observer, StartInfo};
+use crate::engine::probe::echo::EchoDriver;
+use crate::engine::probe::EchoProbe;
 use crate::engine::radio::{RadioReport, Radios};
 use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
@@ -31,7 +32,6 @@ use crate::engine::session::{self, Controls, Driver, Ended, Outcome};
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{Frame, SysComp};
-use crate::probe::EchoProbe;
 use crate::transport::{LinkError, PathId, Transport};
 
 pub struct SweepDriver<P> {

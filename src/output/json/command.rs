@@ -5,8 +5,8 @@ use std::io;
 use serde_json::{json, Value};
 
 use super::{us, SCHEMA_VERSION};
-use crate::engine::commands::{CommandEvent, CommandSpec};
 use crate::engine::summary::CommandSummary;
+use crate::engine::{observe::CommandEvent, CommandSpec};
 use crate::frame::codec;
 use crate::verdict::Verdict;
 

@@ -648,7 +648,7 @@ mod tests {
 
     #[test]
     fn a_command_target_counts_as_a_responder() {
-        use crate::engine::commands::CommandEvent;
+        use crate::engine::observe::CommandEvent;
         let mut m = Metrics::default();
         m.on_start(&StartInfo {
             probe: "command",

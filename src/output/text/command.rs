@@ -3,9 +3,9 @@
 use std::io::{self, Write};
 
 use super::{ms, ms_us, rate, write_histogram, write_signing, TextReporter};
-use crate::engine::commands::{CommandEvent, CommandSpec};
 use crate::engine::stats::RttSummary;
 use crate::engine::summary::CommandSummary;
+use crate::engine::{observe::CommandEvent, CommandSpec};
 use crate::frame::codec;
 use crate::output::StartInfo;
 

@@ -15,7 +15,7 @@ use tokio::task::JoinHandle;
 use crate::config::ContinuousLink;
 use crate::output::prometheus::{Metrics, SharedMetrics};
 use crate::output::WallClock;
-use crate::run::measure::measure;
+use crate::run::one_link::measure;
 use crate::stderr;
 use crate::transport::Link;
 

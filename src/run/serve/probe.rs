@@ -16,7 +16,7 @@ use crate::engine::summary::LinkSummary;
 use crate::output::http::Reply;
 use crate::output::prometheus::{render_probe, Metrics, ProbeResult};
 use crate::output::{Reporter, WallClock};
-use crate::run::measure::measure;
+use crate::run::one_link::measure;
 use crate::transport::Link;
 use crate::verdict;
 

@@ -15,8 +15,8 @@ use rand::{Rng, SeedableRng};
 use tokio::time::{sleep_until, Instant};
 
 use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
+use crate::answering::ResponderCore;
 use crate::frame::{self, Header, Msg, ScanStats, SysComp, Version};
-use crate::responder::core::ResponderCore;
 use radio::RadioPair;
 
 mod params;

@@ -17,65 +17,15 @@
 //!   decided is a **duplicate**. Neither changes the other counts.
 
 use std::collections::BTreeMap;
-use std::time::Duration;
 
-use super::stats::RttStats;
-use super::Nanos;
+use crate::engine::observe::CommandEvent;
+use crate::engine::roster::Roster;
+use crate::engine::stats::RttStats;
+use crate::engine::summary::{AckResult, CommandTargetSummary, HISTOGRAM_ROWS};
+use crate::engine::Nanos;
 use crate::frame::SysComp;
 
 type Key = (SysComp, u16);
-
-/// The command probe's request and retry policy.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CommandSpec {
-    pub target: SysComp,
-    pub command: u16,
-    pub params: [f32; 7],
-    pub retry_interval: Duration,
-    /// Re-sends after the first transmission.
-    pub retries: u8,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CommandEvent {
-    /// Put attempt `attempt` (1-based) of command `n` on the wire.
-    Send {
-        n: u64,
-        target: SysComp,
-        command: u16,
-        attempt: u32,
-    },
-    Skipped {
-        target: SysComp,
-        command: u16,
-        at: Nanos,
-    },
-    Acked {
-        n: u64,
-        target: SysComp,
-        from: SysComp,
-        command: u16,
-        result: u8,
-        attempts: u32,
-        time_to_ack: Nanos,
-    },
-    Failed {
-        n: u64,
-        target: SysComp,
-        command: u16,
-        attempts: u32,
-    },
-    LateAck {
-        from: SysComp,
-        command: u16,
-        result: u8,
-    },
-    DuplicateAck {
-        from: SysComp,
-        command: u16,
-        result: u8,
-    },
-}
 
 #[derive(Debug, Clone, Copy)]
 struct Pending {
@@ -324,6 +274,37 @@ impl CommandTracker {
 
     pub fn unmatched_acks(&self) -> u64 {
         self.unmatched_acks
+    }
+}
+
+impl CommandTracker {
+    /// Each target's figures, for the summary.
+    pub fn summaries(&self, roster: &Roster) -> Vec<CommandTargetSummary> {
+        self.targets()
+            .iter()
+            .map(|t| CommandTargetSummary {
+                id: t.id,
+                commands: t.commands,
+                acknowledged: t.acknowledged,
+                failed: t.failed,
+                skipped: t.skipped,
+                late_acks: t.late_acks,
+                duplicate_acks: t.duplicate_acks,
+                attempts: t.by_attempts.clone(),
+                time_to_ack: t.time_to_ack.summary(),
+                histogram: t.time_to_ack.distribution(HISTOGRAM_ROWS),
+                results: t
+                    .results
+                    .iter()
+                    .map(|(&result, &count)| AckResult {
+                        result,
+                        name: crate::frame::codec::result_name(result),
+                        count,
+                    })
+                    .collect(),
+                identity: roster.get(t.id).cloned(),
+            })
+            .collect()
     }
 }
 

@@ -7,17 +7,19 @@
 
 use std::io;
 
-use super::stats::RttStats;
+use crate::engine::stats::RttStats;
 
-use super::commands::{CommandEvent, CommandSpec, CommandTracker};
-use super::link_io::{Clock, Sender};
-use super::observe::{tell_each, Event, Observer, StartInfo};
-use super::radio::Radios;
-use super::schedule::Schedule;
-use super::session::{self, Controls, Driver, Ended, Outcome};
-use super::summary::{command_target_summaries, CommandSummary, LinkSummary};
-use super::Nanos;
-use super::SessionConfig;
+use super::tracker::CommandTracker;
+use crate::engine::link_io::{Clock, Sender};
+use crate::engine::observe::CommandEvent;
+use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
+use crate::engine::radio::Radios;
+use crate::engine::schedule::Schedule;
+use crate::engine::session::{self, Controls, Driver, Ended, Outcome};
+use crate::engine::summary::{CommandSummary, LinkSummary};
+use crate::engine::CommandSpec;
+use crate::engine::Nanos;
+use crate::engine::SessionConfig;
 use crate::frame::{codec, Frame, Msg, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
 
@@ -154,7 +156,7 @@ impl Driver for CommandDriver {
             command_name: codec::command_name(self.spec.command),
             duration_s: ended.duration_s,
             in_flight: self.tracker.in_flight(),
-            targets: command_target_summaries(&self.tracker, &ended.roster),
+            targets: self.tracker.summaries(&ended.roster),
             unmatched_acks: self.tracker.unmatched_acks(),
             frames: ended.frames,
             interrupted: ended.interrupted,

@@ -10,7 +10,7 @@ use super::{
     LinkConfig, OutputConfig, Probe, MAX_RATE, MAX_TIMEOUT,
 };
 use crate::cli::{Format, PingArgs, ProbeKind};
-use crate::engine::commands::CommandSpec;
+use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
 use crate::frame::{codec, SysComp, Version};

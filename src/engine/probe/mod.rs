@@ -1,6 +1,14 @@
-//! Probes: what a request looks like and how to recognise its reply.
-//! The matcher never sees MAVLink; a probe turns frames into [`Lookup`]s.
+//! Kinds of measurement, one home each: what a request looks like, how its
+//! reply is recognised, and the [`Driver`](crate::engine::session::Driver)
+//! that runs it in the session loop. Echo probes (PING, TIMESYNC) share
+//! [`echo`]'s driver; the command probe has its own ([`command`]). The
+//! matcher never sees MAVLink; a probe turns frames into [`Lookup`]s.
+//!
+//! Probes build on the engine's pure parts and its session; nothing else
+//! in the engine names a probe.
 
+pub mod command;
+pub mod echo;
 pub mod ping;
 pub mod timesync;
 

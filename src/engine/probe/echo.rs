@@ -5,21 +5,21 @@ use std::collections::HashMap;
 use std::io;
 use std::time::Duration;
 
-use super::diagnosis::{diagnose, Observed};
-use super::hint::{Hint, HintCode};
-use super::link_io::{Clock, Sender};
-use super::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
-use super::observe::{tell_each, Event, Observer, StartInfo};
-use super::radio::{radio_hints, Radios};
-use super::roster::Roster;
-use super::schedule::Schedule;
-use super::session::{self, Controls, Driver, Ended, Outcome};
-use super::stats::RttStats;
-use super::summary::{responder_summaries, Interim, LinkSummary, ScheduleSummary, Summary};
-use super::Nanos;
-use super::SessionConfig;
+use super::{Classified, EchoProbe};
+use crate::engine::diagnosis::{diagnose, Observed};
+use crate::engine::hint::{Hint, HintCode};
+use crate::engine::link_io::{Clock, Sender};
+use crate::engine::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
+use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
+use crate::engine::radio::{radio_hints, Radios};
+use crate::engine::roster::Roster;
+use crate::engine::schedule::Schedule;
+use crate::engine::session::{self, Controls, Driver, Ended, Outcome};
+use crate::engine::stats::RttStats;
+use crate::engine::summary::{responder_summaries, Interim, LinkSummary, ScheduleSummary, Summary};
+use crate::engine::Nanos;
+use crate::engine::SessionConfig;
 use crate::frame::{Frame, SysComp};
-use crate::probe::{Classified, EchoProbe};
 use crate::transport::{LinkError, Outbox, PathId, To, Transport};
 
 /// Most requests sent back to back before the session reads the link.
@@ -88,7 +88,13 @@ impl<P: EchoProbe> EchoDriver<P> {
         }
     }
 
-    fn on_reply(&mut self, frame: &Frame, lookup: super::matcher::Lookup, path: PathId, at: Nanos) {
+    fn on_reply(
+        &mut self,
+        frame: &Frame,
+        lookup: crate::engine::matcher::Lookup,
+        path: PathId,
+        at: Nanos,
+    ) {
         // A reply naming a responder that answered from another peer of
         // this link (a spoofed id, or one system heard through two routers)
         // is counted, never measured.

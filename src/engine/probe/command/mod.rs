@@ -1,0 +1,6 @@
+//! The command probe: COMMAND_LONG sent until acknowledged. [`tracker`]
+//! is the pure bookkeeping (what is pending, re-sent, failed); [`driver`]
+//! joins it to the session.
+
+pub mod driver;
+pub mod tracker;

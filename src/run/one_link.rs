@@ -1,0 +1,74 @@
+//! One link's session, whatever the probe: the piece every run path
+//! shares (`mavping LINK...` and each link and probe of `mavping serve`).
+
+use crate::config::{LinkConfig, Probe};
+use crate::engine::observe::Observer;
+use crate::engine::probe::command::driver as command;
+use crate::engine::probe::echo;
+use crate::engine::probe::ping::PingProbe;
+use crate::engine::probe::timesync::TimesyncProbe;
+use crate::engine::probe::EchoProbe;
+use crate::engine::session::{Controls, Outcome};
+use crate::engine::{sweep, SessionConfig};
+use crate::output::WallClock;
+use crate::transport::{Link, LinkSpec};
+
+/// An echo probe's run, in steps when `--sweep` or `--load` asks.
+async fn echo_or_steps<P: EchoProbe>(
+    session: &SessionConfig,
+    link: &mut Link,
+    probe: P,
+    observer: &mut dyn Observer,
+    controls: &Controls,
+) -> Outcome {
+    match &session.sweep {
+        Some(steps) => sweep::driver::run(session, steps, link, probe, observer, controls).await,
+        None => echo::run(session, link, probe, observer, controls).await,
+    }
+}
+
+/// Runs `probe` on the opened `link` until the session ends; its outcome.
+pub async fn measure(
+    config: &LinkConfig,
+    mut link: Link,
+    probe: &Probe,
+    wall: WallClock,
+    observer: &mut dyn Observer,
+    controls: &Controls,
+) -> Outcome {
+    let session = &config.session;
+    let outcome = match probe {
+        Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,
+        Probe::Timesync { target } => {
+            // The simulated link has no wall clock: its responders count
+            // from its start, and so do we there (reproducible output).
+            let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
+            let probe = TimesyncProbe::new(*target, wall_clock);
+            echo_or_steps(session, &mut link, probe, observer, controls).await
+        }
+        Probe::Ping => {
+            let probe = PingProbe::new(wall.micros_since_epoch());
+            echo_or_steps(session, &mut link, probe, observer, controls).await
+        }
+    };
+    // The simulated link's ground truth, for soak scripts (`-v`).
+    if let Link::Sim(sim) = &link {
+        for (id, t) in sim.truth() {
+            tracing::info!(
+                link = %config.name,
+                "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
+                 duplicated={} duplicates_arrived={} outage={} spiked={} spiked_arrived={}",
+                t.answered,
+                t.dropped,
+                t.dropped_before_first,
+                t.delivered,
+                t.duplicated,
+                t.duplicates_arrived,
+                t.outage,
+                t.spiked,
+                t.spiked_arrived
+            );
+        }
+    }
+    outcome
+}
