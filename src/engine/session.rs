@@ -37,7 +37,7 @@ pub struct Controls {
 }
 
 /// How the run ended. The caller judges it and reports the summary.
-pub struct Outcome {
+pub struct Measurement {
     pub summary: LinkSummary,
     /// Each responder's RTT (or time-to-ACK) statistics, whose histograms
     /// (µs) the exports write.
@@ -47,7 +47,7 @@ pub struct Outcome {
 }
 
 /// What the loop knows at the end, for a driver's summary.
-pub struct Ended<'a> {
+pub struct SessionEnd<'a> {
     pub cfg: &'a SessionConfig,
     pub duration_s: f64,
     pub interrupted: bool,
@@ -93,7 +93,7 @@ pub trait Driver {
     /// Once every request is sent: nothing left worth waiting for.
     fn settled(&self) -> bool;
     /// The summary and histograms of the run.
-    fn finish(self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>);
+    fn finish(self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>);
     /// The figures so far, for an interim summary; `None` where the probe
     /// has none.
     fn interim(&self, _roster: &Roster, _at: Nanos) -> Option<Interim> {
@@ -195,19 +195,6 @@ impl Heard {
     }
 }
 
-/// Tells the observer the figures so far, if the probe has an interim.
-fn interim<D: Driver>(
-    driver: &D,
-    roster: &Roster,
-    at: Nanos,
-    observer: &mut dyn Observer,
-) -> io::Result<()> {
-    match driver.interim(roster, at) {
-        Some(figures) => observer.interim(&figures),
-        None => Ok(()),
-    }
-}
-
 /// Polls a future once: its result if it is ready now. Used on cancel-safe
 /// futures only (the stop and interim signals), between precise sleeps.
 fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
@@ -219,8 +206,10 @@ fn ready_now<F: std::future::Future>(f: F) -> Option<F::Output> {
     }
 }
 
-/// Why the loop stopped early.
-enum Stopped {
+/// Why the loop stopped.
+enum Stop {
+    /// The count was sent and settled, or the deadline came.
+    Done,
     Interrupted,
     LinkFailed(LinkError),
     OutputClosed,
@@ -228,209 +217,363 @@ enum Stopped {
     NoPeer,
 }
 
-/// Runs one session until it ends and returns what it measured.
-pub async fn run<T: Transport, D: Driver>(
-    cfg: &SessionConfig,
-    link: &mut T,
-    mut driver: D,
-    observer: &mut dyn Observer,
-    controls: &Controls,
-) -> Outcome {
-    let stop = &*controls.stop;
-    wait::tighten_timer_slack();
-    let mut waiter = Waiter::new(cfg.precise_pacing);
-    let clock = Clock::start();
-    driver.begin(clock.wall_at_zero());
-    let mut sender = Sender::new(
-        cfg.ours,
-        cfg.version,
-        cfg.signing.as_ref().map(SigningConfig::signer),
-    );
-    let mut heartbeat = Heartbeat::ground_station(cfg.heartbeat);
-    let mut heard = Heard {
-        roster: Roster::default(),
-        radios: Radios::default(),
-        gate: Gate::new(cfg.signing),
-    };
-    let mut schedule: Option<Schedule> = None;
-    let deadline_ns = cfg.deadline.map(|d| d.as_nanos() as Nanos);
-    let wait_ns = cfg.wait.map(|d| d.as_nanos() as Nanos);
-    let interim_ns = cfg.interim.map(|d| d.as_nanos() as Nanos);
-    let mut next_interim = interim_ns;
-    let mut inbound: Vec<Inbound> = Vec::new();
-    let mut told_waiting = false;
-    let mut last_flush: Nanos = 0;
-    let mut last_wake: Nanos = 0;
-    let mut last_yield: Nanos = 0;
-    let kernel_stamped = link.rx_clock() == RxClock::Kernel;
-    let mut output = observer.start(&driver.start_info(cfg));
+/// One turn of the loop: `Err` ends the session, for the reason it gives.
+type Turn = Result<(), Stop>;
 
-    let stopped: Option<Stopped> = 'run: loop {
-        if output.is_err() {
-            break Some(Stopped::OutputClosed);
+/// The session's own times, in session nanoseconds.
+struct Timers {
+    deadline: Option<Nanos>,
+    /// Until a peer is heard (listening links).
+    wait: Option<Nanos>,
+    interim_every: Option<Nanos>,
+    next_interim: Option<Nanos>,
+    last_flush: Nanos,
+    /// The last planned wake-up of a sleep-through.
+    last_wake: Nanos,
+    last_yield: Nanos,
+}
+
+impl Timers {
+    fn new(cfg: &SessionConfig) -> Self {
+        let ns = |d: Duration| d.as_nanos() as Nanos;
+        let interim_every = cfg.interim.map(ns);
+        Timers {
+            deadline: cfg.deadline.map(ns),
+            wait: cfg.wait.map(ns),
+            interim_every,
+            next_interim: interim_every,
+            last_flush: 0,
+            last_wake: 0,
+            last_yield: 0,
         }
-        let now = clock.now();
-        if deadline_ns.is_some_and(|d| now >= d) {
-            break None;
+    }
+
+    /// Whether an interim summary is due at `now`; if so, plans the next.
+    fn interim_due(&mut self, now: Nanos) -> bool {
+        if self.next_interim.is_none_or(|due| now < due) {
+            return false;
+        }
+        self.next_interim = self
+            .next_interim
+            .zip(self.interim_every)
+            .map(|(due, every)| due + every);
+        true
+    }
+}
+
+/// A running session: the loop's state, stepped by [`Session::turn`].
+struct Session<'a, T, D> {
+    cfg: &'a SessionConfig,
+    link: &'a mut T,
+    driver: D,
+    observer: &'a mut dyn Observer,
+    controls: &'a Controls,
+    clock: Clock,
+    waiter: Waiter,
+    sender: Sender,
+    heartbeat: Heartbeat,
+    heard: Heard,
+    /// Made once a peer is known.
+    schedule: Option<Schedule>,
+    timers: Timers,
+    told_waiting: bool,
+    /// The link dates what it receives in the kernel (UDP).
+    kernel_stamped: bool,
+    inbound: Vec<Inbound>,
+    /// The first error writing to the observer: once set, the run stops.
+    output: io::Result<()>,
+}
+
+impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
+    fn start(
+        cfg: &'a SessionConfig,
+        link: &'a mut T,
+        mut driver: D,
+        observer: &'a mut dyn Observer,
+        controls: &'a Controls,
+    ) -> Self {
+        wait::tighten_timer_slack();
+        let clock = Clock::start();
+        driver.begin(clock.wall_at_zero());
+        let output = observer.start(&driver.start_info(cfg));
+        let kernel_stamped = link.rx_clock() == RxClock::Kernel;
+        Session {
+            cfg,
+            link,
+            observer,
+            controls,
+            waiter: Waiter::new(cfg.precise_pacing),
+            sender: Sender::new(
+                cfg.ours,
+                cfg.version,
+                cfg.signing.as_ref().map(SigningConfig::signer),
+            ),
+            heartbeat: Heartbeat::ground_station(cfg.heartbeat),
+            heard: Heard {
+                roster: Roster::default(),
+                radios: Radios::default(),
+                gate: Gate::new(cfg.signing),
+            },
+            schedule: None,
+            timers: Timers::new(cfg),
+            told_waiting: false,
+            kernel_stamped,
+            inbound: Vec::new(),
+            output,
+            clock,
+            driver,
+        }
+    }
+
+    /// Keeps the first write error.
+    fn told(&mut self, written: io::Result<()>) {
+        if self.output.is_ok() {
+            self.output = written;
+        }
+    }
+
+    fn output_open(&self) -> Turn {
+        match self.output {
+            Ok(()) => Ok(()),
+            Err(_) => Err(Stop::OutputClosed),
+        }
+    }
+
+    /// Sends what is due, decides what is overdue, then waits for the
+    /// next thing to do.
+    async fn turn(&mut self) -> Turn {
+        self.output_open()?;
+        let now = self.clock.now();
+        if self.timers.deadline.is_some_and(|d| now >= d) {
+            return Err(Stop::Done);
         }
         // Our HEARTBEAT goes first, so a stack that discovers systems by
         // their messages (MAVSDK) knows us before our first request.
-        if let Err(e) = heartbeat.send_if_due(link, &mut sender, now).await {
-            break Some(Stopped::LinkFailed(e));
+        let beat = self.heartbeat.send_if_due(self.link, &mut self.sender, now);
+        beat.await.map_err(Stop::LinkFailed)?;
+        self.schedule_once_a_peer_is_known(now)?;
+        self.send_due().await?;
+        self.decide();
+        self.output_open()?;
+        if self.schedule.as_ref().is_some_and(Schedule::finished) && self.driver.settled() {
+            return Err(Stop::Done);
         }
-        if schedule.is_none() {
-            if link.has_peers() {
-                let interval = cfg.interval.as_nanos() as Nanos;
-                schedule = Some(Schedule::new(now, interval, cfg.count));
-            } else if wait_ns.is_some_and(|w| now >= w) {
-                break Some(Stopped::NoPeer);
-            } else if !told_waiting {
-                told_waiting = true;
-                output = observer.event(&Event::WaitingForPeer);
-            }
+        let next_send = self.schedule.as_ref().and_then(Schedule::next_due);
+        match next_send.filter(|&due| self.sleeps_through_to(due)) {
+            Some(due) => self.sleep_through(due).await,
+            None => self.wait(next_send).await,
         }
-        if let Some(s) = schedule.as_mut() {
-            if let Err(e) = driver.send_due(s, link, &mut sender, &clock).await {
-                break Some(Stopped::LinkFailed(e));
-            }
-        }
-        driver.expire(clock.now());
-        output = output.and(driver.report(&mut heard.radios, observer));
-        let now = clock.now();
-        if next_interim.is_some_and(|due| now >= due) {
-            next_interim = next_interim.zip(interim_ns).map(|(due, every)| due + every);
-            output = output.and(interim(&driver, &heard.roster, now, observer));
-        }
-        if output.is_err() {
-            continue;
-        }
-        if schedule.as_ref().is_some_and(|s| s.finished()) && driver.settled() {
-            break None;
-        }
+    }
 
-        let next_send = schedule.as_ref().and_then(|s| s.next_due());
-        let now = clock.now();
-        let close = next_send.filter(|&due| {
-            cfg.precise_pacing && kernel_stamped && due.saturating_sub(now) <= SLEEP_THROUGH_NS
-        });
-        if let Some(due) = close {
-            // Spaced from the last planned wake-up, not the actual one, so
-            // a late wake-up does not push the next one later.
-            let wake_at = due.max(last_wake.saturating_add(MIN_WAKE_GAP_NS));
-            loop {
-                if ready_now(stop.notified()).is_some() {
-                    break 'run Some(Stopped::Interrupted);
-                }
-                if ready_now(controls.interim.notified()).is_some() {
-                    output = output.and(interim(&driver, &heard.roster, clock.now(), observer));
-                }
-                if clock.now() < wake_at {
-                    wait::block_until(&clock, wake_at);
-                }
-                match link.read_waiting(&mut inbound) {
-                    Err(e) => break 'run Some(Stopped::LinkFailed(e)),
-                    Ok(true) => {
-                        let taken = heard.take(&clock, &mut inbound, &mut driver, observer);
-                        output = output.and(taken);
-                    }
-                    Ok(false) => {}
-                }
-                let now = clock.now();
-                if now.saturating_sub(last_flush) > FLUSH_EVERY_NS {
-                    last_flush = now;
-                    output = output.and(observer.flush());
-                }
-                if output.is_err() {
-                    continue 'run;
-                }
-                // The runtime runs nothing while the thread sleeps here:
-                // let it handle signals now and then.
-                if now.saturating_sub(last_yield) > YIELD_EVERY_NS {
-                    last_yield = now;
-                    tokio::task::yield_now().await;
-                }
-                if now >= wake_at {
-                    break;
-                }
-            }
-            last_wake = wake_at;
-            continue;
+    /// A listening link has no schedule until it hears a peer.
+    fn schedule_once_a_peer_is_known(&mut self, now: Nanos) -> Turn {
+        if self.schedule.is_some() {
+            return Ok(());
         }
+        if self.link.has_peers() {
+            let interval = self.cfg.interval.as_nanos() as Nanos;
+            self.schedule = Some(Schedule::new(now, interval, self.cfg.count));
+        } else if self.timers.wait.is_some_and(|w| now >= w) {
+            return Err(Stop::NoPeer);
+        } else if !self.told_waiting {
+            self.told_waiting = true;
+            let told = self.observer.event(&Event::WaitingForPeer);
+            self.told(told);
+        }
+        Ok(())
+    }
 
+    async fn send_due(&mut self) -> Turn {
+        let Some(schedule) = self.schedule.as_mut() else {
+            return Ok(());
+        };
+        let sent = self
+            .driver
+            .send_due(schedule, self.link, &mut self.sender, &self.clock);
+        sent.await.map_err(Stop::LinkFailed)
+    }
+
+    /// Decides what is overdue and reports it, and an interim summary when
+    /// one is due.
+    fn decide(&mut self) {
+        self.driver.expire(self.clock.now());
+        let reported = self.driver.report(&mut self.heard.radios, self.observer);
+        self.told(reported);
+        if self.timers.interim_due(self.clock.now()) {
+            self.interim();
+        }
+    }
+
+    /// Tells the observer the figures so far, if the probe has an interim.
+    fn interim(&mut self) {
+        let told = match self.driver.interim(&self.heard.roster, self.clock.now()) {
+            Some(figures) => self.observer.interim(&figures),
+            None => Ok(()),
+        };
+        self.told(told);
+    }
+
+    /// Takes in what was received and reports what it decided.
+    fn take_inbound(&mut self) {
+        let taken = self.heard.take(
+            &self.clock,
+            &mut self.inbound,
+            &mut self.driver,
+            self.observer,
+        );
+        self.told(taken);
+    }
+
+    /// Whether to sleep straight to the send due at `due` (see
+    /// [`SLEEP_THROUGH_NS`]).
+    fn sleeps_through_to(&self, due: Nanos) -> bool {
+        self.cfg.precise_pacing
+            && self.kernel_stamped
+            && due.saturating_sub(self.clock.now()) <= SLEEP_THROUGH_NS
+    }
+
+    /// Sleeps to the send due at `due` on the session's own clock, taking
+    /// in what arrived at each wake-up, with the runtime idle meanwhile.
+    async fn sleep_through(&mut self, due: Nanos) -> Turn {
+        // Spaced from the last planned wake-up, not the actual one, so a
+        // late wake-up does not push the next one later.
+        let wake_at = due.max(self.timers.last_wake.saturating_add(MIN_WAKE_GAP_NS));
+        loop {
+            if ready_now(self.controls.stop.notified()).is_some() {
+                return Err(Stop::Interrupted);
+            }
+            if ready_now(self.controls.interim.notified()).is_some() {
+                self.interim();
+            }
+            if self.clock.now() < wake_at {
+                wait::block_until(&self.clock, wake_at);
+            }
+            if self
+                .link
+                .read_waiting(&mut self.inbound)
+                .map_err(Stop::LinkFailed)?
+            {
+                self.take_inbound();
+            }
+            let now = self.clock.now();
+            if now.saturating_sub(self.timers.last_flush) > FLUSH_EVERY_NS {
+                self.timers.last_flush = now;
+                let flushed = self.observer.flush();
+                self.told(flushed);
+            }
+            if self.output.is_err() {
+                return Ok(());
+            }
+            // The runtime runs nothing while the thread sleeps here: let it
+            // handle signals now and then.
+            if now.saturating_sub(self.timers.last_yield) > YIELD_EVERY_NS {
+                self.timers.last_yield = now;
+                tokio::task::yield_now().await;
+            }
+            if now >= wake_at {
+                break;
+            }
+        }
+        self.timers.last_wake = wake_at;
+        Ok(())
+    }
+
+    /// Waits in the runtime for the first of: the next send, a driver's
+    /// deadline, our HEARTBEAT, the run's deadline or wait, an interim, a
+    /// frame, a stop.
+    async fn wait(&mut self, next_send: Option<Nanos>) -> Turn {
+        let t = &self.timers;
         let wake = [
             next_send,
-            driver.next_deadline(),
-            heartbeat.next(),
-            deadline_ns,
-            wait_ns.filter(|_| schedule.is_none()),
-            next_interim,
+            self.driver.next_deadline(),
+            self.heartbeat.next(),
+            t.deadline,
+            t.wait.filter(|_| self.schedule.is_none()),
+            t.next_interim,
         ]
         .into_iter()
         .flatten()
         .min();
         // About to block: let buffered output reach the reader.
-        last_flush = now;
-        output = observer.flush();
-        if output.is_err() {
-            continue;
-        }
-        let sleep = waiter.until(&clock, wake);
+        self.timers.last_flush = self.clock.now();
+        let flushed = self.observer.flush();
+        self.told(flushed);
+        self.output_open()?;
+        let controls = self.controls;
+        let sleep = self.waiter.until(&self.clock, wake);
         tokio::select! {
             biased;
-            _ = stop.notified() => break Some(Stopped::Interrupted),
-            _ = controls.interim.notified() => {
-                output = interim(&driver, &heard.roster, clock.now(), observer);
-            }
-            received = link.recv(&mut inbound) => {
-                if let Err(e) = received {
-                    break Some(Stopped::LinkFailed(e));
-                }
-                output = heard.take(&clock, &mut inbound, &mut driver, observer);
+            _ = controls.stop.notified() => return Err(Stop::Interrupted),
+            _ = controls.interim.notified() => self.interim(),
+            received = self.link.recv(&mut self.inbound) => {
+                received.map_err(Stop::LinkFailed)?;
+                self.take_inbound();
             }
             _ = sleep => {}
         }
-    };
+        Ok(())
+    }
 
-    // Decide what is due before counting what is still in flight.
-    driver.expire(clock.now());
-    let mut output_closed = match stopped {
-        Some(Stopped::OutputClosed) => true,
-        _ => driver.report(&mut heard.radios, observer).is_err(),
-    };
-    if let Some(Stopped::LinkFailed(e)) = &stopped {
-        let error = e.to_string();
-        let failed = Event::LinkFailed {
-            at: clock.now(),
-            error: &error,
+    /// Decides what is left, tells how the link ended, and hands the
+    /// driver's summary back.
+    fn finish(mut self, stop: Stop) -> Measurement {
+        // Decide what is due before counting what is still in flight.
+        self.driver.expire(self.clock.now());
+        let mut output_closed = match stop {
+            Stop::OutputClosed => true,
+            _ => self
+                .driver
+                .report(&mut self.heard.radios, self.observer)
+                .is_err(),
         };
-        output_closed |= observer.event(&failed).is_err();
+        let (interrupted, link_error, no_peer_within) = match stop {
+            Stop::Interrupted => (true, None, None),
+            Stop::LinkFailed(e) => (false, Some(e.to_string()), None),
+            Stop::NoPeer => (false, None, self.cfg.wait),
+            Stop::Done | Stop::OutputClosed => (false, None, None),
+        };
+        if let Some(error) = &link_error {
+            let failed = Event::LinkFailed {
+                at: self.clock.now(),
+                error,
+            };
+            output_closed |= self.observer.event(&failed).is_err();
+        }
+        let (summary, histograms) = self.driver.finish(SessionEnd {
+            cfg: self.cfg,
+            duration_s: self.clock.now() as f64 / 1e9,
+            interrupted,
+            link_error,
+            frames: self.link.scan_stats(),
+            downtime_s: self.link.downtime().as_secs_f64(),
+            rx_clock: self.link.rx_clock(),
+            kind: self.link.kind(),
+            no_peer_within,
+            roster: self.heard.roster,
+            radios: self.heard.radios,
+            gate: self.heard.gate,
+        });
+        Measurement {
+            summary,
+            histograms,
+            output_closed,
+        }
     }
-    let no_peer_within = match stopped {
-        Some(Stopped::NoPeer) => cfg.wait,
-        _ => None,
+}
+
+/// Runs one session until it ends and returns what it measured.
+pub async fn run<T: Transport, D: Driver>(
+    cfg: &SessionConfig,
+    link: &mut T,
+    driver: D,
+    observer: &mut dyn Observer,
+    controls: &Controls,
+) -> Measurement {
+    let mut session = Session::start(cfg, link, driver, observer, controls);
+    let stop = loop {
+        if let Err(stop) = session.turn().await {
+            break stop;
+        }
     };
-    let (interrupted, link_error) = match stopped {
-        Some(Stopped::Interrupted) => (true, None),
-        Some(Stopped::LinkFailed(e)) => (false, Some(e.to_string())),
-        _ => (false, None),
-    };
-    let (summary, histograms) = driver.finish(Ended {
-        cfg,
-        duration_s: clock.now() as f64 / 1e9,
-        interrupted,
-        link_error,
-        frames: link.scan_stats(),
-        downtime_s: link.downtime().as_secs_f64(),
-        rx_clock: link.rx_clock(),
-        kind: link.kind(),
-        no_peer_within,
-        roster: heard.roster,
-        radios: heard.radios,
-        gate: heard.gate,
-    });
-    Outcome {
-        summary,
-        histograms,
-        output_closed,
-    }
+    session.finish(stop)
 }

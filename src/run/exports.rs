@@ -9,7 +9,7 @@ use std::io::{self, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use crate::config::Config;
-use crate::engine::session::Outcome;
+use crate::engine::session::Measurement;
 use crate::output::hgrm;
 use crate::output::plot::Plot;
 use crate::output::prometheus::{Metrics, PrometheusExporter};
@@ -101,7 +101,10 @@ impl Exports {
 
     /// Writes the plot and the histograms of every link; an error says
     /// which file could not be written.
-    pub fn finish<'a>(self, outcomes: impl IntoIterator<Item = &'a Outcome>) -> Result<(), String> {
+    pub fn finish<'a>(
+        self,
+        outcomes: impl IntoIterator<Item = &'a Measurement>,
+    ) -> Result<(), String> {
         if let Some((plot, mut file, path)) = self.plot {
             let written = plot.svg().and_then(|svg| {
                 file.write_all(svg.as_bytes())
@@ -121,7 +124,7 @@ impl Exports {
 /// Every link's responders, one section each, in one file.
 fn write_hgrm<'a>(
     mut out: BufWriter<File>,
-    outcomes: impl IntoIterator<Item = &'a Outcome>,
+    outcomes: impl IntoIterator<Item = &'a Measurement>,
 ) -> io::Result<()> {
     for outcome in outcomes {
         // One 8-byte-count copy at a time, not all of them at once.

@@ -25,7 +25,7 @@ use super::one_link::measure;
 use crate::cli::Format;
 use crate::config::{Config, LinkConfig, Probe};
 use crate::engine::capacity::{self, WireBudget};
-use crate::engine::session::{Controls, Outcome};
+use crate::engine::session::{Controls, Measurement};
 use crate::engine::summary::LinkSummary;
 use crate::exit::Ending;
 use crate::output::json::JsonReporter;
@@ -79,7 +79,7 @@ async fn measure_announced(
     observer: &mut Fanout<'_>,
     controls: Controls,
     announce: bool,
-) -> Outcome {
+) -> Measurement {
     let LinkRun { config, link, .. } = run;
     let outcome = measure(config, link, probe, wall, observer, &controls).await;
     if let Some(e) = outcome.summary.link_error().filter(|_| announce) {

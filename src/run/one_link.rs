@@ -8,7 +8,7 @@ use crate::engine::probe::echo;
 use crate::engine::probe::ping::PingProbe;
 use crate::engine::probe::timesync::TimesyncProbe;
 use crate::engine::probe::EchoProbe;
-use crate::engine::session::{Controls, Outcome};
+use crate::engine::session::{Controls, Measurement};
 use crate::engine::{sweep, SessionConfig};
 use crate::output::WallClock;
 use crate::transport::{Link, LinkSpec};
@@ -20,7 +20,7 @@ async fn echo_or_steps<P: EchoProbe>(
     probe: P,
     observer: &mut dyn Observer,
     controls: &Controls,
-) -> Outcome {
+) -> Measurement {
     match &session.sweep {
         Some(steps) => sweep::driver::run(session, steps, link, probe, observer, controls).await,
         None => echo::run(session, link, probe, observer, controls).await,
@@ -35,7 +35,7 @@ pub async fn measure(
     wall: WallClock,
     observer: &mut dyn Observer,
     controls: &Controls,
-) -> Outcome {
+) -> Measurement {
     let session = &config.session;
     let outcome = match probe {
         Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,

@@ -14,7 +14,7 @@ use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
 use crate::engine::radio::{radio_hints, Radios};
 use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
-use crate::engine::session::{self, Controls, Driver, Ended, Outcome};
+use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
 use crate::engine::summary::{responder_summaries, Interim, LinkSummary, ScheduleSummary, Summary};
 use crate::engine::Nanos;
@@ -32,7 +32,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
     probe: P,
     observer: &mut dyn Observer,
     controls: &Controls,
-) -> Outcome {
+) -> Measurement {
     let driver = EchoDriver::new(cfg, probe);
     session::run(cfg, link, driver, observer, controls).await
 }
@@ -256,7 +256,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         self.matcher.next_deadline().is_none() || self.matcher.all_answered()
     }
 
-    fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
+    fn finish(mut self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let cfg = ended.cfg;
         let undecided = self.matcher.undecided();
         let in_flight = self.matcher.finish();

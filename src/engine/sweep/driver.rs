@@ -28,7 +28,7 @@ use crate::engine::probe::EchoProbe;
 use crate::engine::radio::{RadioReport, Radios};
 use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
-use crate::engine::session::{self, Controls, Driver, Ended, Outcome};
+use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{Frame, SysComp};
@@ -294,7 +294,7 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
         self.finished && self.inner.settled()
     }
 
-    fn finish(mut self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
+    fn finish(mut self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let now = (ended.duration_s * 1e9) as Nanos;
         self.close(false, now, ended.frames.frame_bytes);
         let loss_limit = match self.config.plan {
@@ -351,7 +351,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
     probe: P,
     observer: &mut dyn Observer,
     controls: &Controls,
-) -> Outcome {
+) -> Measurement {
     let driver = SweepDriver::new(cfg, sweep, EchoDriver::new(cfg, probe));
     session::run(cfg, link, driver, observer, controls).await
 }

@@ -15,7 +15,7 @@ use crate::engine::observe::CommandEvent;
 use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
 use crate::engine::radio::Radios;
 use crate::engine::schedule::Schedule;
-use crate::engine::session::{self, Controls, Driver, Ended, Outcome};
+use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::summary::{CommandSummary, LinkSummary};
 use crate::engine::CommandSpec;
 use crate::engine::Nanos;
@@ -30,7 +30,7 @@ pub async fn run<T: Transport>(
     link: &mut T,
     observer: &mut dyn Observer,
     controls: &Controls,
-) -> Outcome {
+) -> Measurement {
     session::run(cfg, link, CommandDriver::new(cfg, spec), observer, controls).await
 }
 
@@ -147,7 +147,7 @@ impl Driver for CommandDriver {
         self.tracker.idle()
     }
 
-    fn finish(self, ended: Ended<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
+    fn finish(self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let cfg = ended.cfg;
         let summary = CommandSummary {
             link: cfg.link_name.clone(),
