@@ -442,6 +442,8 @@ fn session(
         precise_pacing: echo && links.len() == 1 && !matches!(links[0], LinkSpec::Sim(_)),
         signing,
         sweep: None,
+        // Each link has its own.
+        wire: None,
     })
 }
 
@@ -496,7 +498,11 @@ impl TryFrom<&PingArgs> for Config {
                     .filter(|(i, _)| *i == index)
                     .map(|(_, id)| *id),
             );
-            let sweep = super::sweep::for_link(cli, &spec, &session)?;
+            let session = SessionConfig {
+                wire: super::wire_budget(&spec, cli.baud, &probe, &session),
+                ..session.clone()
+            };
+            let sweep = super::sweep::for_link(cli, &session)?;
             // The pending table holds what the fastest step keeps in flight.
             let capacity = match &sweep {
                 Some(s) => pending_capacity(

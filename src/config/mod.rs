@@ -16,6 +16,7 @@ use thiserror::Error;
 pub use serve::{ContinuousLink, Module, Pattern, ProbePlan, ServeConfig, ServeSettings};
 
 use crate::cli::{Format, SigningArgs};
+use crate::engine::capacity::{self, WireBudget};
 use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::{SecretKey, SigningConfig};
@@ -94,6 +95,21 @@ impl Probe {
             Probe::Timesync { .. } => "timesync",
             Probe::Command(_) => "command",
         }
+    }
+}
+
+/// What the baud rate allows `spec` for `session`'s requests: set once
+/// here, so every front end reports the same. The command probe has none
+/// (its frames and retries vary).
+fn wire_budget(
+    spec: &LinkSpec,
+    default_baud: u32,
+    probe: &Probe,
+    session: &SessionConfig,
+) -> Option<WireBudget> {
+    match probe {
+        Probe::Command(_) => None,
+        Probe::Ping | Probe::Timesync { .. } => capacity::for_link(spec, default_baud, session),
     }
 }
 

@@ -6,11 +6,8 @@ use std::time::Duration;
 
 use super::{invalid, ConfigError, MAX_RATE};
 use crate::cli::{PingArgs, ProbeKind};
-use crate::engine::capacity;
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
 use crate::engine::SessionConfig;
-use crate::transport::address::LinkSpec;
-use crate::transport::LinkOptions;
 
 /// The highest rate a sweep offers on a link without a baud rate, unless
 /// `--sweep-max` says otherwise.
@@ -95,20 +92,12 @@ pub(super) fn default_rate(cli: &PingArgs) -> Option<f64> {
     }
 }
 
-/// The highest rate a sweep on `spec` may offer, and why.
-pub(super) fn sweep_max(
-    cli: &PingArgs,
-    spec: &LinkSpec,
-    session: &SessionConfig,
-) -> (f64, MaxFrom) {
+/// The highest rate a sweep of `session` may offer, and why.
+pub(super) fn sweep_max(cli: &PingArgs, session: &SessionConfig) -> (f64, MaxFrom) {
     if let Some(max) = cli.sweep_max {
         return (max, MaxFrom::Given);
     }
-    let options = LinkOptions {
-        baud: cli.baud,
-        ..LinkOptions::default()
-    };
-    match capacity::for_link(spec, &options, session) {
+    match session.wire {
         Some(w) => (
             (BAUD_HEADROOM * w.max_rate_hz).round(),
             MaxFrom::Baud {
@@ -123,7 +112,6 @@ pub(super) fn sweep_max(
 /// A link's steps; `None` when the run does not go in steps.
 pub(super) fn for_link(
     cli: &PingArgs,
-    spec: &LinkSpec,
     session: &SessionConfig,
 ) -> Result<Option<SweepConfig>, ConfigError> {
     if !wanted(cli) {
@@ -131,7 +119,7 @@ pub(super) fn for_link(
     }
     let first_hz = 1.0 / session.interval.as_secs_f64();
     let plan = if cli.sweep {
-        let (max_hz, max_from) = sweep_max(cli, spec, session);
+        let (max_hz, max_from) = sweep_max(cli, session);
         if !max_hz.is_finite() || max_hz <= first_hz || max_hz > MAX_RATE {
             return Err(invalid(format!(
                 "--sweep-max {max_hz}: expected more than the first step's {first_hz}/s and at \

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use super::SessionConfig;
 use crate::frame::Version;
-use crate::transport::{LinkOptions, LinkSpec};
+use crate::transport::LinkSpec;
 
 /// Start bit, 8 data bits, stop bit.
 pub const BITS_PER_BYTE: u64 = 10;
@@ -80,13 +80,9 @@ fn sized(baud: u32, request: u64, reply: u64, replies: u64) -> WireBudget {
 }
 
 /// The budget of a link that has a baud rate; None for the others.
-pub fn for_link(
-    link: &LinkSpec,
-    options: &LinkOptions,
-    session: &SessionConfig,
-) -> Option<WireBudget> {
+pub fn for_link(link: &LinkSpec, default_baud: u32, session: &SessionConfig) -> Option<WireBudget> {
     let (baud, replies) = match link {
-        LinkSpec::Serial { baud, .. } => (baud.unwrap_or(options.baud), 1),
+        LinkSpec::Serial { baud, .. } => (baud.unwrap_or(default_baud), 1),
         LinkSpec::Sim(p) => (p.baud?, u64::from(p.responders)),
         _ => return None,
     };
@@ -184,9 +180,10 @@ mod tests {
                 precise_pacing: true,
                 signing,
                 sweep: None,
+                wire: None,
             };
             let link: LinkSpec = "serial:/dev/ttyUSB0:57600".parse().unwrap();
-            for_link(&link, &LinkOptions::default(), &session).unwrap()
+            for_link(&link, crate::transport::LinkOptions::default().baud, &session).unwrap()
         };
         let plain = budget_of(None);
         let signed = budget_of(Some(SigningConfig {

@@ -61,6 +61,10 @@ pub struct SessionConfig {
     pub signing: Option<SigningConfig>,
     /// `--sweep` or `--load`: the run goes in steps (echo probes only).
     pub sweep: Option<sweep::SweepConfig>,
+    /// What the baud rate allows a serial (or simulated radio) link: set
+    /// once by the configuration, reported by the echo probes' summary
+    /// whatever the front end.
+    pub wire: Option<capacity::WireBudget>,
 }
 
 /// The command probe's request and retry policy.

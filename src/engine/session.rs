@@ -539,7 +539,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             };
             output_closed |= self.observer.event(&failed).is_err();
         }
-        let (summary, histograms) = self.driver.finish(SessionEnd {
+        let (mut summary, histograms) = self.driver.finish(SessionEnd {
             cfg: self.cfg,
             duration_s: self.clock.now() as f64 / 1e9,
             interrupted,
@@ -553,6 +553,10 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             radios: self.heard.radios,
             gate: self.heard.gate,
         });
+        // Last, as it judges the finished figures (a sweep's included).
+        if let (LinkSummary::Echo(s), Some(wire)) = (&mut summary, self.cfg.wire) {
+            s.apply_wire(wire);
+        }
         Measurement {
             summary,
             histograms,

@@ -23,11 +23,9 @@ use tokio::sync::Notify;
 use super::exports::Exports;
 use super::one_link::measure;
 use crate::cli::Format;
-use crate::config::{Config, LinkConfig, Probe};
-use crate::engine::capacity::{self, WireBudget};
+use crate::config::{Config, LinkConfig, OutputConfig, Probe};
 use crate::engine::session::{Controls, Measurement};
-use crate::engine::summary::LinkSummary;
-use crate::exit::Ending;
+use crate::exit::{Ending, LinkEnd};
 use crate::output::json::JsonReporter;
 use crate::output::live::LiveView;
 use crate::output::text::TextReporter;
@@ -63,41 +61,223 @@ fn error_line(several: bool, link: &str, error: &str) -> String {
     }
 }
 
-/// An opened link, ready to run.
+/// One link of the run, carried from its open link to its judgement.
 struct LinkRun<'a> {
     config: &'a LinkConfig,
     link: Link,
-    wire: Option<WireBudget>,
+    /// Attached once every link is open (a live view takes the screen
+    /// only after the errors and warnings are printed).
+    report: Fanout<'a>,
+    controls: Controls,
 }
 
-/// One link's session, from its open link to its outcome. With `announce`,
-/// prints the link's error line as soon as it fails, while others go on.
-async fn measure_announced(
-    run: LinkRun<'_>,
+/// A link whose session ended.
+struct Finished<'a> {
+    config: &'a LinkConfig,
+    report: Fanout<'a>,
+    measurement: Measurement,
+}
+
+/// Where the run's reports go: standard output, and the live view when
+/// there is one.
+struct Screen {
+    view: Option<LiveView>,
+    stdout: Shared<Box<dyn Write>>,
+}
+
+impl Screen {
+    /// Takes the terminal for `--live` when there is one.
+    fn open(out: &OutputConfig, controls: &Controls) -> Result<Self, Ending> {
+        let live = out.live && io::stdout().is_terminal();
+        if out.live && !live {
+            stderr::error(&"--live needs a terminal; printing text");
+        }
+        let view = match live.then(|| LiveView::start(controls.stop.clone())) {
+            None => None,
+            Some(Ok(view)) => Some(view),
+            Some(Err(e)) => {
+                stderr::error(&format_args!("--live: {e}"));
+                return Err(Ending::Refused);
+            }
+        };
+        // Buffered: a write per line would pace the engine at high rates.
+        // The session flushes before it blocks and every 50 ms while busy.
+        // Locked for the run, except under the live view, which draws to
+        // it from its own thread.
+        let stdout: Box<dyn Write> = if live {
+            Box::new(BufWriter::new(io::stdout()))
+        } else {
+            Box::new(BufWriter::new(io::stdout().lock()))
+        };
+        Ok(Screen {
+            view,
+            stdout: Shared::new(stdout),
+        })
+    }
+
+    /// The reporter of one link's run on this screen.
+    fn reporter(
+        &self,
+        out: &OutputConfig,
+        name: &str,
+        several: bool,
+        wall: WallClock,
+    ) -> Vec<Box<dyn Reporter>> {
+        let stdout = self.stdout.clone();
+        match (out.format, &self.view) {
+            // The view shows the run; the text summaries follow it.
+            (Format::Text, Some(view)) => vec![
+                Box::new(view.link()),
+                Box::new(TextReporter::new(stdout, true)),
+            ],
+            (Format::Text, None) => vec![Box::new(
+                TextReporter::new(stdout, out.quiet)
+                    .every_reply(out.every_reply)
+                    .timestamps(out.timestamps.then_some(wall))
+                    .prefixed(several.then(|| format!("[{name}] "))),
+            )],
+            (Format::Json, _) => vec![Box::new(
+                JsonReporter::new(stdout, out.quiet, wall)
+                    .with_link(several.then(|| name.to_string())),
+            )],
+        }
+    }
+
+    fn close(&mut self) {
+        if let Some(mut view) = self.view.take() {
+            if let Err(e) = view.close() {
+                stderr::error(&format_args!("--live: {e}"));
+            }
+        }
+    }
+}
+
+/// Opens every link; the ones that opened, and the names of the others.
+/// Errors and warnings are printed here, before a live view takes the
+/// screen.
+async fn open(config: &Config) -> (Vec<(&LinkConfig, Link)>, Vec<&str>) {
+    let several = config.links.len() > 1;
+    let opening = config
+        .links
+        .iter()
+        .map(|l| Link::open(&l.spec, &config.link_options));
+    let mut opened = Vec::new();
+    let mut unopened = Vec::new();
+    for (link_config, result) in config.links.iter().zip(join_all(opening).await) {
+        let name = &link_config.name;
+        match result {
+            Ok(link) => {
+                if let Some(w) = baud_warning(link_config) {
+                    stderr::warning(&error_line(several, name, &w));
+                }
+                opened.push((link_config, link));
+            }
+            Err(e) => {
+                stderr::error(&error_line(several, name, &e.to_string()));
+                unopened.push(name.as_str());
+            }
+        }
+    }
+    (opened, unopened)
+}
+
+/// A rate the baud rate cannot carry. A USB CDC port or a pty passes what
+/// it gets at once: the warning is for a real UART (the summary says which
+/// it was, from the RTTs). A sweep means to go past it; its first line
+/// says how far.
+fn baud_warning(link: &LinkConfig) -> Option<String> {
+    let session = &link.session;
+    session
+        .wire
+        .filter(|_| !link.spec.may_ignore_baud() && session.sweep.is_none())
+        .and_then(|w| w.warning(1.0 / session.interval.as_secs_f64()))
+}
+
+/// Gives each opened link its reports and its own controls, all raised
+/// by the run's.
+fn attach<'a>(
+    opened: Vec<(&'a LinkConfig, Link)>,
+    config: &'a Config,
+    screen: &Screen,
+    exports: &Exports,
+    controls: &Controls,
+    wall: WallClock,
+) -> Vec<LinkRun<'a>> {
+    let several = config.links.len() > 1;
+    let runs: Vec<LinkRun<'a>> = opened
+        .into_iter()
+        .enumerate()
+        .map(|(index, (link_config, link))| {
+            let name = &link_config.name;
+            let mut reporters = screen.reporter(&config.output, name, several, wall);
+            reporters.extend(exports.reporters(index, name));
+            LinkRun {
+                config: link_config,
+                link,
+                report: Fanout { reporters },
+                controls: Controls::default(),
+            }
+        })
+        .collect();
+    forward(
+        &controls.stop,
+        runs.iter().map(|r| r.controls.stop.clone()).collect(),
+        false,
+    );
+    forward(
+        &controls.interim,
+        runs.iter().map(|r| r.controls.interim.clone()).collect(),
+        true,
+    );
+    runs
+}
+
+/// One link's session, from its open link to its measurement. With
+/// `announce`, prints the link's error line as soon as it fails, while
+/// others go on.
+async fn measure_one<'a>(
+    run: LinkRun<'a>,
     probe: &Probe,
     wall: WallClock,
-    observer: &mut Fanout<'_>,
-    controls: Controls,
     announce: bool,
-) -> Measurement {
-    let LinkRun { config, link, .. } = run;
-    let outcome = measure(config, link, probe, wall, observer, &controls).await;
-    if let Some(e) = outcome.summary.link_error().filter(|_| announce) {
+) -> Finished<'a> {
+    let LinkRun {
+        config,
+        link,
+        mut report,
+        controls,
+    } = run;
+    let measurement = measure(config, link, probe, wall, &mut report, &controls).await;
+    if let Some(e) = measurement.summary.link_error().filter(|_| announce) {
         stderr::error(&error_line(true, &config.name, e));
     }
-    outcome
+    Finished {
+        config,
+        report,
+        measurement,
+    }
 }
 
-/// Standard output for the reports. Locked for the run, except under the
-/// live view, which draws to it from its own thread.
-fn stdout(live: bool) -> Shared<Box<dyn Write>> {
-    // Buffered: a write per line would pace the engine at high rates. The
-    // session flushes before it blocks and every 50 ms while busy.
-    Shared::new(if live {
-        Box::new(BufWriter::new(io::stdout()))
-    } else {
-        Box::new(BufWriter::new(io::stdout().lock()))
-    })
+/// Judges each link and writes its summary, in command-line order; how
+/// each ended, and whether standard output went away.
+fn judge(
+    finished: &mut [Finished<'_>],
+    stdout: &Shared<Box<dyn Write>>,
+    separate: bool,
+) -> (Vec<LinkEnd>, bool) {
+    let mut ends = Vec::new();
+    let mut output_closed = false;
+    for (i, f) in finished.iter_mut().enumerate() {
+        let verdict = verdict::judge_link(&f.measurement.summary, &f.config.thresholds);
+        // Quiet summaries are not preceded by a blank line: separate them.
+        if separate && i > 0 {
+            output_closed |= writeln!(stdout.clone()).is_err();
+        }
+        output_closed |= f.measurement.output_closed
+            || f.report.summary(&f.measurement.summary, &verdict).is_err();
+        ends.push(verdict.end());
+    }
+    (ends, output_closed)
 }
 
 /// Runs every link of `config` side by side; how it ended.
@@ -110,158 +290,41 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
         }
     };
     let several = config.links.len() > 1;
-    let opened = join_all(
-        config
-            .links
-            .iter()
-            .map(|l| Link::open(&l.spec, &config.link_options)),
-    )
-    .await;
+    let (opened, unopened) = open(config).await;
     let wall = WallClock::starting(config.virtual_clock());
-    // Errors and warnings first, before a live view takes the screen.
-    let mut unopened = Vec::new();
-    let mut runs = Vec::new();
-    for (link_config, opened) in config.links.iter().zip(opened) {
-        let name = &link_config.name;
-        let link = match opened {
-            Ok(link) => link,
-            Err(e) => {
-                stderr::error(&error_line(several, name, &e.to_string()));
-                unopened.push(name);
-                continue;
-            }
-        };
-        let session = &link_config.session;
-        let wire = match config.probe {
-            Probe::Command(_) => None,
-            _ => capacity::for_link(&link_config.spec, &config.link_options, session),
-        };
-        // A USB CDC port or a pty passes what it gets at once: the warning
-        // is for a real UART (the summary says which it was, from the RTTs).
-        // A sweep means to go past it; its first line says how far.
-        let warning = wire
-            .filter(|_| !link_config.spec.may_ignore_baud() && session.sweep.is_none())
-            .and_then(|w| w.warning(1.0 / session.interval.as_secs_f64()));
-        if let Some(w) = warning {
-            stderr::warning(&error_line(several, name, &w));
-        }
-        runs.push(LinkRun {
-            config: link_config,
-            link,
-            wire,
-        });
-    }
-    let out = &config.output;
-    let live = out.live && io::stdout().is_terminal();
-    if out.live && !live {
-        stderr::error(&"--live needs a terminal; printing text");
-    }
-    let mut view = None;
-    if live {
-        match LiveView::start(controls.stop.clone()) {
-            Ok(v) => view = Some(v),
-            Err(e) => {
-                stderr::error(&format_args!("--live: {e}"));
-                return Ending::Refused;
-            }
-        }
-    }
-    let stdout = stdout(live);
-    let mut reports: Vec<Fanout<'_>> = Vec::new();
-    for (index, run) in runs.iter().enumerate() {
-        let name = &run.config.name;
-        let mut reporters: Vec<Box<dyn Reporter>> = Vec::new();
-        match (out.format, &view) {
-            // The view shows the run; the text summaries follow it.
-            (Format::Text, Some(view)) => {
-                reporters.push(Box::new(view.link()));
-                reporters.push(Box::new(TextReporter::new(stdout.clone(), true)));
-            }
-            (Format::Text, None) => reporters.push(Box::new(
-                TextReporter::new(stdout.clone(), out.quiet)
-                    .every_reply(out.every_reply)
-                    .timestamps(out.timestamps.then_some(wall))
-                    .prefixed(several.then(|| format!("[{name}] "))),
-            )),
-            (Format::Json, _) => reporters.push(Box::new(
-                JsonReporter::new(stdout.clone(), out.quiet, wall)
-                    .with_link(several.then(|| name.clone())),
-            )),
-        }
-        reporters.extend(exports.reporters(index, name));
-        reports.push(Fanout { reporters });
-    }
+    let mut screen = match Screen::open(&config.output, &controls) {
+        Ok(screen) => screen,
+        Err(ending) => return ending,
+    };
+    let runs = attach(opened, config, &screen, &exports, &controls, wall);
     for (k, name) in unopened.iter().enumerate() {
         exports.unopened(runs.len() + k, name);
     }
-    // Each session gets its own controls, all raised by the run's.
-    let per_link: Vec<Controls> = runs.iter().map(|_| Controls::default()).collect();
-    forward(
-        &controls.stop,
-        per_link.iter().map(|c| c.stop.clone()).collect(),
-        false,
-    );
-    forward(
-        &controls.interim,
-        per_link.iter().map(|c| c.interim.clone()).collect(),
-        true,
-    );
-    let wires: Vec<Option<WireBudget>> = runs.iter().map(|r| r.wire).collect();
-    let thresholds: Vec<_> = runs.iter().map(|r| &r.config.thresholds).collect();
-    let announce = several && view.is_none();
-    let mut sessions = Vec::new();
-    for ((run, report), controls) in runs.into_iter().zip(reports.iter_mut()).zip(per_link) {
-        sessions.push(measure_announced(
-            run,
-            &config.probe,
-            wall,
-            report,
-            controls,
-            announce,
-        ));
-    }
+    let announce = several && screen.view.is_none();
+    let live = screen.view.is_some();
     // One task for every session, so their reports can share stdout; each
     // session is polled when its own waker fires, not whenever any does
     // (100 links would otherwise cost 100 polls per wake-up).
-    let mut outcomes = join_all(sessions).await;
-    if let Some(mut view) = view {
-        if let Err(e) = view.close() {
-            stderr::error(&format_args!("--live: {e}"));
-        }
-    }
+    let sessions = runs
+        .into_iter()
+        .map(|run| measure_one(run, &config.probe, wall, announce));
+    let mut finished = join_all(sessions).await;
+    screen.close();
     if !announce {
-        for outcome in &outcomes {
-            if let Some(e) = outcome.summary.link_error() {
-                stderr::error(&error_line(several, outcome.summary.link(), e));
+        for f in &finished {
+            if let Some(e) = f.measurement.summary.link_error() {
+                stderr::error(&error_line(several, f.measurement.summary.link(), e));
             }
         }
     }
-    let mut links = Vec::new();
-    let mut output_closed = false;
+    let out = &config.output;
     let separate = out.format == Format::Text && (out.quiet || live);
-    for (i, ((outcome, report), wire)) in outcomes
-        .iter_mut()
-        .zip(reports.iter_mut())
-        .zip(wires)
-        .enumerate()
-    {
-        if let (LinkSummary::Echo(summary), Some(w)) = (&mut outcome.summary, wire) {
-            summary.apply_wire(w);
-        }
-        let verdict = verdict::judge_link(&outcome.summary, thresholds[i]);
-        // Quiet summaries are not preceded by a blank line: separate them.
-        if separate && i > 0 {
-            output_closed |= writeln!(stdout.clone()).is_err();
-        }
-        output_closed |=
-            outcome.output_closed || report.summary(&outcome.summary, &verdict).is_err();
-        links.push(verdict.end());
-    }
-    links.extend(unopened.iter().map(|_| crate::exit::LinkEnd {
+    let (mut links, output_closed) = judge(&mut finished, &screen.stdout, separate);
+    links.extend(unopened.iter().map(|_| LinkEnd {
         link_failed: true,
         checks_held: false,
     }));
-    let exports_failed = match exports.finish(&outcomes) {
+    let exports_failed = match exports.finish(finished.iter().map(|f| &f.measurement)) {
         Ok(()) => false,
         Err(e) => {
             stderr::error(&e);

@@ -38,6 +38,7 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         precise_pacing: false,
         signing: None,
         sweep: None,
+        wire: None,
     };
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()

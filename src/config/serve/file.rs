@@ -281,7 +281,7 @@ pub(super) fn continuous_link(
     }
     Ok(ContinuousLink {
         link: LinkConfig {
-            session: session(&name, None, interval, c.timeout, &c)?,
+            session: session(&spec, &name, None, interval, c.timeout, &c)?,
             spec,
             name,
             thresholds: Thresholds::default(),

@@ -132,13 +132,14 @@ fn refuse_virtual(spec: &LinkSpec) -> Result<(), ConfigError> {
 }
 
 fn session(
+    spec: &LinkSpec,
     name: &str,
     count: Option<u64>,
     interval: Duration,
     timeout: Duration,
     c: &Common,
 ) -> Result<SessionConfig, ConfigError> {
-    Ok(SessionConfig {
+    let mut session = SessionConfig {
         link_name: name.to_string(),
         ours: c.ours,
         interval,
@@ -156,7 +157,10 @@ fn session(
         precise_pacing: false,
         signing: c.signing,
         sweep: None,
-    })
+        wire: None,
+    };
+    session.wire = super::wire_budget(spec, c.baud, &c.probe, &session);
+    Ok(session)
 }
 
 fn validate_count(count: u64) -> Result<u64, ConfigError> {

@@ -105,7 +105,8 @@ impl ServeSettings {
         Ok(ProbePlan {
             module: module_name.to_string(),
             link: LinkConfig {
-                session: session(target, Some(count), interval, timeout, &common).map_err(plan)?,
+                session: session(&spec, target, Some(count), interval, timeout, &common)
+                    .map_err(plan)?,
                 spec,
                 name: target.to_string(),
                 thresholds: module.thresholds.clone(),
