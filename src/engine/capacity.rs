@@ -183,7 +183,12 @@ mod tests {
                 wire: None,
             };
             let link: LinkSpec = "serial:/dev/ttyUSB0:57600".parse().unwrap();
-            for_link(&link, crate::transport::LinkOptions::default().baud, &session).unwrap()
+            for_link(
+                &link,
+                crate::transport::LinkOptions::default().baud,
+                &session,
+            )
+            .unwrap()
         };
         let plain = budget_of(None);
         let signed = budget_of(Some(SigningConfig {

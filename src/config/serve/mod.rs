@@ -352,6 +352,42 @@ mod tests {
     }
 
     #[test]
+    fn a_probe_and_a_served_link_carry_the_wire_budget_the_cli_does() {
+        // The same link summarises alike behind `serve` and on the command
+        // line: the budget is set in the config, not by one front end.
+        use clap::Parser;
+        let cli = crate::cli::Cli::try_parse_from([
+            "mavping",
+            "-c",
+            "10",
+            "-i",
+            "0.1",
+            "sim:?baud=57600",
+        ])
+        .unwrap();
+        let from_cli = crate::config::Config::try_from(&cli.ping).unwrap().links[0]
+            .session
+            .wire;
+        assert!(from_cli.is_some_and(|w| w.baud == 57600), "{from_cli:?}");
+        let c = ServeConfig::try_from(&args("--allow sim:** --link sim:?baud=57600")).unwrap();
+        let plan = c
+            .settings
+            .plan("target=sim:?baud%3D57600&count=10&interval=100ms")
+            .unwrap();
+        assert_eq!(plan.link.session.wire, from_cli);
+        assert_eq!(
+            c.settings.links[0].link.session.wire.map(|w| w.baud),
+            Some(57600)
+        );
+        // The command probe's frames vary: it has none.
+        let plan = c
+            .settings
+            .plan("target=sim:?baud%3D57600&probe=command")
+            .map(|p| p.link.session.wire);
+        assert!(matches!(plan, Ok(None) | Err(_)), "{plan:?}");
+    }
+
+    #[test]
     fn the_command_line_alone_needs_no_file() {
         let c = ServeConfig::try_from(&args("")).unwrap();
         assert_eq!(c.listen, "127.0.0.1:9465".parse().unwrap());
