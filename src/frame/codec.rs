@@ -294,11 +294,6 @@ pub(crate) fn enum_name<E: FromPrimitive + std::fmt::Debug>(value: u32, prefix: 
     }
 }
 
-/// Whether the dialect knows a MAV_CMD id (COMMAND_LONG carries it as enum).
-pub fn is_known_command(id: u16) -> bool {
-    dialect::MavCmd::from_u16(id).is_some()
-}
-
 /// MAV_CMD id for a name like "MAV_CMD_REQUEST_MESSAGE" or "request_message".
 pub fn command_id_from_name(name: &str) -> Option<u16> {
     let upper = name.to_ascii_uppercase();
