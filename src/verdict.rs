@@ -189,7 +189,7 @@ pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
         .iter()
         .filter(|r| r.counts.received > 0)
         .collect();
-    if answering.is_empty() {
+    if !summary.any_reply() {
         failures.push(Failure {
             responder: None,
             check: "reply",

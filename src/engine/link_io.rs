@@ -176,7 +176,7 @@ impl Sender {
 /// Whether the signing gate (if any) lets `frame` through; what it refuses
 /// reaches nothing else, and is counted by the gate.
 pub fn admitted(gate: &mut Gate, frame: &Frame, signature: Option<&SignedBytes>) -> bool {
-    let radio = matches!(frame.msg, Msg::RadioStatus { .. });
+    let radio = matches!(frame.msg, Msg::RadioStatus(_));
     let verdict = gate.judge(frame.source, signature, radio);
     if !verdict.accepted() {
         tracing::debug!(from = %frame.source, msgid = frame.msgid, ?verdict, "frame refused");

@@ -32,17 +32,9 @@ const MIN_LOSSES_FOR_HINT: u64 = 3;
 /// when it was sent (its outcome is decided a timeout later).
 const MAX_BUFFER_CHANGES: usize = 256;
 
-/// One RADIO_STATUS as received.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct RadioReport {
-    pub rssi: u8,
-    pub remrssi: u8,
-    pub txbuf: u8,
-    pub noise: u8,
-    pub remnoise: u8,
-    pub rxerrors: u16,
-    pub fixed: u16,
-}
+/// One RADIO_STATUS as received: the frame's own struct, under the name
+/// the engine and the reports know it by.
+pub use crate::frame::RadioStatus as RadioReport;
 
 /// SiK's RSSI scale to dBm. Approximate: the chip's curve, not a
 /// calibrated measurement.

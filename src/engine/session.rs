@@ -161,24 +161,7 @@ impl Heard {
                     }
                 }
                 // Radios inject this from their own ids on any link.
-                Msg::RadioStatus {
-                    rssi,
-                    remrssi,
-                    txbuf,
-                    noise,
-                    remnoise,
-                    rxerrors,
-                    fixed,
-                } => {
-                    let report = RadioReport {
-                        rssi,
-                        remrssi,
-                        txbuf,
-                        noise,
-                        remnoise,
-                        rxerrors,
-                        fixed,
-                    };
+                Msg::RadioStatus(report) => {
                     let first = self.radios.record(frame.source, report, at);
                     driver.on_radio(frame.source, &report, at);
                     output = output.and(observer.event(&Event::Radio {

@@ -6,7 +6,7 @@ use mavlink::{MAVLinkV1MessageRaw, MAVLinkV2MessageRaw, MavHeader, MavlinkVersio
 use num_traits::FromPrimitive;
 
 use super::scanner::{IFLAG_SIGNED, STX_V1};
-use super::{ids, Frame, Msg, SysComp};
+use super::{ids, Frame, Msg, RadioStatus, SysComp};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Version {
@@ -28,6 +28,36 @@ pub struct Header {
 pub const FILLER_MESSAGE_TYPE: u16 = 0xFFFF;
 /// Non-zero, so MAVLink 2 trims none of the filler.
 const FILLER_BYTE: u8 = 0x55;
+
+// RADIO_STATUS's one conversion each way between the dialect's struct and
+// mavping's own.
+impl From<RadioStatus> for dialect::RADIO_STATUS_DATA {
+    fn from(r: RadioStatus) -> Self {
+        dialect::RADIO_STATUS_DATA {
+            rxerrors: r.rxerrors,
+            fixed: r.fixed,
+            rssi: r.rssi,
+            remrssi: r.remrssi,
+            txbuf: r.txbuf,
+            noise: r.noise,
+            remnoise: r.remnoise,
+        }
+    }
+}
+
+impl From<dialect::RADIO_STATUS_DATA> for RadioStatus {
+    fn from(d: dialect::RADIO_STATUS_DATA) -> Self {
+        RadioStatus {
+            rssi: d.rssi,
+            remrssi: d.remrssi,
+            txbuf: d.txbuf,
+            noise: d.noise,
+            remnoise: d.remnoise,
+            rxerrors: d.rxerrors,
+            fixed: d.fixed,
+        }
+    }
+}
 
 // PING is marked superseded by TIMESYNC, yet PX4, QGC and MAVSDK answer it.
 #[allow(deprecated)]
@@ -96,23 +126,7 @@ fn to_mavlink(msg: &Msg) -> dialect::MavMessage {
             target_component,
             ..Default::default()
         }),
-        Msg::RadioStatus {
-            rssi,
-            remrssi,
-            txbuf,
-            noise,
-            remnoise,
-            rxerrors,
-            fixed,
-        } => M::RADIO_STATUS(dialect::RADIO_STATUS_DATA {
-            rxerrors,
-            fixed,
-            rssi,
-            remrssi,
-            txbuf,
-            noise,
-            remnoise,
-        }),
+        Msg::RadioStatus(r) => M::RADIO_STATUS(r.into()),
         Msg::Attitude { time_boot_ms } => M::ATTITUDE(dialect::ATTITUDE_DATA {
             time_boot_ms,
             roll: 0.05,
@@ -262,15 +276,7 @@ fn decode_payload(version: Version, msgid: u32, payload: &[u8]) -> Msg {
             target_system: a.target_system,
             target_component: a.target_component,
         },
-        Ok(M::RADIO_STATUS(r)) => Msg::RadioStatus {
-            rssi: r.rssi,
-            remrssi: r.remrssi,
-            txbuf: r.txbuf,
-            noise: r.noise,
-            remnoise: r.remnoise,
-            rxerrors: r.rxerrors,
-            fixed: r.fixed,
-        },
+        Ok(M::RADIO_STATUS(r)) => Msg::RadioStatus(r.into()),
         _ => Msg::Other,
     }
 }
@@ -286,11 +292,6 @@ pub(crate) fn enum_name<E: FromPrimitive + std::fmt::Debug>(value: u32, prefix: 
         }
         None => format!("unknown ({value})"),
     }
-}
-
-/// Whether the dialect knows a MAV_CMD id (COMMAND_LONG carries it as enum).
-pub fn is_known_command(id: u16) -> bool {
-    dialect::MavCmd::from_u16(id).is_some()
 }
 
 /// MAV_CMD id for a name like "MAV_CMD_REQUEST_MESSAGE" or "request_message".
@@ -363,7 +364,7 @@ mod tests {
                 target_system: 255,
                 target_component: 190,
             },
-            Msg::RadioStatus {
+            Msg::RadioStatus(RadioStatus {
                 rssi: 200,
                 remrssi: 180,
                 txbuf: 90,
@@ -371,7 +372,7 @@ mod tests {
                 remnoise: 41,
                 rxerrors: 65535,
                 fixed: 3,
-            },
+            }),
         ];
         for version in [Version::V1, Version::V2] {
             for msg in messages {

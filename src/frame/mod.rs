@@ -62,15 +62,7 @@ pub enum Msg {
         target_system: u8,
         target_component: u8,
     },
-    RadioStatus {
-        rssi: u8,
-        remrssi: u8,
-        txbuf: u8,
-        noise: u8,
-        remnoise: u8,
-        rxerrors: u16,
-        fixed: u16,
-    },
+    RadioStatus(RadioStatus),
     /// Telemetry a vehicle streams (`--load ATTITUDE@HZ`): plausible,
     /// non-zero figures, so MAVLink 2 trims nothing and the frame is as
     /// long as a real one.
@@ -89,6 +81,21 @@ pub enum Msg {
     },
     /// Any other message: valid frame, contents not needed.
     Other,
+}
+
+/// A radio's RADIO_STATUS (message 109): its link figures, as received and
+/// as the engine and the reports keep them (`engine::radio::RadioReport`).
+/// 255 in the 8-bit figures means unknown; `rxerrors` and `fixed` count
+/// since the radio booted and wrap.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct RadioStatus {
+    pub rssi: u8,
+    pub remrssi: u8,
+    pub txbuf: u8,
+    pub noise: u8,
+    pub remnoise: u8,
+    pub rxerrors: u16,
+    pub fixed: u16,
 }
 
 /// One received frame, CRC checked.

@@ -187,13 +187,13 @@ fn check(frame: &[u8]) -> Check {
     }
 }
 
-/// Whether a good frame starts at each offset of the scanned bytes, worked
-/// out at most once per offset (kept across reads of a stream): every
-/// candidate looks inside its extent, so without this crafted junk read a
-/// byte at a time could cost a CRC per byte per candidate. Allocated only
-/// when a start byte is found inside a candidate.
+/// A memo of good frames: whether one starts at each offset of the scanned
+/// bytes, worked out at most once per offset (kept across reads of a
+/// stream): every candidate looks inside its extent, so without this
+/// crafted junk read a byte at a time could cost a CRC per byte per
+/// candidate. Allocated only when a start byte is found inside a candidate.
 #[derive(Default)]
-struct Inner {
+struct FrameMemo {
     /// Per offset: 0 not known yet (or the frame is not all there yet),
     /// 1 no good frame, otherwise 2 + the good frame's length.
     known: Vec<u16>,
@@ -209,7 +209,7 @@ enum At {
     NotYet,
 }
 
-impl Inner {
+impl FrameMemo {
     fn frame_at(&mut self, buf: &[u8], at: usize) -> At {
         if self.known.len() < buf.len() {
             self.known.resize(buf.len(), 0);
@@ -269,9 +269,9 @@ fn start_bytes(buf: &[u8], from: usize, to: usize) -> impl Iterator<Item = usize
 /// only: a good frame whose payload happens to hold another good frame
 /// (about once in ten million) loses to it. A datagram is judged whole
 /// first (see `judge`).
-fn hides_a_good_frame(buf: &[u8], start: usize, len: usize, inner: &mut Inner) -> bool {
+fn hides_a_good_frame(buf: &[u8], start: usize, len: usize, memo: &mut FrameMemo) -> bool {
     let end = (start + len).min(buf.len());
-    start_bytes(buf, start + 1, end).any(|at| inner.good_at(buf, at, end))
+    start_bytes(buf, start + 1, end).any(|at| memo.good_at(buf, at, end))
 }
 
 /// Whether a good frame starts inside the whole candidate of `len` bytes at
@@ -289,17 +289,17 @@ fn good_frame_starts_inside(
     start: usize,
     len: usize,
     at_end: bool,
-    inner: &mut Inner,
+    memo: &mut FrameMemo,
 ) -> Option<bool> {
     let mut undecided = false;
     for at in start_bytes(buf, start + 1, start + len) {
-        match inner.frame_at(buf, at) {
+        match memo.frame_at(buf, at) {
             At::Good(_) => return Some(true),
             At::NotGood => {}
             At::NotYet if at_end => {}
             At::NotYet => {
                 undecided |= match frame_len(&buf[at..]) {
-                    Ok(Some(claimed)) => !hides_a_good_frame(buf, at, claimed, inner),
+                    Ok(Some(claimed)) => !hides_a_good_frame(buf, at, claimed, memo),
                     _ => true,
                 };
             }
@@ -310,7 +310,7 @@ fn good_frame_starts_inside(
 
 /// Judges the candidate at `whole[start]` (a start byte). `at_end` says
 /// no more bytes will follow `whole` (end of a datagram).
-fn judge(whole: &[u8], start: usize, at_end: bool, inner: &mut Inner) -> Step {
+fn judge(whole: &[u8], start: usize, at_end: bool, memo: &mut FrameMemo) -> Step {
     let buf = &whole[start..];
     let len = match frame_len(buf) {
         Err(()) => return Step::Reject { bad_crc: false },
@@ -327,7 +327,7 @@ fn judge(whole: &[u8], start: usize, at_end: bool, inner: &mut Inner) -> Step {
     if at_end && buf.len() >= len && matches!(check(&buf[..len]), Check::Good) {
         return Step::Frame(len);
     }
-    if hides_a_good_frame(whole, start, len, inner) {
+    if hides_a_good_frame(whole, start, len, memo) {
         return Step::Reject { bad_crc: false };
     }
     if buf.len() < len {
@@ -343,7 +343,7 @@ fn judge(whole: &[u8], start: usize, at_end: bool, inner: &mut Inner) -> Step {
         Check::Unknown => match buf.get(len) {
             Some(&next) if next != STX_V1 && next != STX_V2 => Step::Reject { bad_crc: false },
             None if !at_end => Step::NeedMore,
-            _ => match good_frame_starts_inside(whole, start, len, at_end, inner) {
+            _ => match good_frame_starts_inside(whole, start, len, at_end, memo) {
                 Some(false) => Step::Unknown(len),
                 Some(true) => Step::Reject { bad_crc: false },
                 None => Step::NeedMore,
@@ -358,7 +358,7 @@ fn scan(
     buf: &[u8],
     at_end: bool,
     stats: &mut ScanStats,
-    inner: &mut Inner,
+    memo: &mut FrameMemo,
     on_frame: &mut dyn FnMut(&[u8]),
 ) -> usize {
     let mut pos = 0;
@@ -369,7 +369,7 @@ fn scan(
         };
         stats.skipped_bytes += offset as u64;
         pos += offset;
-        match judge(buf, pos, at_end, inner) {
+        match judge(buf, pos, at_end, memo) {
             Step::Frame(len) => {
                 stats.frames += 1;
                 stats.frame_bytes += len as u64;
@@ -404,14 +404,14 @@ fn scan(
 
 /// Scans one datagram on its own.
 pub fn scan_datagram(datagram: &[u8], stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) {
-    scan(datagram, true, stats, &mut Inner::default(), on_frame);
+    scan(datagram, true, stats, &mut FrameMemo::default(), on_frame);
 }
 
 /// Scanner for a byte stream: keeps an unfinished frame between reads.
 /// Its buffer never holds more than [`MAX_PENDING`] bytes, whatever the input.
 pub struct StreamScanner {
     buf: Vec<u8>,
-    inner: Inner,
+    memo: FrameMemo,
     pub stats: ScanStats,
 }
 
@@ -425,7 +425,7 @@ impl StreamScanner {
     pub fn new() -> Self {
         StreamScanner {
             buf: Vec::with_capacity(4 * MAX_FRAME_LEN),
-            inner: Inner::default(),
+            memo: FrameMemo::default(),
             stats: ScanStats::default(),
         }
     }
@@ -434,13 +434,13 @@ impl StreamScanner {
     pub fn push(&mut self, data: &[u8], on_frame: &mut dyn FnMut(&[u8])) {
         if self.buf.is_empty() {
             // Fast path: no carried tail, scan the read in place.
-            let done = scan(data, false, &mut self.stats, &mut self.inner, on_frame);
-            self.inner.consumed(done);
+            let done = scan(data, false, &mut self.stats, &mut self.memo, on_frame);
+            self.memo.consumed(done);
             self.buf.extend_from_slice(&data[done..]);
         } else {
             self.buf.extend_from_slice(data);
-            let done = scan(&self.buf, false, &mut self.stats, &mut self.inner, on_frame);
-            self.inner.consumed(done);
+            let done = scan(&self.buf, false, &mut self.stats, &mut self.memo, on_frame);
+            self.memo.consumed(done);
             self.buf.drain(..done);
         }
         debug_assert!(self.buf.len() <= MAX_PENDING);

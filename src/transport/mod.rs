@@ -308,13 +308,3 @@ impl Transport for Link {
         each_link!(self, l => l.kind())
     }
 }
-
-impl Link {
-    /// The UDP receive buffer the kernel granted, if this is a UDP link.
-    pub fn udp_recv_buffer(&self) -> Option<usize> {
-        match self {
-            Link::Udp(l) => Some(l.recv_buffer()),
-            _ => None,
-        }
-    }
-}

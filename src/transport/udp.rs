@@ -54,7 +54,6 @@ pub struct UdpLink {
     /// Equal-sized datagrams to one address leave as one GSO send, until
     /// the kernel refuses one.
     gso: bool,
-    recv_buffer: usize,
     kernel_timestamps: bool,
 }
 
@@ -94,15 +93,8 @@ impl UdpLink {
             },
             send_batch: SendBatch::new(),
             gso: true,
-            recv_buffer,
             kernel_timestamps,
         }
-    }
-
-    /// Receive buffer the kernel granted, in bytes (Linux reports twice the
-    /// usable size).
-    pub fn recv_buffer(&self) -> usize {
-        self.recv_buffer
     }
 
     /// `udpin:HOST:PORT`

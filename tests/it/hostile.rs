@@ -11,7 +11,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use crate::common::*;
-use mavping::frame::{encode, Header, Msg, StreamScanner, Version};
+use mavping::frame::{encode, Header, Msg, RadioStatus, StreamScanner, Version};
 use serde_json::Value;
 
 #[test]
@@ -177,7 +177,7 @@ fn flood_datagrams() -> (Vec<Vec<u8>>, u64) {
                         target_component: 9,
                     }
                 }
-                _ => Msg::RadioStatus {
+                _ => Msg::RadioStatus(RadioStatus {
                     rssi: 100,
                     remrssi: 100,
                     txbuf: 50,
@@ -185,7 +185,7 @@ fn flood_datagrams() -> (Vec<Vec<u8>>, u64) {
                     remnoise: 10,
                     rxerrors: 0,
                     fixed: 0,
-                },
+                }),
             };
             encode(&mut data, Version::V2, header, &msg);
         }

@@ -16,7 +16,7 @@ use crate::engine::stats::RttStats;
 
 use super::plan::Planner;
 use super::step::{StepFigures, StepTally};
-use super::verdict::{self, Ending, SweepSummary};
+use super::verdict::{self, SweepEnd, SweepSummary};
 use super::{PlanKind, SweepConfig};
 use crate::engine::hint::HintCode;
 use crate::engine::link_io::{Clock, Sender};
@@ -140,7 +140,7 @@ impl<P: EchoProbe> SweepDriver<P> {
         Some(settled.max(self.last_late.unwrap_or(0) + self.timeout))
     }
 
-    fn summary(&self, ending: Ending) -> SweepSummary {
+    fn summary(&self, ending: SweepEnd) -> SweepSummary {
         SweepSummary {
             kind: match self.config.plan {
                 PlanKind::Sweep { .. } => "sweep",
@@ -302,25 +302,25 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
             PlanKind::Load { .. } => f64::INFINITY,
         };
         let ending = if ended.interrupted {
-            Ending::Interrupted
+            SweepEnd::Interrupted
         } else if ended.link_error.is_some() {
-            Ending::LinkFailed
+            SweepEnd::LinkFailed
         } else if !self.finished {
-            Ending::Deadline
+            SweepEnd::Deadline
         } else if self
             .steps
             .iter()
             .any(|s| s.phase.sweeps() && s.received == 0)
         {
-            Ending::NoReplies
+            SweepEnd::NoReplies
         } else if self
             .steps
             .iter()
             .any(|s| s.phase.sweeps() && s.loss_ratio > loss_limit)
         {
-            Ending::LossLimit
+            SweepEnd::LossLimit
         } else {
-            Ending::Planned
+            SweepEnd::Planned
         };
         let sweep = self.summary(ending);
         let self_plan = self.config.plan;

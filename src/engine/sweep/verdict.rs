@@ -56,7 +56,7 @@ pub struct LoadEffect {
 /// Why the steps ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Ending {
+pub enum SweepEnd {
     /// Every step planned was run.
     Planned,
     /// A ramp step lost more than the limit; the steps after it refined
@@ -81,7 +81,7 @@ pub struct SweepSummary {
     pub queueing: Option<Queueing>,
     pub load: Vec<LoadSummary>,
     pub load_effect: Option<LoadEffect>,
-    pub ending: Ending,
+    pub ending: SweepEnd,
 }
 
 /// The first sweep step's p99: the knee test's reference.

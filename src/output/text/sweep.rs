@@ -9,7 +9,7 @@ use super::{ms_us, TextReporter};
 use crate::engine::capacity::WireBudget;
 use crate::engine::sweep::step::Phase;
 use crate::engine::sweep::step::{StepFigures, KNEE_MAX_LOSS};
-use crate::engine::sweep::verdict::{Ending, SweepSummary};
+use crate::engine::sweep::verdict::{SweepEnd, SweepSummary};
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
 use crate::output::StartInfo;
 
@@ -216,12 +216,12 @@ pub(super) fn write_summary(
         }
     }
     let ending = match s.ending {
-        Ending::Planned => "every step planned was run",
-        Ending::LossLimit => "the ramp stopped where a step lost more than the limit",
-        Ending::NoReplies => "nothing answered, so the ramp went no further",
-        Ending::Interrupted => "interrupted; the steps so far are above",
-        Ending::Deadline => "the deadline ended it; the steps so far are above",
-        Ending::LinkFailed => "the link failed; the steps so far are above",
+        SweepEnd::Planned => "every step planned was run",
+        SweepEnd::LossLimit => "the ramp stopped where a step lost more than the limit",
+        SweepEnd::NoReplies => "nothing answered, so the ramp went no further",
+        SweepEnd::Interrupted => "interrupted; the steps so far are above",
+        SweepEnd::Deadline => "the deadline ended it; the steps so far are above",
+        SweepEnd::LinkFailed => "the link failed; the steps so far are above",
     };
     let n = s.steps.len();
     let steps = if n == 1 { "step" } else { "steps" };
@@ -344,7 +344,7 @@ mod tests {
             steps,
             load: vec![],
             load_effect: None,
-            ending: Ending::LossLimit,
+            ending: SweepEnd::LossLimit,
         }
     }
 

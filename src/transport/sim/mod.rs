@@ -16,7 +16,7 @@ use tokio::time::{sleep_until, Instant};
 
 use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::answering::ResponderCore;
-use crate::frame::{self, Header, Msg, ScanStats, SysComp, Version};
+use crate::frame::{self, Header, Msg, RadioStatus, ScanStats, SysComp, Version};
 use radio::RadioPair;
 
 mod params;
@@ -363,7 +363,7 @@ impl SimLink {
                 &mut bytes,
                 Version::V2,
                 header,
-                &Msg::RadioStatus {
+                &Msg::RadioStatus(RadioStatus {
                     rssi,
                     remrssi: rssi,
                     txbuf,
@@ -372,7 +372,7 @@ impl SimLink {
                     // Since-boot counters wrap at 65 535, as a radio's do.
                     rxerrors: dropped as u16,
                     fixed: 0,
-                },
+                }),
             );
             // The radio is the near end: no link delay.
             self.enqueue(sent, bytes, Payload::Plain);
