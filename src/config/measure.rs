@@ -447,6 +447,26 @@ fn session(
     })
 }
 
+/// Where and how the run reports.
+fn output(cli: &PingArgs) -> Result<OutputConfig, ConfigError> {
+    Ok(OutputConfig {
+        format: if cli.json { Format::Json } else { cli.format },
+        // -Q is quiet with interim summaries, as fping's.
+        quiet: cli.quiet || cli.interim.is_some(),
+        timestamps: cli.timestamps,
+        every_reply: cli.every_reply,
+        live: cli.live,
+        hgrm: cli.hgrm.clone(),
+        samples: cli.samples.clone(),
+        plot: cli.plot.as_deref().map(validate_plot).transpose()?,
+        prometheus: cli
+            .prometheus
+            .as_deref()
+            .map(|a| validate_listen("--prometheus", a))
+            .transpose()?,
+    })
+}
+
 impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
@@ -540,22 +560,7 @@ impl TryFrom<&PingArgs> for Config {
                 route,
             },
             probe,
-            output: OutputConfig {
-                format: if cli.json { Format::Json } else { cli.format },
-                // -Q is quiet with interim summaries, as fping's.
-                quiet: cli.quiet || cli.interim.is_some(),
-                timestamps: cli.timestamps,
-                every_reply: cli.every_reply,
-                live: cli.live,
-                hgrm: cli.hgrm.clone(),
-                samples: cli.samples.clone(),
-                plot: cli.plot.as_deref().map(validate_plot).transpose()?,
-                prometheus: cli
-                    .prometheus
-                    .as_deref()
-                    .map(|a| validate_listen("--prometheus", a))
-                    .transpose()?,
-            },
+            output: output(cli)?,
             verbose: cli.verbose,
         })
     }

@@ -234,63 +234,9 @@ pub(super) fn write_summary(
         )
     });
     if s.kind == "sweep" {
-        match &s.knee {
-            Some(k) => {
-                let above = match k.failed_above_hz {
-                    Some(f) => format!("; {}/s failed", hz(f)),
-                    None => {
-                        "; every rate tried passed, so the link carries more: raise --sweep-max"
-                            .into()
-                    }
-                };
-                writeln!(
-                    out,
-                    "knee: {} PINGs/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, \
-                     loss {:.2}%, p99 {} ms{above}{}",
-                    hz(k.rate_hz),
-                    k.bytes_per_s,
-                    k.tx_bytes_per_s,
-                    k.rx_bytes_per_s,
-                    k.step,
-                    k.loss_ratio * 100.0,
-                    ms_us(k.p99_us),
-                    baud.unwrap_or_default()
-                )?;
-            }
-            None => writeln!(
-                out,
-                "knee: none: no step lost under 1% with a p99 under twice the first step's{}",
-                baud.unwrap_or_default()
-            )?,
-        }
+        write_knee(out, s, baud.as_deref())?;
         if let Some(q) = &s.queueing {
-            if q.bufferbloat {
-                writeln!(
-                    out,
-                    "queueing: bufferbloat: at {}/s the link lost under 1% yet its p99 reached {} ms, \
-                     {} ms over the first step's {} ms: it queues before it drops",
-                    hz(q.worst_at_hz),
-                    ms_us(q.worst_p99_us),
-                    ms_us(q.added_us),
-                    ms_us(q.reference_p99_us)
-                )?;
-            } else {
-                let then = match q.lost_at_hz {
-                    Some(rate) => format!(
-                        "; from {}/s it lost instead: the link drops before it queues",
-                        hz(rate)
-                    ),
-                    None => "; no step lost 1% or more".into(),
-                };
-                writeln!(
-                    out,
-                    "queueing: none to speak of: while it lost under 1%, the p99 stayed under twice the \
-                     first step's {} ms (at most {} ms, at {}/s){then}",
-                    ms_us(q.reference_p99_us),
-                    ms_us(q.worst_p99_us),
-                    hz(q.worst_at_hz)
-                )?;
-            }
+            write_queueing(out, q)?;
         }
     }
     for l in &s.load {
@@ -316,6 +262,74 @@ pub(super) fn write_summary(
             (e.p99_ratio - 1.0) * 100.0,
             ms_us(e.unloaded_p50_us),
             ms_us(e.loaded_p50_us)
+        )?;
+    }
+    Ok(())
+}
+
+/// Where the sweep found the knee, beside what the baud rate alone says.
+fn write_knee(out: &mut impl Write, s: &SweepSummary, baud: Option<&str>) -> io::Result<()> {
+    match &s.knee {
+        Some(k) => {
+            let above = match k.failed_above_hz {
+                Some(f) => format!("; {}/s failed", hz(f)),
+                None => {
+                    "; every rate tried passed, so the link carries more: raise --sweep-max".into()
+                }
+            };
+            writeln!(
+                out,
+                "knee: {} PINGs/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, \
+                 loss {:.2}%, p99 {} ms{above}{}",
+                hz(k.rate_hz),
+                k.bytes_per_s,
+                k.tx_bytes_per_s,
+                k.rx_bytes_per_s,
+                k.step,
+                k.loss_ratio * 100.0,
+                ms_us(k.p99_us),
+                baud.unwrap_or_default()
+            )?;
+        }
+        None => writeln!(
+            out,
+            "knee: none: no step lost under 1% with a p99 under twice the first step's{}",
+            baud.unwrap_or_default()
+        )?,
+    }
+    Ok(())
+}
+
+/// Whether the link queued before it dropped (bufferbloat).
+fn write_queueing(
+    out: &mut impl Write,
+    q: &crate::engine::sweep::verdict::Queueing,
+) -> io::Result<()> {
+    if q.bufferbloat {
+        writeln!(
+            out,
+            "queueing: bufferbloat: at {}/s the link lost under 1% yet its p99 reached {} ms, \
+             {} ms over the first step's {} ms: it queues before it drops",
+            hz(q.worst_at_hz),
+            ms_us(q.worst_p99_us),
+            ms_us(q.added_us),
+            ms_us(q.reference_p99_us)
+        )?;
+    } else {
+        let then = match q.lost_at_hz {
+            Some(rate) => format!(
+                "; from {}/s it lost instead: the link drops before it queues",
+                hz(rate)
+            ),
+            None => "; no step lost 1% or more".into(),
+        };
+        writeln!(
+            out,
+            "queueing: none to speak of: while it lost under 1%, the p99 stayed under twice the \
+             first step's {} ms (at most {} ms, at {}/s){then}",
+            ms_us(q.reference_p99_us),
+            ms_us(q.worst_p99_us),
+            hz(q.worst_at_hz)
         )?;
     }
     Ok(())

@@ -142,150 +142,189 @@ fn number<T: std::str::FromStr>(key: &str, value: &str, range: &str) -> Result<T
         .map_err(|_| format!("{key}={value}: expected {range}"))
 }
 
+/// The radio keys that mean something only beside `air=`.
+#[derive(Default)]
+struct AirKeys {
+    air: Option<u32>,
+    duty: Option<f64>,
+    ecc: Option<bool>,
+    tdm: Option<Duration>,
+}
+
+impl AirKeys {
+    /// The radio pair's air side, if `air=` was given (it needs `baud=`).
+    fn params(self, baud: Option<u32>) -> Result<Option<AirParams>, String> {
+        let Some(air_bps) = self.air else {
+            let given = [
+                (self.duty.is_some(), "duty"),
+                (self.ecc.is_some(), "ecc"),
+                (self.tdm.is_some(), "tdm"),
+            ];
+            return match given.iter().find(|(set, _)| *set) {
+                Some((_, key)) => Err(format!(
+                    "{key}= needs air=BITS_PER_S (e.g. baud=57600&air=64k)"
+                )),
+                None => Ok(None),
+            };
+        };
+        if baud.is_none() {
+            return Err(format!(
+                "air={air_bps} needs baud=N: the radios' serial side (e.g. baud=57600&air=64k)"
+            ));
+        }
+        Ok(Some(AirParams {
+            air_bps,
+            duty: self.duty.unwrap_or(1.0),
+            ecc: self.ecc.unwrap_or(false),
+            tdm_round: self.tdm.unwrap_or(DEFAULT_TDM_ROUND),
+        }))
+    }
+}
+
+/// A signed duration up to ten years: `1.5s`, `-250ms`, `+2h`.
+fn offset_ns(key: &str, value: &str) -> Result<i64, String> {
+    let (negative, magnitude) = match value.strip_prefix('-') {
+        Some(rest) => (true, rest),
+        None => (false, value.strip_prefix('+').unwrap_or(value)),
+    };
+    let ns = humantime::parse_duration(magnitude)
+        .ok()
+        .and_then(|d| i64::try_from(d.as_nanos()).ok())
+        .filter(|ns| *ns <= 10 * 365 * 86_400 * 1_000_000_000)
+        .ok_or_else(|| {
+            format!("{key}={value}: expected a duration up to 10 years, e.g. 1.5s or -250ms")
+        })?;
+    Ok(if negative { -ns } else { ns })
+}
+
+/// A whole number within `range`, said as `expected` when it is not.
+fn bounded<T>(
+    key: &str,
+    value: &str,
+    range: impl std::ops::RangeBounds<T>,
+    expected: &str,
+) -> Result<T, String>
+where
+    T: std::str::FromStr + PartialOrd,
+{
+    let n: T = number(key, value, expected)?;
+    if !range.contains(&n) {
+        return Err(format!("{key}={value}: expected {expected}"));
+    }
+    Ok(n)
+}
+
 impl SimParams {
     /// Parses the part after `sim:`: empty, or `?key=value&key=value`.
     pub fn parse(query: &str) -> Result<Self, String> {
         let mut p = SimParams::default();
-        let (mut air, mut duty, mut ecc, mut tdm) = (None, None, None, None);
+        let mut air = AirKeys::default();
         let query = query.strip_prefix('?').unwrap_or(query);
         for pair in query.split('&').filter(|s| !s.is_empty()) {
             let (key, value) = pair
                 .split_once('=')
                 .ok_or_else(|| format!("'{pair}' is not key=value; keys: {SIM_KEYS}"))?;
-            match key {
-                "responders" => {
-                    p.responders = number(key, value, "1 to 1000")?;
-                    if !(1..=1000).contains(&p.responders) {
-                        return Err(format!("{key}={value}: expected 1 to 1000"));
-                    }
+            p.set(key, value, &mut air)?;
+        }
+        p.air = air.params(p.baud)?;
+        p.check()?;
+        Ok(p)
+    }
+
+    /// Sets one key of the query.
+    fn set(&mut self, key: &str, value: &str, air: &mut AirKeys) -> Result<(), String> {
+        match key {
+            "responders" => self.responders = bounded(key, value, 1..=1000, "1 to 1000")?,
+            "sysid" => self.first_sysid = bounded(key, value, 1..=255, "1 to 255")?,
+            "compid" => self.compid = bounded(key, value, 1..=255, "1 to 255")?,
+            "delay" => self.delay = duration(key, value)?,
+            "jitter" => self.jitter = duration(key, value)?,
+            "hold" => self.hold = duration(key, value)?,
+            "loss" => self.loss = percent(key, value)?,
+            "dup" => self.dup = percent(key, value)?,
+            "reorder" => self.reorder = percent(key, value)?,
+            "seed" => self.seed = number(key, value, "a whole number")?,
+            "ping" => self.answer_ping = switch(key, value)?,
+            "heartbeat" => self.heartbeat = switch(key, value)?,
+            "outage" => {
+                let (start, length) = value.split_once('+').ok_or_else(|| {
+                    format!("{key}={value}: expected START+LENGTH, e.g. outage=30s+5s")
+                })?;
+                self.outage = Some((duration(key, start)?, duration(key, length)?));
+            }
+            "outage_every" => {
+                self.outage_every =
+                    Some(parse_duration(value).map_err(|e| format!("{key}={value}: {e}"))?)
+            }
+            "spike" => self.spike = percent(key, value)?,
+            "spike_delay" => self.spike_delay = duration(key, value)?,
+            "clock" | "offset" | "drift" => self.set_clock(key, value)?,
+            "baud" | "radio" | "buffer" | "air" | "duty" | "ecc" | "tdm" => {
+                self.set_radio(key, value, air)?
+            }
+            _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
+        }
+        Ok(())
+    }
+
+    /// The responders' clocks: `clock=`, `offset=`, `drift=`.
+    fn set_clock(&mut self, key: &str, value: &str) -> Result<(), String> {
+        match key {
+            "clock" => {
+                self.virtual_clock = match value {
+                    "virtual" => true,
+                    "real" => false,
+                    _ => return Err(format!("{key}={value}: expected real or virtual")),
                 }
-                "sysid" => {
-                    p.first_sysid = number(key, value, "1 to 255")?;
-                    if p.first_sysid == 0 {
-                        return Err(format!("{key}={value}: expected 1 to 255"));
-                    }
+            }
+            "offset" => self.clock_offset_ns = offset_ns(key, value)?,
+            _ => {
+                self.drift_ppm = number(key, value, "parts per million, -1000000 to 1000000")?;
+                if !self.drift_ppm.is_finite() || self.drift_ppm.abs() > 1e6 {
+                    return Err(format!("{key}={value}: expected -1000000 to 1000000 ppm"));
                 }
-                "compid" => {
-                    p.compid = number(key, value, "1 to 255")?;
-                    if p.compid == 0 {
-                        return Err(format!("{key}={value}: expected 1 to 255"));
-                    }
-                }
-                "delay" => p.delay = duration(key, value)?,
-                "jitter" => p.jitter = duration(key, value)?,
-                "hold" => p.hold = duration(key, value)?,
-                "loss" => p.loss = percent(key, value)?,
-                "dup" => p.dup = percent(key, value)?,
-                "reorder" => p.reorder = percent(key, value)?,
-                "seed" => p.seed = number(key, value, "a whole number")?,
-                "clock" => {
-                    p.virtual_clock = match value {
-                        "virtual" => true,
-                        "real" => false,
-                        _ => return Err(format!("{key}={value}: expected real or virtual")),
-                    }
-                }
-                "ping" => p.answer_ping = switch(key, value)?,
-                "heartbeat" => p.heartbeat = switch(key, value)?,
-                "offset" => {
-                    let (negative, magnitude) = match value.strip_prefix('-') {
-                        Some(rest) => (true, rest),
-                        None => (false, value.strip_prefix('+').unwrap_or(value)),
-                    };
-                    let ns = humantime::parse_duration(magnitude)
-                        .ok()
-                        .and_then(|d| i64::try_from(d.as_nanos()).ok())
-                        .filter(|ns| *ns <= 10 * 365 * 86_400 * 1_000_000_000)
-                        .ok_or_else(|| {
-                            format!("{key}={value}: expected a duration up to 10 years, e.g. 1.5s or -250ms")
-                        })?;
-                    p.clock_offset_ns = if negative { -ns } else { ns };
-                }
-                "drift" => {
-                    p.drift_ppm = number(key, value, "parts per million, -1000000 to 1000000")?;
-                    if !p.drift_ppm.is_finite() || p.drift_ppm.abs() > 1e6 {
-                        return Err(format!("{key}={value}: expected -1000000 to 1000000 ppm"));
-                    }
-                }
-                "baud" => {
-                    let baud: u32 = number(key, value, "a baud rate from 300 to 10000000")?;
-                    if !(300..=10_000_000).contains(&baud) {
-                        return Err(format!(
-                            "{key}={value}: expected a baud rate from 300 to 10000000"
-                        ));
-                    }
-                    p.baud = Some(baud);
-                }
-                "radio" => p.radio = switch(key, value)?,
-                "buffer" => {
-                    p.buffer = number(key, value, "16 to 1048576 bytes")?;
-                    if !(16..=1 << 20).contains(&p.buffer) {
-                        return Err(format!("{key}={value}: expected 16 to 1048576 bytes"));
-                    }
-                }
-                "air" => air = Some(bit_rate(key, value)?),
-                "duty" => {
-                    let d = percent(key, value)?;
-                    if d <= 0.0 {
-                        return Err(format!("{key}={value}: expected more than 0%"));
-                    }
-                    duty = Some(d);
-                }
-                "ecc" => ecc = Some(switch(key, value)?),
-                "tdm" => {
-                    let round = duration(key, value)?;
-                    if !(Duration::from_millis(1)..=Duration::from_secs(1)).contains(&round) {
-                        return Err(format!("{key}={value}: expected 1ms to 1s"));
-                    }
-                    tdm = Some(round);
-                }
-                "outage" => {
-                    let (start, length) = value.split_once('+').ok_or_else(|| {
-                        format!("{key}={value}: expected START+LENGTH, e.g. outage=30s+5s")
-                    })?;
-                    p.outage = Some((duration(key, start)?, duration(key, length)?));
-                }
-                "outage_every" => {
-                    p.outage_every =
-                        Some(parse_duration(value).map_err(|e| format!("{key}={value}: {e}"))?)
-                }
-                "spike" => p.spike = percent(key, value)?,
-                "spike_delay" => p.spike_delay = duration(key, value)?,
-                _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
             }
         }
-        p.air = match air {
-            Some(air_bps) => {
-                if p.baud.is_none() {
-                    return Err(format!(
-                        "air={air_bps} needs baud=N: the radios' serial side (e.g. baud=57600&air=64k)"
-                    ));
-                }
-                Some(AirParams {
-                    air_bps,
-                    duty: duty.unwrap_or(1.0),
-                    ecc: ecc.unwrap_or(false),
-                    tdm_round: tdm.unwrap_or(DEFAULT_TDM_ROUND),
-                })
+        Ok(())
+    }
+
+    /// A radio link: `baud=`, `radio=`, `buffer=`, and the air keys.
+    fn set_radio(&mut self, key: &str, value: &str, air: &mut AirKeys) -> Result<(), String> {
+        match key {
+            "baud" => {
+                let baud = "a baud rate from 300 to 10000000";
+                self.baud = Some(bounded(key, value, 300..=10_000_000, baud)?);
             }
-            None => {
-                let given = [
-                    (duty.is_some(), "duty"),
-                    (ecc.is_some(), "ecc"),
-                    (tdm.is_some(), "tdm"),
-                ];
-                if let Some((_, key)) = given.iter().find(|(set, _)| *set) {
-                    return Err(format!(
-                        "{key}= needs air=BITS_PER_S (e.g. baud=57600&air=64k)"
-                    ));
-                }
-                None
+            "radio" => self.radio = switch(key, value)?,
+            "buffer" => {
+                self.buffer = bounded(key, value, 16..=1 << 20, "16 to 1048576 bytes")?;
             }
-        };
-        if p.baud.is_none() && p.buffer != DEFAULT_BUFFER_BYTES {
+            "air" => air.air = Some(bit_rate(key, value)?),
+            "duty" => {
+                let d = percent(key, value)?;
+                if d <= 0.0 {
+                    return Err(format!("{key}={value}: expected more than 0%"));
+                }
+                air.duty = Some(d);
+            }
+            "ecc" => air.ecc = Some(switch(key, value)?),
+            _ => {
+                let round = duration(key, value)?;
+                if !(Duration::from_millis(1)..=Duration::from_secs(1)).contains(&round) {
+                    return Err(format!("{key}={value}: expected 1ms to 1s"));
+                }
+                air.tdm = Some(round);
+            }
+        }
+        Ok(())
+    }
+
+    /// What no single key can check.
+    fn check(&self) -> Result<(), String> {
+        if self.baud.is_none() && self.buffer != DEFAULT_BUFFER_BYTES {
             return Err("buffer= needs baud=N: only a serial radio link has a buffer".into());
         }
-        match (p.outage, p.outage_every) {
+        match (self.outage, self.outage_every) {
             (None, Some(_)) => return Err("outage_every needs outage=START+LENGTH".into()),
             (Some((_, length)), Some(every)) if every <= length => {
                 return Err(format!(
@@ -297,10 +336,10 @@ impl SimParams {
             _ => {}
         }
         // Responders are numbered by sysid; the last one must still fit.
-        if usize::from(p.first_sysid) + usize::from(p.responders) - 1 > 255 * 255 {
+        if usize::from(self.first_sysid) + usize::from(self.responders) - 1 > 255 * 255 {
             return Err("too many responders for the sysid range".into());
         }
-        Ok(p)
+        Ok(())
     }
 
     /// The ids of responder `i`: sysids count up from `first_sysid`, and
