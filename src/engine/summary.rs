@@ -7,6 +7,7 @@ use super::capacity::WireBudget;
 use super::clock_offset::ClockSummary;
 use super::hint::{Hint, HintCode};
 use super::matcher::{Counts, Matcher};
+use super::observe::ProbeName;
 use super::radio::RadioSummary;
 use super::roster::{Identity, Roster};
 use super::stats::{Bucket, RttSummary};
@@ -44,7 +45,7 @@ pub struct ScheduleSummary {
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
     pub link: String,
-    pub probe: &'static str,
+    pub probe: ProbeName,
     pub ours: SysComp,
     pub duration_s: f64,
     /// Requests put on the wire.
@@ -255,7 +256,7 @@ impl Summary {
     pub(crate) fn empty(link: &str, requests: u64) -> Summary {
         Summary {
             link: link.into(),
-            probe: "ping",
+            probe: ProbeName::Ping,
             ours: SysComp::new(250, 190),
             duration_s: 1.0,
             requests,

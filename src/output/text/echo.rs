@@ -42,7 +42,7 @@ impl<W: Write> TextReporter<W> {
             "MAVPING {} from {}: {} {}, timeout {}{}",
             info.link,
             info.ours,
-            info.probe.to_uppercase(),
+            info.probe.as_str().to_uppercase(),
             rate(info.interval),
             humantime::format_duration(info.timeout),
             if summarised {
