@@ -14,6 +14,7 @@ use super::stats::{Bucket, RttSummary};
 use super::sweep::verdict::SweepSummary;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
+use crate::transport::RxClock;
 
 /// Rows in the ASCII/JSON RTT distribution.
 pub const HISTOGRAM_ROWS: usize = 8;
@@ -73,7 +74,7 @@ pub struct Summary {
     /// Send pacing figures, once a request was sent.
     pub schedule: Option<ScheduleSummary>,
     /// How receive times were taken (kernel timestamps or user space).
-    pub rx_clock: &'static str,
+    pub rx_clock: RxClock,
     /// Radios heard by their RADIO_STATUS.
     pub radios: Vec<RadioSummary>,
     /// What a serial link's baud rate carries (serial links only).
@@ -272,7 +273,7 @@ impl Summary {
             link_error: None,
             downtime_s: 0.0,
             schedule: None,
-            rx_clock: "test",
+            rx_clock: RxClock::Simulated,
             radios: vec![],
             wire: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
