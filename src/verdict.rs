@@ -107,12 +107,49 @@ pub struct Thresholds {
     pub min_responders: Option<usize>,
 }
 
+/// What a run was judged by: an option (`--max-loss`, ...) or what every
+/// run needs (a reply, an acknowledgement). Reports show it as the option's
+/// name (`max-loss`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Check {
+    /// Something answered at all.
+    Reply,
+    /// A command was acknowledged.
+    Ack,
+    MaxLoss,
+    MaxRtt,
+    MaxJitter,
+    Expect,
+    MinResponders,
+}
+
+impl Check {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Check::Reply => "reply",
+            Check::Ack => "ack",
+            Check::MaxLoss => "max-loss",
+            Check::MaxRtt => "max-rtt",
+            Check::MaxJitter => "max-jitter",
+            Check::Expect => "expect",
+            Check::MinResponders => "min-responders",
+        }
+    }
+}
+
+impl fmt::Display for Check {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Failure {
     /// The responder it concerns, when it concerns one.
     pub responder: Option<SysComp>,
-    /// The option that was broken ("max-loss", "expect", ...).
-    pub check: &'static str,
+    /// The check that was broken.
+    pub check: Check,
     pub message: String,
 }
 
@@ -138,7 +175,7 @@ fn judge_responder(r: &ResponderSummary, t: &Thresholds, out: &mut Vec<Failure>)
     if let Some(max) = t.max_loss {
         if r.loss_ratio > max {
             fail(
-                "max-loss",
+                Check::MaxLoss,
                 format!(
                     "loss {:.2}% is above --max-loss {:.2}%",
                     r.loss_ratio * 100.0,
@@ -155,7 +192,7 @@ fn judge_responder(r: &ResponderSummary, t: &Thresholds, out: &mut Vec<Failure>)
         let max_us = limit.limit.as_secs_f64() * 1e6;
         if value > max_us {
             fail(
-                "max-rtt",
+                Check::MaxRtt,
                 format!(
                     "rtt {} {} is above --max-rtt {}={}",
                     limit.figure,
@@ -170,7 +207,7 @@ fn judge_responder(r: &ResponderSummary, t: &Thresholds, out: &mut Vec<Failure>)
         let max_us = max.as_secs_f64() * 1e6;
         if rtt.jitter_us > max_us {
             fail(
-                "max-jitter",
+                Check::MaxJitter,
                 format!(
                     "jitter {} is above --max-jitter {}",
                     ms(rtt.jitter_us),
@@ -192,7 +229,7 @@ pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
     if !summary.any_reply() {
         failures.push(Failure {
             responder: None,
-            check: "reply",
+            check: Check::Reply,
             message: "no reply at all".into(),
         });
     }
@@ -203,7 +240,7 @@ pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
         if !answering.iter().any(|r| e.matches(r.id)) {
             failures.push(Failure {
                 responder: e.compid.map(|c| SysComp::new(e.sysid, c)),
-                check: "expect",
+                check: Check::Expect,
                 message: format!("expected responder {e} did not answer"),
             });
         }
@@ -212,7 +249,7 @@ pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
         if answering.len() < min {
             failures.push(Failure {
                 responder: None,
-                check: "min-responders",
+                check: Check::MinResponders,
                 message: format!(
                     "{} responders answered, --min-responders is {min}",
                     answering.len()
@@ -229,7 +266,7 @@ pub fn judge_command(summary: &CommandSummary) -> Verdict {
     if !summary.any_ack() {
         failures.push(Failure {
             responder: None,
-            check: "ack",
+            check: Check::Ack,
             message: "no command acknowledged".into(),
         });
     }
@@ -313,7 +350,7 @@ mod tests {
         }
     }
 
-    fn checks(v: &Verdict) -> Vec<&'static str> {
+    fn checks(v: &Verdict) -> Vec<Check> {
         v.failures.iter().map(|f| f.check).collect()
     }
 
@@ -322,13 +359,13 @@ mod tests {
         let s = summary(vec![responder(1, 90, 10, 40_000.0, 3_000.0)]);
         let ok = judge(&s, &Thresholds::default());
         assert_eq!((ok.ok, ok.exit_code), (true, 0));
-        let table: Vec<(Thresholds, &str)> = vec![
+        let table: Vec<(Thresholds, Check)> = vec![
             (
                 Thresholds {
                     max_loss: Some(0.05),
                     ..Default::default()
                 },
-                "max-loss",
+                Check::MaxLoss,
             ),
             (
                 Thresholds {
@@ -338,14 +375,14 @@ mod tests {
                     }],
                     ..Default::default()
                 },
-                "max-rtt",
+                Check::MaxRtt,
             ),
             (
                 Thresholds {
                     max_jitter: Some(Duration::from_millis(2)),
                     ..Default::default()
                 },
-                "max-jitter",
+                Check::MaxJitter,
             ),
             (
                 Thresholds {
@@ -355,14 +392,14 @@ mod tests {
                     }],
                     ..Default::default()
                 },
-                "expect",
+                Check::Expect,
             ),
             (
                 Thresholds {
                     min_responders: Some(2),
                     ..Default::default()
                 },
-                "min-responders",
+                Check::MinResponders,
             ),
         ];
         for (t, check) in table {
@@ -388,9 +425,30 @@ mod tests {
     }
 
     #[test]
+    fn checks_are_named_as_their_options() {
+        for check in [
+            Check::Reply,
+            Check::Ack,
+            Check::MaxLoss,
+            Check::MaxRtt,
+            Check::MaxJitter,
+            Check::Expect,
+            Check::MinResponders,
+        ] {
+            let serialised = serde_json::to_value(check).unwrap();
+            assert_eq!(serialised, check.as_str(), "{check:?}");
+            assert_eq!(check.to_string(), check.as_str());
+        }
+        assert_eq!(Check::MinResponders.as_str(), "min-responders");
+    }
+
+    #[test]
     fn no_reply_fails_and_link_error_is_exit_2() {
         let mut s = summary(vec![]);
-        assert_eq!(checks(&judge(&s, &Thresholds::default())), vec!["reply"]);
+        assert_eq!(
+            checks(&judge(&s, &Thresholds::default())),
+            vec![Check::Reply]
+        );
         s.responders.push(responder(1, 5, 0, 1.0, 0.0));
         s.link_error = Some("gone".into());
         assert_eq!(judge(&s, &Thresholds::default()).exit_code, exit::ERROR);

@@ -17,6 +17,7 @@ pub use serve::{ContinuousLink, Module, Pattern, ProbePlan, ServeConfig, ServeSe
 
 use crate::cli::{Format, SigningArgs};
 use crate::engine::capacity::{self, WireBudget};
+use crate::engine::observe::ProbeName;
 use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::{SecretKey, SigningConfig};
@@ -89,11 +90,11 @@ pub enum Probe {
 
 impl Probe {
     /// The name reports give the probe (`probe="ping"`).
-    pub fn name(&self) -> &'static str {
+    pub fn name(&self) -> ProbeName {
         match self {
-            Probe::Ping => "ping",
-            Probe::Timesync { .. } => "timesync",
-            Probe::Command(_) => "command",
+            Probe::Ping => ProbeName::Ping,
+            Probe::Timesync { .. } => ProbeName::Timesync,
+            Probe::Command(_) => ProbeName::Command,
         }
     }
 }

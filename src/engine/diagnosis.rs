@@ -7,6 +7,7 @@
 use std::time::Duration;
 
 use super::hint::{Hint, HintCode};
+use super::observe::ProbeName;
 use super::radio;
 use super::roster::{Roster, Source};
 use super::summary::ResponderSummary;
@@ -22,7 +23,7 @@ pub const QGC_IDS: SysComp = SysComp::new(255, 190);
 pub struct Observed<'a> {
     pub link: &'a str,
     pub kind: LinkKind,
-    pub probe: &'static str,
+    pub probe: ProbeName,
     pub ours: SysComp,
     pub version: Version,
     /// A signing key was given.
@@ -109,7 +110,7 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
     }
     let identity = source.identity.as_ref()?;
     let who = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_name);
-    let probe = o.probe.to_uppercase();
+    let probe = o.probe.as_str().to_uppercase();
     if identity.mav_type == mav_type::GCS {
         if o.ours == QGC_IDS {
             return Some(our_ids_are_qgcs(&format!("{who} never answered: ")));
@@ -121,7 +122,7 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
         if vehicles {
             return None;
         }
-        let timesync = if o.probe == "timesync" {
+        let timesync = if o.probe == ProbeName::Timesync {
             " (MAVProxy answers TIMESYNC with `module load system_time` and \
              --target-system set to our system id)"
         } else {
@@ -145,7 +146,7 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
         ));
     }
     if identity.is_ardupilot() {
-        if o.probe == "ping" {
+        if o.probe == ProbeName::Ping {
             return Some(Hint::new(
                 HintCode::TimesyncOnly,
                 format!(
@@ -275,7 +276,7 @@ mod tests {
         Observed {
             link: "udpout:127.0.0.1:14550",
             kind: LinkKind::Connecting,
-            probe: "ping",
+            probe: ProbeName::Ping,
             ours: SysComp::new(250, 190),
             version: Version::V2,
             key: false,
@@ -400,7 +401,7 @@ mod tests {
         );
         // TIMESYNC unanswered by ArduPilot: its ground-station id check.
         let o = Observed {
-            probe: "timesync",
+            probe: ProbeName::Timesync,
             ..observed(&roster, 12)
         };
         assert!(codes(&diagnose(&o)).contains(&HintCode::SysidEnforced));
@@ -417,7 +418,7 @@ mod tests {
             false,
         );
         let o = Observed {
-            probe: "timesync",
+            probe: ProbeName::Timesync,
             ..observed(&roster, 12)
         };
         let hints = diagnose(&o);

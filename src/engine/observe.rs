@@ -2,8 +2,11 @@
 //! interface. Reports, exporters and tests implement [`Observer`]; the
 //! engine names none of them.
 
+use std::fmt;
 use std::io;
 use std::time::Duration;
+
+use serde::Serialize;
 
 use super::clock_offset::ClockSummary;
 use super::matcher::MatchEvent;
@@ -16,11 +19,37 @@ use super::CommandSpec;
 use super::Nanos;
 use crate::frame::SysComp;
 
+/// Which probe a session runs, by the name reports give it (`PING` in
+/// text, `"probe": "ping"` in JSON, `probe="ping"` in Prometheus labels).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProbeName {
+    Ping,
+    Timesync,
+    Command,
+}
+
+impl ProbeName {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ProbeName::Ping => "ping",
+            ProbeName::Timesync => "timesync",
+            ProbeName::Command => "command",
+        }
+    }
+}
+
+impl fmt::Display for ProbeName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// What a run is doing, told first.
 #[derive(Debug, Clone)]
 pub struct StartInfo {
     pub link: String,
-    pub probe: &'static str,
+    pub probe: ProbeName,
     pub ours: SysComp,
     pub interval: Duration,
     /// The reply timeout (the retry interval for commands).
@@ -148,4 +177,18 @@ pub enum CommandEvent {
         command: u16,
         result: u8,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn probe_names_serialise_as_reports_show_them() {
+        for probe in [ProbeName::Ping, ProbeName::Timesync, ProbeName::Command] {
+            assert_eq!(serde_json::to_value(probe).unwrap(), probe.as_str());
+            assert_eq!(probe.to_string(), probe.as_str());
+        }
+        assert_eq!(ProbeName::Timesync.as_str(), "timesync");
+    }
 }

@@ -7,12 +7,14 @@ use super::capacity::WireBudget;
 use super::clock_offset::ClockSummary;
 use super::hint::{Hint, HintCode};
 use super::matcher::{Counts, Matcher};
+use super::observe::ProbeName;
 use super::radio::RadioSummary;
 use super::roster::{Identity, Roster};
 use super::stats::{Bucket, RttSummary};
 use super::sweep::verdict::SweepSummary;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
+use crate::transport::RxClock;
 
 /// Rows in the ASCII/JSON RTT distribution.
 pub const HISTOGRAM_ROWS: usize = 8;
@@ -44,7 +46,7 @@ pub struct ScheduleSummary {
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
     pub link: String,
-    pub probe: &'static str,
+    pub probe: ProbeName,
     pub ours: SysComp,
     pub duration_s: f64,
     /// Requests put on the wire.
@@ -72,7 +74,7 @@ pub struct Summary {
     /// Send pacing figures, once a request was sent.
     pub schedule: Option<ScheduleSummary>,
     /// How receive times were taken (kernel timestamps or user space).
-    pub rx_clock: &'static str,
+    pub rx_clock: RxClock,
     /// Radios heard by their RADIO_STATUS.
     pub radios: Vec<RadioSummary>,
     /// What a serial link's baud rate carries (serial links only).
@@ -255,7 +257,7 @@ impl Summary {
     pub(crate) fn empty(link: &str, requests: u64) -> Summary {
         Summary {
             link: link.into(),
-            probe: "ping",
+            probe: ProbeName::Ping,
             ours: SysComp::new(250, 190),
             duration_s: 1.0,
             requests,
@@ -271,7 +273,7 @@ impl Summary {
             link_error: None,
             downtime_s: 0.0,
             schedule: None,
-            rx_clock: "test",
+            rx_clock: RxClock::Simulated,
             radios: vec![],
             wire: None,
             signing: crate::frame::signing::Gate::new(None).summary(),

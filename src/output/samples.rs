@@ -149,6 +149,7 @@ impl<W: Write> Reporter for SampleLog<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::observe::ProbeName;
     use crate::frame::SysComp;
 
     #[test]
@@ -190,7 +191,7 @@ mod tests {
     fn rows_of_several_links_name_their_link() {
         let info = StartInfo {
             link: "sim:?a=1,2".into(),
-            probe: "ping",
+            probe: ProbeName::Ping,
             ours: SysComp::new(255, 190),
             interval: std::time::Duration::from_secs(1),
             timeout: std::time::Duration::from_secs(1),

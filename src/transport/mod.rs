@@ -16,10 +16,12 @@ pub mod stream;
 pub mod tcp;
 pub mod udp;
 
+use std::fmt;
 use std::future::Future;
 use std::io;
 use std::time::Duration;
 
+use serde::Serialize;
 use thiserror::Error;
 use tokio::time::Instant;
 
@@ -76,25 +78,35 @@ impl LinkError {
     }
 }
 
-/// Where a frame's receive time comes from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// Where a frame's receive time comes from. Reports (the text summary's
+/// schedule line, JSON's `rx_clock`) show it as [`RxClock::as_str`] says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub enum RxClock {
     /// The kernel stamped the datagram when it arrived (SO_TIMESTAMPNS):
     /// how late we read it does not change its RTT.
+    #[serde(rename = "kernel receive timestamps (SO_TIMESTAMPNS)")]
     Kernel,
     /// Stamped when our read returned: read promptly to keep RTTs honest.
+    #[serde(rename = "user-space receive timestamps")]
     UserSpace,
     /// The simulated link's exact arrival times.
+    #[serde(rename = "simulated arrival times")]
     Simulated,
 }
 
 impl RxClock {
-    pub fn describe(self) -> &'static str {
+    pub fn as_str(self) -> &'static str {
         match self {
             RxClock::Kernel => "kernel receive timestamps (SO_TIMESTAMPNS)",
             RxClock::UserSpace => "user-space receive timestamps",
             RxClock::Simulated => "simulated arrival times",
         }
+    }
+}
+
+impl fmt::Display for RxClock {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
     }
 }
 
@@ -306,5 +318,18 @@ impl Transport for Link {
 
     fn kind(&self) -> LinkKind {
         each_link!(self, l => l.kind())
+    }
+}
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn receive_clocks_serialise_as_reports_show_them() {
+        for clock in [RxClock::Kernel, RxClock::UserSpace, RxClock::Simulated] {
+            assert_eq!(serde_json::to_value(clock).unwrap(), clock.as_str());
+            assert_eq!(clock.to_string(), clock.as_str());
+        }
+        assert_eq!(RxClock::UserSpace.as_str(), "user-space receive timestamps");
     }
 }

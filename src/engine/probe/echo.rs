@@ -317,7 +317,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             link_error: ended.link_error,
             downtime_s: ended.downtime_s,
             schedule: self.pacing.summary(cfg.interval),
-            rx_clock: ended.rx_clock.describe(),
+            rx_clock: ended.rx_clock,
             radios,
             wire: None,
             signing,

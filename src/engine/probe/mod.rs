@@ -14,6 +14,7 @@ pub mod timesync;
 
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::Lookup;
+use crate::engine::observe::ProbeName;
 use crate::engine::Nanos;
 use crate::frame::{Frame, Msg, SysComp};
 
@@ -34,8 +35,8 @@ pub trait EchoProbe {
     /// (both read together, so our clock is the wall clock, not late by
     /// however long the run took to start).
     fn begin(&mut self, _wall_at_zero: std::time::SystemTime) {}
-    /// Name shown in reports ("ping").
-    fn name(&self) -> &'static str;
+    /// Which probe it is, as reports name it.
+    fn name(&self) -> ProbeName;
     /// The token for a request sent at `now_ns` (session clock); tokens
     /// must rise strictly if replies are looked up by token.
     fn token(&mut self, now_ns: u64) -> u64;

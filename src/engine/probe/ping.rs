@@ -1,7 +1,7 @@
 //! The MAVLink PING protocol: request with targets 0/0, reply echoes
 //! `time_usec` and `seq` with the targets set to the pinger's ids.
 
-use super::{Classified, EchoProbe};
+use super::{Classified, EchoProbe, ProbeName};
 use crate::engine::matcher::Lookup;
 use crate::frame::{Frame, Msg, SysComp};
 
@@ -19,8 +19,8 @@ impl PingProbe {
 }
 
 impl EchoProbe for PingProbe {
-    fn name(&self) -> &'static str {
-        "ping"
+    fn name(&self) -> ProbeName {
+        ProbeName::Ping
     }
 
     fn token(&mut self, now_ns: u64) -> u64 {

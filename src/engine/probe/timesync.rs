@@ -4,7 +4,7 @@
 
 use std::collections::HashMap;
 
-use super::{Classified, EchoProbe};
+use super::{Classified, EchoProbe, ProbeName};
 use crate::engine::clock_offset::{ClockOffset, ClockSummary};
 use crate::engine::matcher::{Lookup, MAX_RESPONDERS};
 use crate::engine::Nanos;
@@ -38,8 +38,8 @@ impl TimesyncProbe {
 }
 
 impl EchoProbe for TimesyncProbe {
-    fn name(&self) -> &'static str {
-        "timesync"
+    fn name(&self) -> ProbeName {
+        ProbeName::Timesync
     }
 
     fn begin(&mut self, wall_at_zero: std::time::SystemTime) {

@@ -23,6 +23,7 @@ use tokio::sync::Notify;
 
 use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::ProbeName;
 use crate::engine::stats::RttStats;
 use crate::engine::summary::LinkSummary;
 use crate::engine::Nanos;
@@ -80,7 +81,8 @@ impl Track {
 #[derive(Clone, Default)]
 pub struct LiveState {
     link: String,
-    probe: &'static str,
+    /// `None` before the session starts.
+    probe: Option<ProbeName>,
     /// Session time of the latest event.
     now: Nanos,
     waiting: bool,
@@ -90,7 +92,7 @@ pub struct LiveState {
 impl LiveState {
     pub fn on_start(&mut self, info: &StartInfo) {
         self.link = info.link.clone();
-        self.probe = info.probe;
+        self.probe = Some(info.probe);
     }
 
     pub fn on_event(&mut self, event: &Event<'_>) {
@@ -195,7 +197,7 @@ pub struct RowView {
 #[derive(Debug, Clone)]
 pub struct Screen {
     pub link: String,
-    pub probe: &'static str,
+    pub probe: Option<ProbeName>,
     /// Session time of the latest event.
     pub now: Nanos,
     pub waiting: bool,
@@ -382,7 +384,7 @@ mod tests {
     fn start(link: &str) -> StartInfo {
         StartInfo {
             link: link.into(),
-            probe: "ping",
+            probe: ProbeName::Ping,
             ours: SysComp::new(255, 190),
             interval: Duration::from_millis(100),
             timeout: Duration::from_secs(2),

@@ -16,6 +16,7 @@ use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
 use ratatui::Frame;
 
 use super::{Mark, RowView, Screen};
+use crate::engine::observe::ProbeName;
 
 const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
 /// The key line: the keys, then what the figures and marks mean.
@@ -97,7 +98,10 @@ pub fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
 /// `mavping · ping · 4.4 s`, with the number of links when there are several.
 fn title(screens: &[Screen]) -> String {
     let now = screens.iter().map(|s| s.now).max().unwrap_or(0);
-    let probe = screens.first().map_or("", |s| s.probe);
+    let probe = screens
+        .first()
+        .and_then(|s| s.probe)
+        .map_or("", ProbeName::as_str);
     let links = match screens.len() {
         1 => String::new(),
         n => format!("{n} links · "),

@@ -23,7 +23,7 @@ use super::http::{self, Head, Limits, Reply, Replying};
 use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::CommandEvent;
+use crate::engine::observe::{CommandEvent, ProbeName};
 use crate::engine::radio::{RadioReport, SinceBootCounter, MAX_RADIOS};
 use crate::engine::summary::{LinkSummary, Summary};
 use crate::engine::Nanos;
@@ -115,7 +115,8 @@ impl RadioSeries {
 #[derive(Debug, Default)]
 pub struct Metrics {
     link: String,
-    probe: &'static str,
+    /// `None` before a session starts (an unopened link's metrics).
+    probe: Option<ProbeName>,
     responders: BTreeMap<SysComp, Series>,
     /// Each radio heard.
     radios: BTreeMap<SysComp, RadioSeries>,
@@ -133,10 +134,10 @@ struct LinkState {
 impl Metrics {
     /// A continuous link's metrics, named `link` before its first session
     /// (so a link that never opens still shows `mavping_link_up 0`).
-    pub fn continuous(link: &str, probe: &'static str) -> Self {
+    pub fn continuous(link: &str, probe: ProbeName) -> Self {
         Metrics {
             link: link.to_string(),
-            probe,
+            probe: Some(probe),
             state: Some(LinkState::default()),
             ..Metrics::default()
         }
@@ -169,7 +170,7 @@ impl Metrics {
 
     pub fn on_start(&mut self, info: &StartInfo) {
         self.link = info.link.clone();
-        self.probe = info.probe;
+        self.probe = Some(info.probe);
         self.set_up(true);
     }
 
@@ -380,7 +381,7 @@ fn test_start(link: &str) -> StartInfo {
     use std::time::Duration;
     StartInfo {
         link: link.into(),
-        probe: "ping",
+        probe: ProbeName::Ping,
         ours: SysComp::new(255, 190),
         interval: Duration::from_secs(1),
         timeout: Duration::from_secs(2),

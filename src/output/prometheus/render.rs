@@ -6,6 +6,7 @@
 use std::fmt::{Display, Write as _};
 
 use super::{Metrics, RadioSeries, Scope, Series, BUCKETS_S};
+use crate::engine::observe::ProbeName;
 use crate::engine::radio::{is_sik, sik_dbm, UNKNOWN};
 use crate::frame::SysComp;
 
@@ -14,7 +15,7 @@ impl Metrics {
         format!(
             "link=\"{}\",probe=\"{}\",sysid=\"{}\",compid=\"{}\"",
             escape(&self.link),
-            self.probe,
+            self.probe.map_or("", ProbeName::as_str),
             id.sysid,
             id.compid
         )
@@ -595,7 +596,7 @@ mod tests {
         use crate::engine::clock_offset::ClockSummary;
         let mut m = Metrics::default();
         m.on_start(&StartInfo {
-            probe: "timesync",
+            probe: ProbeName::Timesync,
             ..info("sim:")
         });
         let id = SysComp::new(1, 1);
@@ -651,7 +652,7 @@ mod tests {
         use crate::engine::observe::CommandEvent;
         let mut m = Metrics::default();
         m.on_start(&StartInfo {
-            probe: "command",
+            probe: ProbeName::Command,
             ..info("sim:")
         });
         let target = SysComp::new(1, 1);
@@ -751,9 +752,9 @@ mod tests {
 
     #[test]
     fn the_server_shows_its_health_and_its_links_state() {
-        let mut up = Metrics::continuous("radio", "ping");
+        let mut up = Metrics::continuous("radio", ProbeName::Ping);
         up.set_up(true);
-        let mut down = Metrics::continuous("gcs \"2\"", "timesync");
+        let mut down = Metrics::continuous("gcs \"2\"", ProbeName::Timesync);
         down.restarted();
         down.restarted();
         let health = Health {

@@ -9,7 +9,7 @@ use crate::engine::radio::{self, RadioReport, RadioSummary};
 use crate::engine::summary::{Interim, ResponderSummary, Summary};
 use crate::engine::Nanos;
 use crate::output::{Event, StartInfo};
-use crate::verdict::Verdict;
+use crate::verdict::{Check, Verdict};
 
 /// Reply lines carry the radio's figures at most this often.
 const RADIO_NOTE_EVERY_NS: Nanos = 1_000_000_000;
@@ -42,7 +42,7 @@ impl<W: Write> TextReporter<W> {
             "MAVPING {} from {}: {} {}, timeout {}{}",
             info.link,
             info.ours,
-            info.probe.to_uppercase(),
+            info.probe.as_str().to_uppercase(),
             rate(info.interval),
             humantime::format_duration(info.timeout),
             if summarised {
@@ -508,7 +508,7 @@ pub(super) fn write_summary(
         writeln!(out, "hint: {}", hint.text)?;
     }
     // Threshold failures; "no reply at all" is already plain above.
-    for f in verdict.failures.iter().filter(|f| f.check != "reply") {
+    for f in verdict.failures.iter().filter(|f| f.check != Check::Reply) {
         writeln!(out, "FAILED {}: {}", f.check, f.message)?;
     }
     Ok(())

@@ -109,7 +109,7 @@ impl<W: Write> TextReporter<W> {
                 };
                 format!(
                     "{} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {} loss{baseline}",
-                    info.probe.to_uppercase(),
+                    info.probe.as_str().to_uppercase(),
                     hz(first_hz),
                     hz(max_hz),
                     pct(loss_limit),
@@ -117,7 +117,7 @@ impl<W: Write> TextReporter<W> {
             }
             PlanKind::Load { rate_hz } => format!(
                 "{} {}/s, {step} without the load then {step} with it",
-                info.probe.to_uppercase(),
+                info.probe.as_str().to_uppercase(),
                 hz(rate_hz)
             ),
         };

@@ -18,7 +18,7 @@ use crate::output::prometheus::{render_probe, Metrics, ProbeResult};
 use crate::output::{Reporter, WallClock};
 use crate::run::one_link::measure;
 use crate::transport::Link;
-use crate::verdict;
+use crate::verdict::{self, Check};
 
 /// Prometheus's own default scrape timeout, for a request that names none.
 const DEFAULT_SCRAPE_TIMEOUT_S: f64 = 10.0;
@@ -144,14 +144,13 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
     }
     for f in &verdict.failures {
         let reason = match f.check {
-            "reply" => "no_reply",
-            "ack" => "no_ack",
-            "max-loss" => "max_loss",
-            "max-rtt" => "max_rtt",
-            "max-jitter" => "max_jitter",
-            "expect" => "expect",
-            "min-responders" => "min_responders",
-            _ => "check_failed",
+            Check::Reply => "no_reply",
+            Check::Ack => "no_ack",
+            Check::MaxLoss => "max_loss",
+            Check::MaxRtt => "max_rtt",
+            Check::MaxJitter => "max_jitter",
+            Check::Expect => "expect",
+            Check::MinResponders => "min_responders",
         };
         if !reasons.contains(&reason) {
             reasons.push(reason);

@@ -11,8 +11,8 @@ use crate::engine::stats::RttStats;
 
 use super::tracker::CommandTracker;
 use crate::engine::link_io::{Clock, Sender};
-use crate::engine::observe::CommandEvent;
 use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
+use crate::engine::observe::{CommandEvent, ProbeName};
 use crate::engine::radio::Radios;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
@@ -60,7 +60,7 @@ impl Driver for CommandDriver {
     fn start_info(&self, cfg: &SessionConfig) -> StartInfo {
         StartInfo {
             link: cfg.link_name.clone(),
-            probe: "command",
+            probe: ProbeName::Command,
             ours: cfg.ours,
             interval: cfg.interval,
             timeout: self.spec.retry_interval,
