@@ -6,6 +6,8 @@
 mod command;
 mod echo;
 mod sweep;
+#[cfg(test)]
+mod tests;
 
 use std::io::{self, Write};
 

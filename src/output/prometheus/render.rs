@@ -476,6 +476,135 @@ mod tests {
     use crate::engine::radio::RadioReport;
     use crate::output::{Event, Observer, StartInfo};
 
+    /// Two links with every kind of figure: responders with replies,
+    /// losses and a clock, a SiK radio and another maker's.
+    fn rich_links() -> (Metrics, Metrics) {
+        let mut a = Metrics::continuous("sim:?seed=1", "timesync");
+        a.on_start(&StartInfo {
+            probe: "timesync",
+            ..info("sim:?seed=1")
+        });
+        let mut b = Metrics::default();
+        b.on_start(&info("udpout:\"x\\y\"\n"));
+        for m in [&mut a, &mut b] {
+            for (seq, rtt) in [
+                (0, 400_000),
+                (1, 3_000_000),
+                (2, 700_000_000),
+                (3, 20_000_000_000),
+            ] {
+                m.on_event(&MatchEvent::Reply {
+                    responder: SysComp::new(1, 1),
+                    seq,
+                    rtt,
+                    sent_at: 0,
+                    at: rtt,
+                    out_of_order: false,
+                    first_from_responder: seq == 0,
+                });
+            }
+            m.on_event(&MatchEvent::Lost {
+                responder: SysComp::new(2, 1),
+                seq: 0,
+                sent_at: 0,
+                at: 0,
+            });
+            m.on_event(&MatchEvent::Late {
+                responder: SysComp::new(2, 1),
+                seq: 0,
+                rtt: 5,
+                sent_at: 0,
+                at: 0,
+            });
+            m.on_event(&MatchEvent::Duplicate {
+                responder: SysComp::new(1, 1),
+                seq: 1,
+                rtt: 5,
+                sent_at: 0,
+                at: 0,
+            });
+            m.on_radio(SysComp::new(51, 68), radio(120, 80));
+            m.on_radio(SysComp::new(3, 100), radio(UNKNOWN, 70));
+            m.on_radio(
+                SysComp::new(52, 68),
+                RadioReport {
+                    remnoise: 60,
+                    ..radio(110, 95)
+                },
+            );
+        }
+        a.on_clock(
+            SysComp::new(1, 1),
+            10_000_000_000,
+            &crate::engine::clock_offset::ClockSummary {
+                offset_ns: -2_000_000_000,
+                uncertainty_ns: 500,
+                bounds_ns: None,
+                bounds_drift_limit_ppm: 200,
+                spread_ns: 0.0,
+                drift_ppm: Some(50.0),
+                drift_stderr_ppm: None,
+                samples: 1,
+            },
+        );
+        // The end of b's run: percentiles of the HDR histogram, and the
+        // clock where no live estimate came.
+        let mut rtt = crate::engine::stats::RttStats::new();
+        rtt.record(3_000_000);
+        rtt.record(700_000_000);
+        let responder = crate::engine::summary::ResponderSummary {
+            id: SysComp::new(1, 1),
+            counts: crate::engine::matcher::Counts::default(),
+            loss_ratio: 0.0,
+            rtt: rtt.summary(),
+            histogram: vec![],
+            identity: None,
+            clock: Some(crate::engine::clock_offset::ClockSummary {
+                offset_ns: 1_500_000,
+                uncertainty_ns: 500,
+                bounds_ns: None,
+                bounds_drift_limit_ppm: 200,
+                spread_ns: 0.0,
+                drift_ppm: None,
+                drift_stderr_ppm: None,
+                samples: 1,
+            }),
+        };
+        b.on_summary(&crate::engine::summary::Summary {
+            responders: vec![responder],
+            ..crate::engine::summary::Summary::empty("b", 4)
+        });
+        b.set_up(false);
+        (a, b)
+    }
+
+    /// Every family of the three expositions, byte for byte.
+    #[test]
+    fn every_family_byte_for_byte() {
+        let (a, b) = rich_links();
+        let health = Health {
+            probes: 7,
+            probes_failed: 2,
+            probes_refused: 1,
+            probes_running: 1,
+            open_links: 2,
+            reloads: 1,
+            reloads_failed: 1,
+            last_reload_ok: true,
+        };
+        let result = ProbeResult {
+            success: false,
+            duration_s: 1.25,
+            reasons: vec!["link_failed", "max_loss"],
+            requests: 5,
+            in_flight: 1,
+            message: Some("the link broke".into()),
+        };
+        insta::assert_snapshot!("run", render(&[&a, &b]));
+        insta::assert_snapshot!("serve", render_serve(&[&a, &b], &health));
+        insta::assert_snapshot!("probe", render_probe(&b, &result));
+    }
+
     #[test]
     fn several_links_are_series_of_one_family() {
         let mut a = Metrics::default();
