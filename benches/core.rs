@@ -129,7 +129,7 @@ fn mutated_pieces() -> Vec<Vec<u8>> {
                 }
                 2 => copy[next() as usize % reply.len()] ^= 1 << (next() % 8),
                 3 => copy[1] = next() as u8,
-                _ => copy = (0..1 + next() % 300).map(|_| next() as u8).collect(),
+                _ => copy = (0..=next() % 300).map(|_| next() as u8).collect(),
             }
             pieces.push(copy);
         }

@@ -123,8 +123,7 @@ pub(super) fn for_link(
         if !max_hz.is_finite() || max_hz <= first_hz || max_hz > MAX_RATE {
             return Err(invalid(format!(
                 "--sweep-max {max_hz}: expected more than the first step's {first_hz}/s and at \
-                 most {} requests per second",
-                MAX_RATE
+                 most {MAX_RATE} requests per second"
             )));
         }
         PlanKind::Sweep {

@@ -272,7 +272,7 @@ mod tests {
     const ARDUPILOT: (u8, u8) = (2, 3);
     const PX4: (u8, u8) = (2, 12);
 
-    fn observed<'a>(roster: &'a Roster, frames: u64) -> Observed<'a> {
+    fn observed(roster: &Roster, frames: u64) -> Observed<'_> {
         Observed {
             link: "udpout:127.0.0.1:14550",
             kind: LinkKind::Connecting,

@@ -321,10 +321,10 @@ impl Matcher {
         let seq = self.seq_of(n);
         let sent_at = self.slots[idx].sent_at;
         for r in self.responders.iter_mut().filter(|r| r.in_window(n)) {
-            if !r.has_answered(idx) {
-                r.charge_lost(seq, sent_at, at, out);
-            } else {
+            if r.has_answered(idx) {
                 r.counts.sent += 1;
+            } else {
+                r.charge_lost(seq, sent_at, at, out);
             }
         }
     }

@@ -54,8 +54,7 @@ impl WallClock {
     pub fn micros_since_epoch(&self) -> u64 {
         self.start
             .duration_since(SystemTime::UNIX_EPOCH)
-            .map(|d| d.as_micros() as u64)
-            .unwrap_or(0)
+            .map_or(0, |d| d.as_micros() as u64)
     }
 }
 

@@ -261,16 +261,16 @@ mod tests {
         // as late as its read (15 ms, 5 ms after the send), never earlier
         // than the socket was last found empty (11 ms).
         for step in [
-            5_000 * MS as i128,
-            -5_000 * MS as i128,
-            -3_600_000 * MS as i128,
+            5_000 * i128::from(MS),
+            -5_000 * i128::from(MS),
+            -3_600_000 * i128::from(MS),
         ] {
             let rtt = rtt_ms(15, |c| c.step_wall(step));
             assert!((1.0..=5.0).contains(&rtt), "step {step} ns: rtt {rtt} ms");
         }
         // A step of 3 ms forward (it would read as 5 ms more) is caught
         // too: timed at the read.
-        assert_eq!(rtt_ms(15, |c| c.step_wall(3 * MS as i128)), 5.0);
+        assert_eq!(rtt_ms(15, |c| c.step_wall(3 * i128::from(MS))), 5.0);
     }
 
     #[test]
@@ -278,7 +278,7 @@ mod tests {
         // Ten minutes asleep between the reply's arrival and its read: on
         // CLOCK_MONOTONIC nothing passed, so the RTT stays that of the
         // waking machine, not ten minutes, and not less than 1 ms.
-        let rtt = rtt_ms(15, |c| c.step_wall(600_000 * MS as i128));
+        let rtt = rtt_ms(15, |c| c.step_wall(600_000 * i128::from(MS)));
         assert!((1.0..=5.0).contains(&rtt), "{rtt}");
     }
 
@@ -287,7 +287,7 @@ mod tests {
         let clocks = Fake::new();
         let mut rx = RxTime::with_clocks(clocks.clone());
         clocks.advance(MS);
-        clocks.step_wall(7_000 * MS as i128);
+        clocks.step_wall(7_000 * i128::from(MS));
         rx.drained();
         clocks.advance(MS);
         let stamp = clocks.stamp();
@@ -302,7 +302,7 @@ mod tests {
         let mut rx = RxTime::with_clocks(clocks.clone());
         clocks.advance(3_600_000 * MS);
         let stamp = clocks.stamp();
-        clocks.step_wall(1_000 * MS as i128);
+        clocks.step_wall(1_000 * i128::from(MS));
         clocks.advance(MS);
         assert_eq!(rx.arrival(Some(stamp)), clocks.mono());
     }
@@ -319,7 +319,7 @@ mod tests {
         let empty = clocks.mono();
         clocks.advance(MS / 5);
         let stamp = clocks.stamp();
-        clocks.step_wall(9 * MS as i128 / 10);
+        clocks.step_wall(9 * i128::from(MS) / 10);
         clocks.advance(3 * MS / 10);
         assert_eq!(rx.arrival(Some(stamp)), empty);
     }

@@ -425,8 +425,8 @@ impl Transport for UdpLink {
     /// The whole box in as few system calls as the kernel allows (GSO,
     /// `sendmmsg`).
     async fn send_all(&mut self, outbox: &Outbox) -> Result<Instant, LinkError> {
-        let sent = Instant::now();
         const QUEUE: usize = 4 * SEND_BATCH;
+        let sent = Instant::now();
         let mut queue: [Datagram<'_>; QUEUE] = [(&[], None); QUEUE];
         let mut queued = 0;
         for (frame, to) in outbox.frames() {

@@ -78,6 +78,10 @@ fn hostile_udp_peer_costs_no_reply_and_every_rejection_is_counted() {
 }
 
 #[test]
+#[allow(
+    clippy::many_single_char_names,
+    reason = "a, b: the pty's two ends; s, t, r: summary, truth, responder"
+)]
 fn hostile_serial_peer_frames_split_and_truncated_across_reads() {
     let mut bridge = Peer::start("pty_bridge.py", &[]);
     let line = bridge.read_line();

@@ -108,7 +108,7 @@ fn timesync_against_an_ardupilot_like_peer_counts_exactly_and_finds_its_clock() 
     // The peer reads its clock as it answers, after its 20 ms sleep, so
     // the NTP midpoint puts it 10 ms early: the bound is ± RTT/2.
     let measured = clock_offset_ns(&out);
-    let expected = truth["offset_ns"].as_i64().unwrap() as i128;
+    let expected = i128::from(truth["offset_ns"].as_i64().unwrap());
     let error_ms = (measured - expected) as f64 / 1e6;
     assert!(
         (error_ms - 10.0).abs() < 2.0,

@@ -127,7 +127,7 @@ timeout = "300ms"
     let probe_target = format!("udpout:127.0.0.1:{probe_port}");
     // Both patterns of contrib/prometheus/prometheus.yml, on loopback.
     let prometheus = Prometheus::start(&format!(
-        r#"
+        r"
 global:
   scrape_interval: 2s
   scrape_timeout: 2s
@@ -148,7 +148,7 @@ scrape_configs:
         target_label: instance
       - target_label: __address__
         replacement: {serve}
-"#,
+",
         serve = server.addr
     ));
 

@@ -166,7 +166,7 @@ fn max_loss_names_the_failing_responder_only() {
         .map(|r| r["responder"]["sysid"].as_u64().unwrap())
         .collect();
     assert_eq!(over, named);
-    assert_eq!(code, if over.is_empty() { 0 } else { 1 });
+    assert_eq!(code, i32::from(!over.is_empty()));
 }
 
 #[test]

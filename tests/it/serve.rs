@@ -156,7 +156,7 @@ fn bad_requests_get_one_line_and_failed_probes_a_reason() {
             format!("target={}", enc("udpout:nowhere")),
             "bad connection string 'udpout:nowhere'",
         ),
-        ("".to_string(), "missing target"),
+        (String::new(), "missing target"),
         (
             format!("target={}&count=-1", enc("udpout:127.0.0.1:9")),
             "count '-1'",

@@ -21,11 +21,13 @@ fn counter(scrape: &Scrape, name: &str, sysid: &str) -> f64 {
         .samples
         .iter()
         .find(|s| s.metric == name && s.labels.get("sysid") == Some(sysid))
-        .map(|s| match s.value {
-            Value::Counter(v) | Value::Gauge(v) | Value::Untyped(v) => v,
-            _ => panic!("{name} is not a counter: {:?}", s.value),
-        })
-        .unwrap_or_else(|| panic!("no {name} for sysid {sysid}"))
+        .map_or_else(
+            || panic!("no {name} for sysid {sysid}"),
+            |s| match s.value {
+                Value::Counter(v) | Value::Gauge(v) | Value::Untyped(v) => v,
+                _ => panic!("{name} is not a counter: {:?}", s.value),
+            },
+        )
 }
 
 #[test]

@@ -179,7 +179,7 @@ mod tests {
         for p in patterns {
             for t in texts {
                 let (p, t) = (p.as_bytes(), t.as_bytes());
-                assert_eq!(glob(p, t), slow(p, t), "{:?} {:?}", p, t);
+                assert_eq!(glob(p, t), slow(p, t), "{p:?} {t:?}");
             }
         }
     }

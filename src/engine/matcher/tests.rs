@@ -243,7 +243,7 @@ proptest! {
                 Fate::Late { extra_us } => timeline.push((sent_at + TIMEOUT + extra_us * 1000, 1, i)),
             }
         }
-        timeline.sort();
+        timeline.sort_unstable();
         for (at, kind, i) in timeline {
             let sent_at = i as u64 * MS;
             if kind == 0 {

@@ -195,7 +195,7 @@ mod tests {
     #[test]
     fn offsets_are_kept_per_responder() {
         let mut p = TimesyncProbe::new(SysComp::new(0, 0), true);
-        p.begin(std::time::UNIX_EPOCH + std::time::Duration::from_nanos(1_000));
+        p.begin(std::time::UNIX_EPOCH + std::time::Duration::from_micros(1));
         // Made at 100 (ts1 1_100), answered at 300: their clock read 5_200
         // between our 1_100 and 1_300.
         p.on_reply(&reply(5_200, 1_100, 0, 0), 100, 300);

@@ -64,6 +64,10 @@ impl Planner {
         }
     }
 
+    #[allow(
+        clippy::unnecessary_wraps,
+        reason = "the value of `next`'s match arms, which may also be None"
+    )]
     fn step(&self, phase: Phase, rate_hz: f64, load: bool) -> Option<PlannedStep> {
         Some(PlannedStep::new(phase, rate_hz, load, self.config.step))
     }

@@ -220,7 +220,7 @@ fn losses(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
     let (ox, oy) = area.get_base_pixel();
     area.draw(&Text::new(
         "lost",
-        (xs.start - ox - 12, (ys.start + ys.end) / 2 - oy),
+        (xs.start - ox - 12, ys.start.midpoint(ys.end) - oy),
         axis_font().pos(Pos::new(HPos::Right, VPos::Center)),
     ))?;
     Ok(())

@@ -67,7 +67,6 @@ fn columns(values: [&str; 13], knee: &str) -> String {
     let mut line = String::new();
     for (i, ((_, width), value)) in COLUMNS.iter().zip(values).enumerate() {
         match i {
-            0 => line.push_str(&format!("{value:>width$}")),
             1 => line.push_str(&format!(" {value:<width$}")),
             _ => line.push_str(&format!("{value:>width$}")),
         }

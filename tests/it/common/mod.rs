@@ -24,9 +24,10 @@ use std::time::{Duration, Instant};
 /// or .venv/bin/python. A missing peer fails the test loudly: interop
 /// tests never skip.
 pub fn python() -> PathBuf {
-    let path = std::env::var_os("MAVPING_PYTHON")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"));
+    let path = std::env::var_os("MAVPING_PYTHON").map_or_else(
+        || PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(".venv/bin/python"),
+        PathBuf::from,
+    );
     let ok = Command::new(&path)
         .args(["-c", "import pymavlink, serial"])
         .stderr(Stdio::null())

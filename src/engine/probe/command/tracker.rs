@@ -157,7 +157,7 @@ impl CommandTracker {
     /// Re-sends and fails whatever is due at `now`.
     pub fn poll(&mut self, now: Nanos, out: &mut impl FnMut(CommandEvent)) {
         let mut failed: Vec<Key> = Vec::new();
-        for (&(target, command), p) in self.pending.iter_mut() {
+        for (&(target, command), p) in &mut self.pending {
             // Fixed plan: a late wake-up sends every attempt that is due.
             while p.first + u64::from(p.attempts) * self.retry_interval <= now {
                 if p.attempts >= self.max_attempts {
@@ -433,7 +433,7 @@ mod tests {
         ) {
             let mut t = CommandTracker::new(100 * MS, retries);
             let mut acks: Vec<(u64, u8)> = acks;
-            acks.sort();
+            acks.sort_unstable();
             let mut next_start = 0;
             for (at_ms, copies) in acks {
                 while next_start <= at_ms {
