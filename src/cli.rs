@@ -700,18 +700,20 @@ pub struct RespondArgs {
         allow_negative_numbers = true,
         long,
         value_name = "PCT",
+        value_parser = parse_percent,
         default_value = "0"
     )]
-    pub drop: String,
+    pub drop: f64,
 
     /// Send this share of replies twice
     #[arg(
         allow_negative_numbers = true,
         long,
         value_name = "PCT",
+        value_parser = parse_percent,
         default_value = "0"
     )]
-    pub dup: String,
+    pub dup: f64,
 
     /// Random seed for --jitter, --drop and --dup
     #[arg(
