@@ -4,6 +4,8 @@
 use std::fmt;
 use std::time::Duration;
 
+use thiserror::Error;
+
 use super::radio::{AirParams, DEFAULT_TDM_ROUND};
 use crate::frame::SysComp;
 use crate::units::{parse_duration, parse_duration_up_to, parse_percent};
@@ -99,6 +101,12 @@ ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|o
 buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, \
 outage_every=DURATION, spike=PCT, spike_delay=DURATION";
 
+/// What is wrong with a `sim:` query: which key, and why (or which keys
+/// go together).
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("{0}")]
+pub struct SimParamsError(String);
+
 /// `64000`, `64k`, `1.5M`: bits per second.
 fn bit_rate(key: &str, value: &str) -> Result<u32, String> {
     let (number, scale) = match value.strip_suffix(['k', 'K']) {
@@ -144,7 +152,11 @@ fn number<T: std::str::FromStr>(key: &str, value: &str, range: &str) -> Result<T
 
 impl SimParams {
     /// Parses the part after `sim:`: empty, or `?key=value&key=value`.
-    pub fn parse(query: &str) -> Result<Self, String> {
+    pub fn parse(query: &str) -> Result<Self, SimParamsError> {
+        Self::parse_query(query).map_err(SimParamsError)
+    }
+
+    fn parse_query(query: &str) -> Result<Self, String> {
         let mut p = SimParams::default();
         let (mut air, mut duty, mut ecc, mut tdm) = (None, None, None, None);
         let query = query.strip_prefix('?').unwrap_or(query);
@@ -444,7 +456,7 @@ mod tests {
             ("?drift=2e6", "ppm"),
             ("?drift=fast", "parts per million"),
         ] {
-            let err = SimParams::parse(q).unwrap_err();
+            let err = SimParams::parse(q).unwrap_err().to_string();
             assert!(err.contains(needle), "{q}: {err}");
         }
     }
@@ -495,7 +507,7 @@ mod tests {
             ("?baud=57600&air=64k&tdm=5s", "1ms to 1s"),
             ("?baud=57600&buffer=2", "16 to 1048576"),
         ] {
-            let err = SimParams::parse(q).unwrap_err();
+            let err = SimParams::parse(q).unwrap_err().to_string();
             assert!(err.contains(needle), "{q}: {err}");
         }
     }
