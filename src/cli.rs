@@ -4,9 +4,10 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use clap::{ArgAction, Parser, Subcommand, ValueEnum};
+use thiserror::Error;
 
 use crate::engine::load::LoadSpec;
-use crate::units::{parse_duration, parse_percent};
+use crate::units::{parse_duration, parse_percent, DurationError};
 use crate::verdict::{Expected, RttLimit};
 
 /// `mavping --help` ends with examples, the connection strings and the
@@ -159,10 +160,20 @@ pub fn complete_link(current: &std::ffi::OsStr) -> Vec<clap_complete::engine::Co
     out.into_iter().map(CompletionCandidate::new).collect()
 }
 
+/// What is wrong with a `[FIGURE=]DURATION` RTT limit.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum RttLimitError {
+    /// Not an RTT figure (the message lists them).
+    #[error("{0}")]
+    Figure(String),
+    #[error(transparent)]
+    Duration(#[from] DurationError),
+}
+
 /// `[FIGURE=]DURATION`, e.g. `p99=50ms` or `200ms` (the maximum).
-pub fn parse_rtt_limit(s: &str) -> Result<RttLimit, String> {
+pub fn parse_rtt_limit(s: &str) -> Result<RttLimit, RttLimitError> {
     let (figure, limit) = match s.split_once('=') {
-        Some((figure, limit)) => (figure.parse()?, limit),
+        Some((figure, limit)) => (figure.parse().map_err(RttLimitError::Figure)?, limit),
         None => (crate::verdict::RttFigure::Max, s),
     };
     Ok(RttLimit {
@@ -179,14 +190,27 @@ pub struct ExpectArg {
     pub id: Expected,
 }
 
+/// What is wrong with an `--expect` value; the text given is quoted.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum ExpectArgError {
+    #[error("'{0}' is not LINK=SYSID or LINK=SYSID/COMPID (1-255)")]
+    Scoped(String),
+    #[error(transparent)]
+    Id(#[from] ExpectedError),
+}
+
+/// Not `SYSID` or `SYSID/COMPID` (1-255); the text given is quoted.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("'{0}' is not SYSID or SYSID/COMPID (1-255)")]
+pub struct ExpectedError(pub String);
+
 /// `SYSID[/COMPID]`, or `LINK=SYSID[/COMPID]` for one of several links
 /// (split at the last `=`, since connection strings may hold one).
-pub fn parse_expect_arg(s: &str) -> Result<ExpectArg, String> {
+pub fn parse_expect_arg(s: &str) -> Result<ExpectArg, ExpectArgError> {
     match s.rsplit_once('=') {
         Some((link, id)) if !link.is_empty() => Ok(ExpectArg {
             link: Some(link.to_string()),
-            id: parse_expected(id)
-                .map_err(|_| format!("'{s}' is not LINK=SYSID or LINK=SYSID/COMPID (1-255)"))?,
+            id: parse_expected(id).map_err(|_| ExpectArgError::Scoped(s.to_string()))?,
         }),
         _ => Ok(ExpectArg {
             link: None,
@@ -196,12 +220,12 @@ pub fn parse_expect_arg(s: &str) -> Result<ExpectArg, String> {
 }
 
 /// `SYSID` or `SYSID/COMPID`, each 1-255.
-pub fn parse_expected(s: &str) -> Result<Expected, String> {
-    let id = |part: &str| -> Result<u8, String> {
+pub fn parse_expected(s: &str) -> Result<Expected, ExpectedError> {
+    let id = |part: &str| -> Result<u8, ExpectedError> {
         part.parse::<u8>()
             .ok()
             .filter(|&v| v != 0)
-            .ok_or_else(|| format!("'{s}' is not SYSID or SYSID/COMPID (1-255)"))
+            .ok_or_else(|| ExpectedError(s.to_string()))
     };
     Ok(match s.split_once('/') {
         Some((sys, comp)) => Expected {
@@ -700,18 +724,20 @@ pub struct RespondArgs {
         allow_negative_numbers = true,
         long,
         value_name = "PCT",
+        value_parser = parse_percent,
         default_value = "0"
     )]
-    pub drop: String,
+    pub drop: f64,
 
     /// Send this share of replies twice
     #[arg(
         allow_negative_numbers = true,
         long,
         value_name = "PCT",
+        value_parser = parse_percent,
         default_value = "0"
     )]
-    pub dup: String,
+    pub dup: f64,
 
     /// Random seed for --jitter, --drop and --dup
     #[arg(

@@ -21,7 +21,7 @@ use libfuzzer_sys::fuzz_target;
 use mavping::cli::{Cli, Mode};
 use mavping::config::ServeConfig;
 use mavping::engine::matcher::MatchEvent;
-use mavping::engine::observe::{Event, Observer, StartInfo};
+use mavping::engine::observe::{Event, Observer, ProbeName, RunKind, StartInfo};
 use mavping::frame::SysComp;
 use mavping::output::http::{serve_one, Limits};
 use mavping::output::prometheus::PrometheusExporter;
@@ -50,13 +50,12 @@ fn exporter() -> PrometheusExporter {
     let mut link = exporter.link(0);
     let _ = link.start(&StartInfo {
         link: "udpout:127.0.0.1:14550".into(),
-        probe: "ping",
+        probe: ProbeName::Ping,
         ours: SysComp::new(250, 190),
         interval: Duration::from_millis(100),
         timeout: Duration::from_secs(1),
         count: None,
-        command: None,
-        sweep: None,
+        run: RunKind::Echo,
     });
     for seq in 0..3u32 {
         let _ = link.event(&Event::Match(MatchEvent::Reply {

@@ -13,7 +13,9 @@ use std::time::Duration;
 
 use thiserror::Error;
 
-pub use serve::{ContinuousLink, Module, Pattern, ProbePlan, ServeConfig, ServeSettings};
+pub use serve::{
+    BadProbeRequest, ContinuousLink, Module, Pattern, ProbePlan, ServeConfig, ServeSettings,
+};
 
 use crate::cli::{Format, SigningArgs};
 use crate::engine::capacity::{self, WireBudget};

@@ -8,11 +8,6 @@ use crate::responder::ResponderSettings;
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;
 use crate::transport::LinkOptions;
-use crate::units::parse_percent;
-
-fn percent(flag: &str, text: &str) -> Result<f64, ConfigError> {
-    parse_percent(text).map_err(|e| invalid(format!("{flag} {text}: {e}")))
-}
 
 impl TryFrom<&RespondArgs> for RespondConfig {
     type Error = ConfigError;
@@ -40,8 +35,8 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 id: validate_ids(cli.sysid, cli.compid)?,
                 delay: cli.delay,
                 jitter: cli.jitter,
-                drop: percent("--drop", &cli.drop)?,
-                dup: percent("--dup", &cli.dup)?,
+                drop: cli.drop,
+                dup: cli.dup,
                 seed: cli.seed,
                 answer_ping: !cli.no_ping,
                 // A responder with a key answers only signed requests.
@@ -105,8 +100,8 @@ mod tests {
         assert!((r.settings.drop - 0.1).abs() < 1e-12 && (r.settings.dup - 0.025).abs() < 1e-12);
         assert!(!r.settings.answer_ping);
         for (args, needle) in [
-            ("--drop 150 sim:", "--drop 150"),
-            ("--dup x sim:", "--dup x"),
+            ("--drop 150 sim:", "'150' for '--drop <PCT>'"),
+            ("--dup x sim:", "'x' for '--dup <PCT>'"),
             ("--sysid 0 sim:", "--sysid 0"),
             ("--delay 2h sim:", "at most 1h"),
             ("bogus:1:2", "accepted forms"),

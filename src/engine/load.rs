@@ -18,6 +18,7 @@ use std::str::FromStr;
 use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use serde::Serialize;
+use thiserror::Error;
 
 use super::link_io::{Clock, Sender};
 use super::Nanos;
@@ -71,36 +72,53 @@ pub struct LoadSpec {
     pub rate: f64,
 }
 
-impl FromStr for LoadSpec {
-    type Err = String;
+/// What a `--load` stream looks like, for its errors.
+const EXPECTED_LOAD: &str =
+    "expected MSG@RATE: ATTITUDE@HZ, GLOBAL_POSITION_INT@HZ or BYTES@BYTES_PER_S, e.g. ATTITUDE@50";
 
-    fn from_str(s: &str) -> Result<Self, String> {
-        let expected =
-            "expected MSG@RATE: ATTITUDE@HZ, GLOBAL_POSITION_INT@HZ or BYTES@BYTES_PER_S, \
-                        e.g. ATTITUDE@50";
+/// What is wrong with a `--load` stream; the text given is quoted.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum LoadSpecError {
+    #[error("'{0}': {EXPECTED_LOAD}", EXPECTED_LOAD = EXPECTED_LOAD)]
+    NotMsgAtRate(String),
+    #[error("'{text}': unknown message {name}; {EXPECTED_LOAD}", EXPECTED_LOAD = EXPECTED_LOAD)]
+    UnknownMessage { text: String, name: String },
+    /// The rate is not a number in (0, [`MAX_LOAD_RATE`]]; `BYTES`' is in
+    /// bytes per second, the messages' in messages per second.
+    #[error(
+        "'{text}': the rate must be a number above 0 and at most {MAX_LOAD_RATE} ({})",
+        if *bytes { "bytes per second" } else { "messages per second" },
+        MAX_LOAD_RATE = MAX_LOAD_RATE
+    )]
+    Rate { text: String, bytes: bool },
+}
+
+impl FromStr for LoadSpec {
+    type Err = LoadSpecError;
+
+    fn from_str(s: &str) -> Result<Self, LoadSpecError> {
         let (name, rate) = s
             .split_once('@')
-            .ok_or_else(|| format!("'{s}': {expected}"))?;
+            .ok_or_else(|| LoadSpecError::NotMsgAtRate(s.to_string()))?;
         let kind = match name.trim().to_ascii_uppercase().as_str() {
             "ATTITUDE" => LoadKind::Attitude,
             "GLOBAL_POSITION_INT" => LoadKind::GlobalPositionInt,
             "BYTES" => LoadKind::Bytes,
-            other => return Err(format!("'{s}': unknown message {other}; {expected}")),
+            other => {
+                return Err(LoadSpecError::UnknownMessage {
+                    text: s.to_string(),
+                    name: other.to_string(),
+                })
+            }
         };
         let rate: f64 = rate
             .trim()
             .parse()
             .ok()
             .filter(|r: &f64| r.is_finite() && *r > 0.0 && *r <= MAX_LOAD_RATE)
-            .ok_or_else(|| {
-                format!(
-                    "'{s}': the rate must be a number above 0 and at most {MAX_LOAD_RATE} ({})",
-                    if kind == LoadKind::Bytes {
-                        "bytes per second"
-                    } else {
-                        "messages per second"
-                    }
-                )
+            .ok_or_else(|| LoadSpecError::Rate {
+                text: s.to_string(),
+                bytes: kind == LoadKind::Bytes,
             })?;
         Ok(LoadSpec { kind, rate })
     }
@@ -289,9 +307,18 @@ mod tests {
             ("BYTES@-5", "bytes per second"),
             ("ATTITUDE@1e9", "at most"),
         ] {
-            let e = bad.parse::<LoadSpec>().unwrap_err();
+            let e = bad.parse::<LoadSpec>().unwrap_err().to_string();
             assert!(e.contains(needle), "{bad}: {e}");
         }
+        assert_eq!(
+            "ATTITUDE".parse::<LoadSpec>().unwrap_err().to_string(),
+            "'ATTITUDE': expected MSG@RATE: ATTITUDE@HZ, GLOBAL_POSITION_INT@HZ or \
+             BYTES@BYTES_PER_S, e.g. ATTITUDE@50"
+        );
+        assert_eq!(
+            "BYTES@0".parse::<LoadSpec>().unwrap_err().to_string(),
+            "'BYTES@0': the rate must be a number above 0 and at most 1000000 (bytes per second)"
+        );
     }
 
     #[test]

@@ -55,10 +55,38 @@ pub struct StartInfo {
     /// The reply timeout (the retry interval for commands).
     pub timeout: Duration,
     pub count: Option<u64>,
+    pub run: RunKind,
+}
+
+/// What kind of run a session is, with what only that kind has: what
+/// reporters tell apart once, at its start.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RunKind {
+    /// An echo probe (PING, TIMESYNC) at one rate: a line per reply.
+    Echo,
+    /// `--sweep` or `--load`: an echo probe in steps; the steps planned,
+    /// the load sent.
+    Steps(SweepConfig),
     /// `--probe command`: what is sent, and how it is re-sent.
-    pub command: Option<CommandSpec>,
-    /// `--sweep` or `--load`: the steps planned, the load sent.
-    pub sweep: Option<SweepConfig>,
+    Command(CommandSpec),
+}
+
+impl RunKind {
+    /// The command a command run sends.
+    pub fn command(&self) -> Option<&CommandSpec> {
+        match self {
+            RunKind::Command(spec) => Some(spec),
+            _ => None,
+        }
+    }
+
+    /// The steps of a run in steps.
+    pub fn steps(&self) -> Option<&SweepConfig> {
+        match self {
+            RunKind::Steps(plan) => Some(plan),
+            _ => None,
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy)]

@@ -13,7 +13,7 @@ pub mod text;
 use std::io;
 use std::time::{Duration, SystemTime};
 
-pub use crate::engine::observe::{Event, Observer, StartInfo};
+pub use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::verdict::Verdict;

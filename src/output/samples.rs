@@ -149,7 +149,7 @@ impl<W: Write> Reporter for SampleLog<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::observe::ProbeName;
+    use crate::engine::observe::{ProbeName, RunKind};
     use crate::frame::SysComp;
 
     #[test]
@@ -196,8 +196,7 @@ mod tests {
             interval: std::time::Duration::from_secs(1),
             timeout: std::time::Duration::from_secs(1),
             count: None,
-            command: None,
-            sweep: None,
+            run: RunKind::Echo,
         };
         let lost = Event::Match(MatchEvent::Lost {
             responder: SysComp::new(1, 1),

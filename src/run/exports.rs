@@ -6,12 +6,15 @@
 
 use std::fs::File;
 use std::io::{self, BufWriter, Write};
+use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
+
+use thiserror::Error;
 
 use crate::config::Config;
 use crate::engine::session::Measurement;
 use crate::output::hgrm;
-use crate::output::plot::Plot;
+use crate::output::plot::{Plot, PlotError};
 use crate::output::prometheus::{Metrics, PrometheusExporter};
 use crate::output::samples::SampleLog;
 use crate::output::{Reporter, Shared};
@@ -26,15 +29,40 @@ pub struct Exports {
     several: bool,
 }
 
-fn create(path: &Path, what: &str) -> Result<BufWriter<File>, String> {
+/// An export that could not be opened or written, and which file or
+/// address it was.
+#[derive(Debug, Error)]
+pub enum ExportError {
+    /// `what` is the option (`--samples`, `--plot`, `--hgrm`).
+    #[error("cannot write {what} {}: {source}", path.display())]
+    Create {
+        what: &'static str,
+        path: PathBuf,
+        source: io::Error,
+    },
+    #[error("--prometheus {addr}: {source}")]
+    Prometheus { addr: SocketAddr, source: io::Error },
+    #[error("cannot write --plot {}: {source}", path.display())]
+    PlotDrawn { path: PathBuf, source: PlotError },
+    #[error("cannot write --plot {}: {source}", path.display())]
+    PlotWritten { path: PathBuf, source: io::Error },
+    #[error("cannot write --hgrm {}: {source}", path.display())]
+    Hgrm { path: PathBuf, source: io::Error },
+}
+
+fn create(path: &Path, what: &'static str) -> Result<BufWriter<File>, ExportError> {
     File::create(path)
         .map(BufWriter::new)
-        .map_err(|e| format!("cannot write {what} {}: {e}", path.display()))
+        .map_err(|source| ExportError::Create {
+            what,
+            path: path.to_path_buf(),
+            source,
+        })
 }
 
 impl Exports {
     /// Opens every export the configuration asks for, in a fixed order.
-    pub fn open(config: &Config) -> Result<Self, String> {
+    pub fn open(config: &Config) -> Result<Self, ExportError> {
         let out = &config.output;
         let samples = out
             .samples
@@ -46,7 +74,7 @@ impl Exports {
             Some(addr) => {
                 let (exporter, bound) = std::net::TcpListener::bind(addr)
                     .and_then(PrometheusExporter::serve)
-                    .map_err(|e| format!("--prometheus {addr}: {e}"))?;
+                    .map_err(|source| ExportError::Prometheus { addr, source })?;
                 // Says the port when 0 was asked for; scripts and tests read it.
                 stderr::error(&format_args!("serving metrics at http://{bound}/metrics"));
                 Some(exporter)
@@ -104,18 +132,18 @@ impl Exports {
     pub fn finish<'a>(
         self,
         outcomes: impl IntoIterator<Item = &'a Measurement>,
-    ) -> Result<(), String> {
+    ) -> Result<(), ExportError> {
         if let Some((plot, mut file, path)) = self.plot {
-            let written = plot.svg().and_then(|svg| {
-                file.write_all(svg.as_bytes())
-                    .and_then(|()| file.flush())
-                    .map_err(|e| e.to_string())
-            });
-            written.map_err(|e| format!("cannot write --plot {}: {e}", path.display()))?;
+            let svg = match plot.svg() {
+                Ok(svg) => svg,
+                Err(source) => return Err(ExportError::PlotDrawn { path, source }),
+            };
+            file.write_all(svg.as_bytes())
+                .and_then(|()| file.flush())
+                .map_err(|source| ExportError::PlotWritten { path, source })?;
         }
         if let Some((file, path)) = self.hgrm {
-            write_hgrm(file, outcomes)
-                .map_err(|e| format!("cannot write --hgrm {}: {e}", path.display()))?;
+            write_hgrm(file, outcomes).map_err(|source| ExportError::Hgrm { path, source })?;
         }
         Ok(())
     }

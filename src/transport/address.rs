@@ -173,7 +173,7 @@ impl std::str::FromStr for LinkSpec {
             let query = query.strip_prefix(':').unwrap_or(query);
             return SimParams::parse(query)
                 .map(LinkSpec::Sim)
-                .map_err(|reason| error(input, reason));
+                .map_err(|reason| error(input, reason.to_string()));
         }
         if input.starts_with('/') || input.starts_with("COM") {
             return serial(input, input);

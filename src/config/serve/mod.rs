@@ -26,6 +26,7 @@ use crate::transport::LinkOptions;
 use crate::verdict::Thresholds;
 pub use allow::Pattern;
 use file::{continuous_link, default_module, file_error, within, File, Table};
+pub use request::BadProbeRequest;
 
 /// `mavping serve` listens here unless told otherwise: this machine only.
 pub const DEFAULT_LISTEN: &str = "127.0.0.1:9465";
@@ -396,7 +397,8 @@ mod tests {
         let e = c
             .settings
             .plan("target=udpout:127.0.0.1:14550")
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("no target is; start mavping serve with --allow"),
             "{e}"

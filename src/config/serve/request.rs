@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 use std::time::Duration;
 
 use clap::ValueEnum;
+use thiserror::Error;
 
 use super::{
     refuse_virtual, session, validate_count, validate_probe_interval, validate_timeout, Common,
@@ -18,10 +19,19 @@ use crate::transport::route::Route;
 use crate::transport::LinkOptions;
 use crate::units::parse_duration;
 
+/// Why a `/probe` request is refused: one line, the HTTP 400 body.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("{0}")]
+pub struct BadProbeRequest(String);
+
 impl ServeSettings {
     /// A `/probe` request's query string into what to run, or the one line
     /// that says why not (the HTTP 400 body).
-    pub fn plan(&self, query: &str) -> Result<ProbePlan, String> {
+    pub fn plan(&self, query: &str) -> Result<ProbePlan, BadProbeRequest> {
+        self.plan_query(query).map_err(BadProbeRequest)
+    }
+
+    fn plan_query(&self, query: &str) -> Result<ProbePlan, String> {
         let mut params: BTreeMap<String, String> = BTreeMap::new();
         for (key, value) in form_urlencoded::parse(query.as_bytes()) {
             if !["target", "module", "count", "interval", "timeout", "probe"].contains(&&*key) {
@@ -186,7 +196,7 @@ mod tests {
                 "clock=virtual cannot be served",
             ),
         ] {
-            let e = s.plan(query).unwrap_err();
+            let e = s.plan(query).unwrap_err().to_string();
             assert!(e.contains(needle), "{query}: {e}");
             assert!(!e.contains('\n'), "{e}");
         }

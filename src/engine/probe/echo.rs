@@ -10,7 +10,7 @@ use crate::engine::diagnosis::{diagnose, Observed};
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::link_io::{Clock, Sender};
 use crate::engine::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
-use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
+use crate::engine::observe::{tell_each, Event, Observer, RunKind, StartInfo};
 use crate::engine::radio::{radio_hints, Radios};
 use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
@@ -158,8 +158,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             interval: cfg.interval,
             timeout: cfg.timeout,
             count: cfg.count,
-            command: None,
-            sweep: cfg.sweep.clone(),
+            run: cfg.sweep.clone().map_or(RunKind::Echo, RunKind::Steps),
         }
     }
 

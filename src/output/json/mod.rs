@@ -13,7 +13,7 @@ use std::io::{self, Write};
 
 use serde_json::{json, Value};
 
-use super::{Event, Observer, Reporter, StartInfo, WallClock};
+use super::{Event, Observer, Reporter, RunKind, StartInfo, WallClock};
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -95,15 +95,15 @@ fn us(ns: Nanos) -> f64 {
 
 impl<W: Write> Observer for JsonReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        self.command = info.command.is_some();
+        self.command = matches!(info.run, RunKind::Command(_));
         if self.quiet {
             return Ok(());
         }
         let mut value = self.start_object(info);
-        if let Some(spec) = &info.command {
+        if let Some(spec) = info.run.command() {
             value.insert("command".into(), command::spec(spec));
         }
-        if let Some(plan) = &info.sweep {
+        if let Some(plan) = info.run.steps() {
             value.insert("sweep".into(), sweep::plan(plan));
         }
         self.emit(Value::Object(value))

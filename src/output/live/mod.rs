@@ -337,6 +337,7 @@ mod tests {
     use ratatui::Terminal;
 
     use super::*;
+    use crate::engine::observe::RunKind;
 
     fn reply(responder: SysComp, seq: u32, rtt_ms: u64) -> Event<'static> {
         Event::Match(MatchEvent::Reply {
@@ -389,8 +390,7 @@ mod tests {
             interval: Duration::from_millis(100),
             timeout: Duration::from_secs(2),
             count: None,
-            command: None,
-            sweep: None,
+            run: RunKind::Echo,
         }
     }
 

@@ -11,7 +11,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::frame::{self, Area, DrawResult, Layout, LegendRow, FONT, MARGIN, ROW_H, TITLE_H};
 use super::style::Look;
-use super::{bin, bin_low_ms, PlotData, Track, BINS_PER_DECADE};
+use super::{bin, bin_low_ms, PlotData, PlotError, Track, BINS_PER_DECADE};
 use crate::engine::Nanos;
 
 const TIME_H: u32 = 300;
@@ -73,7 +73,7 @@ struct Entry<'a> {
     track: &'a Track,
 }
 
-pub(super) fn svg(data: &PlotData) -> Result<String, String> {
+pub(super) fn svg(data: &PlotData) -> Result<String, PlotError> {
     let entries: Vec<Entry<'_>> = data
         .tracks
         .iter()

@@ -8,6 +8,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::style::Look;
+use super::PlotError;
 
 pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
 
@@ -95,7 +96,7 @@ pub(super) fn svg(
     layout: &Layout,
     height: u32,
     body: impl FnOnce(&Area<'_>) -> DrawResult,
-) -> Result<String, String> {
+) -> Result<String, PlotError> {
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (layout.width, height)).into_drawing_area();
@@ -113,7 +114,7 @@ pub(super) fn svg(
             root.present()?;
             Ok(())
         })();
-        drawn.map_err(|e| e.to_string())?;
+        drawn.map_err(|e| PlotError(e.to_string()))?;
     }
     Ok(svg)
 }

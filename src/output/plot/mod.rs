@@ -17,6 +17,8 @@ use std::collections::BTreeMap;
 use std::io;
 use std::rc::Rc;
 
+use thiserror::Error;
+
 use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::{LinkSummary, ResponderSummary};
@@ -26,6 +28,11 @@ use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
 /// Time spans kept per responder.
+/// The SVG could not be drawn: the drawing library's message.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("{0}")]
+pub struct PlotError(String);
+
 pub const SPANS: usize = 1024;
 /// Width of a span at the start: fine enough for 1 kHz pinging.
 const FIRST_SPAN_NS: Nanos = 1_000_000;
@@ -170,7 +177,7 @@ impl PlotData {
 
     /// Draws the SVG document: RTT and loss against the offered rate for
     /// a sweep, else RTT over time and its distribution.
-    pub fn svg(&self) -> Result<String, String> {
+    pub fn svg(&self) -> Result<String, PlotError> {
         if self.sweeps.is_empty() {
             return draw::svg(self);
         }
@@ -232,7 +239,7 @@ impl Plot {
     }
 
     /// Draws the SVG document.
-    pub fn svg(&self) -> Result<String, String> {
+    pub fn svg(&self) -> Result<String, PlotError> {
         self.data.borrow().svg()
     }
 }

@@ -9,6 +9,7 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 use super::draw::{caption_font, log_ticks, mesh, Y_LABELS_W};
 use super::frame::{self, Area, DrawResult, Layout, LegendRow, FONT, MARGIN, ROW_H, TITLE_H};
 use super::style::Look;
+use super::PlotError;
 use crate::engine::sweep::step::StepFigures;
 use crate::engine::sweep::verdict::SweepSummary;
 
@@ -37,7 +38,7 @@ impl SweepEntry<'_> {
     }
 }
 
-pub(super) fn svg(title: &str, entries: &[SweepEntry<'_>]) -> Result<String, String> {
+pub(super) fn svg(title: &str, entries: &[SweepEntry<'_>]) -> Result<String, PlotError> {
     let layout = Layout::new(
         title,
         "link",

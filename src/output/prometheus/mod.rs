@@ -378,6 +378,7 @@ impl PrometheusExporter {
 /// A PING run's start on `link`, for the tests here and in `render`.
 #[cfg(test)]
 fn test_start(link: &str) -> StartInfo {
+    use crate::engine::observe::RunKind;
     use std::time::Duration;
     StartInfo {
         link: link.into(),
@@ -386,8 +387,7 @@ fn test_start(link: &str) -> StartInfo {
         interval: Duration::from_secs(1),
         timeout: Duration::from_secs(2),
         count: None,
-        command: None,
-        sweep: None,
+        run: RunKind::Echo,
     }
 }
 

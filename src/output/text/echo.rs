@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, TextReporter};
+use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, Lines, TextReporter};
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport, RadioSummary};
@@ -30,9 +30,6 @@ pub(super) struct Progress {
 
 impl<W: Write> TextReporter<W> {
     pub(super) fn echo_start(&mut self, info: &StartInfo) -> io::Result<()> {
-        if let Some(plan) = &info.sweep {
-            return self.sweep_start(info, plan);
-        }
         let summarised = !self.every_reply && 1.0 / info.interval.as_secs_f64() > MAX_LINE_RATE;
         if summarised {
             self.progress = Some(Progress::default());
@@ -77,7 +74,7 @@ impl<W: Write> TextReporter<W> {
         match event {
             Event::Step(step) => return self.step_row(step),
             // A run in steps shows each step, not each reply.
-            Event::Match(_) if self.steps => return Ok(()),
+            Event::Match(_) if self.lines == Lines::Steps => return Ok(()),
             _ => {}
         }
         if let (Some(_), Event::Match(e)) = (&self.progress, event) {

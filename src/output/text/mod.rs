@@ -9,7 +9,7 @@ mod sweep;
 
 use std::io::{self, Write};
 
-use super::{Event, Observer, Prefixed, Reporter, StartInfo, WallClock};
+use super::{Event, Observer, Prefixed, Reporter, RunKind, StartInfo, WallClock};
 use crate::engine::radio::RadioReport;
 use crate::engine::stats::Bucket;
 use crate::engine::summary::{Interim, LinkSummary};
@@ -18,14 +18,26 @@ use crate::frame::signing::SigningSummary;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
+/// What a run's event lines show.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Lines {
+    /// An echo probe's: a line per reply, loss and the like.
+    Replies,
+    /// A run in steps (`--sweep`, `--load`): a row per step instead of a
+    /// line per reply.
+    Steps,
+    /// A command probe's: only its own events.
+    Commands,
+}
+
 pub struct TextReporter<W: Write> {
     /// Event lines go through the link's prefix (with several links);
     /// the summary is written unprefixed, under its own header.
     out: Prefixed<W>,
     /// Only the summary (`-q`).
     quiet: bool,
-    /// The run is a command probe's: only its own events are printed.
-    command: bool,
+    /// What event lines show, from the kind of run.
+    lines: Lines,
     timeout: std::time::Duration,
     /// Print every reply even at high rates (`--every-reply`).
     every_reply: bool,
@@ -38,9 +50,6 @@ pub struct TextReporter<W: Write> {
     radio_shown: Option<Nanos>,
     /// `-D`: each event line starts with its Unix time, as `ping -D`.
     timestamps: Option<WallClock>,
-    /// A run in steps (`--sweep`, `--load`): a row per step instead of a
-    /// line per reply.
-    steps: bool,
     /// Step rows printed as the steps ended; the summary shows the rest.
     steps_shown: usize,
 }
@@ -50,14 +59,13 @@ impl<W: Write> TextReporter<W> {
         TextReporter {
             out: Prefixed::new(out, None),
             quiet,
-            command: false,
+            lines: Lines::Replies,
             timeout: std::time::Duration::ZERO,
             every_reply: false,
             progress: None,
             radio: None,
             radio_shown: None,
             timestamps: None,
-            steps: false,
             steps_shown: 0,
         }
     }
@@ -105,14 +113,18 @@ impl<W: Write> TextReporter<W> {
 impl<W: Write> Observer for TextReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.timeout = info.timeout;
-        self.command = info.command.is_some();
-        self.steps = info.sweep.is_some();
+        self.lines = match info.run {
+            RunKind::Echo => Lines::Replies,
+            RunKind::Steps(_) => Lines::Steps,
+            RunKind::Command(_) => Lines::Commands,
+        };
         if self.quiet {
             return Ok(());
         }
-        match &info.command {
-            Some(spec) => self.command_start(info, spec),
-            None => self.echo_start(info),
+        match &info.run {
+            RunKind::Echo => self.echo_start(info),
+            RunKind::Steps(plan) => self.sweep_start(info, plan),
+            RunKind::Command(spec) => self.command_start(info, spec),
         }
     }
 
@@ -123,7 +135,7 @@ impl<W: Write> Observer for TextReporter<W> {
         match event {
             Event::Command(e) => self.command_event(e),
             // A command run prints its commands' fate only.
-            _ if self.command => Ok(()),
+            _ if self.lines == Lines::Commands => Ok(()),
             _ => self.echo_event(event),
         }
     }

@@ -4,6 +4,8 @@
 use std::fmt;
 use std::time::Duration;
 
+use thiserror::Error;
+
 use super::radio::{AirParams, DEFAULT_TDM_ROUND};
 use crate::frame::SysComp;
 use crate::units::{parse_duration, parse_duration_up_to, parse_percent};
@@ -98,6 +100,12 @@ jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=re
 ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
 buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, \
 outage_every=DURATION, spike=PCT, spike_delay=DURATION";
+
+/// What is wrong with a `sim:` query: which key, and why (or which keys
+/// go together).
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("{0}")]
+pub struct SimParamsError(String);
 
 /// `64000`, `64k`, `1.5M`: bits per second.
 fn bit_rate(key: &str, value: &str) -> Result<u32, String> {
@@ -216,7 +224,11 @@ where
 
 impl SimParams {
     /// Parses the part after `sim:`: empty, or `?key=value&key=value`.
-    pub fn parse(query: &str) -> Result<Self, String> {
+    pub fn parse(query: &str) -> Result<Self, SimParamsError> {
+        Self::parse_query(query).map_err(SimParamsError)
+    }
+
+    fn parse_query(query: &str) -> Result<Self, String> {
         let mut p = SimParams::default();
         let mut air = AirKeys::default();
         let query = query.strip_prefix('?').unwrap_or(query);
@@ -483,7 +495,7 @@ mod tests {
             ("?drift=2e6", "ppm"),
             ("?drift=fast", "parts per million"),
         ] {
-            let err = SimParams::parse(q).unwrap_err();
+            let err = SimParams::parse(q).unwrap_err().to_string();
             assert!(err.contains(needle), "{q}: {err}");
         }
     }
@@ -534,7 +546,7 @@ mod tests {
             ("?baud=57600&air=64k&tdm=5s", "1ms to 1s"),
             ("?baud=57600&buffer=2", "16 to 1048576"),
         ] {
-            let err = SimParams::parse(q).unwrap_err();
+            let err = SimParams::parse(q).unwrap_err().to_string();
             assert!(err.contains(needle), "{q}: {err}");
         }
     }

@@ -12,7 +12,7 @@ use crate::engine::stats::RttStats;
 use super::tracker::CommandTracker;
 use crate::engine::link_io::{Clock, Sender};
 use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
-use crate::engine::observe::{CommandEvent, ProbeName};
+use crate::engine::observe::{CommandEvent, ProbeName, RunKind};
 use crate::engine::radio::Radios;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
@@ -65,8 +65,7 @@ impl Driver for CommandDriver {
             interval: cfg.interval,
             timeout: self.spec.retry_interval,
             count: cfg.count,
-            command: Some(self.spec.clone()),
-            sweep: None,
+            run: RunKind::Command(self.spec.clone()),
         }
     }
 
