@@ -153,6 +153,11 @@ impl<W: Write> JsonReporter<W> {
 }
 
 impl Lines {
+    /// Notes what the run is: a command probe's writes its own events only.
+    fn starts(&mut self, info: &StartInfo) {
+        self.command = info.command.is_some();
+    }
+
     /// Writes `line` and its newline.
     fn write(&self, out: &mut impl Write, line: &Line<'_>) -> io::Result<()> {
         let link = match line.names_its_link() {
@@ -235,7 +240,7 @@ fn us(ns: Nanos) -> f64 {
 
 impl<W: Write> Observer for JsonReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        self.lines.command = info.command.is_some();
+        self.lines.starts(info);
         if self.quiet {
             return Ok(());
         }
