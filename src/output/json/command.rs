@@ -1,31 +1,86 @@
-//! JSON objects of the command probe.
+//! Lines of the command probe.
 
-use std::io;
+use serde::Serialize;
 
-use serde_json::{json, Value};
-
-use super::{us, SCHEMA_VERSION};
-use crate::engine::summary::CommandSummary;
+use super::{seconds, us, Line, SCHEMA_VERSION};
+use crate::engine::summary::{CommandSummary, CommandTargetSummary};
 use crate::engine::{observe::CommandEvent, CommandSpec};
 use crate::frame::codec;
+use crate::frame::signing::SigningSummary;
+use crate::frame::{ScanStats, SysComp};
 use crate::verdict::Verdict;
 
-/// The `command` member of the start object: what is sent, and how.
-pub(super) fn spec(spec: &CommandSpec) -> Value {
-    json!({
-        "id": spec.command,
-        "name": codec::command_name(spec.command),
-        "target": spec.target,
-        "params": spec.params,
-        "retry_interval_s": spec.retry_interval.as_secs_f64(),
-        "retries": spec.retries,
-    })
+/// The start line's `command`: what is sent, and how.
+#[derive(Serialize)]
+pub(super) struct Spec {
+    id: u16,
+    name: String,
+    target: SysComp,
+    /// The f32 params as the f64 they widen to.
+    params: [f64; 7],
+    retry_interval_s: f64,
+    retries: u8,
 }
 
-/// The object of a command event, if it has one.
-pub(super) fn event(event: &CommandEvent) -> Option<Value> {
+impl Spec {
+    pub(super) fn of(spec: &CommandSpec) -> Self {
+        Spec {
+            id: spec.command,
+            name: codec::command_name(spec.command),
+            target: spec.target,
+            params: spec.params.map(f64::from),
+            retry_interval_s: spec.retry_interval.as_secs_f64(),
+            retries: spec.retries,
+        }
+    }
+}
+
+/// `ack`: a command acknowledged.
+#[derive(Serialize)]
+pub(super) struct Ack {
+    r#type: &'static str,
+    n: u64,
+    target: SysComp,
+    from: SysComp,
+    command: u16,
+    result: u8,
+    result_name: String,
+    attempts: u32,
+    time_to_ack_us: f64,
+}
+
+/// `command_failed`: every attempt went unacknowledged.
+#[derive(Serialize)]
+pub(super) struct Failed {
+    r#type: &'static str,
+    n: u64,
+    target: SysComp,
+    command: u16,
+    attempts: u32,
+}
+
+/// `skipped`: a command not sent.
+#[derive(Serialize)]
+pub(super) struct Skipped {
+    r#type: &'static str,
+    t_s: f64,
+    target: SysComp,
+    command: u16,
+}
+
+/// `late_ack` or `duplicate_ack`: an ACK after the command was decided.
+#[derive(Serialize)]
+pub(super) struct AckAgain {
+    r#type: &'static str,
+    from: SysComp,
+    command: u16,
+    result: u8,
+}
+
+/// The line of a command event, if it has one.
+pub(super) fn line(event: &CommandEvent) -> Option<Line<'static>> {
     use CommandEvent as E;
-    let value = match *event {
+    let line = match *event {
         // Each transmission is in the summary's attempt counts.
         E::Send { .. } => return None,
         E::Acked {
@@ -36,51 +91,102 @@ pub(super) fn event(event: &CommandEvent) -> Option<Value> {
             result,
             attempts,
             time_to_ack,
-        } => json!({
-            "type": "ack", "n": n, "target": target, "from": from, "command": command,
-            "result": result, "result_name": codec::result_name(result),
-            "attempts": attempts, "time_to_ack_us": us(time_to_ack),
+        } => Line::Ack(Ack {
+            r#type: "ack",
+            n,
+            target,
+            from,
+            command,
+            result,
+            result_name: codec::result_name(result),
+            attempts,
+            time_to_ack_us: us(time_to_ack),
         }),
         E::Failed {
             n,
             target,
             command,
             attempts,
-        } => json!({
-            "type": "command_failed", "n": n, "target": target, "command": command,
-            "attempts": attempts,
+        } => Line::CommandFailed(Failed {
+            r#type: "command_failed",
+            n,
+            target,
+            command,
+            attempts,
         }),
         E::Skipped {
             target,
             command,
             at,
             ..
-        } => json!({
-            "type": "skipped", "t_s": at as f64 / 1e9, "target": target, "command": command,
+        } => Line::Skipped(Skipped {
+            r#type: "skipped",
+            t_s: seconds(at),
+            target,
+            command,
         }),
         E::LateAck {
             from,
             command,
             result,
-        } => json!({"type": "late_ack", "from": from, "command": command, "result": result}),
+        } => Line::LateAck(AckAgain {
+            r#type: "late_ack",
+            from,
+            command,
+            result,
+        }),
         E::DuplicateAck {
             from,
             command,
             result,
-        } => {
-            json!({"type": "duplicate_ack", "from": from, "command": command, "result": result})
-        }
+        } => Line::DuplicateAck(AckAgain {
+            r#type: "duplicate_ack",
+            from,
+            command,
+            result,
+        }),
     };
-    Some(value)
+    Some(line)
 }
 
-/// The `command_summary` object.
-pub(super) fn summary(summary: &CommandSummary, verdict: &Verdict) -> io::Result<Value> {
-    let mut value = serde_json::to_value(summary)?;
-    if let Value::Object(m) = &mut value {
-        m.insert("type".into(), "command_summary".into());
-        m.insert("schema_version".into(), SCHEMA_VERSION.into());
-        m.insert("exit_code".into(), verdict.exit_code.into());
+/// The `command_summary` line.
+#[derive(Serialize)]
+pub(super) struct Summary<'a> {
+    link: &'a str,
+    ours: SysComp,
+    command: u16,
+    command_name: &'a str,
+    duration_s: f64,
+    in_flight: u64,
+    targets: &'a [CommandTargetSummary],
+    unmatched_acks: u64,
+    frames: ScanStats,
+    interrupted: bool,
+    link_error: Option<&'a str>,
+    signing: SigningSummary,
+    r#type: &'static str,
+    schema_version: u32,
+    exit_code: u8,
+}
+
+impl<'a> Summary<'a> {
+    pub(super) fn of(s: &'a CommandSummary, verdict: &Verdict, link: &'a str) -> Self {
+        Summary {
+            link,
+            ours: s.ours,
+            command: s.command,
+            command_name: &s.command_name,
+            duration_s: s.duration_s,
+            in_flight: s.in_flight,
+            targets: &s.targets,
+            unmatched_acks: s.unmatched_acks,
+            frames: s.frames,
+            interrupted: s.interrupted,
+            link_error: s.link_error.as_deref(),
+            signing: s.signing,
+            r#type: "command_summary",
+            schema_version: SCHEMA_VERSION,
+            exit_code: verdict.exit_code,
+        }
     }
-    Ok(value)
 }

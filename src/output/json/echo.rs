@@ -1,48 +1,175 @@
-//! JSON objects of the echo probes (PING, TIMESYNC).
+//! Lines of the echo probes (PING, TIMESYNC).
 
-use std::io::Write;
+use serde::Serialize;
 
-use serde_json::{json, Value};
-
-use super::{us, JsonReporter, SCHEMA_VERSION};
+use super::{seconds, sweep, us, Line, Lines, Stamp, SCHEMA_VERSION};
+use crate::engine::capacity::WireBudget;
+use crate::engine::clock_offset::ClockSummary;
+use crate::engine::hint::Hint;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::summary::{Interim, ResponderSummary, Summary};
+use crate::engine::radio::{RadioReport, RadioSummary};
+use crate::engine::roster::Identity;
+use crate::engine::stats::{Bucket, RttSummary};
+use crate::engine::summary::{self, ResponderSummary, ScheduleSummary};
+use crate::frame::signing::SigningSummary;
+use crate::frame::{ScanStats, SysComp};
+use crate::engine::observe::ProbeName;
 use crate::output::Event;
+use crate::transport::RxClock;
 use crate::verdict::Verdict;
 
-impl<W: Write> JsonReporter<W> {
-    /// The `interim` object: each responder's figures so far.
-    pub(super) fn interim_object(&self, figures: &Interim) -> Value {
-        json!({
-            "type": "interim",
-            "t_s": figures.at as f64 / 1e9,
-            "time": self.wall.rfc3339(figures.at),
-            "requests": figures.requests,
-            "responders": figures
+/// `waiting`: nothing to send to yet.
+#[derive(Serialize)]
+pub(super) struct Waiting {
+    r#type: &'static str,
+    reason: &'static str,
+}
+
+/// `responder`: a system's first HEARTBEAT.
+#[derive(Serialize)]
+pub(super) struct Heard<'a> {
+    #[serde(flatten)]
+    stamp: Stamp,
+    #[serde(flatten)]
+    identity: Heartbeat<'a>,
+}
+
+/// What a system's HEARTBEAT says it is.
+#[derive(Serialize)]
+struct Heartbeat<'a> {
+    mav_type: u8,
+    autopilot: u8,
+    vehicle: &'a str,
+    autopilot_name: &'a str,
+}
+
+impl<'a> Heartbeat<'a> {
+    fn of(i: &'a Identity) -> Self {
+        Heartbeat {
+            mav_type: i.mav_type,
+            autopilot: i.autopilot,
+            vehicle: &i.vehicle,
+            autopilot_name: &i.autopilot_name,
+        }
+    }
+}
+
+/// `reply`: an answer within the timeout.
+#[derive(Serialize)]
+pub(super) struct Reply {
+    #[serde(flatten)]
+    stamp: Stamp,
+    seq: u32,
+    rtt_us: f64,
+    out_of_order: bool,
+}
+
+/// `lost`: no answer within the timeout.
+#[derive(Serialize)]
+pub(super) struct Lost {
+    #[serde(flatten)]
+    stamp: Stamp,
+    seq: u32,
+    sent_t_s: f64,
+}
+
+/// `late` or `duplicate`: an answer after the timeout, or another one.
+#[derive(Serialize)]
+pub(super) struct Again {
+    #[serde(flatten)]
+    stamp: Stamp,
+    seq: u32,
+    rtt_us: f64,
+}
+
+/// `radio`: a radio's first RADIO_STATUS.
+#[derive(Serialize)]
+pub(super) struct Radio {
+    #[serde(flatten)]
+    stamp: Stamp,
+    status: RadioReport,
+}
+
+/// `interim`: each responder's figures so far.
+#[derive(Serialize)]
+pub(super) struct Interim {
+    r#type: &'static str,
+    t_s: f64,
+    time: String,
+    requests: u64,
+    responders: Vec<InterimResponder>,
+}
+
+#[derive(Serialize)]
+struct InterimResponder {
+    responder: SysComp,
+    sent: u64,
+    received: u64,
+    lost: u64,
+    loss_ratio: f64,
+    late: u64,
+    duplicate: u64,
+    not_charged: u64,
+    in_flight: u64,
+    rtt_us: Option<InterimRtt>,
+}
+
+/// The RTT figures so far, in µs.
+#[derive(Serialize)]
+struct InterimRtt {
+    min: f64,
+    mean: f64,
+    max: f64,
+    p50: f64,
+    p90: f64,
+    p99: f64,
+    jitter: f64,
+}
+
+impl InterimResponder {
+    fn of(r: &ResponderSummary) -> Self {
+        InterimResponder {
+            responder: r.id,
+            sent: r.counts.sent,
+            received: r.counts.received,
+            lost: r.counts.lost,
+            loss_ratio: r.loss_ratio,
+            late: r.counts.late,
+            duplicate: r.counts.duplicate,
+            not_charged: r.counts.not_charged,
+            in_flight: r.counts.in_flight,
+            rtt_us: r.rtt.map(|s| InterimRtt {
+                min: s.min_us,
+                mean: s.mean_us,
+                max: s.max_us,
+                p50: s.p50_us,
+                p90: s.p90_us,
+                p99: s.p99_us,
+                jitter: s.jitter_us,
+            }),
+        }
+    }
+}
+
+impl Lines {
+    /// The `interim` line.
+    pub(super) fn interim(&self, figures: &summary::Interim) -> Line<'static> {
+        Line::Interim(Interim {
+            r#type: "interim",
+            t_s: seconds(figures.at),
+            time: self.wall.rfc3339(figures.at),
+            requests: figures.requests,
+            responders: figures
                 .responders
                 .iter()
-                .map(|r| json!({
-                    "responder": r.id,
-                    "sent": r.counts.sent,
-                    "received": r.counts.received,
-                    "lost": r.counts.lost,
-                    "loss_ratio": r.loss_ratio,
-                    "late": r.counts.late,
-                    "duplicate": r.counts.duplicate,
-                    "not_charged": r.counts.not_charged,
-                    "in_flight": r.counts.in_flight,
-                    "rtt_us": r.rtt.map(|s| json!({
-                        "min": s.min_us, "mean": s.mean_us, "max": s.max_us,
-                        "p50": s.p50_us, "p90": s.p90_us, "p99": s.p99_us, "jitter": s.jitter_us,
-                    })),
-                }))
-                .collect::<Vec<_>>(),
+                .map(InterimResponder::of)
+                .collect(),
         })
     }
 
-    /// The object of an echo run's event, if it has one.
-    pub(super) fn echo_event(&self, event: &Event<'_>) -> Option<Value> {
-        let value = match *event {
+    /// The line of an echo run's event, if it has one.
+    pub(super) fn echo<'a>(&self, event: &Event<'a>) -> Option<Line<'a>> {
+        let line = match *event {
             Event::Match(MatchEvent::Reply {
                 responder,
                 seq,
@@ -50,64 +177,56 @@ impl<W: Write> JsonReporter<W> {
                 at,
                 out_of_order,
                 ..
-            }) => {
-                let mut m = self.stamped("reply", at, responder);
-                m.insert("seq".into(), seq.into());
-                m.insert("rtt_us".into(), us(rtt).into());
-                m.insert("out_of_order".into(), out_of_order.into());
-                Value::Object(m)
-            }
+            }) => Line::Reply(Reply {
+                stamp: self.stamp("reply", at, responder),
+                seq,
+                rtt_us: us(rtt),
+                out_of_order,
+            }),
             Event::Match(MatchEvent::Lost {
                 responder,
                 seq,
                 sent_at,
                 at,
-            }) => {
-                let mut m = self.stamped("lost", at, responder);
-                m.insert("seq".into(), seq.into());
-                m.insert("sent_t_s".into(), json!(sent_at as f64 / 1e9));
-                Value::Object(m)
-            }
+            }) => Line::Lost(Lost {
+                stamp: self.stamp("lost", at, responder),
+                seq,
+                sent_t_s: seconds(sent_at),
+            }),
             Event::Match(MatchEvent::Late {
                 responder,
                 seq,
                 rtt,
                 at,
                 ..
-            }) => {
-                let mut m = self.stamped("late", at, responder);
-                m.insert("seq".into(), seq.into());
-                m.insert("rtt_us".into(), us(rtt).into());
-                Value::Object(m)
-            }
+            }) => Line::Late(Again {
+                stamp: self.stamp("late", at, responder),
+                seq,
+                rtt_us: us(rtt),
+            }),
             Event::Match(MatchEvent::Duplicate {
                 responder,
                 seq,
                 rtt,
                 at,
                 ..
-            }) => {
-                let mut m = self.stamped("duplicate", at, responder);
-                m.insert("seq".into(), seq.into());
-                m.insert("rtt_us".into(), us(rtt).into());
-                Value::Object(m)
-            }
+            }) => Line::Duplicate(Again {
+                stamp: self.stamp("duplicate", at, responder),
+                seq,
+                rtt_us: us(rtt),
+            }),
             Event::Match(MatchEvent::Stale { responder, at }) => {
-                Value::Object(self.stamped("stale", at, responder))
+                Line::Stale(self.stamp("stale", at, responder))
             }
-            Event::Heard { id, identity } => {
-                let mut m = self.stamped("responder", identity.first_heard, id);
-                m.insert("mav_type".into(), identity.mav_type.into());
-                m.insert("autopilot".into(), identity.autopilot.into());
-                m.insert("vehicle".into(), identity.vehicle.clone().into());
-                m.insert(
-                    "autopilot_name".into(),
-                    identity.autopilot_name.clone().into(),
-                );
-                Value::Object(m)
-            }
-            Event::WaitingForPeer => json!({"type": "waiting", "reason": "no peer heard yet"}),
-            Event::Step(step) => self.step_object(step),
+            Event::Heard { id, identity } => Line::Responder(Heard {
+                stamp: self.stamp("responder", identity.first_heard, id),
+                identity: Heartbeat::of(identity),
+            }),
+            Event::WaitingForPeer => Line::Waiting(Waiting {
+                r#type: "waiting",
+                reason: "no peer heard yet",
+            }),
+            Event::Step(step) => Line::Step(self.step(step)),
             // The summary has each clock and the link's error; a stream
             // of estimates is for the exporters.
             Event::Command(_) | Event::Clock { .. } | Event::LinkFailed { .. } => return None,
@@ -121,103 +240,199 @@ impl<W: Write> JsonReporter<W> {
                 if !first {
                     return None;
                 }
-                let mut m = self.stamped("radio", at, id);
-                m.insert("status".into(), json!(report));
-                Value::Object(m)
+                Line::Radio(Radio {
+                    stamp: self.stamp("radio", at, id),
+                    status: report,
+                })
             }
         };
-        Some(value)
+        Some(line)
     }
 }
 
-fn responder_json(r: &ResponderSummary, verdict: &Verdict) -> Value {
-    let failures: Vec<&str> = verdict
-        .failures
-        .iter()
-        .filter(|f| f.responder == Some(r.id))
-        .map(|f| f.message.as_str())
-        .collect();
-    json!({
-        "responder": r.id,
-        "identity": r.identity.as_ref().map(|i| json!({
-            "mav_type": i.mav_type,
-            "autopilot": i.autopilot,
-            "vehicle": i.vehicle,
-            "autopilot_name": i.autopilot_name,
-        })),
-        "sent": r.counts.sent,
-        "received": r.counts.received,
-        "lost": r.counts.lost,
-        "loss_ratio": r.loss_ratio,
-        "late": r.counts.late,
-        "duplicate": r.counts.duplicate,
-        "out_of_order": r.counts.out_of_order,
-        "stale": r.counts.stale,
-        "not_charged": r.counts.not_charged,
-        "in_flight": r.counts.in_flight,
-        "rtt_us": r.rtt.map(|s| json!({
-            "min": s.min_us,
-            "mean": s.mean_us,
-            "max": s.max_us,
-            "stddev": s.stddev_us,
-            "p50": s.p50_us,
-            "p90": s.p90_us,
-            "p99": s.p99_us,
-            "p99_9": s.p999_us,
-            "jitter": s.jitter_us,
-        })),
-        "histogram": r.histogram,
-        "clock": r.clock.map(|c| json!({
-            "offset_ns": ns(c.offset_ns),
-            "uncertainty_ns": c.uncertainty_ns,
-            "lower_ns": c.bounds_ns.map(|(lower, _)| ns(lower)),
-            "upper_ns": c.bounds_ns.map(|(_, upper)| ns(upper)),
-            "bounds_drift_limit_ppm": c.bounds_drift_limit_ppm,
-            "spread_ns": c.spread_ns,
-            "drift_ppm": c.drift_ppm,
-            "drift_stderr_ppm": c.drift_stderr_ppm,
-            "samples": c.samples,
-        })),
-        "failures": failures,
-    })
+/// The `summary` line.
+#[derive(Serialize)]
+pub(super) struct Summary<'a> {
+    r#type: &'static str,
+    schema_version: u32,
+    link: &'a str,
+    probe: ProbeName,
+    ours: SysComp,
+    duration_s: f64,
+    requests: u64,
+    in_flight: u64,
+    no_peer_heard_s: Option<f64>,
+    interrupted: bool,
+    link_error: Option<&'a str>,
+    downtime_s: f64,
+    schedule: Option<ScheduleSummary>,
+    rx_clock: RxClock,
+    frames: ScanStats,
+    foreign_replies: u64,
+    wrong_path_replies: u64,
+    untracked_replies: u64,
+    hints: &'a [Hint],
+    radios: &'a [RadioSummary],
+    wire: Option<WireBudget>,
+    signing: SigningSummary,
+    responders: Vec<Responder<'a>>,
+    verdict: &'a Verdict,
+    exit_code: u8,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sweep: Option<sweep::Summary<'a>>,
+}
+
+impl<'a> Summary<'a> {
+    pub(super) fn of(s: &'a summary::Summary, verdict: &'a Verdict, link: &'a str) -> Self {
+        Summary {
+            r#type: "summary",
+            schema_version: SCHEMA_VERSION,
+            link,
+            probe: s.probe,
+            ours: s.ours,
+            duration_s: s.duration_s,
+            requests: s.requests,
+            in_flight: s.in_flight,
+            no_peer_heard_s: s.no_peer_heard_s,
+            interrupted: s.interrupted,
+            link_error: s.link_error.as_deref(),
+            downtime_s: s.downtime_s,
+            schedule: s.schedule,
+            rx_clock: s.rx_clock,
+            frames: s.frames,
+            foreign_replies: s.foreign_replies,
+            wrong_path_replies: s.wrong_path_replies,
+            untracked_replies: s.untracked_replies,
+            hints: &s.hints,
+            radios: &s.radios,
+            wire: s.wire,
+            signing: s.signing,
+            responders: s
+                .responders
+                .iter()
+                .map(|r| Responder::of(r, verdict))
+                .collect(),
+            verdict,
+            exit_code: verdict.exit_code,
+            sweep: s
+                .sweep
+                .as_deref()
+                .map(|sweep| sweep::Summary::of(sweep, s.wire.as_ref())),
+        }
+    }
+}
+
+/// One responder in the summary.
+#[derive(Serialize)]
+struct Responder<'a> {
+    responder: SysComp,
+    identity: Option<Heartbeat<'a>>,
+    sent: u64,
+    received: u64,
+    lost: u64,
+    loss_ratio: f64,
+    late: u64,
+    duplicate: u64,
+    out_of_order: u64,
+    stale: u64,
+    not_charged: u64,
+    in_flight: u64,
+    rtt_us: Option<Rtt>,
+    histogram: &'a [Bucket],
+    clock: Option<Clock>,
+    /// The verdict's messages about it.
+    failures: Vec<&'a str>,
+}
+
+impl<'a> Responder<'a> {
+    fn of(r: &'a ResponderSummary, verdict: &'a Verdict) -> Self {
+        Responder {
+            responder: r.id,
+            identity: r.identity.as_ref().map(Heartbeat::of),
+            sent: r.counts.sent,
+            received: r.counts.received,
+            lost: r.counts.lost,
+            loss_ratio: r.loss_ratio,
+            late: r.counts.late,
+            duplicate: r.counts.duplicate,
+            out_of_order: r.counts.out_of_order,
+            stale: r.counts.stale,
+            not_charged: r.counts.not_charged,
+            in_flight: r.counts.in_flight,
+            rtt_us: r.rtt.as_ref().map(Rtt::of),
+            histogram: &r.histogram,
+            clock: r.clock.as_ref().map(Clock::of),
+            failures: verdict
+                .failures
+                .iter()
+                .filter(|f| f.responder == Some(r.id))
+                .map(|f| f.message.as_str())
+                .collect(),
+        }
+    }
+}
+
+/// The RTT figures, in µs.
+#[derive(Serialize)]
+struct Rtt {
+    min: f64,
+    mean: f64,
+    max: f64,
+    stddev: f64,
+    p50: f64,
+    p90: f64,
+    p99: f64,
+    p99_9: f64,
+    jitter: f64,
+}
+
+impl Rtt {
+    fn of(s: &RttSummary) -> Self {
+        Rtt {
+            min: s.min_us,
+            mean: s.mean_us,
+            max: s.max_us,
+            stddev: s.stddev_us,
+            p50: s.p50_us,
+            p90: s.p90_us,
+            p99: s.p99_us,
+            p99_9: s.p999_us,
+            jitter: s.jitter_us,
+        }
+    }
+}
+
+/// A TIMESYNC responder's clock against ours.
+#[derive(Serialize)]
+struct Clock {
+    offset_ns: i64,
+    uncertainty_ns: u64,
+    lower_ns: Option<i64>,
+    upper_ns: Option<i64>,
+    bounds_drift_limit_ppm: u32,
+    spread_ns: f64,
+    drift_ppm: Option<f64>,
+    drift_stderr_ppm: Option<f64>,
+    samples: u64,
+}
+
+impl Clock {
+    fn of(c: &ClockSummary) -> Self {
+        Clock {
+            offset_ns: ns(c.offset_ns),
+            uncertainty_ns: c.uncertainty_ns,
+            lower_ns: c.bounds_ns.map(|(lower, _)| ns(lower)),
+            upper_ns: c.bounds_ns.map(|(_, upper)| ns(upper)),
+            bounds_drift_limit_ppm: c.bounds_drift_limit_ppm,
+            spread_ns: c.spread_ns,
+            drift_ppm: c.drift_ppm,
+            drift_stderr_ppm: c.drift_stderr_ppm,
+            samples: c.samples,
+        }
+    }
 }
 
 /// i64 holds ±292 years of ns: enough for any two clocks.
 fn ns(v: i128) -> i64 {
     i64::try_from(v).unwrap_or(if v < 0 { i64::MIN } else { i64::MAX })
-}
-
-/// The `summary` object.
-pub(super) fn summary(s: &Summary, verdict: &Verdict) -> Value {
-    let mut v = json!({
-        "type": "summary",
-        "schema_version": SCHEMA_VERSION,
-        "link": s.link,
-        "probe": s.probe,
-        "ours": s.ours,
-        "duration_s": s.duration_s,
-        "requests": s.requests,
-        "in_flight": s.in_flight,
-        "no_peer_heard_s": s.no_peer_heard_s,
-        "interrupted": s.interrupted,
-        "link_error": s.link_error,
-        "downtime_s": s.downtime_s,
-        "schedule": s.schedule,
-        "rx_clock": s.rx_clock,
-        "frames": s.frames,
-        "foreign_replies": s.foreign_replies,
-        "wrong_path_replies": s.wrong_path_replies,
-        "untracked_replies": s.untracked_replies,
-        "hints": s.hints,
-        "radios": s.radios,
-        "wire": s.wire,
-        "signing": s.signing,
-        "responders": s.responders.iter().map(|r| responder_json(r, verdict)).collect::<Vec<_>>(),
-        "verdict": verdict,
-        "exit_code": verdict.exit_code,
-    });
-    if let Some(sweep) = &s.sweep {
-        v["sweep"] = super::sweep::summary(sweep, s.wire.as_ref());
-    }
-    v
 }

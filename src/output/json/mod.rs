@@ -1,7 +1,12 @@
 //! `--json`: newline-delimited JSON, one object per event. The schema is
 //! `schema/mavping-events.schema.json`; bump [`SCHEMA_VERSION`] on any
-//! change that could break a consumer. Echo probes' objects are built in
-//! [`echo`], the command probe's in [`command`].
+//! change that could break a consumer.
+//!
+//! Every line is a [`Line`]: a struct per `type`, whose members are written
+//! in the order they are declared, so that order is the output's: keep it.
+//! The echo probes' lines are in [`echo`], the command probe's in
+//! [`command`], a sweep's in [`sweep`]; `tests` checks one of each against
+//! the schema.
 
 mod command;
 mod echo;
@@ -11,9 +16,10 @@ mod tests;
 
 use std::io::{self, Write};
 
-use serde_json::{json, Value};
+use serde::Serialize;
 
 use super::{Event, Observer, Reporter, RunKind, StartInfo, WallClock};
+use crate::engine::observe::ProbeName;
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -21,10 +27,104 @@ use crate::verdict::Verdict;
 
 pub const SCHEMA_VERSION: u32 = 2;
 
+/// One line of the output, by its `type`.
+#[derive(Serialize)]
+#[serde(untagged)]
+enum Line<'a> {
+    // Boxed: once a run each, and much larger than the others.
+    Start(Box<Start<'a>>),
+    Waiting(echo::Waiting),
+    Responder(echo::Heard<'a>),
+    Reply(echo::Reply),
+    Lost(echo::Lost),
+    Late(echo::Again),
+    Duplicate(echo::Again),
+    Stale(Stamp),
+    Radio(echo::Radio),
+    Interim(echo::Interim),
+    Step(sweep::Step),
+    Summary(Box<echo::Summary<'a>>),
+    Ack(command::Ack),
+    CommandFailed(command::Failed),
+    Skipped(command::Skipped),
+    LateAck(command::AckAgain),
+    DuplicateAck(command::AckAgain),
+    CommandSummary(Box<command::Summary<'a>>),
+}
+
+impl Line<'_> {
+    /// The start and summary lines always name their link; the others
+    /// only in a run of several links, at their end.
+    fn names_its_link(&self) -> bool {
+        match self {
+            Line::Start(_) | Line::Summary(_) | Line::CommandSummary(_) => true,
+            Line::Waiting(_)
+            | Line::Responder(_)
+            | Line::Reply(_)
+            | Line::Lost(_)
+            | Line::Late(_)
+            | Line::Duplicate(_)
+            | Line::Stale(_)
+            | Line::Radio(_)
+            | Line::Interim(_)
+            | Line::Step(_)
+            | Line::Ack(_)
+            | Line::CommandFailed(_)
+            | Line::Skipped(_)
+            | Line::LateAck(_)
+            | Line::DuplicateAck(_) => false,
+        }
+    }
+}
+
+/// A line and, when it does not name it itself, its link.
+#[derive(Serialize)]
+struct Linked<'a> {
+    #[serde(flatten)]
+    line: &'a Line<'a>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    link: Option<&'a str>,
+}
+
+/// The `start` line: what the run is about to do.
+#[derive(Serialize)]
+struct Start<'a> {
+    r#type: &'static str,
+    schema_version: u32,
+    mavping_version: &'static str,
+    time: String,
+    link: &'a str,
+    probe: ProbeName,
+    ours: SysComp,
+    interval_s: f64,
+    rate_hz: f64,
+    timeout_s: f64,
+    count: Option<u64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    command: Option<command::Spec>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    sweep: Option<sweep::Plan>,
+}
+
+/// What every timed event of a responder starts with: its type, session
+/// seconds, wall time and the responder.
+#[derive(Serialize)]
+struct Stamp {
+    r#type: &'static str,
+    t_s: f64,
+    time: String,
+    responder: SysComp,
+}
+
 pub struct JsonReporter<W: Write> {
     out: W,
     /// Only the summary object (`--json -q`).
     quiet: bool,
+    lines: Lines,
+}
+
+/// What the lines are made of besides the run's own figures.
+struct Lines {
     wall: WallClock,
     /// With several links, every object names its link.
     link: Option<String>,
@@ -37,56 +137,103 @@ impl<W: Write> JsonReporter<W> {
         JsonReporter {
             out,
             quiet,
-            wall,
-            link: None,
-            command: false,
+            lines: Lines {
+                wall,
+                link: None,
+                command: false,
+            },
         }
     }
 
     /// Adds `"link": LINK` to every event (the start and summary objects
     /// always carry it), for runs over several links.
     pub fn with_link(mut self, link: Option<String>) -> Self {
-        self.link = link;
+        self.lines.link = link;
         self
     }
+}
 
-    fn emit(&mut self, mut value: Value) -> io::Result<()> {
-        if let (Some(link), Value::Object(m)) = (&self.link, &mut value) {
-            m.insert("link".into(), link.clone().into());
-        }
-        serde_json::to_writer(&mut self.out, &value)?;
-        self.out.write_all(b"\n")
+impl Lines {
+    /// Notes what the run is: a command probe's writes its own events only.
+    fn starts(&mut self, info: &StartInfo) {
+        self.command = matches!(info.run, RunKind::Command(_));
     }
 
-    /// The `start` event: what the run is about to do.
-    fn start_object(&self, info: &StartInfo) -> serde_json::Map<String, Value> {
-        let Value::Object(m) = json!({
-            "type": "start",
-            "schema_version": SCHEMA_VERSION,
-            "mavping_version": env!("CARGO_PKG_VERSION"),
-            "time": self.wall.rfc3339(0),
-            "link": info.link,
-            "probe": info.probe,
-            "ours": info.ours,
-            "interval_s": info.interval.as_secs_f64(),
-            "rate_hz": 1.0 / info.interval.as_secs_f64(),
-            "timeout_s": info.timeout.as_secs_f64(),
-            "count": info.count,
-        }) else {
-            unreachable!("json! of an object literal is an object")
+    /// Writes `line` and its newline.
+    fn write(&self, out: &mut impl Write, line: &Line<'_>) -> io::Result<()> {
+        let link = if line.names_its_link() {
+            None
+        } else {
+            self.link.as_deref()
         };
-        m
+        serde_json::to_writer(&mut *out, &Linked { line, link })?;
+        out.write_all(b"\n")
     }
 
-    /// Fields every timed event carries: session seconds and wall time.
-    fn stamped(&self, kind: &str, t: Nanos, responder: SysComp) -> serde_json::Map<String, Value> {
-        let mut m = serde_json::Map::new();
-        m.insert("type".into(), kind.into());
-        m.insert("t_s".into(), json!(t as f64 / 1e9));
-        m.insert("time".into(), self.wall.rfc3339(t).into());
-        m.insert("responder".into(), json!(responder));
-        m
+    /// The link as a line that names it says it: the one given with
+    /// [`JsonReporter::with_link`], else the run's own.
+    fn link_or<'a>(&'a self, own: &'a str) -> &'a str {
+        self.link.as_deref().unwrap_or(own)
     }
+
+    /// The `start` line.
+    fn start<'a>(&'a self, info: &'a StartInfo) -> Line<'a> {
+        Line::Start(Box::new(Start {
+            r#type: "start",
+            schema_version: SCHEMA_VERSION,
+            mavping_version: env!("CARGO_PKG_VERSION"),
+            time: self.wall.rfc3339(0),
+            link: self.link_or(&info.link),
+            probe: info.probe,
+            ours: info.ours,
+            interval_s: info.interval.as_secs_f64(),
+            rate_hz: 1.0 / info.interval.as_secs_f64(),
+            timeout_s: info.timeout.as_secs_f64(),
+            count: info.count,
+            command: info.run.command().map(command::Spec::of),
+            sweep: info.run.steps().map(sweep::Plan::of),
+        }))
+    }
+
+    /// The line of an event, if it has one in this run.
+    fn event<'a>(&self, event: &Event<'a>) -> Option<Line<'a>> {
+        match event {
+            Event::Command(e) => command::line(e),
+            // A command run writes its commands' fate only.
+            _ if self.command => None,
+            _ => self.echo(event),
+        }
+    }
+
+    /// The summary line.
+    fn summary<'a>(&'a self, summary: &'a LinkSummary, verdict: &'a Verdict) -> Line<'a> {
+        match summary {
+            LinkSummary::Echo(s) => Line::Summary(Box::new(echo::Summary::of(
+                s,
+                verdict,
+                self.link_or(&s.link),
+            ))),
+            LinkSummary::Command(s) => Line::CommandSummary(Box::new(command::Summary::of(
+                s,
+                verdict,
+                self.link_or(&s.link),
+            ))),
+        }
+    }
+
+    /// What every timed event of a responder starts with.
+    fn stamp(&self, r#type: &'static str, t: Nanos, responder: SysComp) -> Stamp {
+        Stamp {
+            r#type,
+            t_s: seconds(t),
+            time: self.wall.rfc3339(t),
+            responder,
+        }
+    }
+}
+
+fn seconds(t: Nanos) -> f64 {
+    t as f64 / 1e9
 }
 
 fn us(ns: Nanos) -> f64 {
@@ -95,32 +242,19 @@ fn us(ns: Nanos) -> f64 {
 
 impl<W: Write> Observer for JsonReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        self.command = matches!(info.run, RunKind::Command(_));
+        self.lines.starts(info);
         if self.quiet {
             return Ok(());
         }
-        let mut value = self.start_object(info);
-        if let Some(spec) = info.run.command() {
-            value.insert("command".into(), command::spec(spec));
-        }
-        if let Some(plan) = info.run.steps() {
-            value.insert("sweep".into(), sweep::plan(plan));
-        }
-        self.emit(Value::Object(value))
+        self.lines.write(&mut self.out, &self.lines.start(info))
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
         if self.quiet {
             return Ok(());
         }
-        let value = match event {
-            Event::Command(e) => command::event(e),
-            // A command run writes its commands' fate only.
-            _ if self.command => None,
-            _ => self.echo_event(event),
-        };
-        match value {
-            Some(value) => self.emit(value),
+        match self.lines.event(event) {
+            Some(line) => self.lines.write(&mut self.out, &line),
             None => Ok(()),
         }
     }
@@ -131,19 +265,16 @@ impl<W: Write> Observer for JsonReporter<W> {
 
     /// Written in quiet mode too: that is what `-Q` is for.
     fn interim(&mut self, figures: &Interim) -> io::Result<()> {
-        let value = self.interim_object(figures);
-        self.emit(value)?;
+        self.lines
+            .write(&mut self.out, &self.lines.interim(figures))?;
         self.out.flush()
     }
 }
 
 impl<W: Write> Reporter for JsonReporter<W> {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
-        let value = match summary {
-            LinkSummary::Echo(s) => echo::summary(s, verdict),
-            LinkSummary::Command(s) => command::summary(s, verdict)?,
-        };
-        self.emit(value)?;
+        self.lines
+            .write(&mut self.out, &self.lines.summary(summary, verdict))?;
         self.out.flush()
     }
 }

@@ -31,13 +31,73 @@ impl Metrics {
     }
 }
 
+/// What a family's samples are, as its `TYPE` line says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum FamilyKind {
+    Gauge,
+    Counter,
+    Histogram,
+}
+
+impl FamilyKind {
+    fn name(self) -> &'static str {
+        match self {
+            FamilyKind::Gauge => "gauge",
+            FamilyKind::Counter => "counter",
+            FamilyKind::Histogram => "histogram",
+        }
+    }
+}
+
+/// A metric family: its name, its `HELP` text and its type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Family {
+    name: &'static str,
+    help: &'static str,
+    kind: FamilyKind,
+}
+
+impl Family {
+    const fn gauge(name: &'static str, help: &'static str) -> Self {
+        Family {
+            name,
+            help,
+            kind: FamilyKind::Gauge,
+        }
+    }
+
+    const fn counter(name: &'static str, help: &'static str) -> Self {
+        Family {
+            name,
+            help,
+            kind: FamilyKind::Counter,
+        }
+    }
+
+    const fn histogram(name: &'static str, help: &'static str) -> Self {
+        Family {
+            name,
+            help,
+            kind: FamilyKind::Histogram,
+        }
+    }
+}
+
+/// A family and how to read its value (of a series, a radio, the server).
+struct Figure<V> {
+    family: Family,
+    value: V,
+}
+
 /// Text being written in the exposition format: a family's `HELP` and
 /// `TYPE` lines, then its samples.
 #[derive(Default)]
 struct Exposition(String);
 
 impl Exposition {
-    fn header(&mut self, name: &str, kind: &str, help: &str) {
+    fn header(&mut self, family: &Family) {
+        let Family { name, help, kind } = family;
+        let kind = kind.name();
         let _ = writeln!(self.0, "# HELP {name} {help}\n# TYPE {name} {kind}");
     }
 
@@ -52,158 +112,201 @@ impl Exposition {
     /// A family with its samples; nothing at all when it has none.
     fn family<V: Display>(
         &mut self,
-        name: &str,
-        kind: &str,
-        help: &str,
+        family: &Family,
         samples: impl IntoIterator<Item = (String, V)>,
     ) {
         let mut samples = samples.into_iter().peekable();
         if samples.peek().is_none() {
             return;
         }
-        self.header(name, kind, help);
+        self.header(family);
         for (labels, value) in samples {
-            self.sample(name, &labels, value);
+            self.sample(family.name, &labels, value);
         }
     }
 }
 
-/// A per-responder figure: its names as a run and as a probe, its help,
-/// and its value.
-type Count = (&'static str, &'static str, &'static str, fn(&Series) -> u64);
-type Gauge = (&'static str, &'static str, fn(&Series) -> Option<f64>);
+/// A per-responder count: a counter in a run, a gauge of one probe under
+/// a name of its own (see [`Scope`]).
+struct Count {
+    run: &'static str,
+    probe: &'static str,
+    help: &'static str,
+    value: fn(&Series) -> u64,
+}
+
+impl Count {
+    fn family(&self, scope: Scope) -> Family {
+        match scope {
+            Scope::Run => Family::counter(self.run, self.help),
+            Scope::Probe => Family::gauge(self.probe, self.help),
+        }
+    }
+}
 
 const COUNTS: [Count; 5] = [
-    (
-        "mavping_sent_total",
-        "mavping_probe_sent",
-        "Requests in the responder's window whose fate is decided (received + lost).",
-        |s| s.sent,
-    ),
-    (
-        "mavping_received_total",
-        "mavping_probe_received",
-        "Replies received within the timeout.",
-        |s| s.received,
-    ),
-    (
-        "mavping_lost_total",
-        "mavping_probe_lost",
-        "Requests not answered within the timeout.",
-        |s| s.lost,
-    ),
-    (
-        "mavping_late_total",
-        "mavping_probe_late",
-        "First replies after the timeout (each also counted lost).",
-        |s| s.late,
-    ),
-    (
-        "mavping_duplicate_total",
-        "mavping_probe_duplicate",
-        "Second and later replies to the same request.",
-        |s| s.duplicate,
-    ),
+    Count {
+        run: "mavping_sent_total",
+        probe: "mavping_probe_sent",
+        help: "Requests in the responder's window whose fate is decided (received + lost).",
+        value: |s| s.sent,
+    },
+    Count {
+        run: "mavping_received_total",
+        probe: "mavping_probe_received",
+        help: "Replies received within the timeout.",
+        value: |s| s.received,
+    },
+    Count {
+        run: "mavping_lost_total",
+        probe: "mavping_probe_lost",
+        help: "Requests not answered within the timeout.",
+        value: |s| s.lost,
+    },
+    Count {
+        run: "mavping_late_total",
+        probe: "mavping_probe_late",
+        help: "First replies after the timeout (each also counted lost).",
+        value: |s| s.late,
+    },
+    Count {
+        run: "mavping_duplicate_total",
+        probe: "mavping_probe_duplicate",
+        help: "Second and later replies to the same request.",
+        value: |s| s.duplicate,
+    },
 ];
 
-const GAUGES: [Gauge; 4] = [
-    (
-        "mavping_last_rtt_seconds",
-        "Round-trip time of the latest reply within the timeout.",
-        |s| s.last_rtt_s,
-    ),
-    (
-        "mavping_rtt_p50_seconds",
-        "Median round-trip time (HDR histogram; at the end of a run or probe).",
-        |s| s.p50_s,
-    ),
-    (
-        "mavping_rtt_p99_seconds",
-        "99th percentile round-trip time (HDR histogram; at the end of a run or probe).",
-        |s| s.p99_s,
-    ),
-    (
-        "mavping_clock_offset_seconds",
-        "Responder's clock minus ours at its latest reply (TIMESYNC probe; updated at most once a second).",
-        |s| s.clock_offset_s,
-    ),
-];
-
-/// A radio's figure: its name, type, help, and value (`None`: left out).
-type RadioFigure = (
-    &'static str,
-    &'static str,
-    &'static str,
-    fn(SysComp, &RadioSeries) -> Option<f64>,
+/// Only `/probe` has it: a run's loss ratio is the counters' arithmetic.
+const PROBE_LOSS_RATIO: Family = Family::gauge(
+    "mavping_probe_loss_ratio",
+    "Lost over sent in this probe (0 to 1).",
 );
 
+/// The RTT histogram, under a run's name or a probe's.
+fn rtt_histogram(scope: Scope) -> Family {
+    let name = match scope {
+        Scope::Run => "mavping_rtt_seconds",
+        Scope::Probe => "mavping_probe_rtt_seconds",
+    };
+    Family::histogram(name, "Round-trip time of replies within the timeout.")
+}
+
+/// A per-responder gauge; a series without the figure is left out.
+type Gauge = Figure<fn(&Series) -> Option<f64>>;
+
+const GAUGES: [Gauge; 4] = [
+    Figure {
+        family: Family::gauge(
+            "mavping_last_rtt_seconds",
+            "Round-trip time of the latest reply within the timeout.",
+        ),
+        value: |s| s.last_rtt_s,
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_rtt_p50_seconds",
+            "Median round-trip time (HDR histogram; at the end of a run or probe).",
+        ),
+        value: |s| s.p50_s,
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_rtt_p99_seconds",
+            "99th percentile round-trip time (HDR histogram; at the end of a run or probe).",
+        ),
+        value: |s| s.p99_s,
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_clock_offset_seconds",
+            "Responder's clock minus ours at its latest reply (TIMESYNC probe; updated at most once a second).",
+        ),
+        value: |s| s.clock_offset_s,
+    },
+];
+
+/// A radio's figure (`None`: left out).
+type RadioFigure = Figure<fn(SysComp, &RadioSeries) -> Option<f64>>;
+
 const RADIO: [RadioFigure; 11] = [
-    (
-        "mavping_radio_rssi",
-        "gauge",
-        "Local signal strength, raw RADIO_STATUS units (255, unknown, left out).",
-        |_, r| known(r.latest.rssi),
-    ),
-    (
-        "mavping_radio_remote_rssi",
-        "gauge",
-        "Remote signal strength, raw RADIO_STATUS units.",
-        |_, r| known(r.latest.remrssi),
-    ),
-    (
-        "mavping_radio_noise",
-        "gauge",
-        "Local background noise, raw RADIO_STATUS units.",
-        |_, r| known(r.latest.noise),
-    ),
-    (
-        "mavping_radio_remote_noise",
-        "gauge",
-        "Remote background noise, raw RADIO_STATUS units.",
-        |_, r| known(r.latest.remnoise),
-    ),
-    (
-        "mavping_radio_rssi_dbm",
-        "gauge",
-        "Local signal strength in dBm (SiK radios: raw / 1.9 - 127, the chip's curve, approximate).",
-        |id, r| sik_dbm_of(id, r.latest.rssi),
-    ),
-    (
-        "mavping_radio_remote_rssi_dbm",
-        "gauge",
-        "Remote signal strength in dBm (SiK radios, approximate).",
-        |id, r| sik_dbm_of(id, r.latest.remrssi),
-    ),
-    (
-        "mavping_radio_noise_dbm",
-        "gauge",
-        "Local background noise in dBm (SiK radios, approximate).",
-        |id, r| sik_dbm_of(id, r.latest.noise),
-    ),
-    (
-        "mavping_radio_remote_noise_dbm",
-        "gauge",
-        "Remote background noise in dBm (SiK radios, approximate).",
-        |id, r| sik_dbm_of(id, r.latest.remnoise),
-    ),
-    (
-        "mavping_radio_txbuf_percent",
-        "gauge",
-        "Free space in the radio's transmit buffer, percent.",
-        |_, r| known(r.latest.txbuf),
-    ),
-    (
-        "mavping_radio_rxerrors_total",
-        "counter",
-        "Receive errors the radio counted since mavping first heard it (its 16-bit counter's wraps and restarts followed).",
-        |_, r| Some(r.rxerrors.grown() as f64),
-    ),
-    (
-        "mavping_radio_fixed_total",
-        "counter",
-        "Packets the radio's error correction repaired since mavping first heard it.",
-        |_, r| Some(r.fixed.grown() as f64),
-    ),
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_rssi",
+            "Local signal strength, raw RADIO_STATUS units (255, unknown, left out).",
+        ),
+        value: |_, r| known(r.latest.rssi),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_remote_rssi",
+            "Remote signal strength, raw RADIO_STATUS units.",
+        ),
+        value: |_, r| known(r.latest.remrssi),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_noise",
+            "Local background noise, raw RADIO_STATUS units.",
+        ),
+        value: |_, r| known(r.latest.noise),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_remote_noise",
+            "Remote background noise, raw RADIO_STATUS units.",
+        ),
+        value: |_, r| known(r.latest.remnoise),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_rssi_dbm",
+            "Local signal strength in dBm (SiK radios: raw / 1.9 - 127, the chip's curve, approximate).",
+        ),
+        value: |id, r| sik_dbm_of(id, r.latest.rssi),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_remote_rssi_dbm",
+            "Remote signal strength in dBm (SiK radios, approximate).",
+        ),
+        value: |id, r| sik_dbm_of(id, r.latest.remrssi),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_noise_dbm",
+            "Local background noise in dBm (SiK radios, approximate).",
+        ),
+        value: |id, r| sik_dbm_of(id, r.latest.noise),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_remote_noise_dbm",
+            "Remote background noise in dBm (SiK radios, approximate).",
+        ),
+        value: |id, r| sik_dbm_of(id, r.latest.remnoise),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_txbuf_percent",
+            "Free space in the radio's transmit buffer, percent.",
+        ),
+        value: |_, r| known(r.latest.txbuf),
+    },
+    Figure {
+        family: Family::counter(
+            "mavping_radio_rxerrors_total",
+            "Receive errors the radio counted since mavping first heard it (its 16-bit counter's wraps and restarts followed).",
+        ),
+        value: |_, r| Some(r.rxerrors.grown() as f64),
+    },
+    Figure {
+        family: Family::counter(
+            "mavping_radio_fixed_total",
+            "Packets the radio's error correction repaired since mavping first heard it.",
+        ),
+        value: |_, r| Some(r.fixed.grown() as f64),
+    },
 ];
 
 fn known(raw: u8) -> Option<f64> {
@@ -223,31 +326,22 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
             .iter()
             .flat_map(|m| m.responders.iter().map(move |(id, s)| (m.labels(*id), s)))
     };
-    for (run_name, probe_name, help, value) in COUNTS {
-        let (name, kind) = match scope {
-            Scope::Run => (run_name, "counter"),
-            Scope::Probe => (probe_name, "gauge"),
-        };
-        out.family(name, kind, help, series().map(|(l, s)| (l, value(s))));
+    for count in &COUNTS {
+        out.family(
+            &count.family(scope),
+            series().map(|(l, s)| (l, (count.value)(s))),
+        );
     }
     if scope == Scope::Probe {
         out.family(
-            "mavping_probe_loss_ratio",
-            "gauge",
-            "Lost over sent in this probe (0 to 1).",
+            &PROBE_LOSS_RATIO,
             series().filter_map(|(l, s)| Some((l, s.loss_ratio()?))),
         );
     }
-    let name = match scope {
-        Scope::Run => "mavping_rtt_seconds",
-        Scope::Probe => "mavping_probe_rtt_seconds",
-    };
+    let histogram = rtt_histogram(scope);
+    let name = histogram.name;
     if series().next().is_some() {
-        out.header(
-            name,
-            "histogram",
-            "Round-trip time of replies within the timeout.",
-        );
+        out.header(&histogram);
     }
     for (labels, s) in series() {
         let mut cumulative = 0;
@@ -265,31 +359,41 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
         out.sample(&format!("{name}_sum"), &labels, s.rtt_sum_s);
         out.sample(&format!("{name}_count"), &labels, s.received);
     }
-    for (name, help, value) in GAUGES {
-        out.family(
-            name,
-            "gauge",
-            help,
-            series().filter_map(|(l, s)| Some((l, value(s)?))),
-        );
+    for Figure { family, value } in &GAUGES {
+        out.family(family, series().filter_map(|(l, s)| Some((l, value(s)?))));
     }
-    for (name, kind, help, value) in RADIO {
+    for Figure { family, value } in &RADIO {
         let radios = links.iter().flat_map(|m| {
             m.radios
                 .iter()
                 .filter_map(move |(id, r)| Some((m.radio_labels(*id), value(*id, r)?)))
         });
-        out.family(name, kind, help, radios);
+        out.family(family, radios);
     }
 }
+
+/// A link's state, as a run has it...
+const RUN_LINK_UP: Family = Family::gauge(
+    "mavping_link_up",
+    "1 while the link is open, 0 after it failed (a run's other links go on).",
+);
+
+/// ...and as `mavping serve` has it.
+const SERVE_LINK_UP: Family = Family::gauge(
+    "mavping_link_up",
+    "1 while the continuous link is open, 0 while it is down and being retried.",
+);
+
+const LINK_RESTARTS: Family = Family::counter(
+    "mavping_link_restarts_total",
+    "Times the continuous link was reopened after it broke or could not be opened.",
+);
 
 /// The exposition of one or several links of a run (`--prometheus`).
 pub fn render(links: &[&Metrics]) -> String {
     let mut out = Exposition::default();
     out.family(
-        "mavping_link_up",
-        "gauge",
-        "1 while the link is open, 0 after it failed (a run's other links go on).",
+        &RUN_LINK_UP,
         links.iter().filter_map(|m| {
             let state = m.state?;
             Some((format!("link=\"{}\"", escape(&m.link)), u8::from(state.up)))
@@ -307,18 +411,8 @@ fn write_link_states(out: &mut Exposition, links: &[&Metrics]) {
             Some((format!("link=\"{}\"", escape(&m.link)), state))
         })
     };
-    out.family(
-        "mavping_link_up",
-        "gauge",
-        "1 while the continuous link is open, 0 while it is down and being retried.",
-        states().map(|(l, s)| (l, u8::from(s.up))),
-    );
-    out.family(
-        "mavping_link_restarts_total",
-        "counter",
-        "Times the continuous link was reopened after it broke or could not be opened.",
-        states().map(|(l, s)| (l, s.restarts)),
-    );
+    out.family(&SERVE_LINK_UP, states().map(|(l, s)| (l, u8::from(s.up))));
+    out.family(&LINK_RESTARTS, states().map(|(l, s)| (l, s.restarts)));
 }
 
 /// What `mavping serve` says about itself at `/metrics`.
@@ -338,61 +432,70 @@ pub struct Health {
     pub last_reload_ok: bool,
 }
 
+/// One of the server's own figures.
+type HealthFigure = Figure<fn(&Health) -> u64>;
+
+const HEALTH: [HealthFigure; 8] = [
+    Figure {
+        family: Family::counter(
+            "mavping_exporter_probes_total",
+            "/probe requests that ran a probe.",
+        ),
+        value: |h| h.probes,
+    },
+    Figure {
+        family: Family::counter(
+            "mavping_exporter_probes_failed_total",
+            "Probes that ran and failed (mavping_probe_success 0).",
+        ),
+        value: |h| h.probes_failed,
+    },
+    Figure {
+        family: Family::counter(
+            "mavping_exporter_probes_refused_total",
+            "/probe requests refused: bad or forbidden (400) or too many at once (503).",
+        ),
+        value: |h| h.probes_refused,
+    },
+    Figure {
+        family: Family::gauge("mavping_exporter_probes_running", "Probes running now."),
+        value: |h| h.probes_running,
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_exporter_open_links",
+            "Links open now: continuous links that are up and the links of running probes.",
+        ),
+        value: |h| h.open_links,
+    },
+    Figure {
+        family: Family::counter(
+            "mavping_exporter_config_reloads_total",
+            "Configuration reloads asked for (SIGHUP).",
+        ),
+        value: |h| h.reloads,
+    },
+    Figure {
+        family: Family::counter(
+            "mavping_exporter_config_reloads_failed_total",
+            "Reloads refused because the new configuration was invalid (the old one stays).",
+        ),
+        value: |h| h.reloads_failed,
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_exporter_config_last_reload_successful",
+            "1 when the configuration in use is the one last read from the file.",
+        ),
+        value: |h| u64::from(h.last_reload_ok),
+    },
+];
+
 /// `mavping serve`'s `/metrics`: its health, then its continuous links.
 pub fn render_serve(links: &[&Metrics], health: &Health) -> String {
     let mut out = Exposition::default();
-    let one = |v: u64| [(String::new(), v)];
-    for (name, kind, help, value) in [
-        (
-            "mavping_exporter_probes_total",
-            "counter",
-            "/probe requests that ran a probe.",
-            health.probes,
-        ),
-        (
-            "mavping_exporter_probes_failed_total",
-            "counter",
-            "Probes that ran and failed (mavping_probe_success 0).",
-            health.probes_failed,
-        ),
-        (
-            "mavping_exporter_probes_refused_total",
-            "counter",
-            "/probe requests refused: bad or forbidden (400) or too many at once (503).",
-            health.probes_refused,
-        ),
-        (
-            "mavping_exporter_probes_running",
-            "gauge",
-            "Probes running now.",
-            health.probes_running,
-        ),
-        (
-            "mavping_exporter_open_links",
-            "gauge",
-            "Links open now: continuous links that are up and the links of running probes.",
-            health.open_links,
-        ),
-        (
-            "mavping_exporter_config_reloads_total",
-            "counter",
-            "Configuration reloads asked for (SIGHUP).",
-            health.reloads,
-        ),
-        (
-            "mavping_exporter_config_reloads_failed_total",
-            "counter",
-            "Reloads refused because the new configuration was invalid (the old one stays).",
-            health.reloads_failed,
-        ),
-        (
-            "mavping_exporter_config_last_reload_successful",
-            "gauge",
-            "1 when the configuration in use is the one last read from the file.",
-            u64::from(health.last_reload_ok),
-        ),
-    ] {
-        out.family(name, kind, help, one(value));
+    for Figure { family, value } in &HEALTH {
+        out.family(family, [(String::new(), value(health))]);
     }
     write_link_states(&mut out, links);
     write_links(&mut out, links, Scope::Run);
@@ -415,6 +518,28 @@ pub struct ProbeResult {
     pub message: Option<String>,
 }
 
+/// What one `/probe` says of itself.
+const PROBE_SUCCESS: Family = Family::gauge(
+    "mavping_probe_success",
+    "1 when a responder answered and every threshold of the module held.",
+);
+const PROBE_FAILURE: Family = Family::gauge(
+    "mavping_probe_failure",
+    "1 for each reason the probe failed (open_failed, link_failed, no_reply, max_loss, ...).",
+);
+const PROBE_DURATION: Family = Family::gauge(
+    "mavping_probe_duration_seconds",
+    "How long the probe took, opening the link included.",
+);
+const PROBE_REQUESTS: Family = Family::gauge(
+    "mavping_probe_requests",
+    "Requests the probe put on the wire.",
+);
+const PROBE_IN_FLIGHT: Family = Family::gauge(
+    "mavping_probe_in_flight",
+    "Requests still undecided when the probe's time was up (counted neither received nor lost).",
+);
+
 /// One `/probe`'s answer: its result, then its link's figures.
 pub fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
     let mut out = Exposition::default();
@@ -423,39 +548,17 @@ pub fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
         let _ = writeln!(out.0, "# mavping: {}", message.replace('\n', " "));
     }
     let one = |v: f64| [(String::new(), v)];
+    out.family(&PROBE_SUCCESS, one(f64::from(u8::from(result.success))));
     out.family(
-        "mavping_probe_success",
-        "gauge",
-        "1 when a responder answered and every threshold of the module held.",
-        one(f64::from(u8::from(result.success))),
-    );
-    out.family(
-        "mavping_probe_failure",
-        "gauge",
-        "1 for each reason the probe failed (open_failed, link_failed, no_reply, max_loss, ...).",
+        &PROBE_FAILURE,
         result
             .reasons
             .iter()
             .map(|r| (format!("reason=\"{r}\""), 1)),
     );
-    out.family(
-        "mavping_probe_duration_seconds",
-        "gauge",
-        "How long the probe took, opening the link included.",
-        one(result.duration_s),
-    );
-    out.family(
-        "mavping_probe_requests",
-        "gauge",
-        "Requests the probe put on the wire.",
-        one(result.requests as f64),
-    );
-    out.family(
-        "mavping_probe_in_flight",
-        "gauge",
-        "Requests still undecided when the probe's time was up (counted neither received nor lost).",
-        one(result.in_flight as f64),
-    );
+    out.family(&PROBE_DURATION, one(result.duration_s));
+    out.family(&PROBE_REQUESTS, one(result.requests as f64));
+    out.family(&PROBE_IN_FLIGHT, one(result.in_flight as f64));
     write_links(&mut out, &[metrics], Scope::Probe);
     out.0
 }
@@ -474,14 +577,15 @@ mod tests {
     use super::*;
     use crate::engine::matcher::MatchEvent;
     use crate::engine::radio::RadioReport;
+    use crate::engine::observe::ProbeName;
     use crate::output::{Event, Observer, StartInfo};
 
     /// Two links with every kind of figure: responders with replies,
     /// losses and a clock, a SiK radio and another maker's.
     fn rich_links() -> (Metrics, Metrics) {
-        let mut a = Metrics::continuous("sim:?seed=1", "timesync");
+        let mut a = Metrics::continuous("sim:?seed=1", ProbeName::Timesync);
         a.on_start(&StartInfo {
-            probe: "timesync",
+            probe: ProbeName::Timesync,
             ..info("sim:?seed=1")
         });
         let mut b = Metrics::default();
