@@ -153,11 +153,35 @@ pub struct Failure {
     pub message: String,
 }
 
-#[derive(Debug, Clone, PartialEq, Serialize)]
+/// A link's judgement: how it ended, for the exit policy, and the checks
+/// that failed. Reports show the code the policy gives it
+/// (`{"ok", "exit_code", "failures"}` in JSON).
+#[derive(Debug, Clone, PartialEq)]
 pub struct Verdict {
-    pub ok: bool,
-    pub exit_code: u8,
+    pub end: LinkEnd,
     pub failures: Vec<Failure>,
+}
+
+impl Verdict {
+    /// The link's own exit code.
+    pub fn exit_code(&self) -> u8 {
+        exit::of_link(self.end)
+    }
+
+    pub fn ok(&self) -> bool {
+        self.exit_code() == exit::OK
+    }
+}
+
+impl Serialize for Verdict {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut s = serializer.serialize_struct("Verdict", 3)?;
+        s.serialize_field("ok", &self.ok())?;
+        s.serialize_field("exit_code", &self.exit_code())?;
+        s.serialize_field("failures", &self.failures)?;
+        s.end()
+    }
 }
 
 fn ms(us: f64) -> String {
@@ -282,25 +306,12 @@ pub fn judge_link(summary: &LinkSummary, t: &Thresholds) -> Verdict {
 }
 
 fn verdict(link_failed: bool, failures: Vec<Failure>) -> Verdict {
-    let end = LinkEnd {
-        link_failed,
-        checks_held: failures.is_empty(),
-    };
-    let exit_code = exit::of_link(end);
     Verdict {
-        ok: exit_code == exit::OK,
-        exit_code,
+        end: LinkEnd {
+            link_failed,
+            checks_held: failures.is_empty(),
+        },
         failures,
-    }
-}
-
-impl Verdict {
-    /// What the exit policy needs of it.
-    pub fn end(&self) -> LinkEnd {
-        LinkEnd {
-            link_failed: self.exit_code == exit::ERROR,
-            checks_held: self.failures.is_empty(),
-        }
     }
 }
 
@@ -358,7 +369,7 @@ mod tests {
     fn each_threshold_fails_alone() {
         let s = summary(vec![responder(1, 90, 10, 40_000.0, 3_000.0)]);
         let ok = judge(&s, &Thresholds::default());
-        assert_eq!((ok.ok, ok.exit_code), (true, 0));
+        assert_eq!((ok.ok(), ok.exit_code()), (true, 0));
         let table: Vec<(Thresholds, Check)> = vec![
             (
                 Thresholds {
@@ -405,7 +416,7 @@ mod tests {
         for (t, check) in table {
             let v = judge(&s, &t);
             assert_eq!(checks(&v), vec![check]);
-            assert_eq!(v.exit_code, exit::FAILED);
+            assert_eq!(v.exit_code(), exit::FAILED);
         }
         // The same limits, loose enough, hold.
         let loose = Thresholds {
@@ -421,7 +432,7 @@ mod tests {
             }],
             min_responders: Some(1),
         };
-        assert!(judge(&s, &loose).ok);
+        assert!(judge(&s, &loose).ok());
     }
 
     #[test]
@@ -451,7 +462,7 @@ mod tests {
         );
         s.responders.push(responder(1, 5, 0, 1.0, 0.0));
         s.link_error = Some("gone".into());
-        assert_eq!(judge(&s, &Thresholds::default()).exit_code, exit::ERROR);
+        assert_eq!(judge(&s, &Thresholds::default()).exit_code(), exit::ERROR);
     }
 
     #[test]

@@ -275,7 +275,7 @@ fn judge(
         }
         output_closed |= f.measurement.output_closed
             || f.report.summary(&f.measurement.summary, &verdict).is_err();
-        ends.push(verdict.end());
+        ends.push(verdict.end);
     }
     (ends, output_closed)
 }

@@ -186,7 +186,7 @@ impl<'a> Summary<'a> {
             signing: s.signing,
             r#type: "command_summary",
             schema_version: SCHEMA_VERSION,
-            exit_code: verdict.exit_code,
+            exit_code: verdict.exit_code(),
         }
     }
 }

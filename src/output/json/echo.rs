@@ -7,13 +7,13 @@ use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::Hint;
 use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::ProbeName;
 use crate::engine::radio::{RadioReport, RadioSummary};
 use crate::engine::roster::Identity;
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::engine::summary::{self, ResponderSummary, ScheduleSummary};
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
-use crate::engine::observe::ProbeName;
 use crate::output::Event;
 use crate::transport::RxClock;
 use crate::verdict::Verdict;
@@ -313,7 +313,7 @@ impl<'a> Summary<'a> {
                 .map(|r| Responder::of(r, verdict))
                 .collect(),
             verdict,
-            exit_code: verdict.exit_code,
+            exit_code: verdict.exit_code(),
             sweep: s
                 .sweep
                 .as_deref()

@@ -7,7 +7,7 @@ use super::{seconds, Lines};
 use crate::engine::capacity::WireBudget;
 use crate::engine::load::LoadSummary;
 use crate::engine::sweep::step::{Phase, StepFigures, StepRadio};
-use crate::engine::sweep::verdict::{Knee, SweepEnd, LoadEffect, Queueing, SweepSummary};
+use crate::engine::sweep::verdict::{Knee, LoadEffect, Queueing, SweepEnd, SweepSummary};
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
 
 /// The start line's `sweep`: what will be sent.

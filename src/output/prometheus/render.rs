@@ -576,8 +576,8 @@ mod tests {
     use super::super::test_start as info;
     use super::*;
     use crate::engine::matcher::MatchEvent;
-    use crate::engine::radio::RadioReport;
     use crate::engine::observe::ProbeName;
+    use crate::engine::radio::RadioReport;
     use crate::output::{Event, Observer, StartInfo};
 
     /// Two links with every kind of figure: responders with replies,

@@ -165,7 +165,7 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
         .map(str::to_string)
         .or_else(|| verdict.failures.first().map(|f| f.message.clone()));
     ProbeResult {
-        success: verdict.ok,
+        success: verdict.ok(),
         duration_s: started.elapsed().as_secs_f64(),
         reasons,
         requests,
