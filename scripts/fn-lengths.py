@@ -12,12 +12,36 @@ if "--max" in args:
 top = int(args[0]) if args else 15
 
 def strip(text):
-    # blank out comments, strings and char literals, keeping line breaks
-    text = re.sub(r"//[^\n]*", "", text)
-    text = re.sub(r'\br#*"(?:.|\n)*?"#*', lambda m: "\n" * m.group(0).count("\n"), text)
-    text = re.sub(r'"(?:\\.|[^"\\])*"', lambda m: "\n" * m.group(0).count("\n"), text, flags=re.S)
-    text = re.sub(r"'(?:\\.|[^'\\])'", "' '", text)
-    return text
+    """Blanks out comments, strings and char literals (keeping line breaks),
+    in one pass, so a `//` inside a string or a quote inside a comment
+    cannot confuse the brace count."""
+    out, i, n = [], 0, len(text)
+    while i < n:
+        c = text[i]
+        if text.startswith("//", i):
+            j = text.find("\n", i)
+            i = n if j < 0 else j
+        elif text.startswith("/*", i):
+            j = text.find("*/", i + 2)
+            j = n if j < 0 else j + 2
+            out.append("\n" * text.count("\n", i, j)); i = j
+        elif c == "r" and re.match(r'r#*"', text[i:]) and not (i and (text[i - 1].isalnum() or text[i - 1] == "_")):
+            hashes = re.match(r'r(#*)"', text[i:]).group(1)
+            j = text.find('"' + hashes, i + len(hashes) + 2)
+            j = n if j < 0 else j + 1 + len(hashes)
+            out.append("\n" * text.count("\n", i, j)); i = j
+        elif c == '"':
+            j = i + 1
+            while j < n and text[j] != '"':
+                j += 2 if text[j] == "\\" else 1
+            j += 1
+            out.append("\n" * text.count("\n", i, j)); i = j
+        elif c == "'" and re.match(r"'(\\.|[^'\\])'|'\\u\{[0-9a-fA-F]+\}'|'\\x[0-9a-fA-F]{2}'", text[i:]):
+            m = re.match(r"'(\\.|[^'\\])'|'\\u\{[0-9a-fA-F]+\}'|'\\x[0-9a-fA-F]{2}'", text[i:])
+            out.append("' '"); i += len(m.group(0))
+        else:
+            out.append(c); i += 1
+    return "".join(out)
 
 found = []
 for root, _, names in os.walk("src"):

@@ -19,7 +19,7 @@ pub use serve::{
 
 use crate::cli::{Format, SigningArgs};
 use crate::engine::capacity::{self, WireBudget};
-use crate::engine::observe::ProbeName;
+use crate::engine::summary::ProbeName;
 use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::{SecretKey, SigningConfig};

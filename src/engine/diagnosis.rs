@@ -7,9 +7,9 @@
 use std::time::Duration;
 
 use super::hint::{Hint, HintCode};
-use super::observe::ProbeName;
 use super::radio;
 use super::roster::{Roster, Source};
+use super::summary::ProbeName;
 use super::summary::ResponderSummary;
 use crate::frame::signing::SigningCounts;
 use crate::frame::{mav_type, ScanStats, SysComp, Version};

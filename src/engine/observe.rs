@@ -2,48 +2,19 @@
 //! interface. Reports, exporters and tests implement [`Observer`]; the
 //! engine names none of them.
 
-use std::fmt;
 use std::io;
 use std::time::Duration;
-
-use serde::Serialize;
 
 use super::clock_offset::ClockSummary;
 use super::matcher::MatchEvent;
 use super::radio::RadioReport;
 use super::roster::Identity;
-use super::summary::Interim;
+use super::summary::{Interim, ProbeName};
 use super::sweep::step::StepFigures;
 use super::sweep::SweepConfig;
 use super::CommandSpec;
 use super::Nanos;
 use crate::frame::SysComp;
-
-/// Which probe a session runs, by the name reports give it (`PING` in
-/// text, `"probe": "ping"` in JSON, `probe="ping"` in Prometheus labels).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "lowercase")]
-pub enum ProbeName {
-    Ping,
-    Timesync,
-    Command,
-}
-
-impl ProbeName {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            ProbeName::Ping => "ping",
-            ProbeName::Timesync => "timesync",
-            ProbeName::Command => "command",
-        }
-    }
-}
-
-impl fmt::Display for ProbeName {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
 
 /// What a run is doing, told first.
 #[derive(Debug, Clone)]

@@ -1,13 +1,14 @@
 //! The end-of-run figures, built from the matcher and the roster. Every
 //! report format renders this one structure.
 
+use std::fmt;
+
 use serde::Serialize;
 
 use super::capacity::WireBudget;
 use super::clock_offset::ClockSummary;
 use super::hint::{Hint, HintCode};
 use super::matcher::{Counts, Matcher};
-use super::observe::ProbeName;
 use super::radio::RadioSummary;
 use super::roster::{Identity, Roster};
 use super::stats::{Bucket, RttSummary};
@@ -15,6 +16,32 @@ use super::sweep::verdict::SweepSummary;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
 use crate::transport::RxClock;
+
+/// Which probe a session runs, by the name reports give it (`PING` in
+/// text, `"probe": "ping"` in JSON, `probe="ping"` in Prometheus labels).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ProbeName {
+    Ping,
+    Timesync,
+    Command,
+}
+
+impl ProbeName {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            ProbeName::Ping => "ping",
+            ProbeName::Timesync => "timesync",
+            ProbeName::Command => "command",
+        }
+    }
+}
+
+impl fmt::Display for ProbeName {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
 
 /// Rows in the ASCII/JSON RTT distribution.
 pub const HISTOGRAM_ROWS: usize = 8;

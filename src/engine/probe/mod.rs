@@ -14,7 +14,7 @@ pub mod timesync;
 
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::Lookup;
-use crate::engine::observe::ProbeName;
+use crate::engine::summary::ProbeName;
 use crate::engine::Nanos;
 use crate::frame::{Frame, Msg, SysComp};
 

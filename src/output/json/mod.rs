@@ -19,7 +19,7 @@ use std::io::{self, Write};
 use serde::Serialize;
 
 use super::{Event, Observer, Reporter, RunKind, StartInfo, WallClock};
-use crate::engine::observe::ProbeName;
+use crate::engine::summary::ProbeName;
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;

@@ -13,10 +13,11 @@ use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::load::{Load, LoadKind, LoadSpec};
 use crate::engine::matcher::{Counts, MatchEvent};
-use crate::engine::observe::{CommandEvent, ProbeName, RunKind};
+use crate::engine::observe::{CommandEvent, RunKind};
 use crate::engine::radio::{RadioReport, Radios, UNKNOWN};
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
+use crate::engine::summary::ProbeName;
 use crate::engine::summary::{
     AckResult, CommandSummary, CommandTargetSummary, Interim, LinkSummary, ResponderSummary,
     ScheduleSummary, Summary,

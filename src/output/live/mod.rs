@@ -23,9 +23,9 @@ use tokio::sync::Notify;
 
 use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::ProbeName;
 use crate::engine::stats::RttStats;
 use crate::engine::summary::LinkSummary;
+use crate::engine::summary::ProbeName;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;

@@ -16,7 +16,7 @@ use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
 use ratatui::Frame;
 
 use super::{Mark, RowView, Screen};
-use crate::engine::observe::ProbeName;
+use crate::engine::summary::ProbeName;
 
 const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
 /// The key line: the keys, then what the figures and marks mean.

@@ -6,8 +6,8 @@
 use std::fmt::{Display, Write as _};
 
 use super::{Metrics, RadioSeries, Scope, Series, BUCKETS_S};
-use crate::engine::observe::ProbeName;
 use crate::engine::radio::{is_sik, sik_dbm, UNKNOWN};
+use crate::engine::summary::ProbeName;
 use crate::frame::SysComp;
 
 impl Metrics {
@@ -576,8 +576,8 @@ mod tests {
     use super::super::test_start as info;
     use super::*;
     use crate::engine::matcher::MatchEvent;
-    use crate::engine::observe::ProbeName;
     use crate::engine::radio::RadioReport;
+    use crate::engine::summary::ProbeName;
     use crate::output::{Event, Observer, StartInfo};
 
     /// Two links with every kind of figure: responders with replies,
