@@ -149,7 +149,8 @@ impl<W: Write> Reporter for SampleLog<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::observe::{ProbeName, RunKind};
+    use crate::engine::observe::RunKind;
+    use crate::engine::summary::ProbeName;
     use crate::frame::SysComp;
 
     #[test]
