@@ -9,6 +9,7 @@
 
 pub mod command;
 pub mod echo;
+pub mod passive;
 pub mod ping;
 pub mod timesync;
 

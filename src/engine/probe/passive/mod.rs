@@ -1,0 +1,4 @@
+//! Passive measurement: what a link's own traffic says about its losses,
+//! without sending anything on it.
+
+pub mod tracker;

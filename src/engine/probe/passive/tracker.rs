@@ -1,0 +1,986 @@
+//! Loss accounting from the 8-bit packet sequence every MAVLink sender
+//! puts in its frames: per source, exact where the sequence proves it,
+//! and honest where it cannot.
+//!
+//! Pure and synchronous: each frame comes with its arrival time as
+//! [`Nanos`]; nothing here reads a clock or does I/O. Memory is constant
+//! for a run of any length (fixed bitmaps, capped lists and maps).
+//!
+//! Rules, per source (a [`SeqTracker`]):
+//! - **Window.** A frame `k` ahead of the last one (the *head*), for `k` in
+//!   1..=127, is new: the `k - 1` numbers skipped are **lost**, and it
+//!   becomes the head. A frame 0..=127 behind the head is looked up in a
+//!   256-bit bitmap of the numbers seen: seen before, it is a
+//!   **duplicate**; not seen, it fills a gap: one frame moves from lost to
+//!   **reordered**. A frame behind the first one of the run (still within
+//!   127) fills the numbers between as lost and counts as reordered, so a
+//!   run that starts on a swapped pair counts 0 lost.
+//! - **Far behind.** A frame exactly 128 away is ahead and behind at once;
+//!   the tracker **resynchronises** on it (it becomes the head, nothing is
+//!   counted lost, `resyncs` counts it). Every other distance falls in the
+//!   window, so a source restarting without a pause shows as a gap or as
+//!   duplicates: the sequence alone cannot tell.
+//! - **Usual interval.** The time per sequence step, smoothed: each step
+//!   `k` ahead, outside silences, gives a sample (time since the head) / k,
+//!   and the estimate moves 1/16 of the way to it (the first sample seeds
+//!   it). Lost frames do not inflate it, as the steps count them.
+//! - **Silence.** No frame from the source for longer than the threshold:
+//!   the `gap` given, or else 5 usual intervals but at least 1 s (5 s while
+//!   no interval is known: 5 heartbeats). Whatever the base, a gap of 64
+//!   usual intervals is always a silence, so a fast source's long outage
+//!   cannot hide in the window. A silence is listed with its start (the
+//!   last frame before it), its length (to the frame after it) and the
+//!   frames the source would have sent in it: length / usual interval,
+//!   rounded, less the frame that ends it.
+//! - **Across a silence** the sequence may have wrapped any number of
+//!   times, or restarted with a reboot. It is trusted only if the silence
+//!   is shorter than 128 frames at the source's usual rate (half the
+//!   sequence space, so a rate off by up to 2x still cannot hide a wrap)
+//!   and the frame after it is ahead within the window: then its gap is
+//!   counted lost, as anywhere else, and the silence records it
+//!   (`seq_lost`). Otherwise (longer, rate unknown, or a frame behind the
+//!   head, which after a pause means a restart) the tracker resynchronises:
+//!   `lost` stays what the sequence proves, and the silence's estimated
+//!   frames go to `silence_frames_estimated` instead. The two never count
+//!   the same frame.
+//! - A silence still on when the summary is taken is listed as `ongoing`;
+//!   its estimated frames count as unspanned.
+//! - **pymavlink's figure**, beside ours and labelled: as
+//!   `mavutil.post_message` computes it, `expected = (last + 1) % 256`, on
+//!   a mismatch `loss += (seq - expected) % 256`, every frame counted, loss
+//!   % = loss / (count + loss). A duplicate costs it 255, a swap 256, and
+//!   a silence whatever its length is modulo 256.
+
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+
+/// How far ahead or behind the head a frame is still read as part of the
+/// same stream (half the sequence space, less the ambiguous middle).
+const WINDOW: u8 = 127;
+/// The silence threshold is this many usual intervals...
+const SILENCE_INTERVALS: u64 = 5;
+/// ...but at least this long: shorter pauses are a bursty source's rhythm,
+/// not silences.
+const SILENCE_FLOOR: Nanos = 1_000_000_000;
+/// The usual interval assumed before the source shows its own: HEARTBEAT's
+/// period, which every component keeps.
+const FIRST_INTERVAL: Nanos = 1_000_000_000;
+/// A gap of this many usual intervals is a silence whatever the threshold.
+const SILENCE_CAP_INTERVALS: u64 = 64;
+/// A silence shorter than this many frames at the usual rate is spanned by
+/// the sequence (half of 256: room for a rate estimate off by 2x).
+const SPAN_FRAMES: u64 = 128;
+/// The usual interval moves 1/this of the way to each sample.
+const EWMA_WEIGHT: u64 = 16;
+/// Silences listed: the first ones...
+const KEEP_FIRST_SILENCES: usize = 8;
+/// ...and the longest of the later ones.
+const KEEP_LONGEST_SILENCES: usize = 8;
+/// Distinct message ids counted per source; later new ids share "other".
+const MAX_MSG_IDS: usize = 32;
+/// The SiK radio's injected RADIO_STATUS comes from sysid '3', compid 'D'.
+pub const RADIO_SOURCE: SysComp = SysComp::new(b'3', b'D');
+
+/// The sequence counts of one source.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SeqCounts {
+    /// Every frame, duplicates included.
+    pub received: u64,
+    /// Sequence numbers skipped and not (yet) filled by a late frame.
+    pub lost: u64,
+    /// Frames whose number had been seen already.
+    pub duplicate: u64,
+    /// Frames that came after a later one and filled their gap.
+    pub reordered: u64,
+    /// Times the accounting restarted on a frame the sequence could not
+    /// place (after a long silence, or exactly 128 away).
+    pub resyncs: u64,
+}
+
+/// pymavlink's loss figure for the same frames, as `mavutil` computes it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct PymavFigure {
+    /// `mav_count`: every frame.
+    pub count: u64,
+    /// `mav_loss`: the sum of `(seq - expected) % 256` over mismatches.
+    pub loss: u64,
+    /// `packet_loss()`: `100 * loss / (count + loss)`, 0 with no frames.
+    pub loss_pct: f64,
+}
+
+impl PymavFigure {
+    fn new(count: u64, loss: u64) -> Self {
+        PymavFigure {
+            count,
+            loss,
+            loss_pct: percent(loss, count + loss).unwrap_or(0.0),
+        }
+    }
+}
+
+/// A time the source was not heard for longer than the threshold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct Silence {
+    /// The arrival of the last frame before it.
+    pub start: Nanos,
+    /// From that frame to the one after it (to the summary, if ongoing).
+    pub length_ns: Nanos,
+    /// Frames the source would have sent in it at its usual rate; `None`
+    /// while no rate was known.
+    pub frames_estimated: Option<u64>,
+    /// The frames the sequence proved lost across it (included in
+    /// `lost`), or `None` if it could not span it and was resynchronised.
+    pub seq_lost: Option<u64>,
+    /// Still on when the summary was taken.
+    pub ongoing: bool,
+}
+
+/// Frames of one message id.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct MsgCount {
+    pub id: u32,
+    pub count: u64,
+}
+
+/// Everything known about one source.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SourceSummary {
+    pub source: SysComp,
+    /// The SiK radio's own RADIO_STATUS source (out of the link's totals).
+    pub radio: bool,
+    pub counts: SeqCounts,
+    /// `100 * lost / (lost + distinct frames received)`; `None` with
+    /// nothing to compare.
+    pub loss_pct: Option<f64>,
+    pub pymav: PymavFigure,
+    /// Frame bytes, duplicates included.
+    pub bytes: u64,
+    pub first_seen: Nanos,
+    pub last_seen: Nanos,
+    /// Arrival rates from the first to the last frame (the first frame
+    /// starts the span, so it is not counted); `None` on a zero span.
+    pub frames_per_s: Option<f64>,
+    pub bytes_per_s: Option<f64>,
+    /// The usual time per sequence step, once known.
+    pub interval_ns: Option<Nanos>,
+    /// The first silences and the longest later ones, by start, then the
+    /// ongoing one if any.
+    pub silences: Vec<Silence>,
+    /// All silences, ongoing included.
+    pub silence_count: u64,
+    /// Silences not in the list.
+    pub silences_omitted: u64,
+    /// Total length of all silences.
+    pub silence_ns: Nanos,
+    /// Estimated frames of the silences the sequence could not span (never
+    /// also in `lost`).
+    pub silence_frames_estimated: u64,
+    /// Frames by message id, most frequent first (the first
+    /// `MAX_MSG_IDS` distinct ids seen).
+    pub msg_ids: Vec<MsgCount>,
+    /// Frames of ids seen after that many distinct ones.
+    pub msg_ids_other: u64,
+}
+
+/// Sequence state of the current stretch (since the start or the last
+/// resync).
+#[derive(Debug, Clone, Copy)]
+struct SeqState {
+    head: u8,
+    /// Arrival of the head frame.
+    head_at: Nanos,
+    /// Numbers accounted in this stretch, head included (each seen or
+    /// lost).
+    span: u64,
+    /// Bit `n` set: number `n` seen. Valid for numbers in the span within
+    /// 127 of the head.
+    seen: [u64; 4],
+}
+
+/// Where a frame landed in the sequence.
+enum Step {
+    /// `k` ahead: the new head, `k - 1` lost.
+    Ahead(u8),
+    Duplicate,
+    /// Filled a gap counted lost.
+    Filled,
+    /// Behind the stretch's first frame: it, and `lost` numbers between.
+    BeforeStart {
+        lost: u64,
+    },
+    Resync,
+}
+
+impl SeqState {
+    fn new(seq: u8, at: Nanos) -> Self {
+        let mut s = SeqState {
+            head: seq,
+            head_at: at,
+            span: 1,
+            seen: [0; 4],
+        };
+        s.mark(seq, true);
+        s
+    }
+
+    fn mark(&mut self, seq: u8, seen: bool) {
+        let (word, bit) = (usize::from(seq / 64), seq % 64);
+        if seen {
+            self.seen[word] |= 1 << bit;
+        } else {
+            self.seen[word] &= !(1 << bit);
+        }
+    }
+
+    fn is_seen(&self, seq: u8) -> bool {
+        self.seen[usize::from(seq / 64)] & (1 << (seq % 64)) != 0
+    }
+
+    fn advance(&mut self, ahead: u8, at: Nanos) {
+        for k in 1..ahead {
+            self.mark(self.head.wrapping_add(k), false);
+        }
+        self.head = self.head.wrapping_add(ahead);
+        self.mark(self.head, true);
+        self.head_at = at;
+        self.span += u64::from(ahead);
+    }
+
+    fn take(&mut self, seq: u8, at: Nanos) -> Step {
+        let ahead = seq.wrapping_sub(self.head);
+        if (1..=WINDOW).contains(&ahead) {
+            self.advance(ahead, at);
+            return Step::Ahead(ahead);
+        }
+        let behind = self.head.wrapping_sub(seq);
+        if behind > WINDOW {
+            *self = SeqState::new(seq, at);
+            return Step::Resync;
+        }
+        let span = u8::try_from(self.span).unwrap_or(u8::MAX);
+        if behind < span {
+            if self.is_seen(seq) {
+                return Step::Duplicate;
+            }
+            self.mark(seq, true);
+            return Step::Filled;
+        }
+        // Behind the first frame of the stretch (span <= behind <= 127):
+        // the stretch grows back to it.
+        for k in span..behind {
+            self.mark(self.head.wrapping_sub(k), false);
+        }
+        self.mark(seq, true);
+        self.span = u64::from(behind) + 1;
+        Step::BeforeStart {
+            lost: u64::from(behind - span),
+        }
+    }
+}
+
+/// The bounded list of silences: the first few, and the longest of the
+/// rest.
+#[derive(Debug, Clone, Default)]
+struct SilenceLog {
+    first: Vec<Silence>,
+    longest: Vec<Silence>,
+    count: u64,
+    omitted: u64,
+    total_ns: Nanos,
+    unspanned_frames: u64,
+}
+
+impl SilenceLog {
+    fn push(&mut self, s: Silence) {
+        self.count += 1;
+        self.total_ns = self.total_ns.saturating_add(s.length_ns);
+        if s.seq_lost.is_none() {
+            self.unspanned_frames += s.frames_estimated.unwrap_or(0);
+        }
+        if self.first.len() < KEEP_FIRST_SILENCES {
+            self.first.push(s);
+        } else if self.longest.len() < KEEP_LONGEST_SILENCES {
+            self.longest.push(s);
+        } else {
+            self.omitted += 1;
+            let shortest = self
+                .longest
+                .iter_mut()
+                .min_by_key(|kept| kept.length_ns)
+                .expect("the list is full");
+            if s.length_ns > shortest.length_ns {
+                *shortest = s;
+            }
+        }
+    }
+}
+
+/// Exact frame counts for the first `MAX_MSG_IDS` distinct message ids.
+#[derive(Debug, Clone, Default)]
+struct MsgIds {
+    kept: Vec<MsgCount>,
+    other: u64,
+}
+
+impl MsgIds {
+    fn count(&mut self, id: u32) {
+        if let Some(m) = self.kept.iter_mut().find(|m| m.id == id) {
+            m.count += 1;
+        } else if self.kept.len() < MAX_MSG_IDS {
+            self.kept.push(MsgCount { id, count: 1 });
+        } else {
+            self.other += 1;
+        }
+    }
+
+    fn by_count(&self) -> Vec<MsgCount> {
+        let mut v = self.kept.clone();
+        v.sort_unstable_by(|a, b| b.count.cmp(&a.count).then(a.id.cmp(&b.id)));
+        v
+    }
+}
+
+/// One source's sequence accounting: see the module's rules.
+#[derive(Debug, Clone)]
+pub struct SeqTracker {
+    gap: Option<Nanos>,
+    state: Option<SeqState>,
+    counts: SeqCounts,
+    pymav_last: Option<u8>,
+    pymav_loss: u64,
+    bytes: u64,
+    first_len: u64,
+    first_seen: Nanos,
+    last_seen: Nanos,
+    interval: Option<Nanos>,
+    silences: SilenceLog,
+    msg_ids: MsgIds,
+}
+
+impl SeqTracker {
+    /// A tracker whose silences are gaps longer than `gap`, or, with
+    /// `None`, than the default threshold (module docs).
+    pub fn new(gap: Option<Nanos>) -> Self {
+        SeqTracker {
+            gap,
+            state: None,
+            counts: SeqCounts::default(),
+            pymav_last: None,
+            pymav_loss: 0,
+            bytes: 0,
+            first_len: 0,
+            first_seen: 0,
+            last_seen: 0,
+            interval: None,
+            silences: SilenceLog::default(),
+            msg_ids: MsgIds::default(),
+        }
+    }
+
+    /// Takes one frame: its header sequence, message id, length on the
+    /// wire and arrival time (not earlier than the previous frame's).
+    pub fn on_frame(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
+        let len = u64::try_from(len_bytes).unwrap_or(u64::MAX);
+        self.counts.received += 1;
+        self.bytes = self.bytes.saturating_add(len);
+        self.msg_ids.count(msg_id);
+        self.pymav(seq);
+        let Some(state) = self.state.as_mut() else {
+            self.state = Some(SeqState::new(seq, at));
+            self.first_len = len;
+            self.first_seen = at;
+            self.last_seen = at;
+            return;
+        };
+        let elapsed = at.saturating_sub(self.last_seen);
+        let silent = elapsed > threshold(self.gap, self.interval);
+        self.last_seen = self.last_seen.max(at);
+        if silent {
+            let frames = self.interval.map(|i| frames_in(elapsed, i));
+            let ahead = seq.wrapping_sub(state.head);
+            let spanned = frames.is_some_and(|f| f < SPAN_FRAMES) && (1..=WINDOW).contains(&ahead);
+            self.silences.push(Silence {
+                start: at - elapsed,
+                length_ns: elapsed,
+                frames_estimated: frames,
+                seq_lost: spanned.then(|| u64::from(ahead - 1)),
+                ongoing: false,
+            });
+            if spanned {
+                // The usual rate is what came before the silence: no sample.
+                state.advance(ahead, at);
+                self.counts.lost += u64::from(ahead - 1);
+            } else {
+                *state = SeqState::new(seq, at);
+                self.counts.resyncs += 1;
+            }
+            return;
+        }
+        let since_head = at.saturating_sub(state.head_at);
+        match state.take(seq, at) {
+            Step::Ahead(k) => {
+                self.counts.lost += u64::from(k - 1);
+                self.sample_interval(since_head / u64::from(k));
+            }
+            Step::Duplicate => self.counts.duplicate += 1,
+            Step::Filled => {
+                self.counts.lost -= 1;
+                self.counts.reordered += 1;
+            }
+            Step::BeforeStart { lost } => {
+                self.counts.lost += lost;
+                self.counts.reordered += 1;
+            }
+            Step::Resync => self.counts.resyncs += 1,
+        }
+    }
+
+    /// pymavlink's `post_message` accounting, to the letter.
+    fn pymav(&mut self, seq: u8) {
+        if let Some(last) = self.pymav_last {
+            let expected = last.wrapping_add(1);
+            if seq != expected {
+                // u8 wrapping subtraction is Python's non-negative `% 256`.
+                self.pymav_loss += u64::from(seq.wrapping_sub(expected));
+            }
+        }
+        self.pymav_last = Some(seq);
+    }
+
+    fn sample_interval(&mut self, sample: Nanos) {
+        let next = match self.interval {
+            None => sample,
+            Some(i) => i.saturating_mul(EWMA_WEIGHT - 1).saturating_add(sample) / EWMA_WEIGHT,
+        };
+        // At least 1 ns, so frame estimates can divide by it.
+        self.interval = Some(next.max(1));
+    }
+
+    pub fn counts(&self) -> SeqCounts {
+        self.counts
+    }
+
+    /// pymavlink's figure for this source alone.
+    pub fn pymav_figure(&self) -> PymavFigure {
+        PymavFigure::new(self.counts.received, self.pymav_loss)
+    }
+
+    /// The usual time per sequence step, once known.
+    pub fn interval(&self) -> Option<Nanos> {
+        self.interval
+    }
+
+    /// The silence running at `at`, if the source has been quiet for
+    /// longer than the threshold.
+    fn ongoing(&self, at: Nanos) -> Option<Silence> {
+        self.state?;
+        let elapsed = at.saturating_sub(self.last_seen);
+        (elapsed > threshold(self.gap, self.interval)).then(|| Silence {
+            start: self.last_seen,
+            length_ns: elapsed,
+            frames_estimated: self.interval.map(|i| frames_in(elapsed, i)),
+            seq_lost: None,
+            ongoing: true,
+        })
+    }
+
+    /// The figures as of `at` (the end of the run, or now): a silence
+    /// still on then is included.
+    pub fn summary(&self, source: SysComp, at: Nanos) -> SourceSummary {
+        let mut silences: Vec<Silence> = self
+            .silences
+            .first
+            .iter()
+            .chain(&self.silences.longest)
+            .copied()
+            .collect();
+        silences.sort_by_key(|s| s.start);
+        let mut log_count = self.silences.count;
+        let mut silence_ns = self.silences.total_ns;
+        let mut unspanned = self.silences.unspanned_frames;
+        if let Some(s) = self.ongoing(at) {
+            log_count += 1;
+            silence_ns = silence_ns.saturating_add(s.length_ns);
+            unspanned += s.frames_estimated.unwrap_or(0);
+            silences.push(s);
+        }
+        let c = self.counts;
+        let span = self.last_seen - self.first_seen;
+        SourceSummary {
+            source,
+            radio: source == RADIO_SOURCE,
+            counts: c,
+            loss_pct: percent(c.lost, c.received - c.duplicate + c.lost),
+            pymav: self.pymav_figure(),
+            bytes: self.bytes,
+            first_seen: self.first_seen,
+            last_seen: self.last_seen,
+            frames_per_s: per_second(c.received.saturating_sub(1), span),
+            bytes_per_s: per_second(self.bytes.saturating_sub(self.first_len), span),
+            interval_ns: self.interval,
+            silences,
+            silence_count: log_count,
+            silences_omitted: self.silences.omitted,
+            silence_ns,
+            silence_frames_estimated: unspanned,
+            msg_ids: self.msg_ids.by_count(),
+            msg_ids_other: self.msg_ids.other,
+        }
+    }
+}
+
+/// The silence threshold for a source with usual interval `interval`.
+fn threshold(gap: Option<Nanos>, interval: Option<Nanos>) -> Nanos {
+    let base = gap.unwrap_or_else(|| {
+        interval
+            .unwrap_or(FIRST_INTERVAL)
+            .saturating_mul(SILENCE_INTERVALS)
+            .max(SILENCE_FLOOR)
+    });
+    interval.map_or(base, |i| base.min(i.saturating_mul(SILENCE_CAP_INTERVALS)))
+}
+
+/// Frames sent strictly inside a gap of `elapsed` at one per `interval`
+/// (rounded; the frame that ends the gap is not one of them).
+fn frames_in(elapsed: Nanos, interval: Nanos) -> u64 {
+    (elapsed.saturating_add(interval / 2) / interval).saturating_sub(1)
+}
+
+/// `100 * part / whole`; `None` for an empty whole. Counts stay far below
+/// 2^53, where `f64` is exact.
+fn percent(part: u64, whole: u64) -> Option<f64> {
+    (whole > 0).then(|| 100.0 * part as f64 / whole as f64)
+}
+
+/// `amount` per second over `span_ns`; `None` for an empty span. (`f64`
+/// is exact for these magnitudes, to well under a ppb.)
+fn per_second(amount: u64, span_ns: Nanos) -> Option<f64> {
+    (span_ns > 0).then(|| amount as f64 * 1e9 / span_ns as f64)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const MS: Nanos = 1_000_000;
+    const S: Nanos = 1_000 * MS;
+    const SRC: SysComp = SysComp::new(1, 1);
+
+    fn counts(received: u64, lost: u64, duplicate: u64, reordered: u64, resyncs: u64) -> SeqCounts {
+        SeqCounts {
+            received,
+            lost,
+            duplicate,
+            reordered,
+            resyncs,
+        }
+    }
+
+    /// Feeds frames given by their position in the source's own stream
+    /// (sequence = position mod 256), each sent at position x `interval`
+    /// and arriving then (or with the previous frame, if that came later).
+    fn feed(t: &mut SeqTracker, positions: &[u64], interval: Nanos) {
+        let mut at = 0;
+        for &p in positions {
+            at = (p * interval).max(at);
+            t.on_frame((p % 256) as u8, 0, 20, at);
+        }
+    }
+
+    fn tracked(positions: &[u64], interval: Nanos) -> SeqTracker {
+        let mut t = SeqTracker::new(None);
+        feed(&mut t, positions, interval);
+        t
+    }
+
+    #[test]
+    fn an_in_order_stream_loses_nothing() {
+        let all: Vec<u64> = (0..100).collect();
+        let t = tracked(&all, 20 * MS);
+        assert_eq!(t.counts(), counts(100, 0, 0, 0, 0));
+        assert_eq!(t.pymav_figure(), PymavFigure::new(100, 0));
+        assert_eq!(t.interval(), Some(20 * MS));
+        let s = t.summary(SRC, 99 * 20 * MS);
+        assert_eq!(s.loss_pct, Some(0.0));
+        assert_eq!(s.bytes, 2000);
+        assert_eq!(s.frames_per_s, Some(50.0));
+        assert_eq!(s.bytes_per_s, Some(1000.0));
+        assert!(s.silences.is_empty());
+        assert_eq!(s.msg_ids, vec![MsgCount { id: 0, count: 100 }]);
+    }
+
+    #[test]
+    fn single_gaps_count_exactly() {
+        let p: Vec<u64> = (0..50).filter(|p| ![10, 20, 21, 22].contains(p)).collect();
+        let t = tracked(&p, 20 * MS);
+        assert_eq!(t.counts(), counts(46, 4, 0, 0, 0));
+        assert_eq!(t.pymav_figure().loss, 4);
+        assert_eq!(t.summary(SRC, 0).loss_pct, Some(8.0));
+    }
+
+    #[test]
+    fn the_sequence_wraps_many_times() {
+        // Five wraps, with gaps across 255 -> 0 and at 0.
+        let p: Vec<u64> = (0..1300)
+            .filter(|p| ![255, 256, 512, 1023].contains(p))
+            .collect();
+        let t = tracked(&p, 10 * MS);
+        assert_eq!(t.counts(), counts(1296, 4, 0, 0, 0));
+        assert_eq!(t.pymav_figure().loss, 4);
+    }
+
+    #[test]
+    fn a_duplicate_is_one_duplicate_and_costs_pymavlink_255() {
+        let t = tracked(&[0, 1, 2, 3, 4, 5, 5, 6, 7, 8], 20 * MS);
+        assert_eq!(t.counts(), counts(10, 0, 1, 0, 0));
+        assert_eq!(t.pymav_figure(), PymavFigure::new(10, 255));
+        // An older duplicate too.
+        let t = tracked(&[0, 1, 2, 3, 4, 5, 2, 6], 20 * MS);
+        assert_eq!(t.counts(), counts(8, 0, 1, 0, 0));
+    }
+
+    #[test]
+    fn a_swap_is_one_reordered_frame_and_costs_pymavlink_256() {
+        let t = tracked(&[0, 1, 2, 3, 4, 6, 5, 7, 8], 20 * MS);
+        assert_eq!(t.counts(), counts(9, 0, 0, 1, 0));
+        assert_eq!(t.pymav_figure().loss, 256);
+        // Across the wrap.
+        let t = tracked(&[253, 254, 256, 255, 257], 20 * MS);
+        assert_eq!(t.counts(), counts(5, 0, 0, 1, 0));
+    }
+
+    #[test]
+    fn a_reorder_after_a_gap_fills_one_of_it() {
+        let t = tracked(&[0, 1, 2, 3, 4, 8, 5, 9, 10], 20 * MS);
+        assert_eq!(t.counts(), counts(9, 2, 0, 1, 0));
+        // The same late frame again is a duplicate, not another fill.
+        let t = tracked(&[0, 1, 2, 3, 4, 8, 5, 5, 9], 20 * MS);
+        assert_eq!(t.counts(), counts(9, 2, 1, 1, 0));
+    }
+
+    #[test]
+    fn a_run_starting_on_a_swap_loses_nothing() {
+        let t = tracked(&[1, 0, 2, 3], 20 * MS);
+        assert_eq!(t.counts(), counts(4, 0, 0, 1, 0));
+        // Behind the start by more than one: the numbers between are lost.
+        let t = tracked(&[10, 7, 11], 20 * MS);
+        assert_eq!(t.counts(), counts(3, 2, 0, 1, 0));
+        let t = tracked(&[10, 7, 11, 8, 9], 20 * MS);
+        assert_eq!(t.counts(), counts(5, 0, 0, 3, 0));
+    }
+
+    /// Feeds sequence numbers as they come, one every `step`.
+    fn arriving(seqs: &[u8], step: Nanos) -> SeqTracker {
+        let mut t = SeqTracker::new(None);
+        for (i, &s) in seqs.iter().enumerate() {
+            t.on_frame(s, 0, 20, i as u64 * step);
+        }
+        t
+    }
+
+    #[test]
+    fn a_frame_128_away_resynchronises() {
+        let t = arriving(&[0, 1, 2, 3, 131, 132], 20 * MS);
+        assert_eq!(t.counts(), counts(6, 0, 0, 0, 1));
+        // ...from which the count goes on.
+        let t = arriving(&[0, 1, 2, 3, 131, 133], 20 * MS);
+        assert_eq!(t.counts(), counts(6, 1, 0, 0, 1));
+        // 127 either way is still in the window.
+        let t = arriving(&[0, 1, 2, 3, 130, 4, 5], 20 * MS);
+        assert_eq!(t.counts(), counts(7, 124, 0, 2, 0));
+    }
+
+    /// 10 Hz for 2 s (positions 0..=20), then `missing` frames lost in a
+    /// row, then 10 more.
+    fn outage(missing: u64) -> SeqTracker {
+        let p: Vec<u64> = (0..=20).chain(21 + missing..31 + missing).collect();
+        tracked(&p, 100 * MS)
+    }
+
+    #[test]
+    fn a_silence_shorter_than_128_frames_is_counted_lost() {
+        let t = outage(30);
+        assert_eq!(t.counts(), counts(31, 30, 0, 0, 0));
+        let s = t.summary(SRC, 60 * 100 * MS);
+        assert_eq!(
+            s.silences,
+            vec![Silence {
+                start: 2 * S,
+                length_ns: 3_100 * MS,
+                frames_estimated: Some(30),
+                seq_lost: Some(30),
+                ongoing: false,
+            }]
+        );
+        assert_eq!((s.silence_count, s.silence_frames_estimated), (1, 0));
+        assert_eq!(s.pymav.loss, 30);
+        // Up to 127 frames: still spanned.
+        let t = outage(120);
+        assert_eq!(t.counts().lost, 120);
+    }
+
+    #[test]
+    fn a_silence_over_255_frames_is_a_silence_not_a_small_loss() {
+        // 600 frames (60 s at 10 Hz): 600 mod 256 = 88 is what the
+        // sequence shows, and what pymavlink counts.
+        let t = outage(600);
+        assert_eq!(t.counts(), counts(31, 0, 0, 0, 1));
+        assert_eq!(t.pymav_figure().loss, 88);
+        let s = t.summary(SRC, 630 * 100 * MS);
+        assert_eq!(s.silences.len(), 1);
+        assert_eq!(s.silences[0].frames_estimated, Some(600));
+        assert_eq!(s.silences[0].seq_lost, None);
+        assert_eq!(s.silence_frames_estimated, 600);
+        assert_eq!(s.silence_ns, 60_100 * MS);
+        // 128..=255 frames too: the rate estimate could be off enough to
+        // hide a wrap.
+        let t = outage(200);
+        assert_eq!(t.counts(), counts(31, 0, 0, 0, 1));
+        // Exactly 256 (the sequence shows nothing missing): a silence all
+        // the same.
+        let t = outage(256);
+        assert_eq!(t.counts(), counts(31, 0, 0, 0, 1));
+        assert_eq!(t.pymav_figure().loss, 0);
+    }
+
+    #[test]
+    fn a_frame_behind_after_a_silence_is_a_restart() {
+        // 10 Hz, then 5 s quiet, then the source starts again at 0.
+        let mut t = SeqTracker::new(None);
+        for p in 0..=40u64 {
+            t.on_frame(p as u8, 0, 20, p * 100 * MS);
+        }
+        for p in 0..5u64 {
+            t.on_frame(p as u8, 0, 20, 9 * S + p * 100 * MS);
+        }
+        assert_eq!(t.counts(), counts(46, 0, 0, 0, 1));
+    }
+
+    #[test]
+    fn with_no_rate_known_a_silence_resynchronises() {
+        let mut t = SeqTracker::new(None);
+        t.on_frame(0, 0, 20, 0);
+        t.on_frame(10, 0, 20, 6 * S);
+        assert_eq!(t.counts(), counts(2, 0, 0, 0, 1));
+        let s = t.summary(SRC, 6 * S);
+        assert_eq!(s.silences[0].frames_estimated, None);
+        assert_eq!(s.silence_frames_estimated, 0);
+    }
+
+    #[test]
+    fn a_fast_source_gets_a_silence_under_the_floor() {
+        // 1 kHz: 64 ms without a frame is a silence although under 1 s,
+        // and 300 frames lost in 0.3 s are not aliased to 44.
+        let p: Vec<u64> = (0..500).chain(800..900).collect();
+        let t = tracked(&p, MS);
+        assert_eq!(t.counts(), counts(600, 0, 0, 0, 1));
+        let s = t.summary(SRC, 899 * MS);
+        assert_eq!(s.silences[0].frames_estimated, Some(300));
+        // And 100 lost in a row, under 128: counted.
+        let p: Vec<u64> = (0..500).chain(600..700).collect();
+        let t = tracked(&p, MS);
+        assert_eq!(t.counts(), counts(600, 100, 0, 0, 0));
+    }
+
+    #[test]
+    fn a_given_gap_sets_the_threshold() {
+        let mut t = SeqTracker::new(Some(300 * MS));
+        feed(&mut t, &[0, 1, 2, 3, 8, 9], 100 * MS);
+        let s = t.summary(SRC, 900 * MS);
+        assert_eq!(t.counts(), counts(6, 4, 0, 0, 0));
+        assert_eq!(s.silences.len(), 1);
+        assert_eq!(s.silences[0].seq_lost, Some(4));
+        assert_eq!(s.silences[0].frames_estimated, Some(4));
+    }
+
+    #[test]
+    fn a_silence_still_on_at_the_end_is_ongoing() {
+        let p: Vec<u64> = (0..20).collect();
+        let t = tracked(&p, 100 * MS);
+        assert!(t.summary(SRC, 2_500 * MS).silences.is_empty());
+        let s = t.summary(SRC, 19 * 100 * MS + 10 * S);
+        assert_eq!(
+            s.silences,
+            vec![Silence {
+                start: 1_900 * MS,
+                length_ns: 10 * S,
+                frames_estimated: Some(99),
+                seq_lost: None,
+                ongoing: true,
+            }]
+        );
+        assert_eq!(s.silence_frames_estimated, 99);
+    }
+
+    #[test]
+    fn the_silence_list_keeps_the_first_and_the_longest() {
+        let mut t = SeqTracker::new(None);
+        let mut at = 0;
+        let mut seq = 0u8;
+        // 30 silences, of 2 s .. 31 s (and the 100 ms step), in a 10 Hz
+        // stream.
+        for i in 0..31u64 {
+            if i > 0 {
+                at += (i + 1) * S;
+            }
+            for _ in 0..20 {
+                t.on_frame(seq, 0, 20, at);
+                seq = seq.wrapping_add(1);
+                at += 100 * MS;
+            }
+        }
+        let s = t.summary(SRC, at - 100 * MS);
+        assert_eq!(s.silence_count, 30);
+        assert_eq!(s.silences.len(), 16);
+        assert_eq!(s.silences_omitted, 14);
+        let lengths: Vec<Nanos> = s.silences.iter().map(|s| s.length_ns / S).collect();
+        // Each is (i + 2) s plus the 100 ms step: 2..=9 first, then the
+        // longest 8: 24..=31.
+        let want: Vec<Nanos> = (2..=9).chain(24..=31).collect();
+        assert_eq!(lengths, want);
+        assert!(s.silences.windows(2).all(|w| w[0].start < w[1].start));
+    }
+
+    #[test]
+    fn message_ids_are_capped_with_an_other_bucket() {
+        let mut t = SeqTracker::new(None);
+        let mut seq = 0u8;
+        for id in 0..40u32 {
+            for _ in 0..=id % 3 {
+                t.on_frame(seq, id, 10, u64::from(seq) * MS);
+                seq = seq.wrapping_add(1);
+            }
+        }
+        let s = t.summary(SRC, 0);
+        assert_eq!(s.msg_ids.len(), MAX_MSG_IDS);
+        assert_eq!(s.msg_ids[0], MsgCount { id: 2, count: 3 });
+        let kept: u64 = s.msg_ids.iter().map(|m| m.count).sum();
+        assert_eq!(kept + s.msg_ids_other, s.counts.received);
+        // Ids 32..40 came after the cap: 3 + 1 + 2 + 3 + 1 + 2 + 3 + 1.
+        assert_eq!(s.msg_ids_other, 16);
+    }
+
+    /// What happens to each frame the source sends, in the property test.
+    #[derive(Debug, Clone, Copy)]
+    enum Fate {
+        Delivered,
+        Dropped,
+        /// Delivered, and a copy right after it.
+        Doubled,
+        /// Delivered after the next delivered frame.
+        Swapped,
+    }
+
+    fn fate() -> impl proptest::strategy::Strategy<Value = Fate> {
+        proptest::prop_oneof![
+            12 => proptest::strategy::Just(Fate::Delivered),
+            3 => proptest::strategy::Just(Fate::Dropped),
+            1 => proptest::strategy::Just(Fate::Doubled),
+            1 => proptest::strategy::Just(Fate::Swapped),
+        ]
+    }
+
+    /// The frames delivered, by stream position, and the true counts. The
+    /// first two frames are always delivered first (so the run starts at
+    /// 0 with a rate known); no more than 20 in a row are dropped.
+    fn deliver(fates: &[Fate]) -> (Vec<u64>, SeqCounts) {
+        let mut out: Vec<u64> = Vec::new();
+        let mut swap_at: Vec<usize> = Vec::new();
+        let mut dropped_run = 0;
+        for (p, f) in fates.iter().enumerate() {
+            let p = p as u64;
+            match (*f, p) {
+                (_, 0..=1) => out.push(p),
+                (Fate::Dropped, _) if dropped_run < 20 => dropped_run += 1,
+                (Fate::Doubled, _) => {
+                    dropped_run = 0;
+                    out.extend([p, p]);
+                }
+                (Fate::Swapped, _) => {
+                    dropped_run = 0;
+                    swap_at.push(out.len());
+                    out.push(p);
+                }
+                _ => {
+                    dropped_run = 0;
+                    out.push(p);
+                }
+            }
+        }
+        for i in swap_at {
+            if i + 1 < out.len() {
+                out.swap(i, i + 1);
+            }
+        }
+        // The truth, from the positions alone.
+        let mut seen = std::collections::BTreeSet::new();
+        let mut truth = SeqCounts::default();
+        let mut highest = 0;
+        for &p in &out {
+            truth.received += 1;
+            if !seen.insert(p) {
+                truth.duplicate += 1;
+            } else if p < highest {
+                truth.reordered += 1;
+            }
+            highest = highest.max(p);
+        }
+        truth.lost = highest + 1 - seen.len() as u64;
+        (out, truth)
+    }
+
+    proptest::proptest! {
+        /// Drops (under the window), duplicates and adjacent swaps on a
+        /// stream wrapping the sequence many times: the counts are exact,
+        /// at rates fast and slow.
+        #[test]
+        fn counts_match_the_truth(
+            fates in proptest::collection::vec(fate(), 1..3000),
+            interval_ms in proptest::sample::select(vec![1u64, 20, 100, 1000]),
+        ) {
+            let (delivered, truth) = deliver(&fates);
+            let t = tracked(&delivered, interval_ms * MS);
+            let spanned = t.summary(SRC, 0).silences.iter().all(|s| s.seq_lost.is_some());
+            proptest::prop_assert!(spanned);
+            proptest::prop_assert_eq!(t.counts(), truth);
+        }
+
+        /// pymavlink's figure is its formula, frame by frame.
+        #[test]
+        fn the_pymavlink_figure_is_its_formula(seqs in proptest::collection::vec(0u8..=255, 0..500)) {
+            let mut t = SeqTracker::new(None);
+            let mut last: i64 = -1;
+            let mut loss: i64 = 0;
+            for (i, &s) in seqs.iter().enumerate() {
+                t.on_frame(s, 0, 10, i as u64 * MS);
+                let expected = (last + 1).rem_euclid(256);
+                if last != -1 && expected != i64::from(s) {
+                    loss += (i64::from(s) - expected).rem_euclid(256);
+                }
+                last = i64::from(s);
+            }
+            proptest::prop_assert_eq!(t.pymav_figure().loss, loss as u64);
+            proptest::prop_assert_eq!(t.pymav_figure().count, seqs.len() as u64);
+        }
+
+        /// Whatever arrives, and whenever: no count underflows, and each
+        /// frame after the first is at most one of duplicate, reordered or
+        /// resync.
+        #[test]
+        fn any_input_is_accounted(
+            frames in proptest::collection::vec((0u8..=255, 0u64..3_000), 1..500),
+        ) {
+            let mut t = SeqTracker::new(None);
+            let mut at = 0;
+            for &(s, step_ms) in &frames {
+                at += step_ms * MS;
+                t.on_frame(s, 0, 10, at);
+            }
+            let c = t.counts();
+            proptest::prop_assert_eq!(c.received, frames.len() as u64);
+            proptest::prop_assert!(c.duplicate + c.reordered + c.resyncs < c.received);
+            let s = t.summary(SRC, at);
+            proptest::prop_assert_eq!(s.silence_count, s.silences.len() as u64 + s.silences_omitted);
+        }
+    }
+}
