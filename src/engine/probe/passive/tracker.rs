@@ -50,6 +50,14 @@
 //!   a mismatch `loss += (seq - expected) % 256`, every frame counted, loss
 //!   % = loss / (count + loss). A duplicate costs it 255, a swap 256, and
 //!   a silence whatever its length is modulo 256.
+//!
+//! A [`SourceTable`] keeps one tracker per (sysid, compid), up to a cap
+//! (frames of sources beyond it are counted, not tracked), with the SiK
+//! radio's injected RADIO_STATUS (source 51/68, "3D") kept apart: tracked
+//! and flagged as a radio, but out of the link's totals, as pymavlink
+//! leaves it out of its own.
+
+use std::collections::BTreeMap;
 
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -78,6 +86,8 @@ const KEEP_FIRST_SILENCES: usize = 8;
 const KEEP_LONGEST_SILENCES: usize = 8;
 /// Distinct message ids counted per source; later new ids share "other".
 const MAX_MSG_IDS: usize = 32;
+/// Sources tracked by a [`SourceTable`] unless told otherwise.
+pub const DEFAULT_MAX_SOURCES: usize = 32;
 /// The SiK radio's injected RADIO_STATUS comes from sysid '3', compid 'D'.
 pub const RADIO_SOURCE: SysComp = SysComp::new(b'3', b'D');
 
@@ -558,6 +568,145 @@ fn per_second(amount: u64, span_ns: Nanos) -> Option<f64> {
     (span_ns > 0).then(|| amount as f64 * 1e9 / span_ns as f64)
 }
 
+/// Frames from sources beyond the table's cap: counted, not tracked.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Untracked {
+    /// Distinct sources.
+    pub sources: u64,
+    pub frames: u64,
+    pub bytes: u64,
+}
+
+/// The link as a whole: every tracked source but the radio.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LinkTotals {
+    pub sources: u64,
+    pub counts: SeqCounts,
+    /// As [`SourceSummary::loss_pct`], over the sums.
+    pub loss_pct: Option<f64>,
+    /// pymavlink's link-wide `mav_count`/`mav_loss` (it too leaves the
+    /// radio out; untracked sources are not in it).
+    pub pymav: PymavFigure,
+    pub bytes: u64,
+    pub silence_count: u64,
+    pub silence_frames_estimated: u64,
+    /// Frames from the radio's own source (counted, not in the totals).
+    pub radio_received: u64,
+}
+
+/// What a [`SourceTable`] reports.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TableSummary {
+    /// By source address; the radio, if heard, among them, flagged.
+    pub sources: Vec<SourceSummary>,
+    pub totals: LinkTotals,
+    pub untracked: Untracked,
+}
+
+/// One [`SeqTracker`] per source, in constant memory.
+#[derive(Debug, Clone)]
+pub struct SourceTable {
+    gap: Option<Nanos>,
+    max_sources: usize,
+    sources: BTreeMap<SysComp, SeqTracker>,
+    /// The SiK radio's source, apart (not against the cap).
+    radio: Option<SeqTracker>,
+    untracked: Untracked,
+    /// One bit per (sysid, compid): untracked sources already counted.
+    untracked_seen: Box<[u64]>,
+}
+
+impl SourceTable {
+    /// A table tracking up to `max_sources` sources (the radio aside), each
+    /// with silences longer than `gap` (or the default threshold).
+    pub fn new(gap: Option<Nanos>, max_sources: usize) -> Self {
+        SourceTable {
+            gap,
+            max_sources,
+            sources: BTreeMap::new(),
+            radio: None,
+            untracked: Untracked::default(),
+            untracked_seen: vec![0; 65536 / 64].into_boxed_slice(),
+        }
+    }
+
+    /// Takes one received frame.
+    pub fn on_frame(&mut self, source: SysComp, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
+        let gap = self.gap;
+        let tracker = if source == RADIO_SOURCE {
+            self.radio.get_or_insert_with(|| SeqTracker::new(gap))
+        } else if self.sources.len() < self.max_sources || self.sources.contains_key(&source) {
+            self.sources
+                .entry(source)
+                .or_insert_with(|| SeqTracker::new(gap))
+        } else {
+            let i = usize::from(source.sysid) << 8 | usize::from(source.compid);
+            let (word, bit) = (i / 64, i % 64);
+            if self.untracked_seen[word] & (1 << bit) == 0 {
+                self.untracked_seen[word] |= 1 << bit;
+                self.untracked.sources += 1;
+            }
+            self.untracked.frames += 1;
+            self.untracked.bytes = self
+                .untracked
+                .bytes
+                .saturating_add(u64::try_from(len_bytes).unwrap_or(u64::MAX));
+            return;
+        };
+        tracker.on_frame(seq, msg_id, len_bytes, at);
+    }
+
+    /// The tracker of one source, if tracked.
+    pub fn source(&self, id: SysComp) -> Option<&SeqTracker> {
+        if id == RADIO_SOURCE {
+            self.radio.as_ref()
+        } else {
+            self.sources.get(&id)
+        }
+    }
+
+    /// Everything, as of `at` (the end of the run, or now).
+    pub fn summary(&self, at: Nanos) -> TableSummary {
+        let mut sources: Vec<SourceSummary> = self
+            .sources
+            .iter()
+            .map(|(id, t)| t.summary(*id, at))
+            .collect();
+        let mut c = SeqCounts::default();
+        let (mut bytes, mut silence_count, mut unspanned, mut pymav_loss) = (0, 0, 0, 0);
+        for s in &sources {
+            c.received += s.counts.received;
+            c.lost += s.counts.lost;
+            c.duplicate += s.counts.duplicate;
+            c.reordered += s.counts.reordered;
+            c.resyncs += s.counts.resyncs;
+            bytes += s.bytes;
+            silence_count += s.silence_count;
+            unspanned += s.silence_frames_estimated;
+            pymav_loss += s.pymav.loss;
+        }
+        let totals = LinkTotals {
+            sources: sources.len() as u64,
+            counts: c,
+            loss_pct: percent(c.lost, c.received - c.duplicate + c.lost),
+            pymav: PymavFigure::new(c.received, pymav_loss),
+            bytes,
+            silence_count,
+            silence_frames_estimated: unspanned,
+            radio_received: self.radio.as_ref().map_or(0, |r| r.counts.received),
+        };
+        if let Some(r) = &self.radio {
+            sources.push(r.summary(RADIO_SOURCE, at));
+            sources.sort_by_key(|s| s.source);
+        }
+        TableSummary {
+            sources,
+            totals,
+            untracked: self.untracked,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -858,6 +1007,47 @@ mod tests {
         assert_eq!(kept + s.msg_ids_other, s.counts.received);
         // Ids 32..40 came after the cap: 3 + 1 + 2 + 3 + 1 + 2 + 3 + 1.
         assert_eq!(s.msg_ids_other, 16);
+    }
+
+    #[test]
+    fn the_table_keeps_the_radio_apart_and_caps_sources() {
+        let mut table = SourceTable::new(None, 2);
+        let a = SysComp::new(1, 1);
+        let b = SysComp::new(255, 190);
+        for i in 0..10u64 {
+            let at = i * 100 * MS;
+            let seq = i as u8;
+            // a loses frame 5; b is clean; the radio loses half (which
+            // would be link loss if counted).
+            if i != 5 {
+                table.on_frame(a, seq, 30, 30, at);
+            }
+            table.on_frame(b, seq, 0, 21, at);
+            table.on_frame(RADIO_SOURCE, seq * 2, 109, 17, at);
+            table.on_frame(SysComp::new(2, 1), seq, 0, 21, at);
+            table.on_frame(SysComp::new(3, 1), seq, 0, 21, at);
+        }
+        let s = table.summary(900 * MS);
+        let ids: Vec<(SysComp, bool)> = s.sources.iter().map(|s| (s.source, s.radio)).collect();
+        assert_eq!(ids, vec![(a, false), (RADIO_SOURCE, true), (b, false)]);
+        assert_eq!(s.totals.sources, 2);
+        assert_eq!(s.totals.counts, counts(19, 1, 0, 0, 0));
+        assert_eq!(s.totals.pymav, PymavFigure::new(19, 1));
+        assert_eq!(s.totals.loss_pct, Some(5.0));
+        assert_eq!(s.totals.bytes, 9 * 30 + 10 * 21);
+        assert_eq!(s.totals.radio_received, 10);
+        assert_eq!(s.sources[1].counts, counts(10, 9, 0, 0, 0));
+        assert_eq!(
+            s.untracked,
+            Untracked {
+                sources: 2,
+                frames: 20,
+                bytes: 420
+            }
+        );
+        assert_eq!(table.source(a).map(|t| t.counts().lost), Some(1));
+        assert!(table.source(SysComp::new(2, 1)).is_none());
+        assert!(serde_json::to_string(&s).is_ok());
     }
 
     /// What happens to each frame the source sends, in the property test.
