@@ -123,6 +123,7 @@ mod tests {
             packet_seq: 0,
             msgid: 0,
             signed: false,
+            len: 0,
             msg,
         }
     }

@@ -355,6 +355,15 @@ pub struct PingArgs {
         hide = true
     )]
     pub first_seq: u32,
+    /// Send no probes: count each source's frames, losses, duplicates and silences from their
+    /// packet sequence numbers (our HEARTBEAT stays on unless --no-heartbeat)
+    #[arg(help_heading = "What to send", long, conflicts_with_all = ["probe", "count", "sweep", "load"])]
+    pub passive: bool,
+
+    /// --passive: a source silent this long is in a silence (default: 5 of its usual intervals, at least 1s)
+    #[arg(help_heading = "What to send", long, value_name = "DURATION", value_parser = parse_duration, requires = "passive")]
+    pub gap: Option<Duration>,
+
     /// What to send: ping, timesync (also ArduPilot; measures clock offset), command
     #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Ping,
           env = "MAVPING_PROBE")]

@@ -7,6 +7,7 @@ use std::time::Duration;
 use serde::Serialize;
 
 use crate::engine::stats::RttSummary;
+use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::{CommandSummary, LinkSummary, ResponderSummary, Summary};
 use crate::exit::{self, LinkEnd};
 use crate::frame::SysComp;
@@ -117,6 +118,8 @@ pub enum Check {
     Reply,
     /// A command was acknowledged.
     Ack,
+    /// A passive run heard some source.
+    Heard,
     MaxLoss,
     MaxRtt,
     MaxJitter,
@@ -129,6 +132,7 @@ impl Check {
         match self {
             Check::Reply => "reply",
             Check::Ack => "ack",
+            Check::Heard => "heard",
             Check::MaxLoss => "max-loss",
             Check::MaxRtt => "max-rtt",
             Check::MaxJitter => "max-jitter",
@@ -297,11 +301,63 @@ pub fn judge_command(summary: &CommandSummary) -> Verdict {
     verdict(summary.link_error.is_some(), failures)
 }
 
-/// Judges any link's run; thresholds apply to echo probes.
+/// Judges a passive run: some source must have been heard, and
+/// `--max-loss`, `--expect` and `--min-responders` hold for the sources'
+/// sequence loss (the radio's own frames aside).
+pub fn judge_passive(summary: &PassiveSummary, t: &Thresholds) -> Verdict {
+    let mut failures = Vec::new();
+    let heard: Vec<_> = summary.heard().collect();
+    if heard.is_empty() {
+        failures.push(Failure {
+            responder: None,
+            check: Check::Heard,
+            message: "nothing heard".into(),
+        });
+    }
+    if let Some(max) = t.max_loss {
+        for s in &heard {
+            let loss = s.loss_pct.unwrap_or(0.0) / 100.0;
+            if loss > max {
+                failures.push(Failure {
+                    responder: Some(s.source),
+                    check: Check::MaxLoss,
+                    message: format!(
+                        "{}: sequence loss {:.2}% is above --max-loss {:.2}%",
+                        s.source,
+                        loss * 100.0,
+                        max * 100.0
+                    ),
+                });
+            }
+        }
+    }
+    for e in &t.expect {
+        if !heard.iter().any(|s| e.matches(s.source)) {
+            failures.push(Failure {
+                responder: e.compid.map(|c| SysComp::new(e.sysid, c)),
+                check: Check::Expect,
+                message: format!("expected source {e} was not heard"),
+            });
+        }
+    }
+    if let Some(min) = t.min_responders {
+        if heard.len() < min {
+            failures.push(Failure {
+                responder: None,
+                check: Check::MinResponders,
+                message: format!("{} sources heard, --min-responders is {min}", heard.len()),
+            });
+        }
+    }
+    verdict(summary.link_error.is_some(), failures)
+}
+
+/// Judges any link's run; thresholds apply to echo probes and passive runs.
 pub fn judge_link(summary: &LinkSummary, t: &Thresholds) -> Verdict {
     match summary {
         LinkSummary::Echo(s) => judge(s, t),
         LinkSummary::Command(s) => judge_command(s),
+        LinkSummary::Passive(s) => judge_passive(s, t),
     }
 }
 

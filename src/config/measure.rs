@@ -377,6 +377,12 @@ fn peer_wait(cli: &PingArgs, spec: &LinkSpec, session: &SessionConfig) -> Option
 }
 
 fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
+    if cli.passive {
+        if cli.gap.is_some_and(|g| g < Duration::from_millis(10)) {
+            return Err(invalid("--gap: expected at least 10ms"));
+        }
+        return Ok(Probe::Passive { gap: cli.gap });
+    }
     probe_of(
         Keys::Flags,
         &ProbeChoice {

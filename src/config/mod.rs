@@ -86,8 +86,15 @@ pub struct OutputConfig {
 #[derive(Debug, Clone, PartialEq)]
 pub enum Probe {
     Ping,
-    Timesync { target: SysComp },
+    Timesync {
+        target: SysComp,
+    },
     Command(CommandSpec),
+    /// No probes: sequence accounting of what every source sends
+    /// (`--passive`), with its silence threshold if given.
+    Passive {
+        gap: Option<Duration>,
+    },
 }
 
 impl Probe {
@@ -97,6 +104,7 @@ impl Probe {
             Probe::Ping => ProbeName::Ping,
             Probe::Timesync { .. } => ProbeName::Timesync,
             Probe::Command(_) => ProbeName::Command,
+            Probe::Passive { .. } => ProbeName::Passive,
         }
     }
 }
@@ -111,7 +119,7 @@ fn wire_budget(
     session: &SessionConfig,
 ) -> Option<WireBudget> {
     match probe {
-        Probe::Command(_) => None,
+        Probe::Command(_) | Probe::Passive { .. } => None,
         Probe::Ping | Probe::Timesync { .. } => capacity::for_link(spec, default_baud, session),
     }
 }

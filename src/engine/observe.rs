@@ -40,6 +40,8 @@ pub enum RunKind {
     Steps(SweepConfig),
     /// `--probe command`: what is sent, and how it is re-sent.
     Command(CommandSpec),
+    /// `--passive`: nothing sent but our HEARTBEAT, if that is on.
+    Passive { heartbeat: bool },
 }
 
 impl RunKind {

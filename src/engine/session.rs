@@ -68,6 +68,12 @@ pub struct SessionEnd<'a> {
 pub trait Driver {
     /// What the run announces first.
     fn start_info(&self, cfg: &SessionConfig) -> StartInfo;
+    /// Whether it sends requests on a schedule (the passive probe does not:
+    /// the session then keeps no schedule and wakes for nothing but the
+    /// link, our HEARTBEAT and its deadlines).
+    fn sends(&self) -> bool {
+        true
+    }
     /// The session's time 0 is `wall_at_zero` on the wall clock.
     fn begin(&mut self, _wall_at_zero: std::time::SystemTime) {}
     /// Puts what is due now on the wire: requests the schedule has due,
@@ -81,6 +87,9 @@ pub trait Driver {
     ) -> Result<(), LinkError>;
     /// Decides what is overdue at `now`.
     fn expire(&mut self, now: Nanos);
+    /// Every frame the signing gate admitted, before the session reads it
+    /// (the passive probe counts them all).
+    fn on_received(&mut self, _frame: &Frame, _at: Nanos) {}
     /// A received frame that is neither a HEARTBEAT nor a RADIO_STATUS.
     fn on_frame(&mut self, frame: &Frame, path: PathId, at: Nanos);
     /// A radio's RADIO_STATUS (the session keeps the run's figures; a
@@ -147,6 +156,7 @@ impl Heard {
             }
             self.roster.frame(frame.source, frame.version, frame.signed);
             let at = clock.ns(at);
+            driver.on_received(&frame, at);
             match frame.msg {
                 Msg::Heartbeat {
                     mav_type,
@@ -354,6 +364,9 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             return Ok(());
         }
         if self.link.has_peers() {
+            if !self.driver.sends() {
+                return Ok(());
+            }
             let interval = self.cfg.interval.as_nanos() as Nanos;
             self.schedule = Some(Schedule::new(now, interval, self.cfg.count));
         } else if self.timers.wait.is_some_and(|w| now >= w) {

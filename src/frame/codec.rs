@@ -225,6 +225,8 @@ pub fn decode(raw: &[u8]) -> Frame {
         packet_seq,
         msgid,
         signed,
+        // A frame is at most 280 bytes.
+        len: u16::try_from(raw.len()).unwrap_or(u16::MAX),
         msg: decode_payload(version, msgid, payload),
     }
 }

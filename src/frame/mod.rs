@@ -108,6 +108,8 @@ pub struct Frame {
     pub packet_seq: u8,
     pub msgid: u32,
     pub signed: bool,
+    /// Bytes on the wire, header to signature.
+    pub len: u16,
     pub msg: Msg,
 }
 

@@ -5,6 +5,7 @@ use crate::config::{LinkConfig, Probe};
 use crate::engine::observe::Observer;
 use crate::engine::probe::command::driver as command;
 use crate::engine::probe::echo;
+use crate::engine::probe::passive::driver as passive;
 use crate::engine::probe::ping::PingProbe;
 use crate::engine::probe::timesync::TimesyncProbe;
 use crate::engine::probe::EchoProbe;
@@ -39,6 +40,7 @@ pub async fn measure(
     let session = &config.session;
     let outcome = match probe {
         Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,
+        Probe::Passive { gap } => passive::run(session, *gap, &mut link, observer, controls).await,
         Probe::Timesync { target } => {
             // The simulated link has no wall clock: its responders count
             // from its start, and so do we there (reproducible output).

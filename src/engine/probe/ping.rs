@@ -75,6 +75,7 @@ mod tests {
             packet_seq: 0,
             msgid: 4,
             signed: false,
+            len: 0,
             msg,
         }
     }

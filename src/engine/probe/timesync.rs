@@ -130,6 +130,7 @@ mod tests {
             packet_seq: 0,
             msgid: 111,
             signed: false,
+            len: 0,
             msg: Msg::Timesync {
                 tc1,
                 ts1,

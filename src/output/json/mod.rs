@@ -10,6 +10,7 @@
 
 mod command;
 mod echo;
+mod passive;
 mod sweep;
 #[cfg(test)]
 mod tests;
@@ -50,6 +51,7 @@ enum Line<'a> {
     LateAck(command::AckAgain),
     DuplicateAck(command::AckAgain),
     CommandSummary(Box<command::Summary<'a>>),
+    PassiveSummary(Box<passive::Summary<'a>>),
 }
 
 impl Line<'_> {
@@ -57,7 +59,10 @@ impl Line<'_> {
     /// only in a run of several links, at their end.
     fn names_its_link(&self) -> bool {
         match self {
-            Line::Start(_) | Line::Summary(_) | Line::CommandSummary(_) => true,
+            Line::Start(_)
+            | Line::Summary(_)
+            | Line::CommandSummary(_)
+            | Line::PassiveSummary(_) => true,
             Line::Waiting(_)
             | Line::Responder(_)
             | Line::Reply(_)
@@ -214,6 +219,11 @@ impl Lines {
                 self.link_or(&s.link),
             ))),
             LinkSummary::Command(s) => Line::CommandSummary(Box::new(command::Summary::of(
+                s,
+                verdict,
+                self.link_or(&s.link),
+            ))),
+            LinkSummary::Passive(s) => Line::PassiveSummary(Box::new(passive::Summary::of(
                 s,
                 verdict,
                 self.link_or(&s.link),

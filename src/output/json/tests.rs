@@ -493,15 +493,64 @@ fn command_run() -> Vec<Told<'static>> {
     told
 }
 
+/// A `--passive` run: two sources with losses, a duplicate, a swap and a
+/// silence, the SiK radio apart, one source beyond a table of two.
+fn passive_run() -> Vec<Told<'static>> {
+    use crate::engine::probe::passive::tracker::{SourceTable, RADIO_SOURCE};
+    use crate::engine::summary::passive::PassiveSummary;
+    let mut table = SourceTable::new(None, 2);
+    let ms = 1_000_000;
+    let seqs: [u8; 10] = [0, 1, 2, 4, 4, 6, 5, 7, 8, 9];
+    for (k, &seq) in seqs.iter().enumerate() {
+        table.on_frame(ONE, seq, 30, 39, k as u64 * 20 * ms);
+        table.on_frame(TWO, seq.wrapping_add(250), 0, 21, k as u64 * 20 * ms);
+    }
+    table.on_frame(ONE, 10, 30, 39, 3_000 * ms);
+    table.on_frame(RADIO_SOURCE, 0, 109, 38, 100 * ms);
+    table.on_frame(SysComp::new(9, 9), 0, 0, 21, 100 * ms);
+    let summary = PassiveSummary {
+        link: "sim:?seed=1".into(),
+        ours: SysComp::new(250, 190),
+        heartbeat: true,
+        duration_s: 3.5,
+        table: table.summary(3_500 * ms),
+        identities: vec![(ONE, identity())],
+        own_frames: 1,
+        radios: radios(),
+        frames: ScanStats::default(),
+        rx_clock: RxClock::Simulated,
+        interrupted: false,
+        link_error: None,
+        signing: crate::frame::signing::Gate::new(None).summary(),
+    };
+    let verdict = verdict::judge_passive(
+        &summary,
+        &Thresholds {
+            max_loss: Some(0.01),
+            ..Thresholds::default()
+        },
+    );
+    vec![
+        Told::Start(StartInfo {
+            probe: ProbeName::Passive,
+            count: None,
+            run: RunKind::Passive { heartbeat: true },
+            ..start("ping")
+        }),
+        Told::Summary(LinkSummary::Passive(Box::new(summary)), verdict),
+    ]
+}
+
 /// The kinds of run, each with what it writes.
 #[derive(Clone, Copy)]
 enum Run {
     Echo(&'static str),
     Sweep(PlanKind),
     Command,
+    Passive,
 }
 
-const RUNS: [Run; 7] = [
+const RUNS: [Run; 8] = [
     Run::Echo("ping"),
     Run::Echo("timesync"),
     Run::Sweep(PlanKind::Sweep {
@@ -527,6 +576,7 @@ const RUNS: [Run; 7] = [
     }),
     Run::Sweep(PlanKind::Load { rate_hz: 10.0 }),
     Run::Command,
+    Run::Passive,
 ];
 
 impl Run {
@@ -535,6 +585,7 @@ impl Run {
             Run::Echo(probe) => echo_run(probe, borrowed),
             Run::Sweep(plan) => sweep_run(plan, borrowed),
             Run::Command => command_run(),
+            Run::Passive => passive_run(),
         }
     }
 }
@@ -621,6 +672,7 @@ struct Seen {
     late_ack: bool,
     duplicate_ack: bool,
     command_summary: bool,
+    passive_summary: bool,
 }
 
 impl Seen {
@@ -645,6 +697,7 @@ impl Seen {
             Line::LateAck(_) => (&mut self.late_ack, "late_ack"),
             Line::DuplicateAck(_) => (&mut self.duplicate_ack, "duplicate_ack"),
             Line::CommandSummary(_) => (&mut self.command_summary, "command_summary"),
+            Line::PassiveSummary(_) => (&mut self.passive_summary, "passive_summary"),
         };
         *seen = true;
         r#type
@@ -671,6 +724,7 @@ impl Seen {
             late_ack,
             duplicate_ack,
             command_summary,
+            passive_summary,
         } = *self;
         [
             (start, "start"),
@@ -691,6 +745,7 @@ impl Seen {
             (late_ack, "late_ack"),
             (duplicate_ack, "duplicate_ack"),
             (command_summary, "command_summary"),
+            (passive_summary, "passive_summary"),
         ]
         .into_iter()
         .filter(|&(seen, _)| !seen)

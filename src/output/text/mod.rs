@@ -5,6 +5,7 @@
 
 mod command;
 mod echo;
+mod passive;
 mod sweep;
 
 use std::io::{self, Write};
@@ -114,7 +115,7 @@ impl<W: Write> Observer for TextReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.timeout = info.timeout;
         self.lines = match info.run {
-            RunKind::Echo => Lines::Replies,
+            RunKind::Echo | RunKind::Passive { .. } => Lines::Replies,
             RunKind::Steps(_) => Lines::Steps,
             RunKind::Command(_) => Lines::Commands,
         };
@@ -125,6 +126,7 @@ impl<W: Write> Observer for TextReporter<W> {
             RunKind::Echo => self.echo_start(info),
             RunKind::Steps(plan) => self.sweep_start(info, plan),
             RunKind::Command(spec) => self.command_start(info, spec),
+            RunKind::Passive { heartbeat } => self.passive_start(info, *heartbeat),
         }
     }
 
@@ -163,6 +165,7 @@ impl<W: Write> Reporter for TextReporter<W> {
             // Steps not shown as they ended (-q, or cut short) are shown here.
             LinkSummary::Echo(s) => echo::write_summary(out, s, verdict, steps_shown)?,
             LinkSummary::Command(s) => command::write_summary(out, s)?,
+            LinkSummary::Passive(s) => passive::write_summary(out, s, verdict)?,
         }
         out.flush()
     }

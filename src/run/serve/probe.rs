@@ -145,6 +145,7 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
     for f in &verdict.failures {
         let reason = match f.check {
             Check::Reply => "no_reply",
+            Check::Heard => "nothing_heard",
             Check::Ack => "no_ack",
             Check::MaxLoss => "max_loss",
             Check::MaxRtt => "max_rtt",
@@ -159,6 +160,8 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
     let (requests, in_flight) = match summary {
         LinkSummary::Echo(s) => (s.requests, s.in_flight),
         LinkSummary::Command(s) => (s.targets.iter().map(|t| t.commands).sum(), s.in_flight),
+        // Passive runs send nothing.
+        LinkSummary::Passive(_) => (0, 0),
     };
     let message = summary
         .link_error()

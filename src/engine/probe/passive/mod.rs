@@ -1,4 +1,5 @@
 //! Passive measurement: what a link's own traffic says about its losses,
 //! without sending anything on it.
 
+pub mod driver;
 pub mod tracker;

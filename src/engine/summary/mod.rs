@@ -1,6 +1,8 @@
 //! The end-of-run figures, built from the matcher and the roster. Every
 //! report format renders this one structure.
 
+pub mod passive;
+
 use std::fmt;
 
 use serde::Serialize;
@@ -25,6 +27,8 @@ pub enum ProbeName {
     Ping,
     Timesync,
     Command,
+    /// No probes: the sequence numbers of what the link carries.
+    Passive,
 }
 
 impl ProbeName {
@@ -33,6 +37,7 @@ impl ProbeName {
             ProbeName::Ping => "ping",
             ProbeName::Timesync => "timesync",
             ProbeName::Command => "command",
+            ProbeName::Passive => "passive",
         }
     }
 }
@@ -259,6 +264,8 @@ pub enum LinkSummary {
     Echo(Box<Summary>),
     /// COMMAND_LONG until acknowledged.
     Command(Box<CommandSummary>),
+    /// `--passive`: no probes, the sources' own sequence numbers.
+    Passive(Box<passive::PassiveSummary>),
 }
 
 impl LinkSummary {
@@ -266,6 +273,7 @@ impl LinkSummary {
         match self {
             LinkSummary::Echo(s) => &s.link,
             LinkSummary::Command(s) => &s.link,
+            LinkSummary::Passive(s) => &s.link,
         }
     }
 
@@ -273,6 +281,7 @@ impl LinkSummary {
         match self {
             LinkSummary::Echo(s) => s.link_error.as_deref(),
             LinkSummary::Command(s) => s.link_error.as_deref(),
+            LinkSummary::Passive(s) => s.link_error.as_deref(),
         }
     }
 }

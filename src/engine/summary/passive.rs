@@ -1,0 +1,189 @@
+//! What a passive run hands back: per source, what its packet sequence
+//! proved (received, lost, duplicate, reordered), its silences and rates,
+//! pymavlink's figure beside ours, and the link's totals. Built by the
+//! passive probe's tracker; every report format renders it.
+
+use crate::engine::radio::RadioSummary;
+use crate::engine::roster::Identity;
+use crate::engine::Nanos;
+use crate::frame::signing::SigningSummary;
+use crate::frame::{ScanStats, SysComp};
+use crate::transport::RxClock;
+
+/// A `--passive` run on one link.
+#[derive(Debug, Clone)]
+pub struct PassiveSummary {
+    pub link: String,
+    pub ours: SysComp,
+    /// Our HEARTBEAT went out at 1 Hz (routers send only to what they hear).
+    pub heartbeat: bool,
+    pub duration_s: f64,
+    pub table: TableSummary,
+    /// What each source said it is, from its HEARTBEAT.
+    pub identities: Vec<(SysComp, Identity)>,
+    /// Frames with our own ids (echoed back by a router): not a source.
+    pub own_frames: u64,
+    pub radios: Vec<RadioSummary>,
+    pub frames: ScanStats,
+    pub rx_clock: RxClock,
+    pub interrupted: bool,
+    pub link_error: Option<String>,
+    pub signing: SigningSummary,
+}
+
+impl PassiveSummary {
+    /// A source's identity, if it sent a HEARTBEAT.
+    pub fn identity(&self, id: SysComp) -> Option<&Identity> {
+        self.identities
+            .iter()
+            .find(|(s, _)| *s == id)
+            .map(|(_, i)| i)
+    }
+
+    /// Sources heard, the radio aside.
+    pub fn heard(&self) -> impl Iterator<Item = &SourceSummary> {
+        self.table.sources.iter().filter(|s| !s.radio)
+    }
+}
+
+/// The sequence counts of one source.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct SeqCounts {
+    /// Every frame, duplicates included.
+    pub received: u64,
+    /// Sequence numbers skipped and not (yet) filled by a late frame.
+    pub lost: u64,
+    /// Frames whose number had been seen already.
+    pub duplicate: u64,
+    /// Frames that came after a later one and filled their gap.
+    pub reordered: u64,
+    /// Times the accounting restarted on a frame the sequence could not
+    /// place (after a long silence, or exactly 128 away).
+    pub resyncs: u64,
+}
+
+/// pymavlink's loss figure for the same frames, as `mavutil` computes it.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct PymavFigure {
+    /// `mav_count`: every frame.
+    pub count: u64,
+    /// `mav_loss`: the sum of `(seq - expected) % 256` over mismatches.
+    pub loss: u64,
+    /// `packet_loss()`: `100 * loss / (count + loss)`, 0 with no frames.
+    pub loss_pct: f64,
+}
+
+impl PymavFigure {
+    pub(crate) fn new(count: u64, loss: u64) -> Self {
+        PymavFigure {
+            count,
+            loss,
+            loss_pct: percent(loss, count + loss).unwrap_or(0.0),
+        }
+    }
+}
+
+/// A time the source was not heard for longer than the threshold.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct Silence {
+    /// The arrival of the last frame before it.
+    pub start: Nanos,
+    /// From that frame to the one after it (to the summary, if ongoing).
+    pub length_ns: Nanos,
+    /// Frames the source would have sent in it at its usual rate; `None`
+    /// while no rate was known.
+    pub frames_estimated: Option<u64>,
+    /// The frames the sequence proved lost across it (included in
+    /// `lost`), or `None` if it could not span it and was resynchronised.
+    pub seq_lost: Option<u64>,
+    /// Still on when the summary was taken.
+    pub ongoing: bool,
+}
+
+/// Frames of one message id.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+pub struct MsgCount {
+    pub id: u32,
+    pub count: u64,
+}
+
+/// Everything known about one source.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SourceSummary {
+    pub source: SysComp,
+    /// The SiK radio's own RADIO_STATUS source (out of the link's totals).
+    pub radio: bool,
+    pub counts: SeqCounts,
+    /// `100 * lost / (lost + distinct frames received)`; `None` with
+    /// nothing to compare.
+    pub loss_pct: Option<f64>,
+    pub pymav: PymavFigure,
+    /// Frame bytes, duplicates included.
+    pub bytes: u64,
+    pub first_seen: Nanos,
+    pub last_seen: Nanos,
+    /// Arrival rates from the first to the last frame (the first frame
+    /// starts the span, so it is not counted); `None` on a zero span.
+    pub frames_per_s: Option<f64>,
+    pub bytes_per_s: Option<f64>,
+    /// The usual time per sequence step, once known.
+    pub interval_ns: Option<Nanos>,
+    /// The first silences and the longest later ones, by start, then the
+    /// ongoing one if any.
+    pub silences: Vec<Silence>,
+    /// All silences, ongoing included.
+    pub silence_count: u64,
+    /// Silences not in the list.
+    pub silences_omitted: u64,
+    /// Total length of all silences.
+    pub silence_ns: Nanos,
+    /// Estimated frames of the silences the sequence could not span (never
+    /// also in `lost`).
+    pub silence_frames_estimated: u64,
+    /// Frames by message id, most frequent first (the first
+    /// `MAX_MSG_IDS` distinct ids seen).
+    pub msg_ids: Vec<MsgCount>,
+    /// Frames of ids seen after that many distinct ones.
+    pub msg_ids_other: u64,
+}
+
+/// Frames from sources beyond the table's cap: counted, not tracked.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct Untracked {
+    /// Distinct sources.
+    pub sources: u64,
+    pub frames: u64,
+    pub bytes: u64,
+}
+
+/// The link as a whole: every tracked source but the radio.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LinkTotals {
+    pub sources: u64,
+    pub counts: SeqCounts,
+    /// As [`SourceSummary::loss_pct`], over the sums.
+    pub loss_pct: Option<f64>,
+    /// pymavlink's link-wide `mav_count`/`mav_loss` (it too leaves the
+    /// radio out; untracked sources are not in it).
+    pub pymav: PymavFigure,
+    pub bytes: u64,
+    pub silence_count: u64,
+    pub silence_frames_estimated: u64,
+    /// Frames from the radio's own source (counted, not in the totals).
+    pub radio_received: u64,
+}
+
+/// What a [`SourceTable`] reports.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct TableSummary {
+    /// By source address; the radio, if heard, among them, flagged.
+    pub sources: Vec<SourceSummary>,
+    pub totals: LinkTotals,
+    pub untracked: Untracked,
+}
+
+/// `100 * part / whole`; `None` for an empty whole. Counts stay far below
+/// 2^53, where `f64` is exact.
+pub(crate) fn percent(part: u64, whole: u64) -> Option<f64> {
+    (whole > 0).then(|| 100.0 * part as f64 / whole as f64)
+}

@@ -1,0 +1,78 @@
+//! `--passive` as JSON: the `passive_summary` line, with every source's
+//! sequence figures (ours and pymavlink's), silences and rates.
+
+use serde::Serialize;
+
+use super::SCHEMA_VERSION;
+use crate::engine::radio::RadioSummary;
+use crate::engine::roster::Identity;
+use crate::engine::summary::passive::{LinkTotals, PassiveSummary, SourceSummary, Untracked};
+use crate::frame::signing::SigningSummary;
+use crate::frame::{ScanStats, SysComp};
+use crate::transport::RxClock;
+use crate::verdict::Verdict;
+
+/// One source, with its identity when it sent a HEARTBEAT.
+#[derive(Serialize)]
+pub(super) struct Source<'a> {
+    #[serde(flatten)]
+    figures: &'a SourceSummary,
+    identity: Option<&'a Identity>,
+}
+
+#[derive(Serialize)]
+pub(super) struct Summary<'a> {
+    r#type: &'static str,
+    schema_version: u32,
+    link: &'a str,
+    probe: &'static str,
+    ours: SysComp,
+    heartbeat: bool,
+    duration_s: f64,
+    interrupted: bool,
+    link_error: Option<&'a str>,
+    rx_clock: RxClock,
+    frames: ScanStats,
+    totals: &'a LinkTotals,
+    sources: Vec<Source<'a>>,
+    untracked: Untracked,
+    own_frames: u64,
+    radios: &'a [RadioSummary],
+    signing: SigningSummary,
+    verdict: &'a Verdict,
+    exit_code: u8,
+}
+
+impl<'a> Summary<'a> {
+    pub(super) fn of(s: &'a PassiveSummary, verdict: &'a Verdict, link: &'a str) -> Self {
+        Summary {
+            r#type: "passive_summary",
+            schema_version: SCHEMA_VERSION,
+            link,
+            probe: "passive",
+            ours: s.ours,
+            heartbeat: s.heartbeat,
+            duration_s: s.duration_s,
+            interrupted: s.interrupted,
+            link_error: s.link_error.as_deref(),
+            rx_clock: s.rx_clock,
+            frames: s.frames,
+            totals: &s.table.totals,
+            sources: s
+                .table
+                .sources
+                .iter()
+                .map(|r| Source {
+                    figures: r,
+                    identity: s.identity(r.source),
+                })
+                .collect(),
+            untracked: s.table.untracked,
+            own_frames: s.own_frames,
+            radios: &s.radios,
+            signing: s.signing,
+            verdict,
+            exit_code: verdict.exit_code(),
+        }
+    }
+}
