@@ -7,6 +7,7 @@ use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 use thiserror::Error;
 
 use crate::engine::load::LoadSpec;
+use crate::telemetry::StreamSpec;
 use crate::units::{parse_duration, parse_percent, DurationError};
 use crate::verdict::{Expected, RttLimit};
 
@@ -728,7 +729,8 @@ pub struct RespondArgs {
     #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
     pub jitter: Duration,
 
-    /// Drop this share of replies, e.g. 10 or 10%
+    /// Drop this share of replies, e.g. 10 or 10% (replies only: streamed frames have
+    /// --stream-drop)
     #[arg(
         allow_negative_numbers = true,
         long,
@@ -738,7 +740,7 @@ pub struct RespondArgs {
     )]
     pub drop: f64,
 
-    /// Send this share of replies twice
+    /// Send this share of replies twice (replies only, not streamed frames)
     #[arg(
         allow_negative_numbers = true,
         long,
@@ -748,7 +750,7 @@ pub struct RespondArgs {
     )]
     pub dup: f64,
 
-    /// Random seed for --jitter, --drop and --dup
+    /// Random seed for --jitter, --drop and --dup (and the streams' phases and --stream-drop)
     #[arg(
         allow_negative_numbers = true,
         long,
@@ -756,6 +758,33 @@ pub struct RespondArgs {
         default_value_t = 1
     )]
     pub seed: u64,
+
+    /// Stream telemetry to every peer, as a vehicle: MSG@HZ, repeatable or a comma list
+    ///
+    /// MSG is ATTITUDE, GLOBAL_POSITION_INT or HEARTBEAT (our HEARTBEAT at that rate
+    /// instead of 1 Hz), e.g. --stream ATTITUDE@50,GLOBAL_POSITION_INT@5. Streams start
+    /// at once, each from a random phase of its period, and every frame takes the next of
+    /// the packet sequence numbers our replies and HEARTBEATs take. Not delayed, dropped or
+    /// doubled by --delay, --jitter, --drop or --dup (those are for replies)
+    #[arg(
+        long,
+        value_name = "MSG@HZ",
+        value_delimiter = ',',
+        action = ArgAction::Append,
+        value_parser = clap::value_parser!(StreamSpec)
+    )]
+    pub stream: Vec<StreamSpec>,
+
+    /// Drop this share of streamed frames: each is numbered, then not sent (the gap a lost
+    /// frame leaves in the sequence numbers), and counted
+    #[arg(
+        allow_negative_numbers = true,
+        long,
+        value_name = "PCT",
+        value_parser = parse_percent,
+        default_value = "0"
+    )]
+    pub stream_drop: f64,
 
     /// Answer only TIMESYNC and commands, not PING (like ArduPilot)
     #[arg(long)]

@@ -17,6 +17,7 @@ pub mod output;
 pub mod responder;
 pub mod run;
 pub mod stderr;
+pub mod telemetry;
 pub mod transport;
 pub mod units;
 pub mod verdict;

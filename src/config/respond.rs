@@ -22,6 +22,13 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 )));
             }
         }
+        crate::telemetry::check_distinct(&cli.stream)
+            .map_err(|e| invalid(format!("--stream: {e}")))?;
+        if cli.stream_drop > 0.0 && cli.stream.is_empty() {
+            return Err(invalid(
+                "--stream-drop needs --stream MSG@HZ: nothing is streamed",
+            ));
+        }
         Ok(RespondConfig {
             link,
             link_options: LinkOptions {
@@ -41,6 +48,8 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 answer_ping: !cli.no_ping,
                 // A responder with a key answers only signed requests.
                 signing: signing(&cli.signing, true)?,
+                streams: cli.stream.clone(),
+                stream_drop: cli.stream_drop,
             },
             verbose: cli.verbose,
         })
@@ -83,6 +92,22 @@ mod tests {
     }
 
     #[test]
+    fn respond_streams() {
+        let r = respond(
+            "--stream ATTITUDE@50,GLOBAL_POSITION_INT@5 --stream HEARTBEAT@2 --stream-drop 10 sim:",
+        )
+        .unwrap();
+        let streams: Vec<String> = r.settings.streams.iter().map(ToString::to_string).collect();
+        assert_eq!(
+            streams,
+            ["ATTITUDE@50", "GLOBAL_POSITION_INT@5", "HEARTBEAT@2"]
+        );
+        assert!((r.settings.stream_drop - 0.1).abs() < 1e-12);
+        let r = respond("sim:").unwrap();
+        assert!(r.settings.streams.is_empty() && r.settings.stream_drop == 0.0);
+    }
+
+    #[test]
     fn respond_lines() {
         let r = respond("udpin:0.0.0.0:14550").unwrap();
         assert_eq!(r.settings.id, SysComp::new(1, 1));
@@ -105,6 +130,24 @@ mod tests {
             ("--sysid 0 sim:", "--sysid 0"),
             ("--delay 2h sim:", "at most 1h"),
             ("bogus:1:2", "accepted forms"),
+            (
+                "--stream ATTITUDE@0 sim:",
+                "invalid value 'ATTITUDE@0' for '--stream <MSG@HZ>': 'ATTITUDE@0': the rate must \
+                 be a number above 0",
+            ),
+            (
+                "--stream RAW_IMU@10 sim:",
+                "'RAW_IMU@10': unknown message RAW_IMU; expected MSG@HZ",
+            ),
+            (
+                "--stream ATTITUDE@5 --stream ATTITUDE@6 sim:",
+                "--stream: ATTITUDE is streamed twice",
+            ),
+            ("--stream-drop 10 sim:", "--stream-drop needs --stream"),
+            (
+                "--stream ATTITUDE@5 --stream-drop 200 sim:",
+                "'200' for '--stream-drop <PCT>'",
+            ),
             ("", "CONNECTION"),
         ] {
             let err = respond(args).unwrap_err();

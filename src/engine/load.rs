@@ -53,7 +53,8 @@ impl LoadKind {
         }
     }
 
-    fn msg(self, time_boot_ms: u32) -> Msg {
+    /// The message a frame of this stream carries (filler for `BYTES`).
+    pub fn msg(self, time_boot_ms: u32) -> Msg {
         match self {
             LoadKind::Attitude => Msg::Attitude { time_boot_ms },
             LoadKind::GlobalPositionInt => Msg::GlobalPositionInt { time_boot_ms },

@@ -201,6 +201,10 @@ fn man_respond(out: &mut dyn Write) -> io::Result<()> {
                 "mavping respond --no-ping serial:/dev/ttyUSB0:57600",
                 "answer TIMESYNC and commands only, as ArduPilot",
             ),
+            (
+                "mavping respond --stream ATTITUDE@50,GLOBAL_POSITION_INT@5 --stream-drop 2% udpout:127.0.0.1:14550",
+                "a vehicle's telemetry, every frame numbered, 2% of it lost",
+            ),
         ],
         &[exit, see_also("mavping(1)")],
         out,

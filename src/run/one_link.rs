@@ -59,7 +59,10 @@ pub async fn measure(
             tracing::info!(
                 link = %config.name,
                 "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
-                 duplicated={} duplicates_arrived={} outage={} spiked={} spiked_arrived={}",
+                 duplicated={} duplicates_arrived={} outage={} spiked={} spiked_arrived={} \
+                 down_sent={} down_dropped={} down_duplicated={} down_duplicates_arrived={} \
+                 down_delivered={} down_reordered={} up_sent={} up_dropped={} \
+                 up_requests_dropped={}",
                 t.answered,
                 t.dropped,
                 t.dropped_before_first,
@@ -68,7 +71,16 @@ pub async fn measure(
                 t.duplicates_arrived,
                 t.outage,
                 t.spiked,
-                t.spiked_arrived
+                t.spiked_arrived,
+                t.down.sent,
+                t.down.dropped,
+                t.down.duplicated,
+                t.down.duplicates_arrived,
+                t.down.delivered,
+                t.down.reordered,
+                t.up.sent,
+                t.up.dropped,
+                t.up.requests_dropped
             );
         }
     }

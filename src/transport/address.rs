@@ -21,8 +21,8 @@ pub enum LinkSpec {
     TcpIn(HostPort),
     /// A serial device; `baud` None means "use --baud".
     Serial { path: String, baud: Option<u32> },
-    /// The built-in simulated link.
-    Sim(SimParams),
+    /// The built-in simulated link (boxed: its parameters are many).
+    Sim(Box<SimParams>),
 }
 
 /// A host (name, IPv4, or IPv6 without brackets) and a port.
@@ -172,7 +172,7 @@ impl std::str::FromStr for LinkSpec {
             let query = input.strip_prefix("sim").unwrap_or_default();
             let query = query.strip_prefix(':').unwrap_or(query);
             return SimParams::parse(query)
-                .map(LinkSpec::Sim)
+                .map(|p| LinkSpec::Sim(Box::new(p)))
                 .map_err(|reason| error(input, reason.to_string()));
         }
         if input.starts_with('/') || input.starts_with("COM") {

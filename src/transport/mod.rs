@@ -261,7 +261,7 @@ impl Link {
                 )
                 .await?,
             ),
-            LinkSpec::Sim(params) => Link::Sim(sim::SimLink::new(params.clone())),
+            LinkSpec::Sim(params) => Link::Sim(sim::SimLink::new((**params).clone())),
         })
     }
 }

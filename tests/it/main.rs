@@ -28,6 +28,7 @@ mod serial_pty;
 mod serve;
 mod signing;
 mod sim_soak;
+mod streams;
 mod sweep;
 mod tcp_pymavlink;
 mod udp_bcast_ipv6;

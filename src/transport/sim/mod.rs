@@ -5,9 +5,17 @@
 //! random delay, maybe dropped, duplicated or held back (reordered). With
 //! `clock=virtual` the run uses tokio's paused clock: output is identical on
 //! every run and a long simulation takes no wall time.
+//!
+//! Responders number every frame they send (HEARTBEAT, `stream=` telemetry,
+//! replies) with one packet sequence, in the order they send them, as an
+//! autopilot does: a reply is numbered when the responder has the request,
+//! one leg after mavping sent it. The per-direction faults (`loss_down=`,
+//! `dup_down=`, `reorder_down=`, `loss_up=`) act on numbered frames, and
+//! [`DownTruth`] and [`UpTruth`] count what they did, for a passive loss
+//! count held against them.
 
-use std::cmp::Reverse;
-use std::collections::BinaryHeap;
+use std::cmp::{Ordering, Reverse};
+use std::collections::{BinaryHeap, HashMap};
 use std::time::Duration;
 
 use rand::rngs::SmallRng;
@@ -17,6 +25,7 @@ use tokio::time::{sleep_until, Instant};
 use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::answering::ResponderCore;
 use crate::frame::{self, Header, Msg, RadioStatus, ScanStats, SysComp, Version};
+use crate::telemetry::{Schedule, StreamKind};
 use radio::RadioPair;
 
 mod params;
@@ -26,11 +35,20 @@ pub use params::{SimParams, DEFAULT_BUFFER_BYTES, SIM_KEYS};
 struct SimResponder {
     core: ResponderCore,
     packet_seq: u8,
-    next_heartbeat: Instant,
+    /// Its HEARTBEAT's timetable (`heartbeat=on`), and its telemetry's.
+    heartbeat: Option<Schedule>,
+    streams: Vec<(StreamKind, Schedule)>,
     truth: SimTruth,
     /// A reply of its has been put on its way (delivered or spiked): the
     /// pinger's window for it opens at the first such exchange.
     replied: bool,
+    /// Frames it numbered so far: the index of the next one (its packet
+    /// sequence is this index plus one, modulo 256).
+    numbered: u64,
+    /// The highest index that has arrived at mavping.
+    latest_arrived: Option<u64>,
+    /// Frames with more than one copy on its way: copies still to arrive.
+    copies_due: HashMap<u64, u8>,
 }
 
 /// What the simulated link did to one responder's exchanges: the ground
@@ -61,6 +79,44 @@ pub struct SimTruth {
     /// ...of which handed to the pinger before it stopped reading (the
     /// late replies it can have seen).
     pub spiked_arrived: u64,
+    /// Every frame the responder sent, by its sequence numbers.
+    pub down: DownTruth,
+    /// Every frame mavping sent towards it.
+    pub up: UpTruth,
+}
+
+/// What became of the frames a responder sent (HEARTBEAT, telemetry,
+/// replies), each numbered: what a passive count of its packet sequence
+/// numbers is held against. `sent = dropped + delivered + in flight`.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct DownTruth {
+    /// Frames it numbered and sent.
+    pub sent: u64,
+    /// ...lost on the way to mavping: `loss_down=`, a full radio buffer
+    /// (`baud=`), the outage (telemetry; `outage=`).
+    pub dropped: u64,
+    /// Extra copies put on their way (`dup=` on replies, `dup_down=`).
+    pub duplicated: u64,
+    /// ...of which arrived.
+    pub duplicates_arrived: u64,
+    /// Frames that arrived (first copies), reordered ones included.
+    pub delivered: u64,
+    /// ...of which after a frame it sent later had arrived (`hold=` by
+    /// `reorder=` or `reorder_down=`, or a jitter wider than the gap).
+    pub reordered: u64,
+}
+
+/// What became of the frames mavping sent, as one responder hears them.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct UpTruth {
+    /// Frames mavping sent (requests, its HEARTBEAT, `--load`).
+    pub sent: u64,
+    /// ...lost on the way to this responder: `loss_up=`, a full buffer
+    /// (`baud=`).
+    pub dropped: u64,
+    /// ...of which requests it would have answered (also counted in
+    /// `answered` and `dropped`: the exchange is lost).
+    pub requests_dropped: u64,
 }
 
 impl SimTruth {
@@ -71,14 +127,50 @@ impl SimTruth {
 }
 
 impl SimResponder {
-    fn header(&mut self) -> Header {
+    /// The header of the next frame it sends, and the frame's index.
+    fn header(&mut self) -> (Header, u64) {
         self.packet_seq = self.packet_seq.wrapping_add(1);
-        Header {
+        let index = self.numbered;
+        self.numbered += 1;
+        self.truth.down.sent += 1;
+        let header = Header {
             sysid: self.core.id.sysid,
             compid: self.core.id.compid,
             seq: self.packet_seq,
-        }
+        };
+        (header, index)
     }
+
+    /// A frame of its reached mavping: a first copy, maybe reordered, or
+    /// an extra one.
+    fn arrived(&mut self, index: u64) {
+        let copy = match self.copies_due.get_mut(&index) {
+            Some(left) => {
+                *left -= 1;
+                let copy = *left == 0;
+                if copy {
+                    self.copies_due.remove(&index);
+                }
+                copy
+            }
+            None => false,
+        };
+        let down = &mut self.truth.down;
+        if copy {
+            down.duplicates_arrived += 1;
+            return;
+        }
+        down.delivered += 1;
+        down.reordered += u64::from(self.latest_arrived.is_some_and(|l| index < l));
+        self.latest_arrived = Some(self.latest_arrived.map_or(index, |l| l.max(index)));
+    }
+}
+
+/// Which responder's frame a delivery is, and which of its frames.
+#[derive(PartialEq, Eq, PartialOrd, Ord, Clone, Copy)]
+struct Tag {
+    responder: usize,
+    index: u64,
 }
 
 /// A delivery waiting in the simulated link, ordered by time then by the
@@ -90,12 +182,60 @@ struct Delivery {
     bytes: Vec<u8>,
     /// What it is, for the ground truth of what arrived.
     payload: Payload,
+    /// A responder's frame (not RADIO_STATUS): for [`DownTruth`].
+    frame: Option<Tag>,
+}
+
+/// A frame a responder sends at `at`, numbered then.
+struct Outgoing {
+    at: Instant,
+    order: u64,
+    responder: usize,
+    what: Sends,
+}
+
+enum Sends {
+    Heartbeat,
+    /// Telemetry: the responder's stream of this index.
+    Stream(usize),
+    /// A reply, its fate drawn when its request was sent.
+    Reply(Box<Reply>),
+}
+
+struct Reply {
+    msg: Msg,
+    version: Version,
+    /// When its copies arrive, or `None`: lost on the way.
+    copies: Option<Copies>,
+}
+
+/// A frame's arrivals: its first copy and maybe an extra one.
+type Copies = ([(Instant, Payload); 2], usize);
+
+impl PartialEq for Outgoing {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == Ordering::Equal
+    }
+}
+
+impl Eq for Outgoing {}
+
+impl PartialOrd for Outgoing {
+    fn partial_cmp(&self, other: &Self) -> Option<Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Outgoing {
+    fn cmp(&self, other: &Self) -> Ordering {
+        (self.at, self.order).cmp(&(other.at, other.order))
+    }
 }
 
 /// What a delivery carries, for the ground truth.
 #[derive(PartialEq, Eq, PartialOrd, Ord, Clone, Copy)]
 enum Payload {
-    /// HEARTBEAT, RADIO_STATUS, a reply's first copy on time.
+    /// HEARTBEAT, telemetry, RADIO_STATUS, a reply's first copy on time.
     Plain,
     /// A reply's first copy, spiked (responder index).
     Spiked(usize),
@@ -107,7 +247,29 @@ enum Payload {
 /// memory without bound; past it, replies are dropped like a full queue.
 const MAX_QUEUED: usize = 1 << 20;
 
+/// The simulated responders' HEARTBEAT: a PX4 quadrotor.
+const HEARTBEAT: Msg = Msg::Heartbeat {
+    mav_type: 2,   // quadrotor
+    autopilot: 12, // PX4
+};
+
+/// Seeds the responders' own draws (telemetry phases, the per-direction
+/// faults) beside `seed=`, so adding them leaves the other faults of a
+/// seed where they were.
+const VEHICLE_SEED: u64 = 0x7e1e_3e7e_5eed_0001;
+
 pub const RADIO_ID: SysComp = SysComp::new(51, 68);
+
+/// `delay=` plus a draw of `jitter=`.
+fn one_way(params: &SimParams, rng: &mut SmallRng) -> Duration {
+    let jitter = params.jitter.as_nanos() as u64;
+    let extra = if jitter == 0 {
+        0
+    } else {
+        rng.gen_range(0..=jitter)
+    };
+    params.delay + Duration::from_nanos(extra)
+}
 
 /// The shared wire of a `baud=` link: when it is next free.
 #[derive(Default)]
@@ -130,21 +292,38 @@ pub struct SimLink {
     /// `air=`: a radio pair with its own air and buffers, instead of one
     /// shared wire.
     pair: Option<Box<RadioPair>>,
+    /// What the responders send next, in the order they send it.
+    outgoing: BinaryHeap<Reverse<Outgoing>>,
+    outgoing_order: u64,
+    /// Draws for telemetry and the per-direction faults.
+    vehicle_rng: SmallRng,
 }
 
 impl SimLink {
     pub fn new(params: SimParams) -> Self {
         let now = Instant::now();
-        let responders = (0..params.responders)
+        let mut vehicle_rng = SmallRng::seed_from_u64(params.seed ^ VEHICLE_SEED);
+        let heartbeat_rate = params.heartbeat_rate();
+        let responders: Vec<SimResponder> = (0..params.responders)
             .map(|i| {
                 let mut core = ResponderCore::new(params.responder_id(i));
                 core.answer_ping = params.answer_ping;
                 SimResponder {
                     core,
                     packet_seq: 0,
-                    next_heartbeat: now,
+                    // The first at once, as a real system's at boot.
+                    heartbeat: heartbeat_rate.map(|rate| Schedule::new(rate, 0.0)),
+                    streams: params
+                        .streams
+                        .iter()
+                        .filter(|s| s.kind != StreamKind::Heartbeat)
+                        .map(|s| (s.kind, Schedule::new(s.rate, vehicle_rng.gen())))
+                        .collect(),
                     truth: SimTruth::default(),
                     replied: false,
+                    numbered: 0,
+                    latest_arrived: None,
+                    copies_due: HashMap::new(),
                 }
             })
             .collect();
@@ -152,7 +331,7 @@ impl SimLink {
             .air
             .zip(params.baud)
             .map(|(air, baud)| Box::new(RadioPair::new(baud, &air, params.buffer)));
-        SimLink {
+        let mut link = SimLink {
             rng: SmallRng::seed_from_u64(params.seed),
             params,
             responders,
@@ -165,7 +344,20 @@ impl SimLink {
             next_radio: now,
             radio_seq: 0,
             pair,
+            outgoing: BinaryHeap::new(),
+            outgoing_order: 0,
+            vehicle_rng,
+        };
+        for i in 0..link.responders.len() {
+            if let Some(first) = link.responders[i].heartbeat.map(|s| s.due_ns()) {
+                link.schedule(first, i, Sends::Heartbeat);
+            }
+            for k in 0..link.responders[i].streams.len() {
+                let first = link.responders[i].streams[k].1.due_ns();
+                link.schedule(first, i, Sends::Stream(k));
+            }
         }
+        link
     }
 
     /// Ground truth per responder, in responder order.
@@ -177,13 +369,12 @@ impl SimLink {
     }
 
     fn one_way(&mut self) -> Duration {
-        let jitter = self.params.jitter.as_nanos() as u64;
-        let extra = if jitter == 0 {
-            0
-        } else {
-            self.rng.gen_range(0..=jitter)
-        };
-        self.params.delay + Duration::from_nanos(extra)
+        one_way(&self.params, &mut self.rng)
+    }
+
+    /// A one-way delay drawn for the responders' own frames.
+    fn vehicle_one_way(&mut self) -> Duration {
+        one_way(&self.params, &mut self.vehicle_rng)
     }
 
     /// A responder's clock at `t`.
@@ -217,51 +408,161 @@ impl SimLink {
         p > 0.0 && self.rng.gen::<f64>() < p
     }
 
-    fn enqueue(&mut self, at: Instant, bytes: Vec<u8>, payload: Payload) {
-        if self.queue.len() < MAX_QUEUED {
-            self.order += 1;
-            self.queue.push(Reverse(Delivery {
-                at,
-                order: self.order,
-                bytes,
-                payload,
-            }));
-        }
+    /// A per-direction fault's draw, from the responders' own draws.
+    fn vehicle_chance(&mut self, p: f64) -> bool {
+        p > 0.0 && self.vehicle_rng.gen::<f64>() < p
     }
 
-    fn queue_heartbeats(&mut self, now: Instant) {
-        if !self.params.heartbeat {
-            return;
+    /// Queues a delivery; false when the queue is full and it is dropped.
+    fn enqueue(
+        &mut self,
+        at: Instant,
+        bytes: Vec<u8>,
+        payload: Payload,
+        frame: Option<Tag>,
+    ) -> bool {
+        if self.queue.len() >= MAX_QUEUED {
+            return false;
         }
-        for i in 0..self.responders.len() {
-            while self.responders[i].next_heartbeat <= now {
-                let sent = self.responders[i].next_heartbeat;
-                self.responders[i].next_heartbeat += Duration::from_secs(1);
-                let header = self.responders[i].header();
-                let mut bytes = Vec::new();
-                frame::encode(
-                    &mut bytes,
-                    Version::V2,
-                    header,
-                    &Msg::Heartbeat {
-                        mav_type: 2,   // quadrotor
-                        autopilot: 12, // PX4
-                    },
-                );
-                let at = sent + self.params.delay;
-                self.enqueue(at, bytes, Payload::Plain);
+        self.order += 1;
+        self.queue.push(Reverse(Delivery {
+            at,
+            order: self.order,
+            bytes,
+            payload,
+            frame,
+        }));
+        true
+    }
+
+    /// Responder `i` sends `what` at `ns` after the link opened.
+    fn schedule(&mut self, ns: u64, i: usize, what: Sends) {
+        self.outgoing_order += 1;
+        self.outgoing.push(Reverse(Outgoing {
+            at: self.instant(ns),
+            order: self.outgoing_order,
+            responder: i,
+            what,
+        }));
+    }
+
+    /// Numbers and sends, in order, every frame the responders send until
+    /// `now`.
+    fn send_due_frames(&mut self, now: Instant) {
+        while self.outgoing.peek().is_some_and(|o| o.0.at <= now) {
+            let Reverse(o) = self.outgoing.pop().expect("peeked");
+            let i = o.responder;
+            match o.what {
+                Sends::Heartbeat => {
+                    self.send_heartbeat(i, o.at);
+                    let schedule = self.responders[i].heartbeat.as_mut().expect("on");
+                    schedule.advance();
+                    let next = schedule.due_ns();
+                    self.schedule(next, i, Sends::Heartbeat);
+                }
+                Sends::Stream(k) => {
+                    self.send_telemetry(i, k, o.at);
+                    let schedule = &mut self.responders[i].streams[k].1;
+                    schedule.advance();
+                    let next = schedule.due_ns();
+                    self.schedule(next, i, Sends::Stream(k));
+                }
+                Sends::Reply(reply) => {
+                    let (header, index) = self.responders[i].header();
+                    match reply.copies {
+                        Some(copies) => {
+                            let mut bytes = Vec::new();
+                            frame::encode(&mut bytes, reply.version, header, &reply.msg);
+                            self.put_on_way(i, index, bytes, copies);
+                        }
+                        None => self.responders[i].truth.down.dropped += 1,
+                    }
+                }
             }
         }
     }
 
-    fn next_heartbeat(&self) -> Option<Instant> {
-        let heartbeat = self
-            .params
-            .heartbeat
-            .then(|| self.responders.iter().map(|r| r.next_heartbeat).min())
-            .flatten();
+    /// A HEARTBEAT sent at `sent`: one leg later at mavping (no jitter, no
+    /// wire time), but for the per-direction faults.
+    fn send_heartbeat(&mut self, i: usize, sent: Instant) {
+        let (header, index) = self.responders[i].header();
+        let mut bytes = Vec::new();
+        frame::encode(&mut bytes, Version::V2, header, &HEARTBEAT);
+        let at = sent + self.params.delay;
+        self.send_down(i, index, bytes, at);
+    }
+
+    /// A telemetry frame sent at `sent`: through the outage, the wire or
+    /// the radios, and the per-direction faults.
+    fn send_telemetry(&mut self, i: usize, k: usize, sent: Instant) {
+        let kind = self.responders[i].streams[k].0;
+        let (header, index) = self.responders[i].header();
+        let time_boot_ms = (self.ns(sent) / 1_000_000) as u32;
+        let mut bytes = Vec::new();
+        frame::encode(
+            &mut bytes,
+            Version::V2,
+            header,
+            &kind.msg(time_boot_ms, &HEARTBEAT),
+        );
+        if self.in_outage(sent) {
+            self.responders[i].truth.down.dropped += 1;
+            return;
+        }
+        let Some(done) = self.downlink(sent, Duration::ZERO, bytes.len()) else {
+            self.responders[i].truth.down.dropped += 1;
+            return;
+        };
+        let at = done + self.vehicle_one_way();
+        self.send_down(i, index, bytes, at);
+    }
+
+    /// The per-direction faults on a frame of responder `i` due at `at`.
+    fn send_down(&mut self, i: usize, index: u64, bytes: Vec<u8>, mut at: Instant) {
+        if self.vehicle_chance(self.params.loss_down) {
+            self.responders[i].truth.down.dropped += 1;
+            return;
+        }
+        if self.vehicle_chance(self.params.reorder_down) {
+            at += self.params.hold;
+        }
+        let mut copies = [(at, Payload::Plain); 2];
+        let mut n = 1;
+        if self.vehicle_chance(self.params.dup_down) {
+            copies[1].0 = at + self.vehicle_one_way();
+            n = 2;
+        }
+        self.put_on_way(i, index, bytes, (copies, n));
+    }
+
+    /// Queues the copies of frame `index` of responder `i`.
+    fn put_on_way(&mut self, i: usize, index: u64, bytes: Vec<u8>, (copies, n): Copies) {
+        let tag = Some(Tag {
+            responder: i,
+            index,
+        });
+        let queued = copies[..n]
+            .iter()
+            .filter(|(at, payload)| self.enqueue(*at, bytes.clone(), *payload, tag))
+            .count();
+        let down = &mut self.responders[i].truth.down;
+        match queued {
+            0 => down.dropped += 1,
+            1 => {}
+            more => {
+                down.duplicated += more as u64 - 1;
+                self.responders[i].copies_due.insert(index, more as u8);
+            }
+        }
+    }
+
+    /// When the link must next act on its own: a frame arriving, a
+    /// responder sending, RADIO_STATUS.
+    fn next_event(&self) -> Option<Instant> {
+        let delivery = self.queue.peek().map(|d| d.0.at);
+        let outgoing = self.outgoing.peek().map(|o| o.0.at);
         let radio = self.params.radio.then_some(self.next_radio);
-        heartbeat.into_iter().chain(radio).min()
+        delivery.into_iter().chain(outgoing).chain(radio).min()
     }
 
     /// Wire time of `bytes` at the link's baud.
@@ -375,14 +676,75 @@ impl SimLink {
                 }),
             );
             // The radio is the near end: no link delay.
-            self.enqueue(sent, bytes, Payload::Plain);
+            self.enqueue(sent, bytes, Payload::Plain, None);
         }
+    }
+}
+
+impl SimLink {
+    /// Whether responder `i` hears a frame mavping sent, or it is lost on
+    /// the way (`loss_up=`, drawn for each responder); counted.
+    fn heard_by(&mut self, i: usize) -> bool {
+        let lost = self.vehicle_chance(self.params.loss_up);
+        let up = &mut self.responders[i].truth.up;
+        up.sent += 1;
+        up.dropped += u64::from(lost);
+        !lost
+    }
+
+    /// Where a reply of responder `i` that has left the wire (or radios)
+    /// at `reply_done` arrives, with its copies, or `None`: dropped.
+    fn reply_copies(&mut self, i: usize, reply_done: Instant) -> Option<Copies> {
+        let mut at = reply_done + self.one_way();
+        // Drawn only when asked for, so seeds keep their faults.
+        let spiked = self.chance(self.params.spike);
+        if spiked {
+            at += self.params.spike_delay;
+        }
+        let held = self.chance(self.params.reorder);
+        // The responder's own faults: their own draws.
+        let held_down = self.vehicle_chance(self.params.reorder_down);
+        if held || held_down {
+            at += self.params.hold;
+        }
+        let again = if self.chance(self.params.dup) {
+            Some(at + self.one_way())
+        } else if self.vehicle_chance(self.params.dup_down) {
+            Some(at + self.vehicle_one_way())
+        } else {
+            None
+        };
+        if self.vehicle_chance(self.params.loss_down) {
+            let r = &mut self.responders[i];
+            r.truth.dropped(r.replied);
+            return None;
+        }
+        let r = &mut self.responders[i];
+        r.replied = true;
+        let payload = if spiked {
+            r.truth.spiked += 1;
+            Payload::Spiked(i)
+        } else {
+            r.truth.delivered += 1;
+            Payload::Plain
+        };
+        let mut copies = [(at, payload); 2];
+        let mut n = 1;
+        if let Some(again) = again {
+            r.truth.duplicated += 1;
+            copies[1] = (again, Payload::Duplicate(i));
+            n = 2;
+        }
+        Some((copies, n))
     }
 }
 
 impl Transport for SimLink {
     async fn send(&mut self, bytes: &[u8]) -> Result<Instant, LinkError> {
         let now = Instant::now();
+        // What the responders sent until now is numbered before what they
+        // answer to this.
+        self.send_due_frames(now);
         let mut requests = std::mem::take(&mut self.scratch);
         requests.clear();
         // Requests go through the real scanner, as on a wire.
@@ -392,11 +754,14 @@ impl Transport for SimLink {
         let Some(sent_done) = self.uplink(now, bytes.len()) else {
             for request in &requests {
                 for i in 0..self.responders.len() {
-                    if self.responders[i].core.answer(&request.frame, 0).is_some() {
-                        let r = &mut self.responders[i];
+                    let r = &mut self.responders[i];
+                    r.truth.up.sent += 1;
+                    r.truth.up.dropped += 1;
+                    if r.core.answer(&request.frame, 0).is_some() {
                         r.truth.answered += 1;
                         r.truth.dropped(r.replied);
                         r.truth.overflowed += 1;
+                        r.truth.up.requests_dropped += 1;
                     }
                 }
             }
@@ -405,10 +770,17 @@ impl Transport for SimLink {
         };
         for request in &requests {
             for i in 0..self.responders.len() {
+                let heard = self.heard_by(i);
                 let Some(mut reply) = self.responders[i].core.answer(&request.frame, 0) else {
                     continue;
                 };
                 self.responders[i].truth.answered += 1;
+                if !heard {
+                    let r = &mut self.responders[i];
+                    r.truth.dropped(r.replied);
+                    r.truth.up.requests_dropped += 1;
+                    continue;
+                }
                 if self.in_outage(now) {
                     let r = &mut self.responders[i];
                     r.truth.dropped(r.replied);
@@ -416,6 +788,8 @@ impl Transport for SimLink {
                     continue;
                 }
                 // Loss is drawn once per exchange: request or reply leg.
+                // The reply is not sent, so not numbered: no gap in the
+                // responder's sequence (for one, `loss_down=`).
                 if self.chance(self.params.loss) {
                     let r = &mut self.responders[i];
                     r.truth.dropped(r.replied);
@@ -431,35 +805,33 @@ impl Transport for SimLink {
                     let read_at = if self.pair.is_some() { sent_done } else { now };
                     *tc1 = self.clock_ns(read_at + up);
                 }
-                let header = self.responders[i].header();
+                let version = request.frame.version;
+                // The reply's length: its header is written when it is sent.
                 let mut out = Vec::new();
-                frame::encode(&mut out, request.frame.version, header, &reply);
-                let Some(reply_done) = self.downlink(sent_done, up, out.len()) else {
-                    let r = &mut self.responders[i];
-                    r.truth.dropped(r.replied);
-                    r.truth.overflowed += 1;
-                    continue;
+                let (sysid, compid) = (0, 0);
+                let header = Header {
+                    sysid,
+                    compid,
+                    seq: 0,
                 };
-                self.responders[i].replied = true;
-                let mut at = reply_done + self.one_way();
-                // Drawn only when asked for, so seeds keep their faults.
-                let payload = if self.chance(self.params.spike) {
-                    self.responders[i].truth.spiked += 1;
-                    at += self.params.spike_delay;
-                    Payload::Spiked(i)
-                } else {
-                    self.responders[i].truth.delivered += 1;
-                    Payload::Plain
+                frame::encode(&mut out, version, header, &reply);
+                let copies = match self.downlink(sent_done, up, out.len()) {
+                    Some(reply_done) => self.reply_copies(i, reply_done),
+                    None => {
+                        let r = &mut self.responders[i];
+                        r.truth.dropped(r.replied);
+                        r.truth.overflowed += 1;
+                        None
+                    }
                 };
-                if self.chance(self.params.reorder) {
-                    at += self.params.hold;
-                }
-                if self.chance(self.params.dup) {
-                    self.responders[i].truth.duplicated += 1;
-                    let again = at + self.one_way();
-                    self.enqueue(again, out.clone(), Payload::Duplicate(i));
-                }
-                self.enqueue(at, out, payload);
+                // Sent (and numbered) once the responder has the request.
+                let ns = self.ns(sent_done + up);
+                let reply = Reply {
+                    msg: reply,
+                    version,
+                    copies,
+                };
+                self.schedule(ns, i, Sends::Reply(Box::new(reply)));
             }
         }
         self.scratch = requests;
@@ -473,17 +845,14 @@ impl Transport for SimLink {
 
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
         loop {
-            let next_delivery = self.queue.peek().map(|d| d.0.at);
-            let wake = match (next_delivery, self.next_heartbeat()) {
-                (Some(a), Some(b)) => a.min(b),
-                (Some(a), None) | (None, Some(a)) => a,
-                (None, None) => return std::future::pending().await,
+            let Some(wake) = self.next_event() else {
+                return std::future::pending().await;
             };
             // The only await: everything after it runs to completion, so a
             // cancelled recv loses nothing.
             sleep_until(wake).await;
             let now = Instant::now();
-            self.queue_heartbeats(now);
+            self.send_due_frames(now);
             self.queue_radio_status(now);
             let before = out.len();
             while self.queue.peek().is_some_and(|d| d.0.at <= now) {
@@ -492,6 +861,9 @@ impl Transport for SimLink {
                     Payload::Plain => {}
                     Payload::Spiked(i) => self.responders[i].truth.spiked_arrived += 1,
                     Payload::Duplicate(i) => self.responders[i].truth.duplicates_arrived += 1,
+                }
+                if let Some(tag) = d.frame {
+                    self.responders[tag.responder].arrived(tag.index);
                 }
                 // Stamped with the simulated arrival time: the RTT is
                 // exactly the simulated delay, free of scheduler noise.
@@ -513,5 +885,247 @@ impl Transport for SimLink {
 
     fn rx_clock(&self) -> RxClock {
         RxClock::Simulated
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::HashSet;
+
+    use super::*;
+    use crate::frame::ids;
+
+    const ATTITUDE: u32 = 30;
+    const GLOBAL_POSITION_INT: u32 = 33;
+
+    fn sim(query: &str) -> SimLink {
+        SimLink::new(SimParams::parse(query).unwrap())
+    }
+
+    /// A PING request from mavping (250/190).
+    fn ping(seq: u32) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        let header = Header {
+            sysid: 250,
+            compid: 190,
+            seq: seq as u8,
+        };
+        let msg = Msg::Ping {
+            time_usec: u64::from(seq) + 1,
+            seq,
+            target_system: 0,
+            target_component: 0,
+        };
+        frame::encode(&mut bytes, Version::V2, header, &msg);
+        bytes
+    }
+
+    /// Reads the link for `run` of its (paused) clock, sending `pings`
+    /// PINGs `every` apart from the start; what arrived, in order.
+    async fn drive(link: &mut SimLink, run: Duration, every: Duration, pings: u32) -> Vec<Inbound> {
+        let end = Instant::now() + run;
+        let mut next = Instant::now();
+        let (mut sent, mut out) = (0, Vec::new());
+        loop {
+            let wake = if sent < pings { next.min(end) } else { end };
+            tokio::select! {
+                r = link.recv(&mut out) => r.unwrap(),
+                () = sleep_until(wake) => {
+                    if Instant::now() >= end {
+                        return out;
+                    }
+                    link.send(&ping(sent)).await.unwrap();
+                    sent += 1;
+                    next += every;
+                }
+            }
+        }
+    }
+
+    /// What a passive count of `source`'s packet sequence numbers finds:
+    /// each frame's index unwrapped from its 8-bit sequence, nearest the
+    /// latest one.
+    #[derive(Debug, Default, PartialEq)]
+    struct Passive {
+        delivered: u64,
+        reordered: u64,
+        duplicates: u64,
+        /// Indices up to the latest never seen: lost, or still on the way.
+        missing: u64,
+    }
+
+    fn passive(frames: &[Inbound], source: SysComp) -> Passive {
+        let mut latest: Option<u64> = None;
+        let mut seen = HashSet::new();
+        let mut p = Passive::default();
+        for f in frames.iter().filter(|f| f.frame.source == source) {
+            let seq = u64::from(f.frame.packet_seq);
+            // Frame i carries sequence i + 1 (modulo 256).
+            let index = match latest {
+                None => (seq + 255) % 256,
+                Some(l) => {
+                    let back = (l + 1 + 256 - seq) % 256;
+                    if back < 128 {
+                        l - back
+                    } else {
+                        l + 256 - back
+                    }
+                }
+            };
+            if !seen.insert(index) {
+                p.duplicates += 1;
+                continue;
+            }
+            p.delivered += 1;
+            p.reordered += u64::from(latest.is_some_and(|l| index < l));
+            latest = Some(latest.map_or(index, |l| l.max(index)));
+        }
+        p.missing = latest.map_or(0, |l| l + 1) - p.delivered;
+        p
+    }
+
+    fn of(frames: &[Inbound], source: SysComp, msgid: u32) -> usize {
+        frames
+            .iter()
+            .filter(|f| f.frame.source == source && f.frame.msgid == msgid)
+            .count()
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn telemetry_heartbeats_and_replies_share_one_sequence_in_the_order_sent() {
+        let mut link = sim("?stream=ATTITUDE@50,GLOBAL_POSITION_INT@5,HEARTBEAT@4&jitter=0");
+        let frames = drive(
+            &mut link,
+            Duration::from_secs(10),
+            Duration::from_millis(200),
+            50,
+        )
+        .await;
+        let id = SysComp::new(1, 1);
+        let ours: Vec<&Inbound> = frames.iter().filter(|f| f.frame.source == id).collect();
+        // One counter, one more each frame, wrapping past 255: nothing
+        // lost, doubled or out of order on a clean link.
+        assert!(ours.len() > 512, "{}", ours.len());
+        for pair in ours.windows(2) {
+            let (a, b) = (pair[0].frame.packet_seq, pair[1].frame.packet_seq);
+            assert_eq!(b, a.wrapping_add(1), "{a} then {b}");
+        }
+        // 10 s at 50 and 5 Hz from a random phase, 10 ms on the way; 4
+        // HEARTBEATs a second from the start (the one at 10 s is on its
+        // way), every PING answered.
+        assert!((499..=500).contains(&of(&frames, id, ATTITUDE)));
+        assert!((49..=50).contains(&of(&frames, id, GLOBAL_POSITION_INT)));
+        assert_eq!(of(&frames, id, ids::HEARTBEAT), 40);
+        assert_eq!(of(&frames, id, ids::PING), 50);
+        let down = link.truth()[0].1.down;
+        let arrived = ours.len() as u64;
+        assert_eq!(
+            (
+                down.delivered,
+                down.dropped,
+                down.reordered,
+                down.duplicated
+            ),
+            (arrived, 0, 0, 0)
+        );
+        assert!(down.sent - arrived <= 3, "{down:?}");
+        let seen = passive(&frames, id);
+        assert_eq!(
+            (seen.delivered, seen.missing, seen.reordered),
+            (arrived, 0, 0)
+        );
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn per_direction_faults_are_the_ground_truth_of_a_passive_count() {
+        let mut link = sim(
+            "?responders=2&stream=ATTITUDE@50&loss_down=10%&dup_down=5%&reorder_down=5%\
+             &loss_up=20%&seed=3",
+        );
+        // 500 PINGs in 50 s, then 10 s for the last replies.
+        let frames = drive(
+            &mut link,
+            Duration::from_secs(60),
+            Duration::from_millis(100),
+            500,
+        )
+        .await;
+        for (id, t) in link.truth() {
+            let seen = passive(&frames, id);
+            let down = t.down;
+            assert_eq!(
+                (seen.delivered, seen.reordered, seen.duplicates),
+                (down.delivered, down.reordered, down.duplicates_arrived),
+                "{id}: {down:?}"
+            );
+            // What is still on its way was sent in the last few frames.
+            let in_flight = down.sent - down.dropped - down.delivered;
+            assert!(in_flight <= 5, "{id}: {down:?}");
+            assert!(
+                seen.missing.abs_diff(down.dropped) <= in_flight,
+                "{seen:?} {down:?}"
+            );
+            let share = down.dropped as f64 / down.sent as f64;
+            assert!((0.08..0.12).contains(&share), "{id}: {down:?}");
+            assert!(
+                down.reordered > 20 && down.duplicates_arrived > 50,
+                "{down:?}"
+            );
+            // Every PING reached the link; a fifth lost on the way up, for
+            // each responder its own fifth.
+            assert_eq!((t.up.sent, t.answered), (500, 500));
+            assert_eq!(t.up.dropped, t.up.requests_dropped);
+            assert!(
+                (70..130).contains(&t.up.requests_dropped),
+                "{id}: {:?}",
+                t.up
+            );
+            // The exchange's truth holds too: every reply not dropped
+            // arrived, its extra copies too.
+            let replies: Vec<u32> = frames
+                .iter()
+                .filter(|f| f.frame.source == id)
+                .filter_map(|f| match f.frame.msg {
+                    Msg::Ping { seq, .. } => Some(seq),
+                    _ => None,
+                })
+                .collect();
+            let unique: HashSet<u32> = replies.iter().copied().collect();
+            assert_eq!(unique.len() as u64, t.delivered, "{id}: {t:?}");
+            assert_eq!(t.answered - t.dropped, t.delivered);
+            assert_eq!(
+                (replies.len() - unique.len()) as u64,
+                t.duplicates_arrived,
+                "{t:?}"
+            );
+            assert!(t.dropped > t.up.requests_dropped, "{t:?}");
+        }
+        let [(_, a), (_, b)] = link.truth()[..] else {
+            panic!("two responders")
+        };
+        assert_ne!(a.up.requests_dropped, b.up.requests_dropped);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn loss_loses_exchanges_without_a_gap_and_loss_down_leaves_one() {
+        let every = Duration::from_millis(100);
+        let mut link = sim("?loss=30%&heartbeat=off&seed=4");
+        let frames = drive(&mut link, Duration::from_secs(12), every, 100).await;
+        let (id, t) = link.truth()[0];
+        let seen = passive(&frames, id);
+        assert!(t.dropped > 15, "{t:?}");
+        assert_eq!(t.down.sent, t.answered - t.dropped);
+        assert_eq!((seen.delivered, seen.missing), (t.down.sent, 0));
+
+        let mut link = sim("?loss_down=30%&heartbeat=off&seed=4");
+        let frames = drive(&mut link, Duration::from_secs(12), every, 100).await;
+        let (id, t) = link.truth()[0];
+        let seen = passive(&frames, id);
+        assert!(t.down.dropped > 15, "{t:?}");
+        assert_eq!((t.down.sent, t.dropped), (100, t.down.dropped));
+        // The last frames' loss shows only once a later frame arrives.
+        let tail = t.down.sent - (seen.delivered + seen.missing);
+        assert_eq!(seen.missing + tail, t.down.dropped);
+        assert_eq!(seen.delivered, t.down.delivered);
     }
 }

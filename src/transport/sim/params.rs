@@ -8,6 +8,7 @@ use thiserror::Error;
 
 use super::radio::{AirParams, DEFAULT_TDM_ROUND};
 use crate::frame::SysComp;
+use crate::telemetry::{self, StreamSpec};
 use crate::units::{parse_duration, parse_duration_up_to, parse_percent};
 
 /// The radio's transmit buffer when `buffer=` does not say.
@@ -62,6 +63,19 @@ pub struct SimParams {
     /// Share of replies hit by a delay spike of `spike_delay` extra.
     pub spike: f64,
     pub spike_delay: Duration,
+    /// Telemetry each responder sends unasked (`stream=`), as a vehicle
+    /// does; a HEARTBEAT stream sets the rate of its HEARTBEAT.
+    pub streams: Vec<StreamSpec>,
+    /// Shares of the frames a responder sends (telemetry, HEARTBEAT,
+    /// replies) lost, delivered twice and held back by `hold` on their way
+    /// to mavping, after they were numbered: what a passive loss count
+    /// sees in the sequence numbers.
+    pub loss_down: f64,
+    pub dup_down: f64,
+    pub reorder_down: f64,
+    /// Share of the frames mavping sends lost on the way to each
+    /// responder (each responder draws its own).
+    pub loss_up: f64,
 }
 
 impl Default for SimParams {
@@ -90,6 +104,11 @@ impl Default for SimParams {
             outage_every: None,
             spike: 0.0,
             spike_delay: Duration::from_millis(500),
+            streams: Vec::new(),
+            loss_down: 0.0,
+            dup_down: 0.0,
+            reorder_down: 0.0,
+            loss_up: 0.0,
         }
     }
 }
@@ -99,7 +118,8 @@ pub const SIM_KEYS: &str = "responders=N (1-1000), sysid=N, compid=N, delay=DURA
 jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=real|virtual, \
 ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
 buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, \
-outage_every=DURATION, spike=PCT, spike_delay=DURATION";
+outage_every=DURATION, spike=PCT, spike_delay=DURATION, stream=MSG@HZ[,MSG@HZ...], \
+loss_down=PCT, dup_down=PCT, reorder_down=PCT, loss_up=PCT";
 
 /// What is wrong with a `sim:` query: which key, and why (or which keys
 /// go together).
@@ -270,6 +290,13 @@ impl SimParams {
             }
             "spike" => self.spike = percent(key, value)?,
             "spike_delay" => self.spike_delay = duration(key, value)?,
+            "stream" => self
+                .streams
+                .extend(telemetry::parse_list(value).map_err(|e| format!("{key}={value}: {e}"))?),
+            "loss_down" => self.loss_down = percent(key, value)?,
+            "dup_down" => self.dup_down = percent(key, value)?,
+            "reorder_down" => self.reorder_down = percent(key, value)?,
+            "loss_up" => self.loss_up = percent(key, value)?,
             "clock" | "offset" | "drift" => self.set_clock(key, value)?,
             "baud" | "radio" | "buffer" | "air" | "duty" | "ecc" | "tdm" => {
                 self.set_radio(key, value, air)?
@@ -347,11 +374,23 @@ impl SimParams {
             }
             _ => {}
         }
+        telemetry::check_distinct(&self.streams).map_err(|e| format!("stream=: {e}"))?;
+        if let Some(rate) = telemetry::heartbeat_rate(&self.streams).filter(|_| !self.heartbeat) {
+            return Err(format!(
+                "stream=HEARTBEAT@{rate} needs heartbeat=on (heartbeat=off sends none)"
+            ));
+        }
         // Responders are numbered by sysid; the last one must still fit.
         if usize::from(self.first_sysid) + usize::from(self.responders) - 1 > 255 * 255 {
             return Err("too many responders for the sysid range".into());
         }
         Ok(())
+    }
+
+    /// HEARTBEATs a second: 1, or what `stream=HEARTBEAT@HZ` says.
+    pub fn heartbeat_rate(&self) -> Option<f64> {
+        self.heartbeat
+            .then(|| telemetry::heartbeat_rate(&self.streams).unwrap_or(1.0))
     }
 
     /// The ids of responder `i`: sysids count up from `first_sysid`, and
@@ -425,6 +464,20 @@ impl fmt::Display for SimParams {
                 humantime::format_duration(self.spike_delay)
             )?;
         }
+        if !self.streams.is_empty() {
+            let streams: Vec<String> = self.streams.iter().map(ToString::to_string).collect();
+            write!(f, "&stream={}", streams.join(","))?;
+        }
+        for (key, share) in [
+            ("loss_down", self.loss_down),
+            ("dup_down", self.dup_down),
+            ("reorder_down", self.reorder_down),
+            ("loss_up", self.loss_up),
+        ] {
+            if share > 0.0 {
+                write!(f, "&{key}={}%", share * 100.0)?;
+            }
+        }
         Ok(())
     }
 }
@@ -497,6 +550,75 @@ mod tests {
         ] {
             let err = SimParams::parse(q).unwrap_err().to_string();
             assert!(err.contains(needle), "{q}: {err}");
+        }
+    }
+
+    #[test]
+    fn streams_and_per_direction_faults_parse_print_back_and_say_what_is_wrong() {
+        let p = SimParams::parse(
+            "?stream=ATTITUDE@50,GLOBAL_POSITION_INT@5&stream=HEARTBEAT@2&loss_down=10%\
+             &dup_down=1&reorder_down=2%&loss_up=20%",
+        )
+        .unwrap();
+        let streams: Vec<String> = p.streams.iter().map(ToString::to_string).collect();
+        assert_eq!(
+            streams,
+            ["ATTITUDE@50", "GLOBAL_POSITION_INT@5", "HEARTBEAT@2"]
+        );
+        assert_eq!(p.heartbeat_rate(), Some(2.0));
+        assert!((p.loss_down - 0.1).abs() < 1e-12 && (p.dup_down - 0.01).abs() < 1e-12);
+        assert!((p.reorder_down - 0.02).abs() < 1e-12 && (p.loss_up - 0.2).abs() < 1e-12);
+        let printed = p.to_string();
+        assert!(
+            printed.ends_with(
+                "&stream=ATTITUDE@50,GLOBAL_POSITION_INT@5,HEARTBEAT@2&loss_down=10%\
+                 &dup_down=1%&reorder_down=2%&loss_up=20%"
+            ),
+            "{printed}"
+        );
+        assert_eq!(SimParams::parse(&printed[4..]).unwrap(), p);
+        // The default HEARTBEAT is 1 Hz; none with heartbeat=off.
+        assert_eq!(SimParams::default().heartbeat_rate(), Some(1.0));
+        let off = SimParams::parse("?heartbeat=off&stream=ATTITUDE@10").unwrap();
+        assert_eq!(off.heartbeat_rate(), None);
+        for (q, message) in [
+            (
+                "?stream=ATTITUDE",
+                "stream=ATTITUDE: 'ATTITUDE': expected MSG@HZ: ATTITUDE@HZ, \
+                 GLOBAL_POSITION_INT@HZ or HEARTBEAT@HZ, e.g. ATTITUDE@50",
+            ),
+            (
+                "?stream=ATTITUDE@50,BYTES@100",
+                "stream=ATTITUDE@50,BYTES@100: 'BYTES@100': unknown message BYTES; expected \
+                 MSG@HZ: ATTITUDE@HZ, GLOBAL_POSITION_INT@HZ or HEARTBEAT@HZ, e.g. ATTITUDE@50",
+            ),
+            (
+                "?stream=ATTITUDE@0",
+                "stream=ATTITUDE@0: 'ATTITUDE@0': the rate must be a number above 0 and at \
+                 most 10000 (messages per second)",
+            ),
+            (
+                "?stream=ATTITUDE@5&stream=ATTITUDE@10",
+                "stream=: ATTITUDE is streamed twice: give each message once",
+            ),
+            (
+                "?stream=HEARTBEAT@5&heartbeat=off",
+                "stream=HEARTBEAT@5 needs heartbeat=on (heartbeat=off sends none)",
+            ),
+            (
+                "?loss_down=150",
+                "loss_down=150: '150' is not a percentage from 0 to 100",
+            ),
+        ] {
+            assert_eq!(SimParams::parse(q).unwrap_err().to_string(), message, "{q}");
+        }
+        for (q, key) in [
+            ("?dup_down=x", "dup_down=x: "),
+            ("?reorder_down=-1", "reorder_down=-1: "),
+            ("?loss_up=101%", "loss_up=101%: "),
+        ] {
+            let err = SimParams::parse(q).unwrap_err().to_string();
+            assert!(err.starts_with(key) && !err.contains('\n'), "{q}: {err}");
         }
     }
 
