@@ -9,9 +9,7 @@ use super::clock_offset::ClockSummary;
 use super::matcher::MatchEvent;
 use super::radio::RadioReport;
 use super::roster::Identity;
-use super::summary::Interim;
-/// Where `src/output/samples.rs` (test samples) still finds it.
-pub use super::summary::ProbeName;
+use super::summary::{Interim, ProbeName};
 use super::sweep::step::StepFigures;
 use super::sweep::SweepConfig;
 use super::CommandSpec;
