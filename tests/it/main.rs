@@ -19,6 +19,7 @@ mod live;
 mod multilink;
 mod mutants;
 mod options;
+mod passive;
 mod probes_pymavlink;
 mod prometheus_server;
 mod properties;
