@@ -246,6 +246,46 @@ fn judge_responder(r: &ResponderSummary, t: &Thresholds, out: &mut Vec<Failure>)
     }
 }
 
+/// Whom `--expect` and `--min-responders` count: responders that answered
+/// a probe, or sources a passive run heard.
+#[derive(Clone, Copy)]
+enum Who {
+    Responders,
+    Sources,
+}
+
+/// `--expect` and `--min-responders` over the ids that answered (or were
+/// heard).
+fn judge_who(ids: &[SysComp], t: &Thresholds, who: Who, out: &mut Vec<Failure>) {
+    for e in &t.expect {
+        if !ids.iter().any(|&id| e.matches(id)) {
+            out.push(Failure {
+                responder: e.compid.map(|c| SysComp::new(e.sysid, c)),
+                check: Check::Expect,
+                message: match who {
+                    Who::Responders => format!("expected responder {e} did not answer"),
+                    Who::Sources => format!("expected source {e} was not heard"),
+                },
+            });
+        }
+    }
+    if let Some(min) = t.min_responders.filter(|&min| ids.len() < min) {
+        out.push(Failure {
+            responder: None,
+            check: Check::MinResponders,
+            message: match who {
+                Who::Responders => {
+                    format!(
+                        "{} responders answered, --min-responders is {min}",
+                        ids.len()
+                    )
+                }
+                Who::Sources => format!("{} sources heard, --min-responders is {min}", ids.len()),
+            },
+        });
+    }
+}
+
 /// Judges a finished run. A link failure is exit 2 whatever else held.
 pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
     let mut failures = Vec::new();
@@ -264,27 +304,8 @@ pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
     for r in &answering {
         judge_responder(r, t, &mut failures);
     }
-    for e in &t.expect {
-        if !answering.iter().any(|r| e.matches(r.id)) {
-            failures.push(Failure {
-                responder: e.compid.map(|c| SysComp::new(e.sysid, c)),
-                check: Check::Expect,
-                message: format!("expected responder {e} did not answer"),
-            });
-        }
-    }
-    if let Some(min) = t.min_responders {
-        if answering.len() < min {
-            failures.push(Failure {
-                responder: None,
-                check: Check::MinResponders,
-                message: format!(
-                    "{} responders answered, --min-responders is {min}",
-                    answering.len()
-                ),
-            });
-        }
-    }
+    let ids: Vec<SysComp> = answering.iter().map(|r| r.id).collect();
+    judge_who(&ids, t, Who::Responders, &mut failures);
     verdict(summary.link_error.is_some(), failures)
 }
 
@@ -331,24 +352,8 @@ pub fn judge_passive(summary: &PassiveSummary, t: &Thresholds) -> Verdict {
             }
         }
     }
-    for e in &t.expect {
-        if !heard.iter().any(|s| e.matches(s.source)) {
-            failures.push(Failure {
-                responder: e.compid.map(|c| SysComp::new(e.sysid, c)),
-                check: Check::Expect,
-                message: format!("expected source {e} was not heard"),
-            });
-        }
-    }
-    if let Some(min) = t.min_responders {
-        if heard.len() < min {
-            failures.push(Failure {
-                responder: None,
-                check: Check::MinResponders,
-                message: format!("{} sources heard, --min-responders is {min}", heard.len()),
-            });
-        }
-    }
+    let ids: Vec<SysComp> = heard.iter().map(|s| s.source).collect();
+    judge_who(&ids, t, Who::Sources, &mut failures);
     verdict(summary.link_error.is_some(), failures)
 }
 
@@ -541,5 +546,61 @@ mod tests {
             "{}",
             v.failures[0].message
         );
+    }
+
+    #[test]
+    fn a_passive_run_is_judged_on_the_sources_heard_and_their_sequence_loss() {
+        use crate::engine::probe::passive::tracker::{SourceTable, RADIO_SOURCE};
+        use crate::engine::summary::passive::PassiveSummary;
+        let mut table = SourceTable::new(None, 8);
+        // 1/1 loses 1 frame in 10; the radio is no source.
+        for (k, seq) in [0u8, 1, 2, 3, 4, 6, 7, 8, 9, 10].into_iter().enumerate() {
+            table.on_frame(SysComp::new(1, 1), seq, 0, 21, k as u64 * 10_000_000);
+        }
+        table.on_frame(RADIO_SOURCE, 0, 109, 38, 0);
+        let passive = |table: &SourceTable| PassiveSummary {
+            link: "sim:".into(),
+            ours: SysComp::new(250, 190),
+            heartbeat: true,
+            duration_s: 1.0,
+            table: table.summary(100_000_000),
+            identities: Vec::new(),
+            own_frames: 0,
+            radios: Vec::new(),
+            frames: crate::frame::ScanStats::default(),
+            rx_clock: crate::transport::RxClock::UserSpace,
+            interrupted: false,
+            link_error: None,
+            signing: crate::frame::signing::Gate::new(None).summary(),
+        };
+        let s = passive(&table);
+        assert!(judge_passive(&s, &Thresholds::default()).ok());
+        let strict = Thresholds {
+            max_loss: Some(0.05),
+            expect: vec![Expected {
+                sysid: 2,
+                compid: None,
+            }],
+            min_responders: Some(2),
+            ..Thresholds::default()
+        };
+        let v = judge_passive(&s, &strict);
+        let checks: Vec<Check> = v.failures.iter().map(|f| f.check).collect();
+        assert_eq!(
+            checks,
+            [Check::MaxLoss, Check::Expect, Check::MinResponders]
+        );
+        assert_eq!(v.failures[1].message, "expected source 2 was not heard");
+        assert_eq!(
+            v.failures[2].message,
+            "1 sources heard, --min-responders is 2"
+        );
+        assert_eq!(v.exit_code(), exit::FAILED);
+        // Only the radio heard: nothing heard.
+        let mut radio_only = SourceTable::new(None, 8);
+        radio_only.on_frame(RADIO_SOURCE, 0, 109, 38, 0);
+        let v = judge_passive(&passive(&radio_only), &Thresholds::default());
+        assert_eq!(v.failures[0].check, Check::Heard);
+        assert_eq!(v.exit_code(), exit::FAILED);
     }
 }
