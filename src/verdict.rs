@@ -412,6 +412,7 @@ mod tests {
             histogram: vec![],
             identity: None,
             clock: None,
+            direction: None,
         }
     }
 

@@ -456,6 +456,7 @@ mod tests {
             histogram: vec![],
             identity: None,
             clock: None,
+            direction: None,
         }];
         let o = Observed {
             responders: &responders,

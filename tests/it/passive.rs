@@ -166,3 +166,51 @@ fn nothing_heard_is_exit_1_and_a_count_is_refused() {
     assert_eq!(code, 1, "{out}");
     assert!(out.contains("FAILED max-loss: 1/1: sequence loss"), "{out}");
 }
+
+#[test]
+fn a_probe_run_splits_its_loss_by_direction_as_the_link_lost_it() {
+    // Requests lost on the way up, frames on the way down, in a vehicle
+    // that streams telemetry beside its replies.
+    let link = "sim:?clock=virtual&stream=ATTITUDE@50&loss_up=10%&loss_down=5%&seed=7";
+    let (code, out, err) = run_mavping(&["-c", "1000", "-i", "20ms", "-q", "--json", "-v", link]);
+    assert_eq!(code, 0, "{out}{err}");
+    let line = out
+        .lines()
+        .find(|l| l.contains("\"type\":\"summary\""))
+        .unwrap();
+    let s: Value = serde_json::from_str(line).unwrap();
+    let d = &s["responders"][0]["direction"];
+    let truth = |k| sim_truth(&err, "1/1", k);
+    // The downlink is counted exactly: every frame it numbered and lost.
+    assert_eq!(
+        d["downlink_lost"].as_u64(),
+        Some(truth("down_dropped")),
+        "{d}\n{err}"
+    );
+    let sent = truth("down_sent");
+    let frames = d["downlink_frames"].as_u64().unwrap();
+    assert!(frames <= sent && sent - frames <= 2, "{sent} {d}");
+    // The uplink is inferred: within three standard errors of the truth.
+    let up_truth = truth("up_requests_dropped") as f64 / 1000.0;
+    let (up, e) = (
+        d["uplink_loss"].as_f64().unwrap(),
+        d["uplink_stderr"].as_f64().unwrap(),
+    );
+    assert!(
+        (up - up_truth).abs() < 3.0 * e,
+        "up {up} ± {e} vs {up_truth}"
+    );
+    assert!(e > 0.005 && e < 0.03, "{d}");
+    assert_eq!(d["consistent"], true);
+    // A clean link has nothing to split.
+    let (_, clean, _) = run_mavping(&[
+        "-c",
+        "20",
+        "-i",
+        "20ms",
+        "-q",
+        "--json",
+        "sim:?clock=virtual",
+    ]);
+    assert!(!clean.contains("\"direction\""), "{clean}");
+}

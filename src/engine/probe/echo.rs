@@ -5,6 +5,7 @@ use std::collections::HashMap;
 use std::io;
 use std::time::Duration;
 
+use super::passive::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{Classified, EchoProbe};
 use crate::engine::diagnosis::{diagnose, Observed};
 use crate::engine::hint::{Hint, HintCode};
@@ -16,7 +17,9 @@ use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
-use crate::engine::summary::{responder_summaries, Interim, LinkSummary, ScheduleSummary, Summary};
+use crate::engine::summary::{
+    responder_summaries, Direction, Interim, LinkSummary, ScheduleSummary, Summary,
+};
 use crate::engine::Nanos;
 use crate::engine::SessionConfig;
 use crate::frame::{Frame, SysComp};
@@ -62,6 +65,8 @@ pub struct EchoDriver<P> {
     /// the ones due now.
     clocks_told: HashMap<SysComp, Nanos>,
     clocks_due: Vec<(SysComp, Nanos)>,
+    /// Every source's packet sequence: a responder's is its downlink loss.
+    sequences: SourceTable,
 }
 
 /// A responder's clock offset is told at most this often.
@@ -71,6 +76,7 @@ impl<P: EchoProbe> EchoDriver<P> {
     pub fn new(cfg: &SessionConfig, probe: P) -> Self {
         let timeout = cfg.timeout.as_nanos() as Nanos;
         EchoDriver {
+            sequences: SourceTable::new(None, DEFAULT_MAX_SOURCES),
             probe,
             ours: cfg.ours,
             first_seq: cfg.first_seq,
@@ -211,6 +217,12 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         self.matcher.expire(now, &mut |e| events.push(e));
     }
 
+    fn on_received(&mut self, frame: &Frame, at: Nanos) {
+        let len = usize::from(frame.len);
+        self.sequences
+            .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
+    }
+
     fn on_frame(&mut self, frame: &Frame, path: PathId, at: Nanos) {
         match self.probe.classify(frame, self.ours) {
             Classified::Reply(lookup) => self.on_reply(frame, lookup, path, at),
@@ -262,6 +274,11 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let mut responders = responder_summaries(&self.matcher, &ended.roster);
         for r in &mut responders {
             r.clock = self.probe.clock(r.id);
+            r.direction = self.sequences.source(r.id).and_then(|s| {
+                let seq = s.counts();
+                let frames = seq.received - seq.duplicate + seq.lost;
+                Direction::split(r.loss_ratio, r.counts.sent, frames, seq.lost)
+            });
         }
         let loss_by_txbuf = ended.radios.loss_by_txbuf();
         let radios = ended.radios.summaries();

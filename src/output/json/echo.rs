@@ -11,7 +11,7 @@ use crate::engine::radio::{RadioReport, RadioSummary};
 use crate::engine::roster::Identity;
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::engine::summary::ProbeName;
-use crate::engine::summary::{self, ResponderSummary, ScheduleSummary};
+use crate::engine::summary::{self, Direction, ResponderSummary, ScheduleSummary};
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
 use crate::output::Event;
@@ -342,6 +342,8 @@ struct Responder<'a> {
     clock: Option<Clock>,
     /// The verdict's messages about it.
     failures: Vec<&'a str>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    direction: Option<Direction>,
 }
 
 impl<'a> Responder<'a> {
@@ -368,6 +370,7 @@ impl<'a> Responder<'a> {
                 .filter(|f| f.responder == Some(r.id))
                 .map(|f| f.message.as_str())
                 .collect(),
+            direction: r.direction,
         }
     }
 }

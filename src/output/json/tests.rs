@@ -137,6 +137,10 @@ fn responder(id: SysComp, answered: bool) -> ResponderSummary {
         histogram: rtt.distribution(4),
         identity: answered.then(identity),
         clock: None,
+        // Which way it lost: 2 of its 40 frames on the way down.
+        direction: answered
+            .then(|| crate::engine::summary::Direction::split(0.2, 10, 40, 2))
+            .flatten(),
     }
 }
 

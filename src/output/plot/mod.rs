@@ -389,6 +389,7 @@ mod tests {
             histogram: Vec::new(),
             identity: None,
             clock: None,
+            direction: None,
         }
     }
 

@@ -673,6 +673,7 @@ mod tests {
                 drift_stderr_ppm: None,
                 samples: 1,
             }),
+            direction: None,
         };
         b.on_summary(&crate::engine::summary::Summary {
             responders: vec![responder],

@@ -6,7 +6,7 @@ use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, Lines, 
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport, RadioSummary};
-use crate::engine::summary::{Interim, ResponderSummary, Summary};
+use crate::engine::summary::{Direction, Interim, ResponderSummary, Summary};
 use crate::engine::Nanos;
 use crate::output::{Event, StartInfo};
 use crate::verdict::{Check, Verdict};
@@ -369,6 +369,9 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
         )?;
     }
     writeln!(out)?;
+    if let Some(d) = &r.direction {
+        write_direction(out, d)?;
+    }
     let Some(rtt) = &r.rtt else {
         return Ok(());
     };
@@ -410,6 +413,36 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
         )?;
     }
     write_histogram(out, &r.histogram)
+}
+
+/// Which way the responder's losses were.
+fn write_direction(out: &mut impl Write, d: &Direction) -> io::Result<()> {
+    let down = format!(
+        "down {} ({} of {} of its frames, by its sequence)",
+        percent(d.downlink_loss),
+        d.downlink_lost,
+        d.downlink_frames
+    );
+    match (d.uplink_loss, d.uplink_stderr) {
+        _ if !d.consistent => writeln!(
+            out,
+            "  direction: {down} is more than the round trip's {}: its sequence does not number \
+             just what it sends us on this link (a router re-sequencing or merging links?), so \
+             no split",
+            percent(d.round_trip_loss)
+        ),
+        (Some(up), Some(e)) => writeln!(
+            out,
+            "  direction: round trip {} lost = up ~{} ± {} and {down}",
+            percent(d.round_trip_loss),
+            percent(up),
+            percent(e)
+        ),
+        _ => writeln!(
+            out,
+            "  direction: {down}: nothing of its came back to split"
+        ),
+    }
 }
 
 pub(super) fn write_summary(
