@@ -29,7 +29,8 @@ fn seconds(ns: u64) -> String {
     format!("{:.3} s", ns as f64 / 1e9)
 }
 
-fn percent(p: Option<f64>) -> String {
+/// A percentage for the table's loss column: two decimals, "-" for none.
+fn loss_column(p: Option<f64>) -> String {
     p.map_or_else(|| "-".into(), |p| format!("{p:.2}%"))
 }
 
@@ -46,7 +47,7 @@ fn row(out: &mut impl Write, s: &PassiveSummary, r: &SourceSummary) -> io::Resul
         who,
         r.counts.received,
         r.counts.lost,
-        percent(r.loss_pct),
+        loss_column(r.loss_pct),
         r.counts.duplicate,
         r.counts.reordered,
         r.silence_count,
@@ -122,7 +123,7 @@ pub(super) fn write_summary(
             "link: {} received, {} lost ({}), {} duplicate, {} reordered; pymavlink's figure: {} lost ({:.2}%)",
             t.counts.received,
             t.counts.lost,
-            percent(t.loss_pct),
+            loss_column(t.loss_pct),
             t.counts.duplicate,
             t.counts.reordered,
             t.pymav.loss,
