@@ -9,6 +9,7 @@ use super::clock_offset::ClockSummary;
 use super::matcher::MatchEvent;
 use super::radio::RadioReport;
 use super::roster::Identity;
+use super::summary::passive::TableSummary;
 use super::summary::{Interim, ProbeName};
 use super::sweep::step::StepFigures;
 use super::sweep::SweepConfig;
@@ -88,6 +89,10 @@ pub enum Event<'a> {
     WaitingForPeer,
     /// A step of a sweep (or of a `--load` run) ended.
     Step(&'a StepFigures),
+    /// Every source's packet-sequence figures so far (cumulative), once a
+    /// second of session time: passive runs, and echo runs for the
+    /// direction split.
+    Sources { at: Nanos, table: &'a TableSummary },
     /// The link failed; the session ends (told before its summary, so an
     /// exporter shows it while a run's other links go on).
     LinkFailed { at: Nanos, error: &'a str },

@@ -5,6 +5,8 @@ use std::collections::HashMap;
 use std::io;
 use std::time::Duration;
 
+use super::passive::driver::tell_sources;
+use super::passive::ticks::Ticks;
 use super::passive::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{Classified, EchoProbe};
 use crate::engine::diagnosis::{diagnose, Observed};
@@ -67,6 +69,7 @@ pub struct EchoDriver<P> {
     clocks_due: Vec<(SysComp, Nanos)>,
     /// Every source's packet sequence: a responder's is its downlink loss.
     sequences: SourceTable,
+    sequence_ticks: Ticks,
 }
 
 /// A responder's clock offset is told at most this often.
@@ -77,6 +80,7 @@ impl<P: EchoProbe> EchoDriver<P> {
         let timeout = cfg.timeout.as_nanos() as Nanos;
         EchoDriver {
             sequences: SourceTable::new(None, DEFAULT_MAX_SOURCES),
+            sequence_ticks: Ticks::default(),
             probe,
             ours: cfg.ours,
             first_seq: cfg.first_seq,
@@ -215,6 +219,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     fn expire(&mut self, now: Nanos) {
         let events = &mut self.events;
         self.matcher.expire(now, &mut |e| events.push(e));
+        self.sequence_ticks.expire(now);
     }
 
     fn on_received(&mut self, frame: &Frame, at: Nanos) {
@@ -248,11 +253,13 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             })
         });
         let told = tell_each(observer, clocks);
-        matched.and(told)
+        let sources = tell_sources(&self.sequences, &mut self.sequence_ticks, observer);
+        matched.and(told).and(sources)
     }
 
     fn next_deadline(&self) -> Option<Nanos> {
-        self.matcher.next_deadline()
+        let tick = self.sequence_ticks.next_deadline();
+        Some(self.matcher.next_deadline().map_or(tick, |d| d.min(tick)))
     }
 
     fn interim(&self, roster: &Roster, at: Nanos) -> Option<Interim> {

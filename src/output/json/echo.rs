@@ -229,7 +229,10 @@ impl Lines {
             Event::Step(step) => Line::Step(self.step(step)),
             // The summary has each clock and the link's error; a stream
             // of estimates is for the exporters.
-            Event::Command(_) | Event::Clock { .. } | Event::LinkFailed { .. } => return None,
+            Event::Command(_)
+            | Event::Clock { .. }
+            | Event::Sources { .. }
+            | Event::LinkFailed { .. } => return None,
             // The first report of each radio; the summary has the rest.
             Event::Radio {
                 id,

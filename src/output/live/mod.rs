@@ -107,6 +107,7 @@ impl LiveState {
             | Event::Command(_)
             | Event::Clock { .. }
             | Event::Step(_)
+            | Event::Sources { .. }
             | Event::LinkFailed { .. } => {}
         }
     }

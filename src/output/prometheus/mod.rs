@@ -276,7 +276,10 @@ impl Observer for Metrics {
             Event::Radio { id, report, .. } => self.on_radio(*id, *report),
             Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
             Event::LinkFailed { .. } => self.set_up(false),
-            Event::Heard { .. } | Event::WaitingForPeer | Event::Step(_) => {}
+            Event::Heard { .. }
+            | Event::WaitingForPeer
+            | Event::Step(_)
+            | Event::Sources { .. } => {}
         }
         Ok(())
     }

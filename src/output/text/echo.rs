@@ -142,6 +142,7 @@ impl<W: Write> TextReporter<W> {
             | Event::Command(_)
             | Event::Clock { .. }
             | Event::Step(_)
+            | Event::Sources { .. }
             | Event::LinkFailed { .. } => Ok(()),
         }
     }

@@ -8,9 +8,10 @@
 use std::io;
 use std::time::Duration;
 
+use super::ticks::Ticks;
 use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use crate::engine::link_io::{Clock, Sender};
-use crate::engine::observe::{Observer, RunKind, StartInfo};
+use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
 use crate::engine::radio::Radios;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
@@ -37,6 +38,7 @@ pub struct PassiveDriver {
     table: SourceTable,
     /// Frames with our own ids (a router echoing ours back): not a source.
     own_frames: u64,
+    ticks: Ticks,
 }
 
 impl PassiveDriver {
@@ -46,7 +48,23 @@ impl PassiveDriver {
             ours: cfg.ours,
             table: SourceTable::new(gap, DEFAULT_MAX_SOURCES),
             own_frames: 0,
+            ticks: Ticks::default(),
         }
+    }
+}
+
+/// Tells `observer` the table, if a telling is due.
+pub(crate) fn tell_sources(
+    table: &SourceTable,
+    ticks: &mut Ticks,
+    observer: &mut dyn Observer,
+) -> io::Result<()> {
+    match ticks.take() {
+        Some(at) => observer.event(&Event::Sources {
+            at,
+            table: &table.summary(at),
+        }),
+        None => Ok(()),
     }
 }
 
@@ -79,7 +97,9 @@ impl Driver for PassiveDriver {
         Ok(())
     }
 
-    fn expire(&mut self, _now: Nanos) {}
+    fn expire(&mut self, now: Nanos) {
+        self.ticks.expire(now);
+    }
 
     fn on_received(&mut self, frame: &Frame, at: Nanos) {
         if frame.source == self.ours {
@@ -93,12 +113,12 @@ impl Driver for PassiveDriver {
 
     fn on_frame(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
 
-    fn report(&mut self, _radios: &mut Radios, _observer: &mut dyn Observer) -> io::Result<()> {
-        Ok(())
+    fn report(&mut self, _radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
+        tell_sources(&self.table, &mut self.ticks, observer)
     }
 
     fn next_deadline(&self) -> Option<Nanos> {
-        None
+        Some(self.ticks.next_deadline())
     }
 
     /// Listening ends on the deadline, Ctrl-C or a failure, never by itself.

@@ -2,4 +2,5 @@
 //! without sending anything on it.
 
 pub mod driver;
+pub mod ticks;
 pub mod tracker;
