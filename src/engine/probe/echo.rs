@@ -281,11 +281,10 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let mut responders = responder_summaries(&self.matcher, &ended.roster);
         for r in &mut responders {
             r.clock = self.probe.clock(r.id);
-            r.direction = self.sequences.source(r.id).and_then(|s| {
-                let seq = s.counts();
-                let frames = seq.received - seq.duplicate + seq.lost;
-                Direction::split(r.loss_ratio, r.counts.sent, frames, seq.lost)
-            });
+            r.direction = self
+                .sequences
+                .source(r.id)
+                .and_then(|s| Direction::of_sequence(r.loss_ratio, r.counts.sent, &s.counts()));
         }
         let loss_by_txbuf = ended.radios.loss_by_txbuf();
         let radios = ended.radios.summaries();

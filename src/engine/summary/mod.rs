@@ -91,6 +91,13 @@ pub struct Direction {
 }
 
 impl Direction {
+    /// The split for a responder with `round_trip` loss over `requests`,
+    /// whose own frames' sequence counted `seq`: every front end's one
+    /// way in (the summary at the end, Prometheus while a run goes on).
+    pub fn of_sequence(round_trip: f64, requests: u64, seq: &passive::SeqCounts) -> Option<Self> {
+        Direction::split(round_trip, requests, seq.numbered(), seq.lost)
+    }
+
     /// The split for a responder `round_trip` of whose `requests` were
     /// lost, whose sequence counted `frames` and `lost` of them.
     pub fn split(round_trip: f64, requests: u64, frames: u64, lost: u64) -> Option<Self> {
