@@ -441,3 +441,34 @@ fn a_passive_link_counts_each_source_across_reopenings() {
     assert_eq!(sample(&m, "mavping_link_up", &link), Some(1.0));
     assert_eq!(server.stop(), Some(0));
 }
+
+#[test]
+fn a_probe_splits_its_loss_by_direction() {
+    let server = Server::start(&["--allow", "sim:**"]);
+    let target = enc("sim:?stream=ATTITUDE@50&loss_up=10%&loss_down=5%&seed=7");
+    let r = server.get(&format!("/probe?target={target}&count=200&interval=10ms"));
+    assert_eq!(r.status, 200, "{}", r.body);
+    assert_promtool_clean(&r.body);
+    let m = &r.body;
+    let one = [("sysid", "1"), ("compid", "1")];
+    let dir = |d: &str| {
+        sample(
+            m,
+            "mavping_direction_loss_ratio",
+            &[one.as_slice(), &[("direction", d)]].concat(),
+        )
+        .unwrap_or_else(|| panic!("no {d} in\n{m}"))
+    };
+    // The probe's own counts give the round trip; up is the summary's
+    // formula on it and the responder's downlink.
+    let lost = sample(m, "mavping_probe_lost", &one).unwrap();
+    let sent = sample(m, "mavping_probe_sent", &one).unwrap();
+    assert_eq!(dir("round_trip"), lost / sent);
+    let (down, up) = (dir("down"), dir("up"));
+    assert!(down > 0.0 && down < 0.15, "{down}");
+    assert!((up - (1.0 - (1.0 - lost / sent) / (1.0 - down))).abs() < 1e-12);
+    assert_eq!(
+        sample(m, "mavping_direction_split_consistent", &one),
+        Some(1.0)
+    );
+}

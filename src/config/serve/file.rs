@@ -271,7 +271,7 @@ impl Table {
         }
         if let Some(key) = self.probing_key() {
             return Err(invalid(format!(
-                "passive = true sends no probes: drop {key} (or passive = true, to probe the link)"
+                "passive = true sends no probes: drop {key}, or drop passive to probe the link"
             )));
         }
         if gap.is_some_and(|g| g < MIN_GAP) {
