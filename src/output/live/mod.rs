@@ -218,6 +218,10 @@ impl Rows {
             Rows::Passive(r) => r.len(),
         }
     }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
 }
 
 /// One responder's row.

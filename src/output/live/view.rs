@@ -214,7 +214,7 @@ fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, cells: &[Cells], 
     let hidden = screen.rows.len().saturating_sub(slots);
     let status = match &screen.rows {
         Rows::Echo(_) if screen.waiting => ": waiting for a peer",
-        Rows::Passive(rows) if rows.is_empty() => ": nothing heard yet",
+        rows @ Rows::Passive(_) if rows.is_empty() => ": nothing heard yet",
         _ => "",
     };
     let mut block = Block::bordered().title(format!(
