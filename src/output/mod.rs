@@ -9,6 +9,7 @@ pub mod plot;
 pub mod prometheus;
 pub mod samples;
 pub mod text;
+pub mod windows;
 
 use std::io;
 use std::time::{Duration, SystemTime};

@@ -20,7 +20,7 @@ use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
 use crate::engine::summary::{
-    responder_summaries, Direction, Interim, LinkSummary, ScheduleSummary, Summary,
+    responder_summaries, Direction, EchoInterim, Interim, LinkSummary, ScheduleSummary, Summary,
 };
 use crate::engine::Nanos;
 use crate::engine::SessionConfig;
@@ -263,11 +263,11 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     }
 
     fn interim(&self, roster: &Roster, at: Nanos) -> Option<Interim> {
-        Some(Interim {
+        Some(Interim::Echo(EchoInterim {
             at,
             requests: self.matcher.issued(),
             responders: responder_summaries(&self.matcher, roster),
-        })
+        }))
     }
 
     fn settled(&self) -> bool {

@@ -263,14 +263,45 @@ pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderS
     out
 }
 
-/// The figures of a run so far (`-Q`, SIGQUIT): each responder's counts
-/// of decided requests and its RTT figures.
+/// The figures of a run so far (`-Q`, SIGQUIT), by the kind of run that
+/// has them.
 #[derive(Debug, Clone)]
-pub struct Interim {
+pub enum Interim {
+    /// An echo probe's (PING, TIMESYNC, and a sweep's steps).
+    Echo(EchoInterim),
+    /// A `--passive` run's.
+    Passive(PassiveInterim),
+}
+
+impl Interim {
+    /// Session time of the figures, ns.
+    pub fn at(&self) -> super::Nanos {
+        match self {
+            Interim::Echo(e) => e.at,
+            Interim::Passive(p) => p.at,
+        }
+    }
+}
+
+/// An echo run so far: each responder's counts of decided requests and
+/// its RTT figures.
+#[derive(Debug, Clone)]
+pub struct EchoInterim {
     /// Session time, ns.
     pub at: super::Nanos,
     pub requests: u64,
     pub responders: Vec<ResponderSummary>,
+}
+
+/// A passive run so far: every source's sequence figures (cumulative), as
+/// the summary will give them.
+#[derive(Debug, Clone)]
+pub struct PassiveInterim {
+    /// Session time, ns.
+    pub at: super::Nanos,
+    pub table: passive::TableSummary,
+    /// What each source said it is, from its HEARTBEAT.
+    pub identities: Vec<(SysComp, Identity)>,
 }
 
 /// `--probe command`: one target's figures.
