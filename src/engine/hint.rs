@@ -52,6 +52,8 @@ pub enum HintCode {
     BaudNotInEffect,
     /// A responder's causal clock-offset bounds do not intersect.
     ClockInconsistent,
+    /// The link refused requests: its peer is not reading what we send.
+    LinkNotReading,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]

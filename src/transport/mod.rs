@@ -7,6 +7,7 @@
 
 pub mod address;
 mod mmsg;
+mod out_queue;
 pub mod outbox;
 pub mod route;
 pub mod rx_time;
@@ -179,6 +180,12 @@ pub trait Transport {
     fn downtime(&self) -> Duration {
         Duration::ZERO
     }
+    /// Frames refused so far because the peer is not taking what was
+    /// sent (a byte stream whose queue is full); a burst refused is
+    /// always its tail.
+    fn refused(&self) -> u64 {
+        0
+    }
     /// How the link meets its peers.
     fn kind(&self) -> LinkKind;
 }
@@ -310,6 +317,10 @@ impl Transport for Link {
 
     fn downtime(&self) -> Duration {
         each_link!(self, l => l.downtime())
+    }
+
+    fn refused(&self) -> u64 {
+        each_link!(self, l => l.refused())
     }
 
     fn rx_clock(&self) -> RxClock {

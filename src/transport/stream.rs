@@ -5,13 +5,24 @@
 //! partial frame between reads and resynchronises after junk. While the
 //! link is down, `send` succeeds without writing: the requests of that
 //! period time out and count as lost, which is what the link did to them.
+//!
+//! Writing never waits for the peer: a frame goes to the kernel at once
+//! if it takes it, else to a bounded [`OutQueue`] drained whenever the
+//! session waits on the link; a frame that does not fit is refused and
+//! counted. A peer that stops reading thus costs requests, not the run:
+//! the deadline and Ctrl-C still end it.
 
+use std::future::poll_fn;
 use std::io::{self, Write};
+use std::pin::Pin;
+use std::task::{Context, Poll};
 use std::time::Duration;
 
-use tokio::io::{AsyncRead, AsyncReadExt, AsyncWrite, AsyncWriteExt};
+use tokio::io::{AsyncRead, AsyncWrite, ReadBuf};
 use tokio::time::{sleep_until, Instant};
 
+use super::out_queue::OutQueue;
+use super::outbox::Outbox;
 use super::{Inbound, LinkError, LinkKind, PathId, Transport};
 use crate::frame::{ScanStats, StreamScanner};
 
@@ -55,6 +66,7 @@ pub struct StreamLink<C: Connect> {
     buf: Box<[u8]>,
     /// Finished down periods; the current one is added by `downtime`.
     downtime: Duration,
+    out: OutQueue,
 }
 
 fn backoff(attempt: u32) -> Duration {
@@ -84,6 +96,7 @@ impl<C: Connect> StreamLink<C> {
             earlier: ScanStats::default(),
             buf: vec![0; READ_BUF].into_boxed_slice(),
             downtime: Duration::ZERO,
+            out: OutQueue::default(),
         })
     }
 
@@ -98,7 +111,9 @@ impl<C: Connect> StreamLink<C> {
                 _ => LinkError::io(format!("{name}: link failed"), e),
             });
         }
-        // A frame cut by the break can never be finished.
+        // A frame cut by the break can never be finished, and what waited
+        // to be written was for the connection that broke.
+        self.out.clear();
         let old = std::mem::take(&mut self.scanner);
         self.earlier.add(&old.stats);
         if old.pending_bytes() > 0 {
@@ -157,20 +172,78 @@ impl<C: Connect> StreamLink<C> {
         }
     }
 
-    async fn write(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
+    /// Queues `frame` (or refuses it) and writes what the peer takes now.
+    fn write(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
         let sent = Instant::now();
-        if let State::Up(stream) = &mut self.state {
-            if let Err(e) = stream.write_all(frame).await {
+        if matches!(self.state, State::Up(_)) && self.out.offer(frame) {
+            let mut cx = Context::from_waker(std::task::Waker::noop());
+            if let Poll::Ready(Err(e)) = self.poll_drain(&mut cx) {
                 self.lost(e)?;
             }
         }
         Ok(sent)
     }
+
+    /// Writes queued bytes until the peer takes no more (`Pending`) or the
+    /// queue is empty (`Ready(Ok)`).
+    fn poll_drain(&mut self, cx: &mut Context<'_>) -> Poll<io::Result<()>> {
+        let State::Up(stream) = &mut self.state else {
+            return Poll::Ready(Ok(()));
+        };
+        while !self.out.is_empty() {
+            match Pin::new(&mut *stream).poll_write(cx, self.out.waiting()) {
+                Poll::Ready(Ok(0)) => return Poll::Ready(Err(io::ErrorKind::WriteZero.into())),
+                Poll::Ready(Ok(n)) => self.out.written(n),
+                Poll::Ready(Err(e)) if e.kind() == io::ErrorKind::Interrupted => {}
+                Poll::Ready(Err(e)) => return Poll::Ready(Err(e)),
+                Poll::Pending => return Poll::Pending,
+            }
+        }
+        Poll::Ready(Ok(()))
+    }
+
+    /// Drains the queue while reading: ready with the bytes read (0: end
+    /// of stream) or an error; pending while neither happened.
+    fn poll_read_draining(&mut self, cx: &mut Context<'_>) -> Poll<io::Result<usize>> {
+        if let Poll::Ready(Err(e)) = self.poll_drain(cx) {
+            return Poll::Ready(Err(e));
+        }
+        let State::Up(stream) = &mut self.state else {
+            return Poll::Ready(Ok(0));
+        };
+        let mut buf = ReadBuf::new(&mut self.buf);
+        match Pin::new(stream).poll_read(cx, &mut buf) {
+            Poll::Ready(Ok(())) => Poll::Ready(Ok(buf.filled().len())),
+            Poll::Ready(Err(e)) => Poll::Ready(Err(e)),
+            Poll::Pending => Poll::Pending,
+        }
+    }
 }
 
 impl<C: Connect> Transport for StreamLink<C> {
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
-        self.write(frame).await
+        self.write(frame)
+    }
+
+    /// Once a frame is refused, the rest of the box is too, so what went
+    /// out is always a prefix of it.
+    async fn send_all(&mut self, outbox: &Outbox) -> Result<Instant, LinkError> {
+        let sent = Instant::now();
+        let mut refusing = false;
+        for (frame, _) in outbox.frames() {
+            if refusing {
+                self.out.refuse();
+                continue;
+            }
+            let before = self.out.refused();
+            self.write(frame)?;
+            refusing = self.out.refused() > before;
+        }
+        Ok(sent)
+    }
+
+    fn refused(&self) -> u64 {
+        self.out.refused()
     }
 
     fn kind(&self) -> LinkKind {
@@ -179,16 +252,17 @@ impl<C: Connect> Transport for StreamLink<C> {
 
     /// One peer: every path is the same stream.
     async fn send_to(&mut self, _path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
-        self.write(frame).await
+        self.write(frame)
     }
 
-    // Cancel-safe: a read that has not completed consumed nothing, a
-    // dropped sleep or connection attempt is simply tried again.
+    // Cancel-safe: a read that has not completed consumed nothing, bytes
+    // written left the queue as they went, a dropped sleep or connection
+    // attempt is simply tried again.
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
         loop {
-            match &mut self.state {
-                State::Up(stream) => {
-                    let read = stream.read(&mut self.buf).await;
+            match &self.state {
+                State::Up(_) => {
+                    let read = poll_fn(|cx| self.poll_read_draining(cx)).await;
                     let at = Instant::now();
                     match read {
                         Ok(0) => self.lost(io::ErrorKind::UnexpectedEof.into())?,

@@ -31,6 +31,7 @@ mod serial_pty;
 mod serve;
 mod signing;
 mod sim_soak;
+mod stalled;
 mod streams;
 mod sweep;
 mod tcp_pymavlink;

@@ -207,11 +207,19 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         }
         // Requests due together leave together, with one system call where
         // the link allows, and share the stamp taken before the first write.
+        let refused_before = link.refused();
         let sent = clock.ns(link.send_all(&self.outbox).await?);
+        // A link whose peer stopped reading refuses the tail of a burst:
+        // those requests never left, so they are neither sent nor lost.
+        let refused = (link.refused() - refused_before).min(self.burst.len() as u64) as usize;
+        let accepted = self.burst.len() - refused;
         let events = &mut self.events;
-        for &(planned, token) in &self.burst {
+        for &(planned, token) in &self.burst[..accepted] {
             self.pacing.sent(planned, sent);
             self.matcher.on_send(token, sent, &mut |e| events.push(e));
+        }
+        for &(planned, _) in &self.burst[accepted..] {
+            self.pacing.refused(planned, sent);
         }
         Ok(())
     }
@@ -308,6 +316,9 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             no_peer_within: ended.no_peer_within,
             link_failed: ended.link_error.is_some(),
         });
+        if let Some(p) = self.pacing.summary(cfg.interval).filter(|p| p.not_sent > 0) {
+            hints.insert(0, not_reading(&cfg.link_name, &p, self.matcher.issued()));
+        }
         hints.extend(radio_hints(&radios, loss_by_txbuf));
         hints.extend(responders.iter().filter_map(|r| {
             let clock = r.clock.filter(|c| c.bounds_ns.is_none())?;
@@ -357,36 +368,67 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     }
 }
 
+/// The link refused requests: what it took, of what was asked.
+fn not_reading(link: &str, p: &ScheduleSummary, sent: u64) -> Hint {
+    Hint::new(
+        HintCode::LinkNotReading,
+        format!(
+            "{link} took only {sent} of {} requests ({:.1}/s of {:.1}/s): its peer is not \
+             reading what we send (a pty or serial port nobody reads, flow control held off, \
+             a TCP peer that stopped reading)",
+            sent + p.not_sent,
+            p.achieved_rate_hz,
+            p.requested_rate_hz
+        ),
+    )
+}
+
 /// How well requests kept to their schedule: achieved rate and how late
 /// each went out against its planned time. Late sends mean the machine,
 /// not the link, was the bottleneck.
 #[derive(Default)]
 struct Pacing {
+    /// The first and last attempt to send, taken or refused.
     first: Option<Nanos>,
     last: Nanos,
     count: u64,
+    /// Requests the link refused (its peer is not reading).
+    refused: u64,
     lateness: RttStats,
 }
 
 impl Pacing {
     fn sent(&mut self, planned: Nanos, actual: Nanos) {
-        self.first.get_or_insert(actual);
-        self.last = actual;
+        self.attempted(actual);
         self.count += 1;
         self.lateness.record(actual.saturating_sub(planned));
+    }
+
+    fn refused(&mut self, _planned: Nanos, at: Nanos) {
+        self.attempted(at);
+        self.refused += 1;
+    }
+
+    fn attempted(&mut self, at: Nanos) {
+        self.first.get_or_insert(at);
+        self.last = at;
     }
 
     fn summary(&self, interval: Duration) -> Option<ScheduleSummary> {
         let first = self.first?;
         let late = self.lateness.summary()?;
         let span = self.last.saturating_sub(first) as f64 / 1e9;
+        // Over the span of every attempt, so a link that took a burst and
+        // then nothing shows the rate it really took.
+        let attempts = self.count + self.refused;
         Some(ScheduleSummary {
             requested_rate_hz: 1.0 / interval.as_secs_f64(),
-            achieved_rate_hz: if self.count > 1 && span > 0.0 {
-                (self.count - 1) as f64 / span
+            achieved_rate_hz: if attempts > 1 && span > 0.0 {
+                (attempts - 1) as f64 * (self.count as f64 / attempts as f64) / span
             } else {
                 0.0
             },
+            not_sent: self.refused,
             lateness_p50_us: late.p50_us,
             lateness_p99_us: late.p99_us,
             lateness_max_us: late.max_us,

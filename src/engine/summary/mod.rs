@@ -142,6 +142,9 @@ pub struct ScheduleSummary {
     pub lateness_p50_us: f64,
     pub lateness_p99_us: f64,
     pub lateness_max_us: f64,
+    /// Requests the link refused because its peer is not reading (a
+    /// byte stream whose queue was full): never sent, so never lost.
+    pub not_sent: u64,
 }
 
 #[derive(Debug, Clone, Serialize)]
@@ -450,6 +453,7 @@ mod tests {
                 lateness_p50_us: 0.0,
                 lateness_p99_us: 0.0,
                 lateness_max_us: 0.0,
+                not_sent: 0,
             }),
             ..Summary::empty("serial:/dev/x:57600", 10)
         }

@@ -190,6 +190,7 @@ fn echo_summary(probe: &'static str) -> Summary {
             lateness_p50_us: 12.5,
             lateness_p99_us: 80.0,
             lateness_max_us: 120.25,
+            not_sent: 3,
         }),
         rx_clock: RxClock::Simulated,
         radios: radios(),

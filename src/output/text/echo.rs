@@ -524,11 +524,23 @@ pub(super) fn write_summary(
         )?;
     }
     if let Some(p) = &s.schedule {
+        let rate = if p.not_sent > 0 {
+            format!(
+                "the link took {}/s of {}/s ({} requests not sent: it is not reading)",
+                per_second(p.achieved_rate_hz),
+                per_second(p.requested_rate_hz),
+                p.not_sent
+            )
+        } else {
+            format!(
+                "{}/s achieved of {}/s",
+                per_second(p.achieved_rate_hz),
+                per_second(p.requested_rate_hz)
+            )
+        };
         writeln!(
             out,
-            "schedule: {}/s achieved of {}/s, send lateness p50/p99/max = {}/{}/{} ms; {}",
-            per_second(p.achieved_rate_hz),
-            per_second(p.requested_rate_hz),
+            "schedule: {rate}, send lateness p50/p99/max = {}/{}/{} ms; {}",
             ms_us(p.lateness_p50_us),
             ms_us(p.lateness_p99_us),
             ms_us(p.lateness_max_us),
