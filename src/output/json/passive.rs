@@ -6,9 +6,12 @@ use serde::Serialize;
 use super::SCHEMA_VERSION;
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
-use crate::engine::summary::passive::{LinkTotals, PassiveSummary, SourceSummary, Untracked};
+use crate::engine::summary::passive::{
+    LinkTotals, PassiveSummary, PerLink, SourceSummary, TableSummary, Untracked,
+};
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
+use crate::transport::tlog::LogFacts;
 use crate::transport::RxClock;
 use crate::verdict::Verdict;
 
@@ -18,6 +21,52 @@ pub(super) struct Source<'a> {
     #[serde(flatten)]
     figures: &'a SourceSummary,
     identity: Option<&'a Identity>,
+}
+
+/// The sources of one table, each with its identity.
+fn sources<'a>(s: &'a PassiveSummary, table: &'a TableSummary) -> Vec<Source<'a>> {
+    table
+        .sources
+        .iter()
+        .map(|r| Source {
+            figures: r,
+            identity: s.identity(r.source),
+        })
+        .collect()
+}
+
+/// One MAVProxy link's table.
+#[derive(Serialize)]
+pub(super) struct Link<'a> {
+    link: u8,
+    totals: &'a LinkTotals,
+    sources: Vec<Source<'a>>,
+    untracked: Untracked,
+}
+
+/// A log's figures per MAVProxy link.
+#[derive(Serialize)]
+pub(super) struct Links<'a> {
+    links: Vec<Link<'a>>,
+    unlinked: &'a [SysComp],
+}
+
+impl<'a> Links<'a> {
+    fn of(s: &'a PassiveSummary, per: &'a PerLink) -> Self {
+        Links {
+            links: per
+                .links
+                .iter()
+                .map(|l| Link {
+                    link: l.link,
+                    totals: &l.table.totals,
+                    sources: sources(s, &l.table),
+                    untracked: l.table.untracked,
+                })
+                .collect(),
+            unlinked: &per.unlinked,
+        }
+    }
 }
 
 #[derive(Serialize)]
@@ -39,6 +88,12 @@ pub(super) struct Summary<'a> {
     own_frames: u64,
     radios: &'a [RadioSummary],
     signing: SigningSummary,
+    /// A telemetry log's records and stamps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    log: Option<&'a LogFacts>,
+    /// A telemetry log's figures per MAVProxy link.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    per_link: Option<Links<'a>>,
     verdict: &'a Verdict,
     exit_code: u8,
 }
@@ -58,19 +113,13 @@ impl<'a> Summary<'a> {
             rx_clock: s.rx_clock,
             frames: s.frames,
             totals: &s.table.totals,
-            sources: s
-                .table
-                .sources
-                .iter()
-                .map(|r| Source {
-                    figures: r,
-                    identity: s.identity(r.source),
-                })
-                .collect(),
+            sources: sources(s, &s.table),
             untracked: s.table.untracked,
             own_frames: s.own_frames,
             radios: &s.radios,
             signing: s.signing,
+            log: s.log.as_ref(),
+            per_link: s.per_link.as_ref().map(|p| Links::of(s, p)),
             verdict,
             exit_code: verdict.exit_code(),
         }

@@ -3,11 +3,15 @@
 //!
 //! The session still sends our HEARTBEAT (where a router or vehicle only
 //! sends to what it has heard) unless `--no-heartbeat`, hears systems and
-//! radios, and ends on the deadline, Ctrl-C or a link failure.
+//! radios, and ends on the deadline, Ctrl-C or a link failure. Reading a
+//! telemetry log, it sends nothing, keeps a table per path (the stamps'
+//! MAVProxy link bits) beside the table of all frames, and ends with the
+//! log.
 
 use std::io;
 use std::time::Duration;
 
+use super::links;
 use super::ticks::Ticks;
 use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use crate::engine::link_io::{Clock, Sender};
@@ -39,6 +43,9 @@ pub struct PassiveDriver {
     /// Frames with our own ids (a router echoing ours back): not a source.
     own_frames: u64,
     ticks: Ticks,
+    /// Reading a telemetry log: a table per path (the stamps' two low
+    /// bits, MAVProxy's link number), for [`links::per_link`].
+    paths: Option<Box<[SourceTable; 4]>>,
 }
 
 impl PassiveDriver {
@@ -49,7 +56,18 @@ impl PassiveDriver {
             table: SourceTable::new(gap, DEFAULT_MAX_SOURCES),
             own_frames: 0,
             ticks: Ticks::default(),
+            paths: None,
         }
+    }
+
+    /// The driver of a telemetry log: also a table per MAVProxy link.
+    pub fn for_log(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
+        let mut driver = Self::new(cfg, gap);
+        let gap = driver.table.gap();
+        driver.paths = Some(Box::new(std::array::from_fn(|_| {
+            SourceTable::new(gap, DEFAULT_MAX_SOURCES)
+        })));
+        driver
     }
 }
 
@@ -79,6 +97,7 @@ impl Driver for PassiveDriver {
             count: None,
             run: RunKind::Passive {
                 heartbeat: cfg.heartbeat,
+                log: self.paths.is_some(),
             },
         }
     }
@@ -101,7 +120,7 @@ impl Driver for PassiveDriver {
         self.ticks.expire(now);
     }
 
-    fn on_received(&mut self, frame: &Frame, at: Nanos) {
+    fn on_received(&mut self, frame: &Frame, path: PathId, at: Nanos) {
         if frame.source == self.ours {
             self.own_frames += 1;
             return;
@@ -109,6 +128,10 @@ impl Driver for PassiveDriver {
         let len = usize::from(frame.len);
         self.table
             .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
+        let by_path = self.paths.as_mut();
+        if let Some(t) = by_path.and_then(|p| p.get_mut(path as usize)) {
+            t.on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
+        }
     }
 
     fn on_frame(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
@@ -129,6 +152,10 @@ impl Driver for PassiveDriver {
     fn finish(self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let at = (end.duration_s * 1e9) as Nanos;
         let table = self.table.summary(at);
+        let per_link = self.paths.and_then(|paths| {
+            let by_path: Vec<_> = paths.iter().map(|t| t.summary(at)).collect();
+            links::per_link(&table, &by_path)
+        });
         let identities = table
             .sources
             .iter()
@@ -148,6 +175,8 @@ impl Driver for PassiveDriver {
             interrupted: end.interrupted,
             link_error: end.link_error,
             signing: end.gate.summary(),
+            log: None,
+            per_link,
         };
         (LinkSummary::Passive(Box::new(summary)), Vec::new())
     }
