@@ -32,6 +32,7 @@ mod sim_soak;
 mod streams;
 mod sweep;
 mod tcp_pymavlink;
+mod tlog;
 mod udp_bcast_ipv6;
 mod udp_pymavlink;
 mod views;

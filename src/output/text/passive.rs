@@ -103,7 +103,7 @@ fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
         wall(st.first_us),
         wall(st.latest_us),
         if st.whole_ms {
-            "in whole milliseconds, as QGroundControl writes them"
+            "all whole milliseconds, as QGroundControl writes them"
         } else {
             "in microseconds"
         },
@@ -116,7 +116,8 @@ fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
     if r.junk_bytes > 0 {
         writeln!(
             out,
-            "log: {} bytes of junk between records, in {} stretches, skipped ({} began with a              frame that failed its CRC)",
+            "log: {} bytes of junk between records, in {} stretches, skipped ({} began with a \
+             frame that failed its CRC)",
             r.junk_bytes, r.junk_stretches, r.bad_crc
         )?;
     }
@@ -130,14 +131,16 @@ fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
     if r.unknown_id > 0 {
         writeln!(
             out,
-            "log: {} records of message ids this build does not know, skipped (pymavlink counts              them in no loss either)",
+            "log: {} records of message ids this build does not know, skipped (pymavlink counts \
+             them in no loss either)",
             r.unknown_id
         )?;
     }
     if st.behind > 0 || st.steps > 0 {
         writeln!(
             out,
-            "log: {} records stamped behind the latest (dated at it), {} clock steps (the time              goes on from the latest, no gap)",
+            "log: {} records stamped behind the latest (dated at it), {} clock steps (the time \
+             goes on from the latest, no gap)",
             st.behind, st.steps
         )?;
     }
@@ -174,7 +177,8 @@ fn write_links(out: &mut impl Write, s: &PassiveSummary, per: &PerLink) -> io::R
         let ids: Vec<String> = per.unlinked.iter().map(ToString::to_string).collect();
         writeln!(
             out,
-            "on no link: {} (the low bits of their stamps vary as a clock's: MAVProxy logs what              its outputs send with a plain stamp)",
+            "on no link: {} (the low bits of their stamps vary as a clock's: MAVProxy logs what \
+             its outputs send with a plain stamp)",
             ids.join(", ")
         )?;
     }

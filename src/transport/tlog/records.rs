@@ -7,9 +7,10 @@
 //!   last one ended), a stamp followed by a whole frame the scanner
 //!   accepts is a record, whatever its stamp says (the clock deals with
 //!   stamps that jump: [`super::stamps`]). A frame of a message id this
-//!   build does not know cannot be checked; there it is believed and
-//!   skipped whole (`unknown_id`), as pymavlink counts such a frame in no
-//!   loss figure either.
+//!   build does not know cannot be checked: it is believed and skipped
+//!   whole (`unknown_id`; pymavlink counts such a frame in no loss figure
+//!   either) only if its stamp is within 3 days of the last good one and
+//!   a good record follows it (or the log ends there).
 //! - **Junk.** Anything else starts a stretch of junk. The scan moves one
 //!   byte at a time until a record that the scanner accepts *and* whose
 //!   stamp is within 3 days of the last good stamp (pymavlink's bound,
@@ -170,19 +171,31 @@ impl Splitter {
         }
     }
 
-    /// Whether a good frame at junk's end, stamped `stamp`, is a record.
-    /// `None`: more bytes are needed to tell.
-    fn plausible(&self, stamp: u64, buf: &[u8], next: usize, at_end: bool) -> Option<bool> {
-        if let Some(last) = self.last_stamp {
-            return Some(near(stamp, last));
+    /// Whether a record place after junk (or holding a frame of an
+    /// unknown id: `unchecked`), stamped `stamp`, is a record. `None`: more
+    /// bytes are needed to tell.
+    fn plausible(
+        &self,
+        stamp: u64,
+        unchecked: bool,
+        buf: &[u8],
+        next: usize,
+        at_end: bool,
+    ) -> Option<bool> {
+        if self.last_stamp.is_some_and(|last| !near(stamp, last)) {
+            return Some(false);
         }
-        // No good stamp yet: the next record must line up (a lone frame
-        // after junk is more likely a frame the junk holds).
+        if self.last_stamp.is_some() && !unchecked {
+            return Some(true);
+        }
+        // No good stamp yet, or a frame nothing checks: the next record
+        // must line up (a lone frame after junk is more likely a frame the
+        // junk holds). The log may end after an unknown one.
         match candidate(buf, next, &mut ScanStats::default()) {
-            Candidate::Need if at_end => Some(false),
+            Candidate::Need if at_end => Some(unchecked && next == buf.len()),
             Candidate::Need => None,
-            Candidate::Good(_) | Candidate::Unknown(_) => Some(near(stamp_at(buf, next), stamp)),
-            Candidate::Bad { .. } => Some(false),
+            Candidate::Good(_) => Some(near(stamp_at(buf, next), stamp)),
+            Candidate::Unknown(_) | Candidate::Bad { .. } => Some(false),
         }
     }
 
@@ -196,10 +209,13 @@ impl Splitter {
             let verdict = match candidate(buf, at, &mut scan) {
                 Candidate::Need if at_end => return (self.end(buf.len() - at), buf.len()),
                 Candidate::Need => return (Found::NeedMore, at),
-                Candidate::Good(len) | Candidate::Unknown(len) if !self.in_junk => Some(len),
+                Candidate::Good(len) if !self.in_junk => Some(len),
+                // An id that cannot be checked is believed only where it
+                // lines up, as after junk.
                 Candidate::Good(len) | Candidate::Unknown(len) => {
                     let stamp = stamp_at(buf, at);
-                    match self.plausible(stamp, buf, at + STAMP_LEN + len, at_end) {
+                    let unchecked = scan.frames == 0;
+                    match self.plausible(stamp, unchecked, buf, at + STAMP_LEN + len, at_end) {
                         None => return (Found::NeedMore, at),
                         Some(true) => Some(len),
                         Some(false) => None,
@@ -224,12 +240,13 @@ impl Splitter {
             self.in_junk = false;
             let stamp = stamp_at(buf, at);
             let end = at + STAMP_LEN + len;
-            self.last_stamp = Some(stamp);
             if scan.frames == 0 {
                 self.stats.unknown_id += 1;
                 at = end;
                 continue;
             }
+            // Only a checked frame vouches for its stamp.
+            self.last_stamp = Some(stamp);
             self.scan.add(&scan);
             self.stats.records += 1;
             let frame = &buf[at + STAMP_LEN..end];
@@ -436,5 +453,21 @@ mod tests {
         assert_eq!(records.len(), 3);
         assert_eq!(stats.unknown_id, 1);
         assert_eq!(stats.junk_bytes, 0);
+    }
+
+    #[test]
+    fn junk_that_looks_like_a_stamp_and_a_header_poisons_nothing() {
+        // Eight zero bytes (a stamp of 1970), then a MAVLink 2 header
+        // claiming 28 bytes: what follows is no frame of a known id, or an
+        // unknown id whose next record does not line up.
+        let mut data = log(3);
+        data.extend([0, 0, 0, 0, 0, 0, 0, 0, 0xFD, 0x1C, 0, 0]);
+        for i in 3..6u8 {
+            data.extend(record(T0 + u64::from(i) * 20_000, Version::V2, i));
+        }
+        let (records, stats) = split(&data, 4096);
+        let seqs: Vec<u8> = records.iter().map(|r| r.1).collect();
+        assert_eq!(seqs, [0, 1, 2, 3, 4, 5]);
+        assert_eq!((stats.junk_bytes, stats.unknown_id), (12, 0));
     }
 }

@@ -45,7 +45,16 @@ pub struct PassiveDriver {
     ticks: Ticks,
     /// Reading a telemetry log: a table per path (the stamps' two low
     /// bits, MAVProxy's link number), for [`links::per_link`].
-    paths: Option<Box<[SourceTable; 4]>>,
+    paths: Option<Paths>,
+}
+
+/// The tables per path of a log.
+enum Paths {
+    /// Every frame so far came by path 0: its table is the table of all
+    /// frames, so none is kept (most logs: QGroundControl's, pymavlink's).
+    AllZero,
+    /// Since the first frame by another path: one table each.
+    Split(Box<[SourceTable; 4]>),
 }
 
 impl PassiveDriver {
@@ -62,12 +71,31 @@ impl PassiveDriver {
 
     /// The driver of a telemetry log: also a table per MAVProxy link.
     pub fn for_log(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
-        let mut driver = Self::new(cfg, gap);
-        let gap = driver.table.gap();
-        driver.paths = Some(Box::new(std::array::from_fn(|_| {
-            SourceTable::new(gap, DEFAULT_MAX_SOURCES)
-        })));
-        driver
+        PassiveDriver {
+            paths: Some(Paths::AllZero),
+            ..Self::new(cfg, gap)
+        }
+    }
+
+    /// Takes a frame into the table of its path.
+    fn by_path(&mut self, frame: &Frame, path: PathId, at: Nanos) {
+        let Some(paths) = &mut self.paths else { return };
+        if path == 0 && matches!(paths, Paths::AllZero) {
+            return;
+        }
+        if matches!(paths, Paths::AllZero) {
+            // Every frame before this one came by path 0.
+            let gap = self.table.gap();
+            let mut split: [SourceTable; 4] =
+                std::array::from_fn(|_| SourceTable::new(gap, DEFAULT_MAX_SOURCES));
+            split[0] = self.table.clone();
+            *paths = Paths::Split(Box::new(split));
+        }
+        let Paths::Split(tables) = paths else { return };
+        if let Some(t) = tables.get_mut(path as usize) {
+            let len = usize::from(frame.len);
+            t.on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
+        }
     }
 }
 
@@ -125,13 +153,12 @@ impl Driver for PassiveDriver {
             self.own_frames += 1;
             return;
         }
+        // Before the table of all frames takes it: a first frame by another
+        // path copies that table as path 0's.
+        self.by_path(frame, path, at);
         let len = usize::from(frame.len);
         self.table
             .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
-        let by_path = self.paths.as_mut();
-        if let Some(t) = by_path.and_then(|p| p.get_mut(path as usize)) {
-            t.on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
-        }
     }
 
     fn on_frame(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
@@ -152,10 +179,14 @@ impl Driver for PassiveDriver {
     fn finish(self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let at = (end.duration_s * 1e9) as Nanos;
         let table = self.table.summary(at);
-        let per_link = self.paths.and_then(|paths| {
-            let by_path: Vec<_> = paths.iter().map(|t| t.summary(at)).collect();
-            links::per_link(&table, &by_path)
-        });
+        let per_link = match self.paths {
+            Some(Paths::Split(paths)) => {
+                let by_path: Vec<_> = paths.iter().map(|t| t.summary(at)).collect();
+                links::per_link(&table, &by_path)
+            }
+            // All by path 0, or not a log: no links to tell apart.
+            Some(Paths::AllZero) | None => None,
+        };
         let identities = table
             .sources
             .iter()
