@@ -1008,9 +1008,35 @@ mod tests {
                 "--expect udp:1.2.3.4:5=1: udp:1.2.3.4:5 is not one of the links given",
             ),
             ("--expect sim:=1/0 sim:", "LINK=SYSID"),
+            ("-c 5 tlog:a.tlog", "-c: tlog:a.tlog is a telemetry log"),
+            ("--probe timesync a.tlog", "--probe timesync: tlog:a.tlog"),
+            ("--rate 5 tlog:-", "--rate: tlog:- is a telemetry log"),
+            ("--load ATTITUDE@10 tlog:-", "--load: tlog:-"),
+            (
+                "tlog:a.tlog sim:",
+                "tlog:a.tlog runs on the log's own clock",
+            ),
+            ("tlog:", "missing file"),
+            ("--gap 2s sim:", "--gap works with --passive"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");
         }
+    }
+
+    #[test]
+    fn a_log_is_passive_sends_nothing_and_runs_on_its_own_clock() {
+        let c = config("--gap 3s flight.tlog tlog:-").unwrap();
+        assert_eq!(
+            c.probe,
+            Probe::Passive {
+                gap: Some(Duration::from_secs(3))
+            }
+        );
+        assert!(c.virtual_clock());
+        assert!(c.links.iter().all(|l| !l.session.heartbeat));
+        // Beside a simulated link on the virtual clock: both passive.
+        let c = config("tlog:a.tlog sim:?clock=virtual").unwrap();
+        assert!(matches!(c.probe, Probe::Passive { .. }));
     }
 }

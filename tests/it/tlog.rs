@@ -643,3 +643,146 @@ fn probes_on_a_log_are_refused_and_passive_is_implied() {
     assert_eq!(code, 2);
     assert!(err.contains("a telemetry log is only read"), "{err}");
 }
+
+#[test]
+fn pymavlinks_own_logger_records_a_vehicle_counted_exactly() {
+    // A pymavlink vehicle over TCP; a pymavlink ground station records
+    // every frame it receives with `setup_logfile`.
+    let dir = Scratch::new("recorder");
+    let path = dir.path("recorded.tlog");
+    let port = free_tcp_port();
+    let mut vehicle = Peer::start(
+        "vehicle.py",
+        &[
+            &format!("tcpin:127.0.0.1:{port}"),
+            "--frames",
+            "600",
+            "--rate",
+            "100",
+            "--drop",
+            "10,11,12,200",
+            "--dup",
+            "50,300",
+            "--swap",
+            "100,400",
+            "--silence",
+            "450:300",
+        ],
+    );
+    let recorder = Peer::start(
+        "tlog_recorder.py",
+        &[&format!("tcp:127.0.0.1:{port}"), path.to_str().unwrap()],
+    );
+    let truth: Value = serde_json::from_str(&vehicle.read_line()).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let recorded = recorder.finish();
+    let (code, summary, err) = read(&[], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    let one = source(&summary["sources"], "1/1");
+    let t = |k: &str| truth[k].as_u64().unwrap();
+    assert_eq!(recorded["recorded"].as_u64(), Some(t("sent")));
+    assert_eq!(counts(one, "received"), t("sent"), "{one}");
+    assert_eq!(counts(one, "lost"), t("dropped"), "{one}");
+    assert_eq!(counts(one, "duplicate"), t("duplicated"), "{one}");
+    assert_eq!(counts(one, "reordered"), t("swapped"), "{one}");
+    assert_eq!(one["silence_count"], 1, "{one}");
+    // pymavlink's logger stamps usec & ~3: no link numbers.
+    assert!(summary.get("per_link").is_none());
+    assert_pymavlink_figures(&summary, &path);
+}
+
+#[test]
+fn mavproxy_records_a_vehicle_on_two_lossy_links_with_their_numbers() {
+    // vehicle.py -> relay -> MAVProxy's masters 0 and 1, each link dropping
+    // frames of its own; MAVProxy logs both, stamped with the link.
+    let mavproxy = venv_program("mavproxy.py");
+    let dir = Scratch::new("mavproxy");
+    let (vehicle_port, link0, link1) = (free_udp_port(), free_udp_port(), free_udp_port());
+    let mut vehicle = Peer::start(
+        "vehicle.py",
+        &[
+            &format!("udpin:127.0.0.1:{vehicle_port}"),
+            "--frames",
+            "1000",
+            "--rate",
+            "100",
+            "--drop",
+            "10,11,12,300",
+            "--dup",
+            "60",
+            "--swap",
+            "100,700",
+        ],
+    );
+    let mavproxy = Program::start_on_udp(
+        &mavproxy,
+        &[
+            &format!("--master=udpin:127.0.0.1:{link0}"),
+            &format!("--master=udpin:127.0.0.1:{link1}"),
+            "--logfile=flight.tlog",
+            "--non-interactive",
+            "--cmd=set flushlogs 1",
+        ],
+        &dir.0,
+        link1,
+    );
+    let relay = Peer::start(
+        "tlog_relay.py",
+        &[
+            &vehicle_port.to_string(),
+            &link0.to_string(),
+            &link1.to_string(),
+            "--drop0",
+            "200,201,500",
+            "--drop1",
+            "5,6,7,8,9,400,800",
+        ],
+    );
+    let truth: Value = serde_json::from_str(&vehicle.read_line()).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let relayed = relay.finish();
+    std::thread::sleep(Duration::from_millis(500));
+    // Stopped (it flushes its log on every frame), so the log no longer
+    // grows while mavping and mavloss.py read it.
+    drop(mavproxy);
+    let path = dir.path("flight.tlog");
+    let (code, summary, err) = read(&[], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    let t = |k: &str| truth[k].as_u64().unwrap();
+    let per = &summary["per_link"];
+    let link = |n: u64| {
+        per["links"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|l| l["link"] == n)
+            .unwrap_or_else(|| panic!("no link {n}: {per}"))
+    };
+    for (n, relay_dropped) in [(0u64, 3u64), (1, 7)] {
+        let r = source(&link(n)["sources"], "1/1");
+        assert_eq!(relayed["dropped"][n as usize], relay_dropped);
+        assert_eq!(
+            counts(r, "received"),
+            relayed["forwarded"][n as usize].as_u64().unwrap(),
+            "link {n}: {r}"
+        );
+        assert_eq!(
+            counts(r, "lost"),
+            t("dropped") + relay_dropped,
+            "link {n}: {r}"
+        );
+        assert_eq!(counts(r, "duplicate"), t("duplicated"), "link {n}: {r}");
+        assert_eq!(counts(r, "reordered"), t("swapped"), "link {n}: {r}");
+    }
+    // What MAVProxy sent itself is on link 3.
+    let own = link(3)["sources"].as_array().unwrap();
+    assert!(own.iter().all(|s| s["source"]["sysid"] == 255), "{own:?}");
+    // Merged, the two links are one stream of duplicates, as mavloss.py
+    // reads it.
+    let merged = source(&summary["sources"], "1/1");
+    assert_eq!(
+        counts(merged, "received"),
+        relayed["forwarded"][0].as_u64().unwrap() + relayed["forwarded"][1].as_u64().unwrap()
+    );
+    assert_pymavlink_figures(&summary, &path);
+}
