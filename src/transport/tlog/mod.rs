@@ -409,6 +409,77 @@ impl Transport for TlogLink {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::codec::{encode, Header, Version};
+    use crate::frame::Msg;
+
+    const T0: u64 = 1_764_500_000_000_000;
+
+    /// A log file of records 20 ms apart, packet sequence = index.
+    fn log_file(name: &str, n: u8) -> std::path::PathBuf {
+        let path = std::env::temp_dir().join(format!("mavping-{}-{name}.tlog", std::process::id()));
+        let mut data = Vec::new();
+        for i in 0..n {
+            data.extend((T0 + u64::from(i) * 20_000).to_be_bytes());
+            let header = Header {
+                sysid: 1,
+                compid: 1,
+                seq: i,
+            };
+            encode(
+                &mut data,
+                Version::V2,
+                header,
+                &Msg::Attitude { time_boot_ms: 0 },
+            );
+        }
+        std::fs::write(&path, data).unwrap();
+        path
+    }
+
+    fn seqs(batch: &[Inbound]) -> Vec<u8> {
+        batch.iter().map(|b| b.frame.packet_seq).collect()
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_recv_hands_over_what_is_due_by_the_next_wake_and_no_later() {
+        let path = log_file("batch", 10);
+        let mut link = TlogLink::open(&TlogPath(path.display().to_string()))
+            .await
+            .unwrap();
+        let t0 = Instant::now();
+        let mut out = Vec::new();
+        // The session wakes at 50 ms: records at 0, 20 and 40 ms.
+        link.next_wake(Some(t0 + Duration::from_millis(50)));
+        link.recv(&mut out).await.unwrap();
+        assert_eq!(seqs(&out), [0, 1, 2]);
+        assert_eq!(Instant::now() - t0, Duration::from_millis(40));
+        assert_eq!(out[2].at - t0, Duration::from_millis(40));
+        // A wake before the next record: that record alone, at its time.
+        out.clear();
+        link.next_wake(Some(t0 + Duration::from_millis(45)));
+        link.recv(&mut out).await.unwrap();
+        assert_eq!(seqs(&out), [3]);
+        assert_eq!(Instant::now() - t0, Duration::from_millis(60));
+        // Cancelled while waiting for its time, nothing is lost.
+        out.clear();
+        link.next_wake(Some(t0 + Duration::from_secs(1)));
+        let cut = tokio::time::timeout(Duration::from_millis(5), link.recv(&mut out)).await;
+        assert!(cut.is_err() && out.is_empty());
+        link.recv(&mut out).await.unwrap();
+        assert_eq!(seqs(&out), [4, 5, 6, 7, 8, 9]);
+        // The end: once the clock is at the last record, a clean end.
+        assert!(matches!(link.recv(&mut out).await, Err(LinkError::End)));
+        assert_eq!(Instant::now() - t0, Duration::from_millis(180));
+        let facts = link.facts().unwrap();
+        assert!(facts.complete);
+        assert_eq!(facts.records.records, 10);
+        assert_eq!(
+            link.started(),
+            SystemTime::UNIX_EPOCH + Duration::from_micros(T0)
+        );
+        assert!(link.send(&[0]).await.is_err(), "nothing is sent on a log");
+        let _ = std::fs::remove_file(path);
+    }
 
     #[test]
     fn what_a_file_without_records_is_gets_a_name() {

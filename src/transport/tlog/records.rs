@@ -470,4 +470,32 @@ mod tests {
         assert_eq!(seqs, [0, 1, 2, 3, 4, 5]);
         assert_eq!((stats.junk_bytes, stats.unknown_id), (12, 0));
     }
+
+    proptest::proptest! {
+        /// Records of both versions with junk (no start bytes) between any
+        /// of them, read in chunks of any size: every record comes out, in
+        /// order, and every junk byte is counted.
+        #[test]
+        fn every_record_survives_junk_and_any_reads(
+            records in proptest::collection::vec(
+                (proptest::bool::ANY, proptest::collection::vec(0u8..0xFD, 0..40)),
+                1..60,
+            ),
+            chunk in 1usize..600,
+        ) {
+            let mut data = Vec::new();
+            let mut junk = 0;
+            for (i, (v1, after)) in records.iter().enumerate() {
+                let version = if *v1 { Version::V1 } else { Version::V2 };
+                data.extend(record(T0 + i as u64 * 20_000, version, i as u8));
+                data.extend(after);
+                junk += after.len() as u64;
+            }
+            let (out, stats) = split(&data, chunk);
+            let seqs: Vec<u8> = out.iter().map(|r| r.1).collect();
+            let expected: Vec<u8> = (0..records.len()).map(|i| i as u8).collect();
+            proptest::prop_assert_eq!(seqs, expected);
+            proptest::prop_assert_eq!(stats.junk_bytes + stats.truncated_bytes, junk);
+        }
+    }
 }
