@@ -20,6 +20,8 @@ mod multilink;
 mod mutants;
 mod options;
 mod passive;
+mod passive_outputs;
+mod passive_prometheus;
 mod probes_pymavlink;
 mod prometheus_server;
 mod properties;

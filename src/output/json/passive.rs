@@ -1,14 +1,16 @@
-//! `--passive` as JSON: the `passive_summary` line, with every source's
-//! sequence figures (ours and pymavlink's), silences and rates.
+//! `--passive` as JSON: the `passive_interim` line (`-Q`, SIGQUIT) and the
+//! `passive_summary` line, with every source's sequence figures (ours and
+//! pymavlink's), silences and rates.
 
 use serde::Serialize;
 
-use super::SCHEMA_VERSION;
+use super::{seconds, Line, Lines, SCHEMA_VERSION};
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{
     LinkTotals, PassiveSummary, PerLink, SourceSummary, TableSummary, Untracked,
 };
+use crate::engine::summary::PassiveInterim;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
 use crate::transport::tlog::LogFacts;
@@ -23,16 +25,45 @@ pub(super) struct Source<'a> {
     identity: Option<&'a Identity>,
 }
 
-/// The sources of one table, each with its identity.
-fn sources<'a>(s: &'a PassiveSummary, table: &'a TableSummary) -> Vec<Source<'a>> {
+/// Every source of `table`, each with its identity if it sent a HEARTBEAT.
+fn sources<'a>(table: &'a TableSummary, identities: &'a [(SysComp, Identity)]) -> Vec<Source<'a>> {
     table
         .sources
         .iter()
         .map(|r| Source {
             figures: r,
-            identity: s.identity(r.source),
+            identity: identities
+                .iter()
+                .find(|(id, _)| *id == r.source)
+                .map(|(_, i)| i),
         })
         .collect()
+}
+
+/// `passive_interim`: every source's figures so far, as the summary gives
+/// them.
+#[derive(Serialize)]
+pub(super) struct Interim<'a> {
+    r#type: &'static str,
+    t_s: f64,
+    time: String,
+    totals: &'a LinkTotals,
+    sources: Vec<Source<'a>>,
+    untracked: Untracked,
+}
+
+impl Lines {
+    /// The `passive_interim` line.
+    pub(super) fn passive_interim<'a>(&self, figures: &'a PassiveInterim) -> Line<'a> {
+        Line::PassiveInterim(Box::new(Interim {
+            r#type: "passive_interim",
+            t_s: seconds(figures.at),
+            time: self.wall.rfc3339(figures.at),
+            totals: &figures.table.totals,
+            sources: sources(&figures.table, &figures.identities),
+            untracked: figures.table.untracked,
+        }))
+    }
 }
 
 /// One MAVProxy link's table.
@@ -60,7 +91,7 @@ impl<'a> Links<'a> {
                 .map(|l| Link {
                     link: l.link,
                     totals: &l.table.totals,
-                    sources: sources(s, &l.table),
+                    sources: sources(&l.table, &s.identities),
                     untracked: l.table.untracked,
                 })
                 .collect(),
@@ -113,7 +144,7 @@ impl<'a> Summary<'a> {
             rx_clock: s.rx_clock,
             frames: s.frames,
             totals: &s.table.totals,
-            sources: sources(s, &s.table),
+            sources: sources(&s.table, &s.identities),
             untracked: s.table.untracked,
             own_frames: s.own_frames,
             radios: &s.radios,
