@@ -783,3 +783,31 @@ fn mavproxy_records_a_vehicle_on_two_lossy_links_with_their_numbers() {
     );
     assert_pymavlink_figures(&summary, &path);
 }
+
+#[test]
+fn interim_figures_come_at_the_logs_own_seconds() {
+    // -Q 20s: at 20 s of the log, 1/1 has sent frames 0 to 1000; 4 of them
+    // dropped (10-12, 500), 2 doubled (50, 700).
+    let dir = Scratch::new("interim");
+    let path = dir.path("q.tlog");
+    write_log(&path, &faulty_plan("us"));
+    let (code, out, err) = run_mavping(&["-Q", "20s", &tlog(&path)]);
+    assert_eq!(code, 0, "{err}");
+    let times: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with('['))
+        .filter_map(|l| l.split(']').next())
+        .collect();
+    assert_eq!(
+        times,
+        ["[20.0 s"; 3]
+            .iter()
+            .chain(&["[40.0 s"; 3])
+            .copied()
+            .collect::<Vec<_>>()
+    );
+    assert!(
+        out.contains("[20.0 s] 1/1: 999 received, 4 lost (0.40%), 2 duplicate, 2 reordered"),
+        "{out}"
+    );
+}
