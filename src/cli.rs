@@ -50,6 +50,7 @@ Connection strings:
   tcp:HOST:PORT (tcpout:)                      connect; tcpin:HOST:PORT listens for clients
   serial:DEVICE[:BAUD] or /dev/DEVICE          a serial port (--baud, default 115200)
   sim:[?key=value&...]                         the built-in simulated link
+  tlog:FILE, FILE.tlog or tlog:- (stdin)       a telemetry log, read on its own clock (passive)
   IPv6 hosts go in brackets: udpout:[::1]:14550. Several connections are pinged side by
   side, each with its own sequence numbers and report.
 
@@ -110,7 +111,7 @@ pub struct Cli {
 }
 
 /// The schemes a connection string starts with, for completion.
-const SCHEMES: [&str; 9] = [
+const SCHEMES: [&str; 10] = [
     "udp:",
     "udpin:",
     "udpout:",
@@ -119,33 +120,38 @@ const SCHEMES: [&str; 9] = [
     "tcpin:",
     "tcpout:",
     "serial:",
+    "tlog:",
     "sim:",
 ];
 
-/// Shell completion of a connection string: the schemes, and serial
-/// devices (`/dev/tty*`, `/dev/serial/...`, `/dev/pts/...`) after
-/// `serial:` or for a bare path.
+/// Shell completion of a connection string: the schemes, serial devices
+/// (`/dev/tty*`, `/dev/serial/...`, `/dev/pts/...`) after `serial:` or for
+/// a bare path, and files after `tlog:`.
 pub fn complete_link(current: &std::ffi::OsStr) -> Vec<clap_complete::engine::CompletionCandidate> {
     use clap_complete::engine::CompletionCandidate;
     let current = current.to_string_lossy();
-    let (scheme, path) = match current.strip_prefix("serial:") {
-        Some(path) => ("serial:", path),
-        None if current.starts_with('/') => ("", current.as_ref()),
-        None => {
-            return SCHEMES
-                .iter()
-                .filter(|s| s.starts_with(current.as_ref()))
-                .map(|s| CompletionCandidate::new(*s))
-                .collect()
-        }
+    // A log's file is looked for from the current directory, a serial
+    // device's from /dev/.
+    let (scheme, path, home) = if let Some(path) = current.strip_prefix("serial:") {
+        ("serial:", path, "/dev/")
+    } else if let Some(path) = current.strip_prefix("tlog:") {
+        ("tlog:", path, "")
+    } else if current.starts_with('/') {
+        ("", current.as_ref(), "/dev/")
+    } else {
+        return SCHEMES
+            .iter()
+            .filter(|s| s.starts_with(current.as_ref()))
+            .map(|s| CompletionCandidate::new(*s))
+            .collect();
     };
     let (dir, prefix) = match path.rfind('/') {
         Some(i) => (&path[..=i], &path[i + 1..]),
-        None => ("/dev/", path),
+        None => (home, path),
     };
     let serial_like =
         |name: &str| dir != "/dev/" || name.starts_with("tty") || name == "serial" || name == "pts";
-    let Ok(entries) = std::fs::read_dir(dir) else {
+    let Ok(entries) = std::fs::read_dir(if dir.is_empty() { "." } else { dir }) else {
         return Vec::new();
     };
     let mut out: Vec<String> = entries
@@ -301,7 +307,7 @@ pub struct PingArgs {
     /// Where to ping (several: side by side, each reported on its own)
     ///
     /// udp:HOST:PORT (listen), udpout:HOST:PORT, udpbcast:ADDR:PORT, tcp:HOST:PORT,
-    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...]; see the list below
+    /// tcpin:HOST:PORT, serial:DEVICE[:BAUD], sim:[?...], tlog:FILE; see the list below
     #[arg(
         value_name = "CONNECTION",
         env = "MAVPING_LINK",
@@ -357,12 +363,13 @@ pub struct PingArgs {
     )]
     pub first_seq: u32,
     /// Send no probes: count each source's frames, losses, duplicates and silences from their
-    /// packet sequence numbers (our HEARTBEAT stays on unless --no-heartbeat)
+    /// packet sequence numbers (our HEARTBEAT stays on unless --no-heartbeat; implied, with
+    /// nothing sent, on a tlog: link)
     #[arg(help_heading = "What to send", long, conflicts_with_all = ["probe", "count", "sweep", "load"])]
     pub passive: bool,
 
     /// --passive: a source silent this long is in a silence (default: 5 of its usual intervals, at least 1s)
-    #[arg(help_heading = "What to send", long, value_name = "DURATION", value_parser = parse_duration, requires = "passive")]
+    #[arg(help_heading = "What to send", long, value_name = "DURATION", value_parser = parse_duration)]
     pub gap: Option<Duration>,
 
     /// What to send: ping, timesync (also ArduPilot; measures clock offset), command

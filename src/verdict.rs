@@ -573,6 +573,8 @@ mod tests {
             interrupted: false,
             link_error: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
+            log: None,
+            per_link: None,
         };
         let s = passive(&table);
         assert!(judge_passive(&s, &Thresholds::default()).ok());

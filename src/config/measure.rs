@@ -139,11 +139,49 @@ fn validate_links(given: &[String], links: &[LinkSpec]) -> Result<(), ConfigErro
         }
     }
     if links.iter().any(LinkSpec::is_virtual) && !links.iter().all(LinkSpec::is_virtual) {
+        if let Some(log) = links.iter().find(|l| l.is_log()) {
+            return Err(invalid(format!(
+                "{log} runs on the log's own clock and cannot run beside live links: read logs \
+                 on their own (or beside sim:?clock=virtual links)"
+            )));
+        }
         return Err(invalid(
             "sim:?clock=virtual cannot run beside other links: use clock=virtual on every sim: link or on none",
         ));
     }
     Ok(())
+}
+
+/// A telemetry log is read, never probed: `--passive` is implied, and an
+/// option that only a probe uses is refused, naming the log.
+fn refuse_probes_on_logs(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), ConfigError> {
+    let Some(log) = links.iter().find(|l| l.is_log()) else {
+        return Ok(());
+    };
+    let probe = match cli.probe {
+        ProbeKind::Ping => None,
+        ProbeKind::Timesync => Some("--probe timesync"),
+        ProbeKind::Command => Some("--probe command"),
+    };
+    let given = probe.or_else(|| {
+        [
+            (cli.count.is_some(), "-c"),
+            (cli.interval.is_some(), "-i"),
+            (cli.rate.is_some(), "--rate"),
+            (cli.target.is_some(), "--target"),
+            (cli.sweep, "--sweep"),
+            (!cli.load.is_empty(), "--load"),
+        ]
+        .into_iter()
+        .find_map(|(set, flag)| set.then_some(flag))
+    });
+    match given {
+        Some(flag) => Err(invalid(format!(
+            "{flag}: {log} is a telemetry log, read without probes (--passive is implied); \
+             drop {flag}"
+        ))),
+        None => Ok(()),
+    }
 }
 
 /// `--plot`: only SVG; the PNG backend needs system font libraries.
@@ -376,8 +414,14 @@ fn peer_wait(cli: &PingArgs, spec: &LinkSpec, session: &SessionConfig) -> Option
     })
 }
 
-fn validate_probe(cli: &PingArgs) -> Result<Probe, ConfigError> {
-    if cli.passive {
+fn validate_probe(cli: &PingArgs, links: &[LinkSpec]) -> Result<Probe, ConfigError> {
+    let logs = links.iter().any(LinkSpec::is_log);
+    if cli.gap.is_some() && !cli.passive && !logs {
+        return Err(invalid(
+            "--gap works with --passive (or a tlog: link, which is passive)",
+        ));
+    }
+    if cli.passive || logs {
         if cli.gap.is_some_and(|g| g < Duration::from_millis(10)) {
             return Err(invalid("--gap: expected at least 10ms"));
         }
@@ -439,7 +483,8 @@ fn session(
         } else {
             Version::V2
         },
-        heartbeat: !cli.no_heartbeat,
+        // A log is read: nothing is sent on it.
+        heartbeat: !cli.no_heartbeat && !links.iter().any(LinkSpec::is_log),
         capacity: pending_capacity(interval, cli.timeout)?,
         first_seq: cli.first_seq,
         // Several links share one thread: a session must not spin there
@@ -499,7 +544,8 @@ impl TryFrom<&PingArgs> for Config {
         }
         validate_baud(cli.baud)?;
         validate_views(cli)?;
-        let probe = validate_probe(cli)?;
+        refuse_probes_on_logs(cli, &specs)?;
+        let probe = validate_probe(cli, &specs)?;
         let session = session(cli, &specs, &probe)?;
         let everywhere = Thresholds {
             max_loss: cli.max_loss,
@@ -962,9 +1008,35 @@ mod tests {
                 "--expect udp:1.2.3.4:5=1: udp:1.2.3.4:5 is not one of the links given",
             ),
             ("--expect sim:=1/0 sim:", "LINK=SYSID"),
+            ("-c 5 tlog:a.tlog", "-c: tlog:a.tlog is a telemetry log"),
+            ("--probe timesync a.tlog", "--probe timesync: tlog:a.tlog"),
+            ("--rate 5 tlog:-", "--rate: tlog:- is a telemetry log"),
+            ("--load ATTITUDE@10 tlog:-", "--load: tlog:-"),
+            (
+                "tlog:a.tlog sim:",
+                "tlog:a.tlog runs on the log's own clock",
+            ),
+            ("tlog:", "missing file"),
+            ("--gap 2s sim:", "--gap works with --passive"),
         ] {
             let err = config(args).unwrap_err();
             assert!(err.contains(needle), "{args}: {err}");
         }
+    }
+
+    #[test]
+    fn a_log_is_passive_sends_nothing_and_runs_on_its_own_clock() {
+        let c = config("--gap 3s flight.tlog tlog:-").unwrap();
+        assert_eq!(
+            c.probe,
+            Probe::Passive {
+                gap: Some(Duration::from_secs(3))
+            }
+        );
+        assert!(c.virtual_clock());
+        assert!(c.links.iter().all(|l| !l.session.heartbeat));
+        // Beside a simulated link on the virtual clock: both passive.
+        let c = config("tlog:a.tlog sim:?clock=virtual").unwrap();
+        assert!(matches!(c.probe, Probe::Passive { .. }));
     }
 }

@@ -14,6 +14,11 @@ impl TryFrom<&RespondArgs> for RespondConfig {
 
     fn try_from(cli: &RespondArgs) -> Result<Self, ConfigError> {
         let link: LinkSpec = cli.link.parse()?;
+        if link.is_log() {
+            return Err(invalid(format!(
+                "mavping respond {link}: a telemetry log is only read; answer on a live link"
+            )));
+        }
         for (flag, d) in [("--delay", cli.delay), ("--jitter", cli.jitter)] {
             if d > MAX_TIMEOUT {
                 return Err(invalid(format!(

@@ -66,6 +66,7 @@ fn nothing_heard(o: &Observed<'_>) -> Hint {
             "check the wiring, that the device speaks MAVLink, and that nothing else holds the port"
         }
         LinkKind::Simulated => "the simulated link delivered nothing",
+        LinkKind::Log => "the log held no frame",
     };
     Hint::new(
         HintCode::NothingHeard,

@@ -41,8 +41,9 @@ pub enum RunKind {
     Steps(SweepConfig),
     /// `--probe command`: what is sent, and how it is re-sent.
     Command(CommandSpec),
-    /// `--passive`: nothing sent but our HEARTBEAT, if that is on.
-    Passive { heartbeat: bool },
+    /// `--passive`: nothing sent but our HEARTBEAT, if that is on; `log`:
+    /// a telemetry log read (passive by nature, nothing sent).
+    Passive { heartbeat: bool, log: bool },
 }
 
 impl RunKind {

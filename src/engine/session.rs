@@ -88,8 +88,8 @@ pub trait Driver {
     /// Decides what is overdue at `now`.
     fn expire(&mut self, now: Nanos);
     /// Every frame the signing gate admitted, before the session reads it
-    /// (the passive probe counts them all).
-    fn on_received(&mut self, _frame: &Frame, _at: Nanos) {}
+    /// (the passive probe counts them all), with the path it came by.
+    fn on_received(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
     /// A received frame that is neither a HEARTBEAT nor a RADIO_STATUS.
     fn on_frame(&mut self, frame: &Frame, path: PathId, at: Nanos);
     /// A radio's RADIO_STATUS (the session keeps the run's figures; a
@@ -156,7 +156,7 @@ impl Heard {
             }
             self.roster.frame(frame.source, frame.version, frame.signed);
             let at = clock.ns(at);
-            driver.on_received(&frame, at);
+            driver.on_received(&frame, path, at);
             match frame.msg {
                 Msg::Heartbeat {
                     mav_type,
@@ -207,6 +207,17 @@ enum Stop {
     LinkFailed(LinkError),
     /// A listening link heard nobody in time.
     NoPeer,
+}
+
+impl Stop {
+    /// A link error ends the session as a failure, but a recorded link
+    /// that reached its end (a telemetry log) is done.
+    fn from_link(error: LinkError) -> Stop {
+        match error {
+            LinkError::End => Stop::Done,
+            e => Stop::LinkFailed(e),
+        }
+    }
 }
 
 /// One turn of the loop: `Err` ends the session, for the reason it gives.
@@ -449,7 +460,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             if self
                 .link
                 .read_waiting(&mut self.inbound)
-                .map_err(Stop::LinkFailed)?
+                .map_err(Stop::from_link)?
             {
                 self.take_inbound();
             }
@@ -494,13 +505,14 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         let flushed = self.observer.flush();
         self.told(flushed);
         let controls = self.controls;
+        self.link.next_wake(wake.map(|ns| self.clock.at(ns)));
         let sleep = self.waiter.until(&self.clock, wake);
         tokio::select! {
             biased;
             _ = controls.stop.notified() => return Err(Stop::Interrupted),
             _ = controls.interim.notified() => self.interim(),
             received = self.link.recv(&mut self.inbound) => {
-                received.map_err(Stop::LinkFailed)?;
+                received.map_err(Stop::from_link)?;
                 self.take_inbound();
             }
             _ = sleep => {}

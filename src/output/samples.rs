@@ -258,7 +258,10 @@ mod tests {
             interval: std::time::Duration::from_secs(1),
             timeout: std::time::Duration::from_secs(1),
             count: None,
-            run: RunKind::Passive { heartbeat: true },
+            run: RunKind::Passive {
+                heartbeat: true,
+                log: false,
+            },
         }
     }
 
@@ -278,6 +281,8 @@ mod tests {
             interrupted: false,
             link_error: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
+            log: None,
+            per_link: None,
         }))
     }
 

@@ -66,6 +66,9 @@ fn error_line(several: bool, link: &str, error: &str) -> String {
 struct LinkRun<'a> {
     config: &'a LinkConfig,
     link: Link,
+    /// The wall clock at its session's time 0: the run's start, or a
+    /// telemetry log's first stamp.
+    wall: WallClock,
     /// Attached once every link is open (a live view takes the screen
     /// only after the errors and warnings are printed).
     report: Fanout<'a>,
@@ -210,11 +213,18 @@ fn attach<'a>(
         .enumerate()
         .map(|(index, (link_config, link))| {
             let name = &link_config.name;
+            let wall = match &link {
+                Link::Tlog(log) => WallClock {
+                    start: log.started(),
+                },
+                _ => wall,
+            };
             let mut reporters = screen.reporter(&config.output, name, several, wall);
             reporters.extend(exports.reporters(index, name));
             LinkRun {
                 config: link_config,
                 link,
+                wall,
                 report: Fanout::new(reporters),
                 controls: Controls::default(),
             }
@@ -236,15 +246,11 @@ fn attach<'a>(
 /// One link's session, from its open link to its measurement. With
 /// `announce`, prints the link's error line as soon as it fails, while
 /// others go on.
-async fn measure_one<'a>(
-    run: LinkRun<'a>,
-    probe: &Probe,
-    wall: WallClock,
-    announce: bool,
-) -> Finished<'a> {
+async fn measure_one<'a>(run: LinkRun<'a>, probe: &Probe, announce: bool) -> Finished<'a> {
     let LinkRun {
         config,
         link,
+        wall,
         mut report,
         controls,
     } = run;
@@ -309,7 +315,7 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
     // (100 links would otherwise cost 100 polls per wake-up).
     let sessions = runs
         .into_iter()
-        .map(|run| measure_one(run, &config.probe, wall, announce));
+        .map(|run| measure_one(run, &config.probe, announce));
     let mut finished = join_all(sessions).await;
     screen.close();
     if !announce {

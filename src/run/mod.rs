@@ -128,13 +128,17 @@ where
     let run = run(controls.clone());
     // A LocalSet: the HTTP server's handlers run sessions, which stay on
     // this one thread.
-    tokio::task::LocalSet::new().block_on(&runtime, async move {
+    let ending = tokio::task::LocalSet::new().block_on(&runtime, async move {
         tokio::select! {
             biased;
             () = signals::watch(controls) => Ending::InterruptedTwice,
             ending = run => ending,
         }
-    })
+    });
+    // A read of standard input may still be blocked on the blocking pool
+    // (a telemetry log on a pipe that went quiet): do not wait for it.
+    runtime.shutdown_background();
+    ending
 }
 
 /// Answers the shell's completion request, when this run is one

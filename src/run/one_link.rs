@@ -5,11 +5,12 @@ use crate::config::{LinkConfig, Probe};
 use crate::engine::observe::Observer;
 use crate::engine::probe::command::driver as command;
 use crate::engine::probe::echo;
-use crate::engine::probe::passive::driver as passive;
+use crate::engine::probe::passive::driver::{self as passive, PassiveDriver};
 use crate::engine::probe::ping::PingProbe;
 use crate::engine::probe::timesync::TimesyncProbe;
 use crate::engine::probe::EchoProbe;
-use crate::engine::session::{Controls, Measurement};
+use crate::engine::session::{self, Controls, Measurement};
+use crate::engine::summary::LinkSummary;
 use crate::engine::{sweep, SessionConfig};
 use crate::output::WallClock;
 use crate::transport::{Link, LinkSpec};
@@ -38,8 +39,13 @@ pub async fn measure(
     controls: &Controls,
 ) -> Measurement {
     let session = &config.session;
-    let outcome = match probe {
+    let mut outcome = match probe {
         Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,
+        // A log: a table per MAVProxy link too, and what the log held.
+        Probe::Passive { gap } if matches!(link, Link::Tlog(_)) => {
+            let driver = PassiveDriver::for_log(session, *gap);
+            session::run(session, &mut link, driver, observer, controls).await
+        }
         Probe::Passive { gap } => passive::run(session, *gap, &mut link, observer, controls).await,
         Probe::Timesync { target } => {
             // The simulated link has no wall clock: its responders count
@@ -53,6 +59,9 @@ pub async fn measure(
             echo_or_steps(session, &mut link, probe, observer, controls).await
         }
     };
+    if let (Link::Tlog(log), LinkSummary::Passive(s)) = (&link, &mut outcome.summary) {
+        s.log = log.facts();
+    }
     // The simulated link's ground truth, for soak scripts (`-v`).
     if let Link::Sim(sim) = &link {
         for (id, t) in sim.truth() {

@@ -5,6 +5,7 @@ use std::fmt;
 use thiserror::Error;
 
 use super::sim::SimParams;
+use super::tlog::TlogPath;
 
 /// Where to connect, before anything is opened.
 #[derive(Debug, Clone, PartialEq)]
@@ -23,6 +24,8 @@ pub enum LinkSpec {
     Serial { path: String, baud: Option<u32> },
     /// The built-in simulated link (boxed: its parameters are many).
     Sim(Box<SimParams>),
+    /// A telemetry log, read on its own clock (`-`: standard input).
+    Tlog(TlogPath),
 }
 
 /// A host (name, IPv4, or IPv6 without brackets) and a port.
@@ -60,9 +63,15 @@ impl LinkSpec {
         }
     }
 
-    /// A simulated link on tokio's paused, virtual clock.
+    /// A link on tokio's paused, virtual clock: a simulated link with
+    /// `clock=virtual`, or a telemetry log (on the log's own clock).
     pub fn is_virtual(&self) -> bool {
-        matches!(self, LinkSpec::Sim(p) if p.virtual_clock)
+        matches!(self, LinkSpec::Sim(p) if p.virtual_clock) || self.is_log()
+    }
+
+    /// A telemetry log: passive, nothing sent, ends with the log.
+    pub fn is_log(&self) -> bool {
+        matches!(self, LinkSpec::Tlog(_))
     }
 }
 
@@ -79,6 +88,7 @@ impl fmt::Display for LinkSpec {
                 None => write!(f, "serial:{path}"),
             },
             LinkSpec::Sim(p) => write!(f, "{p}"),
+            LinkSpec::Tlog(path) => write!(f, "{path}"),
         }
     }
 }
@@ -86,7 +96,8 @@ impl fmt::Display for LinkSpec {
 /// Accepted forms, listed in every parse error.
 pub const ACCEPTED_FORMS: &str = "udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, \
 udpbcast:ADDR:PORT, tcp:HOST:PORT, tcpout:HOST:PORT, tcpin:HOST:PORT, serial:DEVICE[:BAUD], \
-/dev/DEVICE, sim:[?key=value&...] (IPv6 hosts in brackets: udpout:[::1]:14550)";
+/dev/DEVICE, sim:[?key=value&...], tlog:FILE or FILE.tlog (a telemetry log; tlog:- reads standard \
+input) (IPv6 hosts in brackets: udpout:[::1]:14550)";
 
 #[derive(Debug, Error, PartialEq)]
 #[error("bad connection string '{input}': {reason}; accepted forms: {ACCEPTED_FORMS}")]
@@ -160,6 +171,14 @@ fn serial(input: &str, rest: &str) -> Result<LinkSpec, AddressError> {
     }
 }
 
+/// `input` less `prefix`, if it starts with it in any case.
+fn strip_prefix_ignoring_case<'a>(input: &'a str, prefix: &str) -> Option<&'a str> {
+    input
+        .get(..prefix.len())
+        .filter(|p| p.eq_ignore_ascii_case(prefix))
+        .map(|_| &input[prefix.len()..])
+}
+
 impl std::str::FromStr for LinkSpec {
     type Err = AddressError;
 
@@ -174,6 +193,19 @@ impl std::str::FromStr for LinkSpec {
             return SimParams::parse(query)
                 .map(|p| LinkSpec::Sim(Box::new(p)))
                 .map_err(|reason| error(input, reason.to_string()));
+        }
+        if let Some(path) = strip_prefix_ignoring_case(input, "tlog:") {
+            if path.is_empty() {
+                return Err(error(
+                    input,
+                    "missing file: tlog:FILE, or tlog:- for standard input",
+                ));
+            }
+            return Ok(LinkSpec::Tlog(TlogPath(path.to_string())));
+        }
+        // A path naming a log (no serial device is called *.tlog).
+        if !input.contains(':') && input.to_ascii_lowercase().ends_with(".tlog") {
+            return Ok(LinkSpec::Tlog(TlogPath(input.to_string())));
         }
         if input.starts_with('/') || input.starts_with("COM") {
             return serial(input, input);
@@ -271,6 +303,27 @@ mod tests {
                     baud: None,
                 },
             ),
+            (
+                "tlog:flight.tlog",
+                LinkSpec::Tlog(TlogPath("flight.tlog".into())),
+            ),
+            ("TLOG:-", LinkSpec::Tlog(TlogPath("-".into()))),
+            ("tlog:/tmp/a:b", LinkSpec::Tlog(TlogPath("/tmp/a:b".into()))),
+            (
+                "/logs/2026-12-01.TLOG",
+                LinkSpec::Tlog(TlogPath("/logs/2026-12-01.TLOG".into())),
+            ),
+            (
+                "flight.tlog",
+                LinkSpec::Tlog(TlogPath("flight.tlog".into())),
+            ),
+            (
+                "serial:/dev/odd.tlog",
+                LinkSpec::Serial {
+                    path: "/dev/odd.tlog".into(),
+                    baud: None,
+                },
+            ),
         ];
         for (input, expected) in table {
             assert_eq!(input.parse::<LinkSpec>(), Ok(expected), "{input}");
@@ -291,6 +344,7 @@ mod tests {
             "serial:",
             "serial:/dev/ttyUSB0:0",
             "sim:?bogus=1",
+            "tlog:",
         ] {
             let err = input.parse::<LinkSpec>().unwrap_err().to_string();
             assert!(
@@ -306,6 +360,7 @@ mod tests {
             "udpout:[::1]:14550",
             "tcpin:0.0.0.0:5760",
             "serial:/dev/ttyUSB0:57600",
+            "tlog:-",
         ] {
             assert_eq!(input.parse::<LinkSpec>().unwrap().to_string(), input);
         }

@@ -35,6 +35,7 @@ mod stalled;
 mod streams;
 mod sweep;
 mod tcp_pymavlink;
+mod tlog;
 mod udp_bcast_ipv6;
 mod udp_pymavlink;
 mod views;

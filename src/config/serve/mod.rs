@@ -122,8 +122,15 @@ struct Common {
     retry_interval: Duration,
 }
 
-/// `sim:?clock=virtual` needs a runtime of its own, paused.
+/// `sim:?clock=virtual` and a telemetry log need a runtime of their own,
+/// paused.
 fn refuse_virtual(spec: &LinkSpec) -> Result<(), ConfigError> {
+    if spec.is_log() {
+        return Err(invalid(format!(
+            "{spec} cannot be served: a telemetry log runs on its own clock (read it with \
+             mavping {spec})"
+        )));
+    }
     if spec.is_virtual() {
         return Err(invalid(
             "sim:?clock=virtual cannot be served: drop clock=virtual (the server runs on real time)",

@@ -230,7 +230,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         self.sequence_ticks.expire(now);
     }
 
-    fn on_received(&mut self, frame: &Frame, at: Nanos) {
+    fn on_received(&mut self, frame: &Frame, _path: PathId, at: Nanos) {
         let len = usize::from(frame.len);
         self.sequences
             .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);

@@ -8,6 +8,7 @@ use crate::engine::roster::Identity;
 use crate::engine::Nanos;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
+use crate::transport::tlog::LogFacts;
 use crate::transport::RxClock;
 
 /// A `--passive` run on one link.
@@ -29,6 +30,12 @@ pub struct PassiveSummary {
     pub interrupted: bool,
     pub link_error: Option<String>,
     pub signing: SigningSummary,
+    /// Read from a telemetry log: what the log held (set by the run, from
+    /// the link).
+    pub log: Option<LogFacts>,
+    /// A log's figures per MAVProxy link, when its stamps carry link
+    /// numbers.
+    pub per_link: Option<PerLink>,
 }
 
 impl PassiveSummary {
@@ -185,6 +192,62 @@ pub struct LinkTotals {
     pub silence_frames_estimated: u64,
     /// Frames from the radio's own source (counted, not in the totals).
     pub radio_received: u64,
+}
+
+impl LinkTotals {
+    /// The totals of `sources`: the radio's own source (flagged) is left
+    /// out and its frames counted apart.
+    pub fn of(sources: &[SourceSummary]) -> Self {
+        let mut c = SeqCounts::default();
+        let (mut bytes, mut silence_count, mut unspanned, mut pymav_loss) = (0, 0, 0, 0);
+        let mut radio_received = 0;
+        let mut count = 0;
+        for s in sources {
+            if s.radio {
+                radio_received += s.counts.received;
+                continue;
+            }
+            count += 1;
+            c.received += s.counts.received;
+            c.lost += s.counts.lost;
+            c.duplicate += s.counts.duplicate;
+            c.reordered += s.counts.reordered;
+            c.resyncs += s.counts.resyncs;
+            bytes += s.bytes;
+            silence_count += s.silence_count;
+            unspanned += s.silence_frames_estimated;
+            pymav_loss += s.pymav.loss;
+        }
+        LinkTotals {
+            sources: count,
+            counts: c,
+            loss_pct: percent(c.lost, c.received - c.duplicate + c.lost),
+            pymav: PymavFigure::new(c.received, pymav_loss),
+            bytes,
+            silence_count,
+            silence_frames_estimated: unspanned,
+            radio_received,
+        }
+    }
+}
+
+/// The sources heard through one MAVProxy link: the stamps' two lowest
+/// bits, 3 marking what MAVProxy itself sent.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct LinkTable {
+    pub link: u8,
+    pub table: TableSummary,
+}
+
+/// A telemetry log's figures per MAVProxy link.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PerLink {
+    /// By link number; only links that carried a source.
+    pub links: Vec<LinkTable>,
+    /// Sources whose stamps' low bits vary as a clock's do, not as a link
+    /// number's (MAVProxy logs what its outputs send with a plain stamp):
+    /// in no link's table.
+    pub unlinked: Vec<SysComp>,
 }
 
 /// What a [`SourceTable`] reports.

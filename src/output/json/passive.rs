@@ -8,11 +8,12 @@ use super::{seconds, Line, Lines, SCHEMA_VERSION};
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{
-    LinkTotals, PassiveSummary, SourceSummary, TableSummary, Untracked,
+    LinkTotals, PassiveSummary, PerLink, SourceSummary, TableSummary, Untracked,
 };
 use crate::engine::summary::PassiveInterim;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
+use crate::transport::tlog::LogFacts;
 use crate::transport::RxClock;
 use crate::verdict::Verdict;
 
@@ -65,6 +66,40 @@ impl Lines {
     }
 }
 
+/// One MAVProxy link's table.
+#[derive(Serialize)]
+pub(super) struct Link<'a> {
+    link: u8,
+    totals: &'a LinkTotals,
+    sources: Vec<Source<'a>>,
+    untracked: Untracked,
+}
+
+/// A log's figures per MAVProxy link.
+#[derive(Serialize)]
+pub(super) struct Links<'a> {
+    links: Vec<Link<'a>>,
+    unlinked: &'a [SysComp],
+}
+
+impl<'a> Links<'a> {
+    fn of(s: &'a PassiveSummary, per: &'a PerLink) -> Self {
+        Links {
+            links: per
+                .links
+                .iter()
+                .map(|l| Link {
+                    link: l.link,
+                    totals: &l.table.totals,
+                    sources: sources(&l.table, &s.identities),
+                    untracked: l.table.untracked,
+                })
+                .collect(),
+            unlinked: &per.unlinked,
+        }
+    }
+}
+
 #[derive(Serialize)]
 pub(super) struct Summary<'a> {
     r#type: &'static str,
@@ -84,6 +119,12 @@ pub(super) struct Summary<'a> {
     own_frames: u64,
     radios: &'a [RadioSummary],
     signing: SigningSummary,
+    /// A telemetry log's records and stamps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    log: Option<&'a LogFacts>,
+    /// A telemetry log's figures per MAVProxy link.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    per_link: Option<Links<'a>>,
     verdict: &'a Verdict,
     exit_code: u8,
 }
@@ -108,6 +149,8 @@ impl<'a> Summary<'a> {
             own_frames: s.own_frames,
             radios: &s.radios,
             signing: s.signing,
+            log: s.log.as_ref(),
+            per_link: s.per_link.as_ref().map(|p| Links::of(s, p)),
             verdict,
             exit_code: verdict.exit_code(),
         }

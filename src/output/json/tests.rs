@@ -533,6 +533,8 @@ fn passive_run() -> Vec<Told<'static>> {
         interrupted: false,
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
+        log: None,
+        per_link: None,
     };
     let verdict = verdict::judge_passive(
         &summary,
@@ -545,10 +547,92 @@ fn passive_run() -> Vec<Told<'static>> {
         Told::Start(StartInfo {
             probe: ProbeName::Passive,
             count: None,
-            run: RunKind::Passive { heartbeat: true },
+            run: RunKind::Passive {
+                heartbeat: true,
+                log: false,
+            },
             ..start("ping")
         }),
         Told::Interim(interim),
+        Told::Summary(LinkSummary::Passive(Box::new(summary)), verdict),
+    ]
+}
+
+/// A telemetry log read: a vehicle on MAVProxy's links 0 and 1 (link 1
+/// loses a frame), MAVProxy's own frames on link 3, junk and a cut last
+/// record.
+fn log_run() -> Vec<Told<'static>> {
+    use crate::engine::probe::passive::links::per_link;
+    use crate::engine::probe::passive::tracker::SourceTable;
+    use crate::engine::summary::passive::PassiveSummary;
+    use crate::transport::tlog::records::RecordStats;
+    use crate::transport::tlog::stamps::StampFacts;
+    use crate::transport::tlog::LogFacts;
+    let ms = 1_000_000;
+    let mut merged = SourceTable::new(None, 32);
+    let mut paths: Vec<SourceTable> = (0..4).map(|_| SourceTable::new(None, 32)).collect();
+    let mut feed = |source, seq: u8, link: usize, at| {
+        merged.on_frame(source, seq, 30, 39, at);
+        paths[link].on_frame(source, seq, 30, 39, at);
+    };
+    for seq in 0..40u8 {
+        let at = u64::from(seq) * 20 * ms;
+        feed(ONE, seq, 0, at);
+        if seq != 7 {
+            feed(ONE, seq, 1, at + ms);
+        }
+        feed(TWO, seq, 3, at + 2 * ms);
+    }
+    let table = merged.summary(800 * ms);
+    let by_path: Vec<_> = paths.iter().map(|t| t.summary(800 * ms)).collect();
+    let summary = PassiveSummary {
+        link: "tlog:flight.tlog".into(),
+        ours: SysComp::new(250, 190),
+        heartbeat: false,
+        duration_s: 0.8,
+        per_link: per_link(&table, &by_path),
+        table,
+        identities: vec![(ONE, identity())],
+        own_frames: 0,
+        radios: Vec::new(),
+        frames: ScanStats::default(),
+        rx_clock: RxClock::Log,
+        interrupted: false,
+        link_error: None,
+        signing: crate::frame::signing::Gate::new(None).summary(),
+        log: Some(LogFacts {
+            records: RecordStats {
+                records: 119,
+                unknown_id: 1,
+                junk_bytes: 12,
+                junk_stretches: 1,
+                bad_crc: 1,
+                truncated_bytes: 5,
+            },
+            stamps: StampFacts {
+                first_us: 1_764_500_000_000_000,
+                latest_us: 1_764_500_000_782_000,
+                behind: 0,
+                steps: 0,
+                whole_ms: false,
+                low_bits: [40, 39, 0, 40],
+            },
+            complete: true,
+        }),
+    };
+    assert!(summary.per_link.is_some());
+    let verdict = verdict::judge_passive(&summary, &Thresholds::default());
+    vec![
+        Told::Start(StartInfo {
+            link: "tlog:flight.tlog".into(),
+            probe: ProbeName::Passive,
+            count: None,
+            run: RunKind::Passive {
+                heartbeat: false,
+                log: true,
+            },
+            ..start("ping")
+        }),
         Told::Summary(LinkSummary::Passive(Box::new(summary)), verdict),
     ]
 }
@@ -560,9 +644,10 @@ enum Run {
     Sweep(PlanKind),
     Command,
     Passive,
+    Log,
 }
 
-const RUNS: [Run; 8] = [
+const RUNS: [Run; 9] = [
     Run::Echo("ping"),
     Run::Echo("timesync"),
     Run::Sweep(PlanKind::Sweep {
@@ -589,6 +674,7 @@ const RUNS: [Run; 8] = [
     Run::Sweep(PlanKind::Load { rate_hz: 10.0 }),
     Run::Command,
     Run::Passive,
+    Run::Log,
 ];
 
 impl Run {
@@ -598,6 +684,7 @@ impl Run {
             Run::Sweep(plan) => sweep_run(plan, borrowed),
             Run::Command => command_run(),
             Run::Passive => passive_run(),
+            Run::Log => log_run(),
         }
     }
 }

@@ -489,7 +489,10 @@ mod tests {
         let mut s = LiveState::default();
         s.on_start(&StartInfo {
             probe: ProbeName::Passive,
-            run: RunKind::Passive { heartbeat: true },
+            run: RunKind::Passive {
+                heartbeat: true,
+                log: false,
+            },
             ..start("sim:?responders=2&stream=ATTITUDE@50")
         });
         let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));

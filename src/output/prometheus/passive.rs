@@ -232,7 +232,10 @@ mod tests {
     fn passive_start(link: &str) -> StartInfo {
         StartInfo {
             probe: ProbeName::Passive,
-            run: RunKind::Passive { heartbeat: true },
+            run: RunKind::Passive {
+                heartbeat: true,
+                log: false,
+            },
             ..info(link)
         }
     }
@@ -354,6 +357,8 @@ mod tests {
                 link_id: None,
                 counts: crate::frame::signing::SigningCounts::default(),
             },
+            log: None,
+            per_link: None,
         }
     }
 

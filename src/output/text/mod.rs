@@ -126,7 +126,7 @@ impl<W: Write> Observer for TextReporter<W> {
             RunKind::Echo => self.echo_start(info),
             RunKind::Steps(plan) => self.sweep_start(info, plan),
             RunKind::Command(spec) => self.command_start(info, spec),
-            RunKind::Passive { heartbeat } => self.passive_start(info, *heartbeat),
+            RunKind::Passive { heartbeat, log } => self.passive_start(info, *heartbeat, *log),
         }
     }
 

@@ -7,22 +7,30 @@ use std::io::{self, Write};
 
 use super::{per_second, TextReporter};
 use crate::engine::observe::StartInfo;
-use crate::engine::summary::passive::{PassiveSummary, Silence, SourceSummary};
+use crate::engine::summary::passive::{PassiveSummary, PerLink, Silence, SourceSummary};
 use crate::engine::summary::PassiveInterim;
 use crate::frame::codec::message_name;
+use crate::transport::tlog::LogFacts;
 use crate::verdict::{Check, Verdict};
 
 /// Message ids named per source under the table; the rest are counted.
 const TOP_MSG_IDS: usize = 4;
 
 impl<W: Write> TextReporter<W> {
-    pub(super) fn passive_start(&mut self, info: &StartInfo, heartbeat: bool) -> io::Result<()> {
+    pub(super) fn passive_start(
+        &mut self,
+        info: &StartInfo,
+        heartbeat: bool,
+        log: bool,
+    ) -> io::Result<()> {
         writeln!(
             self.out,
             "MAVPING {} from {}: PASSIVE, no probes; {}",
             info.link,
             info.ours,
-            if heartbeat {
+            if log {
+                "a telemetry log, read on its own clock (--passive implied); nothing sent"
+            } else if heartbeat {
                 "our HEARTBEAT at 1 Hz (--no-heartbeat for none)"
             } else {
                 "nothing sent (--no-heartbeat)"
@@ -152,6 +160,104 @@ fn write_silence(out: &mut impl Write, r: &SourceSummary, silence: &Silence) -> 
     )
 }
 
+/// What a telemetry log held: its span on the wall clock, its records,
+/// its stamps, and what was not a record.
+fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
+    let st = &log.stamps;
+    let wall = |us: u64| {
+        let t = std::time::SystemTime::UNIX_EPOCH + std::time::Duration::from_micros(us);
+        humantime::format_rfc3339_micros(t).to_string()
+    };
+    let r = &log.records;
+    writeln!(
+        out,
+        "log: {} records from {} to {} (stamps {}){}",
+        r.records,
+        wall(st.first_us),
+        wall(st.latest_us),
+        if st.whole_ms {
+            "all whole milliseconds, as QGroundControl writes them"
+        } else {
+            "in microseconds"
+        },
+        if log.complete {
+            ", read to its end"
+        } else {
+            ", stopped before its end"
+        },
+    )?;
+    if r.junk_bytes > 0 {
+        writeln!(
+            out,
+            "log: {} bytes of junk between records, in {} stretches, skipped ({} began with a \
+             frame that failed its CRC)",
+            r.junk_bytes, r.junk_stretches, r.bad_crc
+        )?;
+    }
+    if r.truncated_bytes > 0 {
+        writeln!(
+            out,
+            "log: its last record is cut short ({} bytes)",
+            r.truncated_bytes
+        )?;
+    }
+    if r.unknown_id > 0 {
+        writeln!(
+            out,
+            "log: {} records of message ids this build does not know, skipped (pymavlink counts \
+             them in no loss either)",
+            r.unknown_id
+        )?;
+    }
+    if st.behind > 0 || st.steps > 0 {
+        writeln!(
+            out,
+            "log: {} records stamped behind the latest (dated at it), {} clock steps (the time \
+             goes on from the latest, no gap)",
+            st.behind, st.steps
+        )?;
+    }
+    Ok(())
+}
+
+/// The table per MAVProxy link, and the sources on none.
+fn write_links(out: &mut impl Write, s: &PassiveSummary, per: &PerLink) -> io::Result<()> {
+    writeln!(
+        out,
+        "per MAVProxy link (the stamps' two lowest bits; link 3 is what MAVProxy sent):"
+    )?;
+    writeln!(
+        out,
+        "link {:<9} {:<22} {:>9} {:>7} {:>7} {:>5} {:>7} {:>8} {:>9} {:>9}",
+        "source",
+        "identity",
+        "received",
+        "lost",
+        "loss",
+        "dup",
+        "reorder",
+        "silences",
+        "frames/s",
+        "B/s"
+    )?;
+    for l in &per.links {
+        for r in &l.table.sources {
+            write!(out, "{:<4} ", l.link)?;
+            row(out, s, r)?;
+        }
+    }
+    if !per.unlinked.is_empty() {
+        let ids: Vec<String> = per.unlinked.iter().map(ToString::to_string).collect();
+        writeln!(
+            out,
+            "on no link: {} (the low bits of their stamps vary as a clock's: MAVProxy logs what \
+             its outputs send with a plain stamp)",
+            ids.join(", ")
+        )?;
+    }
+    Ok(())
+}
+
 /// The summary of a passive run.
 pub(super) fn write_summary(
     out: &mut impl Write,
@@ -159,10 +265,18 @@ pub(super) fn write_summary(
     verdict: &Verdict,
 ) -> io::Result<()> {
     let t = &s.table.totals;
+    if let Some(log) = &s.log {
+        write_log(out, log)?;
+    }
     writeln!(
         out,
-        "{:.1} s listened, {} sources heard, {} frames{}",
+        "{:.1} s {}, {} sources heard, {} frames{}",
         s.duration_s,
+        if s.log.is_some() {
+            "of log"
+        } else {
+            "listened"
+        },
         t.sources,
         t.counts.received,
         if t.radio_received > 0 {
@@ -202,6 +316,9 @@ pub(super) fn write_summary(
             t.pymav.loss,
             t.pymav.loss_pct
         )?;
+    }
+    if let Some(per) = &s.per_link {
+        write_links(out, s, per)?;
     }
     for r in &s.table.sources {
         write_messages(out, r)?;

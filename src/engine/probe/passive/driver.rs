@@ -3,11 +3,15 @@
 //!
 //! The session still sends our HEARTBEAT (where a router or vehicle only
 //! sends to what it has heard) unless `--no-heartbeat`, hears systems and
-//! radios, and ends on the deadline, Ctrl-C or a link failure.
+//! radios, and ends on the deadline, Ctrl-C or a link failure. Reading a
+//! telemetry log, it sends nothing, keeps a table per path (the stamps'
+//! MAVProxy link bits) beside the table of all frames, and ends with the
+//! log.
 
 use std::io;
 use std::time::Duration;
 
+use super::links;
 use super::ticks::Ticks;
 use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use crate::engine::link_io::{Clock, Sender};
@@ -40,6 +44,18 @@ pub struct PassiveDriver {
     /// Frames with our own ids (a router echoing ours back): not a source.
     own_frames: u64,
     ticks: Ticks,
+    /// Reading a telemetry log: a table per path (the stamps' two low
+    /// bits, MAVProxy's link number), for [`links::per_link`].
+    paths: Option<Paths>,
+}
+
+/// The tables per path of a log.
+enum Paths {
+    /// Every frame so far came by path 0: its table is the table of all
+    /// frames, so none is kept (most logs: QGroundControl's, pymavlink's).
+    AllZero,
+    /// Since the first frame by another path: one table each.
+    Split(Box<[SourceTable; 4]>),
 }
 
 impl PassiveDriver {
@@ -50,6 +66,36 @@ impl PassiveDriver {
             table: SourceTable::new(gap, DEFAULT_MAX_SOURCES),
             own_frames: 0,
             ticks: Ticks::default(),
+            paths: None,
+        }
+    }
+
+    /// The driver of a telemetry log: also a table per MAVProxy link.
+    pub fn for_log(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
+        PassiveDriver {
+            paths: Some(Paths::AllZero),
+            ..Self::new(cfg, gap)
+        }
+    }
+
+    /// Takes a frame into the table of its path.
+    fn by_path(&mut self, frame: &Frame, path: PathId, at: Nanos) {
+        let Some(paths) = &mut self.paths else { return };
+        if path == 0 && matches!(paths, Paths::AllZero) {
+            return;
+        }
+        if matches!(paths, Paths::AllZero) {
+            // Every frame before this one came by path 0.
+            let gap = self.table.gap();
+            let mut split: [SourceTable; 4] =
+                std::array::from_fn(|_| SourceTable::new(gap, DEFAULT_MAX_SOURCES));
+            split[0] = self.table.clone();
+            *paths = Paths::Split(Box::new(split));
+        }
+        let Paths::Split(tables) = paths else { return };
+        if let Some(t) = tables.get_mut(path as usize) {
+            let len = usize::from(frame.len);
+            t.on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
         }
     }
 }
@@ -89,6 +135,7 @@ impl Driver for PassiveDriver {
             count: None,
             run: RunKind::Passive {
                 heartbeat: cfg.heartbeat,
+                log: self.paths.is_some(),
             },
         }
     }
@@ -111,11 +158,14 @@ impl Driver for PassiveDriver {
         self.ticks.expire(now);
     }
 
-    fn on_received(&mut self, frame: &Frame, at: Nanos) {
+    fn on_received(&mut self, frame: &Frame, path: PathId, at: Nanos) {
         if frame.source == self.ours {
             self.own_frames += 1;
             return;
         }
+        // Before the table of all frames takes it: a first frame by another
+        // path copies that table as path 0's.
+        self.by_path(frame, path, at);
         let len = usize::from(frame.len);
         self.table
             .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
@@ -139,6 +189,14 @@ impl Driver for PassiveDriver {
     fn finish(self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let at = (end.duration_s * 1e9) as Nanos;
         let table = self.table.summary(at);
+        let per_link = match self.paths {
+            Some(Paths::Split(paths)) => {
+                let by_path: Vec<_> = paths.iter().map(|t| t.summary(at)).collect();
+                links::per_link(&table, &by_path)
+            }
+            // All by path 0, or not a log: no links to tell apart.
+            Some(Paths::AllZero) | None => None,
+        };
         let identities = identities(&table, &end.roster);
         let summary = PassiveSummary {
             link: end.cfg.link_name.clone(),
@@ -154,6 +212,8 @@ impl Driver for PassiveDriver {
             interrupted: end.interrupted,
             link_error: end.link_error,
             signing: end.gate.summary(),
+            log: None,
+            per_link,
         };
         (LinkSummary::Passive(Box::new(summary)), Vec::new())
     }

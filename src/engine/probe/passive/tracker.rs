@@ -506,6 +506,11 @@ impl SourceTable {
         }
     }
 
+    /// The silence threshold it was made with.
+    pub fn gap(&self) -> Option<Nanos> {
+        self.gap
+    }
+
     /// Takes one received frame.
     pub fn on_frame(&mut self, source: SysComp, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
         let gap = self.gap;
@@ -548,33 +553,11 @@ impl SourceTable {
             .iter()
             .map(|(id, t)| t.summary(*id, at))
             .collect();
-        let mut c = SeqCounts::default();
-        let (mut bytes, mut silence_count, mut unspanned, mut pymav_loss) = (0, 0, 0, 0);
-        for s in &sources {
-            c.received += s.counts.received;
-            c.lost += s.counts.lost;
-            c.duplicate += s.counts.duplicate;
-            c.reordered += s.counts.reordered;
-            c.resyncs += s.counts.resyncs;
-            bytes += s.bytes;
-            silence_count += s.silence_count;
-            unspanned += s.silence_frames_estimated;
-            pymav_loss += s.pymav.loss;
-        }
-        let totals = LinkTotals {
-            sources: sources.len() as u64,
-            counts: c,
-            loss_pct: percent(c.lost, c.received - c.duplicate + c.lost),
-            pymav: PymavFigure::new(c.received, pymav_loss),
-            bytes,
-            silence_count,
-            silence_frames_estimated: unspanned,
-            radio_received: self.radio.as_ref().map_or(0, |r| r.counts.received),
-        };
         if let Some(r) = &self.radio {
             sources.push(r.summary(RADIO_SOURCE, at));
             sources.sort_by_key(|s| s.source);
         }
+        let totals = LinkTotals::of(&sources);
         TableSummary {
             sources,
             totals,

@@ -1,0 +1,501 @@
+//! A telemetry log's bytes as records: 8 bytes of big-endian microseconds
+//! since the Unix epoch, then one MAVLink frame (v1 or v2, maybe signed),
+//! checked by the frame scanner. Pure: bytes in, records out, no I/O.
+//!
+//! Rules:
+//! - **Aligned.** Where a record is due (the file's start, or where the
+//!   last one ended), a stamp followed by a whole frame the scanner
+//!   accepts is a record, whatever its stamp says (the clock deals with
+//!   stamps that jump: [`super::stamps`]). A frame of a message id this
+//!   build does not know cannot be checked: it is believed and skipped
+//!   whole (`unknown_id`; pymavlink counts such a frame in no loss figure
+//!   either) only if its stamp is within 3 days of the last good one and
+//!   a good record follows it (or the log ends there).
+//! - **Junk.** Anything else starts a stretch of junk. The scan moves one
+//!   byte at a time until a record that the scanner accepts *and* whose
+//!   stamp is within 3 days of the last good stamp (pymavlink's bound,
+//!   `mavlogfile.scan_timestamp`). With no good stamp yet (junk at the
+//!   start of the file), a record must follow that lines up: a good
+//!   frame, its stamp within 3 days. Every byte skipped is counted, and
+//!   each stretch once.
+//! - **End.** Bytes at the end that cannot make a record: at a record's
+//!   place, a last record cut short (a ground station killed while it
+//!   wrote); inside junk, more junk.
+//!
+//! The caller keeps a bounded buffer: [`Splitter::next`] says how many
+//! leading bytes it is finished with, and never needs more than two
+//! records' worth ([`MAX_RECORD`] each) to decide.
+
+use serde::Serialize;
+
+use crate::frame::scanner::{IFLAG_SIGNED, MAX_FRAME_LEN, STX_V1, STX_V2};
+use crate::frame::{scan_datagram, ScanStats};
+
+/// The stamp before each frame.
+pub const STAMP_LEN: usize = 8;
+/// The longest record: a stamp and the longest frame.
+pub const MAX_RECORD: usize = STAMP_LEN + MAX_FRAME_LEN;
+/// A stamp this far from the last good one cannot be a record's after
+/// junk: pymavlink's bound (3 days, in µs).
+pub const PLAUSIBLE_US: u64 = 3 * 24 * 3600 * 1_000_000;
+/// MAVLink 2: header, CRC, signature.
+const V2_OVERHEAD: usize = 12;
+const V1_OVERHEAD: usize = 8;
+const SIGNATURE_LEN: usize = 13;
+
+/// What the log held besides its records' frames.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Serialize)]
+pub struct RecordStats {
+    /// Records whose frame the scanner accepted (delivered).
+    pub records: u64,
+    /// Records whose frame's message id this build does not know: skipped
+    /// whole, not delivered.
+    pub unknown_id: u64,
+    /// Bytes between records that were not a record.
+    pub junk_bytes: u64,
+    /// Stretches of junk (each a re-synchronisation).
+    pub junk_stretches: u64,
+    /// Candidate frames at a record's place that failed their CRC (or a
+    /// MAVLink 1 length), each the start of a stretch of junk.
+    pub bad_crc: u64,
+    /// Bytes of a last record cut short (0: the log ends on a record).
+    pub truncated_bytes: u64,
+}
+
+/// The next thing in the bytes.
+#[derive(Debug, PartialEq, Eq)]
+pub enum Found<'a> {
+    /// A record: its raw stamp and its frame's bytes.
+    Record { stamp: u64, frame: &'a [u8] },
+    /// More bytes are needed to decide.
+    NeedMore,
+    /// Nothing more will come and nothing more is there.
+    End,
+}
+
+/// What a record's place holds.
+enum Candidate {
+    /// Not enough bytes to tell.
+    Need,
+    /// A stamp and a frame the scanner accepts, `len` bytes long.
+    Good(usize),
+    /// A stamp and an aligned frame of an id the scanner does not know.
+    Unknown(usize),
+    /// Not a record.
+    Bad { bad_crc: bool },
+}
+
+/// The frame length a header claims, if it can start a frame.
+fn claimed_len(frame: &[u8]) -> Option<usize> {
+    match frame[0] {
+        STX_V1 => Some(V1_OVERHEAD + usize::from(frame[1])),
+        STX_V2 if frame[2] & !IFLAG_SIGNED == 0 => {
+            let signature = if frame[2] & IFLAG_SIGNED != 0 {
+                SIGNATURE_LEN
+            } else {
+                0
+            };
+            Some(V2_OVERHEAD + usize::from(frame[1]) + signature)
+        }
+        _ => None,
+    }
+}
+
+/// The big-endian stamp at `buf[at..]`.
+fn stamp_at(buf: &[u8], at: usize) -> u64 {
+    let mut b = [0u8; STAMP_LEN];
+    b.copy_from_slice(&buf[at..at + STAMP_LEN]);
+    u64::from_be_bytes(b)
+}
+
+/// What the record place at `buf[at]` holds; the scanner's figures for an
+/// accepted frame go to `scan`.
+fn candidate(buf: &[u8], at: usize, scan: &mut ScanStats) -> Candidate {
+    // Three header bytes tell a frame's length (MAVLink 2's flags).
+    if buf.len() < at + STAMP_LEN + 3 {
+        return Candidate::Need;
+    }
+    let frame = &buf[at + STAMP_LEN..];
+    let Some(len) = claimed_len(frame) else {
+        return Candidate::Bad { bad_crc: false };
+    };
+    if frame.len() < len {
+        return Candidate::Need;
+    }
+    let mut one = ScanStats::default();
+    let mut whole = false;
+    scan_datagram(&frame[..len], &mut one, &mut |raw| whole = raw.len() == len);
+    if whole && one.frames == 1 && one.skipped_bytes == 0 {
+        scan.add(&one);
+        Candidate::Good(len)
+    } else if one.unknown_id == 1 && one.frames == 0 && one.skipped_bytes == 0 {
+        Candidate::Unknown(len)
+    } else {
+        Candidate::Bad {
+            bad_crc: one.bad_crc > 0,
+        }
+    }
+}
+
+/// Whether two stamps are within pymavlink's bound of each other.
+fn near(a: u64, b: u64) -> bool {
+    a.abs_diff(b) <= PLAUSIBLE_US
+}
+
+/// Splits a log into records; see the module's rules.
+#[derive(Debug, Default)]
+pub struct Splitter {
+    /// The last good record's stamp.
+    last_stamp: Option<u64>,
+    /// Inside a stretch of junk (the next record must be plausible).
+    in_junk: bool,
+    /// The scanner's figures over the records' frames.
+    scan: ScanStats,
+    stats: RecordStats,
+}
+
+impl Splitter {
+    pub fn stats(&self) -> RecordStats {
+        self.stats
+    }
+
+    /// The scanner's figures over the frames delivered, with the junk as
+    /// its skipped bytes and a cut last record as truncated.
+    pub fn scan_stats(&self) -> ScanStats {
+        ScanStats {
+            unknown_id: self.stats.unknown_id,
+            bad_crc: self.stats.bad_crc,
+            skipped_bytes: self.stats.junk_bytes + self.stats.truncated_bytes,
+            truncated: u64::from(self.stats.truncated_bytes > 0),
+            ..self.scan
+        }
+    }
+
+    /// Whether a record place after junk (or holding a frame of an
+    /// unknown id: `unchecked`), stamped `stamp`, is a record. `None`: more
+    /// bytes are needed to tell.
+    fn plausible(
+        &self,
+        stamp: u64,
+        unchecked: bool,
+        buf: &[u8],
+        next: usize,
+        at_end: bool,
+    ) -> Option<bool> {
+        if self.last_stamp.is_some_and(|last| !near(stamp, last)) {
+            return Some(false);
+        }
+        if self.last_stamp.is_some() && !unchecked {
+            return Some(true);
+        }
+        // No good stamp yet, or a frame nothing checks: the next record
+        // must line up (a lone frame after junk is more likely a frame the
+        // junk holds). The log may end after an unknown one.
+        match candidate(buf, next, &mut ScanStats::default()) {
+            Candidate::Need if at_end => Some(unchecked && next == buf.len()),
+            Candidate::Need => None,
+            Candidate::Good(_) => Some(near(stamp_at(buf, next), stamp)),
+            Candidate::Unknown(_) | Candidate::Bad { .. } => Some(false),
+        }
+    }
+
+    /// The next record in `buf`, and how many leading bytes are finished
+    /// with (the caller drops them before the next call). `at_end`: no
+    /// bytes will follow `buf`.
+    pub fn next<'a>(&mut self, buf: &'a [u8], at_end: bool) -> (Found<'a>, usize) {
+        let mut at = 0;
+        loop {
+            let mut scan = ScanStats::default();
+            let verdict = match candidate(buf, at, &mut scan) {
+                Candidate::Need if at_end => return (self.end(buf.len() - at), buf.len()),
+                Candidate::Need => return (Found::NeedMore, at),
+                Candidate::Good(len) if !self.in_junk => Some(len),
+                // An id that cannot be checked is believed only where it
+                // lines up, as after junk.
+                Candidate::Good(len) | Candidate::Unknown(len) => {
+                    let stamp = stamp_at(buf, at);
+                    let unchecked = scan.frames == 0;
+                    match self.plausible(stamp, unchecked, buf, at + STAMP_LEN + len, at_end) {
+                        None => return (Found::NeedMore, at),
+                        Some(true) => Some(len),
+                        Some(false) => None,
+                    }
+                }
+                Candidate::Bad { bad_crc } => {
+                    if !self.in_junk {
+                        self.stats.bad_crc += u64::from(bad_crc);
+                    }
+                    None
+                }
+            };
+            let Some(len) = verdict else {
+                if !self.in_junk {
+                    self.in_junk = true;
+                    self.stats.junk_stretches += 1;
+                }
+                self.stats.junk_bytes += 1;
+                at += 1;
+                continue;
+            };
+            self.in_junk = false;
+            let stamp = stamp_at(buf, at);
+            let end = at + STAMP_LEN + len;
+            if scan.frames == 0 {
+                self.stats.unknown_id += 1;
+                at = end;
+                continue;
+            }
+            // Only a checked frame vouches for its stamp.
+            self.last_stamp = Some(stamp);
+            self.scan.add(&scan);
+            self.stats.records += 1;
+            let frame = &buf[at + STAMP_LEN..end];
+            return (Found::Record { stamp, frame }, end);
+        }
+    }
+
+    /// `rest` bytes are left that can make no record.
+    fn end(&mut self, rest: usize) -> Found<'static> {
+        if rest > 0 {
+            if self.in_junk {
+                self.stats.junk_bytes += rest as u64;
+            } else {
+                self.stats.truncated_bytes += rest as u64;
+            }
+        }
+        Found::End
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::frame::codec::{encode, Header, Version};
+    use crate::frame::Msg;
+
+    const T0: u64 = 1_764_500_000_000_000;
+
+    fn frame(version: Version, seq: u8) -> Vec<u8> {
+        let mut out = Vec::new();
+        encode(
+            &mut out,
+            version,
+            Header {
+                sysid: 1,
+                compid: 1,
+                seq,
+            },
+            &Msg::Attitude {
+                time_boot_ms: u32::from(seq) * 20,
+            },
+        );
+        out
+    }
+
+    fn record(stamp: u64, version: Version, seq: u8) -> Vec<u8> {
+        let mut out = stamp.to_be_bytes().to_vec();
+        out.extend(frame(version, seq));
+        out
+    }
+
+    /// Every record of `data`, fed `chunk` bytes at a time, as (stamp,
+    /// packet seq), and the figures.
+    fn split(data: &[u8], chunk: usize) -> (Vec<(u64, u8)>, RecordStats) {
+        let mut s = Splitter::default();
+        let mut buf = Vec::new();
+        let mut fed = 0;
+        let mut out = Vec::new();
+        loop {
+            let at_end = fed == data.len();
+            let (found, used) = s.next(&buf, at_end);
+            let got = match found {
+                Found::Record { stamp, frame } => Some((stamp, crate::frame::decode(frame))),
+                Found::NeedMore => None,
+                Found::End => break,
+            };
+            buf.drain(..used);
+            match got {
+                Some((stamp, f)) => out.push((stamp, f.packet_seq)),
+                None => {
+                    let take = chunk.min(data.len() - fed);
+                    buf.extend_from_slice(&data[fed..fed + take]);
+                    fed += take;
+                }
+            }
+            assert!(buf.len() <= 2 * MAX_RECORD + chunk);
+        }
+        (out, s.stats())
+    }
+
+    fn log(n: u8) -> Vec<u8> {
+        (0..n)
+            .flat_map(|i| {
+                let v = if i % 3 == 0 { Version::V1 } else { Version::V2 };
+                record(T0 + u64::from(i) * 20_000, v, i)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn records_come_out_whole_whatever_the_reads() {
+        let data = log(50);
+        for chunk in [1, 7, 300, 1 << 16] {
+            let (records, stats) = split(&data, chunk);
+            assert_eq!(records.len(), 50, "chunk {chunk}");
+            assert_eq!(records[49], (T0 + 49 * 20_000, 49));
+            assert_eq!(
+                stats,
+                RecordStats {
+                    records: 50,
+                    ..RecordStats::default()
+                }
+            );
+        }
+    }
+
+    #[test]
+    fn junk_between_records_is_counted_and_skipped() {
+        let mut data = log(3);
+        // Junk with start bytes in it, and a frame whose CRC is broken.
+        data.extend([0xFD, 0x09, 0x00, 0xFE, 1, 2, 3]);
+        let mut broken = record(T0 + 60_000, Version::V2, 3);
+        *broken.last_mut().unwrap() ^= 0xFF;
+        data.extend(&broken);
+        data.extend(record(T0 + 80_000, Version::V2, 4));
+        for chunk in [1, 5, 4096] {
+            let (records, stats) = split(&data, chunk);
+            let seqs: Vec<u8> = records.iter().map(|r| r.1).collect();
+            assert_eq!(seqs, [0, 1, 2, 4], "chunk {chunk}");
+            assert_eq!(stats.junk_stretches, 1);
+            assert_eq!(stats.junk_bytes as usize, 7 + broken.len());
+            assert_eq!(stats.truncated_bytes, 0);
+        }
+    }
+
+    #[test]
+    fn a_record_after_junk_needs_a_stamp_near_the_last_good_one() {
+        let mut data = log(2);
+        data.extend([0x55; 5]);
+        // A good frame whose stamp is 4 days off: junk too.
+        data.extend(record(T0 + 4 * 24 * 3600 * 1_000_000, Version::V2, 2));
+        data.extend(record(T0 + 60_000, Version::V2, 3));
+        let (records, stats) = split(&data, 64);
+        let seqs: Vec<u8> = records.iter().map(|r| r.1).collect();
+        assert_eq!(seqs, [0, 1, 3]);
+        assert_eq!(stats.junk_stretches, 1);
+    }
+
+    #[test]
+    fn an_aligned_record_is_taken_whatever_its_stamp() {
+        // A clock step at a record boundary is the clock's business.
+        let mut data = log(2);
+        data.extend(record(T0 + 9 * 24 * 3600 * 1_000_000, Version::V2, 2));
+        let (records, stats) = split(&data, 64);
+        assert_eq!(records.len(), 3);
+        assert_eq!(stats.junk_bytes, 0);
+    }
+
+    #[test]
+    fn junk_before_the_first_record_needs_two_records_in_a_row() {
+        let mut data = vec![0x00, 0xFE, 0x21, 0x13];
+        // A lone good frame with a stamp that is not a time: a frame the
+        // junk happens to hold, which the next record does not line up with.
+        data.extend(record(42, Version::V1, 9));
+        data.extend([0x77; 3]);
+        data.extend(log(3));
+        let (records, stats) = split(&data, 16);
+        let seqs: Vec<u8> = records.iter().map(|r| r.1).collect();
+        assert_eq!(seqs, [0, 1, 2]);
+        assert_eq!(stats.junk_stretches, 1);
+        assert_eq!(
+            stats.junk_bytes as usize,
+            4 + 8 + frame(Version::V1, 9).len() + 3
+        );
+    }
+
+    #[test]
+    fn a_last_record_cut_short_is_truncated_not_junk() {
+        let mut data = log(4);
+        let cut = record(T0 + 100_000, Version::V2, 4);
+        data.extend(&cut[..cut.len() - 5]);
+        let (records, stats) = split(&data, 100);
+        assert_eq!(records.len(), 4);
+        assert_eq!(stats.truncated_bytes as usize, cut.len() - 5);
+        assert_eq!(stats.junk_bytes, 0);
+    }
+
+    #[test]
+    fn bytes_that_are_not_a_log_give_no_record() {
+        // A raw MAVLink stream (no stamps), text, zeros.
+        let mut raw = Vec::new();
+        for i in 0..20 {
+            raw.extend(frame(Version::V2, i));
+        }
+        let text = b"hello, this is not a telemetry log at all\n".repeat(20);
+        for data in [raw, text, vec![0u8; 1000], Vec::new()] {
+            let (records, stats) = split(&data, 64);
+            assert!(records.is_empty(), "{stats:?}");
+            assert_eq!(stats.junk_bytes + stats.truncated_bytes, data.len() as u64);
+        }
+    }
+
+    #[test]
+    fn unknown_ids_at_a_records_place_are_skipped_whole() {
+        let mut data = log(2);
+        // MAVLink 2, id 0xABCDEF (unknown), 4 payload bytes.
+        let mut unknown = (T0 + 40_000).to_be_bytes().to_vec();
+        unknown.extend([
+            0xFD, 4, 0, 0, 2, 1, 1, 0xEF, 0xCD, 0xAB, 1, 2, 3, 4, 0x12, 0x34,
+        ]);
+        data.extend(&unknown);
+        data.extend(record(T0 + 60_000, Version::V2, 3));
+        let (records, stats) = split(&data, 64);
+        assert_eq!(records.len(), 3);
+        assert_eq!(stats.unknown_id, 1);
+        assert_eq!(stats.junk_bytes, 0);
+    }
+
+    #[test]
+    fn junk_that_looks_like_a_stamp_and_a_header_poisons_nothing() {
+        // Eight zero bytes (a stamp of 1970), then a MAVLink 2 header
+        // claiming 28 bytes: what follows is no frame of a known id, or an
+        // unknown id whose next record does not line up.
+        let mut data = log(3);
+        data.extend([0, 0, 0, 0, 0, 0, 0, 0, 0xFD, 0x1C, 0, 0]);
+        for i in 3..6u8 {
+            data.extend(record(T0 + u64::from(i) * 20_000, Version::V2, i));
+        }
+        let (records, stats) = split(&data, 4096);
+        let seqs: Vec<u8> = records.iter().map(|r| r.1).collect();
+        assert_eq!(seqs, [0, 1, 2, 3, 4, 5]);
+        assert_eq!((stats.junk_bytes, stats.unknown_id), (12, 0));
+    }
+
+    proptest::proptest! {
+        /// Records of both versions with junk (no start bytes) between any
+        /// of them, read in chunks of any size: every record comes out, in
+        /// order, and every junk byte is counted.
+        #[test]
+        fn every_record_survives_junk_and_any_reads(
+            records in proptest::collection::vec(
+                (proptest::bool::ANY, proptest::collection::vec(0u8..0xFD, 0..40)),
+                1..60,
+            ),
+            chunk in 1usize..600,
+        ) {
+            let mut data = Vec::new();
+            let mut junk = 0;
+            for (i, (v1, after)) in records.iter().enumerate() {
+                let version = if *v1 { Version::V1 } else { Version::V2 };
+                data.extend(record(T0 + i as u64 * 20_000, version, i as u8));
+                data.extend(after);
+                junk += after.len() as u64;
+            }
+            let (out, stats) = split(&data, chunk);
+            let seqs: Vec<u8> = out.iter().map(|r| r.1).collect();
+            let expected: Vec<u8> = (0..records.len()).map(|i| i as u8).collect();
+            proptest::prop_assert_eq!(seqs, expected);
+            proptest::prop_assert_eq!(stats.junk_bytes + stats.truncated_bytes, junk);
+        }
+    }
+}

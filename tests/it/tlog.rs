@@ -1,0 +1,813 @@
+//! `tlog:FILE`: telemetry logs written by pymavlink (its `mavlogfile`, with
+//! faults planned frame by frame: `tests/peers/tlog_writer.py`), recorded by
+//! pymavlink's own logger and by MAVProxy from pymavlink vehicles, read by
+//! mavping: counts exact against the plan or the vehicles' truth, the
+//! pymavlink figure equal to `mavloss.py`'s on the same file, per-link
+//! figures from MAVProxy's stamps, standard input, the log's own clock,
+//! and files that are not logs.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::Duration;
+
+use serde_json::{json, Value};
+
+use crate::common::*;
+
+/// A scratch directory of one test, removed when dropped.
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Scratch {
+        let dir = std::env::temp_dir().join(format!("mavping-tlog-{}-{name}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        Scratch(dir)
+    }
+
+    fn path(&self, file: &str) -> PathBuf {
+        self.0.join(file)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Writes `plan` as a log with pymavlink; its ground truth.
+fn write_log(path: &Path, plan: &Value) -> Value {
+    let out = Command::new(python())
+        .arg(peer_script("tlog_writer.py"))
+        .arg(path)
+        .arg(plan.to_string())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "tlog_writer.py: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// `mavloss.py` on `path`: packets and lost per (sysid, compid), and the
+/// total.
+struct MavLoss {
+    sources: BTreeMap<(u64, u64), (u64, u64)>,
+    total: (u64, u64),
+}
+
+fn mavloss(path: &Path) -> MavLoss {
+    let out = Command::new(python())
+        .arg(venv_program("mavloss.py"))
+        .arg(path)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "mavloss.py: {text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let numbers = |line: &str| -> Vec<u64> {
+        line.split(|c: char| !c.is_ascii_digit())
+            .filter(|s| !s.is_empty())
+            .map(|s| s.parse().unwrap())
+            .collect()
+    };
+    let mut sources = BTreeMap::new();
+    let mut total = None;
+    for line in text.lines() {
+        if let Some(rest) = line.strip_prefix("Total: ") {
+            let n = numbers(rest);
+            total = Some((n[0], n[1]));
+        } else if line.starts_with("  ")
+            && line.trim_start().starts_with(|c: char| c.is_ascii_digit())
+        {
+            let n = numbers(line);
+            sources.insert((n[0], n[1]), (n[2], n[3]));
+        }
+    }
+    MavLoss {
+        sources,
+        total: total.unwrap_or_else(|| panic!("no total in {text}")),
+    }
+}
+
+/// mavping `--json` on `link`: exit code, the passive summary (every line
+/// checked against the schema), stderr.
+fn read(args: &[&str], link: &str) -> (i32, Value, String) {
+    let mut all = vec!["--json"];
+    all.extend_from_slice(args);
+    all.push(link);
+    let (code, out, err) = run_mavping(&all);
+    let lines = json_lines(&out);
+    assert_schema(&lines);
+    let summary = lines
+        .into_iter()
+        .find(|l| l["type"] == "passive_summary")
+        .unwrap_or_else(|| panic!("no passive_summary: {out}{err}"));
+    (code, summary, err)
+}
+
+fn tlog(path: &Path) -> String {
+    format!("tlog:{}", path.display())
+}
+
+/// A source's figures in a summary (or a link's table).
+fn source<'a>(sources: &'a Value, id: &str) -> &'a Value {
+    sources
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| format!("{}/{}", s["source"]["sysid"], s["source"]["compid"]) == id)
+        .unwrap_or_else(|| panic!("no {id} in {sources}"))
+}
+
+fn counts(s: &Value, key: &str) -> u64 {
+    s["counts"][key].as_u64().unwrap()
+}
+
+fn truth(t: &Value, id: &str, key: &str) -> u64 {
+    t["sources"][id][key].as_u64().unwrap()
+}
+
+/// The pymavlink figure per source and in total is mavloss.py's, exactly.
+fn assert_pymavlink_figures(summary: &Value, path: &Path) {
+    let loss = mavloss(path);
+    let ours: BTreeMap<(u64, u64), (u64, u64)> = summary["sources"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|s| s["radio"] == false)
+        .map(|s| {
+            let id = (
+                s["source"]["sysid"].as_u64().unwrap(),
+                s["source"]["compid"].as_u64().unwrap(),
+            );
+            (
+                id,
+                (
+                    s["pymav"]["count"].as_u64().unwrap(),
+                    s["pymav"]["loss"].as_u64().unwrap(),
+                ),
+            )
+        })
+        .collect();
+    assert_eq!(
+        ours, loss.sources,
+        "per source: mavping (left), mavloss.py (right)"
+    );
+    let totals = &summary["totals"]["pymav"];
+    assert_eq!(
+        (
+            totals["count"].as_u64().unwrap(),
+            totals["loss"].as_u64().unwrap()
+        ),
+        loss.total
+    );
+}
+
+/// 1/1 at 50/s (MAVLink 2): drops (three in a row), duplicates, swapped
+/// pairs, a silence of 300 frames (longer than the sequence spans) and one
+/// of 20; 2/1 at 10/s in MAVLink 1; 1/154 at 20/s, signed. All wrap the
+/// 8-bit sequence.
+fn faulty_plan(stamps: &str) -> Value {
+    json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "stamps": stamps,
+        "sources": [
+            {"sysid": 1, "compid": 1, "rate": 50, "frames": 3000, "phase_us": 0,
+             "drop": [10, 11, 12, 500, 2001], "dup": [50, 700], "swap": [100, 900],
+             "silence": [[1200, 300], [2500, 20]]},
+            {"sysid": 2, "compid": 1, "rate": 10, "frames": 600, "version": 1,
+             "phase_us": 3000, "drop": [5, 300], "dup": [77], "swap": [400]},
+            {"sysid": 1, "compid": 154, "rate": 20, "frames": 1200, "signed": true,
+             "phase_us": 7000, "drop": [30]}
+        ]
+    })
+}
+
+/// The short silence of 1/1 is spanned by its sequence: counted lost.
+const SHORT_SILENCE: u64 = 20;
+const LONG_SILENCE: u64 = 300;
+
+fn assert_faulty_plan_counts(summary: &Value, t: &Value) {
+    let s = &summary["sources"];
+    for id in ["1/1", "2/1", "1/154"] {
+        let r = source(s, id);
+        assert_eq!(counts(r, "received"), truth(t, id, "written"), "{id}: {r}");
+        assert_eq!(
+            counts(r, "duplicate"),
+            truth(t, id, "duplicated"),
+            "{id}: {r}"
+        );
+        assert_eq!(counts(r, "reordered"), truth(t, id, "swapped"), "{id}: {r}");
+        let spanned = if id == "1/1" { SHORT_SILENCE } else { 0 };
+        assert_eq!(
+            counts(r, "lost"),
+            truth(t, id, "dropped") + spanned,
+            "{id}: {r}"
+        );
+    }
+    let one = source(s, "1/1");
+    assert_eq!(truth(t, "1/1", "silenced"), SHORT_SILENCE + LONG_SILENCE);
+    assert_eq!(one["silence_count"], 1, "{one}");
+    let silence = &one["silences"][0];
+    assert_eq!(silence["seq_lost"], Value::Null);
+    let estimated = silence["frames_estimated"].as_u64().unwrap();
+    assert!(estimated.abs_diff(LONG_SILENCE) <= 1, "{silence}");
+    // Time 0 is the first record; the log is 60 s long.
+    let span = summary["duration_s"].as_f64().unwrap();
+    assert!((59.9..60.0).contains(&span), "{span}");
+    assert_eq!(summary["log"]["complete"], true);
+    assert_eq!(summary["heartbeat"], false);
+    assert_eq!(summary["rx_clock"], "the log's time stamps");
+}
+
+#[test]
+fn a_log_written_by_pymavlink_is_counted_exactly_and_pymavlinks_figure_is_mavloss() {
+    let dir = Scratch::new("faulty");
+    let path = dir.path("faulty.tlog");
+    let t = write_log(&path, &faulty_plan("us"));
+    let (code, summary, err) = read(&[], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    assert_faulty_plan_counts(&summary, &t);
+    assert_eq!(summary["log"]["records"]["records"], t["records"]);
+    assert_eq!(summary["log"]["records"]["junk_bytes"], 0);
+    assert_eq!(
+        summary["log"]["stamps"]["first_us"],
+        1_764_500_000_000_000u64
+    );
+    assert_eq!(summary["log"]["stamps"]["whole_ms"], false);
+    assert_eq!(
+        summary["signing"]["signed_unchecked"],
+        truth(&t, "1/154", "written")
+    );
+    assert!(summary.get("per_link").is_none(), "{summary}");
+    assert_pymavlink_figures(&summary, &path);
+    // pymavlink's figure is far from the truth: each duplicate ~255 lost,
+    // each swap 256, the long silence its length modulo 256.
+    let one = source(&summary["sources"], "1/1");
+    assert!(one["pymav"]["loss"].as_u64().unwrap() > 1000, "{one}");
+}
+
+#[test]
+fn qgroundcontrol_and_pymavlink_stamps_read_the_same() {
+    let dir = Scratch::new("stamps");
+    for stamps in ["ms", "pymavlink"] {
+        let path = dir.path(&format!("{stamps}.tlog"));
+        let t = write_log(&path, &faulty_plan(stamps));
+        let (code, summary, err) = read(&[], &tlog(&path));
+        assert_eq!(code, 0, "{stamps}: {err}");
+        assert_faulty_plan_counts(&summary, &t);
+        assert_eq!(summary["log"]["stamps"]["whole_ms"], stamps == "ms");
+        let bits = &summary["log"]["stamps"]["low_bits"];
+        assert_eq!(bits[0], t["records"], "{stamps}: {bits}");
+        assert_pymavlink_figures(&summary, &path);
+    }
+}
+
+#[test]
+fn junk_between_records_is_counted_and_skipped_and_a_cut_last_record_said() {
+    let dir = Scratch::new("junk");
+    let path = dir.path("junk.tlog");
+    let mut plan = faulty_plan("us");
+    // Junk without a start byte; with start bytes and a header that claims
+    // a frame; eight zero bytes (a stamp of 1970) before a false header.
+    plan["junk"] = json!([
+        [100, "00112233445566778899"],
+        [1500, "fd0900aabbfe01"],
+        [3000, "0000000000000000fd1c0000"]
+    ]);
+    plan["cut"] = json!(7);
+    let t = write_log(&path, &plan);
+    let (code, summary, err) = read(&[], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    let records = &summary["log"]["records"];
+    assert_eq!(records["junk_bytes"], t["junk_bytes"], "{records}");
+    assert_eq!(records["junk_stretches"], 3, "{records}");
+    let cut_short = t["last_record_len"].as_u64().unwrap() - 7;
+    assert_eq!(
+        records["truncated_bytes"].as_u64(),
+        Some(cut_short),
+        "{records}"
+    );
+    let written = t["records"].as_u64().unwrap();
+    assert_eq!(records["records"].as_u64(), Some(written - 1), "{records}");
+    assert_eq!(summary["frames"]["truncated"], 1);
+    assert_eq!(
+        summary["frames"]["skipped_bytes"].as_u64(),
+        Some(t["junk_bytes"].as_u64().unwrap() + cut_short)
+    );
+    // Every record but the cut one is there: the counts are the plan's,
+    // less the last frame of the source that wrote it.
+    let mut received = 0;
+    for s in summary["sources"].as_array().unwrap() {
+        received += counts(s, "received");
+    }
+    assert_eq!(received, written - 1);
+    // pymavlink reads what follows junk worse: it loses the two records
+    // after a stretch (its parser takes the next stamp for junk), and a
+    // stretch that looks like a stamp and a frame header ends its reading.
+    let loss = mavloss(&path);
+    assert!(
+        loss.total.0 < 3000,
+        "mavloss.py read {} packets",
+        loss.total.0
+    );
+    let (_, text, _) = run_mavping(&[&tlog(&path)]);
+    assert!(
+        text.contains(&format!(
+            "log: {} bytes of junk between records, in 3 stretches, skipped",
+            t["junk_bytes"]
+        )),
+        "{text}"
+    );
+    assert!(
+        text.contains(&format!(
+            "log: its last record is cut short ({cut_short} bytes)"
+        )),
+        "{text}"
+    );
+}
+
+#[test]
+fn pymavlink_loses_the_two_records_after_junk_mavping_none() {
+    let dir = Scratch::new("junk2");
+    let path = dir.path("junk2.tlog");
+    let plan = json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "sources": [{"sysid": 1, "compid": 1, "rate": 50, "frames": 1000}],
+        "junk": [[100, "00112233445566778899"], [400, "0102030405"]]
+    });
+    write_log(&path, &plan);
+    let (_, summary, _) = read(&[], &tlog(&path));
+    let one = source(&summary["sources"], "1/1");
+    assert_eq!(
+        (counts(one, "received"), counts(one, "lost")),
+        (1000, 0),
+        "{one}"
+    );
+    let loss = mavloss(&path);
+    assert_eq!(loss.total, (996, 4), "two records lost after each stretch");
+}
+
+/// A vehicle on MAVProxy's links 0 and 1, each losing frames of its own
+/// beside two both lose; MAVProxy's own frames on link 3; a ground
+/// station's frames MAVProxy forwarded with plain stamps.
+fn mavproxy_plan() -> Value {
+    json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "stamps": "mavproxy",
+        "sources": [
+            {"sysid": 1, "compid": 1, "rate": 50, "frames": 3000, "drop": [40, 41],
+             "links": {"0": {"drop": [100, 2000]}, "1": {"drop": [7, 8, 9, 1500], "delay_us": 300}}},
+            {"sysid": 255, "compid": 230, "rate": 1, "frames": 60, "phase_us": 11,
+             "links": {"3": {}}},
+            {"sysid": 255, "compid": 190, "rate": 2, "frames": 120, "phase_us": 5, "plain": true}
+        ]
+    })
+}
+
+#[test]
+fn mavproxy_link_numbers_give_figures_per_link() {
+    let dir = Scratch::new("links");
+    let path = dir.path("links.tlog");
+    let t = write_log(&path, &mavproxy_plan());
+    let (code, summary, err) = read(&[], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    // Merged, the vehicle's second link is duplicates; only what both
+    // links lost is lost.
+    let merged = source(&summary["sources"], "1/1");
+    assert_eq!(counts(merged, "lost"), truth(&t, "1/1", "dropped"));
+    let per = &summary["per_link"];
+    let link = |n: u64| {
+        per["links"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|l| l["link"] == n)
+            .unwrap_or_else(|| panic!("no link {n}: {per}"))
+    };
+    for n in [0u64, 1] {
+        let r = source(&link(n)["sources"], "1/1");
+        let lt = &t["sources"]["1/1"]["links"][n.to_string()];
+        assert_eq!(
+            counts(r, "received"),
+            lt["written"].as_u64().unwrap(),
+            "link {n}: {r}"
+        );
+        assert_eq!(
+            counts(r, "lost"),
+            lt["dropped"].as_u64().unwrap() + truth(&t, "1/1", "dropped"),
+            "link {n}: {r}"
+        );
+        assert_eq!(counts(r, "duplicate"), 0, "link {n}: {r}");
+    }
+    let own = source(&link(3)["sources"], "255/230");
+    assert_eq!(counts(own, "received"), 60);
+    assert_eq!(per["unlinked"], json!([{"sysid": 255, "compid": 190}]));
+    assert_eq!(per["links"].as_array().unwrap().len(), 3, "{per}");
+    // mavloss.py merges the links, as the main table does.
+    assert_pymavlink_figures(&summary, &path);
+    let (_, text, _) = run_mavping(&[&tlog(&path)]);
+    assert!(text.contains("per MAVProxy link"), "{text}");
+    assert!(text.contains("on no link: 255/190"), "{text}");
+}
+
+#[test]
+fn a_clocks_microseconds_are_no_link_numbers() {
+    // Stamps of a clock read as frames arrive: their low bits vary.
+    let dir = Scratch::new("nolinks");
+    let path = dir.path("us.tlog");
+    let mut plan = faulty_plan("us");
+    for s in plan["sources"].as_array_mut().unwrap() {
+        s["plain"] = json!(true);
+    }
+    let t = write_log(&path, &plan);
+    let (_, summary, _) = read(&[], &tlog(&path));
+    let bits = &summary["log"]["stamps"]["low_bits"];
+    assert!(
+        bits.as_array()
+            .unwrap()
+            .iter()
+            .filter(|b| b.as_u64() > Some(0))
+            .count()
+            > 1,
+        "{bits}"
+    );
+    assert!(summary.get("per_link").is_none(), "{summary}");
+    assert_faulty_plan_counts(&summary, &t);
+}
+
+#[test]
+fn standard_input_reads_as_the_file_does() {
+    let dir = Scratch::new("stdin");
+    let path = dir.path("in.tlog");
+    write_log(&path, &mavproxy_plan());
+    let (_, from_file, _) = read(&[], &tlog(&path));
+    let child = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "cat '{}' | '{}' --json tlog:-",
+            path.display(),
+            env!("CARGO_BIN_EXE_mavping")
+        ))
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (code, out, err) = wait_output(child, Duration::from_secs(60));
+    assert_eq!(code, 0, "{err}");
+    let mut from_stdin = json_lines(&out)
+        .into_iter()
+        .find(|l| l["type"] == "passive_summary")
+        .unwrap();
+    assert_eq!(from_stdin["link"], "tlog:-");
+    from_stdin["link"] = from_file["link"].clone();
+    assert_eq!(from_stdin, from_file);
+}
+
+#[test]
+fn a_log_fed_slowly_through_a_pipe_is_read_on_its_own_clock() {
+    // The writer sleeps between chunks: the log's clock must wait for its
+    // bytes, not run ahead of them (a silence that is not in the log).
+    let dir = Scratch::new("slow");
+    let path = dir.path("slow.tlog");
+    let t = write_log(&path, &faulty_plan("us"));
+    let (_, from_file, _) = read(&[], &tlog(&path));
+    let feeder = format!(
+        "import sys, time\n\
+         data = open('{}', 'rb').read()\n\
+         for i in range(0, len(data), 4000):\n\
+         \x20   sys.stdout.buffer.write(data[i:i + 4000]); sys.stdout.flush(); time.sleep(0.05)\n",
+        path.display()
+    );
+    let child = Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "'{}' -c \"$FEED\" | '{}' --json tlog:-",
+            python().display(),
+            env!("CARGO_BIN_EXE_mavping")
+        ))
+        .env("FEED", feeder)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (code, out, err) = wait_output(child, Duration::from_secs(60));
+    assert_eq!(code, 0, "{err}");
+    let mut slow = json_lines(&out)
+        .into_iter()
+        .find(|l| l["type"] == "passive_summary")
+        .unwrap();
+    slow["link"] = from_file["link"].clone();
+    assert_eq!(slow, from_file);
+    assert_faulty_plan_counts(&slow, &t);
+}
+
+#[test]
+fn a_deadline_reads_the_logs_first_seconds_exactly() {
+    // 1/1 alone at 50/s from time 0: by 10.5 s, frames 0 to 525.
+    let dir = Scratch::new("deadline");
+    let path = dir.path("d.tlog");
+    let plan = json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "sources": [{"sysid": 1, "compid": 1, "rate": 50, "frames": 3000}]
+    });
+    write_log(&path, &plan);
+    let (code, summary, err) = read(&["-w", "10.5"], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    let one = source(&summary["sources"], "1/1");
+    assert_eq!(counts(one, "received"), 526, "{one}");
+    assert_eq!(summary["duration_s"], 10.5);
+    assert_eq!(summary["log"]["complete"], false);
+}
+
+#[test]
+fn files_that_are_not_logs_are_refused_in_one_line() {
+    let dir = Scratch::new("bad");
+    let png = dir.path("image.png");
+    std::fs::write(
+        &png,
+        [&b"\x89PNG\r\n\x1a\n\0\0\0\rIHDR"[..], &[0x42; 300]].concat(),
+    )
+    .unwrap();
+    let text = dir.path("notes.tlog");
+    std::fs::write(
+        &text,
+        "these are my flight notes\nbattery 12.4 V\n".repeat(30),
+    )
+    .unwrap();
+    let empty = dir.path("empty.tlog");
+    std::fs::write(&empty, "").unwrap();
+    let good = dir.path("one.tlog");
+    let plan = json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "sources": [{"sysid": 1, "compid": 1, "rate": 50, "frames": 1}]
+    });
+    write_log(&good, &plan);
+    let cut = dir.path("cut.tlog");
+    let bytes = std::fs::read(&good).unwrap();
+    std::fs::write(&cut, &bytes[..bytes.len() - 3]).unwrap();
+    let raw = dir.path("raw.tlog");
+    // Frames without stamps: the records' frames, back to back.
+    let stamped = dir.path("many.tlog");
+    let plan = json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "sources": [{"sysid": 1, "compid": 1, "rate": 50, "frames": 50}]
+    });
+    write_log(&stamped, &plan);
+    let many = std::fs::read(&stamped).unwrap();
+    let mut frames = Vec::new();
+    let mut at = 0;
+    while at < many.len() {
+        // MAVLink 2, unsigned: header 10, payload, CRC 2.
+        let len = 12 + usize::from(many[at + 9]);
+        frames.extend_from_slice(&many[at + 8..at + 8 + len]);
+        at += 8 + len;
+    }
+    std::fs::write(&raw, frames).unwrap();
+    let cut_says = format!(
+        "not a telemetry log: its {} bytes are one record cut short",
+        bytes.len() - 3
+    );
+    let cases: Vec<(String, &str)> = vec![
+        (tlog(&png), "not a telemetry log: no record"),
+        (tlog(&text), "not a telemetry log: its"),
+        (tlog(&empty), "not a telemetry log: it is empty"),
+        (tlog(&cut), &cut_says),
+        (tlog(&raw), "hold MAVLink frames without time stamps"),
+        (tlog(&dir.0), "it is a directory, not a telemetry log"),
+        (tlog(&dir.path("missing.tlog")), "cannot open"),
+    ];
+    for (link, says) in cases {
+        let (code, out, err) = run_mavping(&[&link]);
+        assert_eq!(code, 2, "{link}: {out}{err}");
+        assert!(out.is_empty(), "{link}: nothing measured: {out}");
+        assert_eq!(err.lines().count(), 1, "{link}: {err}");
+        assert!(
+            err.starts_with(&format!("mavping: {link}")) || err.contains(&link),
+            "{err}"
+        );
+        assert!(err.contains(says), "{link}: {err}");
+    }
+}
+
+#[test]
+fn probes_on_a_log_are_refused_and_passive_is_implied() {
+    let dir = Scratch::new("refused");
+    let path = dir.path("r.tlog");
+    write_log(
+        &path,
+        &json!({
+            "start_us": 1_764_500_000_000_000u64,
+            "sources": [{"sysid": 1, "compid": 1, "rate": 50, "frames": 100}]
+        }),
+    );
+    let link = tlog(&path);
+    for flags in [
+        &["-c", "5"][..],
+        &["--probe", "timesync"],
+        &["--probe", "command"],
+        &["-i", "0.1"],
+        &["--sweep"],
+    ] {
+        let mut args = flags.to_vec();
+        args.push(&link);
+        let (code, out, err) = run_mavping(&args);
+        assert_eq!(code, 2, "{flags:?}: {out}{err}");
+        assert_eq!(err.lines().count(), 1, "{flags:?}: {err}");
+        assert!(
+            err.contains("is a telemetry log, read without probes"),
+            "{err}"
+        );
+    }
+    // --passive and --gap are accepted; nothing is sent, and it says so.
+    let (code, out, _) = run_mavping(&["--passive", "--gap", "2s", &link]);
+    assert_eq!(code, 0, "{out}");
+    assert!(
+        out.lines().next().unwrap().ends_with(
+            "PASSIVE, no probes; a telemetry log, read on its own clock (--passive implied); nothing sent"
+        ),
+        "{out}"
+    );
+    let (code, _, err) = run_mavping(&[&link, "sim:"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("cannot run beside live links"), "{err}");
+    let (code, _, err) = run_mavping(&["respond", &link]);
+    assert_eq!(code, 2);
+    assert!(err.contains("a telemetry log is only read"), "{err}");
+}
+
+#[test]
+fn pymavlinks_own_logger_records_a_vehicle_counted_exactly() {
+    // A pymavlink vehicle over TCP; a pymavlink ground station records
+    // every frame it receives with `setup_logfile`.
+    let dir = Scratch::new("recorder");
+    let path = dir.path("recorded.tlog");
+    let port = free_tcp_port();
+    let mut vehicle = Peer::start(
+        "vehicle.py",
+        &[
+            &format!("tcpin:127.0.0.1:{port}"),
+            "--frames",
+            "600",
+            "--rate",
+            "100",
+            "--drop",
+            "10,11,12,200",
+            "--dup",
+            "50,300",
+            "--swap",
+            "100,400",
+            "--silence",
+            "450:300",
+        ],
+    );
+    let recorder = Peer::start(
+        "tlog_recorder.py",
+        &[&format!("tcp:127.0.0.1:{port}"), path.to_str().unwrap()],
+    );
+    let truth: Value = serde_json::from_str(&vehicle.read_line()).unwrap();
+    std::thread::sleep(Duration::from_millis(300));
+    let recorded = recorder.finish();
+    let (code, summary, err) = read(&[], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    let one = source(&summary["sources"], "1/1");
+    let t = |k: &str| truth[k].as_u64().unwrap();
+    assert_eq!(recorded["recorded"].as_u64(), Some(t("sent")));
+    assert_eq!(counts(one, "received"), t("sent"), "{one}");
+    assert_eq!(counts(one, "lost"), t("dropped"), "{one}");
+    assert_eq!(counts(one, "duplicate"), t("duplicated"), "{one}");
+    assert_eq!(counts(one, "reordered"), t("swapped"), "{one}");
+    assert_eq!(one["silence_count"], 1, "{one}");
+    // pymavlink's logger stamps usec & ~3: no link numbers.
+    assert!(summary.get("per_link").is_none());
+    assert_pymavlink_figures(&summary, &path);
+}
+
+#[test]
+fn mavproxy_records_a_vehicle_on_two_lossy_links_with_their_numbers() {
+    // vehicle.py -> relay -> MAVProxy's masters 0 and 1, each link dropping
+    // frames of its own; MAVProxy logs both, stamped with the link.
+    let mavproxy = venv_program("mavproxy.py");
+    let dir = Scratch::new("mavproxy");
+    let (vehicle_port, link0, link1) = (free_udp_port(), free_udp_port(), free_udp_port());
+    let mut vehicle = Peer::start(
+        "vehicle.py",
+        &[
+            &format!("udpin:127.0.0.1:{vehicle_port}"),
+            "--frames",
+            "700",
+            "--rate",
+            "50",
+            "--drop",
+            "10,11,12,300",
+            "--dup",
+            "60",
+            "--swap",
+            "100,500",
+        ],
+    );
+    let mavproxy = Program::start_on_udp(
+        &mavproxy,
+        &[
+            &format!("--master=udpin:127.0.0.1:{link0}"),
+            &format!("--master=udpin:127.0.0.1:{link1}"),
+            "--logfile=flight.tlog",
+            "--non-interactive",
+            "--cmd=set flushlogs 1",
+        ],
+        &dir.0,
+        link1,
+    );
+    let relay = Peer::start(
+        "tlog_relay.py",
+        &[
+            &vehicle_port.to_string(),
+            &link0.to_string(),
+            &link1.to_string(),
+            "--drop0",
+            "200,201,450",
+            "--drop1",
+            "5,6,7,8,9,400,600",
+        ],
+    );
+    let truth: Value = serde_json::from_str(&vehicle.read_line()).unwrap();
+    std::thread::sleep(Duration::from_millis(500));
+    let relayed = relay.finish();
+    std::thread::sleep(Duration::from_millis(500));
+    // Stopped (it flushes its log on every frame), so the log no longer
+    // grows while mavping and mavloss.py read it.
+    drop(mavproxy);
+    let path = dir.path("flight.tlog");
+    let (code, summary, err) = read(&[], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    let t = |k: &str| truth[k].as_u64().unwrap();
+    let per = &summary["per_link"];
+    let link = |n: u64| {
+        per["links"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|l| l["link"] == n)
+            .unwrap_or_else(|| panic!("no link {n}: {per}"))
+    };
+    for (n, relay_dropped) in [(0u64, 3u64), (1, 7)] {
+        let r = source(&link(n)["sources"], "1/1");
+        let why = format!("link {n}: {r}\nvehicle: {truth}\nrelay: {relayed}");
+        assert_eq!(relayed["dropped"][n as usize], relay_dropped);
+        assert_eq!(
+            counts(r, "received"),
+            relayed["forwarded"][n as usize].as_u64().unwrap(),
+            "{why}"
+        );
+        assert_eq!(counts(r, "lost"), t("dropped") + relay_dropped, "{why}");
+        assert_eq!(counts(r, "duplicate"), t("duplicated"), "{why}");
+        assert_eq!(counts(r, "reordered"), t("swapped"), "{why}");
+    }
+    // What MAVProxy sent itself is on link 3.
+    let own = link(3)["sources"].as_array().unwrap();
+    assert!(own.iter().all(|s| s["source"]["sysid"] == 255), "{own:?}");
+    // Merged, the two links are one stream of duplicates, as mavloss.py
+    // reads it.
+    let merged = source(&summary["sources"], "1/1");
+    assert_eq!(
+        counts(merged, "received"),
+        relayed["forwarded"][0].as_u64().unwrap() + relayed["forwarded"][1].as_u64().unwrap()
+    );
+    assert_pymavlink_figures(&summary, &path);
+}
+
+#[test]
+fn interim_figures_come_at_the_logs_own_seconds() {
+    // -Q 20s: at 20 s of the log, 1/1 has sent frames 0 to 1000; 4 of them
+    // dropped (10-12, 500), 2 doubled (50, 700).
+    let dir = Scratch::new("interim");
+    let path = dir.path("q.tlog");
+    write_log(&path, &faulty_plan("us"));
+    let (code, out, err) = run_mavping(&["-Q", "20s", &tlog(&path)]);
+    assert_eq!(code, 0, "{err}");
+    let times: Vec<&str> = out
+        .lines()
+        .filter(|l| l.starts_with('['))
+        .filter_map(|l| l.split(']').next())
+        .collect();
+    assert_eq!(
+        times,
+        ["[20.0 s"; 3]
+            .iter()
+            .chain(&["[40.0 s"; 3])
+            .copied()
+            .collect::<Vec<_>>()
+    );
+    assert!(
+        out.contains("[20.0 s] 1/1: 999 received, 4 lost (0.40%), 2 duplicate, 2 reordered"),
+        "{out}"
+    );
+}

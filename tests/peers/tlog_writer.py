@@ -1,0 +1,180 @@
+#!/usr/bin/env python3
+"""Writes a telemetry log with pymavlink (its `mavlogfile`, opened with
+`mavutil.mavlink_connection(PATH, write=True)`), frames packed by
+pymavlink's own encoder, with faults planned frame by frame, and prints
+one JSON line of ground truth. For mavping's `tlog:` tests.
+
+    tlog_writer.py OUT.tlog PLAN_JSON
+
+The plan:
+  start_us     the first stamp (µs since the Unix epoch)
+  stamps       "us" (a clock's µs), "ms" (QGroundControl: ms x 1000),
+               "pymavlink" (usec & ~3), "mavproxy" ((usec & ~3) | link)
+  sources      each: sysid, compid, rate (ATTITUDE per second; a
+               HEARTBEAT each second besides), frames (numbered), version
+               (1 or 2), signed (MAVLink 2 signing), phase_us, and faults
+               by frame number (the n-th frame it numbers, from 0):
+                 drop [n...]      numbered, never written (a gap)
+                 dup [n...]       written twice
+                 swap [n...]      held back, written after frame n+1
+                 silence [[n,k]]  after frame n, k frames numbered and
+                                  none written, in their time (a silence)
+               links (mavproxy stamps): {"LINK": {"drop": [n...],
+                 "delay_us": d}}: the frame is written once per link,
+                 less that link's drops; plain: true stamps the source's
+                 frames with a clock's µs (MAVProxy logs what its outputs
+                 send so), whatever the plan's stamps
+  junk         [[r, hex]]: those bytes after the r-th record written
+  cut          bytes cut off the end (a last record cut short)
+
+Stamps are arrival times: a swapped frame is stamped after the frame it
+follows, a duplicate 1 ms after its first copy. The truth per source (and
+per link) counts what was numbered and what was written.
+"""
+import heapq
+import json
+import os
+import random
+import struct
+import sys
+
+os.environ["MAVLINK20"] = "1"
+from pymavlink import mavutil  # noqa: E402
+
+mavlink = mavutil.mavlink
+
+
+def frames_of(src, mav):
+    """(time_us, frame number, bytes) of every frame the source numbers."""
+    period = 1e6 / src["rate"]
+    t = src.get("phase_us", 0)
+    next_hb = t
+    n = 0
+    while n < src["frames"]:
+        if t >= next_hb:
+            msg = mav.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR,
+                                       mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, 0)
+            next_hb += 1e6
+        else:
+            msg = mav.attitude_encode(int(t / 1000), 0.1, 0.2, 0.3, 0.01, 0.02, 0.03)
+        data = msg.pack(mav, force_mavlink1=src.get("version", 2) == 1)
+        mav.seq = (mav.seq + 1) % 256
+        yield int(t), n, bytes(data)
+        n += 1
+        t += period
+
+
+def mav_for(src):
+    mav = mavlink.MAVLink(None, srcSystem=src["sysid"], srcComponent=src["compid"])
+    if src.get("signed"):
+        mav.signing.secret_key = bytes(range(32))
+        mav.signing.link_id = 1
+        mav.signing.timestamp = 1
+        mav.signing.sign_outgoing = True
+    return mav
+
+
+def plan_source(src, out, truth_of):
+    """Puts the source's writes on `out`: (time_us, order, link, bytes)."""
+    drop = set(src.get("drop", []))
+    dup = set(src.get("dup", []))
+    swap = set(src.get("swap", []))
+    silences = {n: k for n, k in src.get("silence", [])}
+    links = src.get("links") or {"0": {}}
+    truth = truth_of(src)
+    held = None
+    skip_until = -1
+    for t, n, data in frames_of(src, mav_for(src)):
+        truth["numbered"] += 1
+        if n <= skip_until:
+            truth["silenced"] += 1
+            continue
+        if n in silences:
+            skip_until = n + silences[n]
+        last = n == src["frames"] - 1
+        if n in drop and not last:
+            truth["dropped"] += 1
+            continue
+        if n in swap and not last:
+            held = (n, data)
+            truth["swapped"] += 1
+            continue
+        writes = [(t, n, data)]
+        if n in dup:
+            writes.append((t + 1000, n, data))
+            truth["duplicated"] += 1
+        if held is not None:
+            writes.append((t + 500, held[0], held[1]))
+            held = None
+        for link, spec in links.items():
+            lt = truth["links"].setdefault(link, {"written": 0, "dropped": 0})
+            for wt, wn, wdata in writes:
+                if wn in set(spec.get("drop", [])):
+                    lt["dropped"] += 1
+                    continue
+                lt["written"] += 1
+                out.append((wt + spec.get("delay_us", 0), int(link), src, wdata))
+        truth["written"] += len(writes)
+
+
+def stamp(plan, src, t_us, link, rng):
+    us = plan["start_us"] + t_us
+    kind = plan.get("stamps", "us")
+    if src.get("plain"):
+        return us | rng.randrange(4)
+    if kind == "ms":
+        return (us // 1000) * 1000
+    if kind == "pymavlink":
+        return us & ~3
+    if kind == "mavproxy":
+        return (us & ~3) | link
+    return us
+
+
+def main():
+    path, plan = sys.argv[1], json.loads(sys.argv[2])
+    rng = random.Random(7)
+    truths = {}
+
+    def truth_of(src):
+        key = "%d/%d" % (src["sysid"], src["compid"])
+        return truths.setdefault(key, {"numbered": 0, "written": 0, "dropped": 0,
+                                       "duplicated": 0, "swapped": 0, "silenced": 0,
+                                       "links": {}})
+
+    writes = []
+    for src in plan["sources"]:
+        plan_source(src, writes, truth_of)
+    # In time order; equal times in the order planned.
+    order = [(t, i, link, src, data) for i, (t, link, src, data) in enumerate(writes)]
+    heapq.heapify(order)
+    junk = {r: bytes.fromhex(h) for r, h in plan.get("junk", [])}
+    # pymavlink's log writer needs the file to exist to take it for a log.
+    open(path, "wb").close()
+    log = mavutil.mavlink_connection(path, write=True)
+    records = 0
+    junk_bytes = 0
+    size = 0
+    last_len = 0
+    while order:
+        t, _, link, src, data = heapq.heappop(order)
+        record = struct.pack(">Q", stamp(plan, src, t, link, rng)) + data
+        log.write(record)
+        size += len(record)
+        last_len = len(record)
+        records += 1
+        if records in junk:
+            log.write(junk[records])
+            junk_bytes += len(junk[records])
+            size += len(junk[records])
+    log.close()
+    cut = plan.get("cut", 0)
+    if cut:
+        with open(path, "r+b") as f:
+            f.truncate(size - cut)
+    print(json.dumps({"sources": truths, "records": records, "junk_bytes": junk_bytes,
+                      "cut": cut, "last_record_len": last_len}), flush=True)
+
+
+if __name__ == "__main__":
+    main()
