@@ -21,14 +21,18 @@
 //!   window, so a source restarting without a pause shows as a gap or as
 //!   duplicates: the sequence alone cannot tell.
 //! - **Usual interval.** The time per sequence step, smoothed: each step
-//!   `k` ahead, outside silences, gives a sample (time since the head) / k,
-//!   and the estimate moves 1/16 of the way to it (the first sample seeds
-//!   it). Lost frames do not inflate it, as the steps count them.
+//!   `k` ahead, outside silences, gives a sample (time since the head) / k.
+//!   The first 16 samples are averaged; after them the estimate moves 1/16
+//!   of the way to each sample. Lost frames do not inflate it, as the steps
+//!   count them. (Seeding it from the first sample alone let two frames
+//!   sent together, or an autopilot's burst, set an interval of
+//!   microseconds that made every later pause a silence, each one
+//!   resynchronising: no loss was ever counted again.)
 //! - **Silence.** No frame from the source for longer than the threshold:
 //!   the `gap` given, or else 5 usual intervals but at least 1 s (5 s while
-//!   no interval is known: 5 heartbeats). Whatever the base, a gap of 64
-//!   usual intervals is always a silence, so a fast source's long outage
-//!   cannot hide in the window. A silence is listed with its start (the
+//!   no interval is known: 5 heartbeats). Whatever the base, once 16
+//!   samples have set the usual interval, a gap of 64 of them is always a
+//!   silence, so a fast source's long outage cannot hide in the window. A silence is listed with its start (the
 //!   last frame before it), its length (to the frame after it) and the
 //!   frames the source would have sent in it: length / usual interval,
 //!   rounded, less the frame that ends it.
@@ -82,7 +86,9 @@ const SILENCE_CAP_INTERVALS: u64 = 64;
 /// A silence shorter than this many frames at the usual rate is spanned by
 /// the sequence (half of 256: room for a rate estimate off by 2x).
 const SPAN_FRAMES: u64 = 128;
-/// The usual interval moves 1/this of the way to each sample.
+/// The usual interval is the mean of this many first samples, then moves
+/// 1/this of the way to each sample; the 64-interval cap on silences waits
+/// for them.
 const EWMA_WEIGHT: u64 = 16;
 /// Silences listed: the first ones...
 const KEEP_FIRST_SILENCES: usize = 8;
@@ -266,6 +272,10 @@ pub struct SeqTracker {
     first_seen: Nanos,
     last_seen: Nanos,
     interval: Option<Nanos>,
+    /// Samples taken of the usual interval (counted to `EWMA_WEIGHT`), and
+    /// their sum while it is being averaged.
+    samples: u64,
+    sample_sum: Nanos,
     silences: SilenceLog,
     msg_ids: MsgIds,
 }
@@ -285,6 +295,8 @@ impl SeqTracker {
             first_seen: 0,
             last_seen: 0,
             interval: None,
+            samples: 0,
+            sample_sum: 0,
             silences: SilenceLog::default(),
             msg_ids: MsgIds::default(),
         }
@@ -298,6 +310,7 @@ impl SeqTracker {
         self.bytes = self.bytes.saturating_add(len);
         self.msg_ids.count(msg_id);
         self.pymav(seq);
+        let threshold = self.threshold();
         let Some(state) = self.state.as_mut() else {
             self.state = Some(SeqState::new(seq, at));
             self.first_len = len;
@@ -306,7 +319,7 @@ impl SeqTracker {
             return;
         };
         let elapsed = at.saturating_sub(self.last_seen);
-        let silent = elapsed > threshold(self.gap, self.interval);
+        let silent = elapsed > threshold;
         self.last_seen = self.last_seen.max(at);
         if silent {
             let frames = self.interval.map(|i| frames_in(elapsed, i));
@@ -362,11 +375,24 @@ impl SeqTracker {
 
     fn sample_interval(&mut self, sample: Nanos) {
         let next = match self.interval {
-            None => sample,
-            Some(i) => i.saturating_mul(EWMA_WEIGHT - 1).saturating_add(sample) / EWMA_WEIGHT,
+            Some(i) if self.samples >= EWMA_WEIGHT => {
+                i.saturating_mul(EWMA_WEIGHT - 1).saturating_add(sample) / EWMA_WEIGHT
+            }
+            _ => {
+                self.samples += 1;
+                self.sample_sum = self.sample_sum.saturating_add(sample);
+                self.sample_sum / self.samples
+            }
         };
         // At least 1 ns, so frame estimates can divide by it.
         self.interval = Some(next.max(1));
+    }
+
+    /// How long a pause must last to be a silence: see [`threshold`]; the
+    /// cap waits for the usual interval to be settled.
+    fn threshold(&self) -> Nanos {
+        let settled = self.interval.filter(|_| self.samples >= EWMA_WEIGHT);
+        threshold(self.gap, self.interval, settled)
     }
 
     pub fn counts(&self) -> SeqCounts {
@@ -388,7 +414,7 @@ impl SeqTracker {
     fn ongoing(&self, at: Nanos) -> Option<Silence> {
         self.state?;
         let elapsed = at.saturating_sub(self.last_seen);
-        (elapsed > threshold(self.gap, self.interval)).then(|| Silence {
+        (elapsed > self.threshold()).then(|| Silence {
             start: self.last_seen,
             length_ns: elapsed,
             frames_estimated: self.interval.map(|i| frames_in(elapsed, i)),
@@ -442,15 +468,16 @@ impl SeqTracker {
     }
 }
 
-/// The silence threshold for a source with usual interval `interval`.
-fn threshold(gap: Option<Nanos>, interval: Option<Nanos>) -> Nanos {
+/// The silence threshold for a source with usual interval `interval`,
+/// capped at 64 of `settled` (the interval once enough samples set it).
+fn threshold(gap: Option<Nanos>, interval: Option<Nanos>, settled: Option<Nanos>) -> Nanos {
     let base = gap.unwrap_or_else(|| {
         interval
             .unwrap_or(FIRST_INTERVAL)
             .saturating_mul(SILENCE_INTERVALS)
             .max(SILENCE_FLOOR)
     });
-    interval.map_or(base, |i| base.min(i.saturating_mul(SILENCE_CAP_INTERVALS)))
+    settled.map_or(base, |i| base.min(i.saturating_mul(SILENCE_CAP_INTERVALS)))
 }
 
 /// Frames sent strictly inside a gap of `elapsed` at one per `interval`
@@ -778,6 +805,61 @@ mod tests {
         assert_eq!(s.silence_frames_estimated, 0);
     }
 
+    /// Frames sent in bursts of `burst`, `spacing` apart within a burst,
+    /// a burst every `every`, by stream position; `lost` positions are
+    /// not delivered.
+    fn bursts(n: u64, burst: u64, spacing: Nanos, every: Nanos, lost: &[u64]) -> SeqTracker {
+        let mut t = SeqTracker::new(None);
+        for p in (0..n).filter(|p| !lost.contains(p)) {
+            t.on_frame(
+                (p % 256) as u8,
+                0,
+                20,
+                p / burst * every + p % burst * spacing,
+            );
+        }
+        t
+    }
+
+    #[test]
+    fn a_source_whose_first_frames_come_together_is_still_counted() {
+        // Two frames 80 µs apart, then one every 200 ms (a radio's
+        // RADIO_STATUS sent twice at start-up): the first step is no
+        // usual interval, and must not make every later pause a silence
+        // (each resynchronising, so no loss would ever be counted).
+        let mut t = SeqTracker::new(None);
+        t.on_frame(0, 0, 20, 0);
+        for p in 1..60u64 {
+            if p % 10 != 5 {
+                t.on_frame(p as u8, 0, 20, 80_000 + (p - 1) * 200 * MS);
+            }
+        }
+        assert_eq!(t.counts(), counts(54, 6, 0, 0, 0));
+        assert_eq!(t.summary(SRC, 58 * 200 * MS).silence_count, 0);
+        let interval = t.interval().unwrap();
+        assert!((100 * MS..=200 * MS).contains(&interval), "{interval}");
+    }
+
+    #[test]
+    fn a_source_sending_in_bursts_is_counted_exactly() {
+        // An autopilot's scheduler sends its messages together: 5 frames
+        // 50 µs apart every 20 ms (4 ms a frame on average), 1000 frames
+        // with 10 lost, the sequence wrapping 3 times.
+        let lost = [7, 8, 100, 333, 334, 335, 600, 777, 901, 950];
+        let t = bursts(1000, 5, 50_000, 20 * MS, &lost);
+        assert_eq!(t.counts(), counts(990, 10, 0, 0, 0));
+        assert_eq!(t.summary(SRC, 199 * 20 * MS).silence_count, 0);
+        // A second's outage (250 frames at its rate) is a silence, not a
+        // loss of 250 mod 256.
+        let gone: Vec<u64> = (500..750).collect();
+        let t = bursts(1000, 5, 50_000, 20 * MS, &gone);
+        assert_eq!(t.counts(), counts(750, 0, 0, 0, 1));
+        let s = t.summary(SRC, 199 * 20 * MS);
+        assert_eq!(s.silence_count, 1);
+        let estimated = s.silences[0].frames_estimated.unwrap();
+        assert!((200..=300).contains(&estimated), "{estimated}");
+    }
+
     #[test]
     fn a_fast_source_gets_a_silence_under_the_floor() {
         // 1 kHz: 64 ms without a frame is a silence although under 1 s,
@@ -993,6 +1075,27 @@ mod tests {
             let (delivered, truth) = deliver(&fates);
             let t = tracked(&delivered, interval_ms * MS);
             let spanned = t.summary(SRC, 0).silences.iter().all(|s| s.seq_lost.is_some());
+            proptest::prop_assert!(spanned);
+            proptest::prop_assert_eq!(t.counts(), truth);
+        }
+
+        /// The same faults on a source that sends in bursts (an
+        /// autopilot's scheduler: `burst` frames 50 µs apart, a burst every
+        /// 20 or 100 ms): exact too, every pause spanned by the sequence.
+        #[test]
+        fn counts_match_the_truth_in_bursts(
+            fates in proptest::collection::vec(fate(), 1..3000),
+            burst in 1u64..=12,
+            every_ms in proptest::sample::select(vec![20u64, 100]),
+        ) {
+            let (delivered, truth) = deliver(&fates);
+            let mut t = SeqTracker::new(None);
+            let mut at = 0;
+            for &p in &delivered {
+                at = (p / burst * every_ms * MS + p % burst * 50_000).max(at);
+                t.on_frame((p % 256) as u8, 0, 20, at);
+            }
+            let spanned = t.summary(SRC, at).silences.iter().all(|s| s.seq_lost.is_some());
             proptest::prop_assert!(spanned);
             proptest::prop_assert_eq!(t.counts(), truth);
         }
