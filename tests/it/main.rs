@@ -20,6 +20,7 @@ mod multilink;
 mod mutants;
 mod options;
 mod passive;
+mod passive_peers;
 mod probes_pymavlink;
 mod prometheus_server;
 mod properties;
