@@ -21,13 +21,15 @@
 //!   window, so a source restarting without a pause shows as a gap or as
 //!   duplicates: the sequence alone cannot tell.
 //! - **Usual interval.** The time per sequence step, smoothed: each step
-//!   `k` ahead, outside silences, gives a sample (time since the head) / k.
-//!   The first 16 samples are averaged; after them the estimate moves 1/16
-//!   of the way to each sample. Lost frames do not inflate it, as the steps
-//!   count them. (Seeding it from the first sample alone let two frames
-//!   sent together, or an autopilot's burst, set an interval of
-//!   microseconds that made every later pause a silence, each one
-//!   resynchronising: no loss was ever counted again.)
+//!   `k` ahead, and each silence the sequence spans, gives a sample (time
+//!   since the head) / k. The first 16 samples are averaged; after them
+//!   the estimate moves 1/16 of the way to each sample. Lost frames do not
+//!   inflate it, as the steps count them; a pause the source made itself
+//!   raises it for a while. (Seeded from the first sample alone, two
+//!   frames sent together set an interval of microseconds; with spanned
+//!   silences giving no sample, an estimate too low never rose again, as
+//!   between an autopilot's bursts: every later pause a silence, then
+//!   each one resynchronising, and no loss was counted again.)
 //! - **Silence.** No frame from the source for longer than the threshold:
 //!   the `gap` given, or else 5 usual intervals but at least 1 s (5 s while
 //!   no interval is known: 5 heartbeats). Whatever the base, once 16
@@ -333,9 +335,14 @@ impl SeqTracker {
                 ongoing: false,
             });
             if spanned {
-                // The usual rate is what came before the silence: no sample.
+                // The sequence proves the steps in it: a sample like any
+                // other. (Left out, an estimate too low could never rise
+                // again: every pause longer than 64 of it a silence, none
+                // a sample, as between an autopilot's bursts.)
+                let sample = at.saturating_sub(state.head_at) / u64::from(ahead);
                 state.advance(ahead, at);
                 self.counts.lost += u64::from(ahead - 1);
+                self.sample_interval(sample);
             } else {
                 *state = SeqState::new(seq, at);
                 self.counts.resyncs += 1;
