@@ -2,5 +2,6 @@
 //! without sending anything on it.
 
 pub mod driver;
+mod rate;
 pub mod ticks;
 pub mod tracker;

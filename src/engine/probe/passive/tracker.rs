@@ -20,21 +20,21 @@
 //!   counted lost, `resyncs` counts it). Every other distance falls in the
 //!   window, so a source restarting without a pause shows as a gap or as
 //!   duplicates: the sequence alone cannot tell.
-//! - **Usual interval.** The time per sequence step, smoothed: each step
-//!   `k` ahead, and each silence the sequence spans, gives a sample (time
-//!   since the head) / k. The first 16 samples are averaged; after them
-//!   the estimate moves 1/16 of the way to each sample. Lost frames do not
-//!   inflate it, as the steps count them; a pause the source made itself
-//!   raises it for a while. (Seeded from the first sample alone, two
-//!   frames sent together set an interval of microseconds; with spanned
-//!   silences giving no sample, an estimate too low never rose again, as
-//!   between an autopilot's bursts: every later pause a silence, then
-//!   each one resynchronising, and no loss was counted again.)
+//! - **Usual interval.** The time per sequence step over the source's last
+//!   256 to 512 steps or one to two seconds ([`super::rate`]): steps `k`
+//!   ahead count `k`, so lost frames do not inflate it; a silence the
+//!   sequence spans counts too (a pause the source made itself raises it
+//!   for a while), one it cannot span does not. A mean over a window, as
+//!   frames often come in bursts (an autopilot's scheduler, a batch from a
+//!   sender or a router, a radio's TDM round): an average per step fell to
+//!   the spacing inside a burst, which made every pause between bursts a
+//!   silence, each then resynchronising, and no loss was counted again.
 //! - **Silence.** No frame from the source for longer than the threshold:
 //!   the `gap` given, or else 5 usual intervals but at least 1 s (5 s while
-//!   no interval is known: 5 heartbeats). Whatever the base, once 16
-//!   samples have set the usual interval, a gap of 64 of them is always a
-//!   silence, so a fast source's long outage cannot hide in the window. A silence is listed with its start (the
+//!   no interval is known: 5 heartbeats). Whatever the base, once a full
+//!   bucket (256 steps or a second) sets the usual interval, a gap of 64
+//!   of them is always a silence, so a fast source's long outage cannot
+//!   hide in the window. A silence is listed with its start (the
 //!   last frame before it), its length (to the frame after it) and the
 //!   frames the source would have sent in it: length / usual interval,
 //!   rounded, less the frame that ends it.
@@ -65,6 +65,7 @@
 
 use std::collections::BTreeMap;
 
+use super::rate::Rate;
 use crate::engine::summary::passive::{
     percent, LinkTotals, MsgCount, PymavFigure, SeqCounts, Silence, SourceSummary, TableSummary,
     Untracked,
@@ -88,10 +89,6 @@ const SILENCE_CAP_INTERVALS: u64 = 64;
 /// A silence shorter than this many frames at the usual rate is spanned by
 /// the sequence (half of 256: room for a rate estimate off by 2x).
 const SPAN_FRAMES: u64 = 128;
-/// The usual interval is the mean of this many first samples, then moves
-/// 1/this of the way to each sample; the 64-interval cap on silences waits
-/// for them.
-const EWMA_WEIGHT: u64 = 16;
 /// Silences listed: the first ones...
 const KEEP_FIRST_SILENCES: usize = 8;
 /// ...and the longest of the later ones.
@@ -273,11 +270,7 @@ pub struct SeqTracker {
     first_len: u64,
     first_seen: Nanos,
     last_seen: Nanos,
-    interval: Option<Nanos>,
-    /// Samples taken of the usual interval (counted to `EWMA_WEIGHT`), and
-    /// their sum while it is being averaged.
-    samples: u64,
-    sample_sum: Nanos,
+    rate: Rate,
     silences: SilenceLog,
     msg_ids: MsgIds,
 }
@@ -296,9 +289,7 @@ impl SeqTracker {
             first_len: 0,
             first_seen: 0,
             last_seen: 0,
-            interval: None,
-            samples: 0,
-            sample_sum: 0,
+            rate: Rate::new(0),
             silences: SilenceLog::default(),
             msg_ids: MsgIds::default(),
         }
@@ -315,6 +306,7 @@ impl SeqTracker {
         let threshold = self.threshold();
         let Some(state) = self.state.as_mut() else {
             self.state = Some(SeqState::new(seq, at));
+            self.rate = Rate::new(at);
             self.first_len = len;
             self.first_seen = at;
             self.last_seen = at;
@@ -324,7 +316,7 @@ impl SeqTracker {
         let silent = elapsed > threshold;
         self.last_seen = self.last_seen.max(at);
         if silent {
-            let frames = self.interval.map(|i| frames_in(elapsed, i));
+            let frames = self.rate.interval().map(|i| frames_in(elapsed, i));
             let ahead = seq.wrapping_sub(state.head);
             let spanned = frames.is_some_and(|f| f < SPAN_FRAMES) && (1..=WINDOW).contains(&ahead);
             self.silences.push(Silence {
@@ -335,25 +327,23 @@ impl SeqTracker {
                 ongoing: false,
             });
             if spanned {
-                // The sequence proves the steps in it: a sample like any
-                // other. (Left out, an estimate too low could never rise
-                // again: every pause longer than 64 of it a silence, none
-                // a sample, as between an autopilot's bursts.)
-                let sample = at.saturating_sub(state.head_at) / u64::from(ahead);
+                // The sequence proves the steps in it: steps like any
+                // other. (Left out, a window of bursts would lose the
+                // pauses between them.)
                 state.advance(ahead, at);
                 self.counts.lost += u64::from(ahead - 1);
-                self.sample_interval(sample);
+                self.rate.step(u64::from(ahead), at);
             } else {
                 *state = SeqState::new(seq, at);
                 self.counts.resyncs += 1;
+                self.rate.rebase(at);
             }
             return;
         }
-        let since_head = at.saturating_sub(state.head_at);
         match state.take(seq, at) {
             Step::Ahead(k) => {
                 self.counts.lost += u64::from(k - 1);
-                self.sample_interval(since_head / u64::from(k));
+                self.rate.step(u64::from(k), at);
             }
             Step::Duplicate => self.counts.duplicate += 1,
             Step::Filled => {
@@ -364,7 +354,10 @@ impl SeqTracker {
                 self.counts.lost += lost;
                 self.counts.reordered += 1;
             }
-            Step::Resync => self.counts.resyncs += 1,
+            Step::Resync => {
+                self.counts.resyncs += 1;
+                self.rate.rebase(at);
+            }
         }
     }
 
@@ -380,26 +373,12 @@ impl SeqTracker {
         self.pymav_last = Some(seq);
     }
 
-    fn sample_interval(&mut self, sample: Nanos) {
-        let next = match self.interval {
-            Some(i) if self.samples >= EWMA_WEIGHT => {
-                i.saturating_mul(EWMA_WEIGHT - 1).saturating_add(sample) / EWMA_WEIGHT
-            }
-            _ => {
-                self.samples += 1;
-                self.sample_sum = self.sample_sum.saturating_add(sample);
-                self.sample_sum / self.samples
-            }
-        };
-        // At least 1 ns, so frame estimates can divide by it.
-        self.interval = Some(next.max(1));
-    }
-
     /// How long a pause must last to be a silence: see [`threshold`]; the
     /// cap waits for the usual interval to be settled.
     fn threshold(&self) -> Nanos {
-        let settled = self.interval.filter(|_| self.samples >= EWMA_WEIGHT);
-        threshold(self.gap, self.interval, settled)
+        let interval = self.rate.interval();
+        let settled = interval.filter(|_| self.rate.settled());
+        threshold(self.gap, interval, settled)
     }
 
     pub fn counts(&self) -> SeqCounts {
@@ -413,7 +392,7 @@ impl SeqTracker {
 
     /// The usual time per sequence step, once known.
     pub fn interval(&self) -> Option<Nanos> {
-        self.interval
+        self.rate.interval()
     }
 
     /// The silence running at `at`, if the source has been quiet for
@@ -424,7 +403,7 @@ impl SeqTracker {
         (elapsed > self.threshold()).then(|| Silence {
             start: self.last_seen,
             length_ns: elapsed,
-            frames_estimated: self.interval.map(|i| frames_in(elapsed, i)),
+            frames_estimated: self.rate.interval().map(|i| frames_in(elapsed, i)),
             seq_lost: None,
             ongoing: true,
         })
@@ -463,7 +442,7 @@ impl SeqTracker {
             last_seen: self.last_seen,
             frames_per_s: per_second(c.received.saturating_sub(1), span),
             bytes_per_s: per_second(self.bytes.saturating_sub(self.first_len), span),
-            interval_ns: self.interval,
+            interval_ns: self.rate.interval(),
             silences,
             silence_count: log_count,
             silences_omitted: self.silences.omitted,
@@ -476,7 +455,7 @@ impl SeqTracker {
 }
 
 /// The silence threshold for a source with usual interval `interval`,
-/// capped at 64 of `settled` (the interval once enough samples set it).
+/// capped at 64 of `settled` (the interval once a full bucket set it).
 fn threshold(gap: Option<Nanos>, interval: Option<Nanos>, settled: Option<Nanos>) -> Nanos {
     let base = gap.unwrap_or_else(|| {
         interval
@@ -856,6 +835,13 @@ mod tests {
         let t = bursts(1000, 5, 50_000, 20 * MS, &lost);
         assert_eq!(t.counts(), counts(990, 10, 0, 0, 0));
         assert_eq!(t.summary(SRC, 199 * 20 * MS).silence_count, 0);
+        // 100,000 frames/s sent in batches of 50 every 0.5 ms (a sender's
+        // sendmmsg), 20 lost in runs, the sequence wrapping 400 times.
+        let lost: Vec<u64> = (1..=20).map(|i| i * 4_999).collect();
+        let t = bursts(100_000, 50, 100, 500_000, &lost);
+        assert_eq!(t.counts(), counts(99_980, 20, 0, 0, 0));
+        let interval = t.interval().unwrap();
+        assert!((8_000..=12_000).contains(&interval), "{interval}");
         // A second's outage (250 frames at its rate) is a silence, not a
         // loss of 250 mod 256.
         let gone: Vec<u64> = (500..750).collect();
