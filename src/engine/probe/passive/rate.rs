@@ -30,6 +30,9 @@ pub(super) struct Rate {
     filling: Bucket,
     /// The arrival of the latest step's frame: where the window ends.
     head_at: Nanos,
+    /// The interval before the count restarted: shown (and used for a
+    /// silence's frames) until a step is seen again, never to settle.
+    before: Option<Nanos>,
 }
 
 impl Rate {
@@ -42,6 +45,7 @@ impl Rate {
                 steps: 0,
             },
             head_at: at,
+            before: None,
         }
     }
 
@@ -69,7 +73,10 @@ impl Rate {
     /// The usual time per step (at least 1 ns), once a step was seen.
     pub(super) fn interval(&self) -> Option<Nanos> {
         let (span, steps) = self.window();
-        (steps > 0).then(|| (span / steps).max(1))
+        if steps == 0 {
+            return self.before;
+        }
+        Some((span / steps).max(1))
     }
 
     /// A full bucket is behind the estimate (256 steps, or a second):
@@ -78,21 +85,16 @@ impl Rate {
         self.full.is_some()
     }
 
-    /// The count restarted at `at` after a silence it could not span: the
-    /// rate goes on as it was, the silence's time left out.
+    /// The count restarted at `at` (after a silence it could not span, or
+    /// a frame it could not place): the rate is measured afresh too. Kept
+    /// instead, an estimate gone wrong (a batch of frames stamped alike
+    /// makes a window of no time) would judge every pause a silence too
+    /// long to span, each one restarting the count and none a step, for
+    /// ever; afresh, it judges by the 1 s floor until a bucket is full.
     pub(super) fn rebase(&mut self, at: Nanos) {
-        let (span, steps) = self.window();
-        if steps > 0 {
-            self.full = Some(Bucket {
-                start: at.saturating_sub(span),
-                steps,
-            });
-        }
-        self.filling = Bucket {
-            start: at,
-            steps: 0,
-        };
-        self.head_at = at;
+        let before = self.interval();
+        *self = Rate::new(at);
+        self.before = before;
     }
 }
 
@@ -158,21 +160,19 @@ mod tests {
     }
 
     #[test]
-    fn a_silence_it_could_not_span_leaves_the_rate_as_it_was() {
+    fn a_restarted_count_measures_the_rate_afresh() {
+        // A window of no time (a batch stamped alike) gives 1 ns a step...
         let mut r = Rate::new(0);
-        for p in 1..=300u64 {
-            r.step(1, p * 10 * MS);
+        r.step(300, 0);
+        assert_eq!((r.interval(), r.settled()), (Some(1), true));
+        // ...and once the count restarts, it no longer settles anything
+        // (shown until the next step) until a bucket of real steps is in.
+        r.rebase(5 * MS);
+        assert_eq!((r.interval(), r.settled()), (Some(1), false));
+        for p in 1..=256u64 {
+            r.step(1, 5 * MS + p * 10 * US);
         }
-        // 60 s without a frame, then the count restarts.
-        r.rebase(63 * 1_000 * MS);
-        assert_eq!(r.interval(), Some(10 * MS));
-        assert!(r.settled());
-        r.step(1, 63 * 1_000 * MS + 10 * MS);
-        assert_eq!(r.interval(), Some(10 * MS));
-        // With no step before it, nothing is known yet.
-        let mut r = Rate::new(0);
-        r.rebase(5 * 1_000 * MS);
-        assert_eq!((r.interval(), r.settled()), (None, false));
+        assert_eq!((r.interval(), r.settled()), (Some(10 * US), true));
     }
 
     #[test]

@@ -24,7 +24,8 @@
 //!   256 to 512 steps or one to two seconds ([`super::rate`]): steps `k`
 //!   ahead count `k`, so lost frames do not inflate it; a silence the
 //!   sequence spans counts too (a pause the source made itself raises it
-//!   for a while), one it cannot span does not. A mean over a window, as
+//!   for a while); after one it cannot span, the rate is measured afresh,
+//!   as the count is. A mean over a window, as
 //!   frames often come in bursts (an autopilot's scheduler, a batch from a
 //!   sender or a router, a radio's TDM round): an average per step fell to
 //!   the spacing inside a burst, which made every pause between bursts a
@@ -851,6 +852,27 @@ mod tests {
         assert_eq!(s.silence_count, 1);
         let estimated = s.silences[0].frames_estimated.unwrap();
         assert!((200..=300).contains(&estimated), "{estimated}");
+    }
+
+    #[test]
+    fn a_batch_stamped_alike_costs_one_restart_not_the_rest_of_the_run() {
+        // 300 frames with one arrival time (a backlog read at once), then
+        // 100,000 frames/s in batches of 50 every 0.5 ms, 10 lost after.
+        let mut t = SeqTracker::new(None);
+        let lost: Vec<u64> = (1..=10).map(|i| 1_000 + i * 1_777).collect();
+        for p in (0..20_000u64).filter(|p| !lost.contains(p)) {
+            let at = if p < 300 {
+                0
+            } else {
+                p / 50 * 500_000 + p % 50 * 100
+            };
+            t.on_frame((p % 256) as u8, 0, 20, at);
+        }
+        // The first pause after the batch looks endless at a rate of no
+        // time: one restart, then the rate is measured again.
+        assert_eq!(t.counts(), counts(19_990, 10, 0, 0, 1));
+        let interval = t.interval().unwrap();
+        assert!((8_000..=12_000).contains(&interval), "{interval}");
     }
 
     #[test]
