@@ -268,12 +268,12 @@ fn a_passive_count_on_a_serial_link_is_exact() {
     signal(run.child.id(), "INT");
     let (code, out, err) = run.wait(Duration::from_secs(20));
     assert_eq!(code, 0, "{out}\n{err}");
-    let n = |v: &serde_json::Value| v.as_u64().unwrap();
+    let num = |v: &serde_json::Value| v.as_u64().unwrap();
     assert_eq!(
         [
-            n(&sent["dropped"]),
-            n(&sent["duplicated"]),
-            n(&sent["swapped"])
+            num(&sent["dropped"]),
+            num(&sent["duplicated"]),
+            num(&sent["swapped"])
         ],
         [4, 2, 3],
         "{sent}"
@@ -282,26 +282,29 @@ fn a_passive_count_on_a_serial_link_is_exact() {
         .lines()
         .find(|l| l.contains("\"passive_summary\""))
         .expect(&out);
-    let s: serde_json::Value = serde_json::from_str(line).unwrap();
-    let r = &s["sources"][0];
-    assert_eq!(
-        [n(&r["source"]["sysid"]), n(&r["source"]["compid"])],
-        [1, 1]
-    );
-    let c = &r["counts"];
-    assert_eq!(c["received"], sent["sent"], "{r}");
+    let summary: serde_json::Value = serde_json::from_str(line).unwrap();
+    let source = &summary["sources"][0];
     assert_eq!(
         [
-            n(&c["lost"]),
-            n(&c["duplicate"]),
-            n(&c["reordered"]),
-            n(&c["resyncs"])
+            num(&source["source"]["sysid"]),
+            num(&source["source"]["compid"])
+        ],
+        [1, 1]
+    );
+    let counts = &source["counts"];
+    assert_eq!(counts["received"], sent["sent"], "{source}");
+    assert_eq!(
+        [
+            num(&counts["lost"]),
+            num(&counts["duplicate"]),
+            num(&counts["reordered"]),
+            num(&counts["resyncs"])
         ],
         [4, 2, 3, 0],
-        "{r}"
+        "{source}"
     );
     // Every byte was a frame: nothing skipped on the wire.
-    assert_eq!(s["frames"]["skipped_bytes"], 0, "{s}");
+    assert_eq!(summary["frames"]["skipped_bytes"], 0, "{summary}");
     // pymavlink's arithmetic: the drops, 255 a duplicate, 256 a swap.
-    assert_eq!(r["pymav"]["loss"], 4 + 2 * 255 + 3 * 256, "{r}");
+    assert_eq!(source["pymav"]["loss"], 4 + 2 * 255 + 3 * 256, "{source}");
 }

@@ -287,7 +287,9 @@ struct Wire {
 }
 
 pub struct SimLink {
-    params: SimParams,
+    /// Boxed: the parameters are read, not moved, and the link is one
+    /// variant of `transport::Link` beside much smaller ones.
+    params: Box<SimParams>,
     responders: Vec<SimResponder>,
     rng: SmallRng,
     queue: BinaryHeap<Reverse<Delivery>>,
@@ -342,7 +344,7 @@ impl SimLink {
             .map(|(air, baud)| Box::new(RadioPair::new(baud, &air, params.buffer)));
         let mut link = SimLink {
             rng: SmallRng::seed_from_u64(params.seed),
-            params,
+            params: Box::new(params),
             responders,
             queue: BinaryHeap::new(),
             order: 0,
