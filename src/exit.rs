@@ -34,9 +34,10 @@ pub enum Ending {
     /// Links were measured (one or several, in command-line order).
     Measured {
         links: Vec<LinkEnd>,
-        /// Standard output went away (`mavping ... | head`): the reader's
-        /// choice, not a failure.
-        output_closed: bool,
+        /// The output could not be written (a full disk, an I/O error).
+        /// A closed stdout (`mavping ... | head`) is the reader's choice
+        /// and changes nothing: the run went on to its end.
+        output_failed: bool,
         /// `--plot` or `--hgrm` could not be written at the end.
         exports_failed: bool,
     },
@@ -58,8 +59,8 @@ pub fn of_link(end: LinkEnd) -> u8 {
 }
 
 /// The code of a run: the worst of its links (any error wins, then any
-/// failed check), except that a closed stdout turns a failed check into
-/// success; an export that could not be written is an error.
+/// failed check); output or an export that could not be written is an
+/// error. A closed stdout changes nothing: a failed check stays failed.
 pub fn code(ending: &Ending) -> u8 {
     match ending {
         Ending::Done => OK,
@@ -67,10 +68,10 @@ pub fn code(ending: &Ending) -> u8 {
         Ending::InterruptedTwice => INTERRUPTED_TWICE,
         Ending::Measured {
             links,
-            output_closed,
+            output_failed,
             exports_failed,
         } => {
-            if *exports_failed {
+            if *exports_failed || *output_failed {
                 return ERROR;
             }
             let worst = links
@@ -81,11 +82,7 @@ pub fn code(ending: &Ending) -> u8 {
                     (FAILED, _) | (_, FAILED) => FAILED,
                     _ => OK,
                 });
-            if *output_closed && worst != ERROR {
-                OK
-            } else {
-                worst
-            }
+            worst
         }
     }
 }
@@ -107,10 +104,10 @@ mod tests {
         checks_held: true,
     };
 
-    fn measured(links: &[LinkEnd], output_closed: bool) -> u8 {
+    fn measured(links: &[LinkEnd], output_failed: bool) -> u8 {
         code(&Ending::Measured {
             links: links.to_vec(),
-            output_closed,
+            output_failed,
             exports_failed: false,
         })
     }
@@ -124,16 +121,16 @@ mod tests {
     }
 
     #[test]
-    fn a_closed_stdout_forgives_failed_checks_not_errors() {
-        assert_eq!(measured(&[BAD], true), OK);
-        assert_eq!(measured(&[BAD, BROKEN], true), ERROR);
+    fn output_that_could_not_be_written_is_an_error_even_when_every_check_held() {
+        assert_eq!(measured(&[GOOD], true), ERROR);
+        assert_eq!(measured(&[BAD], true), ERROR);
     }
 
     #[test]
     fn an_export_that_failed_is_an_error() {
         let ending = Ending::Measured {
             links: vec![GOOD],
-            output_closed: false,
+            output_failed: false,
             exports_failed: true,
         };
         assert_eq!(code(&ending), ERROR);

@@ -98,8 +98,47 @@ pub enum Event<'a> {
     LinkFailed { at: Nanos, error: &'a str },
 }
 
-/// Follows a session. Write errors end the run quietly (a closed pipe, as
-/// in `mavping ... | head -1`, is not a failure).
+/// What became of a run's output. The reader's choice to stop reading (a
+/// closed pipe, as in `mavping ... | head -1`) is not a failure: the run
+/// goes on to its end and its code. Any other write error (a full disk,
+/// an I/O error) is: the figures did not reach where they were sent.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum OutputFate {
+    #[default]
+    Written,
+    Closed,
+    Failed(String),
+}
+
+impl OutputFate {
+    /// Notes the outcome of a write; a failure outranks a closed pipe.
+    pub fn note(&mut self, written: &io::Result<()>) {
+        let Err(e) = written else {
+            return;
+        };
+        let fate = if e.kind() == io::ErrorKind::BrokenPipe {
+            OutputFate::Closed
+        } else {
+            OutputFate::Failed(e.to_string())
+        };
+        self.merge(fate);
+    }
+
+    /// The worse of the two.
+    pub fn merge(&mut self, other: OutputFate) {
+        let rank = |f: &OutputFate| match f {
+            OutputFate::Written => 0,
+            OutputFate::Closed => 1,
+            OutputFate::Failed(_) => 2,
+        };
+        if rank(&other) > rank(self) {
+            *self = other;
+        }
+    }
+}
+
+/// Follows a session. A write error is told back and the run goes on: an
+/// output that failed is not written to again (see [`OutputFate`]).
 pub trait Observer {
     fn start(&mut self, info: &StartInfo) -> io::Result<()>;
     fn event(&mut self, event: &Event<'_>) -> io::Result<()>;
@@ -188,6 +227,21 @@ pub enum CommandEvent {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_full_disk_outranks_a_closed_pipe_whatever_the_order() {
+        let pipe = Err(io::Error::from(io::ErrorKind::BrokenPipe));
+        let full = Err(io::Error::from(io::ErrorKind::StorageFull));
+        let mut fate = OutputFate::default();
+        fate.note(&Ok(()));
+        assert_eq!(fate, OutputFate::Written);
+        fate.note(&pipe);
+        assert_eq!(fate, OutputFate::Closed);
+        fate.note(&full);
+        assert!(matches!(fate, OutputFate::Failed(_)));
+        fate.note(&pipe);
+        assert!(matches!(fate, OutputFate::Failed(_)));
+    }
 
     #[test]
     fn probe_names_serialise_as_reports_show_them() {

@@ -15,7 +15,7 @@ use std::sync::Arc;
 use tokio::sync::Notify;
 
 use super::link_io::{admitted, Clock, Heartbeat, Sender};
-use super::observe::{Event, Observer, StartInfo};
+use super::observe::{Event, Observer, OutputFate, StartInfo};
 use super::radio::{RadioReport, Radios};
 use super::roster::Roster;
 use super::schedule::Schedule;
@@ -42,8 +42,8 @@ pub struct Measurement {
     /// Each responder's RTT (or time-to-ACK) statistics, whose histograms
     /// (µs) the exports write.
     pub histograms: Vec<(SysComp, RttStats)>,
-    /// The observer's output went away (closed pipe): stop quietly.
-    pub output_closed: bool,
+    /// What became of the observer's output.
+    pub output: OutputFate,
 }
 
 /// What the loop knows at the end, for a driver's summary.
@@ -205,7 +205,6 @@ enum Stop {
     Done,
     Interrupted,
     LinkFailed(LinkError),
-    OutputClosed,
     /// A listening link heard nobody in time.
     NoPeer,
 }
@@ -273,8 +272,8 @@ struct Session<'a, T, D> {
     /// The link dates what it receives in the kernel (UDP).
     kernel_stamped: bool,
     inbound: Vec<Inbound>,
-    /// The first error writing to the observer: once set, the run stops.
-    output: io::Result<()>,
+    /// What became of the observer's output (the run goes on regardless).
+    output: OutputFate,
 }
 
 impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
@@ -288,7 +287,8 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         wait::tighten_timer_slack();
         let clock = Clock::start();
         driver.begin(clock.wall_at_zero());
-        let output = observer.start(&driver.start_info(cfg));
+        let mut output = OutputFate::default();
+        output.note(&observer.start(&driver.start_info(cfg)));
         let kernel_stamped = link.rx_clock() == RxClock::Kernel;
         Session {
             cfg,
@@ -318,24 +318,27 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         }
     }
 
-    /// Keeps the first write error.
+    /// Notes a write error; the measurement goes on.
     fn told(&mut self, written: io::Result<()>) {
-        if self.output.is_ok() {
-            self.output = written;
-        }
+        self.output.note(&written);
     }
 
-    fn output_open(&self) -> Turn {
+    /// A run with no count, deadline or sweep whose reader went away ends
+    /// as `ping | head` does, judged as if interrupted; any other run goes
+    /// on to its end, so a closed pipe cannot cut a check short.
+    fn reader_gone(&self) -> Turn {
+        let cfg = self.cfg;
+        let endless = cfg.count.is_none() && cfg.deadline.is_none() && cfg.sweep.is_none();
         match self.output {
-            Ok(()) => Ok(()),
-            Err(_) => Err(Stop::OutputClosed),
+            OutputFate::Closed if endless => Err(Stop::Interrupted),
+            _ => Ok(()),
         }
     }
 
     /// Sends what is due, decides what is overdue, then waits for the
     /// next thing to do.
     async fn turn(&mut self) -> Turn {
-        self.output_open()?;
+        self.reader_gone()?;
         let now = self.clock.now();
         if self.timers.deadline.is_some_and(|d| now >= d) {
             return Err(Stop::Done);
@@ -347,7 +350,6 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         self.schedule_once_a_peer_is_known(now)?;
         self.send_due().await?;
         self.decide();
-        self.output_open()?;
         if self.schedule.as_ref().is_some_and(Schedule::finished) && self.driver.settled() {
             return Err(Stop::Done);
         }
@@ -457,9 +459,6 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
                 let flushed = self.observer.flush();
                 self.told(flushed);
             }
-            if self.output.is_err() {
-                return Ok(());
-            }
             // The runtime runs nothing while the thread sleeps here: let it
             // handle signals now and then.
             if now.saturating_sub(self.timers.last_yield) > YIELD_EVERY_NS {
@@ -494,7 +493,6 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         self.timers.last_flush = self.clock.now();
         let flushed = self.observer.flush();
         self.told(flushed);
-        self.output_open()?;
         let controls = self.controls;
         let sleep = self.waiter.until(&self.clock, wake);
         tokio::select! {
@@ -515,25 +513,21 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
     fn finish(mut self, stop: Stop) -> Measurement {
         // Decide what is due before counting what is still in flight.
         self.driver.expire(self.clock.now());
-        let mut output_closed = match stop {
-            Stop::OutputClosed => true,
-            _ => self
-                .driver
-                .report(&mut self.heard.radios, self.observer)
-                .is_err(),
-        };
+        let reported = self.driver.report(&mut self.heard.radios, self.observer);
+        self.told(reported);
         let (interrupted, link_error, no_peer_within) = match stop {
             Stop::Interrupted => (true, None, None),
             Stop::LinkFailed(e) => (false, Some(e.to_string()), None),
             Stop::NoPeer => (false, None, self.cfg.wait),
-            Stop::Done | Stop::OutputClosed => (false, None, None),
+            Stop::Done => (false, None, None),
         };
         if let Some(error) = &link_error {
             let failed = Event::LinkFailed {
                 at: self.clock.now(),
                 error,
             };
-            output_closed |= self.observer.event(&failed).is_err();
+            let told = self.observer.event(&failed);
+            self.told(told);
         }
         let (mut summary, histograms) = self.driver.finish(SessionEnd {
             cfg: self.cfg,
@@ -556,7 +550,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         Measurement {
             summary,
             histograms,
-            output_closed,
+            output: self.output,
         }
     }
 }

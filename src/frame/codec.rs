@@ -322,6 +322,11 @@ pub fn command_name(id: u16) -> String {
     enum_name::<dialect::MavCmd>(u32::from(id), "MAV_CMD_")
 }
 
+/// Name of a message id ("ATTITUDE"), if the dialect knows it.
+pub fn message_name(id: u32) -> Option<&'static str> {
+    dialect::MavMessage::default_message_from_id(id).map(|m| m.message_name())
+}
+
 /// Name of a MAV_RESULT value ("accepted").
 pub fn result_name(value: u8) -> String {
     enum_name::<dialect::MavResult>(u32::from(value), "MAV_RESULT_")
@@ -459,5 +464,8 @@ mod tests {
         assert_eq!(super::super::vehicle_type_name(250), "unknown (250)");
         assert_eq!(command_id_from_name("request_message"), Some(512));
         assert_eq!(result_name(0), "accepted");
+        assert_eq!(message_name(30), Some("ATTITUDE"));
+        assert_eq!(message_name(109), Some("RADIO_STATUS"));
+        assert_eq!(message_name(65_000), None);
     }
 }

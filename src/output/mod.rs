@@ -9,6 +9,7 @@ pub mod plot;
 pub mod prometheus;
 pub mod samples;
 pub mod text;
+pub mod windows;
 
 use std::io;
 use std::time::{Duration, SystemTime};
@@ -59,41 +60,55 @@ impl WallClock {
 }
 
 /// Several reporters fed the same run (the chosen format, the sample log,
-/// the exporter...).
+/// the exporter...). One that fails to write is not written to again, and
+/// the others go on: a closed stdout (`| head`) must not cost the plot,
+/// the sample log or the exporter anything.
 #[derive(Default)]
 pub struct Fanout<'a> {
-    pub reporters: Vec<Box<dyn Reporter + 'a>>,
+    reporters: Vec<(Box<dyn Reporter + 'a>, bool)>,
+}
+
+impl<'a> Fanout<'a> {
+    pub fn new(reporters: Vec<Box<dyn Reporter + 'a>>) -> Self {
+        Fanout {
+            reporters: reporters.into_iter().map(|r| (r, true)).collect(),
+        }
+    }
+
+    /// Calls `f` on each reporter still writing; the first error is told
+    /// back, and the reporter that gave it is muted.
+    fn each(&mut self, mut f: impl FnMut(&mut dyn Reporter) -> io::Result<()>) -> io::Result<()> {
+        let mut result = Ok(());
+        for (r, writing) in self.reporters.iter_mut().filter(|(_, w)| *w) {
+            if let Err(e) = f(r.as_mut()) {
+                *writing = false;
+                if result.is_ok() {
+                    result = Err(e);
+                }
+            }
+        }
+        result
+    }
 }
 
 impl Observer for Fanout<'_> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        self.reporters.iter_mut().try_for_each(|r| r.start(info))
+        self.each(|r| r.start(info))
     }
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        self.reporters.iter_mut().try_for_each(|r| r.event(event))
+        self.each(|r| r.event(event))
     }
     fn flush(&mut self) -> io::Result<()> {
-        self.reporters.iter_mut().try_for_each(|r| r.flush())
+        self.each(|r| r.flush())
     }
     fn interim(&mut self, figures: &Interim) -> io::Result<()> {
-        self.reporters
-            .iter_mut()
-            .try_for_each(|r| r.interim(figures))
+        self.each(|r| r.interim(figures))
     }
 }
 
 impl Reporter for Fanout<'_> {
-    /// Every reporter gets the summary, even after one failed: a closed
-    /// stdout (`| head`) must not cost the plot or the sample log its end.
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
-        let mut result = Ok(());
-        for r in &mut self.reporters {
-            let written = r.summary(summary, verdict);
-            if result.is_ok() {
-                result = written;
-            }
-        }
-        result
+        self.each(|r| r.summary(summary, verdict))
     }
 }
 

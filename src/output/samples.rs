@@ -1,12 +1,16 @@
-//! `--samples FILE.csv`: one row per reply or loss, written as the run goes.
-//! The one output whose size grows with the run, by the user's choice; the
-//! process itself keeps nothing.
+//! `--samples FILE.csv`: one row per reply or loss, written as the run goes;
+//! in a passive run, one row per source per second of what its sequence
+//! said in that second. The one output whose size grows with the run, by
+//! the user's choice; the process itself keeps nothing but the last
+//! figures of each source.
 
 use std::io::{self, Write};
 
-use super::{Event, Observer, Reporter, StartInfo};
+use super::windows::{Window, Windows};
+use super::{Event, Observer, Reporter, RunKind, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport};
+use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::LinkSummary;
 use crate::verdict::Verdict;
 
@@ -14,6 +18,15 @@ use crate::verdict::Verdict;
 /// They hold the latest RADIO_STATUS (any radio) when the row was written,
 /// so loss can be plotted against RSSI; empty before one or when unknown.
 pub const HEADER: &str = "sysid,compid,seq,sent_s,rtt_us,status,rssi,remrssi,txbuf,noise,remnoise";
+
+/// A passive run's rows: per source and window (from the previous row's
+/// time, or the start, to `t_s`, session seconds), what its sequence said
+/// in it. The columns add up to the summary's figures; `lost` is negative
+/// in a window whose late frames filled more of earlier windows' gaps than
+/// it skipped (they count as reordered). The radio (51/68) has rows too,
+/// as it is outside the summary's totals.
+pub const PASSIVE_HEADER: &str =
+    "t_s,window_s,sysid,compid,received,lost,duplicate,reordered,bytes,frames_per_s";
 
 /// With several links, one file holds them all and each row ends with its
 /// link's connection string.
@@ -25,6 +38,8 @@ pub struct SampleLog<W: Write> {
     /// `,LINK` (CSV-quoted when needed) after each row, with several links.
     link: Option<String>,
     header: bool,
+    /// A passive run's sources, window by window (set at its start).
+    windows: Option<Windows>,
 }
 
 impl<W: Write> SampleLog<W> {
@@ -34,6 +49,7 @@ impl<W: Write> SampleLog<W> {
             radio: None,
             link: None,
             header: true,
+            windows: None,
         }
     }
 
@@ -78,18 +94,59 @@ fn us(ns: u64) -> String {
     format!("{:.3}", ns as f64 / 1e3)
 }
 
+impl<W: Write> SampleLog<W> {
+    /// A passive run's row of one window.
+    fn window(&mut self, w: &Window) -> io::Result<()> {
+        writeln!(
+            self.out,
+            "{},{},{},{},{},{},{},{},{},{}{}",
+            secs(w.end),
+            secs(w.end - w.start),
+            w.source.sysid,
+            w.source.compid,
+            w.received,
+            w.lost,
+            w.duplicate,
+            w.reordered,
+            w.bytes,
+            w.frames_per_s()
+                .map_or_else(String::new, |r| format!("{r:.3}")),
+            self.link.as_deref().unwrap_or("")
+        )
+    }
+
+    /// The rows of the windows ending at `at`; an empty last window (the
+    /// run ended on a telling) writes none.
+    fn windows(&mut self, at: u64, table: &TableSummary, last: bool) -> io::Result<()> {
+        let Some(windows) = self.windows.as_mut() else {
+            return Ok(());
+        };
+        let rows = windows.next(at, table);
+        if last && rows.iter().all(Window::is_empty) {
+            return Ok(());
+        }
+        rows.iter().try_for_each(|w| self.window(w))
+    }
+}
+
 impl<W: Write> Observer for SampleLog<W> {
-    fn start(&mut self, _: &StartInfo) -> io::Result<()> {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        let passive = matches!(info.run, RunKind::Passive { .. });
+        self.windows = passive.then(Windows::default);
+        let header = if passive { PASSIVE_HEADER } else { HEADER };
         match (self.header, &self.link) {
             (false, _) => Ok(()),
-            (true, None) => writeln!(self.out, "{HEADER}"),
-            (true, Some(_)) => writeln!(self.out, "{HEADER}{LINK_COLUMN}"),
+            (true, None) => writeln!(self.out, "{header}"),
+            (true, Some(_)) => writeln!(self.out, "{header}{LINK_COLUMN}"),
         }
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
         if let Event::Radio { report, .. } = *event {
             self.radio = Some(report);
+        }
+        if let Event::Sources { at, table } = *event {
+            return self.windows(at, table, false);
         }
         let Event::Match(e) = event else {
             return Ok(());
@@ -141,7 +198,12 @@ impl<W: Write> Observer for SampleLog<W> {
 }
 
 impl<W: Write> Reporter for SampleLog<W> {
-    fn summary(&mut self, _: &LinkSummary, _: &Verdict) -> io::Result<()> {
+    /// A passive run's last, partial, window comes from its summary.
+    fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
+        if let LinkSummary::Passive(s) = summary {
+            let end = (s.duration_s * 1e9) as u64;
+            self.windows(end, &s.table, true)?;
+        }
         self.out.flush()
     }
 }
@@ -186,6 +248,107 @@ mod tests {
             out,
             "1,1,0,0.000000,,lost,,,,,\n1,1,1,0.000000,,lost,200,,15,40,60\n"
         );
+    }
+
+    fn passive_start() -> StartInfo {
+        StartInfo {
+            link: "sim:".into(),
+            probe: ProbeName::Passive,
+            ours: SysComp::new(250, 190),
+            interval: std::time::Duration::from_secs(1),
+            timeout: std::time::Duration::from_secs(1),
+            count: None,
+            run: RunKind::Passive { heartbeat: true },
+        }
+    }
+
+    fn passive_summary(duration_s: f64, table: TableSummary) -> LinkSummary {
+        use crate::engine::summary::passive::PassiveSummary;
+        LinkSummary::Passive(Box::new(PassiveSummary {
+            link: "sim:".into(),
+            ours: SysComp::new(250, 190),
+            heartbeat: true,
+            duration_s,
+            table,
+            identities: vec![],
+            own_frames: 0,
+            radios: vec![],
+            frames: crate::frame::ScanStats::default(),
+            rx_clock: crate::transport::RxClock::Simulated,
+            interrupted: false,
+            link_error: None,
+            signing: crate::frame::signing::Gate::new(None).summary(),
+        }))
+    }
+
+    fn judged(summary: &LinkSummary) -> Verdict {
+        crate::verdict::judge_link(summary, &crate::verdict::Thresholds::default())
+    }
+
+    #[test]
+    fn a_passive_run_has_a_row_per_source_per_second_and_the_last_part() {
+        use crate::engine::probe::passive::tracker::SourceTable;
+        let ms = 1_000_000;
+        let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));
+        let mut table = SourceTable::new(None, 32);
+        let mut log = SampleLog::new(Vec::new()).for_link("sim:", true);
+        log.start(&passive_start()).unwrap();
+        // 1/1 skips 2, which comes in the next second; 2/1 starts then.
+        for (seq, at) in [(0, 100), (1, 200), (3, 300)] {
+            table.on_frame(a, seq, 30, 40, at * ms);
+        }
+        let first = table.summary(1_000 * ms);
+        log.event(&Event::Sources {
+            at: 1_000 * ms,
+            table: &first,
+        })
+        .unwrap();
+        table.on_frame(a, 2, 30, 40, 1_100 * ms);
+        table.on_frame(b, 0, 0, 21, 1_200 * ms);
+        table.on_frame(b, 0, 0, 21, 1_300 * ms);
+        table.on_frame(b, 1, 0, 21, 1_400 * ms);
+        let end = passive_summary(1.5, table.summary(1_500 * ms));
+        log.summary(&end, &judged(&end)).unwrap();
+        assert_eq!(
+            String::from_utf8(log.out).unwrap(),
+            format!(
+                "{PASSIVE_HEADER},link\n\
+                 1.000000,1.000000,1,1,3,1,0,0,120,3.000,sim:\n\
+                 1.500000,0.500000,1,1,1,-1,0,1,40,2.000,sim:\n\
+                 1.500000,0.500000,2,1,3,0,1,0,63,6.000,sim:\n"
+            )
+        );
+    }
+
+    #[test]
+    fn a_passive_run_that_ends_on_a_second_adds_no_empty_rows() {
+        use crate::engine::probe::passive::tracker::SourceTable;
+        let mut table = SourceTable::new(None, 32);
+        table.on_frame(SysComp::new(1, 1), 0, 30, 40, 500_000_000);
+        let at_one = table.summary(1_000_000_000);
+        let mut log = SampleLog::new(Vec::new());
+        log.start(&passive_start()).unwrap();
+        // An echo run's table (told for its direction split) is not sampled.
+        let mut echo = SampleLog::new(Vec::new());
+        echo.start(&StartInfo {
+            run: RunKind::Echo,
+            ..passive_start()
+        })
+        .unwrap();
+        for l in [&mut log, &mut echo] {
+            l.event(&Event::Sources {
+                at: 1_000_000_000,
+                table: &at_one,
+            })
+            .unwrap();
+        }
+        let end = passive_summary(1.0, at_one.clone());
+        log.summary(&end, &judged(&end)).unwrap();
+        assert_eq!(
+            String::from_utf8(log.out).unwrap(),
+            format!("{PASSIVE_HEADER}\n1.000000,1.000000,1,1,1,0,0,0,40,1.000\n")
+        );
+        assert_eq!(String::from_utf8(echo.out).unwrap(), format!("{HEADER}\n"));
     }
 
     #[test]

@@ -24,6 +24,7 @@ use super::exports::Exports;
 use super::one_link::measure;
 use crate::cli::Format;
 use crate::config::{Config, LinkConfig, OutputConfig, Probe};
+use crate::engine::observe::OutputFate;
 use crate::engine::session::{Controls, Measurement};
 use crate::exit::{Ending, LinkEnd};
 use crate::output::json::JsonReporter;
@@ -214,7 +215,7 @@ fn attach<'a>(
             LinkRun {
                 config: link_config,
                 link,
-                report: Fanout { reporters },
+                report: Fanout::new(reporters),
                 controls: Controls::default(),
             }
         })
@@ -259,25 +260,26 @@ async fn measure_one<'a>(
 }
 
 /// Judges each link and writes its summary, in command-line order; how
-/// each ended, and whether standard output went away.
+/// each ended, and what became of the output.
 fn judge(
     finished: &mut [Finished<'_>],
     stdout: &Shared<Box<dyn Write>>,
     separate: bool,
-) -> (Vec<LinkEnd>, bool) {
+) -> (Vec<LinkEnd>, OutputFate) {
     let mut ends = Vec::new();
-    let mut output_closed = false;
+    let mut output = OutputFate::default();
     for (i, f) in finished.iter_mut().enumerate() {
         let verdict = verdict::judge_link(&f.measurement.summary, &f.config.thresholds);
         // Quiet summaries are not preceded by a blank line: separate them.
         if separate && i > 0 {
-            output_closed |= writeln!(stdout.clone()).is_err();
+            output.note(&writeln!(stdout.clone()));
         }
-        output_closed |= f.measurement.output_closed
-            || f.report.summary(&f.measurement.summary, &verdict).is_err();
+        output.merge(f.measurement.output.clone());
+        output.note(&f.report.summary(&f.measurement.summary, &verdict));
         ends.push(verdict.end);
     }
-    (ends, output_closed)
+    output.note(&stdout.clone().flush());
+    (ends, output)
 }
 
 /// Runs every link of `config` side by side; how it ended.
@@ -319,7 +321,10 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
     }
     let out = &config.output;
     let separate = out.format == Format::Text && (out.quiet || live);
-    let (mut links, output_closed) = judge(&mut finished, &screen.stdout, separate);
+    let (mut links, output) = judge(&mut finished, &screen.stdout, separate);
+    if let OutputFate::Failed(e) = &output {
+        stderr::error(&format!("cannot write the output: {e}"));
+    }
     links.extend(unopened.iter().map(|_| LinkEnd {
         link_failed: true,
         checks_held: false,
@@ -333,7 +338,7 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
     };
     Ending::Measured {
         links,
-        output_closed,
+        output_failed: matches!(output, OutputFate::Failed(_)),
         exports_failed,
     }
 }

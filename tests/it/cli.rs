@@ -163,11 +163,31 @@ fn ctrl_c_prints_the_summary_and_exits_normally() {
     assert_eq!(c.sent, c.received + c.lost);
 }
 
+/// A UDP socket that reads everything and answers nothing; joined, it
+/// tells how many PINGs (MAVLink 2, message 4) it read.
+fn silent_peer(listen_for: Duration) -> (u16, std::thread::JoinHandle<u64>) {
+    let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let port = socket.local_addr().unwrap().port();
+    socket.set_read_timeout(Some(listen_for)).unwrap();
+    let counting = std::thread::spawn(move || {
+        let mut buf = [0u8; 512];
+        let mut pings = 0;
+        while let Ok(n) = socket.recv(&mut buf) {
+            let msgid = (n >= 10 && buf[0] == 0xFD).then(|| buf[7]);
+            pings += u64::from(msgid == Some(4));
+        }
+        pings
+    });
+    (port, counting)
+}
+
 #[test]
-fn closed_stdout_is_not_an_error() {
+fn a_closed_stdout_stops_the_output_not_the_measurement() {
     use std::io::Read;
+    let (port, counting) = silent_peer(Duration::from_secs(3));
+    let target = format!("udpout:127.0.0.1:{port}");
     let mut child = mavping()
-        .args(["-i", "0.01", "-c", "500", "sim:?delay=1ms&jitter=0ms"])
+        .args(["-c", "10", "-i", "0.1", "-W", "0.3", &target])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -178,8 +198,96 @@ fn closed_stdout_is_not_an_error() {
     stdout.read_exact(&mut first).unwrap();
     drop(stdout);
     let (code, _, err) = wait_output(child, Duration::from_secs(30));
+    // Nothing answered: the check failed, pipe or no pipe.
+    assert_eq!(code, 1, "{err}");
+    assert!(err.is_empty(), "{err}");
+    assert_eq!(counting.join().unwrap(), 10, "every request went out");
+}
+
+#[test]
+fn a_closed_stdout_keeps_a_good_run_good() {
+    use std::io::Read;
+    let mut child = mavping()
+        .args(["-i", "0.01", "-c", "100", "sim:?delay=1ms&jitter=0ms"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut stdout = child.stdout.take().unwrap();
+    let mut first = [0u8; 8];
+    stdout.read_exact(&mut first).unwrap();
+    drop(stdout);
+    let (code, _, err) = wait_output(child, Duration::from_secs(30));
     assert_eq!(code, 0, "{err}");
     assert!(err.is_empty(), "{err}");
+}
+
+/// Runs `mavping ARGS | head -1` in bash; mavping's exit code.
+fn piped_to_head(args: &str) -> String {
+    let script = format!(
+        "{} {args} | head -1 >/dev/null; echo ${{PIPESTATUS[0]}}",
+        env!("CARGO_BIN_EXE_mavping")
+    );
+    let out = std::process::Command::new("timeout")
+        .args(["20", "bash", "-c", &script])
+        .output()
+        .unwrap();
+    String::from_utf8_lossy(&out.stdout).trim().to_string()
+}
+
+#[test]
+fn an_endless_run_ends_when_its_reader_goes_as_ping_does() {
+    // The next line after the first meets the closed pipe and ends the
+    // run (no -c, -w or sweep); judged on what it measured until then.
+    assert_eq!(piped_to_head("-i 0.05 sim:"), "0");
+    assert_eq!(piped_to_head("-i 0.05 --expect 9/1 sim:"), "1");
+}
+
+#[test]
+fn a_full_disk_is_an_error_whatever_the_measurement() {
+    let full = || std::fs::File::create("/dev/full").unwrap();
+    let (port, counting) = silent_peer(Duration::from_secs(3));
+    let silent = format!("udpout:127.0.0.1:{port}");
+    for (args, what) in [
+        (vec!["-c", "5", "-i", "0.05", "sim:"], "a good run"),
+        (
+            vec!["-c", "5", "-i", "0.05", "--json", "sim:"],
+            "a good run, JSON",
+        ),
+        (
+            vec![
+                "-c",
+                "5",
+                "-i",
+                "0.05",
+                "-W",
+                "0.2",
+                "--max-loss",
+                "10",
+                &silent,
+            ],
+            "no reply at all",
+        ),
+    ] {
+        let child = mavping()
+            .args(&args)
+            .stdout(full())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (code, _, err) = wait_output(child, Duration::from_secs(30));
+        assert_eq!(code, 2, "{what}: {err}");
+        assert_eq!(
+            err.trim_end(),
+            "mavping: cannot write the output: No space left on device (os error 28)",
+            "{what}"
+        );
+    }
+    assert_eq!(
+        counting.join().unwrap(),
+        5,
+        "the silent peer's run went to its count"
+    );
 }
 
 #[test]

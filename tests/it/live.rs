@@ -1,7 +1,8 @@
 //! `--live` in a real terminal (a tmux pane of a set size), as a user sees
 //! it: at 80×24 every column header is whole and every row fits inside its
 //! borders, with one link or several; a wider terminal shows more of the
-//! recent outcomes; responders beyond the screen are counted; `q` leaves the
+//! recent outcomes; responders beyond the screen are counted; a passive
+//! run has a row per source, its identity and its seconds; `q` leaves the
 //! view and prints the summary.
 
 use std::process::Command;
@@ -10,21 +11,37 @@ use assert_cmd::cargo::cargo_bin;
 
 use crate::common::Tmux;
 
-/// The column headers, in order, as the header line must show them.
-const HEADERS: [&str; 11] = [
-    "responder",
-    "sent",
-    "recv",
-    "loss%",
-    "late",
-    "dup",
-    "last",
-    "p50",
-    "p99",
-    "jitter",
-    "recent",
-];
-const KEYS: &str = "q or Ctrl-C: stop and print the summary · RTT in ms · × lost · ! late";
+/// What a kind of run's view shows: its column headers, in order, as the
+/// header line must show them, and its key line.
+struct Kind {
+    headers: &'static [&'static str],
+    keys: &'static str,
+}
+
+const ECHO: Kind = Kind {
+    headers: &[
+        "responder",
+        "sent",
+        "recv",
+        "loss%",
+        "late",
+        "dup",
+        "last",
+        "p50",
+        "p99",
+        "jitter",
+        "recent",
+    ],
+    keys: "q or Ctrl-C: stop and print the summary · RTT in ms · × lost · ! late",
+};
+
+const PASSIVE: Kind = Kind {
+    headers: &[
+        "source", "identity", "recv", "lost", "loss%", "dup", "reord", "sil", "fr/s", "per",
+        "second",
+    ],
+    keys: "q or Ctrl-C: stop and print the summary · a bar a second: frames, red: lost",
+};
 
 /// Runs `mavping --live ARGS` in a `width` x `height` pane; the shell
 /// prints the exit code when it ends.
@@ -60,19 +77,21 @@ fn strip(row: &str) -> &str {
 /// every header whole and in order, every row closed by its right border,
 /// and the key line whole at the bottom. Returns the number of sections.
 fn assert_fits(screen: &str, width: usize, height: usize) -> usize {
+    assert_fits_as(&ECHO, screen, width, height)
+}
+
+fn assert_fits_as(kind: &Kind, screen: &str, width: usize, height: usize) -> usize {
     let lines: Vec<&str> = screen.lines().collect();
     assert!(lines.len() <= height, "{} lines:\n{screen}", lines.len());
     for l in &lines {
         assert!(l.chars().count() <= width, "wider than {width}: {l:?}");
     }
-    let headers: Vec<&&str> = lines
-        .iter()
-        .filter(|l| l.starts_with("│responder"))
-        .collect();
+    let first = format!("│{}", kind.headers[0]);
+    let headers: Vec<&&str> = lines.iter().filter(|l| l.starts_with(&first)).collect();
     assert!(!headers.is_empty(), "no header line:\n{screen}");
     for h in &headers {
         let words: Vec<&str> = h.trim_matches('│').split_whitespace().collect();
-        assert_eq!(words, HEADERS, "a header is cut or missing:\n{screen}");
+        assert_eq!(words, kind.headers, "a header is cut or missing:\n{screen}");
         assert!(h.ends_with('│'), "{h:?}");
     }
     for r in rows(screen) {
@@ -80,13 +99,18 @@ fn assert_fits(screen: &str, width: usize, height: usize) -> usize {
         assert_eq!(r.chars().count(), width, "{r:?}");
     }
     let keys = lines.iter().rev().find(|l| !l.trim().is_empty());
-    assert_eq!(keys, Some(&KEYS), "{screen}");
+    assert_eq!(keys, Some(&kind.keys), "{screen}");
     headers.len()
 }
 
 /// Presses `q` and checks the view is left for the text summary of the
 /// links named `links...`.
 fn quit(tmux: &Tmux, links: &[&str]) {
+    quit_as(&ECHO, tmux, links);
+}
+
+/// As [`quit`]; returns what the terminal shows then.
+fn quit_as(kind: &Kind, tmux: &Tmux, links: &[&str]) -> String {
     tmux.send_keys("q");
     let screen = tmux.wait_for("exit=", |s| s.contains("exit="));
     assert!(screen.contains("exit=0"), "{screen}");
@@ -97,7 +121,11 @@ fn quit(tmux: &Tmux, links: &[&str]) {
         });
         assert!(summary, "no summary of {link}:\n{screen}");
     }
-    assert!(!screen.contains(KEYS), "the view was not left:\n{screen}");
+    assert!(
+        !screen.contains(kind.keys),
+        "the view was not left:\n{screen}"
+    );
+    screen
 }
 
 #[test]
@@ -171,6 +199,57 @@ fn responders_beyond_the_screen_are_counted_at_80x24() {
     assert!(screen.contains("┌ sim:?delay=30ms ─"), "{screen}");
     // 40 responders' summaries scroll the first link's off the history.
     quit(&tmux, &["sim:?delay=30ms"]);
+}
+
+/// A row's words: `1/1 quadrotor px4 546 54 9.0 ...`.
+fn words(row: &str) -> Vec<&str> {
+    row.trim_matches('│').split_whitespace().collect()
+}
+
+#[test]
+fn a_passive_run_has_a_row_per_source_with_its_seconds_at_80x24() {
+    let link = "sim:?responders=2&stream=ATTITUDE@50&loss_down=10%&seed=5";
+    let command = format!(
+        "{} --live --passive '{link}'; echo exit=$?",
+        cargo_bin("mavping").display()
+    );
+    let tmux = Tmux::start("passive", &command, 80, 24);
+    // Both vehicles, each named by its HEARTBEAT, each having lost frames,
+    // with three seconds in their strips: told once a second, not per frame.
+    let screen = tmux.wait_for_screen("two sources with losses and 3 s", |s| {
+        let rows = rows(s);
+        rows.len() == 2
+            && rows.iter().all(|r| {
+                let w = words(r);
+                w.len() == 11 && w[4] != "0" && w[10].chars().count() >= 3
+            })
+    });
+    assert_eq!(assert_fits_as(&PASSIVE, &screen, 80, 24), 1);
+    assert!(screen.starts_with("mavping · passive · "), "{screen}");
+    assert!(screen.contains("┌ sim:?responders=2&"), "{screen}");
+    let shown: Vec<(String, u64)> = rows(&screen)
+        .iter()
+        .map(|r| {
+            let w = words(r);
+            assert_eq!(w[1..3], ["quadrotor", "px4"], "{r}");
+            // 51 frames a second (50 ATTITUDE and a HEARTBEAT), less 10%.
+            let rate: f64 = w[9].parse().unwrap();
+            assert!((38.0..=56.0).contains(&rate), "{r}");
+            (w[0].to_string(), w[3].parse().unwrap())
+        })
+        .collect();
+    assert_eq!(shown[0].0, "1/1");
+    assert_eq!(shown[1].0, "2/1");
+    let after = quit_as(&PASSIVE, &tmux, &["sim:?responders=2&"]);
+    // The summary has at least what the view showed, as the run went on.
+    for (id, received) in shown {
+        let row = after
+            .lines()
+            .find(|l| l.starts_with(&format!("{id} ")))
+            .unwrap_or_else(|| panic!("no {id} in the summary:\n{after}"));
+        let summary_received: u64 = row.split_whitespace().nth(3).unwrap().parse().unwrap();
+        assert!(summary_received >= received, "{row}\n{after}");
+    }
 }
 
 #[test]

@@ -1,8 +1,9 @@
 //! `mavping serve` scraped by a real Prometheus server (Debian's
 //! `prometheus` package): a continuous link and a `/probe` target, each
-//! against a pymavlink responder with known drops. What Prometheus stores
-//! and answers through its HTTP query API must equal the responders'
-//! ground truth.
+//! against a pymavlink responder with known drops, and a passive link
+//! listening to a pymavlink vehicle that drops, doubles and swaps frames.
+//! What Prometheus stores and answers through its HTTP query API must
+//! equal the peers' ground truth.
 
 use std::path::PathBuf;
 use std::process::{Child, Stdio};
@@ -27,8 +28,10 @@ struct Prometheus {
 }
 
 impl Prometheus {
-    fn start(config: &str) -> Prometheus {
-        let dir = std::env::temp_dir().join(format!("mavping-prometheus-{}", std::process::id()));
+    /// A server of its own for the test `name` (tests run side by side).
+    fn start(name: &str, config: &str) -> Prometheus {
+        let dir =
+            std::env::temp_dir().join(format!("mavping-prometheus-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("prometheus.yml");
@@ -126,8 +129,10 @@ timeout = "300ms"
     std::fs::remove_file(&config).unwrap();
     let probe_target = format!("udpout:127.0.0.1:{probe_port}");
     // Both patterns of contrib/prometheus/prometheus.yml, on loopback.
-    let prometheus = Prometheus::start(&format!(
-        r"
+    let prometheus = Prometheus::start(
+        "links-and-probes",
+        &format!(
+            r"
 global:
   scrape_interval: 2s
   scrape_timeout: 2s
@@ -149,8 +154,9 @@ scrape_configs:
       - target_label: __address__
         replacement: {serve}
 ",
-        serve = server.addr
-    ));
+            serve = server.addr
+        ),
+    );
 
     let start = Instant::now();
     while !prometheus.ready() {
@@ -237,5 +243,131 @@ scrape_configs:
         probe_truth["dropped"].as_f64().unwrap() / probe_truth["ping_requests"].as_f64().unwrap();
     assert_eq!(probe_loss, truth_ratio, "{probe_truth}");
     assert_eq!(probe_loss, 0.2);
+    drop(prometheus);
+}
+
+/// Unix seconds now.
+fn now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64()
+}
+
+#[test]
+fn a_real_prometheus_scrapes_a_passive_link_and_sees_what_the_vehicle_did() {
+    let port = free_udp_port();
+    // 400 frames at 100/s: 3 numbered and not sent, 2 sent twice, one pair
+    // swapped, and after frame 250, 200 numbered and not sent (2 s).
+    let mut vehicle = Peer::start(
+        "vehicle.py",
+        &[
+            &format!("udpin:127.0.0.1:{port}"),
+            "--frames",
+            "400",
+            "--rate",
+            "100",
+            "--drop",
+            "20,21,300",
+            "--dup",
+            "60,320",
+            "--swap",
+            "150",
+            "--silence",
+            "250:200",
+        ],
+    );
+    let config =
+        std::env::temp_dir().join(format!("mavping-serve-passive-{}.toml", std::process::id()));
+    std::fs::write(
+        &config,
+        format!(
+            r#"
+[[link]]
+link = "udpout:127.0.0.1:{port}"
+name = "vehicle"
+passive = true
+"#
+        ),
+    )
+    .unwrap();
+    // Prometheus first, scraping where the server will listen, so that it
+    // sees the vehicle's frames as they come.
+    let listen = format!("127.0.0.1:{}", free_tcp_port());
+    let prometheus = Prometheus::start(
+        "passive",
+        &format!(
+            r"
+global:
+  scrape_interval: 1s
+  scrape_timeout: 1s
+scrape_configs:
+  - job_name: mavping_links
+    static_configs:
+      - targets: ['{listen}']
+"
+        ),
+    );
+    let start = Instant::now();
+    while !prometheus.ready() {
+        assert!(start.elapsed() < PATIENCE, "prometheus did not start");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    let server = Server::start(&["--listen", &listen, "--config", config.to_str().unwrap()]);
+    std::fs::remove_file(&config).unwrap();
+    // The vehicle has sent its last frame; Prometheus then scrapes the
+    // source silent with every frame counted.
+    let truth: Value = serde_json::from_str(&vehicle.read_line()).unwrap();
+    let sent = truth["sent"].as_u64().unwrap();
+    assert_eq!(truth["dropped"], 3, "{truth}");
+    let source = r#"{link="vehicle",sysid="1",compid="1"}"#;
+    let at = loop {
+        let t = now();
+        let done = prometheus.query(
+            &format!(
+                "mavping_source_received_total{source} == {sent} \
+                 and on() mavping_source_silent{source} == 1"
+            ),
+            Some(t),
+        );
+        if done.len() == 1 {
+            break t;
+        }
+        assert!(
+            start.elapsed() < PATIENCE,
+            "Prometheus never saw all {sent} frames: {:?}\n{}",
+            prometheus.query(r#"{__name__=~"mavping_source_.*"}"#, Some(t)),
+            server.stderr()
+        );
+        std::thread::sleep(Duration::from_millis(500));
+    };
+    // Samples arrived all along, not only at the end.
+    let over_time = |f: &str| {
+        prometheus.value(
+            &format!("{f}_over_time(mavping_source_received_total{source}[5m])"),
+            at,
+        )
+    };
+    assert!(over_time("count") >= 3.0, "{} samples", over_time("count"));
+    assert!(over_time("min") < sent as f64, "{}", over_time("min"));
+    let value = |name: &str| prometheus.value(&format!("{name}{source}"), at);
+    assert_eq!(value("mavping_source_lost_total"), 3.0);
+    assert_eq!(value("mavping_source_lost_pending"), 0.0);
+    assert_eq!(value("mavping_source_duplicate_total"), 2.0);
+    assert_eq!(value("mavping_source_reordered_total"), 1.0);
+    // The 200 frames not sent: a silence the sequence cannot span (the
+    // count restarts after it), and the one since the last frame.
+    assert_eq!(value("mavping_source_resyncs_total"), 1.0);
+    assert_eq!(value("mavping_source_silences_total"), 2.0);
+    assert_eq!(
+        value("mavping_source_pymavlink_lost_total"),
+        f64::from(3 + 2 * 255 + 256 + 200)
+    );
+    let numbered = (sent - 2 + 3) as f64;
+    assert_eq!(value("mavping_source_loss_ratio"), 3.0 / numbered);
+    assert_eq!(
+        prometheus.value(r#"mavping_link_up{link="vehicle"}"#, at),
+        1.0
+    );
     drop(prometheus);
 }

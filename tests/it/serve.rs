@@ -379,3 +379,96 @@ fn bad_command_lines_and_a_port_in_use_exit_2_with_one_line() {
         );
     }
 }
+
+#[test]
+fn a_passive_link_counts_each_source_across_reopenings() {
+    let port = free_udp_port();
+    let vehicle = |args: &[&str]| {
+        let listen = format!("udpin:127.0.0.1:{port}");
+        let mut all = vec![listen.as_str(), "--frames", "200", "--rate", "100"];
+        all.extend(args);
+        Peer::start("vehicle.py", &all)
+    };
+    // The first vehicle numbers 200 frames and does not send two of them.
+    let mut first = vehicle(&["--drop", "30,31"]);
+    let file = TempFile::new(
+        "serve-passive.toml",
+        &format!(
+            "[[link]]\nlink = \"udpout:127.0.0.1:{port}\"\nname = \"vehicle\"\npassive = true\n"
+        ),
+    );
+    let server = Server::start(&["--config", file.path()]);
+    let link = [("link", "vehicle")];
+    let one = [("link", "vehicle"), ("sysid", "1"), ("compid", "1")];
+    let value = |m: &str, name: &str| sample(m, name, &one);
+    let truth: serde_json::Value = serde_json::from_str(&first.read_line()).unwrap();
+    let sent_first = truth["sent"].as_f64().unwrap();
+    let m = metrics_until(&server, "the first vehicle counted and silent", |m| {
+        value(m, "mavping_source_received_total") == Some(sent_first)
+            && value(m, "mavping_source_silent") == Some(1.0)
+    });
+    assert_promtool_clean(&m);
+    assert_eq!(value(&m, "mavping_source_lost_total"), Some(2.0));
+    // Nothing is probed on a passive link.
+    assert!(!m.contains("mavping_sent_total"), "{m}");
+
+    // It goes away: our HEARTBEAT meets ICMP port unreachable, the link
+    // breaks and is reopened; a second vehicle (its sequence from 0 again)
+    // loses one frame and doubles one.
+    first.kill();
+    metrics_until(&server, "the link reopened", |m| {
+        sample(m, "mavping_link_restarts_total", &link).unwrap_or(0.0) >= 1.0
+    });
+    let mut second = vehicle(&["--drop", "50", "--dup", "70"]);
+    let truth: serde_json::Value = serde_json::from_str(&second.read_line()).unwrap();
+    let sent = sent_first + truth["sent"].as_f64().unwrap();
+    let m = metrics_until(&server, "both vehicles counted", |m| {
+        value(m, "mavping_source_received_total") == Some(sent)
+            && value(m, "mavping_source_silent") == Some(1.0)
+    });
+    assert_promtool_clean(&m);
+    // The counters go on across the two sessions of the link.
+    assert_eq!(value(&m, "mavping_source_lost_total"), Some(3.0));
+    assert_eq!(value(&m, "mavping_source_duplicate_total"), Some(1.0));
+    assert_eq!(value(&m, "mavping_source_reordered_total"), Some(0.0));
+    // Each vehicle's silence after its last frame.
+    assert_eq!(value(&m, "mavping_source_silences_total"), Some(2.0));
+    assert_eq!(value(&m, "mavping_source_lost_pending"), Some(0.0));
+    assert_eq!(
+        value(&m, "mavping_source_loss_ratio"),
+        Some(3.0 / (sent - 1.0 + 3.0))
+    );
+    assert_eq!(sample(&m, "mavping_link_up", &link), Some(1.0));
+    assert_eq!(server.stop(), Some(0));
+}
+
+#[test]
+fn a_probe_splits_its_loss_by_direction() {
+    let server = Server::start(&["--allow", "sim:**"]);
+    let target = enc("sim:?stream=ATTITUDE@50&loss_up=10%&loss_down=5%&seed=7");
+    let r = server.get(&format!("/probe?target={target}&count=200&interval=10ms"));
+    assert_eq!(r.status, 200, "{}", r.body);
+    assert_promtool_clean(&r.body);
+    let m = &r.body;
+    let one = [("sysid", "1"), ("compid", "1")];
+    let dir = |d: &str| {
+        sample(
+            m,
+            "mavping_direction_loss_ratio",
+            &[one.as_slice(), &[("direction", d)]].concat(),
+        )
+        .unwrap_or_else(|| panic!("no {d} in\n{m}"))
+    };
+    // The probe's own counts give the round trip; up is the summary's
+    // formula on it and the responder's downlink.
+    let lost = sample(m, "mavping_probe_lost", &one).unwrap();
+    let sent = sample(m, "mavping_probe_sent", &one).unwrap();
+    assert_eq!(dir("round_trip"), lost / sent);
+    let (down, up) = (dir("down"), dir("up"));
+    assert!(down > 0.0 && down < 0.15, "{down}");
+    assert!((up - (1.0 - (1.0 - lost / sent) / (1.0 - down))).abs() < 1e-12);
+    assert_eq!(
+        sample(m, "mavping_direction_split_consistent", &one),
+        Some(1.0)
+    );
+}

@@ -199,3 +199,79 @@ fn the_plot_shows_each_responder_and_the_losses() {
         png.path.display()
     );
 }
+
+#[test]
+fn the_plot_of_a_passive_run_shows_each_sources_rate_and_loss() {
+    let dir = std::env::temp_dir().join(format!("mavping-passive-plot-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("passive.svg");
+    // Two vehicles losing 5% of their frames, the second silent for 8 s
+    // from 40 s: its rate falls to nothing there.
+    let out = Command::new(cargo_bin("mavping"))
+        .args(["--passive", "-w", "120", "--json", "--plot"])
+        .arg(&path)
+        .arg(
+            "sim:?clock=virtual&responders=2&stream=ATTITUDE@50,GLOBAL_POSITION_INT@5\
+             &loss_down=5%&dup_down=2%&reorder_down=2%&outage=40s+8s&seed=3",
+        )
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(0), "{out:?}");
+    let svg = std::fs::read_to_string(&path).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    for text in [
+        "mavping --passive sim:",
+        "frames a second, by source",
+        "sequence loss per span",
+        "time since start (s)",
+        "1/1",
+        "2/1",
+    ] {
+        assert!(svg.contains(text), "{text} is not in the plot");
+    }
+    // The legend has the run's own figures, as the JSON summary gives them.
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let events = crate::common::json_lines(&stdout);
+    crate::common::assert_schema(&events);
+    let summary = events
+        .iter()
+        .find(|e| e["type"] == "passive_summary")
+        .expect("a passive summary");
+    for s in summary["sources"].as_array().unwrap() {
+        let c = &s["counts"];
+        assert!(n(c, "lost") > 0, "{s}");
+        for figure in [
+            n(c, "received").to_string(),
+            n(c, "lost").to_string(),
+            format!("{:.2}", s["loss_pct"].as_f64().unwrap()),
+            n(c, "duplicate").to_string(),
+            format!("{:.1}", s["frames_per_s"].as_f64().unwrap()),
+        ] {
+            assert!(
+                svg.contains(&format!("\n{figure}\n")),
+                "{figure} not in the legend: {s}"
+            );
+        }
+    }
+
+    let png = Rendered::of(&svg, "passive-two-sources");
+    assert!(
+        png.png.starts_with(b"\x89PNG") && png.png.len() > 20_000,
+        "{}",
+        png.path.display()
+    );
+    for (name, rgb) in [("blue", BLUE), ("vermillion", VERMILLION)] {
+        assert!(
+            png.count(rgb) > 200,
+            "little {name} in {}",
+            png.path.display()
+        );
+    }
+    assert_eq!(png.count(0xFF0000), 0, "{}", png.path.display());
+    assert!(
+        png.dark_in_rows(0..40) > 300,
+        "no title text in {}",
+        png.path.display()
+    );
+}

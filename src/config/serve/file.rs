@@ -16,7 +16,8 @@ use super::{
 use crate::cli::{parse_expected, parse_rtt_limit, ProbeKind, SigningArgs};
 use crate::config::measure::{probe_of, ProbeChoice};
 use crate::config::{
-    invalid, signing, validate_baud, validate_ids, ConfigError, Keys, LinkConfig, MAX_TIMEOUT,
+    invalid, signing, validate_baud, validate_ids, ConfigError, Keys, LinkConfig, Probe,
+    MAX_TIMEOUT,
 };
 use crate::frame::Version;
 use crate::transport::address::LinkSpec;
@@ -24,6 +25,9 @@ use crate::transport::route::Route;
 use crate::transport::{serial, LinkOptions};
 use crate::units::{parse_duration, parse_percent};
 use crate::verdict::Thresholds;
+
+/// The shortest silence threshold a passive link takes, as `--gap`.
+const MIN_GAP: Duration = Duration::from_millis(10);
 
 /// A duration in the file: `"250ms"`, `"2s"`, or a number of seconds.
 #[derive(Debug, Clone, Deserialize)]
@@ -65,6 +69,8 @@ pub(super) struct Table {
     link: Option<String>,
     name: Option<String>,
     rate: Option<f64>,
+    passive: Option<bool>,
+    gap: Option<FileDuration>,
     // [module.NAME] only
     count: Option<u64>,
     max_loss: Option<String>,
@@ -99,6 +105,8 @@ impl Table {
             ("link", self.link.is_some()),
             ("name", self.name.is_some()),
             ("rate", self.rate.is_some()),
+            ("passive", self.passive.is_some()),
+            ("gap", self.gap.is_some()),
         ];
         let module_only = [
             ("count", self.count.is_some()),
@@ -234,13 +242,55 @@ impl Table {
         })
     }
 
+    /// A key that says how to probe, set in a table that sends no probes.
+    fn probing_key(&self) -> Option<&'static str> {
+        [
+            ("probe", self.probe.is_some()),
+            ("rate", self.rate.is_some()),
+            ("interval", self.interval.is_some()),
+            ("timeout", self.timeout.is_some()),
+            ("target", self.target.is_some()),
+            ("command", self.command.is_some()),
+            ("retry_interval", self.retry_interval.is_some()),
+            ("retries", self.retries.is_some()),
+        ]
+        .into_iter()
+        .find(|(_, set)| *set)
+        .map(|(k, _)| k)
+    }
+
+    /// `passive = true`: the link's own traffic, no probes (`--passive`),
+    /// with `gap` as `--gap`; `None` for a probed link.
+    fn passive_probe(&self) -> Result<Option<Probe>, ConfigError> {
+        let gap = self.gap.as_ref().map(|g| g.get("gap")).transpose()?;
+        if self.passive != Some(true) {
+            return match gap {
+                Some(_) => Err(invalid("gap needs passive = true")),
+                None => Ok(None),
+            };
+        }
+        if let Some(key) = self.probing_key() {
+            return Err(invalid(format!(
+                "passive = true sends no probes: drop {key}, or drop passive to probe the link"
+            )));
+        }
+        if gap.is_some_and(|g| g < MIN_GAP) {
+            return Err(invalid("gap: expected at least 10ms"));
+        }
+        Ok(Some(Probe::Passive { gap }))
+    }
+
     pub(super) fn continuous(&self) -> Result<ContinuousLink, ConfigError> {
         let Some(given) = &self.link else {
             return Err(invalid(
                 "a [[link]] needs link = \"CONNECTION\", e.g. link = \"udpout:10.0.0.2:14550\"",
             ));
         };
-        let c = self.common(Duration::from_secs(2))?;
+        let mut c = self.common(Duration::from_secs(2))?;
+        if let Some(passive) = self.passive_probe()? {
+            c.probe = passive;
+            return continuous_link(given, self.name.as_deref(), Duration::from_secs(1), c);
+        }
         let interval = match (self.rate, &self.interval) {
             (Some(_), Some(_)) => return Err(invalid("rate and interval: give one, not both")),
             (Some(rate), None) => {

@@ -520,6 +520,47 @@ timeout = "1s"
     }
 
     #[test]
+    fn a_continuous_link_can_listen_without_probes() {
+        let c = with_file(
+            r#"
+[[link]]
+link = "udp:127.0.0.1:14550"
+name = "vehicle"
+passive = true
+gap = "3s"
+heartbeat = false
+
+[[link]]
+link = "sim:"
+passive = true
+
+[[link]]
+link = "sim:?seed=2"
+passive = false
+rate = 2
+"#,
+        )
+        .unwrap();
+        let [vehicle, sim, probed] = &c.settings.links[..] else {
+            panic!("three links: {:?}", c.settings.links)
+        };
+        assert_eq!(
+            vehicle.probe,
+            Probe::Passive {
+                gap: Some(Duration::from_secs(3))
+            }
+        );
+        assert_eq!(vehicle.link.name, "vehicle");
+        assert!(!vehicle.link.session.heartbeat);
+        assert_eq!(vehicle.link.session.count, None);
+        assert_eq!(sim.probe, Probe::Passive { gap: None });
+        // Our HEARTBEAT stays on unless turned off, as without --no-heartbeat.
+        assert!(sim.link.session.heartbeat);
+        assert_eq!(probed.probe, Probe::Ping);
+        assert_eq!(probed.link.session.interval, Duration::from_millis(500));
+    }
+
+    #[test]
     fn the_example_in_contrib_is_valid() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("contrib/mavping-serve.toml");
         let (s, listen) = ServeSettings::load(&args(""), Some(&path)).unwrap();
@@ -527,7 +568,8 @@ timeout = "1s"
         assert_eq!(s.allow.len(), 3);
         assert!(s.modules.contains_key("ardupilot") && s.modules.contains_key("radio"));
         let names: Vec<&str> = s.links.iter().map(|l| l.link.name.as_str()).collect();
-        assert_eq!(names, ["sik-radio", "companion"]);
+        assert_eq!(names, ["sik-radio", "companion", "vehicle-telemetry"]);
+        assert!(matches!(s.links[2].probe, Probe::Passive { gap: Some(_) }));
         assert!(s.plan("target=serial:/dev/ttyUSB3&module=radio").is_ok());
         assert!(s
             .plan("target=udpout:10.0.0.9:14550&module=ardupilot")
@@ -572,6 +614,34 @@ timeout = "1s"
                 "listen: listen localhost:1: expected ADDR:PORT",
             ),
             ("allow = [\"*\"]", "start it with a link kind"),
+            (
+                "[[link]]\nlink = \"sim:\"\npassive = true\nrate = 5",
+                "[[link]] #1: passive = true sends no probes: drop rate",
+            ),
+            (
+                "[[link]]\nlink = \"sim:\"\npassive = true\nprobe = \"timesync\"",
+                "passive = true sends no probes: drop probe",
+            ),
+            (
+                "[[link]]\nlink = \"sim:\"\npassive = true\ntimeout = \"1s\"",
+                "passive = true sends no probes: drop timeout",
+            ),
+            (
+                "[[link]]\nlink = \"sim:\"\ngap = \"2s\"",
+                "[[link]] #1: gap needs passive = true",
+            ),
+            (
+                "[[link]]\nlink = \"sim:\"\npassive = true\ngap = \"1ms\"",
+                "gap: expected at least 10ms",
+            ),
+            (
+                "[[link]]\nlink = \"sim:\"\npassive = true\ngap = \"soon\"",
+                "gap: 'soon'",
+            ),
+            (
+                "[module.a]\npassive = true",
+                "[module.a]: passive belongs in a [[link]]",
+            ),
         ] {
             let e = with_file(toml).unwrap_err();
             assert!(e.contains(needle), "{toml}: {e}");

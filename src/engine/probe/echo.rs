@@ -20,7 +20,7 @@ use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
 use crate::engine::summary::{
-    responder_summaries, Direction, Interim, LinkSummary, ScheduleSummary, Summary,
+    responder_summaries, Direction, EchoInterim, Interim, LinkSummary, ScheduleSummary, Summary,
 };
 use crate::engine::Nanos;
 use crate::engine::SessionConfig;
@@ -263,11 +263,11 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     }
 
     fn interim(&self, roster: &Roster, at: Nanos) -> Option<Interim> {
-        Some(Interim {
+        Some(Interim::Echo(EchoInterim {
             at,
             requests: self.matcher.issued(),
             responders: responder_summaries(&self.matcher, roster),
-        })
+        }))
     }
 
     fn settled(&self) -> bool {
@@ -281,11 +281,10 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let mut responders = responder_summaries(&self.matcher, &ended.roster);
         for r in &mut responders {
             r.clock = self.probe.clock(r.id);
-            r.direction = self.sequences.source(r.id).and_then(|s| {
-                let seq = s.counts();
-                let frames = seq.received - seq.duplicate + seq.lost;
-                Direction::split(r.loss_ratio, r.counts.sent, frames, seq.lost)
-            });
+            r.direction = self
+                .sequences
+                .source(r.id)
+                .and_then(|s| Direction::of_sequence(r.loss_ratio, r.counts.sent, &s.counts()));
         }
         let loss_by_txbuf = ended.radios.loss_by_txbuf();
         let radios = ended.radios.summaries();

@@ -91,6 +91,13 @@ pub struct Direction {
 }
 
 impl Direction {
+    /// The split for a responder with `round_trip` loss over `requests`,
+    /// whose own frames' sequence counted `seq`: every front end's one
+    /// way in (the summary at the end, Prometheus while a run goes on).
+    pub fn of_sequence(round_trip: f64, requests: u64, seq: &passive::SeqCounts) -> Option<Self> {
+        Direction::split(round_trip, requests, seq.numbered(), seq.lost)
+    }
+
     /// The split for a responder `round_trip` of whose `requests` were
     /// lost, whose sequence counted `frames` and `lost` of them.
     pub fn split(round_trip: f64, requests: u64, frames: u64, lost: u64) -> Option<Self> {
@@ -256,14 +263,45 @@ pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderS
     out
 }
 
-/// The figures of a run so far (`-Q`, SIGQUIT): each responder's counts
-/// of decided requests and its RTT figures.
+/// The figures of a run so far (`-Q`, SIGQUIT), by the kind of run that
+/// has them.
 #[derive(Debug, Clone)]
-pub struct Interim {
+pub enum Interim {
+    /// An echo probe's (PING, TIMESYNC, and a sweep's steps).
+    Echo(EchoInterim),
+    /// A `--passive` run's.
+    Passive(PassiveInterim),
+}
+
+impl Interim {
+    /// Session time of the figures, ns.
+    pub fn at(&self) -> super::Nanos {
+        match self {
+            Interim::Echo(e) => e.at,
+            Interim::Passive(p) => p.at,
+        }
+    }
+}
+
+/// An echo run so far: each responder's counts of decided requests and
+/// its RTT figures.
+#[derive(Debug, Clone)]
+pub struct EchoInterim {
     /// Session time, ns.
     pub at: super::Nanos,
     pub requests: u64,
     pub responders: Vec<ResponderSummary>,
+}
+
+/// A passive run so far: every source's sequence figures (cumulative), as
+/// the summary will give them.
+#[derive(Debug, Clone)]
+pub struct PassiveInterim {
+    /// Session time, ns.
+    pub at: super::Nanos,
+    pub table: passive::TableSummary,
+    /// What each source said it is, from its HEARTBEAT.
+    pub identities: Vec<(SysComp, Identity)>,
 }
 
 /// `--probe command`: one target's figures.

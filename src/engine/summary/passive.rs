@@ -62,6 +62,14 @@ pub struct SeqCounts {
     pub resyncs: u64,
 }
 
+impl SeqCounts {
+    /// Sequence numbers the source used that the count accounts for: each
+    /// received once or lost.
+    pub fn numbered(&self) -> u64 {
+        self.received - self.duplicate + self.lost
+    }
+}
+
 /// pymavlink's loss figure for the same frames, as `mavutil` computes it.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct PymavFigure {
@@ -117,6 +125,12 @@ pub struct SourceSummary {
     /// `100 * lost / (lost + distinct frames received)`; `None` with
     /// nothing to compare.
     pub loss_pct: Option<f64>,
+    /// Of `lost`, the numbers a late frame may still fill (and move to
+    /// `reordered`): within the window behind the latest frame, outside a
+    /// silence. `lost - lost_pending` never decreases, which is what a
+    /// counter of losses needs (Prometheus).
+    #[serde(skip)]
+    pub lost_pending: u64,
     pub pymav: PymavFigure,
     /// Frame bytes, duplicates included.
     pub bytes: u64,

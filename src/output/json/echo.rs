@@ -153,7 +153,7 @@ impl InterimResponder {
 
 impl Lines {
     /// The `interim` line.
-    pub(super) fn interim(&self, figures: &summary::Interim) -> Line<'static> {
+    pub(super) fn echo_interim(&self, figures: &summary::EchoInterim) -> Line<'static> {
         Line::Interim(Interim {
             r#type: "interim",
             t_s: seconds(figures.at),

@@ -43,6 +43,7 @@ enum Line<'a> {
     Stale(Stamp),
     Radio(echo::Radio),
     Interim(echo::Interim),
+    PassiveInterim(Box<passive::Interim<'a>>),
     Step(sweep::Step),
     Summary(Box<echo::Summary<'a>>),
     Ack(command::Ack),
@@ -72,6 +73,7 @@ impl Line<'_> {
             | Line::Stale(_)
             | Line::Radio(_)
             | Line::Interim(_)
+            | Line::PassiveInterim(_)
             | Line::Step(_)
             | Line::Ack(_)
             | Line::CommandFailed(_)
@@ -228,6 +230,14 @@ impl Lines {
                 verdict,
                 self.link_or(&s.link),
             ))),
+        }
+    }
+
+    /// The line of the figures so far.
+    fn interim<'a>(&self, figures: &'a Interim) -> Line<'a> {
+        match figures {
+            Interim::Echo(e) => self.echo_interim(e),
+            Interim::Passive(p) => self.passive_interim(p),
         }
     }
 

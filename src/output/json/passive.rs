@@ -1,12 +1,16 @@
-//! `--passive` as JSON: the `passive_summary` line, with every source's
-//! sequence figures (ours and pymavlink's), silences and rates.
+//! `--passive` as JSON: the `passive_interim` line (`-Q`, SIGQUIT) and the
+//! `passive_summary` line, with every source's sequence figures (ours and
+//! pymavlink's), silences and rates.
 
 use serde::Serialize;
 
-use super::SCHEMA_VERSION;
+use super::{seconds, Line, Lines, SCHEMA_VERSION};
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
-use crate::engine::summary::passive::{LinkTotals, PassiveSummary, SourceSummary, Untracked};
+use crate::engine::summary::passive::{
+    LinkTotals, PassiveSummary, SourceSummary, TableSummary, Untracked,
+};
+use crate::engine::summary::PassiveInterim;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
 use crate::transport::RxClock;
@@ -18,6 +22,47 @@ pub(super) struct Source<'a> {
     #[serde(flatten)]
     figures: &'a SourceSummary,
     identity: Option<&'a Identity>,
+}
+
+/// Every source of `table`, each with its identity if it sent a HEARTBEAT.
+fn sources<'a>(table: &'a TableSummary, identities: &'a [(SysComp, Identity)]) -> Vec<Source<'a>> {
+    table
+        .sources
+        .iter()
+        .map(|r| Source {
+            figures: r,
+            identity: identities
+                .iter()
+                .find(|(id, _)| *id == r.source)
+                .map(|(_, i)| i),
+        })
+        .collect()
+}
+
+/// `passive_interim`: every source's figures so far, as the summary gives
+/// them.
+#[derive(Serialize)]
+pub(super) struct Interim<'a> {
+    r#type: &'static str,
+    t_s: f64,
+    time: String,
+    totals: &'a LinkTotals,
+    sources: Vec<Source<'a>>,
+    untracked: Untracked,
+}
+
+impl Lines {
+    /// The `passive_interim` line.
+    pub(super) fn passive_interim<'a>(&self, figures: &'a PassiveInterim) -> Line<'a> {
+        Line::PassiveInterim(Box::new(Interim {
+            r#type: "passive_interim",
+            t_s: seconds(figures.at),
+            time: self.wall.rfc3339(figures.at),
+            totals: &figures.table.totals,
+            sources: sources(&figures.table, &figures.identities),
+            untracked: figures.table.untracked,
+        }))
+    }
 }
 
 #[derive(Serialize)]
@@ -58,15 +103,7 @@ impl<'a> Summary<'a> {
             rx_clock: s.rx_clock,
             frames: s.frames,
             totals: &s.table.totals,
-            sources: s
-                .table
-                .sources
-                .iter()
-                .map(|r| Source {
-                    figures: r,
-                    identity: s.identity(r.source),
-                })
-                .collect(),
+            sources: sources(&s.table, &s.identities),
             untracked: s.table.untracked,
             own_frames: s.own_frames,
             radios: &s.radios,

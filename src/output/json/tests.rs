@@ -19,8 +19,8 @@ use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
 use crate::engine::summary::ProbeName;
 use crate::engine::summary::{
-    AckResult, CommandSummary, CommandTargetSummary, Interim, LinkSummary, ResponderSummary,
-    ScheduleSummary, Summary,
+    AckResult, CommandSummary, CommandTargetSummary, EchoInterim, Interim, LinkSummary,
+    PassiveInterim, ResponderSummary, ScheduleSummary, Summary,
 };
 use crate::engine::sweep::step::{Phase, StepFigures, StepRadio};
 use crate::engine::sweep::verdict::{self as sweep_verdict, SweepEnd, SweepSummary};
@@ -301,11 +301,11 @@ fn echo_run<'a>(probe: &'static str, borrowed: &'a Borrowed) -> Vec<Told<'a>> {
         ]
         .map(Told::Event),
     );
-    told.push(Told::Interim(Interim {
+    told.push(Told::Interim(Interim::Echo(EchoInterim {
         at: 2_500_000_000,
         requests: 8,
         responders: vec![responder(ONE, true), responder(TWO, false)],
-    }));
+    })));
     let summary = echo_summary(probe);
     let verdict = verdict::judge(&summary, &thresholds());
     told.push(Told::Summary(LinkSummary::Echo(Box::new(summary)), verdict));
@@ -509,9 +509,15 @@ fn passive_run() -> Vec<Told<'static>> {
         table.on_frame(ONE, seq, 30, 39, k as u64 * 20 * ms);
         table.on_frame(TWO, seq.wrapping_add(250), 0, 21, k as u64 * 20 * ms);
     }
-    table.on_frame(ONE, 10, 30, 39, 3_000 * ms);
     table.on_frame(RADIO_SOURCE, 0, 109, 38, 100 * ms);
     table.on_frame(SysComp::new(9, 9), 0, 0, 21, 100 * ms);
+    // The figures so far, before the silence ended.
+    let interim = Interim::Passive(PassiveInterim {
+        at: 1_000 * ms,
+        table: table.summary(1_000 * ms),
+        identities: vec![(ONE, identity())],
+    });
+    table.on_frame(ONE, 10, 30, 39, 3_000 * ms);
     let summary = PassiveSummary {
         link: "sim:?seed=1".into(),
         ours: SysComp::new(250, 190),
@@ -541,6 +547,7 @@ fn passive_run() -> Vec<Told<'static>> {
             run: RunKind::Passive { heartbeat: true },
             ..start("ping")
         }),
+        Told::Interim(interim),
         Told::Summary(LinkSummary::Passive(Box::new(summary)), verdict),
     ]
 }
@@ -668,6 +675,7 @@ struct Seen {
     stale: bool,
     radio: bool,
     interim: bool,
+    passive_interim: bool,
     step: bool,
     summary: bool,
     ack: bool,
@@ -693,6 +701,7 @@ impl Seen {
             Line::Stale(_) => (&mut self.stale, "stale"),
             Line::Radio(_) => (&mut self.radio, "radio"),
             Line::Interim(_) => (&mut self.interim, "interim"),
+            Line::PassiveInterim(_) => (&mut self.passive_interim, "passive_interim"),
             Line::Step(_) => (&mut self.step, "step"),
             Line::Summary(_) => (&mut self.summary, "summary"),
             Line::Ack(_) => (&mut self.ack, "ack"),
@@ -720,6 +729,7 @@ impl Seen {
             stale,
             radio,
             interim,
+            passive_interim,
             step,
             summary,
             ack,
@@ -741,6 +751,7 @@ impl Seen {
             (stale, "stale"),
             (radio, "radio"),
             (interim, "interim"),
+            (passive_interim, "passive_interim"),
             (step, "step"),
             (summary, "summary"),
             (ack, "ack"),

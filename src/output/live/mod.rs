@@ -1,6 +1,8 @@
 //! `--live`: a full-screen view of the link, in the spirit of mtr and gping:
 //! a row per responder with its counts, RTT figures and a strip of its
-//! recent replies, where losses and late replies stand out.
+//! recent replies, where losses and late replies stand out; in a passive
+//! run, a row per source (`sources.rs`) with its sequence figures and a
+//! strip of its recent seconds.
 //!
 //! The measurement never waits on the terminal: `event()` only updates a
 //! small state under a mutex, and a separate thread draws it a few times a
@@ -8,6 +10,7 @@
 //! restored and the normal text summary printed (by the run, as text).
 //! The frame itself is drawn by `view.rs`.
 
+mod sources;
 mod view;
 
 use std::collections::{BTreeMap, VecDeque};
@@ -21,7 +24,8 @@ use crossterm::event::{self, KeyCode, KeyEventKind, KeyModifiers};
 use ratatui::Frame;
 use tokio::sync::Notify;
 
-use super::{Event, Observer, Reporter, StartInfo};
+use self::sources::{SourceRow, Sources};
+use super::{Event, Observer, Reporter, RunKind, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::stats::RttStats;
 use crate::engine::summary::LinkSummary;
@@ -87,28 +91,43 @@ pub struct LiveState {
     now: Nanos,
     waiting: bool,
     tracks: BTreeMap<SysComp, Track>,
+    /// A passive run's sources (`None` in a probe run, whose table is told
+    /// for its direction split only).
+    sources: Option<Sources>,
 }
 
 impl LiveState {
     pub fn on_start(&mut self, info: &StartInfo) {
         self.link = info.link.clone();
         self.probe = Some(info.probe);
+        if matches!(info.run, RunKind::Passive { .. }) {
+            self.sources = Some(Sources::default());
+        }
     }
 
     pub fn on_event(&mut self, event: &Event<'_>) {
-        match event {
-            Event::WaitingForPeer => self.waiting = true,
-            Event::Heard { id, identity } => {
+        match (event, self.sources.as_mut()) {
+            (Event::WaitingForPeer, _) => self.waiting = true,
+            (Event::Heard { id, identity }, Some(sources)) => sources.heard(*id, identity),
+            (Event::Heard { id, identity }, None) => {
                 self.tracks.entry(*id).or_insert_with(Track::new).heard_as =
                     Some(format!("{} {}", identity.vehicle, identity.autopilot_name));
             }
-            Event::Match(e) => self.on_match(e),
-            Event::Radio { .. }
-            | Event::Command(_)
-            | Event::Clock { .. }
-            | Event::Step(_)
-            | Event::Sources { .. }
-            | Event::LinkFailed { .. } => {}
+            (Event::Sources { at, table }, Some(sources)) => {
+                sources.table(*at, table);
+                self.now = self.now.max(*at);
+                self.waiting = false;
+            }
+            (Event::Match(e), _) => self.on_match(e),
+            (
+                Event::Radio { .. }
+                | Event::Command(_)
+                | Event::Clock { .. }
+                | Event::Step(_)
+                | Event::Sources { .. }
+                | Event::LinkFailed { .. },
+                _,
+            ) => {}
         }
     }
 
@@ -152,28 +171,56 @@ impl LiveState {
             probe: self.probe,
             now: self.now,
             waiting: self.waiting,
-            rows: self
-                .tracks
-                .iter()
-                .map(|(id, t)| {
-                    let s = t.rtt.summary();
-                    RowView {
-                        id: format!("{}/{}", id.sysid, id.compid),
-                        heard_as: t.heard_as.clone(),
-                        sent: t.sent,
-                        received: t.received,
-                        lost: t.lost,
-                        late: t.late,
-                        duplicate: t.duplicate,
-                        last_ms: t.rtt.last().map(|ns| ns as f64 / 1e6),
-                        p50_ms: s.map(|s| s.p50_us / 1e3),
-                        p99_ms: s.map(|s| s.p99_us / 1e3),
-                        jitter_ms: s.map(|s| s.jitter_us / 1e3),
-                        recent: t.recent.iter().copied().collect(),
-                    }
-                })
-                .collect(),
+            rows: match &self.sources {
+                Some(sources) => Rows::Passive(sources.rows()),
+                None => Rows::Echo(self.echo_rows()),
+            },
         }
+    }
+
+    fn echo_rows(&self) -> Vec<RowView> {
+        self.tracks
+            .iter()
+            .map(|(id, t)| {
+                let s = t.rtt.summary();
+                RowView {
+                    id: format!("{}/{}", id.sysid, id.compid),
+                    heard_as: t.heard_as.clone(),
+                    sent: t.sent,
+                    received: t.received,
+                    lost: t.lost,
+                    late: t.late,
+                    duplicate: t.duplicate,
+                    last_ms: t.rtt.last().map(|ns| ns as f64 / 1e6),
+                    p50_ms: s.map(|s| s.p50_us / 1e3),
+                    p99_ms: s.map(|s| s.p99_us / 1e3),
+                    jitter_ms: s.map(|s| s.jitter_us / 1e3),
+                    recent: t.recent.iter().copied().collect(),
+                }
+            })
+            .collect()
+    }
+}
+
+/// A section's rows, by the kind of run.
+#[derive(Debug, Clone)]
+pub enum Rows {
+    /// A responder's each (PING, TIMESYNC, commands).
+    Echo(Vec<RowView>),
+    /// A source's each (`--passive`).
+    Passive(Vec<SourceRow>),
+}
+
+impl Rows {
+    pub fn len(&self) -> usize {
+        match self {
+            Rows::Echo(r) => r.len(),
+            Rows::Passive(r) => r.len(),
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
     }
 }
 
@@ -202,7 +249,7 @@ pub struct Screen {
     /// Session time of the latest event.
     pub now: Nanos,
     pub waiting: bool,
-    pub rows: Vec<RowView>,
+    pub rows: Rows,
 }
 
 fn lock<T>(state: &Mutex<T>) -> MutexGuard<'_, T> {
@@ -335,6 +382,7 @@ impl Reporter for LiveLink {
 #[cfg(test)]
 mod tests {
     use ratatui::backend::TestBackend;
+    use ratatui::style::Color;
     use ratatui::Terminal;
 
     use super::*;
@@ -430,6 +478,116 @@ mod tests {
         }
         let screens = [state().screen(), many.screen()];
         insta::assert_snapshot!(frame(80, 12, &screens));
+    }
+
+    /// A passive run of `seconds`: 1/1 (a quadrotor heard by its
+    /// HEARTBEAT) at 50 frames a second, losing one in every third
+    /// second, with a silent second; 2/1 at 10 a second, once sending a
+    /// frame twice; the SiK radio's own reports once a second.
+    fn passive(seconds: u64) -> LiveState {
+        use crate::engine::probe::passive::tracker::{SourceTable, RADIO_SOURCE};
+        let mut s = LiveState::default();
+        s.on_start(&StartInfo {
+            probe: ProbeName::Passive,
+            run: RunKind::Passive { heartbeat: true },
+            ..start("sim:?responders=2&stream=ATTITUDE@50")
+        });
+        let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));
+        let identity = crate::engine::roster::Identity {
+            mav_type: 2,
+            autopilot: 12,
+            vehicle: "quadrotor".into(),
+            autopilot_name: "px4".into(),
+            first_heard: 0,
+        };
+        s.on_event(&Event::Heard {
+            id: a,
+            identity: &identity,
+        });
+        let mut table = SourceTable::new(None, 32);
+        let ms = 1_000_000;
+        let (mut seq_a, mut seq_b) = (0u8, 0u8);
+        for second in 0..seconds {
+            let t0 = second * 1_000 * ms;
+            for k in 0..50 {
+                // Second 7 is silent; one frame lost every third second.
+                if second != 7 && !(second % 3 == 2 && k == 25) {
+                    table.on_frame(a, seq_a, 30, 40, t0 + k * 20 * ms);
+                }
+                seq_a = seq_a.wrapping_add(1);
+            }
+            for k in 0..10 {
+                table.on_frame(b, seq_b, 33, 40, t0 + k * 100 * ms);
+                if second == 4 && k == 3 {
+                    table.on_frame(b, seq_b, 33, 40, t0 + k * 100 * ms + ms);
+                }
+                seq_b = seq_b.wrapping_add(1);
+            }
+            table.on_frame(RADIO_SOURCE, second as u8, 109, 38, t0 + 500 * ms);
+            let at = t0 + 1_000 * ms;
+            s.on_event(&Event::Sources {
+                at,
+                table: &table.summary(at),
+            });
+        }
+        s
+    }
+
+    #[test]
+    fn a_passive_frame_shows_each_source_and_its_seconds() {
+        // A wider terminal shows more of the recent seconds.
+        let screen = passive(60).screen();
+        insta::assert_snapshot!(
+            "passive_80_columns",
+            frame(80, 8, std::slice::from_ref(&screen))
+        );
+        insta::assert_snapshot!("passive_120_columns", frame(120, 8, &[screen]));
+    }
+
+    #[test]
+    fn a_second_that_lost_frames_is_red_and_a_silent_one_a_dot() {
+        let screen = passive(12).screen();
+        let mut terminal = Terminal::new(TestBackend::new(80, 8)).unwrap();
+        terminal.draw(|f| view::render(f, &[screen])).unwrap();
+        let buffer = terminal.backend().buffer();
+        // 1/1's row: the strip follows its rate, newest last.
+        let row: Vec<_> = (0..80).map(|x| &buffer[(x, 3)]).collect();
+        let symbols: Vec<&str> = row.iter().map(|c| c.symbol()).collect();
+        let at = (0..76)
+            .find(|&x| symbols[x..x + 5].concat() == "49.0 ")
+            .expect("1/1's rate");
+        let strip: Vec<_> = row[at + 5..at + 17].iter().collect();
+        let colours: Vec<Color> = strip.iter().map(|c| c.fg).collect();
+        let symbols: String = strip.iter().map(|c| c.symbol()).collect();
+        assert_eq!(symbols, "███████·████", "{row:?}");
+        // Seconds 2, 5 and 11 lost a frame; 8 lost the silent second 7's.
+        let red: Vec<usize> = (0..12).filter(|&i| colours[i] == Color::Red).collect();
+        assert_eq!(red, [2, 5, 8, 11]);
+        assert_eq!(colours[7], Color::DarkGray);
+        assert_eq!(colours[0], Color::Green);
+    }
+
+    #[test]
+    fn a_probe_runs_table_makes_no_source_rows() {
+        use crate::engine::probe::passive::tracker::SourceTable;
+        let mut s = state();
+        let mut table = SourceTable::new(None, 32);
+        table.on_frame(SysComp::new(1, 1), 0, 0, 21, 0);
+        s.on_event(&Event::Sources {
+            at: 1_000_000_000,
+            table: &table.summary(1_000_000_000),
+        });
+        assert!(matches!(s.screen().rows, Rows::Echo(ref r) if r.len() == 2));
+    }
+
+    #[test]
+    fn a_sources_seconds_are_bounded() {
+        let s = passive(RECENT as u64 + 60);
+        let Rows::Passive(rows) = s.screen().rows else {
+            panic!("not a passive screen");
+        };
+        assert!(rows.iter().all(|r| r.recent.len() == RECENT));
+        assert_eq!(rows[1].received, 10 * (RECENT as u64 + 60) + 1);
     }
 
     #[test]

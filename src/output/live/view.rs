@@ -15,39 +15,94 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
 use ratatui::Frame;
 
-use super::{Mark, RowView, Screen};
+use super::sources::{Second, SourceRow};
+use super::{Mark, RowView, Rows, Screen};
 use crate::engine::summary::ProbeName;
 
 const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
 /// The key line: the keys, then what the figures and marks mean.
 pub const KEYS: &str = "q or Ctrl-C: stop and print the summary · RTT in ms · × lost · ! late";
+/// The key line of a passive run.
+pub const PASSIVE_KEYS: &str =
+    "q or Ctrl-C: stop and print the summary · a bar a second: frames, red: lost";
 /// The strip is dropped last, and kept at least this wide.
 const STRIP_MIN: u16 = 8;
 /// ratatui's default gap between table columns.
 const SPACING: u16 = 1;
-/// A section's lines besides its responders: two borders and the header.
+/// A section's lines besides its rows: two borders and the header.
 const SECTION_FRAME: u16 = 3;
 
-/// The figure columns, in display order, then the strip.
-const HEADERS: [&str; 10] = [
-    "responder",
-    "sent",
-    "recv",
-    "loss%",
-    "late",
-    "dup",
-    "last",
-    "p50",
-    "p99",
-    "jitter",
-];
-const STRIP_HEADER: &str = "recent";
-/// Room for the usual figures (5-digit counts, RTTs under 100 ms), so
-/// columns do not shift as the figures change; wider figures widen them.
-const MIN_WIDTHS: [u16; 10] = [9, 5, 5, 5, 4, 3, 5, 5, 5, 6];
-/// When the terminal is too narrow, columns go in falling order of this;
-/// 0 is never given up (who, how much is lost, how long it takes).
-const GIVE_UP: [u8; 10] = [0, 5, 6, 0, 9, 10, 7, 0, 0, 8];
+/// What a kind of row shows: its figure columns in display order, then
+/// the strip.
+pub(super) struct Spec {
+    pub headers: &'static [&'static str],
+    /// Room for the usual figures, so columns do not shift as the figures
+    /// change; wider figures widen them.
+    pub min_widths: &'static [u16],
+    /// When the terminal is too narrow, columns go in falling order of
+    /// this; 0 is never given up.
+    pub give_up: &'static [u8],
+    /// The first this many columns (who) are left-aligned, the figures
+    /// after them right-aligned, so their digits line up.
+    pub left: usize,
+    pub strip: &'static str,
+    pub keys: &'static str,
+    /// What a row is, to count those beyond the screen.
+    pub rows_are: &'static str,
+}
+
+/// A responder's row: who, how much is lost and how long it takes stay.
+pub(super) const ECHO: Spec = Spec {
+    headers: &[
+        "responder",
+        "sent",
+        "recv",
+        "loss%",
+        "late",
+        "dup",
+        "last",
+        "p50",
+        "p99",
+        "jitter",
+    ],
+    min_widths: &[9, 5, 5, 5, 4, 3, 5, 5, 5, 6],
+    give_up: &[0, 5, 6, 0, 9, 10, 7, 0, 0, 8],
+    left: 1,
+    strip: "recent",
+    keys: KEYS,
+    rows_are: "responders",
+};
+
+/// A source's row in a passive run: who and how much it loses stay; its
+/// identity goes first, then the rarer counts.
+pub(super) const PASSIVE: Spec = Spec {
+    headers: &[
+        "source", "identity", "recv", "lost", "loss%", "dup", "reord", "sil", "fr/s",
+    ],
+    min_widths: &[7, 8, 6, 4, 5, 3, 5, 3, 5],
+    give_up: &[0, 9, 5, 0, 0, 8, 7, 6, 4],
+    left: 2,
+    strip: "per second",
+    keys: PASSIVE_KEYS,
+    rows_are: "sources",
+};
+
+fn spec(rows: &Rows) -> &'static Spec {
+    match rows {
+        Rows::Echo(_) => &ECHO,
+        Rows::Passive(_) => &PASSIVE,
+    }
+}
+
+/// A row's figures, each with whether it is bad news.
+type Cells = Vec<(String, bool)>;
+
+fn cells(rows: &Rows) -> Vec<Cells> {
+    match rows {
+        Rows::Echo(rows) => rows.iter().map(figures).collect(),
+        Rows::Passive(rows) => rows.iter().map(source_figures).collect(),
+    }
+}
 
 /// Draws every link's section under one title line, with the keys below.
 pub fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
@@ -67,32 +122,43 @@ pub fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
         .collect();
     let heights = section_heights(body.height, &needs);
     let areas = Layout::vertical(heights.iter().map(|&h| Constraint::Length(h))).split(body);
-    // One set of columns for every section, so they line up.
-    let cells: Vec<Vec<[(String, bool); 10]>> = screens
-        .iter()
-        .map(|s| s.rows.iter().map(figures).collect())
-        .collect();
-    let widths: Vec<u16> = (0..HEADERS.len())
+    let cells: Vec<Vec<Cells>> = screens.iter().map(|s| cells(&s.rows)).collect();
+    for (i, (screen, area)) in screens.iter().zip(areas.iter()).enumerate() {
+        if area.height < SECTION_FRAME {
+            continue;
+        }
+        // One set of columns for every section of a kind, so they line up.
+        let kind = spec(&screen.rows);
+        let alike = screens
+            .iter()
+            .zip(&cells)
+            .filter(|(s, _)| std::ptr::eq(spec(&s.rows), kind))
+            .flat_map(|(_, c)| c);
+        let columns = fit(
+            &widths(kind, alike),
+            kind.give_up,
+            body.width.saturating_sub(2),
+        );
+        section(frame, *area, screen, &cells[i], &columns);
+    }
+    let keys = screens.first().map_or(KEYS, |s| spec(&s.rows).keys);
+    frame.render_widget(
+        Paragraph::new(keys).style(Style::new().fg(Color::DarkGray)),
+        foot,
+    );
+}
+
+/// Each column as wide as its header, its minimum or its widest figure.
+fn widths<'a>(kind: &Spec, rows: impl Iterator<Item = &'a Cells> + Clone) -> Vec<u16> {
+    (0..kind.headers.len())
         .map(|c| {
-            cells
-                .iter()
-                .flatten()
+            rows.clone()
                 .map(|row| width(&row[c].0))
-                .chain([width(HEADERS[c]), MIN_WIDTHS[c]])
+                .chain([width(kind.headers[c]), kind.min_widths[c]])
                 .max()
                 .unwrap_or(0)
         })
-        .collect();
-    let columns = fit(&widths, body.width.saturating_sub(2));
-    for ((screen, cells), area) in screens.iter().zip(&cells).zip(areas.iter()) {
-        if area.height >= SECTION_FRAME {
-            section(frame, *area, screen, cells, &columns);
-        }
-    }
-    frame.render_widget(
-        Paragraph::new(KEYS).style(Style::new().fg(Color::DarkGray)),
-        foot,
-    );
+        .collect()
 }
 
 /// `mavping · ping · 4.4 s`, with the number of links when there are several.
@@ -133,14 +199,9 @@ fn section_heights(available: u16, needs: &[u16]) -> Vec<u16> {
     heights
 }
 
-/// One link: its responders as a table, titled with the link.
-fn section(
-    frame: &mut Frame<'_>,
-    area: Rect,
-    screen: &Screen,
-    cells: &[[(String, bool); 10]],
-    columns: &Columns,
-) {
+/// One link: its rows as a table, titled with the link.
+fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, cells: &[Cells], columns: &Columns) {
+    let kind = spec(&screen.rows);
     let inner = area.width.saturating_sub(2);
     let Columns {
         shown,
@@ -151,10 +212,10 @@ fn section(
 
     let slots = usize::from(area.height.saturating_sub(SECTION_FRAME));
     let hidden = screen.rows.len().saturating_sub(slots);
-    let status = if screen.waiting {
-        ": waiting for a peer"
-    } else {
-        ""
+    let status = match &screen.rows {
+        Rows::Echo(_) if screen.waiting => ": waiting for a peer",
+        rows @ Rows::Passive(_) if rows.is_empty() => ": nothing heard yet",
+        _ => "",
     };
     let mut block = Block::bordered().title(format!(
         " {}{status} ",
@@ -164,16 +225,16 @@ fn section(
         )
     ));
     if hidden > 0 {
-        block = block.title_bottom(format!(" {hidden} more responders "));
+        block = block.title_bottom(format!(" {hidden} more {} ", kind.rows_are));
     }
 
     let alarm = Style::new().fg(Color::Red).add_modifier(Modifier::BOLD);
-    let rows = screen.rows.iter().zip(cells).take(slots).map(|(r, cells)| {
+    let rows = cells.iter().enumerate().take(slots).map(|(i, cells)| {
         let mut row: Vec<Cell<'_>> = shown
             .iter()
             .map(|&c| {
                 let (text, bad) = &cells[c];
-                let cell = Cell::from(aligned(c, text.clone()));
+                let cell = Cell::from(aligned(kind, c, text.clone()));
                 if *bad {
                     cell.style(alarm)
                 } else {
@@ -181,14 +242,27 @@ fn section(
                 }
             })
             .collect();
-        row.push(recent(r, strip_width));
-        Row::new(row)
+        let (strip, quiet) = match &screen.rows {
+            Rows::Echo(rows) => (recent(&rows[i], strip_width), false),
+            Rows::Passive(rows) => (
+                Cell::from(seconds(&rows[i].recent, usize::from(strip_width))),
+                rows[i].radio,
+            ),
+        };
+        row.push(strip);
+        // The radio's own row is not the link's: shown, but dimmed.
+        let row = Row::new(row);
+        if quiet {
+            row.style(Style::new().fg(Color::DarkGray))
+        } else {
+            row
+        }
     });
     let header = Row::new(
         shown
             .iter()
-            .map(|&c| Cell::from(aligned(c, HEADERS[c].to_string())))
-            .chain([Cell::from(STRIP_HEADER)]),
+            .map(|&c| Cell::from(aligned(kind, c, kind.headers[c].to_string())))
+            .chain([Cell::from(kind.strip)]),
     )
     .style(Style::new().add_modifier(Modifier::UNDERLINED));
     let constraints = shown
@@ -202,25 +276,25 @@ fn section(
     frame.render_widget(table, area);
 }
 
-/// Figures (every column after the responder) right-aligned, so their
-/// digits line up.
-fn aligned(column: usize, text: String) -> Line<'static> {
+/// Figures (every column after who) right-aligned, so their digits line
+/// up.
+fn aligned(kind: &Spec, column: usize, text: String) -> Line<'static> {
     let line = Line::from(text);
-    if column == 0 {
+    if column < kind.left {
         line
     } else {
         line.alignment(Alignment::Right)
     }
 }
 
-/// A row's figures, each with whether it is bad news.
-fn figures(r: &RowView) -> [(String, bool); 10] {
+/// A responder's figures, each with whether it is bad news.
+fn figures(r: &RowView) -> Cells {
     let loss = if r.sent == 0 {
         0.0
     } else {
         100.0 * r.lost as f64 / r.sent as f64
     };
-    [
+    vec![
         (r.id.clone(), false),
         (r.sent.to_string(), false),
         (r.received.to_string(), false),
@@ -231,6 +305,22 @@ fn figures(r: &RowView) -> [(String, bool); 10] {
         (ms(r.p50_ms), false),
         (ms(r.p99_ms), false),
         (ms(r.jitter_ms), false),
+    ]
+}
+
+/// A source's figures, each with whether it is bad news.
+fn source_figures(r: &SourceRow) -> Cells {
+    let one = |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.1}"));
+    vec![
+        (r.id.clone(), false),
+        (r.identity.clone().unwrap_or_else(|| "-".into()), false),
+        (r.received.to_string(), false),
+        (r.lost.to_string(), r.lost > 0),
+        (one(r.loss_pct), r.lost > 0),
+        (r.duplicate.to_string(), false),
+        (r.reordered.to_string(), false),
+        (r.silences.to_string(), r.silences > 0),
+        (one(r.rate), false),
     ]
 }
 
@@ -245,7 +335,7 @@ fn width(text: &str) -> u16 {
 /// The columns a table shows.
 #[derive(Debug, PartialEq)]
 struct Columns {
-    /// Indices into [`HEADERS`], in display order.
+    /// Indices into the kind's headers, in display order.
     shown: Vec<usize>,
     /// Of every figure column, shown or not.
     widths: Vec<u16>,
@@ -253,9 +343,9 @@ struct Columns {
 }
 
 /// Which figure columns are shown in `inner` columns, and the strip's
-/// width: columns are given up (see [`GIVE_UP`]) until the strip has
-/// [`STRIP_MIN`].
-fn fit(widths: &[u16], inner: u16) -> Columns {
+/// width: columns are given up (in falling order of `give_up`) until the
+/// strip has [`STRIP_MIN`].
+fn fit(widths: &[u16], give_up: &[u8], inner: u16) -> Columns {
     let mut shown: Vec<usize> = (0..widths.len()).collect();
     loop {
         // Each column is followed by a gap: the last one's is the strip's.
@@ -264,8 +354,8 @@ fn fit(widths: &[u16], inner: u16) -> Columns {
         let next = shown
             .iter()
             .enumerate()
-            .filter(|(_, &c)| GIVE_UP[c] > 0)
-            .max_by_key(|(_, &c)| GIVE_UP[c])
+            .filter(|(_, &c)| give_up[c] > 0)
+            .max_by_key(|(_, &c)| give_up[c])
             .map(|(i, _)| i);
         match next {
             Some(i) if strip < STRIP_MIN => {
@@ -339,6 +429,26 @@ pub(super) fn strip(recent: &[Mark], width: usize) -> Line<'static> {
     Line::from(spans)
 }
 
+/// A source's recent seconds, newest on the right: a bar per second scaled
+/// from none to the most frames shown, red where its sequence lost any,
+/// `·` a second without a frame.
+pub(super) fn seconds(recent: &[Second], width: usize) -> Line<'static> {
+    let shown = &recent[recent.len().saturating_sub(width)..];
+    let most = shown.iter().map(|s| s.frames).max().unwrap_or(0).max(1);
+    let spans: Vec<Span<'static>> = shown
+        .iter()
+        .map(|s| {
+            if s.frames == 0 {
+                return Span::styled("·", Style::new().fg(Color::DarkGray));
+            }
+            let level = (s.frames as f64 / most as f64 * 7.0).round() as usize;
+            let colour = if s.lost { Color::Red } else { Color::Green };
+            Span::styled(BARS[level].to_string(), Style::new().fg(colour))
+        })
+        .collect();
+    Line::from(spans)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -362,6 +472,7 @@ mod tests {
     #[test]
     fn columns_are_given_up_least_needed_first() {
         let widths = [9, 4, 4, 5, 4, 3, 5, 5, 5, 6];
+        let fit = |widths: &[u16], inner| fit(widths, ECHO.give_up, inner);
         // 80 columns less the borders: everything, and a strip.
         let all = fit(&widths, 78);
         assert_eq!(all.shown, (0..10).collect::<Vec<_>>());
@@ -372,6 +483,14 @@ mod tests {
         assert_eq!(narrow.strip, 9);
         // Far too narrow: only the columns never given up remain.
         assert_eq!(fit(&widths, 20).shown, [0, 3, 7, 8]);
+        // A source's identity goes first, then dup, reord and sil.
+        let widths = [7, 13, 6, 4, 5, 3, 5, 3, 5];
+        let fit = |inner| super::fit(&widths, PASSIVE.give_up, inner).shown;
+        assert_eq!(fit(78), (0..9).collect::<Vec<_>>());
+        assert_eq!(fit(60), [0, 2, 3, 4, 5, 6, 7, 8]);
+        assert_eq!(fit(50), [0, 2, 3, 4, 6, 7, 8]);
+        assert_eq!(fit(44), [0, 2, 3, 4, 7, 8]);
+        assert_eq!(fit(20), [0, 3, 4]);
     }
 
     #[test]

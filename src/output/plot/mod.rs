@@ -1,5 +1,7 @@
 //! `--plot FILE.svg`: collects what the plot shows while the run goes on.
-//! The drawing is in `draw.rs`, colours and markers in `style.rs`.
+//! The drawing is in `draw.rs`, colours and markers in `style.rs`; a
+//! sweep's in `sweep.rs`, a passive run's (each source's rate and loss
+//! over time) in `passive.rs`.
 //!
 //! Memory is constant: each responder keeps [`SPANS`] time spans. When a
 //! sample falls past the last span, every span doubles in width and
@@ -9,6 +11,7 @@
 
 mod draw;
 mod frame;
+mod passive;
 mod style;
 mod sweep;
 
@@ -19,8 +22,11 @@ use std::rc::Rc;
 
 use thiserror::Error;
 
-use super::{Event, Observer, Reporter, StartInfo};
+use self::passive::SourceTrack;
+use super::windows::Windows;
+use super::{Event, Observer, Reporter, RunKind, StartInfo};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::{LinkSummary, ResponderSummary};
 use crate::engine::sweep::verdict::SweepSummary;
 use crate::engine::Nanos;
@@ -132,6 +138,8 @@ pub struct PlotData {
     tracks: BTreeMap<(usize, SysComp), Track>,
     /// Each sweeping link's steps, once its summary came.
     sweeps: BTreeMap<usize, SweepSummary>,
+    /// A passive run's sources (at most its table's, per link).
+    sources: BTreeMap<(usize, SysComp), SourceTrack>,
 }
 
 impl PlotData {
@@ -166,6 +174,25 @@ impl PlotData {
         }
     }
 
+    /// The windows of a passive link's sources.
+    pub fn on_windows(&mut self, link: usize, windows: &[super::windows::Window]) {
+        for w in windows {
+            self.sources
+                .entry((link, w.source))
+                .or_insert_with(|| SourceTrack::new(w.radio))
+                .window(w);
+        }
+    }
+
+    /// The run's own figures for each source of a passive `link`.
+    pub fn on_sources(&mut self, link: usize, table: &TableSummary) {
+        for s in &table.sources {
+            if let Some(t) = self.sources.get_mut(&(link, s.source)) {
+                t.on_summary(s);
+            }
+        }
+    }
+
     /// A responder's legend entry; with several links, its link too.
     fn label(&self, link: usize, id: SysComp) -> String {
         let id = format!("{}/{}", id.sysid, id.compid);
@@ -178,6 +205,9 @@ impl PlotData {
     /// Draws the SVG document: RTT and loss against the offered rate for
     /// a sweep, else RTT over time and its distribution.
     pub fn svg(&self) -> Result<String, PlotError> {
+        if !self.sources.is_empty() {
+            return self.passive_svg();
+        }
         if self.sweeps.is_empty() {
             return draw::svg(self);
         }
@@ -196,6 +226,28 @@ impl PlotData {
             several => format!("mavping sweep, {} links", several.len()),
         };
         sweep::svg(&title, &entries)
+    }
+
+    /// A passive run: each source's rate and loss over time.
+    fn passive_svg(&self) -> Result<String, PlotError> {
+        let entries: Vec<passive::SourceEntry<'_>> = self
+            .sources
+            .iter()
+            .enumerate()
+            .map(|(n, (&(link, id), track))| {
+                let radio = if track.is_radio() { " (radio)" } else { "" };
+                passive::SourceEntry {
+                    label: format!("{}{radio}", self.label(link, id)),
+                    look: style::Look::nth(n),
+                    track,
+                }
+            })
+            .collect();
+        let title = match self.links.as_slice() {
+            [one] => format!("mavping --passive {one}"),
+            several => format!("mavping --passive, {} links", several.len()),
+        };
+        passive::svg(&title, &entries)
     }
 
     /// A link's sweep, drawn instead of its RTT over time.
@@ -235,6 +287,7 @@ impl Plot {
         PlotLink {
             data: self.data.clone(),
             index: data.links.len() - 1,
+            windows: None,
         }
     }
 
@@ -248,17 +301,34 @@ impl Plot {
 pub struct PlotLink {
     data: Rc<RefCell<PlotData>>,
     index: usize,
+    /// A passive run's sources, window by window (set at its start).
+    windows: Option<Windows>,
+}
+
+impl PlotLink {
+    /// The windows ending at `at` of a passive run's sources.
+    fn windows(&mut self, at: Nanos, table: &TableSummary) {
+        if let Some(windows) = self.windows.as_mut() {
+            let next = windows.next(at, table);
+            self.data.borrow_mut().on_windows(self.index, &next);
+        }
+    }
 }
 
 impl Observer for PlotLink {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.data.borrow_mut().links[self.index] = info.link.clone();
+        if matches!(info.run, RunKind::Passive { .. }) {
+            self.windows = Some(Windows::default());
+        }
         Ok(())
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        if let Event::Match(e) = event {
-            self.data.borrow_mut().on_event(self.index, e);
+        match *event {
+            Event::Match(ref e) => self.data.borrow_mut().on_event(self.index, e),
+            Event::Sources { at, table } => self.windows(at, table),
+            _ => {}
         }
         Ok(())
     }
@@ -266,13 +336,21 @@ impl Observer for PlotLink {
 
 impl Reporter for PlotLink {
     fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
-        // The command probe sends no echo requests, so it has no lines.
-        if let LinkSummary::Echo(s) = summary {
-            let mut data = self.data.borrow_mut();
-            data.on_summary(self.index, &s.responders);
-            if let Some(sweep) = &s.sweep {
-                data.on_sweep(self.index, sweep);
+        match summary {
+            LinkSummary::Echo(s) => {
+                let mut data = self.data.borrow_mut();
+                data.on_summary(self.index, &s.responders);
+                if let Some(sweep) = &s.sweep {
+                    data.on_sweep(self.index, sweep);
+                }
             }
+            // The last, partial, window, and the figures for the legend.
+            LinkSummary::Passive(s) => {
+                self.windows((s.duration_s * 1e9) as Nanos, &s.table);
+                self.data.borrow_mut().on_sources(self.index, &s.table);
+            }
+            // The command probe sends no echo requests, so it has no lines.
+            LinkSummary::Command(_) => {}
         }
         Ok(())
     }

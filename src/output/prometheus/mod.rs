@@ -5,11 +5,16 @@
 //!
 //! A [`Metrics`] follows one link's session as an engine [`Observer`].
 //! `--prometheus` serves the run's links at `/metrics` while it goes on
-//! ([`PrometheusExporter`]); memory is fixed per responder and radio (the
-//! matcher and the radio table bound how many there are), whatever the run
-//! length.
+//! ([`PrometheusExporter`]); memory is fixed per responder, radio and
+//! source (the matcher, the radio table and the source table bound how
+//! many there are), whatever the run length. A passive run's per-source
+//! figures and an echo run's loss by direction come from the table of
+//! sources the engine tells once a second ([`sources`]).
 
+mod exposition;
+mod passive;
 mod render;
+mod sources;
 
 use std::cell::{Ref, RefCell};
 use std::collections::BTreeMap;
@@ -25,8 +30,8 @@ use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::CommandEvent;
 use crate::engine::radio::{RadioReport, SinceBootCounter, MAX_RADIOS};
-use crate::engine::summary::ProbeName;
-use crate::engine::summary::{LinkSummary, Summary};
+use crate::engine::summary::passive::TableSummary;
+use crate::engine::summary::{Direction, LinkSummary, ProbeName, Summary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -64,6 +69,17 @@ struct Series {
     p50_s: Option<f64>,
     p99_s: Option<f64>,
     clock_offset_s: Option<f64>,
+    split: Split,
+}
+
+/// Where a responder's loss by direction comes from.
+#[derive(Debug, Default, Clone, Copy)]
+enum Split {
+    /// Made at each scrape while the run goes on.
+    #[default]
+    Live,
+    /// The summary's own, once the run has ended (`None`: it found none).
+    AtEnd(Option<Direction>),
 }
 
 impl Series {
@@ -91,6 +107,15 @@ impl Series {
 
     fn loss_ratio(&self) -> Option<f64> {
         (self.sent > 0).then(|| self.lost as f64 / self.sent as f64)
+    }
+
+    /// Its loss by direction, from its requests and its own frames'
+    /// sequence (`downlink`), as the summary splits it.
+    fn direction(&self, downlink: Option<&sources::SourceSeries>) -> Option<Direction> {
+        match self.split {
+            Split::AtEnd(at_end) => at_end,
+            Split::Live => Direction::of_sequence(self.loss_ratio()?, self.sent, &downlink?.seq()),
+        }
     }
 }
 
@@ -121,6 +146,9 @@ pub struct Metrics {
     responders: BTreeMap<SysComp, Series>,
     /// Each radio heard.
     radios: BTreeMap<SysComp, RadioSeries>,
+    /// Each source's packet sequence (a passive run's figures; an echo
+    /// run's responders' downlink).
+    sources: sources::Sources,
     /// Open now, and (a continuous link of `mavping serve`) how often it
     /// was reopened after breaking; `None` before a session starts.
     state: Option<LinkState>,
@@ -173,6 +201,18 @@ impl Metrics {
         self.link = info.link.clone();
         self.probe = Some(info.probe);
         self.set_up(true);
+        // A continuous link's new session: its sequences start afresh,
+        // its counters go on.
+        self.sources.carry();
+        for s in self.responders.values_mut() {
+            s.split = Split::Live;
+        }
+    }
+
+    /// The table of sources, as told while the session goes on (`ended`
+    /// false) or in its summary.
+    pub fn on_sources(&mut self, table: &TableSummary, ended: bool) {
+        self.sources.update(table, ended);
     }
 
     pub fn on_event(&mut self, e: &MatchEvent) {
@@ -254,6 +294,7 @@ impl Metrics {
                 s.p50_s = Some(rtt.p50_us / 1e6);
                 s.p99_s = Some(rtt.p99_us / 1e6);
             }
+            s.split = Split::AtEnd(r.direction);
         }
     }
 
@@ -276,10 +317,8 @@ impl Observer for Metrics {
             Event::Radio { id, report, .. } => self.on_radio(*id, *report),
             Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
             Event::LinkFailed { .. } => self.set_up(false),
-            Event::Heard { .. }
-            | Event::WaitingForPeer
-            | Event::Step(_)
-            | Event::Sources { .. } => {}
+            Event::Sources { table, .. } => self.on_sources(table, false),
+            Event::Heard { .. } | Event::WaitingForPeer | Event::Step(_) => {}
         }
         Ok(())
     }
@@ -287,8 +326,10 @@ impl Observer for Metrics {
 
 impl Reporter for Metrics {
     fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
-        if let LinkSummary::Echo(summary) = summary {
-            self.on_summary(summary);
+        match summary {
+            LinkSummary::Echo(summary) => self.on_summary(summary),
+            LinkSummary::Passive(summary) => self.on_sources(&summary.table, true),
+            LinkSummary::Command(_) => {}
         }
         Ok(())
     }

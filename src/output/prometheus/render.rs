@@ -3,128 +3,13 @@
 //! series are left out. What a run, `mavping serve`'s `/metrics` and one
 //! `/probe` show differs only in which families are written.
 
-use std::fmt::{Display, Write as _};
+use std::fmt::Write as _;
 
+use super::exposition::{escape, Exposition, Family, Figure};
+use super::passive::{write_directions, write_sources};
 use super::{Metrics, RadioSeries, Scope, Series, BUCKETS_S};
 use crate::engine::radio::{is_sik, sik_dbm, UNKNOWN};
-use crate::engine::summary::ProbeName;
 use crate::frame::SysComp;
-
-impl Metrics {
-    fn labels(&self, id: SysComp) -> String {
-        format!(
-            "link=\"{}\",probe=\"{}\",sysid=\"{}\",compid=\"{}\"",
-            escape(&self.link),
-            self.probe.map_or("", ProbeName::as_str),
-            id.sysid,
-            id.compid
-        )
-    }
-
-    fn radio_labels(&self, id: SysComp) -> String {
-        format!(
-            "link=\"{}\",sysid=\"{}\",compid=\"{}\"",
-            escape(&self.link),
-            id.sysid,
-            id.compid
-        )
-    }
-}
-
-/// What a family's samples are, as its `TYPE` line says.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum FamilyKind {
-    Gauge,
-    Counter,
-    Histogram,
-}
-
-impl FamilyKind {
-    fn name(self) -> &'static str {
-        match self {
-            FamilyKind::Gauge => "gauge",
-            FamilyKind::Counter => "counter",
-            FamilyKind::Histogram => "histogram",
-        }
-    }
-}
-
-/// A metric family: its name, its `HELP` text and its type.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-struct Family {
-    name: &'static str,
-    help: &'static str,
-    kind: FamilyKind,
-}
-
-impl Family {
-    const fn gauge(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Gauge,
-        }
-    }
-
-    const fn counter(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Counter,
-        }
-    }
-
-    const fn histogram(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Histogram,
-        }
-    }
-}
-
-/// A family and how to read its value (of a series, a radio, the server).
-struct Figure<V> {
-    family: Family,
-    value: V,
-}
-
-/// Text being written in the exposition format: a family's `HELP` and
-/// `TYPE` lines, then its samples.
-#[derive(Default)]
-struct Exposition(String);
-
-impl Exposition {
-    fn header(&mut self, family: &Family) {
-        let Family { name, help, kind } = family;
-        let kind = kind.name();
-        let _ = writeln!(self.0, "# HELP {name} {help}\n# TYPE {name} {kind}");
-    }
-
-    fn sample(&mut self, name: &str, labels: &str, value: impl Display) {
-        let _ = if labels.is_empty() {
-            writeln!(self.0, "{name} {value}")
-        } else {
-            writeln!(self.0, "{name}{{{labels}}} {value}")
-        };
-    }
-
-    /// A family with its samples; nothing at all when it has none.
-    fn family<V: Display>(
-        &mut self,
-        family: &Family,
-        samples: impl IntoIterator<Item = (String, V)>,
-    ) {
-        let mut samples = samples.into_iter().peekable();
-        if samples.peek().is_none() {
-            return;
-        }
-        self.header(family);
-        for (labels, value) in samples {
-            self.sample(family.name, &labels, value);
-        }
-    }
-}
 
 /// A per-responder count: a counter in a run, a gauge of one probe under
 /// a name of its own (see [`Scope`]).
@@ -370,6 +255,8 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
         });
         out.family(family, radios);
     }
+    write_directions(out, links);
+    write_sources(out, links);
 }
 
 /// A link's state, as a run has it...
@@ -561,14 +448,6 @@ pub fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
     out.family(&PROBE_IN_FLIGHT, one(result.in_flight as f64));
     write_links(&mut out, &[metrics], Scope::Probe);
     out.0
-}
-
-/// Label values escape backslash, double quote and newline.
-fn escape(value: &str) -> String {
-    value
-        .replace('\\', "\\\\")
-        .replace('"', "\\\"")
-        .replace('\n', "\\n")
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, Lines, 
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport, RadioSummary};
-use crate::engine::summary::{Direction, Interim, ResponderSummary, Summary};
+use crate::engine::summary::{Direction, EchoInterim, ResponderSummary, Summary};
 use crate::engine::Nanos;
 use crate::output::{Event, StartInfo};
 use crate::verdict::{Check, Verdict};
@@ -149,7 +149,7 @@ impl<W: Write> TextReporter<W> {
 
     /// `[12.0 s] 1/1: 120 sent, 118 received, 2 lost (1.67%), 0 late, 0
     /// duplicate; rtt p50/p99 = 21.304/25.611 ms`, a line per responder.
-    pub(super) fn write_interim(&mut self, figures: &Interim) -> io::Result<()> {
+    pub(super) fn write_interim(&mut self, figures: &EchoInterim) -> io::Result<()> {
         if figures.responders.is_empty() {
             self.stamp(figures.at)?;
             return writeln!(

@@ -148,7 +148,10 @@ impl<W: Write> Observer for TextReporter<W> {
 
     /// A line per responder, in quiet mode too: that is what `-Q` is for.
     fn interim(&mut self, figures: &Interim) -> io::Result<()> {
-        self.write_interim(figures)
+        match figures {
+            Interim::Echo(e) => self.write_interim(e),
+            Interim::Passive(p) => self.passive_interim(p),
+        }
     }
 }
 

@@ -1,13 +1,19 @@
-//! `--passive` as text: the start line, and the summary as a table per
-//! source with the link's totals, pymavlink's figure beside ours, and the
-//! silences.
+//! `--passive` as text: the start line, the interim lines (`-Q`,
+//! SIGQUIT), and the summary as a table per source with the link's
+//! totals, pymavlink's figure beside ours, each source's busiest messages
+//! and its silences.
 
 use std::io::{self, Write};
 
 use super::{per_second, TextReporter};
 use crate::engine::observe::StartInfo;
 use crate::engine::summary::passive::{PassiveSummary, Silence, SourceSummary};
+use crate::engine::summary::PassiveInterim;
+use crate::frame::codec::message_name;
 use crate::verdict::{Check, Verdict};
+
+/// Message ids named per source under the table; the rest are counted.
+const TOP_MSG_IDS: usize = 4;
 
 impl<W: Write> TextReporter<W> {
     pub(super) fn passive_start(&mut self, info: &StartInfo, heartbeat: bool) -> io::Result<()> {
@@ -22,6 +28,33 @@ impl<W: Write> TextReporter<W> {
                 "nothing sent (--no-heartbeat)"
             }
         )
+    }
+
+    /// `[12.0 s] 1/1: 600 received, 3 lost (0.50%), 1 duplicate, 2
+    /// reordered, 0 silences, 50.0 frames/s`, a line per source.
+    pub(super) fn passive_interim(&mut self, figures: &PassiveInterim) -> io::Result<()> {
+        let at = figures.at as f64 / 1e9;
+        if figures.table.sources.is_empty() {
+            self.stamp(figures.at)?;
+            writeln!(self.out, "[{at:.1} s] nothing heard yet")?;
+        }
+        for r in &figures.table.sources {
+            self.stamp(figures.at)?;
+            writeln!(
+                self.out,
+                "[{at:.1} s] {}{}: {} received, {} lost ({}), {} duplicate, {} reordered, {} silences, {} frames/s",
+                r.source,
+                if r.radio { " (radio)" } else { "" },
+                r.counts.received,
+                r.counts.lost,
+                loss_column(r.loss_pct),
+                r.counts.duplicate,
+                r.counts.reordered,
+                r.silence_count,
+                r.frames_per_s.map_or_else(|| "-".into(), per_second),
+            )?;
+        }
+        self.out.flush()
     }
 }
 
@@ -55,6 +88,46 @@ fn row(out: &mut impl Write, s: &PassiveSummary, r: &SourceSummary) -> io::Resul
         r.bytes_per_s
             .map_or_else(|| "-".into(), |b| format!("{b:.0}")),
     )
+}
+
+/// `messages: 1/1 ATTITUDE 49.9/s, GLOBAL_POSITION_INT 5.0/s, HEARTBEAT
+/// 1.0/s`: a source's busiest message ids, by name where the dialect
+/// knows it, each at its share of the source's rate (its count where the
+/// rate is not known), then how many more.
+fn write_messages(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
+    if r.msg_ids.is_empty() {
+        return Ok(());
+    }
+    let each: Vec<String> = r
+        .msg_ids
+        .iter()
+        .take(TOP_MSG_IDS)
+        .map(|m| {
+            let name = message_name(m.id).map_or_else(|| format!("id {}", m.id), String::from);
+            match r.frames_per_s {
+                Some(rate) if r.counts.received > 0 => {
+                    let share = rate * m.count as f64 / r.counts.received as f64;
+                    format!("{name} {}/s", per_second(share))
+                }
+                _ => format!("{name} ×{}", m.count),
+            }
+        })
+        .collect();
+    let more = r.msg_ids.len().saturating_sub(TOP_MSG_IDS);
+    let rest: u64 = r
+        .msg_ids
+        .iter()
+        .skip(TOP_MSG_IDS)
+        .map(|m| m.count)
+        .sum::<u64>()
+        + r.msg_ids_other;
+    let tail = match (more, r.msg_ids_other) {
+        (0, 0) => String::new(),
+        (0, _) => format!(", and more ids ({rest} frames)"),
+        (n, 0) => format!(", and {n} more ids ({rest} frames)"),
+        (n, _) => format!(", and {n}+ more ids ({rest} frames)"),
+    };
+    writeln!(out, "messages: {} {}{tail}", r.source, each.join(", "))
 }
 
 fn write_silence(out: &mut impl Write, r: &SourceSummary, silence: &Silence) -> io::Result<()> {
@@ -131,6 +204,9 @@ pub(super) fn write_summary(
         )?;
     }
     for r in &s.table.sources {
+        write_messages(out, r)?;
+    }
+    for r in &s.table.sources {
         for silence in &r.silences {
             write_silence(out, r, silence)?;
         }
@@ -154,4 +230,79 @@ pub(super) fn write_summary(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::observe::Observer;
+    use crate::engine::probe::passive::tracker::{SourceTable, RADIO_SOURCE};
+    use crate::engine::summary::Interim;
+    use crate::frame::SysComp;
+
+    const MS: u64 = 1_000_000;
+
+    /// 1/1: 100 sequence numbers 20 ms apart, 50 never sent; every tenth a
+    /// HEARTBEAT, one of an id no dialect knows, the rest ATTITUDE. 2/1:
+    /// six ids. And one RADIO_STATUS from the radio.
+    fn table() -> SourceTable {
+        let mut t = SourceTable::new(None, 32);
+        for k in 0..100u64 {
+            if k == 50 {
+                continue;
+            }
+            let id = match k {
+                _ if k % 10 == 0 => 0,
+                55 => 65_000,
+                _ => 30,
+            };
+            t.on_frame(SysComp::new(1, 1), k as u8, id, 40, k * 20 * MS);
+        }
+        for (k, id) in [1u32, 1, 1, 2, 2, 24, 33, 74, 147].into_iter().enumerate() {
+            t.on_frame(SysComp::new(2, 1), k as u8, id, 30, k as u64 * 200 * MS);
+        }
+        t.on_frame(RADIO_SOURCE, 0, 109, 38, 500 * MS);
+        t
+    }
+
+    #[test]
+    fn the_busiest_messages_are_named_at_their_share_of_the_rate() {
+        let summary = table().summary(2_000 * MS);
+        let mut out = Vec::new();
+        for r in &summary.sources {
+            write_messages(&mut out, r).unwrap();
+        }
+        // 1/1: 98 frames in the 1.98 s after its first, 49.5 a second, of
+        // which ATTITUDE is 89 of its 99 and HEARTBEAT 9 (50 was never
+        // sent). 2/1: 5 a second, SYS_STATUS 3 of its 9 frames.
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            "messages: 1/1 ATTITUDE 44.5/s, HEARTBEAT 4.5/s, id 65000 0.5/s\n\
+             messages: 2/1 SYS_STATUS 1.7/s, SYSTEM_TIME 1.1/s, GPS_RAW_INT 0.6/s, \
+             GLOBAL_POSITION_INT 0.6/s, and 2 more ids (2 frames)\n\
+             messages: 51/68 RADIO_STATUS ×1\n"
+        );
+    }
+
+    #[test]
+    fn an_interim_is_a_line_per_source_in_quiet_mode_too() {
+        let table = table();
+        let mut text = TextReporter::new(Vec::new(), true);
+        let empty = SourceTable::new(None, 32).summary(MS);
+        for (at, table) in [(MS, empty), (2_000 * MS, table.summary(2_000 * MS))] {
+            text.interim(&Interim::Passive(PassiveInterim {
+                at,
+                table,
+                identities: vec![],
+            }))
+            .unwrap();
+        }
+        assert_eq!(
+            String::from_utf8(text.into_inner()).unwrap(),
+            "[0.0 s] nothing heard yet\n\
+             [2.0 s] 1/1: 99 received, 1 lost (1.00%), 0 duplicate, 0 reordered, 0 silences, 49.5 frames/s\n\
+             [2.0 s] 2/1: 9 received, 0 lost (0.00%), 0 duplicate, 0 reordered, 0 silences, 5.0 frames/s\n\
+             [2.0 s] 51/68 (radio): 1 received, 0 lost (0.00%), 0 duplicate, 0 reordered, 0 silences, - frames/s\n"
+        );
+    }
 }

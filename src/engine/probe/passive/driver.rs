@@ -13,11 +13,12 @@ use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use crate::engine::link_io::{Clock, Sender};
 use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
 use crate::engine::radio::Radios;
+use crate::engine::roster::{Identity, Roster};
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
-use crate::engine::summary::passive::PassiveSummary;
-use crate::engine::summary::{LinkSummary, ProbeName};
+use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::summary::{Interim, LinkSummary, PassiveInterim, ProbeName};
 use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{Frame, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
@@ -66,6 +67,15 @@ pub(crate) fn tell_sources(
         }),
         None => Ok(()),
     }
+}
+
+/// What each source of `table` said it is, from its HEARTBEAT.
+fn identities(table: &TableSummary, roster: &Roster) -> Vec<(SysComp, Identity)> {
+    table
+        .sources
+        .iter()
+        .filter_map(|s| roster.get(s.source).map(|i| (s.source, i.clone())))
+        .collect()
 }
 
 impl Driver for PassiveDriver {
@@ -129,11 +139,7 @@ impl Driver for PassiveDriver {
     fn finish(self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let at = (end.duration_s * 1e9) as Nanos;
         let table = self.table.summary(at);
-        let identities = table
-            .sources
-            .iter()
-            .filter_map(|s| end.roster.get(s.source).map(|i| (s.source, i.clone())))
-            .collect();
+        let identities = identities(&table, &end.roster);
         let summary = PassiveSummary {
             link: end.cfg.link_name.clone(),
             ours: end.cfg.ours,
@@ -150,5 +156,15 @@ impl Driver for PassiveDriver {
             signing: end.gate.summary(),
         };
         (LinkSummary::Passive(Box::new(summary)), Vec::new())
+    }
+
+    /// Every source's figures as of `at`, as the summary would give them.
+    fn interim(&self, roster: &Roster, at: Nanos) -> Option<Interim> {
+        let table = self.table.summary(at);
+        Some(Interim::Passive(PassiveInterim {
+            at,
+            identities: identities(&table, roster),
+            table,
+        }))
     }
 }

@@ -165,6 +165,15 @@ impl SeqState {
         self.span += u64::from(ahead);
     }
 
+    /// Numbers counted lost that a late frame may still fill: unseen,
+    /// behind the head within the window and the stretch.
+    fn pending(&self) -> u64 {
+        let reach = self.span.saturating_sub(1).min(u64::from(WINDOW));
+        (1..=reach)
+            .filter(|&k| !self.is_seen(self.head.wrapping_sub(k as u8)))
+            .count() as u64
+    }
+
     fn take(&mut self, seq: u8, at: Nanos) -> Step {
         let ahead = seq.wrapping_sub(self.head);
         if (1..=WINDOW).contains(&ahead) {
@@ -424,7 +433,11 @@ impl SeqTracker {
         let mut log_count = self.silences.count;
         let mut silence_ns = self.silences.total_ns;
         let mut unspanned = self.silences.unspanned_frames;
+        // After a silence no frame can fill a gap (the next one advances or
+        // resynchronises), so nothing is pending in one.
+        let mut lost_pending = self.state.map_or(0, |s| s.pending());
         if let Some(s) = self.ongoing(at) {
+            lost_pending = 0;
             log_count += 1;
             silence_ns = silence_ns.saturating_add(s.length_ns);
             unspanned += s.frames_estimated.unwrap_or(0);
@@ -437,6 +450,7 @@ impl SeqTracker {
             radio: source == RADIO_SOURCE,
             counts: c,
             loss_pct: percent(c.lost, c.received - c.duplicate + c.lost),
+            lost_pending,
             pymav: self.pymav_figure(),
             bytes: self.bytes,
             first_seen: self.first_seen,
@@ -921,6 +935,27 @@ mod tests {
     }
 
     #[test]
+    fn a_gap_is_pending_until_it_leaves_the_window_or_a_silence_starts() {
+        // 5 and 6 skipped: both may still arrive.
+        let mut t = tracked(&[0, 1, 2, 3, 4, 7, 8], 20 * MS);
+        let pending = |t: &SeqTracker, at| t.summary(SRC, at).lost_pending;
+        assert_eq!((t.counts().lost, pending(&t, 160 * MS)), (2, 2));
+        // 5 arrives late: reordered, one still pending.
+        t.on_frame(5, 0, 20, 170 * MS);
+        assert_eq!((t.counts().lost, pending(&t, 170 * MS)), (1, 1));
+        // 127 behind the head 6 may still come; 128 behind it cannot.
+        feed(&mut t, &(9..=133).collect::<Vec<_>>(), 20 * MS);
+        assert_eq!((t.counts().lost, pending(&t, 133 * 20 * MS)), (1, 1));
+        feed(&mut t, &[134], 20 * MS);
+        assert_eq!((t.counts().lost, pending(&t, 134 * 20 * MS)), (1, 0));
+        // A new gap, then the source goes quiet: in a silence nothing can
+        // fill it any more.
+        feed(&mut t, &[136], 20 * MS);
+        assert_eq!(pending(&t, 136 * 20 * MS), 1);
+        assert_eq!(pending(&t, 136 * 20 * MS + 2 * S), 0);
+    }
+
+    #[test]
     fn the_silence_list_keeps_the_first_and_the_longest() {
         let mut t = SeqTracker::new(None);
         let mut at = 0;
@@ -1113,6 +1148,47 @@ mod tests {
             let spanned = t.summary(SRC, at).silences.iter().all(|s| s.seq_lost.is_some());
             proptest::prop_assert!(spanned);
             proptest::prop_assert_eq!(t.counts(), truth);
+        }
+
+        /// What a counter of losses shows, lost less pending, never goes
+        /// down, frame after frame, whatever arrives; and it is at most
+        /// the loss the sequence shows.
+        #[test]
+        fn settled_loss_never_decreases(
+            frames in proptest::collection::vec((0u8..=255, 0u64..1_500), 1..600),
+        ) {
+            let mut t = SeqTracker::new(None);
+            let (mut at, mut settled) = (0, 0);
+            for &(s, step_ms) in &frames {
+                at += step_ms * MS;
+                t.on_frame(s, 0, 10, at);
+                let summary = t.summary(SRC, at);
+                let now = summary.counts.lost - summary.lost_pending;
+                proptest::prop_assert!(now >= settled, "{} after {}", now, settled);
+                settled = now;
+            }
+        }
+
+        /// On a stream with drops, duplicates and swaps, the same; and once
+        /// the source has gone quiet, nothing is pending: the settled loss
+        /// is the truth.
+        #[test]
+        fn settled_loss_reaches_the_truth_in_a_silence(
+            fates in proptest::collection::vec(fate(), 1..1500),
+        ) {
+            let (delivered, truth) = deliver(&fates);
+            let mut t = SeqTracker::new(None);
+            let (mut at, mut settled) = (0, 0);
+            for &p in &delivered {
+                at = (p * 20 * MS).max(at);
+                t.on_frame((p % 256) as u8, 0, 20, at);
+                let s = t.summary(SRC, at);
+                proptest::prop_assert!(s.counts.lost - s.lost_pending >= settled);
+                settled = s.counts.lost - s.lost_pending;
+            }
+            let quiet = t.summary(SRC, at + 2 * S);
+            proptest::prop_assert_eq!(quiet.lost_pending, 0);
+            proptest::prop_assert_eq!(quiet.counts.lost, truth.lost);
         }
 
         /// pymavlink's figure is its formula, frame by frame.

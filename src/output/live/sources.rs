@@ -1,0 +1,125 @@
+//! `--live` in a passive run: a row per source from the table the engine
+//! tells once a second ([`Event::Sources`]), never from a per-frame event.
+//! Each source keeps its latest figures and its last [`RECENT`] seconds
+//! (frames, and whether any were lost) for the strip.
+//!
+//! [`Event::Sources`]: crate::engine::observe::Event::Sources
+
+use std::collections::{BTreeMap, VecDeque};
+
+use super::RECENT;
+use crate::engine::roster::Identity;
+use crate::engine::summary::passive::{SeqCounts, TableSummary};
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+use crate::output::windows::Windows;
+
+/// Identities kept for sources not (yet) in the table: as many as it
+/// tracks, and some.
+const MAX_HEARD: usize = 64;
+
+/// One second of a source, as the strip shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Second {
+    pub frames: u64,
+    /// Its sequence skipped numbers in it.
+    pub lost: bool,
+}
+
+#[derive(Debug, Clone)]
+struct Source {
+    radio: bool,
+    counts: SeqCounts,
+    loss_pct: Option<f64>,
+    silences: u64,
+    /// Frames a second in the latest window.
+    rate: Option<f64>,
+    recent: VecDeque<Second>,
+}
+
+/// A passive run's sources, as the view follows them.
+#[derive(Debug, Clone, Default)]
+pub struct Sources {
+    windows: Windows,
+    sources: BTreeMap<SysComp, Source>,
+    /// `vehicle autopilot` from each system's first HEARTBEAT.
+    heard: BTreeMap<SysComp, String>,
+}
+
+impl Sources {
+    pub fn heard(&mut self, id: SysComp, identity: &Identity) {
+        if self.heard.len() < MAX_HEARD || self.heard.contains_key(&id) {
+            self.heard.insert(
+                id,
+                format!("{} {}", identity.vehicle, identity.autopilot_name),
+            );
+        }
+    }
+
+    /// The table as of `at`: each source's figures, and its latest second.
+    pub fn table(&mut self, at: Nanos, table: &TableSummary) {
+        for (w, s) in self.windows.next(at, table).iter().zip(&table.sources) {
+            let t = self.sources.entry(s.source).or_insert_with(|| Source {
+                radio: s.radio,
+                counts: SeqCounts::default(),
+                loss_pct: None,
+                silences: 0,
+                rate: None,
+                recent: VecDeque::with_capacity(RECENT),
+            });
+            t.counts = s.counts;
+            t.loss_pct = s.loss_pct;
+            t.silences = s.silence_count;
+            t.rate = w.frames_per_s();
+            if t.recent.len() == RECENT {
+                t.recent.pop_front();
+            }
+            t.recent.push_back(Second {
+                frames: w.received,
+                lost: w.lost > 0,
+            });
+        }
+    }
+
+    /// The rows to draw, by source.
+    pub fn rows(&self) -> Vec<SourceRow> {
+        self.sources
+            .iter()
+            .map(|(id, s)| SourceRow {
+                id: id.to_string(),
+                identity: self
+                    .heard
+                    .get(id)
+                    .cloned()
+                    .or_else(|| s.radio.then(|| "radio".to_string())),
+                radio: s.radio,
+                received: s.counts.received,
+                lost: s.counts.lost,
+                loss_pct: s.loss_pct,
+                duplicate: s.counts.duplicate,
+                reordered: s.counts.reordered,
+                silences: s.silences,
+                rate: s.rate,
+                recent: s.recent.iter().copied().collect(),
+            })
+            .collect()
+    }
+}
+
+/// One source's row.
+#[derive(Debug, Clone)]
+pub struct SourceRow {
+    pub id: String,
+    /// What its HEARTBEAT said it is; `radio` for the SiK radio's own.
+    pub identity: Option<String>,
+    pub radio: bool,
+    pub received: u64,
+    pub lost: u64,
+    pub loss_pct: Option<f64>,
+    pub duplicate: u64,
+    pub reordered: u64,
+    pub silences: u64,
+    /// Frames a second in the latest second.
+    pub rate: Option<f64>,
+    pub recent: Vec<Second>,
+}

@@ -1,0 +1,133 @@
+//! The Prometheus text format, written: a family (its name, `HELP` and
+//! `TYPE`), its samples, and the label sets of a link's series. Every
+//! exposition mavping serves is written through [`Exposition`].
+
+use std::fmt::{Display, Write as _};
+
+use super::Metrics;
+use crate::engine::summary::ProbeName;
+use crate::frame::SysComp;
+
+impl Metrics {
+    pub(super) fn labels(&self, id: SysComp) -> String {
+        format!(
+            "link=\"{}\",probe=\"{}\",sysid=\"{}\",compid=\"{}\"",
+            escape(&self.link),
+            self.probe.map_or("", ProbeName::as_str),
+            id.sysid,
+            id.compid
+        )
+    }
+
+    pub(super) fn radio_labels(&self, id: SysComp) -> String {
+        format!(
+            "link=\"{}\",sysid=\"{}\",compid=\"{}\"",
+            escape(&self.link),
+            id.sysid,
+            id.compid
+        )
+    }
+}
+
+/// What a family's samples are, as its `TYPE` line says.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum FamilyKind {
+    Gauge,
+    Counter,
+    Histogram,
+}
+
+impl FamilyKind {
+    fn name(self) -> &'static str {
+        match self {
+            FamilyKind::Gauge => "gauge",
+            FamilyKind::Counter => "counter",
+            FamilyKind::Histogram => "histogram",
+        }
+    }
+}
+
+/// A metric family: its name, its `HELP` text and its type.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) struct Family {
+    pub(super) name: &'static str,
+    pub(super) help: &'static str,
+    pub(super) kind: FamilyKind,
+}
+
+impl Family {
+    pub(super) const fn gauge(name: &'static str, help: &'static str) -> Self {
+        Family {
+            name,
+            help,
+            kind: FamilyKind::Gauge,
+        }
+    }
+
+    pub(super) const fn counter(name: &'static str, help: &'static str) -> Self {
+        Family {
+            name,
+            help,
+            kind: FamilyKind::Counter,
+        }
+    }
+
+    pub(super) const fn histogram(name: &'static str, help: &'static str) -> Self {
+        Family {
+            name,
+            help,
+            kind: FamilyKind::Histogram,
+        }
+    }
+}
+
+/// A family and how to read its value (of a series, a radio, the server).
+pub(super) struct Figure<V> {
+    pub(super) family: Family,
+    pub(super) value: V,
+}
+
+/// Text being written in the exposition format: a family's `HELP` and
+/// `TYPE` lines, then its samples.
+#[derive(Default)]
+pub(super) struct Exposition(pub(super) String);
+
+impl Exposition {
+    pub(super) fn header(&mut self, family: &Family) {
+        let Family { name, help, kind } = family;
+        let kind = kind.name();
+        let _ = writeln!(self.0, "# HELP {name} {help}\n# TYPE {name} {kind}");
+    }
+
+    pub(super) fn sample(&mut self, name: &str, labels: &str, value: impl Display) {
+        let _ = if labels.is_empty() {
+            writeln!(self.0, "{name} {value}")
+        } else {
+            writeln!(self.0, "{name}{{{labels}}} {value}")
+        };
+    }
+
+    /// A family with its samples; nothing at all when it has none.
+    pub(super) fn family<V: Display>(
+        &mut self,
+        family: &Family,
+        samples: impl IntoIterator<Item = (String, V)>,
+    ) {
+        let mut samples = samples.into_iter().peekable();
+        if samples.peek().is_none() {
+            return;
+        }
+        self.header(family);
+        for (labels, value) in samples {
+            self.sample(family.name, &labels, value);
+        }
+    }
+}
+
+/// Label values escape backslash, double quote and newline.
+pub(super) fn escape(value: &str) -> String {
+    value
+        .replace('\\', "\\\\")
+        .replace('"', "\\\"")
+        .replace('\n', "\\n")
+}

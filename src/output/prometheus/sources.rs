@@ -1,0 +1,309 @@
+//! Each source's packet-sequence figures as Prometheus shows them: the
+//! table the engine tells once a second is cumulative, so counters are
+//! set from it, never added to; they never go down (a loss a late frame
+//! may still fill waits outside `mavping_source_lost_total` until it
+//! cannot); and a continuous link's earlier sessions are carried, so its
+//! counters go on across reopenings. At most [`MAX_SOURCES`] sources a
+//! link, whatever the run length.
+
+use std::collections::BTreeMap;
+
+use crate::engine::probe::passive::tracker::DEFAULT_MAX_SOURCES;
+use crate::engine::summary::passive::{SeqCounts, SourceSummary, TableSummary};
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+
+/// Sources kept per link: the engine's table cap, and the radio.
+pub const MAX_SOURCES: usize = DEFAULT_MAX_SOURCES + 1;
+
+/// What only grows for one source.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Figures {
+    /// The sequence's counts as the table said them (`lost` may still
+    /// move to `reordered`).
+    pub seq: SeqCounts,
+    /// What a counter of losses shows: `lost` less what may still be
+    /// filled (all of it once the session has ended).
+    pub lost_settled: u64,
+    pub bytes: u64,
+    pub silences: u64,
+    pub silence_ns: Nanos,
+    pub pymav_count: u64,
+    pub pymav_loss: u64,
+}
+
+impl Figures {
+    fn of(s: &SourceSummary, ended: bool) -> Self {
+        let pending = if ended { 0 } else { s.lost_pending };
+        Figures {
+            seq: s.counts,
+            lost_settled: s.counts.lost.saturating_sub(pending),
+            bytes: s.bytes,
+            silences: s.silence_count,
+            silence_ns: s.silence_ns,
+            pymav_count: s.pymav.count,
+            pymav_loss: s.pymav.loss,
+        }
+    }
+
+    /// Field by field, the larger: a counter's value never goes back
+    /// (an ongoing silence measured to a tick can end a little before it,
+    /// by a frame read after the tick but stamped before).
+    fn max(self, o: Figures) -> Figures {
+        let seq = |f: fn(&SeqCounts) -> u64| f(&self.seq).max(f(&o.seq));
+        Figures {
+            seq: SeqCounts {
+                received: seq(|c| c.received),
+                lost: seq(|c| c.lost),
+                duplicate: seq(|c| c.duplicate),
+                reordered: seq(|c| c.reordered),
+                resyncs: seq(|c| c.resyncs),
+            },
+            lost_settled: self.lost_settled.max(o.lost_settled),
+            bytes: self.bytes.max(o.bytes),
+            silences: self.silences.max(o.silences),
+            silence_ns: self.silence_ns.max(o.silence_ns),
+            pymav_count: self.pymav_count.max(o.pymav_count),
+            pymav_loss: self.pymav_loss.max(o.pymav_loss),
+        }
+    }
+
+    fn plus(self, o: Figures) -> Figures {
+        Figures {
+            seq: add_seq(self.seq, o.seq),
+            lost_settled: self.lost_settled + o.lost_settled,
+            bytes: self.bytes.saturating_add(o.bytes),
+            silences: self.silences + o.silences,
+            silence_ns: self.silence_ns.saturating_add(o.silence_ns),
+            pymav_count: self.pymav_count + o.pymav_count,
+            pymav_loss: self.pymav_loss + o.pymav_loss,
+        }
+    }
+
+    /// The same figures with every pending loss settled: what a session
+    /// that has ended proved.
+    fn settled(self) -> Figures {
+        Figures {
+            lost_settled: self.seq.lost,
+            ..self
+        }
+    }
+}
+
+fn add_seq(a: SeqCounts, b: SeqCounts) -> SeqCounts {
+    SeqCounts {
+        received: a.received + b.received,
+        lost: a.lost + b.lost,
+        duplicate: a.duplicate + b.duplicate,
+        reordered: a.reordered + b.reordered,
+        resyncs: a.resyncs + b.resyncs,
+    }
+}
+
+/// The latest table's figures that are not counters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Latest {
+    figures: Figures,
+    pending: u64,
+    frames_per_s: Option<f64>,
+    silent: bool,
+}
+
+/// One source on one link.
+#[derive(Debug, Clone, Default)]
+pub struct SourceSeries {
+    /// The SiK radio's own RADIO_STATUS source (51/68).
+    pub radio: bool,
+    /// Earlier sessions of a continuous link, summed.
+    carried: Figures,
+    /// This session's counters as last shown.
+    shown: Figures,
+    /// This session's latest table, if the source was heard in it.
+    latest: Option<Latest>,
+}
+
+impl SourceSeries {
+    fn update(&mut self, s: &SourceSummary, ended: bool) {
+        let figures = Figures::of(s, ended);
+        self.radio = s.radio;
+        self.shown = self.shown.max(figures);
+        self.latest = Some(Latest {
+            figures,
+            pending: if ended { 0 } else { s.lost_pending },
+            frames_per_s: s.frames_per_s,
+            silent: s.silences.last().is_some_and(|x| x.ongoing),
+        });
+    }
+
+    /// A new session: this one's figures become history.
+    fn carry(&mut self) {
+        let last = self.latest.map_or(Figures::default(), |l| l.figures);
+        self.carried = self.carried.plus(self.shown.max(last.settled()));
+        self.shown = Figures::default();
+        self.latest = None;
+    }
+
+    /// The counters, earlier sessions included.
+    pub fn counters(&self) -> Figures {
+        self.carried.plus(self.shown)
+    }
+
+    /// The sequence as last told, earlier sessions included (a ratio's
+    /// or the direction split's input: `lost` is not settled).
+    pub fn seq(&self) -> SeqCounts {
+        let latest = self.latest.map_or(SeqCounts::default(), |l| l.figures.seq);
+        add_seq(self.carried.seq, latest)
+    }
+
+    /// pymavlink's count and loss, earlier sessions included.
+    fn pymav(&self) -> (u64, u64) {
+        let (count, loss) = self
+            .latest
+            .map_or((0, 0), |l| (l.figures.pymav_count, l.figures.pymav_loss));
+        (
+            self.carried.pymav_count + count,
+            self.carried.pymav_loss + loss,
+        )
+    }
+
+    /// Lost over the numbers the sequence accounts for.
+    pub fn loss_ratio(&self) -> Option<f64> {
+        let seq = self.seq();
+        let numbered = seq.numbered();
+        (numbered > 0).then(|| seq.lost as f64 / numbered as f64)
+    }
+
+    /// pymavlink's `packet_loss()`, as a ratio: loss over count + loss.
+    pub fn pymav_loss_ratio(&self) -> Option<f64> {
+        let (count, loss) = self.pymav();
+        (count + loss > 0).then(|| loss as f64 / (count + loss) as f64)
+    }
+
+    pub fn pending(&self) -> Option<u64> {
+        self.latest.map(|l| l.pending)
+    }
+
+    pub fn frames_per_s(&self) -> Option<f64> {
+        self.latest?.frames_per_s
+    }
+
+    /// Whether a silence is on now; `None` when not heard this session.
+    pub fn silent(&self) -> Option<bool> {
+        self.latest.map(|l| l.silent)
+    }
+}
+
+/// Every source of one link.
+#[derive(Debug, Clone, Default)]
+pub struct Sources(BTreeMap<SysComp, SourceSeries>);
+
+impl Sources {
+    /// The table as told at a tick (`ended` false) or at the end of the
+    /// session. Sources beyond [`MAX_SOURCES`] are left out.
+    pub fn update(&mut self, table: &TableSummary, ended: bool) {
+        for s in &table.sources {
+            if self.0.len() < MAX_SOURCES || self.0.contains_key(&s.source) {
+                self.0.entry(s.source).or_default().update(s, ended);
+            }
+        }
+    }
+
+    /// A new session of the same link begins.
+    pub fn carry(&mut self) {
+        self.0.values_mut().for_each(SourceSeries::carry);
+    }
+
+    pub fn get(&self, id: SysComp) -> Option<&SourceSeries> {
+        self.0.get(&id)
+    }
+
+    pub fn iter(&self) -> impl Iterator<Item = (&SysComp, &SourceSeries)> {
+        self.0.iter()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::probe::passive::tracker::SourceTable;
+
+    const MS: Nanos = 1_000_000;
+    const A: SysComp = SysComp::new(1, 1);
+
+    /// A table fed `seqs` from source A, one every 20 ms from `t0`.
+    fn feed(table: &mut SourceTable, seqs: &[u8], t0: Nanos) -> Nanos {
+        let mut at = t0;
+        for &s in seqs {
+            table.on_frame(A, s, 30, 20, at);
+            at += 20 * MS;
+        }
+        at - 20 * MS
+    }
+
+    #[test]
+    fn a_late_frame_never_takes_a_counter_back() {
+        let mut table = SourceTable::new(None, 4);
+        let mut sources = Sources::default();
+        // 3 and 4 skipped: counted lost, but either may still come.
+        let at = feed(&mut table, &[0, 1, 2, 5, 6], 0);
+        sources.update(&table.summary(at), false);
+        let a = sources.get(A).unwrap();
+        assert_eq!(a.seq().lost, 2);
+        assert_eq!(a.counters().lost_settled, 0);
+        assert_eq!(a.pending(), Some(2));
+        assert_eq!(a.loss_ratio(), Some(2.0 / 7.0));
+        // 3 comes late: reordered; the ratio drops, no counter does.
+        let at = feed(&mut table, &[3], at + 5 * MS);
+        sources.update(&table.summary(at), false);
+        let a = sources.get(A).unwrap();
+        assert_eq!((a.seq().lost, a.seq().reordered), (1, 1));
+        assert_eq!(a.counters().lost_settled, 0);
+        // The run ends: 4 is lost for good.
+        sources.update(&table.summary(at), true);
+        let a = sources.get(A).unwrap();
+        assert_eq!(a.counters().lost_settled, 1);
+        assert_eq!(a.counters().seq.received, 6);
+        assert_eq!(a.pending(), Some(0));
+    }
+
+    #[test]
+    fn a_new_session_carries_the_counters_on() {
+        let mut sources = Sources::default();
+        let mut first = SourceTable::new(None, 4);
+        let at = feed(&mut first, &[0, 1, 3, 4], 0);
+        sources.update(&first.summary(at), false);
+        assert_eq!(sources.get(A).unwrap().counters().lost_settled, 0);
+        // The link breaks and is reopened: the pending loss of the first
+        // session is settled, and the second starts from there.
+        sources.carry();
+        let a = sources.get(A).unwrap();
+        assert_eq!(a.counters().lost_settled, 1);
+        assert_eq!((a.silent(), a.frames_per_s()), (None, None));
+        let mut second = SourceTable::new(None, 4);
+        let at = feed(&mut second, &[200, 202, 203], 0);
+        sources.update(&second.summary(at + 2_000 * MS), false);
+        let a = sources.get(A).unwrap();
+        assert_eq!(a.counters().seq.received, 7);
+        // 201 is settled by the silence two seconds after 203.
+        assert_eq!(a.counters().lost_settled, 2);
+        assert_eq!(a.counters().silences, 1);
+        assert_eq!(a.silent(), Some(true));
+        assert_eq!(a.loss_ratio(), Some(2.0 / 9.0));
+    }
+
+    #[test]
+    fn sources_are_capped() {
+        let mut table = SourceTable::new(None, 64);
+        for sysid in 1..=40 {
+            table.on_frame(SysComp::new(sysid, 1), 0, 0, 20, 0);
+        }
+        let mut sources = Sources::default();
+        sources.update(&table.summary(0), false);
+        assert_eq!(sources.iter().count(), MAX_SOURCES);
+        // Those kept go on being updated.
+        table.on_frame(SysComp::new(1, 1), 1, 0, 20, MS);
+        sources.update(&table.summary(MS), false);
+        let one = sources.get(SysComp::new(1, 1)).unwrap();
+        assert_eq!(one.counters().seq.received, 2);
+    }
+}
