@@ -10,12 +10,17 @@ child's own pages.
 
     run.py [--quick] [--binary PATH]
 
+The passive rows (--passive at 100,000 frames/s) come from passive.py,
+which also runs alone.
+
 --binary benches another build of mavping (an older one, for a before and
 after table): the same script, the same machine, the same responder code
 as that build.
 """
 import json
 import os
+
+import passive
 import shutil
 import signal
 import socket
@@ -260,6 +265,9 @@ def main():
 
         # 5. Many links in one process.
         hundred_links(rows)
+
+        # 5b. Listening: --passive at 100k frames/s (bench/passive.py).
+        rows.extend(passive.rows(MAVPING, QUICK))
 
         # 6. Memory: peak RSS of a short and a long run at 10 kHz; per responder.
         resp = Responder()

@@ -4,7 +4,9 @@
 //!   on the same bytes (the crate mavping would otherwise use), and on
 //!   hostile bytes (each reply among mutated copies of itself, as the
 //!   mutation test sends them) as a stream and as datagrams;
-//! - matching and statistics per reply, the work done for every PING.
+//! - matching and statistics per reply, the work done for every PING;
+//! - the per-source sequence accounting of every received frame (passive
+//!   runs, and the downlink figure of every echo run).
 //!
 //! Run: `cargo bench --bench core` (or `bash scripts/bench.sh` for the
 //! end-to-end comparison with irtt and pymavlink).
@@ -13,6 +15,7 @@ use std::hint::black_box;
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use mavping::engine::matcher::{Lookup, Matcher};
+use mavping::engine::probe::passive::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use mavping::engine::stats::RttStats;
 use mavping::frame::{self, Header, Msg, ScanStats, StreamScanner, SysComp, Version};
 
@@ -205,5 +208,44 @@ fn matching(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, frames, hostile, matching);
+/// The per-frame sequence accounting every passive and echo run does:
+/// `SourceTable::on_frame` (the table lookup and the source's tracker).
+fn sequences(c: &mut Criterion) {
+    let mut g = c.benchmark_group("sequences");
+    g.throughput(Throughput::Elements(1));
+    // 100,000 frames/s from one source, in order.
+    g.bench_function("SourceTable::on_frame: 1 source, in order", |b| {
+        let mut table = SourceTable::new(None, DEFAULT_MAX_SOURCES);
+        let who = SysComp::new(1, 1);
+        let (mut seq, mut at) = (0u8, 0u64);
+        b.iter(|| {
+            seq = seq.wrapping_add(1);
+            at += 10_000;
+            table.on_frame(black_box(who), seq, 30, 36, at);
+        })
+    });
+    // 20 sources interleaved, every 16th frame lost and every 64th
+    // doubled: the gap, fill and duplicate paths.
+    g.bench_function("SourceTable::on_frame: 20 sources, lossy", |b| {
+        let mut table = SourceTable::new(None, DEFAULT_MAX_SOURCES);
+        let sources: Vec<SysComp> = (1..=20).map(|s| SysComp::new(s, 1)).collect();
+        let mut seqs = [0u8; 20];
+        let (mut frame, mut at) = (0u64, 0u64);
+        b.iter(|| {
+            frame += 1;
+            at += 10_000;
+            let who = (frame % 20) as usize;
+            if frame % 16 == 0 {
+                seqs[who] = seqs[who].wrapping_add(1);
+            }
+            if frame % 64 != 0 {
+                seqs[who] = seqs[who].wrapping_add(1);
+            }
+            table.on_frame(black_box(sources[who]), seqs[who], 30, 36, at);
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, frames, hostile, matching, sequences);
 criterion_main!(benches);

@@ -7,6 +7,10 @@
 #   bash scripts/bench.sh --binary /tmp/before/target/release/mavping
 #                                  # the same bench against another build
 #                                  # (for a before/after table)
+#   bash scripts/bench.sh --passive  # only the passive rows (about 2 minutes):
+#                                  # --passive at 100,000 frames/s beside a
+#                                  # plain reader and pymavlink's mavutil
+# Not run by CI (it needs a quiet machine and minutes).
 # Micro-benchmarks of the parser, matcher and statistics: cargo bench --bench core
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,6 +18,8 @@ cargo build --release --quiet
 # The baseline of the CPU-per-PING rows: a loop that only sleeps, reads and
 # sends once per PING (examples/wake_floor.rs).
 cargo build --release --quiet --example wake_floor
+# The sender and the plain reader of the passive rows (examples/stream_floor.rs).
+cargo build --release --quiet --example stream_floor
 if [ ! -x /usr/bin/time ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
   apt-get install -y -qq time >/dev/null  # GNU time: per-process peak RSS and CPU
 fi
@@ -27,5 +33,9 @@ fi
 if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pymavlink" 2>/dev/null; then
   python3 -m venv .venv
   .venv/bin/pip install --quiet --disable-pip-version-check "pymavlink==2.4.50" pyserial==3.5
+fi
+if [ "${1:-}" = --passive ]; then
+  shift
+  exec .venv/bin/python bench/passive.py "$@"
 fi
 exec .venv/bin/python bench/run.py "$@"

@@ -71,7 +71,7 @@ pub async fn measure(
                  duplicated={} duplicates_arrived={} outage={} spiked={} spiked_arrived={} \
                  down_sent={} down_dropped={} down_duplicated={} down_duplicates_arrived={} \
                  down_delivered={} down_reordered={} up_sent={} up_dropped={} \
-                 up_requests_dropped={}",
+                 up_requests_dropped={} up_duplicated={} up_requests_duplicated={}",
                 t.answered,
                 t.dropped,
                 t.dropped_before_first,
@@ -89,7 +89,9 @@ pub async fn measure(
                 t.down.reordered,
                 t.up.sent,
                 t.up.dropped,
-                t.up.requests_dropped
+                t.up.requests_dropped,
+                t.up.duplicated,
+                t.up.requests_duplicated
             );
         }
     }

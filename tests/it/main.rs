@@ -21,6 +21,7 @@ mod mutants;
 mod options;
 mod passive;
 mod passive_outputs;
+mod passive_peers;
 mod passive_prometheus;
 mod probes_pymavlink;
 mod prometheus_server;

@@ -237,3 +237,74 @@ fn a_device_held_exclusively_exits_2_busy() {
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(err.contains("busy"), "{err}");
 }
+
+#[test]
+fn a_passive_count_on_a_serial_link_is_exact() {
+    // A pymavlink vehicle on the far end of the cable, numbering frames it
+    // does not send, sending some twice and swapping pairs; mavping only
+    // listens (its HEARTBEAT starts the vehicle, as a radio's GCS does).
+    let (_bridge, a, b) = pty_bridge(&[]);
+    let mut vehicle = Peer::start(
+        "vehicle.py",
+        &[
+            &b,
+            "--baud",
+            "57600",
+            "--frames",
+            "400",
+            "--rate",
+            "100",
+            "--drop",
+            "10,11,12,250",
+            "--dup",
+            "60,300",
+            "--swap",
+            "100,270,350",
+        ],
+    );
+    let run = start_mavping(&["--passive", "--json", &format!("serial:{a}:57600")]);
+    let sent = crate::passive_peers::truth_when_done(&mut vehicle);
+    std::thread::sleep(Duration::from_millis(300));
+    signal(run.child.id(), "INT");
+    let (code, out, err) = run.wait(Duration::from_secs(20));
+    assert_eq!(code, 0, "{out}\n{err}");
+    let num = |v: &serde_json::Value| v.as_u64().unwrap();
+    assert_eq!(
+        [
+            num(&sent["dropped"]),
+            num(&sent["duplicated"]),
+            num(&sent["swapped"])
+        ],
+        [4, 2, 3],
+        "{sent}"
+    );
+    let line = out
+        .lines()
+        .find(|l| l.contains("\"passive_summary\""))
+        .expect(&out);
+    let summary: serde_json::Value = serde_json::from_str(line).unwrap();
+    let source = &summary["sources"][0];
+    assert_eq!(
+        [
+            num(&source["source"]["sysid"]),
+            num(&source["source"]["compid"])
+        ],
+        [1, 1]
+    );
+    let counts = &source["counts"];
+    assert_eq!(counts["received"], sent["sent"], "{source}");
+    assert_eq!(
+        [
+            num(&counts["lost"]),
+            num(&counts["duplicate"]),
+            num(&counts["reordered"]),
+            num(&counts["resyncs"])
+        ],
+        [4, 2, 3, 0],
+        "{source}"
+    );
+    // Every byte was a frame: nothing skipped on the wire.
+    assert_eq!(summary["frames"]["skipped_bytes"], 0, "{summary}");
+    // pymavlink's arithmetic: the drops, 255 a duplicate, 256 a swap.
+    assert_eq!(source["pymav"]["loss"], 4 + 2 * 255 + 3 * 256, "{source}");
+}

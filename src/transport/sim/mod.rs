@@ -10,7 +10,8 @@
 //! replies) with one packet sequence, in the order they send them, as an
 //! autopilot does: a reply is numbered when the responder has the request,
 //! one leg after mavping sent it. The per-direction faults (`loss_down=`,
-//! `dup_down=`, `reorder_down=`, `loss_up=`) act on numbered frames, and
+//! `dup_down=`, `reorder_down=`, `loss_up=`, `dup_up=`) act on numbered
+//! frames (a request heard twice is answered twice), and
 //! [`DownTruth`] and [`UpTruth`] count what they did, for a passive loss
 //! count held against them.
 
@@ -28,6 +29,7 @@ use crate::frame::{self, Header, Msg, RadioStatus, ScanStats, SysComp, Version};
 use crate::telemetry::{Schedule, StreamKind};
 use radio::RadioPair;
 
+mod exchange;
 mod params;
 pub mod radio;
 pub use params::{SimParams, DEFAULT_BUFFER_BYTES, SIM_KEYS};
@@ -64,7 +66,8 @@ pub struct SimTruth {
     pub dropped_before_first: u64,
     /// Replies delivered (first copies), not spiked.
     pub delivered: u64,
-    /// Extra copies put on their way.
+    /// Extra replies put on their way: copies (`dup=`, `dup_down=`), and
+    /// the second answer to a request heard twice (`dup_up=`).
     pub duplicated: u64,
     /// ...of which handed to the pinger before it stopped reading.
     pub duplicates_arrived: u64,
@@ -117,6 +120,12 @@ pub struct UpTruth {
     /// ...of which requests it would have answered (also counted in
     /// `answered` and `dropped`: the exchange is lost).
     pub requests_dropped: u64,
+    /// Frames it heard twice (`dup_up=`)...
+    pub duplicated: u64,
+    /// ...of which requests it answered twice: two replies, each numbered
+    /// in its sequence; the second to arrive is a duplicate reply
+    /// (`duplicated`), and the exchange is lost only if both are.
+    pub requests_duplicated: u64,
 }
 
 impl SimTruth {
@@ -278,7 +287,9 @@ struct Wire {
 }
 
 pub struct SimLink {
-    params: SimParams,
+    /// Boxed: the parameters are read, not moved, and the link is one
+    /// variant of `transport::Link` beside much smaller ones.
+    params: Box<SimParams>,
     responders: Vec<SimResponder>,
     rng: SmallRng,
     queue: BinaryHeap<Reverse<Delivery>>,
@@ -333,7 +344,7 @@ impl SimLink {
             .map(|(air, baud)| Box::new(RadioPair::new(baud, &air, params.buffer)));
         let mut link = SimLink {
             rng: SmallRng::seed_from_u64(params.seed),
-            params,
+            params: Box::new(params),
             responders,
             queue: BinaryHeap::new(),
             order: 0,
@@ -681,64 +692,6 @@ impl SimLink {
     }
 }
 
-impl SimLink {
-    /// Whether responder `i` hears a frame mavping sent, or it is lost on
-    /// the way (`loss_up=`, drawn for each responder); counted.
-    fn heard_by(&mut self, i: usize) -> bool {
-        let lost = self.vehicle_chance(self.params.loss_up);
-        let up = &mut self.responders[i].truth.up;
-        up.sent += 1;
-        up.dropped += u64::from(lost);
-        !lost
-    }
-
-    /// Where a reply of responder `i` that has left the wire (or radios)
-    /// at `reply_done` arrives, with its copies, or `None`: dropped.
-    fn reply_copies(&mut self, i: usize, reply_done: Instant) -> Option<Copies> {
-        let mut at = reply_done + self.one_way();
-        // Drawn only when asked for, so seeds keep their faults.
-        let spiked = self.chance(self.params.spike);
-        if spiked {
-            at += self.params.spike_delay;
-        }
-        let held = self.chance(self.params.reorder);
-        // The responder's own faults: their own draws.
-        let held_down = self.vehicle_chance(self.params.reorder_down);
-        if held || held_down {
-            at += self.params.hold;
-        }
-        let again = if self.chance(self.params.dup) {
-            Some(at + self.one_way())
-        } else if self.vehicle_chance(self.params.dup_down) {
-            Some(at + self.vehicle_one_way())
-        } else {
-            None
-        };
-        if self.vehicle_chance(self.params.loss_down) {
-            let r = &mut self.responders[i];
-            r.truth.dropped(r.replied);
-            return None;
-        }
-        let r = &mut self.responders[i];
-        r.replied = true;
-        let payload = if spiked {
-            r.truth.spiked += 1;
-            Payload::Spiked(i)
-        } else {
-            r.truth.delivered += 1;
-            Payload::Plain
-        };
-        let mut copies = [(at, payload); 2];
-        let mut n = 1;
-        if let Some(again) = again {
-            r.truth.duplicated += 1;
-            copies[1] = (again, Payload::Duplicate(i));
-            n = 2;
-        }
-        Some((copies, n))
-    }
-}
-
 impl Transport for SimLink {
     async fn send(&mut self, bytes: &[u8]) -> Result<Instant, LinkError> {
         let now = Instant::now();
@@ -770,68 +723,7 @@ impl Transport for SimLink {
         };
         for request in &requests {
             for i in 0..self.responders.len() {
-                let heard = self.heard_by(i);
-                let Some(mut reply) = self.responders[i].core.answer(&request.frame, 0) else {
-                    continue;
-                };
-                self.responders[i].truth.answered += 1;
-                if !heard {
-                    let r = &mut self.responders[i];
-                    r.truth.dropped(r.replied);
-                    r.truth.up.requests_dropped += 1;
-                    continue;
-                }
-                if self.in_outage(now) {
-                    let r = &mut self.responders[i];
-                    r.truth.dropped(r.replied);
-                    r.truth.outage += 1;
-                    continue;
-                }
-                // Loss is drawn once per exchange: request or reply leg.
-                // The reply is not sent, so not numbered: no gap in the
-                // responder's sequence (for one, `loss_down=`).
-                if self.chance(self.params.loss) {
-                    let r = &mut self.responders[i];
-                    r.truth.dropped(r.replied);
-                    continue;
-                }
-                let up = self.one_way();
-                // A real responder reads its clock when the request arrives,
-                // one leg after we sent it: that is what makes the NTP
-                // offset estimate unbiased.
-                if let Msg::Timesync { tc1, .. } = &mut reply {
-                    // Through a radio pair the request arrives once it is
-                    // through the air.
-                    let read_at = if self.pair.is_some() { sent_done } else { now };
-                    *tc1 = self.clock_ns(read_at + up);
-                }
-                let version = request.frame.version;
-                // The reply's length: its header is written when it is sent.
-                let mut out = Vec::new();
-                let (sysid, compid) = (0, 0);
-                let header = Header {
-                    sysid,
-                    compid,
-                    seq: 0,
-                };
-                frame::encode(&mut out, version, header, &reply);
-                let copies = match self.downlink(sent_done, up, out.len()) {
-                    Some(reply_done) => self.reply_copies(i, reply_done),
-                    None => {
-                        let r = &mut self.responders[i];
-                        r.truth.dropped(r.replied);
-                        r.truth.overflowed += 1;
-                        None
-                    }
-                };
-                // Sent (and numbered) once the responder has the request.
-                let ns = self.ns(sent_done + up);
-                let reply = Reply {
-                    msg: reply,
-                    version,
-                    copies,
-                };
-                self.schedule(ns, i, Sends::Reply(Box::new(reply)));
+                self.exchange(i, &request.frame, now, sent_done);
             }
         }
         self.scratch = requests;
@@ -1104,6 +996,70 @@ mod tests {
             panic!("two responders")
         };
         assert_ne!(a.up.requests_dropped, b.up.requests_dropped);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_request_heard_twice_is_answered_twice_each_reply_numbered() {
+        let mut link = sim("?stream=ATTITUDE@50&dup_up=20%&loss_down=10%&seed=5");
+        let frames = drive(
+            &mut link,
+            Duration::from_secs(25),
+            Duration::from_millis(100),
+            200,
+        )
+        .await;
+        let (id, t) = link.truth()[0];
+        // About a fifth of the PINGs reached it twice; each copy was
+        // answered.
+        assert_eq!(t.up.sent, 200);
+        assert_eq!((t.up.dropped, t.up.requests_dropped), (0, 0));
+        assert_eq!(t.up.requests_duplicated, t.up.duplicated);
+        assert!((25..60).contains(&t.up.duplicated), "{:?}", t.up);
+        let replies: Vec<u32> = frames
+            .iter()
+            .filter(|f| f.frame.source == id)
+            .filter_map(|f| match f.frame.msg {
+                Msg::Ping { seq, .. } => Some(seq),
+                _ => None,
+            })
+            .collect();
+        let unique: HashSet<u32> = replies.iter().copied().collect();
+        // An exchange is lost only when every reply of it is: the truth
+        // counts what the pinger sees, replies and duplicate replies.
+        assert_eq!(t.answered, 200);
+        assert_eq!(unique.len() as u64, t.delivered, "{t:?}");
+        assert_eq!(t.answered - t.dropped, t.delivered);
+        assert!(t.dropped > 5 && t.dropped < t.down.dropped, "{t:?}");
+        assert_eq!(
+            (replies.len() - unique.len()) as u64,
+            t.duplicates_arrived,
+            "{t:?}"
+        );
+        assert!(t.duplicates_arrived > 15, "{t:?}");
+        // On the way down the second reply is a frame of its own: in the
+        // sequence, no duplicate, and its losses are the downlink's.
+        let down = t.down;
+        let seen = passive(&frames, id);
+        assert_eq!((seen.duplicates, down.duplicated), (0, 0));
+        assert_eq!(seen.delivered, down.delivered);
+        let in_flight = down.sent - down.dropped - down.delivered;
+        assert!(in_flight <= 5, "{down:?}");
+        assert!(
+            seen.missing.abs_diff(down.dropped) <= in_flight,
+            "{seen:?} {down:?}"
+        );
+        // Without dup_up= the same seed answers each request once.
+        let mut once = sim("?stream=ATTITUDE@50&loss_down=10%&seed=5");
+        let frames = drive(
+            &mut once,
+            Duration::from_secs(25),
+            Duration::from_millis(100),
+            200,
+        )
+        .await;
+        let (_, t) = once.truth()[0];
+        assert_eq!((t.up.duplicated, t.duplicates_arrived), (0, 0));
+        assert_eq!(of(&frames, id, ids::PING) as u64, t.delivered);
     }
 
     #[tokio::test(start_paused = true)]

@@ -76,6 +76,10 @@ pub struct SimParams {
     /// Share of the frames mavping sends lost on the way to each
     /// responder (each responder draws its own).
     pub loss_up: f64,
+    /// Share of the frames mavping sends that reach a responder twice (a
+    /// request heard twice is answered twice; each responder draws its
+    /// own).
+    pub dup_up: f64,
 }
 
 impl Default for SimParams {
@@ -109,6 +113,7 @@ impl Default for SimParams {
             dup_down: 0.0,
             reorder_down: 0.0,
             loss_up: 0.0,
+            dup_up: 0.0,
         }
     }
 }
@@ -119,7 +124,7 @@ jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=re
 ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
 buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, \
 outage_every=DURATION, spike=PCT, spike_delay=DURATION, stream=MSG@HZ[,MSG@HZ...], \
-loss_down=PCT, dup_down=PCT, reorder_down=PCT, loss_up=PCT";
+loss_down=PCT, dup_down=PCT, reorder_down=PCT, loss_up=PCT, dup_up=PCT";
 
 /// What is wrong with a `sim:` query: which key, and why (or which keys
 /// go together).
@@ -297,6 +302,7 @@ impl SimParams {
             "dup_down" => self.dup_down = percent(key, value)?,
             "reorder_down" => self.reorder_down = percent(key, value)?,
             "loss_up" => self.loss_up = percent(key, value)?,
+            "dup_up" => self.dup_up = percent(key, value)?,
             "clock" | "offset" | "drift" => self.set_clock(key, value)?,
             "baud" | "radio" | "buffer" | "air" | "duty" | "ecc" | "tdm" => {
                 self.set_radio(key, value, air)?
@@ -473,6 +479,7 @@ impl fmt::Display for SimParams {
             ("dup_down", self.dup_down),
             ("reorder_down", self.reorder_down),
             ("loss_up", self.loss_up),
+            ("dup_up", self.dup_up),
         ] {
             if share > 0.0 {
                 write!(f, "&{key}={}%", share * 100.0)?;
@@ -557,7 +564,7 @@ mod tests {
     fn streams_and_per_direction_faults_parse_print_back_and_say_what_is_wrong() {
         let p = SimParams::parse(
             "?stream=ATTITUDE@50,GLOBAL_POSITION_INT@5&stream=HEARTBEAT@2&loss_down=10%\
-             &dup_down=1&reorder_down=2%&loss_up=20%",
+             &dup_down=1&reorder_down=2%&loss_up=20%&dup_up=3%",
         )
         .unwrap();
         let streams: Vec<String> = p.streams.iter().map(ToString::to_string).collect();
@@ -568,11 +575,12 @@ mod tests {
         assert_eq!(p.heartbeat_rate(), Some(2.0));
         assert!((p.loss_down - 0.1).abs() < 1e-12 && (p.dup_down - 0.01).abs() < 1e-12);
         assert!((p.reorder_down - 0.02).abs() < 1e-12 && (p.loss_up - 0.2).abs() < 1e-12);
+        assert!((p.dup_up - 0.03).abs() < 1e-12);
         let printed = p.to_string();
         assert!(
             printed.ends_with(
                 "&stream=ATTITUDE@50,GLOBAL_POSITION_INT@5,HEARTBEAT@2&loss_down=10%\
-                 &dup_down=1%&reorder_down=2%&loss_up=20%"
+                 &dup_down=1%&reorder_down=2%&loss_up=20%&dup_up=3%"
             ),
             "{printed}"
         );
@@ -616,6 +624,7 @@ mod tests {
             ("?dup_down=x", "dup_down=x: "),
             ("?reorder_down=-1", "reorder_down=-1: "),
             ("?loss_up=101%", "loss_up=101%: "),
+            ("?dup_up=often", "dup_up=often: "),
         ] {
             let err = SimParams::parse(q).unwrap_err().to_string();
             assert!(err.starts_with(key) && !err.contains('\n'), "{q}: {err}");

@@ -3,5 +3,6 @@
 
 pub mod driver;
 pub mod links;
+mod rate;
 pub mod ticks;
 pub mod tracker;

@@ -20,15 +20,22 @@
 //!   counted lost, `resyncs` counts it). Every other distance falls in the
 //!   window, so a source restarting without a pause shows as a gap or as
 //!   duplicates: the sequence alone cannot tell.
-//! - **Usual interval.** The time per sequence step, smoothed: each step
-//!   `k` ahead, outside silences, gives a sample (time since the head) / k,
-//!   and the estimate moves 1/16 of the way to it (the first sample seeds
-//!   it). Lost frames do not inflate it, as the steps count them.
+//! - **Usual interval.** The time per sequence step over the source's last
+//!   256 to 512 steps or one to two seconds ([`super::rate`]): steps `k`
+//!   ahead count `k`, so lost frames do not inflate it; a silence the
+//!   sequence spans counts too (a pause the source made itself raises it
+//!   for a while); after one it cannot span, the rate is measured afresh,
+//!   as the count is. A mean over a window, as
+//!   frames often come in bursts (an autopilot's scheduler, a batch from a
+//!   sender or a router, a radio's TDM round): an average per step fell to
+//!   the spacing inside a burst, which made every pause between bursts a
+//!   silence, each then resynchronising, and no loss was counted again.
 //! - **Silence.** No frame from the source for longer than the threshold:
 //!   the `gap` given, or else 5 usual intervals but at least 1 s (5 s while
-//!   no interval is known: 5 heartbeats). Whatever the base, a gap of 64
-//!   usual intervals is always a silence, so a fast source's long outage
-//!   cannot hide in the window. A silence is listed with its start (the
+//!   no interval is known: 5 heartbeats). Whatever the base, once a full
+//!   bucket (256 steps or a second) sets the usual interval, a gap of 64
+//!   of them is always a silence, so a fast source's long outage cannot
+//!   hide in the window. A silence is listed with its start (the
 //!   last frame before it), its length (to the frame after it) and the
 //!   frames the source would have sent in it: length / usual interval,
 //!   rounded, less the frame that ends it.
@@ -59,6 +66,7 @@
 
 use std::collections::BTreeMap;
 
+use super::rate::Rate;
 use crate::engine::summary::passive::{
     percent, LinkTotals, MsgCount, PymavFigure, SeqCounts, Silence, SourceSummary, TableSummary,
     Untracked,
@@ -82,8 +90,6 @@ const SILENCE_CAP_INTERVALS: u64 = 64;
 /// A silence shorter than this many frames at the usual rate is spanned by
 /// the sequence (half of 256: room for a rate estimate off by 2x).
 const SPAN_FRAMES: u64 = 128;
-/// The usual interval moves 1/this of the way to each sample.
-const EWMA_WEIGHT: u64 = 16;
 /// Silences listed: the first ones...
 const KEEP_FIRST_SILENCES: usize = 8;
 /// ...and the longest of the later ones.
@@ -274,7 +280,7 @@ pub struct SeqTracker {
     first_len: u64,
     first_seen: Nanos,
     last_seen: Nanos,
-    interval: Option<Nanos>,
+    rate: Rate,
     silences: SilenceLog,
     msg_ids: MsgIds,
 }
@@ -293,7 +299,7 @@ impl SeqTracker {
             first_len: 0,
             first_seen: 0,
             last_seen: 0,
-            interval: None,
+            rate: Rate::new(0),
             silences: SilenceLog::default(),
             msg_ids: MsgIds::default(),
         }
@@ -307,18 +313,20 @@ impl SeqTracker {
         self.bytes = self.bytes.saturating_add(len);
         self.msg_ids.count(msg_id);
         self.pymav(seq);
+        let threshold = self.threshold();
         let Some(state) = self.state.as_mut() else {
             self.state = Some(SeqState::new(seq, at));
+            self.rate = Rate::new(at);
             self.first_len = len;
             self.first_seen = at;
             self.last_seen = at;
             return;
         };
         let elapsed = at.saturating_sub(self.last_seen);
-        let silent = elapsed > threshold(self.gap, self.interval);
+        let silent = elapsed > threshold;
         self.last_seen = self.last_seen.max(at);
         if silent {
-            let frames = self.interval.map(|i| frames_in(elapsed, i));
+            let frames = self.rate.interval().map(|i| frames_in(elapsed, i));
             let ahead = seq.wrapping_sub(state.head);
             let spanned = frames.is_some_and(|f| f < SPAN_FRAMES) && (1..=WINDOW).contains(&ahead);
             self.silences.push(Silence {
@@ -329,20 +337,23 @@ impl SeqTracker {
                 ongoing: false,
             });
             if spanned {
-                // The usual rate is what came before the silence: no sample.
+                // The sequence proves the steps in it: steps like any
+                // other. (Left out, a window of bursts would lose the
+                // pauses between them.)
                 state.advance(ahead, at);
                 self.counts.lost += u64::from(ahead - 1);
+                self.rate.step(u64::from(ahead), at);
             } else {
                 *state = SeqState::new(seq, at);
                 self.counts.resyncs += 1;
+                self.rate.rebase(at);
             }
             return;
         }
-        let since_head = at.saturating_sub(state.head_at);
         match state.take(seq, at) {
             Step::Ahead(k) => {
                 self.counts.lost += u64::from(k - 1);
-                self.sample_interval(since_head / u64::from(k));
+                self.rate.step(u64::from(k), at);
             }
             Step::Duplicate => self.counts.duplicate += 1,
             Step::Filled => {
@@ -353,7 +364,10 @@ impl SeqTracker {
                 self.counts.lost += lost;
                 self.counts.reordered += 1;
             }
-            Step::Resync => self.counts.resyncs += 1,
+            Step::Resync => {
+                self.counts.resyncs += 1;
+                self.rate.rebase(at);
+            }
         }
     }
 
@@ -369,13 +383,12 @@ impl SeqTracker {
         self.pymav_last = Some(seq);
     }
 
-    fn sample_interval(&mut self, sample: Nanos) {
-        let next = match self.interval {
-            None => sample,
-            Some(i) => i.saturating_mul(EWMA_WEIGHT - 1).saturating_add(sample) / EWMA_WEIGHT,
-        };
-        // At least 1 ns, so frame estimates can divide by it.
-        self.interval = Some(next.max(1));
+    /// How long a pause must last to be a silence: see [`threshold`]; the
+    /// cap waits for the usual interval to be settled.
+    fn threshold(&self) -> Nanos {
+        let interval = self.rate.interval();
+        let settled = interval.filter(|_| self.rate.settled());
+        threshold(self.gap, interval, settled)
     }
 
     pub fn counts(&self) -> SeqCounts {
@@ -389,7 +402,7 @@ impl SeqTracker {
 
     /// The usual time per sequence step, once known.
     pub fn interval(&self) -> Option<Nanos> {
-        self.interval
+        self.rate.interval()
     }
 
     /// The silence running at `at`, if the source has been quiet for
@@ -397,10 +410,10 @@ impl SeqTracker {
     fn ongoing(&self, at: Nanos) -> Option<Silence> {
         self.state?;
         let elapsed = at.saturating_sub(self.last_seen);
-        (elapsed > threshold(self.gap, self.interval)).then(|| Silence {
+        (elapsed > self.threshold()).then(|| Silence {
             start: self.last_seen,
             length_ns: elapsed,
-            frames_estimated: self.interval.map(|i| frames_in(elapsed, i)),
+            frames_estimated: self.rate.interval().map(|i| frames_in(elapsed, i)),
             seq_lost: None,
             ongoing: true,
         })
@@ -444,7 +457,7 @@ impl SeqTracker {
             last_seen: self.last_seen,
             frames_per_s: per_second(c.received.saturating_sub(1), span),
             bytes_per_s: per_second(self.bytes.saturating_sub(self.first_len), span),
-            interval_ns: self.interval,
+            interval_ns: self.rate.interval(),
             silences,
             silence_count: log_count,
             silences_omitted: self.silences.omitted,
@@ -456,15 +469,16 @@ impl SeqTracker {
     }
 }
 
-/// The silence threshold for a source with usual interval `interval`.
-fn threshold(gap: Option<Nanos>, interval: Option<Nanos>) -> Nanos {
+/// The silence threshold for a source with usual interval `interval`,
+/// capped at 64 of `settled` (the interval once a full bucket set it).
+fn threshold(gap: Option<Nanos>, interval: Option<Nanos>, settled: Option<Nanos>) -> Nanos {
     let base = gap.unwrap_or_else(|| {
         interval
             .unwrap_or(FIRST_INTERVAL)
             .saturating_mul(SILENCE_INTERVALS)
             .max(SILENCE_FLOOR)
     });
-    interval.map_or(base, |i| base.min(i.saturating_mul(SILENCE_CAP_INTERVALS)))
+    settled.map_or(base, |i| base.min(i.saturating_mul(SILENCE_CAP_INTERVALS)))
 }
 
 /// Frames sent strictly inside a gap of `elapsed` at one per `interval`
@@ -775,6 +789,89 @@ mod tests {
         assert_eq!(s.silence_frames_estimated, 0);
     }
 
+    /// Frames sent in bursts of `burst`, `spacing` apart within a burst,
+    /// a burst every `every`, by stream position; `lost` positions are
+    /// not delivered.
+    fn bursts(n: u64, burst: u64, spacing: Nanos, every: Nanos, lost: &[u64]) -> SeqTracker {
+        let mut t = SeqTracker::new(None);
+        for p in (0..n).filter(|p| !lost.contains(p)) {
+            t.on_frame(
+                (p % 256) as u8,
+                0,
+                20,
+                p / burst * every + p % burst * spacing,
+            );
+        }
+        t
+    }
+
+    #[test]
+    fn a_source_whose_first_frames_come_together_is_still_counted() {
+        // Two frames 80 µs apart, then one every 200 ms (a radio's
+        // RADIO_STATUS sent twice at start-up): the first step is no
+        // usual interval, and must not make every later pause a silence
+        // (each resynchronising, so no loss would ever be counted).
+        let mut t = SeqTracker::new(None);
+        t.on_frame(0, 0, 20, 0);
+        for p in 1..60u64 {
+            if p % 10 != 5 {
+                t.on_frame(p as u8, 0, 20, 80_000 + (p - 1) * 200 * MS);
+            }
+        }
+        assert_eq!(t.counts(), counts(54, 6, 0, 0, 0));
+        assert_eq!(t.summary(SRC, 58 * 200 * MS).silence_count, 0);
+        let interval = t.interval().unwrap();
+        assert!((100 * MS..=200 * MS).contains(&interval), "{interval}");
+    }
+
+    #[test]
+    fn a_source_sending_in_bursts_is_counted_exactly() {
+        // An autopilot's scheduler sends its messages together: 5 frames
+        // 50 µs apart every 20 ms (4 ms a frame on average), 1000 frames
+        // with 10 lost, the sequence wrapping 3 times.
+        let lost = [7, 8, 100, 333, 334, 335, 600, 777, 901, 950];
+        let t = bursts(1000, 5, 50_000, 20 * MS, &lost);
+        assert_eq!(t.counts(), counts(990, 10, 0, 0, 0));
+        assert_eq!(t.summary(SRC, 199 * 20 * MS).silence_count, 0);
+        // 100,000 frames/s sent in batches of 50 every 0.5 ms (a sender's
+        // sendmmsg), 20 lost in runs, the sequence wrapping 400 times.
+        let lost: Vec<u64> = (1..=20).map(|i| i * 4_999).collect();
+        let t = bursts(100_000, 50, 100, 500_000, &lost);
+        assert_eq!(t.counts(), counts(99_980, 20, 0, 0, 0));
+        let interval = t.interval().unwrap();
+        assert!((8_000..=12_000).contains(&interval), "{interval}");
+        // A second's outage (250 frames at its rate) is a silence, not a
+        // loss of 250 mod 256.
+        let gone: Vec<u64> = (500..750).collect();
+        let t = bursts(1000, 5, 50_000, 20 * MS, &gone);
+        assert_eq!(t.counts(), counts(750, 0, 0, 0, 1));
+        let s = t.summary(SRC, 199 * 20 * MS);
+        assert_eq!(s.silence_count, 1);
+        let estimated = s.silences[0].frames_estimated.unwrap();
+        assert!((200..=300).contains(&estimated), "{estimated}");
+    }
+
+    #[test]
+    fn a_batch_stamped_alike_costs_one_restart_not_the_rest_of_the_run() {
+        // 300 frames with one arrival time (a backlog read at once), then
+        // 100,000 frames/s in batches of 50 every 0.5 ms, 10 lost after.
+        let mut t = SeqTracker::new(None);
+        let lost: Vec<u64> = (1..=10).map(|i| 1_000 + i * 1_777).collect();
+        for p in (0..20_000u64).filter(|p| !lost.contains(p)) {
+            let at = if p < 300 {
+                0
+            } else {
+                p / 50 * 500_000 + p % 50 * 100
+            };
+            t.on_frame((p % 256) as u8, 0, 20, at);
+        }
+        // The first pause after the batch looks endless at a rate of no
+        // time: one restart, then the rate is measured again.
+        assert_eq!(t.counts(), counts(19_990, 10, 0, 0, 1));
+        let interval = t.interval().unwrap();
+        assert!((8_000..=12_000).contains(&interval), "{interval}");
+    }
+
     #[test]
     fn a_fast_source_gets_a_silence_under_the_floor() {
         // 1 kHz: 64 ms without a frame is a silence although under 1 s,
@@ -1011,6 +1108,27 @@ mod tests {
             let (delivered, truth) = deliver(&fates);
             let t = tracked(&delivered, interval_ms * MS);
             let spanned = t.summary(SRC, 0).silences.iter().all(|s| s.seq_lost.is_some());
+            proptest::prop_assert!(spanned);
+            proptest::prop_assert_eq!(t.counts(), truth);
+        }
+
+        /// The same faults on a source that sends in bursts (an
+        /// autopilot's scheduler: `burst` frames 50 µs apart, a burst every
+        /// 20 or 100 ms): exact too, every pause spanned by the sequence.
+        #[test]
+        fn counts_match_the_truth_in_bursts(
+            fates in proptest::collection::vec(fate(), 1..3000),
+            burst in 1u64..=12,
+            every_ms in proptest::sample::select(vec![20u64, 100]),
+        ) {
+            let (delivered, truth) = deliver(&fates);
+            let mut t = SeqTracker::new(None);
+            let mut at = 0;
+            for &p in &delivered {
+                at = (p / burst * every_ms * MS + p % burst * 50_000).max(at);
+                t.on_frame((p % 256) as u8, 0, 20, at);
+            }
+            let spanned = t.summary(SRC, at).silences.iter().all(|s| s.seq_lost.is_some());
             proptest::prop_assert!(spanned);
             proptest::prop_assert_eq!(t.counts(), truth);
         }

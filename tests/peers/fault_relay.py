@@ -1,0 +1,362 @@
+#!/usr/bin/env python3
+"""A UDP relay between a ground side (mavping, MAVProxy) and one or more
+vehicles that drops, duplicates and reorders MAVLink frames in each
+direction by a seeded plan, and counts exactly what it did: the ground
+truth mavping's per-direction figures are held against. Raw sockets, no
+pymavlink: it reads only frame headers (and PING payloads, to tell
+requests and replies apart).
+
+  fault_relay.py --vehicle 127.0.0.1:V1 [--vehicle 127.0.0.1:V2] \\
+      --seed 7 --drop-up 0.1 --dup-up 0.03 --drop-down 0.05 --dup-down 0.03 \\
+      --reorder-down 0.02 [--requests N]
+
+Prints "ready", then the UDP port it listens on for the ground side (it
+answers whoever sent last there, as a router's UDP server does). Every
+frame mavping sends goes to every vehicle, each with its own fate; every
+frame a vehicle sends goes to the ground side.
+
+The plan: each stream (uplink to vehicle i; downlink of source
+sysid/compid) has its own random sequence seeded by --seed and the
+stream's name, three draws a frame whatever happens to it, so the k-th
+frame of a stream always meets the same fate. A stream's first frame is
+always delivered (a sequence count starts at the first frame it sees: a
+drop before it shows nowhere). Per frame: dropped with --drop-*; else,
+downlink, held back with --reorder-down (it goes after the source's next
+frame, or after 200 ms); and a frame that goes is sent twice with
+--dup-*.
+
+--requests N (a probe run): once N PING requests have come from the
+ground side and the vehicles have answered every copy forwarded to them,
+the downlink closes (nothing more forwarded or counted), so the counts
+are exactly what the prober can have seen: it received everything the
+relay forwarded before that, and nothing after.
+
+On SIGTERM, one JSON line: per downlink source, frames from the vehicle,
+forwarded (copies included), dropped, dropped after the last forwarded
+frame (no later frame shows those gaps), duplicated, reordered, PING
+replies and how many of them were dropped; per vehicle on the uplink,
+frames, dropped, duplicated, and every PING request's fate: its copies
+forwarded, its replies forwarded and dropped ([seq, copies, replies forwarded, replies
+dropped], in the order the requests came), and the first replies that
+went down after the reply to a later request.
+"""
+import argparse
+import json
+import random
+import select
+import signal
+import socket
+import sys
+import time
+
+PING = 4
+HOLD_S = 0.2
+
+
+def frames_of(data):
+    """Splits a datagram into MAVLink 1/2 frames: [(bytes, header)] with
+    header (seq, sysid, compid, msgid, payload); bytes that are no frame
+    come as one piece with header None."""
+    out, i = [], 0
+    while i < len(data):
+        magic = data[i]
+        if magic == 0xFD and i + 10 <= len(data):
+            n = data[i + 1]
+            end = i + 10 + n + 2 + (13 if data[i + 2] & 1 else 0)
+            seq, sysid, compid = data[i + 4], data[i + 5], data[i + 6]
+            msgid = data[i + 7] | data[i + 8] << 8 | data[i + 9] << 16
+            payload = data[i + 10:i + 10 + n]
+        elif magic == 0xFE and i + 6 <= len(data):
+            n = data[i + 1]
+            end = i + 6 + n + 2
+            seq, sysid, compid, msgid = data[i + 2], data[i + 3], data[i + 4], data[i + 5]
+            payload = data[i + 6:i + 6 + n]
+        else:
+            out.append((data[i:], None))
+            return out
+        if end > len(data):
+            out.append((data[i:], None))
+            return out
+        out.append((data[i:end], (seq, sysid, compid, msgid, payload)))
+        i = end
+    return out
+
+
+def ping_fields(payload):
+    """(seq, target_system, target_component) of a PING payload (MAVLink 2
+    trims trailing zeros)."""
+    p = bytes(payload).ljust(14, b"\0")
+    return int.from_bytes(p[8:12], "little"), p[12], p[13]
+
+
+class Plan:
+    """The fates of one stream's frames, by frame number."""
+
+    def __init__(self, seed, name, drop, dup, hold):
+        self.rng = random.Random(f"{seed}/{name}")
+        self.drop, self.dup, self.hold = drop, dup, hold
+        self.index = 0
+
+    def next(self):
+        """(index, fate, doubled): fate is "drop", "hold" or "go"."""
+        d, h, u = self.rng.random(), self.rng.random(), self.rng.random()
+        k = self.index
+        self.index += 1
+        if k == 0:
+            return k, "go", False
+        if d < self.drop:
+            return k, "drop", False
+        return k, ("hold" if h < self.hold else "go"), u < self.dup
+
+
+class DownSource:
+    """What the relay did to one source's frames on their way down."""
+
+    def __init__(self, plan):
+        self.plan = plan
+        self.frames = self.forwarded = self.duplicated = self.reordered = 0
+        self.dropped = []
+        self.seen = set()
+        self.highest = -1
+        self.held = None  # (index, data, doubled, release_at, reply)
+        self.replies = self.replies_dropped = 0
+
+    def truth(self):
+        after_last = sum(1 for k in self.dropped if k > self.highest)
+        return {"frames": self.frames, "forwarded": self.forwarded,
+                "dropped": len(self.dropped), "dropped_after_last": after_last,
+                "duplicated": self.duplicated, "reordered": self.reordered,
+                "distinct_forwarded": len(self.seen), "last_forwarded_index": self.highest,
+                "replies": self.replies, "replies_dropped": self.replies_dropped}
+
+
+class Uplink:
+    """What the relay did to the ground side's frames on their way to one
+    vehicle, and the fate of every PING request."""
+
+    def __init__(self, addr, plan):
+        self.addr, self.plan = addr, plan
+        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.sock.bind(("127.0.0.1", 0))
+        self.frames = self.dropped = self.duplicated = 0
+        self.requests = []  # [seq] in arrival order
+        self.fate = {}  # seq -> [copies forwarded, replies forwarded, replies dropped]
+        self.index = {}  # seq -> its place in `requests`
+        self.outstanding = 0  # copies forwarded not yet answered
+        self.highest_answered = -1
+        self.replies_out_of_order = 0  # first replies after a later request's
+        self.sources = set()
+
+    def answered(self, seq):
+        """A copy of the reply to `seq` went down."""
+        fate = self.fate[seq]
+        fate[1] += 1
+        if fate[1] == 1:
+            k = self.index[seq]
+            self.replies_out_of_order += k < self.highest_answered
+            self.highest_answered = max(self.highest_answered, k)
+
+    def truth(self):
+        reqs = [[s, *self.fate[s]] for s in self.requests]
+        return {"vehicle": f"{self.addr[0]}:{self.addr[1]}", "sources": sorted(self.sources),
+                "frames": self.frames, "dropped": self.dropped, "duplicated": self.duplicated,
+                "requests": reqs, "unanswered_copies": self.outstanding,
+                "replies_out_of_order": self.replies_out_of_order}
+
+
+class Relay:
+    def __init__(self, args):
+        self.args = args
+        self.ground = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        self.ground.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+        self.ground.bind(("127.0.0.1", 0))
+        self.peer = None
+        self.ours = tuple(int(x) for x in args.ours.split("/"))
+        self.up = []
+        for i, v in enumerate(args.vehicle):
+            host, port = v.rsplit(":", 1)
+            self.up.append(Uplink((host, int(port)), Plan(args.seed, f"up/{i}", args.drop_up,
+                                                          args.dup_up, 0.0)))
+        self.down = {}
+        self.requests_seen = 0
+        self.closed_at = None
+        self.close_forced = False
+        self.after_close = 0
+        self.no_peer = 0
+        self.unparsed = 0
+
+    def from_ground(self, data):
+        for frame, header in frames_of(data):
+            request = None
+            if header is None:
+                self.unparsed += 1
+            elif header[3] == PING:
+                seq, ts, tc = ping_fields(header[4])
+                if (ts, tc) == (0, 0):
+                    request = seq
+                    self.requests_seen += 1
+            for link in self.up:
+                self.uplink(link, frame, request)
+
+    def uplink(self, link, frame, request):
+        k, fate, doubled = link.plan.next()
+        link.frames += 1
+        copies = 0
+        if fate == "drop":
+            link.dropped += 1
+        else:
+            copies = 2 if doubled else 1
+            link.duplicated += copies - 1
+            for _ in range(copies):
+                link.sock.sendto(frame, link.addr)
+        if request is not None:
+            link.index.setdefault(request, len(link.requests))
+            link.requests.append(request)
+            link.fate.setdefault(request, [0, 0, 0])[0] += copies
+            link.outstanding += copies
+
+    def from_vehicle(self, link, data):
+        for frame, header in frames_of(data):
+            if header is None:
+                self.unparsed += 1
+                continue
+            seq, sysid, compid, msgid, payload = header
+            key = f"{sysid}/{compid}"
+            link.sources.add(key)
+            reply = None
+            if msgid == PING:
+                rseq, ts, tc = ping_fields(payload)
+                if (ts, tc) == self.ours and rseq in link.fate:
+                    reply = rseq
+                    link.outstanding -= 1
+            if self.closed_at is not None:
+                self.after_close += 1
+                continue
+            if self.peer is None:
+                self.no_peer += 1
+                continue
+            src = self.down.get(key)
+            if src is None:
+                a = self.args
+                src = self.down[key] = DownSource(Plan(a.seed, f"down/{key}", a.drop_down,
+                                                       a.dup_down, a.reorder_down))
+            self.downlink(src, link, frame, reply)
+        self.maybe_close()
+
+    def downlink(self, src, link, frame, reply):
+        k, fate, doubled = src.plan.next()
+        src.frames += 1
+        src.replies += reply is not None
+        if fate == "drop":
+            src.dropped.append(k)
+            if reply is not None:
+                src.replies_dropped += 1
+                link.fate[reply][2] += 1
+            return
+        if fate == "hold" and src.held is None:
+            src.held = (k, frame, doubled, time.monotonic() + HOLD_S, link, reply)
+            return
+        self.forward(src, k, frame, doubled, link, reply)
+        self.release(src)
+
+    def forward(self, src, k, frame, doubled, link, reply):
+        for _ in range(2 if doubled else 1):
+            self.ground.sendto(frame, self.peer)
+            src.forwarded += 1
+            if k in src.seen:
+                src.duplicated += 1
+            elif k < src.highest:
+                src.reordered += 1
+            src.seen.add(k)
+            src.highest = max(src.highest, k)
+            if reply is not None:
+                link.answered(reply)
+
+    def release(self, src, now=None):
+        if src.held is not None and (now is None or now >= src.held[3]):
+            k, frame, doubled, _, link, reply = src.held
+            src.held = None
+            self.forward(src, k, frame, doubled, link, reply)
+
+    def maybe_close(self, force=False):
+        n = self.args.requests
+        if n is None or self.closed_at is not None or self.requests_seen < n:
+            return
+        if force or all(link.outstanding <= 0 for link in self.up):
+            for src in self.down.values():
+                self.release(src)
+            self.closed_at = time.monotonic()
+            self.close_forced = force
+
+    def run(self, until):
+        socks = {self.ground: None, **{link.sock: link for link in self.up}}
+        last_request = None
+        while until.running:
+            now = time.monotonic()
+            held = [s.held[3] for s in self.down.values() if s.held is not None]
+            timeout = max(0.0, min([0.05, *[h - now for h in held]]))
+            try:
+                ready, _, _ = select.select(list(socks), [], [], timeout)
+            except InterruptedError:
+                ready = []
+            for sock in ready:
+                data, addr = sock.recvfrom(65535)
+                if sock is self.ground:
+                    self.peer = addr
+                    self.from_ground(data)
+                else:
+                    self.from_vehicle(socks[sock], data)
+            now = time.monotonic()
+            for src in self.down.values():
+                if self.closed_at is None:
+                    self.release(src, now)
+            # A vehicle that never answers some copy must not hold the
+            # downlink open for ever: close after 3 s, and say so.
+            if self.args.requests is not None and self.requests_seen >= self.args.requests:
+                last_request = last_request or now
+                if now - last_request > 3.0:
+                    self.maybe_close(force=True)
+
+    def truth(self):
+        return {"down": {k: s.truth() for k, s in sorted(self.down.items())},
+                "up": [link.truth() for link in self.up],
+                "requests_seen": self.requests_seen,
+                "closed": self.closed_at is not None, "close_forced": self.close_forced,
+                "after_close": self.after_close, "before_peer": self.no_peer,
+                "unparsed": self.unparsed}
+
+
+class UntilSignalled:
+    def __init__(self):
+        self.running = True
+        signal.signal(signal.SIGTERM, self.stop)
+        signal.signal(signal.SIGINT, self.stop)
+
+    def stop(self, *_):
+        self.running = False
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--vehicle", action="append", required=True, help="HOST:PORT, repeatable")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--drop-up", type=float, default=0.0)
+    ap.add_argument("--dup-up", type=float, default=0.0)
+    ap.add_argument("--drop-down", type=float, default=0.0)
+    ap.add_argument("--dup-down", type=float, default=0.0)
+    ap.add_argument("--reorder-down", type=float, default=0.0)
+    ap.add_argument("--requests", type=int, default=None,
+                    help="close the downlink once this many PINGs are answered")
+    ap.add_argument("--ours", default="250/190", help="the prober's sysid/compid")
+    args = ap.parse_args()
+    relay = Relay(args)
+    until = UntilSignalled()
+    print("ready", flush=True)
+    print(relay.ground.getsockname()[1], flush=True)
+    relay.run(until)
+    print(json.dumps(relay.truth()), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
