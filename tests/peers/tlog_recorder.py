@@ -9,6 +9,7 @@ It sends a HEARTBEAT each second (a vehicle listening with udpin learns
 where to send from it), prints "ready", records until SIGTERM, then closes
 the log and prints one JSON line: the frames it recorded.
 """
+import contextlib
 import json
 import os
 import signal
@@ -21,7 +22,10 @@ from pymavlink import mavutil  # noqa: E402
 
 def main():
     connection, path = sys.argv[1], sys.argv[2]
-    m = mavutil.mavlink_connection(connection, source_system=255, source_component=190)
+    # pymavlink's TCP client prints its retries ("Connection refused
+    # sleeping") on stdout, where the test reads "ready": send them to stderr.
+    with contextlib.redirect_stdout(sys.stderr):
+        m = mavutil.mavlink_connection(connection, source_system=255, source_component=190)
     m.setup_logfile(path)
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))

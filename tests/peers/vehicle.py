@@ -92,8 +92,11 @@ class Vehicle:
             wait = until - now
             if self.radio_period is not None and self.heard_heartbeat:
                 wait = min(wait, max(0.0, self.next_radio - now))
+            # tcpin has no port until a client connects: wait on its listener.
+            port = getattr(self.m, "port", None)
+            fd = port.fileno() if port is not None else self.m.fd
             try:
-                select.select([self.m.port.fileno()], [], [], wait)
+                select.select([fd], [], [], wait)
             except InterruptedError:
                 pass
 
