@@ -7,6 +7,7 @@ use clap::{ArgAction, Parser, Subcommand, ValueEnum};
 use thiserror::Error;
 
 use crate::engine::load::LoadSpec;
+use crate::frame::SysComp;
 use crate::telemetry::StreamSpec;
 use crate::units::{parse_duration, parse_percent, DurationError};
 use crate::verdict::{Expected, RttLimit};
@@ -327,7 +328,7 @@ pub struct PingArgs {
         allow_negative_numbers = true,
         long,
         value_name = "ID",
-        default_value_t = 250,
+        default_value_t = SysComp::OURS.sysid,
         env = "MAVPING_SYSID"
     )]
     pub sysid: u8,
@@ -338,7 +339,7 @@ pub struct PingArgs {
         allow_negative_numbers = true,
         long,
         value_name = "ID",
-        default_value_t = 190,
+        default_value_t = SysComp::OURS.compid,
         env = "MAVPING_COMPID"
     )]
     pub compid: u8,

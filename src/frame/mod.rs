@@ -19,6 +19,12 @@ pub struct SysComp {
 }
 
 impl SysComp {
+    /// The ids mavping sends as unless told otherwise, in the CLI and in
+    /// `mavping serve` alike. Not 255/190: that is QGroundControl's and
+    /// Mission Planner's, whose frames MAVSDK-based stacks drop and whose
+    /// loss ArduPilot's GCS failsafe watches.
+    pub const OURS: SysComp = SysComp::new(250, 190);
+
     pub const fn new(sysid: u8, compid: u8) -> Self {
         SysComp { sysid, compid }
     }

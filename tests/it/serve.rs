@@ -472,3 +472,42 @@ fn a_probe_splits_its_loss_by_direction() {
         Some(1.0)
     );
 }
+
+#[test]
+fn serve_probes_as_the_command_line_does_so_mavsdk_answers() {
+    // MAVSDK drops frames from 255/190 (QGroundControl's ids); serve used
+    // them, so /probe of a default mavsdk_server failed with no hint, and
+    // a continuous link to it showed only that it was up.
+    let port = free_udp_port();
+    let _mavsdk = crate::common::Program::start_on_udp(
+        &crate::common::venv_program("mavsdk_server"),
+        &["-p", "0", &format!("udpin://127.0.0.1:{port}")],
+        &std::env::temp_dir(),
+        port,
+    );
+    let target = format!("udpout:127.0.0.1:{port}");
+    let server = Server::start(&["--allow", "udpout:127.0.0.1:*", "--link", &target]);
+    let r = server.get(&format!(
+        "/probe?target={}&count=4&interval=100ms&timeout=500ms",
+        enc(&target)
+    ));
+    assert_eq!(r.status, 200, "{}", r.body);
+    let b = &r.body;
+    let mavsdk = [("sysid", "245"), ("compid", "190")];
+    assert_eq!(sample(b, "mavping_probe_success", &[]), Some(1.0), "{b}");
+    assert_eq!(
+        sample(b, "mavping_probe_received", &mavsdk),
+        Some(4.0),
+        "{b}"
+    );
+    // The continuous link hears it answer too.
+    let m = metrics_until(&server, "replies from 245/190", |m| {
+        sample(
+            m,
+            "mavping_received_total",
+            &[("link", &target), ("sysid", "245")],
+        )
+        .is_some_and(|v| v > 0.0)
+    });
+    assert_promtool_clean(&m);
+}

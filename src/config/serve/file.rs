@@ -19,7 +19,7 @@ use crate::config::{
     invalid, signing, validate_baud, validate_ids, ConfigError, Keys, LinkConfig, Probe,
     MAX_TIMEOUT,
 };
-use crate::frame::Version;
+use crate::frame::{SysComp, Version};
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;
 use crate::transport::{serial, LinkOptions};
@@ -171,7 +171,10 @@ impl Table {
         Ok(Common {
             probe,
             kind,
-            ours: validate_ids(self.sysid.unwrap_or(255), self.compid.unwrap_or(190))?,
+            ours: validate_ids(
+                self.sysid.unwrap_or(SysComp::OURS.sysid),
+                self.compid.unwrap_or(SysComp::OURS.compid),
+            )?,
             version,
             heartbeat: self.heartbeat.unwrap_or(true),
             signing,
