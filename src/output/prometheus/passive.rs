@@ -372,13 +372,13 @@ mod tests {
     }
 
     /// An echo link whose 1/1 lost 20 of 100 requests, and whose own
-    /// frames, `numbered` of them, lost every 20th.
-    fn echo_link(numbered: u64) -> (Metrics, SysComp) {
+    /// An echo run's metrics after 100 requests to 1/1, every fifth lost.
+    fn lost_every_fifth() -> (Metrics, SysComp) {
         let mut m = Metrics::default();
         m.on_start(&info("sim:"));
         let r = SysComp::new(1, 1);
         for seq in 0..100 {
-            let e = if seq % 5 == 0 {
+            m.on_event(&if seq % 5 == 0 {
                 MatchEvent::Lost {
                     responder: r,
                     seq,
@@ -395,9 +395,14 @@ mod tests {
                     out_of_order: false,
                     first_from_responder: seq == 1,
                 }
-            };
-            m.on_event(&e);
+            });
         }
+        (m, r)
+    }
+
+    /// frames, `numbered` of them, lost every 20th.
+    fn echo_link(numbered: u64) -> (Metrics, SysComp) {
+        let (mut m, r) = lost_every_fifth();
         let mut table = SourceTable::new(None, 32);
         let seqs: Vec<u8> = (0..numbered)
             .filter(|i| i % 20 != 10)
@@ -450,29 +455,7 @@ mod tests {
     fn no_up_figure_where_the_split_cannot_hold() {
         // 20% round trip, but 40 of 100 frames down: the sequence does not
         // number only what comes to us.
-        let mut m = Metrics::default();
-        m.on_start(&info("sim:"));
-        let r = SysComp::new(1, 1);
-        for seq in 0..100 {
-            m.on_event(&if seq % 5 == 0 {
-                MatchEvent::Lost {
-                    responder: r,
-                    seq,
-                    sent_at: 0,
-                    at: 0,
-                }
-            } else {
-                MatchEvent::Reply {
-                    responder: r,
-                    seq,
-                    rtt: 1_000_000,
-                    sent_at: 0,
-                    at: 0,
-                    out_of_order: false,
-                    first_from_responder: false,
-                }
-            });
-        }
+        let (mut m, r) = lost_every_fifth();
         let mut table = SourceTable::new(None, 32);
         let seqs: Vec<u8> = (0..100u8).filter(|i| i % 5 >= 2).collect();
         frames(&mut table, r, &seqs, 0);

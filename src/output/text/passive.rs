@@ -226,20 +226,7 @@ fn write_links(out: &mut impl Write, s: &PassiveSummary, per: &PerLink) -> io::R
         out,
         "per MAVProxy link (the stamps' two lowest bits; link 3 is what MAVProxy sent):"
     )?;
-    writeln!(
-        out,
-        "link {:<9} {:<22} {:>9} {:>7} {:>7} {:>5} {:>7} {:>8} {:>9} {:>9}",
-        "source",
-        "identity",
-        "received",
-        "lost",
-        "loss",
-        "dup",
-        "reorder",
-        "silences",
-        "frames/s",
-        "B/s"
-    )?;
+    table_header(out, "link ")?;
     for l in &per.links {
         for r in &l.table.sources {
             write!(out, "{:<4} ", l.link)?;
@@ -288,20 +275,7 @@ pub(super) fn write_summary(
     if s.table.sources.is_empty() {
         writeln!(out, "nothing heard")?;
     } else {
-        writeln!(
-            out,
-            "{:<9} {:<22} {:>9} {:>7} {:>7} {:>5} {:>7} {:>8} {:>9} {:>9}",
-            "source",
-            "identity",
-            "received",
-            "lost",
-            "loss",
-            "dup",
-            "reorder",
-            "silences",
-            "frames/s",
-            "B/s"
-        )?;
+        table_header(out, "")?;
         for r in &s.table.sources {
             row(out, s, r)?;
         }
@@ -347,6 +321,25 @@ pub(super) fn write_summary(
         }
     }
     Ok(())
+}
+
+/// The source table's column names, after `lead` (the per-link table's
+/// link column).
+fn table_header(out: &mut impl Write, lead: &str) -> io::Result<()> {
+    writeln!(
+        out,
+        "{lead}{:<9} {:<22} {:>9} {:>7} {:>7} {:>5} {:>7} {:>8} {:>9} {:>9}",
+        "source",
+        "identity",
+        "received",
+        "lost",
+        "loss",
+        "dup",
+        "reorder",
+        "silences",
+        "frames/s",
+        "B/s"
+    )
 }
 
 #[cfg(test)]
