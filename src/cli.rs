@@ -12,6 +12,13 @@ use crate::telemetry::StreamSpec;
 use crate::units::{parse_duration, parse_percent, DurationError};
 use crate::verdict::{Expected, RttLimit};
 
+/// Flags set from the environment take what people write for a yes or
+/// a no (`1`, `yes`, `on`, `true`; `0`, `no`, `off`, `false`), not only
+/// clap's `true`/`false`.
+fn boolish() -> clap::builder::BoolishValueParser {
+    clap::builder::BoolishValueParser::new()
+}
+
 /// `mavping --help` ends with examples, the connection strings and the
 /// exit codes (the man page has the same).
 pub const EXAMPLES: &[(&str, &str)] = &[
@@ -555,7 +562,7 @@ pub struct PingArgs {
     pub samples: Option<PathBuf>,
 
     /// Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal
-    #[arg(help_heading = "Output", long, env = "MAVPING_LIVE")]
+    #[arg(help_heading = "Output", long, env = "MAVPING_LIVE", value_parser = boolish())]
     pub live: bool,
 
     /// Serve Prometheus metrics at http://ADDR:PORT/metrics while the run goes on
@@ -651,7 +658,7 @@ pub struct PingArgs {
     /// When a tcp or serial link breaks, reconnect with backoff instead of
     /// ending the run; on udpout an ICMP "port unreachable" does not end it
     /// (pings sent while down count as lost)
-    #[arg(help_heading = "Links", long, env = "MAVPING_RECONNECT")]
+    #[arg(help_heading = "Links", long, env = "MAVPING_RECONNECT", value_parser = boolish())]
     pub reconnect: bool,
     /// Baud rate of a serial device whose connection string names none
     #[arg(help_heading = "Serial", allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
@@ -664,7 +671,7 @@ pub struct PingArgs {
     /// With a signing key: refuse unsigned replies too (wrongly signed and
     /// replayed ones are always refused); refused frames are counted, never
     /// measured
-    #[arg(help_heading = "Signing", long, env = "MAVPING_REQUIRE_SIGNED")]
+    #[arg(help_heading = "Signing", long, env = "MAVPING_REQUIRE_SIGNED", value_parser = boolish())]
     pub require_signed: bool,
 }
 

@@ -91,7 +91,62 @@ fn bad_sim_parameters() {
         ("sim:?outage=1s", "START+LENGTH"),
         ("sim:?spike=200%", "spike=200%"),
         ("sim:?spike_delay=2h", "at most 1h"),
+        ("sim:?loss=5%&loss=6%", "loss= is given twice"),
     ] {
         rejects(&[link], needle);
     }
+}
+
+/// Two simulated vehicles that differ only in their ids, or in answering
+/// PING, are two links (they were refused as "the same link").
+#[test]
+fn sim_links_that_differ_in_ids_or_ping_run_side_by_side() {
+    let list = std::env::temp_dir().join(format!("mavping-sim-ids-{}.txt", std::process::id()));
+    std::fs::write(
+        &list,
+        "sim:?sysid=7&clock=virtual\nsim:?sysid=8&clock=virtual\nsim:?ping=off&clock=virtual\n",
+    )
+    .unwrap();
+    let (code, out, err) = run_mavping(&["-c", "3", "-q", "-f", list.to_str().unwrap()]);
+    let _ = std::fs::remove_file(&list);
+    assert_eq!(code, 1, "the PING-less one answers nothing: {out}{err}");
+    for (name, responder) in [("sysid=7", "7/1"), ("sysid=8", "8/1")] {
+        let section = out
+            .split("--- ")
+            .find(|s| s.contains(name))
+            .unwrap_or_else(|| panic!("no summary of {name}: {out}"));
+        let counts = text_counts(section, responder).unwrap_or_else(|| panic!("{section}"));
+        assert_eq!((counts.received, counts.lost), (3, 0), "{section}");
+    }
+    let silent = out.split("--- ").find(|s| s.contains("ping=off")).unwrap();
+    assert!(silent.contains("no replies"), "{silent}");
+}
+
+/// Flags from the environment take the usual spellings of yes and no.
+#[test]
+fn boolean_environment_variables_take_one_zero_yes_and_no() {
+    for (value, on) in [("1", true), ("yes", true), ("on", true), ("0", false), ("no", false)] {
+        let out = mavping()
+            .args(["-c", "1", "-q", "sim:?clock=virtual"])
+            .env("MAVPING_LIVE", value)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(0), "MAVPING_LIVE={value}: {err}");
+        // Not a terminal: --live falls back to text and says so.
+        assert_eq!(err.contains("--live needs a terminal"), on, "{value}: {err}");
+    }
+    rejects_env("MAVPING_RECONNECT", "maybe", "maybe");
+}
+
+fn rejects_env(name: &str, value: &str, needle: &str) {
+    let out = mavping()
+        .args(["-c", "1", "sim:?clock=virtual"])
+        .env(name, value)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{name}={value}: {err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(err.contains(needle), "{err}");
 }

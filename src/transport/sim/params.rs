@@ -257,10 +257,16 @@ impl SimParams {
         let mut p = SimParams::default();
         let mut air = AirKeys::default();
         let query = query.strip_prefix('?').unwrap_or(query);
+        let mut seen: Vec<&str> = Vec::new();
         for pair in query.split('&').filter(|s| !s.is_empty()) {
             let (key, value) = pair
                 .split_once('=')
                 .ok_or_else(|| format!("'{pair}' is not key=value; keys: {SIM_KEYS}"))?;
+            // `loss=5%&loss=6%` would silently mean 6 %; streams add up.
+            if key != "stream" && seen.contains(&key) {
+                return Err(format!("{key}= is given twice: give each key once"));
+            }
+            seen.push(key);
             p.set(key, value, &mut air)?;
         }
         p.air = air.params(p.baud)?;
@@ -423,6 +429,25 @@ impl fmt::Display for SimParams {
             self.reorder * 100.0,
             self.seed
         )?;
+        // Keys that tell two links apart (two vehicles' ids; one answering
+        // PING, one not), printed only when not the default so the usual
+        // name stays short.
+        let defaults = SimParams::default();
+        if self.first_sysid != defaults.first_sysid {
+            write!(f, "&sysid={}", self.first_sysid)?;
+        }
+        if self.compid != defaults.compid {
+            write!(f, "&compid={}", self.compid)?;
+        }
+        if self.hold != defaults.hold {
+            write!(f, "&hold={}", humantime::format_duration(self.hold))?;
+        }
+        if !self.answer_ping {
+            write!(f, "&ping=off")?;
+        }
+        if !self.heartbeat {
+            write!(f, "&heartbeat=off")?;
+        }
         if self.clock_offset_ns != 0 {
             // Seconds as a number: humantime's "3s 250ms" has a space.
             write!(f, "&offset={}s", self.clock_offset_ns as f64 / 1e9)?;
@@ -554,10 +579,39 @@ mod tests {
             ("?offset=20y", "up to 10 years"),
             ("?drift=2e6", "ppm"),
             ("?drift=fast", "parts per million"),
+            ("?loss=5%&loss=6%", "loss= is given twice"),
+            ("?clock=virtual&clock=real", "clock= is given twice"),
         ] {
             let err = SimParams::parse(q).unwrap_err().to_string();
             assert!(err.contains(needle), "{q}: {err}");
         }
+    }
+
+    #[test]
+    fn links_that_differ_only_in_ids_or_answering_ping_print_apart_and_back() {
+        let queries = [
+            "",
+            "?sysid=7",
+            "?sysid=8",
+            "?compid=2",
+            "?ping=off",
+            "?heartbeat=off",
+            "?hold=80ms",
+        ];
+        let printed: Vec<String> = queries
+            .iter()
+            .map(|q| SimParams::parse(q).unwrap().to_string())
+            .collect();
+        for (i, name) in printed.iter().enumerate() {
+            assert_eq!(
+                SimParams::parse(&name[4..]).unwrap(),
+                SimParams::parse(queries[i]).unwrap(),
+                "{name}"
+            );
+            assert!(!printed[..i].contains(name), "{name} printed twice");
+        }
+        assert!(printed[1].ends_with("&sysid=7"), "{}", printed[1]);
+        assert!(printed[4].ends_with("&ping=off"), "{}", printed[4]);
     }
 
     #[test]
