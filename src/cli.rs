@@ -631,7 +631,7 @@ pub struct PingArgs {
     #[arg(help_heading = "Links", short = '6')]
     pub ipv6: bool,
 
-    /// Send from this local address (udpout:, tcp:): ADDR or ADDR:PORT
+    /// Send from this local address (udpout:, udpbcast:, tcp:): ADDR or ADDR:PORT
     #[arg(
         help_heading = "Links",
         allow_negative_numbers = true,

@@ -110,7 +110,7 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
         ));
     }
     let identity = source.identity.as_ref()?;
-    let who = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_name);
+    let who = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_said());
     let probe = o.probe.as_str().to_uppercase();
     if identity.mav_type == mav_type::GCS {
         if o.ours == QGC_IDS {

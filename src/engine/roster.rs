@@ -33,6 +33,17 @@ impl Identity {
     pub fn is_ardupilot(&self) -> bool {
         self.autopilot == AUTOPILOT_ARDUPILOT
     }
+
+    /// The autopilot as text reports say it: MAV_AUTOPILOT_INVALID is what
+    /// ground stations, companion programs and `mavping respond` send to
+    /// say they are none, not a fault ("gcs, no autopilot").
+    pub fn autopilot_said(&self) -> &str {
+        if self.autopilot == frame::AUTOPILOT_INVALID {
+            "no autopilot"
+        } else {
+            &self.autopilot_name
+        }
+    }
 }
 
 /// One system's traffic.

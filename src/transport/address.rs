@@ -146,6 +146,18 @@ fn host_port(input: &str, rest: &str) -> Result<HostPort, AddressError> {
     })
 }
 
+/// The address of a peer to send to: port 0 names no peer.
+fn reachable(input: &str, rest: &str) -> Result<HostPort, AddressError> {
+    let hp = host_port(input, rest)?;
+    if hp.port == 0 {
+        return Err(error(
+            input,
+            "port 0 names no peer: give the port the system listens on",
+        ));
+    }
+    Ok(hp)
+}
+
 fn serial(input: &str, rest: &str) -> Result<LinkSpec, AddressError> {
     if rest.is_empty() {
         return Err(error(input, "missing serial device"));
@@ -163,6 +175,18 @@ fn serial(input: &str, rest: &str) -> Result<LinkSpec, AddressError> {
                 path: path.to_string(),
                 baud: Some(baud),
             })
+        }
+        // `/dev/ttyS0:abc`: a mistyped baud, not a device named so (device
+        // names with colons, as /dev/serial/by-path's, end in `-port0`).
+        Some((path, baud))
+            if path.starts_with("/dev/")
+                && !baud.is_empty()
+                && baud.bytes().all(|b| b.is_ascii_alphanumeric()) =>
+        {
+            Err(error(
+                input,
+                format!("'{baud}' is not a baud rate (e.g. serial:{path}:57600)"),
+            ))
         }
         _ => Ok(LinkSpec::Serial {
             path: rest.to_string(),
@@ -211,12 +235,23 @@ impl std::str::FromStr for LinkSpec {
             return serial(input, input);
         }
         if let Some((scheme, rest)) = input.split_once(':') {
+            // MAVSDK's forms (`udpin://0.0.0.0:14540`, `udp://:14540`,
+            // `tcp://HOST:PORT`, `serial:///dev/ttyUSB0:57600`) mean what
+            // ours without the slashes mean; an empty host listens on all.
+            let (rest, mavsdk) = match rest.strip_prefix("//") {
+                Some(rest) => (rest, true),
+                None => (rest, false),
+            };
+            let listening = |rest: &str| match rest.strip_prefix(':') {
+                Some(port) if mavsdk => host_port(input, &format!("0.0.0.0:{port}")),
+                _ => host_port(input, rest),
+            };
             let spec = match scheme.to_ascii_lowercase().as_str() {
-                "udpin" | "udp" => Some(LinkSpec::UdpIn(host_port(input, rest)?)),
-                "udpout" => Some(LinkSpec::UdpOut(host_port(input, rest)?)),
-                "udpbcast" => Some(LinkSpec::UdpBcast(host_port(input, rest)?)),
-                "tcp" | "tcpout" => Some(LinkSpec::TcpOut(host_port(input, rest)?)),
-                "tcpin" => Some(LinkSpec::TcpIn(host_port(input, rest)?)),
+                "udpin" | "udp" => Some(LinkSpec::UdpIn(listening(rest)?)),
+                "udpout" => Some(LinkSpec::UdpOut(reachable(input, rest)?)),
+                "udpbcast" => Some(LinkSpec::UdpBcast(reachable(input, rest)?)),
+                "tcp" | "tcpout" => Some(LinkSpec::TcpOut(reachable(input, rest)?)),
+                "tcpin" => Some(LinkSpec::TcpIn(listening(rest)?)),
                 "serial" => Some(serial(input, rest)?),
                 _ => None,
             };
@@ -343,6 +378,12 @@ mod tests {
             "14550",
             "serial:",
             "serial:/dev/ttyUSB0:0",
+            "serial:/dev/ttyS0:abc",
+            "/dev/ttyS0:fast",
+            "udpout:127.0.0.1:0",
+            "udpbcast:255.255.255.255:0",
+            "tcp:localhost:0",
+            "udpout://127.0.0.1:0",
             "sim:?bogus=1",
             "tlog:",
         ] {
@@ -352,6 +393,31 @@ mod tests {
                 "{input}: {err}"
             );
         }
+    }
+
+    #[test]
+    fn mavsdk_forms_mean_what_ours_do() {
+        let same = [
+            ("udp://:14540", "udpin:0.0.0.0:14540"),
+            ("udpin://0.0.0.0:14540", "udpin:0.0.0.0:14540"),
+            ("udp://127.0.0.1:14550", "udpin:127.0.0.1:14550"),
+            ("udpout://192.168.1.12:14550", "udpout:192.168.1.12:14550"),
+            ("tcp://127.0.0.1:5760", "tcp:127.0.0.1:5760"),
+            ("tcpout://127.0.0.1:5760", "tcp:127.0.0.1:5760"),
+            ("tcpin://:5760", "tcpin:0.0.0.0:5760"),
+            ("serial:///dev/ttyUSB0:57600", "serial:/dev/ttyUSB0:57600"),
+            (
+                "/dev/serial/by-path/pci-0000:00:14.0-usb-0:2:1.0-port0",
+                "serial:/dev/serial/by-path/pci-0000:00:14.0-usb-0:2:1.0-port0",
+            ),
+        ];
+        for (theirs, ours) in same {
+            assert_eq!(theirs.parse::<LinkSpec>(), ours.parse(), "{theirs}");
+        }
+        let err = "serial:/dev/ttyS0:abc".parse::<LinkSpec>().unwrap_err();
+        assert!(err.reason.contains("'abc' is not a baud rate"), "{err}");
+        let err = "udpout:127.0.0.1:0".parse::<LinkSpec>().unwrap_err();
+        assert!(err.reason.contains("port 0 names no peer"), "{err}");
     }
 
     #[test]

@@ -6,6 +6,7 @@
 //! and hide CRC errors — each fatal to a ping tool.
 
 pub mod address;
+mod advice;
 mod mmsg;
 mod out_queue;
 pub mod outbox;
@@ -80,6 +81,17 @@ impl LinkError {
         LinkError::Io {
             context: context.into(),
             source,
+        }
+    }
+
+    /// The same error with its OS error replaced by `f`'s (advice added).
+    pub fn map_io(self, f: impl FnOnce(io::Error) -> io::Error) -> Self {
+        match self {
+            LinkError::Io { context, source } => LinkError::Io {
+                context,
+                source: f(source),
+            },
+            other => other,
         }
     }
 }

@@ -47,5 +47,20 @@ impl Connect for SerialConnector {
         tokio_serial::new(&self.path, self.baud)
             .open_native_async()
             .map_err(io::Error::from)
+            .map_err(|e| not_a_terminal(&self.path, e))
     }
+}
+
+/// libc's "Not a typewriter" for a file that is no serial device (a
+/// regular file, /dev/null), said in words a user can act on.
+fn not_a_terminal(path: &str, e: io::Error) -> io::Error {
+    // serialport keeps only the errno's words, not its number.
+    let enotty = nix::errno::Errno::ENOTTY;
+    if e.raw_os_error() != Some(enotty as i32) && e.to_string() != enotty.desc() {
+        return e;
+    }
+    io::Error::other(format!(
+        "{path} is not a serial device (the system says it is not a terminal): name a serial \
+         port (/dev/ttyUSB0, /dev/ttyACM0, /dev/serial/by-id/...) or a pty"
+    ))
 }

@@ -15,6 +15,7 @@ use tokio::net::{TcpListener, TcpStream};
 use tokio::time::Instant;
 
 use super::address::HostPort;
+use super::advice;
 use super::route::{resolve, Route};
 use super::stream::Connect;
 use super::{Inbound, LinkError, LinkKind, PathId, Transport};
@@ -98,7 +99,10 @@ impl TcpServer {
             .set_reuseaddr(true)
             .and_then(|()| socket.bind(local))
             .and_then(|()| socket.listen(1024))
-            .map_err(|e| LinkError::io(format!("cannot listen on tcp {addr}"), e))?;
+            .map_err(|e| {
+                let e = advice::listening("tcpin", addr, local, e);
+                LinkError::io(format!("cannot listen on tcp {addr}"), e)
+            })?;
         Ok(TcpServer {
             listener,
             clients: Vec::new(),

@@ -13,6 +13,7 @@ use tokio::net::UdpSocket;
 use tokio::time::Instant;
 
 use super::address::HostPort;
+use super::advice;
 use super::mmsg::{self, Datagram, RecvBatch, SendBatch, RECV_BATCH, SEND_BATCH};
 use super::route::{resolve, Route};
 use super::rx_time::RxTime;
@@ -100,7 +101,9 @@ impl UdpLink {
     /// `udpin:HOST:PORT`
     pub async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
         let local = resolve(addr, route.family).await?;
-        let socket = route.udp(local, &format!("cannot listen on udp {addr}"))?;
+        let socket = route
+            .udp(local, &format!("cannot listen on udp {addr}"))
+            .map_err(|e| e.map_io(|io| advice::listening("udp", addr, local, io)))?;
         Ok(Self::with(socket, Mode::Listen { peers: Vec::new() }))
     }
 
@@ -147,6 +150,14 @@ impl UdpLink {
                     "IPv6 has no broadcast; use an IPv4 broadcast address",
                 ),
             ));
+        }
+        if let SocketAddr::V4(v4) = target {
+            if let Some(why) = advice::not_broadcast(*v4.ip()) {
+                return Err(LinkError::io(
+                    format!("cannot broadcast to udp {addr}"),
+                    io::Error::new(io::ErrorKind::InvalidInput, why),
+                ));
+            }
         }
         let local = route.local_for(target)?;
         let socket = route.udp(local, &format!("cannot send from udp {local}"))?;

@@ -4,6 +4,7 @@
 
 mod common;
 
+mod advice;
 mod cli;
 mod completions;
 mod contrib;

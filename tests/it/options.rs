@@ -125,7 +125,13 @@ fn sim_links_that_differ_in_ids_or_ping_run_side_by_side() {
 /// Flags from the environment take the usual spellings of yes and no.
 #[test]
 fn boolean_environment_variables_take_one_zero_yes_and_no() {
-    for (value, on) in [("1", true), ("yes", true), ("on", true), ("0", false), ("no", false)] {
+    for (value, on) in [
+        ("1", true),
+        ("yes", true),
+        ("on", true),
+        ("0", false),
+        ("no", false),
+    ] {
         let out = mavping()
             .args(["-c", "1", "-q", "sim:?clock=virtual"])
             .env("MAVPING_LIVE", value)
@@ -134,7 +140,11 @@ fn boolean_environment_variables_take_one_zero_yes_and_no() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert_eq!(out.status.code(), Some(0), "MAVPING_LIVE={value}: {err}");
         // Not a terminal: --live falls back to text and says so.
-        assert_eq!(err.contains("--live needs a terminal"), on, "{value}: {err}");
+        assert_eq!(
+            err.contains("--live needs a terminal"),
+            on,
+            "{value}: {err}"
+        );
     }
     rejects_env("MAVPING_RECONNECT", "maybe", "maybe");
 }

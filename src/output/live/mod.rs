@@ -110,8 +110,11 @@ impl LiveState {
             (Event::WaitingForPeer, _) => self.waiting = true,
             (Event::Heard { id, identity }, Some(sources)) => sources.heard(*id, identity),
             (Event::Heard { id, identity }, None) => {
-                self.tracks.entry(*id).or_insert_with(Track::new).heard_as =
-                    Some(format!("{} {}", identity.vehicle, identity.autopilot_name));
+                self.tracks.entry(*id).or_insert_with(Track::new).heard_as = Some(format!(
+                    "{} {}",
+                    identity.vehicle,
+                    identity.autopilot_said()
+                ));
             }
             (Event::Sources { at, table }, Some(sources)) => {
                 sources.table(*at, table);

@@ -51,7 +51,7 @@ impl Sources {
         if self.heard.len() < MAX_HEARD || self.heard.contains_key(&id) {
             self.heard.insert(
                 id,
-                format!("{} {}", identity.vehicle, identity.autopilot_name),
+                format!("{} {}", identity.vehicle, identity.autopilot_said()),
             );
         }
     }

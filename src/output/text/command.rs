@@ -101,7 +101,7 @@ pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Res
     writeln!(out)?;
     for t in &s.targets {
         let who = match &t.identity {
-            Some(i) => format!("{} ({}, {})", t.id, i.vehicle, i.autopilot_name),
+            Some(i) => format!("{} ({}, {})", t.id, i.vehicle, i.autopilot_said()),
             None => t.id.to_string(),
         };
         writeln!(

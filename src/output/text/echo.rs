@@ -135,7 +135,8 @@ impl<W: Write> TextReporter<W> {
             Event::Heard { id, identity } => writeln!(
                 self.out,
                 "heard {id}: {}, {}",
-                identity.vehicle, identity.autopilot_name
+                identity.vehicle,
+                identity.autopilot_said()
             ),
             Event::WaitingForPeer => writeln!(self.out, "waiting for a peer to send MAVLink..."),
             Event::Radio { .. }
@@ -332,7 +333,7 @@ fn percent(ratio: f64) -> String {
 fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()> {
     let c = &r.counts;
     let who = match &r.identity {
-        Some(i) => format!("{} ({}, {})", r.id, i.vehicle, i.autopilot_name),
+        Some(i) => format!("{} ({}, {})", r.id, i.vehicle, i.autopilot_said()),
         None => r.id.to_string(),
     };
     write!(

@@ -77,7 +77,7 @@ fn loss_column(p: Option<f64>) -> String {
 
 fn row(out: &mut impl Write, s: &PassiveSummary, r: &SourceSummary) -> io::Result<()> {
     let who = match s.identity(r.source) {
-        Some(i) => format!("{}, {}", i.vehicle, i.autopilot_name),
+        Some(i) => format!("{}, {}", i.vehicle, i.autopilot_said()),
         None if r.radio => "radio".into(),
         None => "-".into(),
     };
