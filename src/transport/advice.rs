@@ -91,7 +91,7 @@ mod tests {
     #[test]
     fn loopback_broadcasts_and_the_limited_broadcast_are_broadcasts_hosts_are_not() {
         assert_eq!(not_broadcast(Ipv4Addr::BROADCAST), None);
-        let host = not_broadcast(Ipv4Addr::new(127, 0, 0, 1)).unwrap();
+        let host = not_broadcast(Ipv4Addr::LOCALHOST).unwrap();
         assert!(
             host.contains("127.0.0.1 is not a broadcast address"),
             "{host}"
