@@ -609,6 +609,7 @@ impl TryFrom<&PingArgs> for Config {
             link_options: LinkOptions {
                 baud: cli.baud,
                 reconnect: cli.reconnect,
+                wait_for_peer: false,
                 route,
             },
             probe,
@@ -673,6 +674,7 @@ mod tests {
             LinkOptions {
                 baud: 57600,
                 reconnect: true,
+                wait_for_peer: false,
                 route: Route::default(),
             }
         );

@@ -41,6 +41,8 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 // A responder outlives its pingers: one that is not up yet
                 // or restarts must not end it.
                 reconnect: true,
+                // Nor one whose tcp listener is not up yet.
+                wait_for_peer: true,
                 route: Route::default(),
             },
             settings: ResponderSettings {

@@ -244,6 +244,10 @@ pub struct LinkOptions {
     /// Reopen a tcp client or serial link that breaks, instead of ending;
     /// on `udpout:` an ICMP "port unreachable" does not end the link.
     pub reconnect: bool,
+    /// With `reconnect`: a tcp client whose peer is not up yet ("connection
+    /// refused") starts down and keeps trying, as after a loss (`mavping
+    /// respond`, which may start before the pinger it answers).
+    pub wait_for_peer: bool,
     /// Address family, local address and interface of IP links.
     pub route: route::Route,
 }
@@ -253,6 +257,7 @@ impl Default for LinkOptions {
         LinkOptions {
             baud: serial::DEFAULT_BAUD,
             reconnect: false,
+            wait_for_peer: false,
             route: route::Route::default(),
         }
     }
@@ -282,13 +287,14 @@ impl Link {
                 })
             }
             LinkSpec::UdpBcast(a) => Link::Udp(udp::UdpLink::broadcast(a, &options.route).await?),
-            LinkSpec::TcpOut(a) => Link::Tcp(
-                stream::StreamLink::open(
-                    tcp::TcpConnector::new(a, options.route.clone()),
-                    options.reconnect,
-                )
-                .await?,
-            ),
+            LinkSpec::TcpOut(a) => {
+                let connector = tcp::TcpConnector::new(a, options.route.clone());
+                Link::Tcp(if options.reconnect && options.wait_for_peer {
+                    stream::StreamLink::open_or_wait(connector).await?
+                } else {
+                    stream::StreamLink::open(connector, options.reconnect).await?
+                })
+            }
             LinkSpec::TcpIn(a) => Link::TcpIn(tcp::TcpServer::listen(a, &options.route).await?),
             LinkSpec::Serial { path, baud } => Link::Serial(
                 stream::StreamLink::open(

@@ -88,16 +88,51 @@ impl<C: Connect> StreamLink<C> {
             .connect()
             .await
             .map_err(|e| LinkError::io(format!("cannot open {}", connector.name()), e))?;
-        Ok(StreamLink {
+        Ok(Self::with(connector, reconnect, State::Up(stream)))
+    }
+
+    fn with(connector: C, reconnect: bool, state: State<C::Stream>) -> Self {
+        StreamLink {
             connector,
             reconnect,
-            state: State::Up(stream),
+            state,
             scanner: StreamScanner::new(),
             earlier: ScanStats::default(),
             buf: vec![0; READ_BUF].into_boxed_slice(),
             downtime: Duration::ZERO,
             out: OutQueue::default(),
-        })
+        }
+    }
+
+    /// Connects, or when nothing listens there yet, starts down and tries
+    /// again with backoff as after a loss; any other failure (a name that
+    /// does not resolve, an unreachable network) ends the run as `open`'s.
+    pub async fn open_or_wait(connector: C) -> Result<Self, LinkError> {
+        let first = connector.connect().await;
+        let stream = match first {
+            Err(e) if e.kind() == io::ErrorKind::ConnectionRefused => None,
+            other => Some(
+                other.map_err(|e| LinkError::io(format!("cannot open {}", connector.name()), e))?,
+            ),
+        };
+        let now = Instant::now();
+        let state = match stream {
+            Some(stream) => State::Up(stream),
+            None => {
+                let delay = backoff(1);
+                notice(format_args!(
+                    "{}: nothing listening yet; connecting (attempt 1 in {})",
+                    connector.name(),
+                    humantime::format_duration(delay)
+                ));
+                State::Down {
+                    since: now,
+                    attempt: 1,
+                    retry_at: now + delay,
+                }
+            }
+        };
+        Ok(Self::with(connector, true, state))
     }
 
     /// The connection broke: end the run, or start reconnecting.

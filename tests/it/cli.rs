@@ -352,6 +352,40 @@ respond: {respond_out}{respond_err}"
     assert!(respond_out.contains("5 replies sent"), "{respond_out}");
 }
 
+/// The same on `tcp:`: a responder started before the pinger's listener
+/// exists waits for it (respond.md promises so), it does not exit at once.
+#[test]
+fn respond_tcp_waits_for_a_listener_that_is_not_up_yet() {
+    let port = free_tcp_port();
+    let respond = mavping()
+        .args(["respond", &format!("tcp:127.0.0.1:{port}")])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "5",
+        "-i",
+        "100ms",
+        "-W",
+        "5s",
+        &format!("tcpin:127.0.0.1:{port}"),
+    ]);
+    signal(respond.id(), "TERM");
+    let (respond_code, respond_out, respond_err) = wait_output(respond, Duration::from_secs(10));
+    assert_eq!(code, 0, "{out}{err}\nrespond: {respond_out}{respond_err}");
+    let counts = text_counts(&out, "1/1").expect("1/1 answered");
+    assert_eq!((counts.received, counts.lost), (5, 0), "{out}");
+    assert!(respond_out.contains("5 replies sent"), "{respond_out}");
+    assert!(
+        respond_err.contains("nothing listening yet"),
+        "{respond_err}"
+    );
+    assert_eq!(respond_code, 0, "{respond_err}");
+}
+
 #[test]
 fn seeded_virtual_timesync_and_command_runs_are_reproducible() {
     for probe in ["timesync", "command"] {

@@ -345,6 +345,7 @@ pub(super) fn continuous_link(
             // A broken link is reopened by the server, with backoff, so
             // it shows as down meanwhile.
             reconnect: false,
+            wait_for_peer: false,
             route: Route::default(),
         },
     })

@@ -125,6 +125,7 @@ impl ServeSettings {
             options: LinkOptions {
                 baud: module.baud,
                 reconnect: false,
+                wait_for_peer: false,
                 route: Route::default(),
             },
         })
