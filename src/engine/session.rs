@@ -101,6 +101,10 @@ pub trait Driver {
     fn next_deadline(&self) -> Option<Nanos>;
     /// Once every request is sent: nothing left worth waiting for.
     fn settled(&self) -> bool;
+    /// The run is ending at `now` (its count, deadline, Ctrl-C or a link
+    /// failure): close what is open, so the last report tells it (a
+    /// sweep's step cut short).
+    fn stopping(&mut self, _now: Nanos, _frames: &ScanStats) {}
     /// The summary and histograms of the run.
     fn finish(self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>);
     /// The figures so far, for an interim summary; `None` where the probe
@@ -525,6 +529,8 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
     fn finish(mut self, stop: Stop) -> Measurement {
         // Decide what is due before counting what is still in flight.
         self.driver.expire(self.clock.now());
+        self.driver
+            .stopping(self.clock.now(), &self.link.scan_stats());
         let reported = self.driver.report(&mut self.heard.radios, self.observer);
         self.told(reported);
         let (interrupted, link_error, no_peer_within) = match stop {

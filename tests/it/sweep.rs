@@ -371,6 +371,38 @@ fn a_sweep_through_a_paced_pty_finds_the_paced_rate() {
     );
 }
 
+/// A run that ends inside a step (here its deadline) tells that step as
+/// a `step` event too, marked cut short: a script that follows the events
+/// sees every step the summary lists.
+#[test]
+fn the_step_a_deadline_cuts_short_is_told_as_an_event() {
+    let (code, out, err) = run_mavping(&[
+        "--sweep",
+        "--json",
+        "--step",
+        "2s",
+        "-w",
+        "5",
+        "sim:?baud=57600&clock=virtual",
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    let events = json_lines(&out);
+    assert_schema(&events);
+    let steps: Vec<&Value> = events.iter().filter(|e| e["type"] == "step").collect();
+    let summary = events.last().unwrap();
+    let all = summary["sweep"]["steps"].as_array().unwrap();
+    assert_eq!(summary["sweep"]["ending"], "deadline", "{summary}");
+    assert_eq!(steps.len(), 3, "two whole steps and the one cut at 5 s");
+    assert_eq!(steps.len(), all.len());
+    for (event, step) in steps.iter().zip(all) {
+        assert_eq!(event["index"], step["index"]);
+        assert_eq!(event["requests"], step["requests"]);
+        assert_eq!(event["complete"], step["complete"]);
+    }
+    assert_eq!(steps[2]["complete"], false, "{}", steps[2]);
+    assert_eq!(steps[1]["complete"], true, "{}", steps[1]);
+}
+
 #[test]
 fn ctrl_c_stops_a_sweep_at_once_with_the_steps_so_far() {
     // Real time: a step a second, up to 230/s; stopped during the third.
@@ -399,15 +431,19 @@ fn ctrl_c_stops_a_sweep_at_once_with_the_steps_so_far() {
     assert_eq!(code, Some(0), "{seen}{rest}");
     assert!(rest.contains("sweep: 3 steps, interrupted"), "{seen}{rest}");
     assert!(rest.contains("\nknee: 5 PINGs/s"), "{seen}{rest}");
-    // The rows shown as the steps ended are not repeated; the step cut
-    // short is shown in the summary, never judged.
-    let summary = rest.split("mavping statistics ---").nth(1).unwrap();
-    let cut: Vec<&str> = summary
+    // The step cut short is shown as a row like the others as the run
+    // ends, never judged, and the summary does not repeat a row.
+    let (rows, summary) = rest.split_once("mavping statistics ---").unwrap();
+    let cut: Vec<&str> = rows
         .lines()
         .filter(|l| l.trim_start().starts_with("3 "))
         .collect();
-    assert_eq!(cut.len(), 1, "{summary}");
-    assert!(cut[0].ends_with("cut short"), "{summary}");
+    assert_eq!(cut.len(), 1, "{rows}");
+    assert!(cut[0].ends_with("cut short"), "{rows}");
+    assert!(
+        !summary.lines().any(|l| l.trim_start().starts_with("3 ")),
+        "{summary}"
+    );
 }
 
 #[test]

@@ -31,7 +31,7 @@ use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::{Nanos, SessionConfig};
-use crate::frame::{Frame, SysComp};
+use crate::frame::{Frame, ScanStats, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
 
 pub struct SweepDriver<P> {
@@ -292,6 +292,12 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
 
     fn settled(&self) -> bool {
         self.finished && self.inner.settled()
+    }
+
+    /// A step cut short by the run's end is closed here, before the
+    /// session's last report, so it is told as a `step` like the others.
+    fn stopping(&mut self, now: Nanos, frames: &ScanStats) {
+        self.close(false, now, frames.frame_bytes);
     }
 
     fn finish(mut self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
