@@ -38,6 +38,8 @@ pub struct Observed<'a> {
     pub requests: u64,
     /// Requests still within their timeout when the run ended.
     pub undecided: u64,
+    /// How long a request waits for its reply (`-W`).
+    pub timeout: Duration,
     /// A listening link gave up after this long without a peer.
     pub no_peer_within: Option<Duration>,
     /// The link failed: its error says what happened.
@@ -202,6 +204,103 @@ fn signing(c: &SigningCounts) -> Vec<Hint> {
     hints
 }
 
+fn too_early(o: &Observed<'_>) -> Hint {
+    Hint::new(
+        HintCode::TooEarly,
+        format!(
+            "{} still within {} {} timeout when the run ended: too early to tell why nothing \
+             has answered (run longer, or -W shorter)",
+            match o.requests {
+                1 => "the one request was".to_string(),
+                n => format!("all {n} requests were"),
+            },
+            if o.requests == 1 { "its" } else { "their" },
+            seconds(o.timeout)
+        ),
+    )
+}
+
+/// A system that answered, but never within the timeout.
+fn replies_late(o: &Observed<'_>, r: &ResponderSummary) -> Option<Hint> {
+    (r.counts.received == 0 && r.counts.late > 0).then(|| {
+        Hint::new(
+            HintCode::RepliesLate,
+            format!(
+                "{}: all {} of its replies came after the {} timeout (counted lost): its round \
+                 trip is longer than that; raise -W",
+                r.id,
+                r.counts.late,
+                seconds(o.timeout)
+            ),
+        )
+    })
+}
+
+/// Our own frames came back and no other system's: a loopback, not a peer.
+fn own_frames_echoed(o: &Observed<'_>) -> Option<Hint> {
+    let mut sources = o.roster.sources();
+    let (_, own) = sources.find(|(id, _)| **id == o.ours)?;
+    let others = o.roster.sources().any(|(id, _)| *id != o.ours);
+    let answered = o.responders.iter().any(|r| r.counts.received > 0);
+    (!others && !answered).then(|| {
+        Hint::new(
+            HintCode::OwnFramesEchoed,
+            format!(
+                "the only frames heard on {} were our own ({} from {}) sent back: a loopback \
+                 (a peer that echoes what it gets, a serial adapter with TX wired to RX) and \
+                 no other system; check the address or the wiring",
+                o.link, own.frames, o.ours
+            ),
+        )
+    })
+}
+
+/// Why a command run's targets never acknowledged, from what the link
+/// heard: nothing at all or no MAVLink, or other systems than the target.
+pub fn command_hints(o: &Observed<'_>, unacknowledged: &[SysComp]) -> Vec<Hint> {
+    let f = &o.frames;
+    if unacknowledged.is_empty() || o.no_peer_within.is_some() || o.link_failed {
+        return Vec::new();
+    }
+    if f.frames == 0 {
+        let junk = f.skipped_bytes + f.bad_crc + f.truncated > 0;
+        return vec![if junk {
+            not_mavlink(o)
+        } else {
+            nothing_heard(o)
+        }];
+    }
+    let heard: Vec<(&SysComp, &crate::engine::roster::Identity)> = o
+        .roster
+        .iter()
+        .filter(|(id, i)| **id != o.ours && i.is_vehicle_like())
+        .collect();
+    let mut hints: Vec<Hint> = own_frames_echoed(o).into_iter().collect();
+    for target in unacknowledged {
+        if o.roster.get(*target).is_some() || heard.is_empty() {
+            continue;
+        }
+        let said = |(id, i): &(&SysComp, &crate::engine::roster::Identity)| {
+            format!("{id} ({}, {})", i.vehicle, i.autopilot_said())
+        };
+        let text = match heard.as_slice() {
+            [one] => format!(
+                "no HEARTBEAT from {target}, the command's target, but {} was heard: try \
+                 --target {}",
+                said(one),
+                one.0
+            ),
+            many => format!(
+                "no HEARTBEAT from {target}, the command's target, but {} were heard: name one \
+                 with --target",
+                many.iter().map(said).collect::<Vec<_>>().join(", ")
+            ),
+        };
+        hints.push(Hint::new(HintCode::WrongTarget, text));
+    }
+    hints
+}
+
 /// The hints that explain missing replies, most likely first.
 pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
     let mut hints = signing(&o.signing);
@@ -220,17 +319,28 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
     if f.frames == 0 && o.link_failed {
         return hints;
     }
-    if f.frames == 0 && hints.is_empty() {
-        if f.skipped_bytes + f.bad_crc + f.truncated > 0 {
+    let junk = f.skipped_bytes + f.bad_crc + f.truncated > 0;
+    let decided = o.requests.saturating_sub(o.undecided);
+    if decided == 0 && o.requests > 0 {
+        // Silence proves nothing yet; bytes that are no MAVLink do.
+        if f.frames == 0 && junk {
             hints.push(not_mavlink(o));
-        } else {
-            hints.push(nothing_heard(o));
         }
+        hints.push(too_early(o));
+        return hints;
+    }
+    if f.frames == 0 && hints.is_empty() {
+        hints.push(match junk {
+            true => not_mavlink(o),
+            false => nothing_heard(o),
+        });
         if o.ours == QGC_IDS && o.kind != LinkKind::Serial {
             hints.push(our_ids_are_qgcs(""));
         }
         return hints;
     }
+    hints.extend(own_frames_echoed(o));
+    hints.extend(o.responders.iter().filter_map(|r| replies_late(o, r)));
     let answered = |id: SysComp| {
         o.responders
             .iter()
@@ -243,18 +353,6 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
         // A radio answers no probe: its silence says nothing about the link.
         .filter(|(id, _)| !o.radios.contains(id) && !radio::is_sik_default(**id))
         .collect();
-    let decided = o.requests.saturating_sub(o.undecided);
-    if decided == 0 && o.requests > 0 && !silent.is_empty() {
-        hints.push(Hint::new(
-            HintCode::TooEarly,
-            format!(
-                "all {} requests were still within their timeout when the run ended: too \
-                 early to tell why a system has not answered",
-                o.requests
-            ),
-        ));
-        return hints;
-    }
     hints.extend(
         silent
             .into_iter()
@@ -291,6 +389,7 @@ mod tests {
             radios: &[],
             requests: 10,
             undecided: 2,
+            timeout: Duration::from_secs(2),
             no_peer_within: None,
             link_failed: false,
         }
@@ -464,5 +563,99 @@ mod tests {
             ..observed(&roster, 5)
         };
         assert!(diagnose(&o).is_empty());
+    }
+
+    fn responder(id: SysComp, counts: Counts) -> ResponderSummary {
+        ResponderSummary {
+            id,
+            counts,
+            loss_ratio: 1.0,
+            rtt: None,
+            histogram: vec![],
+            identity: None,
+            clock: None,
+            direction: None,
+        }
+    }
+
+    #[test]
+    fn too_early_is_said_even_when_nothing_was_heard_and_with_junk_beside_it() {
+        let roster = Roster::default();
+        let o = Observed {
+            undecided: 10,
+            ..observed(&roster, 0)
+        };
+        let hints = diagnose(&o);
+        assert_eq!(codes(&hints), [HintCode::TooEarly]);
+        assert!(hints[0].text.contains("their 2 s timeout"), "{hints:?}");
+        let junk = ScanStats {
+            skipped_bytes: 40,
+            ..ScanStats::default()
+        };
+        let o = Observed { frames: junk, ..o };
+        assert_eq!(
+            codes(&diagnose(&o)),
+            [HintCode::NotMavlink, HintCode::TooEarly]
+        );
+    }
+
+    #[test]
+    fn a_responder_whose_replies_all_came_late_is_told_to_raise_the_timeout() {
+        let roster = Roster::default();
+        let late = Counts {
+            sent: 5,
+            lost: 5,
+            late: 3,
+            ..Counts::default()
+        };
+        let responders = [responder(SysComp::new(1, 1), late)];
+        let o = Observed {
+            responders: &responders,
+            ..observed(&roster, 8)
+        };
+        let hints = diagnose(&o);
+        assert_eq!(codes(&hints), [HintCode::RepliesLate]);
+        assert!(hints[0].text.contains("all 3 of its replies"), "{hints:?}");
+        // One reply in time: the timeout is not what failed.
+        let some = Counts {
+            received: 1,
+            ..late
+        };
+        let responders = [responder(SysComp::new(1, 1), some)];
+        let o = Observed {
+            responders: &responders,
+            ..observed(&roster, 8)
+        };
+        assert!(diagnose(&o).is_empty());
+    }
+
+    #[test]
+    fn only_our_own_frames_heard_is_a_loopback_and_a_wrong_command_target_is_named() {
+        let mut roster = Roster::default();
+        let ours = SysComp::new(250, 190);
+        roster.heard(ours, 6, 8, 0);
+        roster.frame(ours, Version::V2, false);
+        let hints = diagnose(&observed(&roster, 12));
+        assert_eq!(codes(&hints), [HintCode::OwnFramesEchoed]);
+        assert!(
+            hints[0].text.contains("our own (1 from 250/190)"),
+            "{hints:?}"
+        );
+
+        let mut roster = Roster::default();
+        vehicle(&mut roster, SysComp::new(7, 1), PX4, Version::V2, false);
+        let o = observed(&roster, 12);
+        let hints = command_hints(&o, &[SysComp::new(1, 1)]);
+        assert_eq!(codes(&hints), [HintCode::WrongTarget]);
+        assert!(hints[0].text.contains("try --target 7/1"), "{hints:?}");
+        // The target was heard: its silence has other causes.
+        assert!(command_hints(&o, &[SysComp::new(7, 1)]).is_empty());
+        assert_eq!(
+            codes(&command_hints(
+                &observed(&Roster::default(), 0),
+                &[SysComp::new(1, 1)]
+            )),
+            [HintCode::NothingHeard]
+        );
     }
 }

@@ -54,6 +54,13 @@ pub enum HintCode {
     ClockInconsistent,
     /// The link refused requests: its peer is not reading what we send.
     LinkNotReading,
+    /// A system's replies all came after the timeout: the round trip is
+    /// longer than `-W` allows.
+    RepliesLate,
+    /// The only frames heard were our own, sent back (a loopback).
+    OwnFramesEchoed,
+    /// A command's target was never heard, another system was.
+    WrongTarget,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -331,3 +331,124 @@ fn equal_rtts_make_one_histogram_row() {
         "{out}"
     );
 }
+
+/// Hints where a run fails with evidence but said nothing (issue 28, 11).
+/// A pymavlink responder that holds every reply 800 ms, pinged with a
+/// 300 ms timeout: every reply is late.
+#[test]
+fn replies_that_all_come_after_the_timeout_say_raise_it() {
+    let port = free_udp_port();
+    let _peer = Peer::start(
+        "responder.py",
+        &[&format!("udpin:127.0.0.1:{port}"), "--delay-ms", "800"],
+    );
+    let (code, out, err) = run_mavping(&[
+        "--json",
+        "-q",
+        "-c",
+        "3",
+        "-i",
+        "1s",
+        "-W",
+        "300ms",
+        &format!("udpout:127.0.0.1:{port}"),
+    ]);
+    assert_eq!(code, 1, "{out}\n{err}");
+    let s = checked_summary(&out);
+    let r = responder(&s, "1/1");
+    assert_eq!(n(r, "received"), 0, "{s}");
+    let late = n(r, "late");
+    assert!(
+        late >= 2,
+        "replies to the first two arrive before the end: {s}"
+    );
+    assert_eq!(codes(&s), ["replies_late"], "{s}");
+    assert_eq!(
+        hint(&s, "replies_late"),
+        format!(
+            "1/1: all {late} of its replies came after the 0.3 s timeout (counted lost): its \
+             round trip is longer than that; raise -W"
+        )
+    );
+}
+
+/// A peer that sends every datagram back: our own frames, no system.
+#[test]
+fn our_own_frames_sent_back_are_named_a_loopback() {
+    let echo = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let port = echo.local_addr().unwrap().port();
+    let mirror = echo.try_clone().unwrap();
+    let echoed = std::thread::spawn(move || {
+        let mut buf = [0u8; 2048];
+        let mut count = 0u64;
+        mirror
+            .set_read_timeout(Some(Duration::from_secs(3)))
+            .unwrap();
+        while let Ok((len, from)) = mirror.recv_from(&mut buf) {
+            mirror.send_to(&buf[..len], from).unwrap();
+            count += 1;
+        }
+        count
+    });
+    let link = format!("udpout:127.0.0.1:{port}");
+    let (code, out, err) = run_mavping(&["--json", "-q", "-c", "3", "-i", "200ms", &link]);
+    assert_eq!(code, 1, "{out}\n{err}");
+    let s = checked_summary(&out);
+    assert_eq!(codes(&s), ["own_frames_echoed"], "{s}");
+    let sent_back = echoed.join().unwrap();
+    assert!(
+        hint(&s, "own_frames_echoed").contains(&format!("our own ({sent_back} from 250/190)")),
+        "{s} (the peer sent back {sent_back})"
+    );
+}
+
+/// A command to 1/1 on a link where only 7/1 is heard (a pymavlink vehicle
+/// with system id 7, sending HEARTBEAT).
+#[test]
+fn a_command_to_a_target_never_heard_names_the_one_that_was() {
+    let port = free_udp_port();
+    let _peer = Peer::start(
+        "responder.py",
+        &[&format!("udpin:127.0.0.1:{port}"), "--sysid", "7"],
+    );
+    let link = format!("udpout:127.0.0.1:{port}");
+    let (code, out, err) = run_mavping(&[
+        "--json",
+        "-q",
+        "--probe",
+        "command",
+        "--target",
+        "1/1",
+        "-c",
+        "2",
+        "--retries",
+        "1",
+        &link,
+    ]);
+    assert_eq!(code, 1, "{out}\n{err}");
+    let events = json_lines(&out);
+    assert_schema(&events);
+    let s = events
+        .iter()
+        .find(|e| e["type"] == "command_summary")
+        .unwrap();
+    assert_eq!(codes(s), ["wrong_target"], "{s}");
+    assert!(
+        hint(s, "wrong_target").ends_with("but 7/1 (quadrotor, px4) was heard: try --target 7/1"),
+        "{s}"
+    );
+}
+
+/// Nothing heard, but the only request is still within its timeout: too
+/// early, not "nothing heard" (scripting.md's promise).
+#[test]
+fn a_run_that_ends_before_any_timeout_is_too_early_even_with_nothing_heard() {
+    let silent = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let port = silent.local_addr().unwrap().port();
+    let link = format!("udpout:127.0.0.1:{port}");
+    let (code, out, err) = run_mavping(&["--json", "-q", "-c", "2", "-w", "0.5", &link]);
+    assert_eq!(code, 1, "{out}\n{err}");
+    let s = checked_summary(&out);
+    assert_eq!(codes(&s), ["too_early"], "{s}");
+    assert!(hint(&s, "too_early").contains("2 s timeout"), "{s}");
+}

@@ -313,6 +313,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             radios: &radio_ids,
             requests: self.matcher.issued(),
             undecided,
+            timeout: cfg.timeout,
             no_peer_within: ended.no_peer_within,
             link_failed: ended.link_error.is_some(),
         });

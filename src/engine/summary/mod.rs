@@ -345,6 +345,8 @@ pub struct CommandSummary {
     /// nor failed.
     pub in_flight: u64,
     pub targets: Vec<CommandTargetSummary>,
+    /// Why targets never acknowledged, from what the link heard.
+    pub hints: Vec<Hint>,
     /// ACKs addressed to us for commands we never sent that system.
     pub unmatched_acks: u64,
     pub frames: ScanStats,

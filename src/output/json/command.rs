@@ -3,6 +3,7 @@
 use serde::Serialize;
 
 use super::{seconds, us, Line, SCHEMA_VERSION};
+use crate::engine::hint::Hint;
 use crate::engine::summary::{CommandSummary, CommandTargetSummary};
 use crate::engine::{observe::CommandEvent, CommandSpec};
 use crate::frame::codec;
@@ -159,6 +160,7 @@ pub(super) struct Summary<'a> {
     duration_s: f64,
     in_flight: u64,
     targets: &'a [CommandTargetSummary],
+    hints: &'a [Hint],
     unmatched_acks: u64,
     frames: ScanStats,
     interrupted: bool,
@@ -179,6 +181,7 @@ impl<'a> Summary<'a> {
             duration_s: s.duration_s,
             in_flight: s.in_flight,
             targets: &s.targets,
+            hints: &s.hints,
             unmatched_acks: s.unmatched_acks,
             frames: s.frames,
             interrupted: s.interrupted,

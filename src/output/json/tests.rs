@@ -421,6 +421,7 @@ fn command_summary() -> CommandSummary {
             }],
             identity: Some(identity()),
         }],
+        hints: vec![],
         unmatched_acks: 2,
         frames: ScanStats {
             frames: 12,

@@ -140,5 +140,8 @@ pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Res
         )?;
     }
     write_signing(out, &s.signing)?;
+    for hint in &s.hints {
+        writeln!(out, "hint: {}", hint.text)?;
+    }
     Ok(())
 }

@@ -10,6 +10,8 @@ use std::io;
 use crate::engine::stats::RttStats;
 
 use super::tracker::CommandTracker;
+use crate::engine::diagnosis::{command_hints, Observed};
+use crate::engine::hint::Hint;
 use crate::engine::link_io::{Clock, Sender};
 use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
 use crate::engine::observe::{CommandEvent, RunKind};
@@ -17,7 +19,7 @@ use crate::engine::radio::Radios;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::summary::ProbeName;
-use crate::engine::summary::{CommandSummary, LinkSummary};
+use crate::engine::summary::{CommandSummary, CommandTargetSummary, LinkSummary};
 use crate::engine::CommandSpec;
 use crate::engine::Nanos;
 use crate::engine::SessionConfig;
@@ -54,6 +56,37 @@ impl CommandDriver {
             events: Vec::new(),
             transmitted: 0,
         }
+    }
+}
+
+impl CommandDriver {
+    /// Why targets never acknowledged, from what the link heard.
+    fn hints(&self, ended: &SessionEnd<'_>, targets: &[CommandTargetSummary]) -> Vec<Hint> {
+        let unacknowledged: Vec<SysComp> = targets
+            .iter()
+            .filter(|t| t.acknowledged == 0 && t.failed > 0)
+            .map(|t| t.id)
+            .collect();
+        let signing = ended.gate.summary();
+        let observed = Observed {
+            link: &ended.cfg.link_name,
+            kind: ended.kind,
+            probe: ProbeName::Command,
+            ours: self.ours,
+            version: ended.cfg.version,
+            key: signing.key,
+            signing: signing.counts,
+            frames: ended.frames,
+            roster: &ended.roster,
+            responders: &[],
+            radios: &[],
+            requests: targets.iter().map(|t| t.commands).sum(),
+            undecided: self.tracker.in_flight(),
+            timeout: self.spec.retry_interval,
+            no_peer_within: ended.no_peer_within,
+            link_failed: ended.link_error.is_some(),
+        };
+        command_hints(&observed, &unacknowledged)
     }
 }
 
@@ -149,6 +182,8 @@ impl Driver for CommandDriver {
 
     fn finish(self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let cfg = ended.cfg;
+        let targets = self.tracker.summaries(&ended.roster);
+        let hints = self.hints(&ended, &targets);
         let summary = CommandSummary {
             link: cfg.link_name.clone(),
             ours: cfg.ours,
@@ -156,7 +191,8 @@ impl Driver for CommandDriver {
             command_name: codec::command_name(self.spec.command),
             duration_s: ended.duration_s,
             in_flight: self.tracker.in_flight(),
-            targets: self.tracker.summaries(&ended.roster),
+            targets,
+            hints,
             unmatched_acks: self.tracker.unmatched_acks(),
             frames: ended.frames,
             interrupted: ended.interrupted,
