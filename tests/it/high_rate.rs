@@ -13,6 +13,7 @@ use mavping::engine::probe::echo;
 use mavping::engine::probe::ping::PingProbe;
 use mavping::engine::session::Controls;
 use mavping::engine::summary::LinkSummary;
+use mavping::engine::matcher::Window;
 use mavping::engine::SessionConfig;
 use mavping::frame::{SysComp, Version};
 use mavping::transport::sim::{SimLink, SimParams};
@@ -34,6 +35,7 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         version: Version::V2,
         heartbeat: true,
         capacity: 8192,
+        window: Window::FirstAnswer,
         first_seq: u32::MAX - 10_000, // and the sequence wraps on the way
         precise_pacing: false,
         signing: None,

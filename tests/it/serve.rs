@@ -511,3 +511,88 @@ fn serve_probes_as_the_command_line_does_so_mavsdk_answers() {
     });
     assert_promtool_clean(&m);
 }
+
+/// A `/probe` names its target: every request to it counts, the first
+/// ones too. The responder drops 0, 1, 2 and 7 of each probe's ten: with a
+/// long timeout its first answer (to 3) comes while 0-2 are undecided,
+/// with a short one after 0 and 1 were decided; either way the probe
+/// charges all four, as the responder's own count says.
+#[test]
+fn a_probe_charges_the_requests_dropped_before_the_first_answer() {
+    let port = free_udp_port();
+    let responder = Peer::start(
+        "responder.py",
+        &[&format!("udpin:127.0.0.1:{port}"), "--drop", "0,1,2,7"],
+    );
+    let server = Server::start(&["--allow", "udpout:127.0.0.1:*"]);
+    let target = format!("udpout:127.0.0.1:{port}");
+    let answers: Vec<Response> = ["interval=20ms&timeout=500ms", "interval=30ms&timeout=50ms"]
+        .iter()
+        .map(|timing| {
+            server.get(&format!(
+                "/probe?target={}&count=10&{timing}",
+                enc(&target)
+            ))
+        })
+        .collect();
+    let truth = responder.finish();
+    assert_eq!(truth["ping_requests"], 20, "{truth}");
+    assert_eq!(truth["dropped"], 8, "{truth}");
+    assert_eq!(truth["replies"], 12, "{truth}");
+    for r in &answers {
+        assert_eq!(r.status, 200, "{}", r.body);
+        let b = &r.body;
+        let one = [("link", target.as_str()), ("sysid", "1"), ("compid", "1")];
+        let v = |name| sample(b, name, &one).unwrap_or_else(|| panic!("no {name} in\n{b}"));
+        assert_eq!(sample(b, "mavping_probe_requests", &[]), Some(10.0), "{b}");
+        assert_eq!(v("mavping_probe_sent"), 10.0, "{b}");
+        assert_eq!(v("mavping_probe_received"), 6.0, "{b}");
+        assert_eq!(v("mavping_probe_lost"), 4.0, "{b}");
+        assert_eq!(v("mavping_probe_loss_ratio"), 0.4, "{b}");
+        assert_eq!(sample(b, "mavping_probe_success", &[]), Some(1.0), "{b}");
+        assert_promtool_clean(b);
+    }
+}
+
+/// `/probe` of a listening link nobody sends to gives up as `-c` does
+/// (3 requests at 100 ms plus a 200 ms timeout: 0.5 s), not at the
+/// scrape's deadline, and says why.
+#[test]
+fn a_probe_of_a_listening_link_with_no_peer_gives_up_and_says_so() {
+    let server = Server::start(&["--allow", "udpin:127.0.0.1:*"]);
+    let target = format!("udpin:127.0.0.1:{}", free_udp_port());
+    let r = crate::common::http_get(
+        &server.addr,
+        &format!(
+            "/probe?target={}&count=3&interval=100ms&timeout=200ms",
+            enc(&target)
+        ),
+        &[("X-Prometheus-Scrape-Timeout-Seconds", "30")],
+    );
+    assert_eq!(r.status, 200, "{}", r.body);
+    let b = &r.body;
+    assert_eq!(
+        b.lines().next(),
+        Some(format!("# mavping: no MAVLink system heard on {target} in 0.5 s").as_str()),
+        "{b}"
+    );
+    assert_eq!(sample(b, "mavping_probe_success", &[]), Some(0.0), "{b}");
+    for reason in ["nothing_heard", "no_reply"] {
+        assert_eq!(
+            sample(b, "mavping_probe_failure", &[("reason", reason)]),
+            Some(1.0),
+            "{b}"
+        );
+    }
+    assert_eq!(sample(b, "mavping_probe_requests", &[]), Some(0.0), "{b}");
+    // It waited what the count takes, not the 29.5 s the scrape allowed.
+    let took = sample(b, "mavping_probe_duration_seconds", &[]).unwrap();
+    assert!((0.5..5.0).contains(&took), "{took}");
+    assert_promtool_clean(b);
+    let m = server.get("/metrics").body;
+    assert_eq!(
+        sample(&m, "mavping_exporter_probes_failed_total", &[]),
+        Some(1.0)
+    );
+    assert_eq!(sample(&m, "mavping_exporter_open_links", &[]), Some(0.0));
+}

@@ -85,7 +85,7 @@ impl<P: EchoProbe> EchoDriver<P> {
             ours: cfg.ours,
             first_seq: cfg.first_seq,
             timeout,
-            matcher: Matcher::new(timeout, cfg.capacity, cfg.first_seq),
+            matcher: Matcher::new(timeout, cfg.capacity, cfg.first_seq).with_window(cfg.window),
             events: Vec::new(),
             foreign_replies: 0,
             paths: HashMap::new(),
