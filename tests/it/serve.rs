@@ -596,3 +596,93 @@ fn a_probe_of_a_listening_link_with_no_peer_gives_up_and_says_so() {
     );
     assert_eq!(sample(&m, "mavping_exporter_open_links", &[]), Some(0.0));
 }
+
+/// A bound UDP socket that never answers, counting the PINGs it is sent
+/// from what the kernel holds, without waiting.
+struct SilentPeer {
+    socket: std::net::UdpSocket,
+    pings: u64,
+}
+
+impl SilentPeer {
+    fn bind() -> Self {
+        let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+        socket.set_nonblocking(true).unwrap();
+        SilentPeer { socket, pings: 0 }
+    }
+
+    fn port(&self) -> u16 {
+        self.socket.local_addr().unwrap().port()
+    }
+
+    /// Every PING received so far (MAVLink message id 4).
+    fn pings(&mut self) -> u64 {
+        let mut buf = [0u8; 2048];
+        while let Ok(n) = self.socket.recv(&mut buf) {
+            let data = &buf[..n];
+            let frames = crate::common::frame_oracle::good_frames(data);
+            for f in crate::common::frame_oracle::isolated(&frames) {
+                let b = &data[f];
+                let msgid = match b[0] {
+                    0xFD => u32::from_le_bytes([b[7], b[8], b[9], 0]),
+                    _ => u32::from(b[5]),
+                };
+                self.pings += u64::from(msgid == 4);
+            }
+        }
+        self.pings
+    }
+}
+
+/// A continuous link nobody answers shows its requests going out and no
+/// responder (the rule MavlinkLinkUnanswered fires on that), beside one a
+/// responder answers. Requests go every 2 s, so each is told at once: a
+/// scrape between two readings of the peer that found the same count
+/// shows exactly that count.
+#[test]
+fn a_continuous_link_nobody_answers_shows_its_requests_and_no_responder() {
+    let mut silent = SilentPeer::bind();
+    let port = free_udp_port();
+    let responder = Peer::start("responder.py", &[&format!("udpin:127.0.0.1:{port}")]);
+    let file = TempFile::new(
+        "serve-unanswered.toml",
+        &format!(
+            "[[link]]\nlink = \"udpout:127.0.0.1:{}\"\nname = \"silent\"\ninterval = \"2s\"\n\
+             timeout = \"500ms\"\n\n[[link]]\nlink = \"udpout:127.0.0.1:{port}\"\n\
+             name = \"answered\"\ninterval = \"2s\"\ntimeout = \"500ms\"\n",
+            silent.port()
+        ),
+    );
+    let server = Server::start(&["--config", file.path()]);
+    let quiet = [("link", "silent"), ("probe", "ping")];
+    let heard = [("link", "answered"), ("probe", "ping")];
+    metrics_until(&server, "three requests on the silent link", |m| {
+        sample(m, "mavping_requests_total", &quiet).unwrap_or(0.0) >= 3.0
+            && sample(m, "mavping_responders", &heard) == Some(1.0)
+    });
+    let (m, requests) = loop {
+        let before = silent.pings();
+        let m = server.get("/metrics").body;
+        let after = silent.pings();
+        let requests = sample(&m, "mavping_requests_total", &quiet).unwrap();
+        assert!(
+            before as f64 <= requests && requests <= after as f64,
+            "{before} <= {requests} <= {after}"
+        );
+        if before == after {
+            break (m, requests);
+        }
+    };
+    assert!(requests >= 3.0, "{m}");
+    assert_eq!(sample(&m, "mavping_responders", &quiet), Some(0.0), "{m}");
+    assert_eq!(sample(&m, "mavping_link_up", &[("link", "silent")]), Some(1.0));
+    // Nothing per responder: there is none.
+    assert!(!m.contains("mavping_sent_total{link=\"silent\""), "{m}");
+    let answered = sample(&m, "mavping_requests_total", &heard).unwrap();
+    let one = [("link", "answered"), ("sysid", "1"), ("compid", "1")];
+    let received = sample(&m, "mavping_received_total", &one).unwrap();
+    assert!(answered >= 2.0 && received >= 1.0, "{m}");
+    assert_promtool_clean(&m);
+    drop(responder);
+    assert_eq!(server.stop(), Some(0));
+}

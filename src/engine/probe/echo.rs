@@ -282,6 +282,10 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         self.matcher.next_deadline().is_none() || self.matcher.all_answered()
     }
 
+    fn requests(&self) -> Option<u64> {
+        Some(self.matcher.issued())
+    }
+
     fn finish(mut self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let cfg = ended.cfg;
         let undecided = self.matcher.undecided();
