@@ -10,8 +10,8 @@ use super::{
     LinkConfig, OutputConfig, Probe, MAX_RATE, MAX_TIMEOUT,
 };
 use crate::cli::{Format, PingArgs, ProbeKind};
-use crate::engine::CommandSpec;
 use crate::engine::matcher::Window;
+use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
 use crate::frame::{codec, SysComp, Version};

@@ -8,12 +8,12 @@ use std::process::Stdio;
 use std::time::Duration;
 
 use crate::common::*;
+use mavping::engine::matcher::Window;
 use mavping::engine::observe::Unobserved;
 use mavping::engine::probe::echo;
 use mavping::engine::probe::ping::PingProbe;
 use mavping::engine::session::Controls;
 use mavping::engine::summary::LinkSummary;
-use mavping::engine::matcher::Window;
 use mavping::engine::SessionConfig;
 use mavping::frame::{SysComp, Version};
 use mavping::transport::sim::{SimLink, SimParams};

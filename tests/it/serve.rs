@@ -7,7 +7,9 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use crate::common::{assert_promtool_clean, free_udp_port, sample, Peer, Response, Server};
+use crate::common::{
+    assert_promtool_clean, free_udp_port, sample, Peer, Response, Server, SilentPeer,
+};
 
 /// Generous bound for something that normally takes a second or two;
 /// reaching it fails the test instead of hanging it.
@@ -528,12 +530,7 @@ fn a_probe_charges_the_requests_dropped_before_the_first_answer() {
     let target = format!("udpout:127.0.0.1:{port}");
     let answers: Vec<Response> = ["interval=20ms&timeout=500ms", "interval=30ms&timeout=50ms"]
         .iter()
-        .map(|timing| {
-            server.get(&format!(
-                "/probe?target={}&count=10&{timing}",
-                enc(&target)
-            ))
-        })
+        .map(|timing| server.get(&format!("/probe?target={}&count=10&{timing}", enc(&target))))
         .collect();
     let truth = responder.finish();
     assert_eq!(truth["ping_requests"], 20, "{truth}");
@@ -597,43 +594,6 @@ fn a_probe_of_a_listening_link_with_no_peer_gives_up_and_says_so() {
     assert_eq!(sample(&m, "mavping_exporter_open_links", &[]), Some(0.0));
 }
 
-/// A bound UDP socket that never answers, counting the PINGs it is sent
-/// from what the kernel holds, without waiting.
-struct SilentPeer {
-    socket: std::net::UdpSocket,
-    pings: u64,
-}
-
-impl SilentPeer {
-    fn bind() -> Self {
-        let socket = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
-        socket.set_nonblocking(true).unwrap();
-        SilentPeer { socket, pings: 0 }
-    }
-
-    fn port(&self) -> u16 {
-        self.socket.local_addr().unwrap().port()
-    }
-
-    /// Every PING received so far (MAVLink message id 4).
-    fn pings(&mut self) -> u64 {
-        let mut buf = [0u8; 2048];
-        while let Ok(n) = self.socket.recv(&mut buf) {
-            let data = &buf[..n];
-            let frames = crate::common::frame_oracle::good_frames(data);
-            for f in crate::common::frame_oracle::isolated(&frames) {
-                let b = &data[f];
-                let msgid = match b[0] {
-                    0xFD => u32::from_le_bytes([b[7], b[8], b[9], 0]),
-                    _ => u32::from(b[5]),
-                };
-                self.pings += u64::from(msgid == 4);
-            }
-        }
-        self.pings
-    }
-}
-
 /// A continuous link nobody answers shows its requests going out and no
 /// responder (the rule MavlinkLinkUnanswered fires on that), beside one a
 /// responder answers. Requests go every 2 s, so each is told at once: a
@@ -675,7 +635,10 @@ fn a_continuous_link_nobody_answers_shows_its_requests_and_no_responder() {
     };
     assert!(requests >= 3.0, "{m}");
     assert_eq!(sample(&m, "mavping_responders", &quiet), Some(0.0), "{m}");
-    assert_eq!(sample(&m, "mavping_link_up", &[("link", "silent")]), Some(1.0));
+    assert_eq!(
+        sample(&m, "mavping_link_up", &[("link", "silent")]),
+        Some(1.0)
+    );
     // Nothing per responder: there is none.
     assert!(!m.contains("mavping_sent_total{link=\"silent\""), "{m}");
     let answered = sample(&m, "mavping_requests_total", &heard).unwrap();

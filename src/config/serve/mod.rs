@@ -16,9 +16,9 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use super::measure::{count_wait, listens, pending_capacity};
-use crate::engine::matcher::Window;
 use super::{invalid, validate_listen, ConfigError, LinkConfig, Probe};
 use crate::cli::{ProbeKind, ServeArgs};
+use crate::engine::matcher::Window;
 use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
 use crate::frame::{SysComp, Version};

@@ -502,10 +502,7 @@ mod tests {
         let mut b = Metrics::default();
         b.on_start(&info("udpout:\"x\\y\"\n"));
         for m in [&mut a, &mut b] {
-            let _ = m.event(&Event::Progress {
-                at: 0,
-                requests: 4,
-            });
+            let _ = m.event(&Event::Progress { at: 0, requests: 4 });
             for (seq, rtt) in [
                 (0, 400_000),
                 (1, 3_000_000),
