@@ -551,6 +551,41 @@ fn a_probe_charges_the_requests_dropped_before_the_first_answer() {
     }
 }
 
+/// The case: 20 probes of 10 against `mavping respond` dropping
+/// 12 % at random. Every request of every probe counts, so the probes'
+/// losses add up to exactly what the responder dropped (the first
+/// requests' included: before, each probe excused those).
+#[test]
+fn twenty_probes_lose_exactly_what_mavping_respond_dropped() {
+    let port = free_udp_port();
+    let respond = crate::common::Respond::start(&[
+        "--drop",
+        "12%",
+        "--seed",
+        "3",
+        &format!("udpin:127.0.0.1:{port}"),
+    ]);
+    let server = Server::start(&["--allow", "udpout:127.0.0.1:*"]);
+    let target = format!("udpout:127.0.0.1:{port}");
+    let one = [("link", target.as_str()), ("sysid", "1"), ("compid", "1")];
+    let (mut sent, mut lost) = (0.0, 0.0);
+    for _ in 0..20 {
+        let r = server.get(&format!(
+            "/probe?target={}&interval=20ms&timeout=300ms",
+            enc(&target)
+        ));
+        assert_eq!(r.status, 200, "{}", r.body);
+        sent += sample(&r.body, "mavping_probe_sent", &one).unwrap();
+        lost += sample(&r.body, "mavping_probe_lost", &one).unwrap();
+    }
+    let (code, counts) = respond.finish();
+    assert_eq!(code, 0);
+    // requests, ping, timesync, command, retransmissions, replies, dropped
+    assert_eq!(counts[1], 200, "{counts:?}");
+    assert!(counts[6] > 0, "{counts:?}");
+    assert_eq!((sent, lost), (200.0, counts[6] as f64), "{counts:?}");
+}
+
 /// `/probe` of a listening link nobody sends to gives up as `-c` does
 /// (3 requests at 100 ms plus a 200 ms timeout: 0.5 s), not at the
 /// scrape's deadline, and says why.
