@@ -444,7 +444,7 @@ const PROBE_SUCCESS: Family = Family::gauge(
 );
 const PROBE_FAILURE: Family = Family::gauge(
     "mavping_probe_failure",
-    "1 for each reason the probe failed (open_failed, link_failed, no_reply, max_loss, ...).",
+    "1 for each reason the probe failed (open_failed, link_failed, nothing_heard, no_reply, max_loss, ...).",
 );
 const PROBE_DURATION: Family = Family::gauge(
     "mavping_probe_duration_seconds",
