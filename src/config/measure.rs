@@ -10,6 +10,7 @@ use super::{
     LinkConfig, OutputConfig, Probe, MAX_RATE, MAX_TIMEOUT,
 };
 use crate::cli::{Format, PingArgs, ProbeKind};
+use crate::engine::matcher::Window;
 use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
@@ -401,17 +402,26 @@ pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, Con
 /// `--wait`, else what `-c` takes plus one timeout; other links do not
 /// wait for a peer (they send from the start).
 fn peer_wait(cli: &PingArgs, spec: &LinkSpec, session: &SessionConfig) -> Option<Duration> {
-    if !matches!(spec, LinkSpec::UdpIn(_) | LinkSpec::TcpIn(_)) {
+    if !listens(spec) {
         return None;
     }
-    cli.wait.or_else(|| {
-        let count = u32::try_from(cli.count?).unwrap_or(u32::MAX);
-        session
-            .interval
-            .checked_mul(count)
-            .and_then(|d| d.checked_add(session.timeout))
-            .map(|d| d.min(crate::units::MAX_DURATION))
-    })
+    cli.wait
+        .or_else(|| count_wait(cli.count?, session.interval, session.timeout))
+}
+
+/// A link that waits for its peers to send first.
+pub(super) fn listens(spec: &LinkSpec) -> bool {
+    matches!(spec, LinkSpec::UdpIn(_) | LinkSpec::TcpIn(_))
+}
+
+/// What `count` requests take at `interval`, plus one timeout: how long a
+/// listening link with a count waits for a peer (`-c`, a `/probe`).
+pub(super) fn count_wait(count: u64, interval: Duration, timeout: Duration) -> Option<Duration> {
+    let count = u32::try_from(count).unwrap_or(u32::MAX);
+    interval
+        .checked_mul(count)
+        .and_then(|d| d.checked_add(timeout))
+        .map(|d| d.min(crate::units::MAX_DURATION))
 }
 
 fn validate_probe(cli: &PingArgs, links: &[LinkSpec]) -> Result<Probe, ConfigError> {
@@ -486,6 +496,9 @@ fn session(
         // A log is read: nothing is sent on it.
         heartbeat: !cli.no_heartbeat && !links.iter().any(LinkSpec::is_log),
         capacity: pending_capacity(interval, cli.timeout)?,
+        // A run streams: a responder that joins it late is not blamed
+        // for the time before.
+        window: Window::FirstAnswer,
         first_seq: cli.first_seq,
         // Several links share one thread: a session must not spin there
         // while another's replies wait. Commands go out at most every few

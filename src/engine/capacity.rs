@@ -176,6 +176,7 @@ mod tests {
                 version: Version::V2,
                 heartbeat: true,
                 capacity: 64,
+                window: crate::engine::matcher::Window::FirstAnswer,
                 first_seq: 0,
                 precise_pacing: true,
                 signing,

@@ -19,6 +19,10 @@
 //!   and the requests from there that were already decided are charged
 //!   then, as lost (nothing of them came in time: it would have opened
 //!   the window earlier).
+//!   That is [`Window::FirstAnswer`], for runs that stream. A run whose
+//!   target was named (a `/probe` of `mavping serve`) charges every
+//!   request to every responder from the first ([`Window::FromStart`]):
+//!   there, a responder that misses the first requests has lost them.
 //! - When a request's timeout passes, every responder whose window includes
 //!   it and that has not answered it gets it counted as lost.
 //! - A first reply after the timeout is late (the request stays lost); a
@@ -95,6 +99,19 @@ impl MatchEvent {
             | MatchEvent::Stale { at, .. } => at,
         }
     }
+}
+
+/// Where a responder's accounting window opens.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Window {
+    /// At the first request it answered (in time or late): a responder
+    /// that joins a streaming run late is not blamed for the time before.
+    #[default]
+    FirstAnswer,
+    /// At the run's first request: its target was named, so every request
+    /// counts. The requests decided before a responder is first heard are
+    /// charged then, so the ring must hold every request of the run.
+    FromStart,
 }
 
 /// Exact per-responder counts. Every request issued is counted once in
@@ -218,6 +235,7 @@ pub const MAX_RESPONDERS: usize = 4096;
 
 pub struct Matcher {
     timeout: Nanos,
+    window: Window,
     first_seq: u32,
     slots: Vec<Slot>,
     mask: u64,
@@ -237,6 +255,7 @@ impl Matcher {
         let capacity = capacity.max(2).next_power_of_two();
         Matcher {
             timeout,
+            window: Window::default(),
             first_seq,
             slots: vec![Slot::default(); capacity],
             mask: capacity as u64 - 1,
@@ -246,6 +265,13 @@ impl Matcher {
             index: HashMap::new(),
             untracked: 0,
         }
+    }
+
+    /// Where each responder's window opens (by default, at its first
+    /// answer).
+    pub fn with_window(mut self, window: Window) -> Self {
+        self.window = window;
+        self
     }
 
     pub fn capacity(&self) -> usize {
@@ -411,6 +437,9 @@ impl Matcher {
             return;
         }
         r.set_answered(idx, true);
+        if self.window == Window::FromStart && r.window_start.is_none() {
+            self.open_window_from_start(ri, at, out);
+        }
         if expired {
             self.open_window_at(ri, n, at, out);
             let r = &mut self.responders[ri];
@@ -424,6 +453,7 @@ impl Matcher {
             });
             return;
         }
+        let r = &mut self.responders[ri];
         let first = r.counts.received == 0;
         // A reordered reply to an older, still undecided request moves the
         // window back: nothing from it on has been decided yet.
@@ -462,6 +492,14 @@ impl Matcher {
             self.responders[ri].charge_lost(seq, sent_at, at, out);
         }
         self.responders[ri].window_start = Some(n);
+    }
+
+    /// A responder first heard in a run whose every request counts: the
+    /// requests decided before are charged now, each lost.
+    fn open_window_from_start(&mut self, ri: usize, at: Nanos, out: &mut impl FnMut(MatchEvent)) {
+        let held_from = self.next_n.saturating_sub(self.slots.len() as u64);
+        debug_assert_eq!(held_from, 0, "the ring holds every request of the run");
+        self.open_window_at(ri, held_from, at, out);
     }
 
     /// Ends the run: requests still within their timeout are counted for the

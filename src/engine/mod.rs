@@ -50,6 +50,10 @@ pub struct SessionConfig {
     pub heartbeat: bool,
     /// Request slots in the matcher's ring.
     pub capacity: usize,
+    /// Where each responder's accounting window opens: at its first answer
+    /// (a streaming run), or at the run's first request (a `/probe`, whose
+    /// target is named; the ring then holds every request of the run).
+    pub window: matcher::Window,
     pub first_seq: u32,
     /// Wait for sends precisely (sub-millisecond) rather than on tokio's
     /// 1 ms timer. Off for the simulated link, whose paused virtual clock

@@ -88,6 +88,11 @@ pub enum Event<'a> {
     },
     /// Nothing to send to yet (udpin before a peer is heard).
     WaitingForPeer,
+    /// Requests put on the wire so far in this session (PINGs, TIMESYNCs,
+    /// commands; re-sends not counted), whoever answers them: told when
+    /// the figure changed, at most once a second while the run sends, and
+    /// once at its end. A link nobody answers shows in nothing else.
+    Progress { at: Nanos, requests: u64 },
     /// A step of a sweep (or of a `--load` run) ended.
     Step(&'a StepFigures),
     /// Every source's packet-sequence figures so far (cumulative), once a

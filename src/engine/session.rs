@@ -105,6 +105,10 @@ pub trait Driver {
     /// failure): close what is open, so the last report tells it (a
     /// sweep's step cut short).
     fn stopping(&mut self, _now: Nanos, _frames: &ScanStats) {}
+    /// Requests put on the wire so far (`None`: the probe sends none).
+    fn requests(&self) -> Option<u64> {
+        None
+    }
     /// The summary and histograms of the run.
     fn finish(self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>);
     /// The figures so far, for an interim summary; `None` where the probe
@@ -128,6 +132,9 @@ const MIN_WAKE_GAP_NS: Nanos = 100_000;
 const YIELD_EVERY_NS: Nanos = 50_000_000;
 /// Output is buffered; while busy, it reaches the reader this often.
 const FLUSH_EVERY_NS: Nanos = 50_000_000;
+
+/// While a run sends, its requests so far are told at most this often.
+const PROGRESS_EVERY_NS: Nanos = 1_000_000_000;
 
 /// The systems and radios heard, and the signing gate: what every session
 /// learns from the link whatever its probe.
@@ -238,6 +245,10 @@ struct Timers {
     /// The last planned wake-up of a sleep-through.
     last_wake: Nanos,
     last_yield: Nanos,
+    /// The requests last told ([`Event::Progress`]), and when the next
+    /// telling may come.
+    progress_told: u64,
+    next_progress: Nanos,
 }
 
 impl Timers {
@@ -252,6 +263,8 @@ impl Timers {
             last_flush: 0,
             last_wake: 0,
             last_yield: 0,
+            progress_told: 0,
+            next_progress: 0,
         }
     }
 
@@ -403,7 +416,34 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         let sent = self
             .driver
             .send_due(schedule, self.link, &mut self.sender, &self.clock);
-        sent.await.map_err(Stop::LinkFailed)
+        sent.await.map_err(Stop::LinkFailed)?;
+        self.tell_progress(false);
+        Ok(())
+    }
+
+    /// Tells the requests put on the wire so far if the figure changed: at
+    /// once when the last telling is [`PROGRESS_EVERY_NS`] old (a slow
+    /// schedule wakes for nothing more), else when it is
+    /// ([`Session::progress_due`]); and at the end (`last`).
+    fn tell_progress(&mut self, last: bool) {
+        let Some(requests) = self.driver.requests() else {
+            return;
+        };
+        let now = self.clock.now();
+        let t = &mut self.timers;
+        if t.progress_told == requests || !(last || now >= t.next_progress) {
+            return;
+        }
+        t.progress_told = requests;
+        t.next_progress = now.saturating_add(PROGRESS_EVERY_NS);
+        let told = self.observer.event(&Event::Progress { at: now, requests });
+        self.told(told);
+    }
+
+    /// When the requests sent since the last telling are to be told.
+    fn progress_due(&self) -> Option<Nanos> {
+        let requests = self.driver.requests()?;
+        (self.timers.progress_told != requests).then_some(self.timers.next_progress)
     }
 
     /// Decides what is overdue and reports it, and an interim summary when
@@ -500,6 +540,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             t.deadline,
             t.wait.filter(|_| self.schedule.is_none()),
             t.next_interim,
+            self.progress_due(),
         ]
         .into_iter()
         .flatten()
@@ -533,6 +574,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             .stopping(self.clock.now(), &self.link.scan_stats());
         let reported = self.driver.report(&mut self.heard.radios, self.observer);
         self.told(reported);
+        self.tell_progress(true);
         let (interrupted, link_error, no_peer_within) = match stop {
             Stop::Interrupted => (true, None, None),
             Stop::LinkFailed(e) => (false, Some(e.to_string()), None),

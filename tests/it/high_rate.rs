@@ -8,6 +8,7 @@ use std::process::Stdio;
 use std::time::Duration;
 
 use crate::common::*;
+use mavping::engine::matcher::Window;
 use mavping::engine::observe::Unobserved;
 use mavping::engine::probe::echo;
 use mavping::engine::probe::ping::PingProbe;
@@ -34,6 +35,7 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         version: Version::V2,
         heartbeat: true,
         capacity: 8192,
+        window: Window::FirstAnswer,
         first_seq: u32::MAX - 10_000, // and the sequence wraps on the way
         precise_pacing: false,
         signing: None,

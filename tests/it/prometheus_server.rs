@@ -13,6 +13,7 @@ use serde_json::Value;
 
 use crate::common::{
     free_tcp_port, free_udp_port, http_get, prometheus_tool, sample, signal, Peer, Server,
+    SilentPeer,
 };
 
 /// Prometheus starts, scrapes every two seconds and needs two scrapes of
@@ -93,15 +94,18 @@ impl Drop for Prometheus {
 #[test]
 fn a_real_prometheus_scrapes_links_and_probes_and_sees_the_ground_truth() {
     // The continuous link's responder drops three early requests; the probe
-    // target's drops two of the ten requests of every probe.
+    // target's drops two of the ten requests of every probe, the first
+    // one included (a probe charges it all the same). A second continuous
+    // link sends to a socket that never answers.
     let (link_port, probe_port) = (free_udp_port(), free_udp_port());
+    let mut silent = SilentPeer::bind();
     let link_responder = Peer::start(
         "responder.py",
         &[&format!("udpin:127.0.0.1:{link_port}"), "--drop", "2,5,9"],
     );
     let probe_responder = Peer::start(
         "responder.py",
-        &[&format!("udpin:127.0.0.1:{probe_port}"), "--drop", "1,4"],
+        &[&format!("udpin:127.0.0.1:{probe_port}"), "--drop", "0,4"],
     );
     let config = std::env::temp_dir().join(format!("mavping-serve-{}.toml", std::process::id()));
     std::fs::write(
@@ -121,7 +125,14 @@ link = "udpout:127.0.0.1:{link_port}"
 name = "radio-a"
 interval = "100ms"
 timeout = "300ms"
-"#
+
+[[link]]
+link = "udpout:127.0.0.1:{silent_port}"
+name = "silent"
+interval = "100ms"
+timeout = "300ms"
+"#,
+            silent_port = silent.port()
         ),
     )
     .unwrap();
@@ -215,6 +226,17 @@ scrape_configs:
         now,
     );
     assert_eq!(sent, received + lost);
+    // The shipped rule's expression (without its `for`) picks the link
+    // nobody answers, and only it.
+    let unanswered = prometheus.query(&rule_expr("MavlinkLinkUnanswered"), Some(now));
+    assert_eq!(unanswered.len(), 1, "{unanswered:?}");
+    assert_eq!(unanswered[0]["metric"]["link"], "silent", "{unanswered:?}");
+    let silent_requests = prometheus.value(r#"mavping_requests_total{link="silent"}"#, now);
+    assert!(silent_requests >= 15.0, "{silent_requests}");
+    assert_eq!(
+        prometheus.value(r#"mavping_responders{link="radio-a"}"#, now),
+        1.0
+    );
 
     // No probe may be cut short, which killing Prometheus mid-scrape (its
     // connection closed) or ending a responder would do: freeze Prometheus
@@ -243,7 +265,25 @@ scrape_configs:
         probe_truth["dropped"].as_f64().unwrap() / probe_truth["ping_requests"].as_f64().unwrap();
     assert_eq!(probe_loss, truth_ratio, "{probe_truth}");
     assert_eq!(probe_loss, 0.2);
+    // What Prometheus stored was sent: the silent peer counted at least that.
+    assert!(silent.pings() as f64 >= silent_requests);
     drop(prometheus);
+}
+
+/// The `expr` of the alerting rule `alert` in contrib/prometheus.
+fn rule_expr(alert: &str) -> String {
+    let path =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("contrib/prometheus/mavping.rules.yml");
+    let text = std::fs::read_to_string(path).unwrap();
+    let rule = text
+        .split("- alert: ")
+        .find(|r| r.starts_with(alert))
+        .unwrap_or_else(|| panic!("no rule {alert}"));
+    let expr = rule.split_once("expr: |").expect("a block expr").1;
+    expr.lines()
+        .take_while(|l| !l.trim_start().starts_with("for:"))
+        .collect::<Vec<_>>()
+        .join("\n")
 }
 
 /// Unix seconds now.

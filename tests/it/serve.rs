@@ -7,7 +7,9 @@
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use crate::common::{assert_promtool_clean, free_udp_port, sample, Peer, Response, Server};
+use crate::common::{
+    assert_promtool_clean, free_udp_port, sample, Peer, Response, Server, SilentPeer,
+};
 
 /// Generous bound for something that normally takes a second or two;
 /// reaching it fails the test instead of hanging it.
@@ -510,4 +512,175 @@ fn serve_probes_as_the_command_line_does_so_mavsdk_answers() {
         .is_some_and(|v| v > 0.0)
     });
     assert_promtool_clean(&m);
+}
+
+/// A `/probe` names its target: every request to it counts, the first
+/// ones too. The responder drops 0, 1, 2 and 7 of each probe's ten: with a
+/// long timeout its first answer (to 3) comes while 0-2 are undecided,
+/// with a short one after 0 and 1 were decided; either way the probe
+/// charges all four, as the responder's own count says.
+#[test]
+fn a_probe_charges_the_requests_dropped_before_the_first_answer() {
+    let port = free_udp_port();
+    let responder = Peer::start(
+        "responder.py",
+        &[&format!("udpin:127.0.0.1:{port}"), "--drop", "0,1,2,7"],
+    );
+    let server = Server::start(&["--allow", "udpout:127.0.0.1:*"]);
+    let target = format!("udpout:127.0.0.1:{port}");
+    let answers: Vec<Response> = ["interval=20ms&timeout=500ms", "interval=30ms&timeout=50ms"]
+        .iter()
+        .map(|timing| server.get(&format!("/probe?target={}&count=10&{timing}", enc(&target))))
+        .collect();
+    let truth = responder.finish();
+    assert_eq!(truth["ping_requests"], 20, "{truth}");
+    assert_eq!(truth["dropped"], 8, "{truth}");
+    assert_eq!(truth["replies"], 12, "{truth}");
+    for r in &answers {
+        assert_eq!(r.status, 200, "{}", r.body);
+        let b = &r.body;
+        let one = [("link", target.as_str()), ("sysid", "1"), ("compid", "1")];
+        let v = |name| sample(b, name, &one).unwrap_or_else(|| panic!("no {name} in\n{b}"));
+        assert_eq!(sample(b, "mavping_probe_requests", &[]), Some(10.0), "{b}");
+        assert_eq!(v("mavping_probe_sent"), 10.0, "{b}");
+        assert_eq!(v("mavping_probe_received"), 6.0, "{b}");
+        assert_eq!(v("mavping_probe_lost"), 4.0, "{b}");
+        assert_eq!(v("mavping_probe_loss_ratio"), 0.4, "{b}");
+        assert_eq!(sample(b, "mavping_probe_success", &[]), Some(1.0), "{b}");
+        assert_promtool_clean(b);
+    }
+}
+
+/// The issue's case: 20 probes of 10 against `mavping respond` dropping
+/// 12 % at random. Every request of every probe counts, so the probes'
+/// losses add up to exactly what the responder dropped (the first
+/// requests' included: before, each probe excused those).
+#[test]
+fn twenty_probes_lose_exactly_what_mavping_respond_dropped() {
+    let port = free_udp_port();
+    let respond = crate::common::Respond::start(&[
+        "--drop",
+        "12%",
+        "--seed",
+        "3",
+        &format!("udpin:127.0.0.1:{port}"),
+    ]);
+    let server = Server::start(&["--allow", "udpout:127.0.0.1:*"]);
+    let target = format!("udpout:127.0.0.1:{port}");
+    let one = [("link", target.as_str()), ("sysid", "1"), ("compid", "1")];
+    let (mut sent, mut lost) = (0.0, 0.0);
+    for _ in 0..20 {
+        let r = server.get(&format!(
+            "/probe?target={}&interval=20ms&timeout=300ms",
+            enc(&target)
+        ));
+        assert_eq!(r.status, 200, "{}", r.body);
+        sent += sample(&r.body, "mavping_probe_sent", &one).unwrap();
+        lost += sample(&r.body, "mavping_probe_lost", &one).unwrap();
+    }
+    let (code, counts) = respond.finish();
+    assert_eq!(code, 0);
+    // requests, ping, timesync, command, retransmissions, replies, dropped
+    assert_eq!(counts[1], 200, "{counts:?}");
+    assert!(counts[6] > 0, "{counts:?}");
+    assert_eq!((sent, lost), (200.0, counts[6] as f64), "{counts:?}");
+}
+
+/// `/probe` of a listening link nobody sends to gives up as `-c` does
+/// (3 requests at 100 ms plus a 200 ms timeout: 0.5 s), not at the
+/// scrape's deadline, and says why.
+#[test]
+fn a_probe_of_a_listening_link_with_no_peer_gives_up_and_says_so() {
+    let server = Server::start(&["--allow", "udpin:127.0.0.1:*"]);
+    let target = format!("udpin:127.0.0.1:{}", free_udp_port());
+    let r = crate::common::http_get(
+        &server.addr,
+        &format!(
+            "/probe?target={}&count=3&interval=100ms&timeout=200ms",
+            enc(&target)
+        ),
+        &[("X-Prometheus-Scrape-Timeout-Seconds", "30")],
+    );
+    assert_eq!(r.status, 200, "{}", r.body);
+    let b = &r.body;
+    assert_eq!(
+        b.lines().next(),
+        Some(format!("# mavping: no MAVLink system heard on {target} in 0.5 s").as_str()),
+        "{b}"
+    );
+    assert_eq!(sample(b, "mavping_probe_success", &[]), Some(0.0), "{b}");
+    for reason in ["nothing_heard", "no_reply"] {
+        assert_eq!(
+            sample(b, "mavping_probe_failure", &[("reason", reason)]),
+            Some(1.0),
+            "{b}"
+        );
+    }
+    assert_eq!(sample(b, "mavping_probe_requests", &[]), Some(0.0), "{b}");
+    // It waited what the count takes, not the 29.5 s the scrape allowed.
+    let took = sample(b, "mavping_probe_duration_seconds", &[]).unwrap();
+    assert!((0.5..5.0).contains(&took), "{took}");
+    assert_promtool_clean(b);
+    let m = server.get("/metrics").body;
+    assert_eq!(
+        sample(&m, "mavping_exporter_probes_failed_total", &[]),
+        Some(1.0)
+    );
+    assert_eq!(sample(&m, "mavping_exporter_open_links", &[]), Some(0.0));
+}
+
+/// A continuous link nobody answers shows its requests going out and no
+/// responder (the rule MavlinkLinkUnanswered fires on that), beside one a
+/// responder answers. Requests go every 2 s, so each is told at once: a
+/// scrape between two readings of the peer that found the same count
+/// shows exactly that count.
+#[test]
+fn a_continuous_link_nobody_answers_shows_its_requests_and_no_responder() {
+    let mut silent = SilentPeer::bind();
+    let port = free_udp_port();
+    let responder = Peer::start("responder.py", &[&format!("udpin:127.0.0.1:{port}")]);
+    let file = TempFile::new(
+        "serve-unanswered.toml",
+        &format!(
+            "[[link]]\nlink = \"udpout:127.0.0.1:{}\"\nname = \"silent\"\ninterval = \"2s\"\n\
+             timeout = \"500ms\"\n\n[[link]]\nlink = \"udpout:127.0.0.1:{port}\"\n\
+             name = \"answered\"\ninterval = \"2s\"\ntimeout = \"500ms\"\n",
+            silent.port()
+        ),
+    );
+    let server = Server::start(&["--config", file.path()]);
+    let quiet = [("link", "silent"), ("probe", "ping")];
+    let heard = [("link", "answered"), ("probe", "ping")];
+    metrics_until(&server, "three requests on the silent link", |m| {
+        sample(m, "mavping_requests_total", &quiet).unwrap_or(0.0) >= 3.0
+            && sample(m, "mavping_responders", &heard) == Some(1.0)
+    });
+    let (m, requests) = loop {
+        let before = silent.pings();
+        let m = server.get("/metrics").body;
+        let after = silent.pings();
+        let requests = sample(&m, "mavping_requests_total", &quiet).unwrap();
+        assert!(
+            before as f64 <= requests && requests <= after as f64,
+            "{before} <= {requests} <= {after}"
+        );
+        if before == after {
+            break (m, requests);
+        }
+    };
+    assert!(requests >= 3.0, "{m}");
+    assert_eq!(sample(&m, "mavping_responders", &quiet), Some(0.0), "{m}");
+    assert_eq!(
+        sample(&m, "mavping_link_up", &[("link", "silent")]),
+        Some(1.0)
+    );
+    // Nothing per responder: there is none.
+    assert!(!m.contains("mavping_sent_total{link=\"silent\""), "{m}");
+    let answered = sample(&m, "mavping_requests_total", &heard).unwrap();
+    let one = [("link", "answered"), ("sysid", "1"), ("compid", "1")];
+    let received = sample(&m, "mavping_received_total", &one).unwrap();
+    assert!(answered >= 2.0 && received >= 1.0, "{m}");
+    assert_promtool_clean(&m);
+    drop(responder);
+    assert_eq!(server.stop(), Some(0));
 }

@@ -15,9 +15,10 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::measure::pending_capacity;
+use super::measure::{count_wait, listens, pending_capacity};
 use super::{invalid, validate_listen, ConfigError, LinkConfig, Probe};
 use crate::cli::{ProbeKind, ServeArgs};
+use crate::engine::matcher::Window;
 use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
 use crate::frame::{SysComp, Version};
@@ -139,6 +140,11 @@ fn refuse_virtual(spec: &LinkSpec) -> Result<(), ConfigError> {
     Ok(())
 }
 
+/// A probe (`count` given) names its target: every request counts, the
+/// ring holds them all, and a listening link gives up when no peer is
+/// heard within what the count takes plus one timeout, as `-c` does. A
+/// continuous link streams: a responder heard late is not charged for
+/// before, and a listening one waits for ever.
 fn session(
     spec: &LinkSpec,
     name: &str,
@@ -147,19 +153,28 @@ fn session(
     timeout: Duration,
     c: &Common,
 ) -> Result<SessionConfig, ConfigError> {
+    let pending = pending_capacity(interval, timeout)?;
     let mut session = SessionConfig {
         link_name: name.to_string(),
         ours: c.ours,
         interval,
         count,
         deadline: None,
-        // A probe's link sends first; a continuous link waits for ever.
-        wait: None,
+        wait: count
+            .filter(|_| listens(spec))
+            .and_then(|count| count_wait(count, interval, timeout)),
         interim: None,
         timeout,
         version: c.version,
         heartbeat: c.heartbeat,
-        capacity: pending_capacity(interval, timeout)?,
+        capacity: count.map_or(pending, |count| {
+            pending.max((count as usize).next_power_of_two())
+        }),
+        window: if count.is_some() {
+            Window::FromStart
+        } else {
+            Window::FirstAnswer
+        },
         first_seq: 0,
         // Many sessions share the server's thread: none may spin.
         precise_pacing: false,

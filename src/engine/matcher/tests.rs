@@ -378,3 +378,57 @@ fn a_late_reply_older_than_the_window_moves_it_back_and_charges_the_gap() {
         (0, 4, 1, 3, 1)
     );
 }
+
+/// A named target (`/probe`): the requests before its first answer are
+/// its losses, charged when it is first heard (decided ones) or at their
+/// timeout (the rest); the same replies streaming leave them uncharged.
+#[test]
+fn from_the_start_every_request_counts_for_a_late_first_answer() {
+    for window in [Window::FromStart, Window::FirstAnswer] {
+        let mut h = Harness::new(100 * MS, 64, 0);
+        h.m = Matcher::new(100 * MS, 64, 0).with_window(window);
+        let reqs: Vec<_> = (0..8).map(|i| h.send(i * 30 * MS)).collect();
+        // Requests 0-3 were decided (at 100-190 ms) before A first answers
+        // request 5 at 215 ms; 4 is still undecided, and stays unanswered.
+        h.expire(214 * MS);
+        h.reply(A, reqs[5], 150 * MS, 215 * MS);
+        h.reply(A, reqs[6], 180 * MS, 219 * MS);
+        h.reply(A, reqs[7], 210 * MS, 220 * MS);
+        h.expire(1000 * MS);
+        h.m.finish();
+        let c = h.counts(A);
+        let lost: Vec<u32> = h
+            .events
+            .iter()
+            .filter_map(|e| match e {
+                MatchEvent::Lost { seq, .. } => Some(*seq),
+                _ => None,
+            })
+            .collect();
+        let counts = (c.not_charged, c.sent, c.received, c.lost);
+        match window {
+            Window::FromStart => {
+                assert_eq!(counts, (0, 8, 3, 5));
+                assert_eq!(lost, vec![0, 1, 2, 3, 4]);
+            }
+            Window::FirstAnswer => {
+                assert_eq!(counts, (5, 3, 3, 0));
+                assert!(lost.is_empty(), "{lost:?}");
+            }
+        }
+    }
+}
+
+/// From the start, a first answer that is late charges its own request
+/// once (lost, and late), not twice.
+#[test]
+fn from_the_start_a_late_first_answer_is_charged_once() {
+    let mut h = Harness::new(10 * MS, 64, 0);
+    h.m = Matcher::new(10 * MS, 64, 0).with_window(Window::FromStart);
+    let reqs: Vec<_> = (0..3).map(|i| h.send(i * MS)).collect();
+    h.expire(50 * MS);
+    h.reply(A, reqs[1], MS, 51 * MS);
+    h.m.finish();
+    let c = h.counts(A);
+    assert_eq!((c.sent, c.received, c.lost, c.late), (3, 0, 3, 1));
+}

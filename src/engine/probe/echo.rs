@@ -85,7 +85,7 @@ impl<P: EchoProbe> EchoDriver<P> {
             ours: cfg.ours,
             first_seq: cfg.first_seq,
             timeout,
-            matcher: Matcher::new(timeout, cfg.capacity, cfg.first_seq),
+            matcher: Matcher::new(timeout, cfg.capacity, cfg.first_seq).with_window(cfg.window),
             events: Vec::new(),
             foreign_replies: 0,
             paths: HashMap::new(),
@@ -280,6 +280,10 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
 
     fn settled(&self) -> bool {
         self.matcher.next_deadline().is_none() || self.matcher.all_answered()
+    }
+
+    fn requests(&self) -> Option<u64> {
+        Some(self.matcher.issued())
     }
 
     fn finish(mut self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {

@@ -300,6 +300,10 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
         self.close(false, now, frames.frame_bytes);
     }
 
+    fn requests(&self) -> Option<u64> {
+        self.inner.requests()
+    }
+
     fn finish(mut self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let now = (ended.duration_s * 1e9) as Nanos;
         self.close(false, now, ended.frames.frame_bytes);

@@ -232,6 +232,7 @@ impl Lines {
             Event::Command(_)
             | Event::Clock { .. }
             | Event::Sources { .. }
+            | Event::Progress { .. }
             | Event::LinkFailed { .. } => return None,
             // The first report of each radio; the summary has the rest.
             Event::Radio {

@@ -128,6 +128,7 @@ impl LiveState {
                 | Event::Clock { .. }
                 | Event::Step(_)
                 | Event::Sources { .. }
+                | Event::Progress { .. }
                 | Event::LinkFailed { .. },
                 _,
             ) => {}

@@ -70,6 +70,9 @@ struct Series {
     p99_s: Option<f64>,
     clock_offset_s: Option<f64>,
     split: Split,
+    /// It answered a request of the link's current session (in time or
+    /// late).
+    answering: bool,
 }
 
 /// Where a responder's loss by direction comes from.
@@ -98,6 +101,7 @@ impl Series {
         self.sent += 1;
         match received {
             Some(rtt) => {
+                self.answering = true;
                 self.received += 1;
                 self.observe(rtt);
             }
@@ -152,6 +156,21 @@ pub struct Metrics {
     /// Open now, and (a continuous link of `mavping serve`) how often it
     /// was reopened after breaking; `None` before a session starts.
     state: Option<LinkState>,
+    requests: Requests,
+}
+
+/// Requests the link put on the wire, whoever answered them: in the
+/// sessions before (a continuous link reopened), and in this one so far.
+#[derive(Debug, Default, Clone, Copy)]
+struct Requests {
+    earlier: u64,
+    session: u64,
+}
+
+impl Requests {
+    fn total(self) -> u64 {
+        self.earlier + self.session
+    }
 }
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -204,9 +223,22 @@ impl Metrics {
         // A continuous link's new session: its sequences start afresh,
         // its counters go on.
         self.sources.carry();
+        self.requests.earlier += std::mem::take(&mut self.requests.session);
         for s in self.responders.values_mut() {
             s.split = Split::Live;
+            s.answering = false;
         }
+    }
+
+    /// Whether the link sends requests (a passive one does not); `None`
+    /// before a session starts.
+    fn sends(&self) -> bool {
+        self.probe.is_some_and(|p| p != ProbeName::Passive)
+    }
+
+    /// Responders that answered in the link's current session.
+    fn answering(&self) -> usize {
+        self.responders.values().filter(|s| s.answering).count()
     }
 
     /// The table of sources, as told while the session goes on (`ended`
@@ -229,10 +261,14 @@ impl Metrics {
             // A late reply was already counted sent and lost when its
             // timeout passed.
             MatchEvent::Late { responder, .. } => {
-                self.responders.entry(responder).or_default().late += 1;
+                let s = self.responders.entry(responder).or_default();
+                s.late += 1;
+                s.answering = true;
             }
             MatchEvent::Duplicate { responder, .. } => {
-                self.responders.entry(responder).or_default().duplicate += 1;
+                let s = self.responders.entry(responder).or_default();
+                s.duplicate += 1;
+                s.answering = true;
             }
             MatchEvent::Stale { .. } => {}
         }
@@ -256,10 +292,14 @@ impl Metrics {
                 self.responders.entry(target).or_default().decided(None);
             }
             CommandEvent::LateAck { from, .. } => {
-                self.responders.entry(from).or_default().late += 1;
+                let s = self.responders.entry(from).or_default();
+                s.late += 1;
+                s.answering = true;
             }
             CommandEvent::DuplicateAck { from, .. } => {
-                self.responders.entry(from).or_default().duplicate += 1;
+                let s = self.responders.entry(from).or_default();
+                s.duplicate += 1;
+                s.answering = true;
             }
             CommandEvent::Send { .. } | CommandEvent::Skipped { .. } => {}
         }
@@ -318,6 +358,7 @@ impl Observer for Metrics {
             Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
             Event::LinkFailed { .. } => self.set_up(false),
             Event::Sources { table, .. } => self.on_sources(table, false),
+            Event::Progress { requests, .. } => self.requests.session = *requests,
             Event::Heard { .. } | Event::WaitingForPeer | Event::Step(_) => {}
         }
         Ok(())
@@ -327,9 +368,14 @@ impl Observer for Metrics {
 impl Reporter for Metrics {
     fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
         match summary {
-            LinkSummary::Echo(summary) => self.on_summary(summary),
+            LinkSummary::Echo(summary) => {
+                self.requests.session = summary.requests;
+                self.on_summary(summary);
+            }
             LinkSummary::Passive(summary) => self.on_sources(&summary.table, true),
-            LinkSummary::Command(_) => {}
+            LinkSummary::Command(summary) => {
+                self.requests.session = summary.targets.iter().map(|t| t.commands).sum();
+            }
         }
         Ok(())
     }
@@ -502,5 +548,40 @@ mod tests {
             .unwrap();
         assert!((sum - 0.0308).abs() < 1e-12, "{sum}");
         assert!(!text.contains("mavping_clock_offset_seconds{"));
+    }
+
+    /// A continuous link's requests go on across its sessions; who answers
+    /// is its current session's.
+    #[test]
+    fn requests_add_up_across_sessions_and_responders_are_the_sessions() {
+        let mut m = Metrics::continuous("udpout:h:1", ProbeName::Ping);
+        let link = r#"link="udpout:h:1",probe="ping""#;
+        let has = |m: &Metrics, line: String| {
+            let text = m.render();
+            assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
+        };
+        has(&m, format!("mavping_requests_total{{{link}}} 0"));
+        has(&m, format!("mavping_responders{{{link}}} 0"));
+        let _ = m.start(&test_start("udpout:h:1"));
+        let _ = m.event(&Event::Progress { at: 0, requests: 3 });
+        m.on_event(&MatchEvent::Reply {
+            responder: SysComp::new(1, 1),
+            seq: 0,
+            rtt: 1,
+            sent_at: 0,
+            at: 1,
+            out_of_order: false,
+            first_from_responder: true,
+        });
+        has(&m, format!("mavping_requests_total{{{link}}} 3"));
+        has(&m, format!("mavping_responders{{{link}}} 1"));
+        // Reopened: nobody has answered the new session yet.
+        let _ = m.start(&test_start("udpout:h:1"));
+        let _ = m.event(&Event::Progress { at: 0, requests: 2 });
+        has(&m, format!("mavping_requests_total{{{link}}} 5"));
+        has(&m, format!("mavping_responders{{{link}}} 0"));
+        // A passive link sends nothing: neither family.
+        let passive = Metrics::continuous("udpin:0.0.0.0:1", ProbeName::Passive);
+        assert!(!passive.render().contains("mavping_requests_total"));
     }
 }

@@ -203,9 +203,41 @@ fn sik_dbm_of(id: SysComp, raw: u8) -> Option<f64> {
     is_sik(id).then(|| known(raw).map(sik_dbm))?
 }
 
+/// A link's requests, whoever answered them (a run's and a continuous
+/// link's; a `/probe` has `mavping_probe_requests`)...
+const REQUESTS: Family = Family::counter(
+    "mavping_requests_total",
+    "Requests the link put on the wire, answered or not (a continuous link's across its reopenings).",
+);
+
+/// ...and who answers them: with requests going out, 0 says nobody hears.
+const RESPONDERS: Family = Family::gauge(
+    "mavping_responders",
+    "Systems that answered the link's requests (in time or late) since it was last opened.",
+);
+
+/// Each link's requests and responders, by link and probe.
+fn write_senders(out: &mut Exposition, links: &[&Metrics]) {
+    let senders = || {
+        links.iter().filter(|m| m.sends()).map(|m| {
+            let labels = format!(
+                "link=\"{}\",probe=\"{}\"",
+                escape(&m.link),
+                m.probe.map_or("", |p| p.as_str())
+            );
+            (labels, *m)
+        })
+    };
+    out.family(&REQUESTS, senders().map(|(l, m)| (l, m.requests.total())));
+    out.family(&RESPONDERS, senders().map(|(l, m)| (l, m.answering())));
+}
+
 /// Every link's per-responder and radio families, each family once with
 /// a series per link and responder told apart by their labels.
 fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
+    if scope == Scope::Run {
+        write_senders(out, links);
+    }
     let series = || {
         links
             .iter()
@@ -412,7 +444,7 @@ const PROBE_SUCCESS: Family = Family::gauge(
 );
 const PROBE_FAILURE: Family = Family::gauge(
     "mavping_probe_failure",
-    "1 for each reason the probe failed (open_failed, link_failed, no_reply, max_loss, ...).",
+    "1 for each reason the probe failed (open_failed, link_failed, nothing_heard, no_reply, max_loss, ...).",
 );
 const PROBE_DURATION: Family = Family::gauge(
     "mavping_probe_duration_seconds",
@@ -470,6 +502,7 @@ mod tests {
         let mut b = Metrics::default();
         b.on_start(&info("udpout:\"x\\y\"\n"));
         for m in [&mut a, &mut b] {
+            let _ = m.event(&Event::Progress { at: 0, requests: 4 });
             for (seq, rtt) in [
                 (0, 400_000),
                 (1, 3_000_000),

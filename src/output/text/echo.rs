@@ -144,6 +144,7 @@ impl<W: Write> TextReporter<W> {
             | Event::Clock { .. }
             | Event::Step(_)
             | Event::Sources { .. }
+            | Event::Progress { .. }
             | Event::LinkFailed { .. } => Ok(()),
         }
     }

@@ -12,6 +12,7 @@ use hyper::header::HeaderMap;
 use hyper::StatusCode;
 
 use super::Server;
+use crate::engine::hint::HintCode;
 use crate::engine::summary::LinkSummary;
 use crate::output::http::Reply;
 use crate::output::prometheus::{render_probe, Metrics, ProbeResult};
@@ -142,6 +143,10 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
     if summary.link_error().is_some() {
         reasons.push("link_failed");
     }
+    let no_peer = no_peer_heard(summary);
+    if no_peer.is_some() {
+        reasons.push("nothing_heard");
+    }
     for f in &verdict.failures {
         let reason = match f.check {
             Check::Reply => "no_reply",
@@ -165,6 +170,7 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
     };
     let message = summary
         .link_error()
+        .or(no_peer)
         .map(str::to_string)
         .or_else(|| verdict.failures.first().map(|f| f.message.clone()));
     ProbeResult {
@@ -175,6 +181,18 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
         in_flight,
         message,
     }
+}
+
+/// What a listening link that heard no peer within its count's time says
+/// ("no MAVLink system heard on udpin:... in 1.1 s").
+fn no_peer_heard(summary: &LinkSummary) -> Option<&str> {
+    let LinkSummary::Echo(s) = summary else {
+        return None;
+    };
+    s.hints
+        .iter()
+        .find(|h| h.code == HintCode::NoPeerHeard)
+        .map(|h| h.text.as_str())
 }
 
 #[cfg(test)]

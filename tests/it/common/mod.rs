@@ -6,12 +6,14 @@ pub mod http;
 pub mod json;
 pub mod render;
 pub mod serve;
+pub mod silent;
 pub mod tmux;
 
 pub use http::*;
 pub use json::*;
 pub use render::Rendered;
 pub use serve::Server;
+pub use silent::SilentPeer;
 pub use tmux::Tmux;
 
 use std::io::{BufRead, BufReader, Read};

@@ -180,6 +180,10 @@ impl Driver for CommandDriver {
         self.tracker.idle()
     }
 
+    fn requests(&self) -> Option<u64> {
+        Some(self.tracker.targets().iter().map(|t| t.commands).sum())
+    }
+
     fn finish(self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let cfg = ended.cfg;
         let targets = self.tracker.summaries(&ended.roster);
