@@ -3,6 +3,7 @@
 
 pub mod driver;
 pub mod links;
+pub mod round_trips;
 mod rate;
 pub mod ticks;
 pub mod tracker;
