@@ -82,10 +82,19 @@ fn nearest_rank(sorted: &[f64], q: f64) -> f64 {
 fn assert_exchanges(rt: &Value, truth: &Value) {
     for ex in truth["exchanges"].as_array().unwrap() {
         let kind = ex["kind"].as_str().unwrap();
-        let (from, to) = (ex["requester"].as_str().unwrap(), ex["responder"].as_str().unwrap());
+        let (from, to) = (
+            ex["requester"].as_str().unwrap(),
+            ex["responder"].as_str().unwrap(),
+        );
         let p = pair(rt, kind, from, to);
         let why = format!("{kind} {from} -> {to}: {p}\ntruth: {ex}");
-        for key in ["matched", "after_retransmission", "unanswered", "late", "duplicate"] {
+        for key in [
+            "matched",
+            "after_retransmission",
+            "unanswered",
+            "late",
+            "duplicate",
+        ] {
             assert_eq!(p[key], ex[key], "{key}: {why}");
         }
         // A TIMESYNC reply names no requester (pymavlink's dialect, as
@@ -209,10 +218,10 @@ fn the_text_summary_states_the_stamps_resolution_and_a_line_per_exchange() {
 /// A live mavping run through MAVProxy (`--out` to mavping, its master a
 /// pymavlink responder) with MAVProxy logging: mavping's JSON summary,
 /// the responder's truth, and the log's passive summary.
-fn through_mavproxy(name: &str, responder: &[&str], probe: &[&str]) -> (Value, Value, Value) {
+fn throughmavproxy(name: &str, responder: &[&str], probe: &[&str]) -> (Value, Value, Value) {
     let dir = Scratch::new(name);
     let (master, out) = (free_udp_port(), free_udp_port());
-    let _mavproxy = Program::start_on_udp(
+    let mavproxy = Program::start_on_udp(
         &venv_program("mavproxy.py"),
         &[
             &format!("--master=udpin:127.0.0.1:{master}"),
@@ -245,7 +254,7 @@ fn through_mavproxy(name: &str, responder: &[&str], probe: &[&str]) -> (Value, V
     std::thread::sleep(std::time::Duration::from_millis(500));
     let truth = responder.finish();
     std::thread::sleep(std::time::Duration::from_millis(500));
-    drop(_mavproxy);
+    drop(mavproxy);
     let (code, log, err) = read(&[], &tlog(&dir.path("session.tlog")));
     assert_eq!(code, 0, "{err}");
     (live, truth, log)
@@ -267,9 +276,17 @@ fn live_counts(live: &Value) -> (u64, u64, u64) {
 fn mavproxy_logs_mavpings_pings_and_a_responders_replies_matched_as_it_answered() {
     // responder.py waits 30 ms before each reply, never answers seqs 3
     // and 7, answers 5 twice.
-    let (live, truth, log) = through_mavproxy(
+    let (live, truth, log) = throughmavproxy(
         "rtt-mavproxy-ping",
-        &["responder.py", "--delay-ms", "30", "--drop", "3,7", "--dup", "5"],
+        &[
+            "responder.py",
+            "--delay-ms",
+            "30",
+            "--drop",
+            "3,7",
+            "--dup",
+            "5",
+        ],
         &["-c", "15", "-i", "0.2s"],
     );
     let rt = &log["round_trips"];
@@ -300,7 +317,7 @@ fn mavproxy_logs_mavpings_pings_and_a_responders_replies_matched_as_it_answered(
 #[test]
 fn mavproxy_logs_timesync_with_an_ardupilot_like_responder_matched_by_ts1() {
     // ArduPilot's replies carry no targets: ts1 alone finds the request.
-    let (live, truth, log) = through_mavproxy(
+    let (live, truth, log) = throughmavproxy(
         "rtt-mavproxy-timesync",
         &["ardupilot_like.py", "--delay-ms", "20", "--drop", "2,9"],
         &["--probe", "timesync", "-c", "12", "-i", "0.25s"],

@@ -4,8 +4,8 @@
 
 use serde::Serialize;
 
-use super::{seconds, Line, Lines, SCHEMA_VERSION};
 use super::round_trips::RoundTrips;
+use super::{seconds, Line, Lines, SCHEMA_VERSION};
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{

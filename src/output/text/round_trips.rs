@@ -5,9 +5,7 @@
 use std::io::{self, Write};
 
 use super::ms_us;
-use crate::engine::probe::passive::round_trips::{
-    PairSummary, RequesterSummary, RoundTripSummary,
-};
+use crate::engine::probe::passive::round_trips::{PairSummary, RequesterSummary, RoundTripSummary};
 use crate::transport::tlog::LogFacts;
 
 /// Nothing when the log held no exchange.
@@ -113,7 +111,10 @@ fn write_requests(out: &mut impl Write, r: &RequesterSummary) -> io::Result<()> 
         extra.push(format!("{} pushed out of the table in flight", c.evicted));
     }
     if c.in_flight_at_end > 0 {
-        extra.push(format!("{} in flight when the log ended", c.in_flight_at_end));
+        extra.push(format!(
+            "{} in flight when the log ended",
+            c.in_flight_at_end
+        ));
     }
     let extra = if extra.is_empty() {
         String::new()

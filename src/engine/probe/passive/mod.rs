@@ -3,7 +3,7 @@
 
 pub mod driver;
 pub mod links;
-pub mod round_trips;
 mod rate;
+pub mod round_trips;
 pub mod ticks;
 pub mod tracker;

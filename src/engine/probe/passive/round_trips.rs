@@ -295,7 +295,9 @@ pub struct RoundTrips {
 
 impl std::fmt::Debug for Pair {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Pair").field("counts", &self.counts).finish()
+        f.debug_struct("Pair")
+            .field("counts", &self.counts)
+            .finish_non_exhaustive()
     }
 }
 
@@ -392,7 +394,9 @@ impl RoundTrips {
         // The request: in flight, else timed out (a late reply).
         let mut found = None;
         for (q, queue) in self.queues.iter_mut().enumerate() {
-            if queue.kind != kind || queue.requester == responder || !names(requester, queue.requester)
+            if queue.kind != kind
+                || queue.requester == responder
+                || !names(requester, queue.requester)
             {
                 continue;
             }
@@ -402,7 +406,14 @@ impl RoundTrips {
                 .rev()
                 .find(|r| r.key == key && names(r.target, responder));
             if let Some(r) = hit {
-                found = Some((q, Some((at.saturating_sub(r.at), r.attempts, answer(r, responder, in_progress)))));
+                found = Some((
+                    q,
+                    Some((
+                        at.saturating_sub(r.at),
+                        r.attempts,
+                        answer(r, responder, in_progress),
+                    )),
+                ));
                 break;
             }
             if queue
@@ -706,7 +717,9 @@ mod tests {
         let rtt = p.rtt.unwrap();
         assert_eq!((rtt.min_us, rtt.max_us), (10_000.0, 19_000.0));
         assert_eq!(
-            pair(&s, Kind::Ping, SysComp::new(9, 9), VEHICLE).counts.no_request,
+            pair(&s, Kind::Ping, SysComp::new(9, 9), VEHICLE)
+                .counts
+                .no_request,
             8
         );
         assert_eq!(s.requesters[0].counts.requests, 10);
@@ -785,7 +798,11 @@ mod tests {
         let s = rt.summary(20_000 * MS);
         let p = pair(&s, Kind::Command, GCS, VEHICLE);
         assert_eq!(
-            (p.counts.matched, p.counts.after_retransmission, p.counts.unanswered),
+            (
+                p.counts.matched,
+                p.counts.after_retransmission,
+                p.counts.unanswered
+            ),
             (1, 1, 1)
         );
         assert_eq!(p.rtt.unwrap().max_us, 30_000.0);
