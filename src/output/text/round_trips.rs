@@ -84,7 +84,7 @@ fn write_pair(out: &mut impl Write, p: &PairSummary) -> io::Result<()> {
         p.responder.to_string()
     };
     let requester = if p.requester.sysid == 0 && p.requester.compid == 0 {
-        "anyone".to_string()
+        "(no requester named)".to_string()
     } else {
         p.requester.to_string()
     };
