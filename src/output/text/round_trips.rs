@@ -129,3 +129,66 @@ fn write_requests(out: &mut impl Write, r: &RequesterSummary) -> io::Result<()> 
         c.requests
     )
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::probe::passive::round_trips::RoundTrips;
+    use crate::frame::{Frame, Msg, SysComp, Version};
+
+    const MS: u64 = 1_000_000;
+
+    fn frame(sysid: u8, msg: Msg) -> Frame {
+        Frame {
+            version: Version::V2,
+            source: SysComp::new(sysid, 1),
+            packet_seq: 0,
+            msgid: 0,
+            signed: false,
+            len: 0,
+            msg,
+        }
+    }
+
+    fn timesync(tc1: i64, ts1: i64) -> Msg {
+        Msg::Timesync {
+            tc1,
+            ts1,
+            target_system: 0,
+            target_component: 0,
+        }
+    }
+
+    #[test]
+    fn a_line_per_pair_and_per_requester_and_nothing_without_exchanges() {
+        let mut rt = RoundTrips::new(2_000 * MS);
+        let mut out = Vec::new();
+        write_round_trips(&mut out, &rt.summary(0), None).unwrap();
+        assert!(out.is_empty());
+        // 255/1 syncs with 1/1: 12 ms, then nothing; a reply to a request
+        // before the log; 3/1 pings anyone and nobody answers.
+        rt.on_frame(&frame(255, timesync(0, 10)), 0);
+        rt.on_frame(&frame(1, timesync(7, 10)), 12 * MS);
+        rt.on_frame(&frame(255, timesync(0, 20)), 1_000 * MS);
+        rt.on_frame(&frame(1, timesync(7, 5)), 1_100 * MS);
+        let ping = Msg::Ping {
+            time_usec: 1,
+            seq: 1,
+            target_system: 0,
+            target_component: 0,
+        };
+        rt.on_frame(&frame(3, ping), 1_200 * MS);
+        write_round_trips(&mut out, &rt.summary(9_000 * MS), None).unwrap();
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            "round trips recovered from the log's stamps (microseconds; unanswered after 2s):\n\
+             \x20 timesync (no requester named) -> 1/1: 0 matched, 0 unanswered, 1 with no request in the log\n\
+             \x20 timesync 255/1 -> 1/1: 1 matched, 1 unanswered; rtt n=1 min/p50/p90/p99/max = 12.000/12.000/12.000/12.000/12.000 ms\n\
+             \x20 ping 3/1 -> any (none heard answering): 0 matched, 1 unanswered\n\
+             \x20 requests: timesync from 255/1: 2\n\
+             \x20 requests: ping from 3/1: 1\n\
+             \x20 (a frame the ground station sent is stamped when it wrote it, one it received when \
+             it read it: the RTT is the link both ways and the responder's time)\n"
+        );
+    }
+}

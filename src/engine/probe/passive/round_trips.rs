@@ -5,7 +5,7 @@
 //! responder and kind out.
 //!
 //! How a reply names its request (the MAVLink services' rules, and what
-//! pymavlink, MAVProxy, QGroundControl, PX4 and ArduPilot send):
+//! pymavlink, MAVProxy, PX4 and ArduPilot send):
 //! - TIMESYNC: a request has `tc1 == 0` and `ts1` the requester's clock;
 //!   the reply mirrors `ts1` with `tc1 != 0`. Its targets name the
 //!   requester where set; ArduPilot and pymavlink's dialect leave them 0,
