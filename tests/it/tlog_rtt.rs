@@ -216,9 +216,15 @@ fn the_text_summary_states_the_stamps_resolution_and_a_line_per_exchange() {
 }
 
 /// A live mavping run through MAVProxy (`--out` to mavping, its master a
-/// pymavlink responder) with MAVProxy logging: mavping's JSON summary,
-/// the responder's truth, and the log's passive summary.
-fn throughmavproxy(name: &str, responder: &[&str], probe: &[&str]) -> (Value, Value, Value) {
+/// responder started by `start` on MAVProxy's master port) with MAVProxy
+/// logging: mavping's JSON summary, the responder's truth (`finish`), and
+/// the log's passive summary.
+fn through_mavproxy<R>(
+    name: &str,
+    start: impl FnOnce(u16) -> R,
+    finish: impl FnOnce(R) -> Value,
+    probe: &[&str],
+) -> (Value, Value, Value) {
     let dir = Scratch::new(name);
     let (master, out) = (free_udp_port(), free_udp_port());
     let mavproxy = Program::start_on_udp(
@@ -233,11 +239,7 @@ fn throughmavproxy(name: &str, responder: &[&str], probe: &[&str]) -> (Value, Va
         &dir.0,
         master,
     );
-    let (script, args) = responder.split_first().unwrap();
-    let mut all = vec![format!("udpout:127.0.0.1:{master}")];
-    all.extend(args.iter().map(|a| a.to_string()));
-    let all: Vec<&str> = all.iter().map(String::as_str).collect();
-    let responder = Peer::start(script, &all);
+    let responder = start(master);
     // MAVProxy learns where its master is from the responder's first
     // HEARTBEAT: a request forwarded before that would go nowhere.
     std::thread::sleep(std::time::Duration::from_secs(1));
@@ -249,15 +251,25 @@ fn throughmavproxy(name: &str, responder: &[&str], probe: &[&str]) -> (Value, Va
     assert_eq!(code, 0, "{stdout}{err}");
     let live = json_lines(&stdout)
         .into_iter()
-        .find(|l| l["type"] == "summary")
+        .find(|l| l["type"].as_str().is_some_and(|t| t.ends_with("summary")))
         .unwrap_or_else(|| panic!("no summary: {stdout}"));
     std::thread::sleep(std::time::Duration::from_millis(500));
-    let truth = responder.finish();
+    let truth = finish(responder);
     std::thread::sleep(std::time::Duration::from_millis(500));
     drop(mavproxy);
     let (code, log, err) = read(&[], &tlog(&dir.path("session.tlog")));
     assert_eq!(code, 0, "{err}");
     (live, truth, log)
+}
+
+/// A pymavlink responder from tests/peers, on MAVProxy's master port.
+fn python_peer(script: &'static str, args: &'static [&'static str]) -> impl FnOnce(u16) -> Peer {
+    move |master| {
+        let mut all = vec![format!("udpout:127.0.0.1:{master}")];
+        all.extend(args.iter().map(|a| a.to_string()));
+        let all: Vec<&str> = all.iter().map(String::as_str).collect();
+        Peer::start(script, &all)
+    }
 }
 
 /// The live run's figures for responder 1/1.
@@ -276,17 +288,13 @@ fn live_counts(live: &Value) -> (u64, u64, u64) {
 fn mavproxy_logs_mavpings_pings_and_a_responders_replies_matched_as_it_answered() {
     // responder.py waits 30 ms before each reply, never answers seqs 3
     // and 7, answers 5 twice.
-    let (live, truth, log) = throughmavproxy(
+    let (live, truth, log) = through_mavproxy(
         "rtt-mavproxy-ping",
-        &[
+        python_peer(
             "responder.py",
-            "--delay-ms",
-            "30",
-            "--drop",
-            "3,7",
-            "--dup",
-            "5",
-        ],
+            &["--delay-ms", "30", "--drop", "3,7", "--dup", "5"],
+        ),
+        Peer::finish,
         &["-c", "15", "-i", "0.2s"],
     );
     let rt = &log["round_trips"];
@@ -318,9 +326,10 @@ fn mavproxy_logs_mavpings_pings_and_a_responders_replies_matched_as_it_answered(
 #[test]
 fn mavproxy_logs_timesync_with_an_ardupilot_like_responder_matched_by_ts1() {
     // ArduPilot's replies carry no targets: ts1 alone finds the request.
-    let (live, truth, log) = throughmavproxy(
+    let (live, truth, log) = through_mavproxy(
         "rtt-mavproxy-timesync",
-        &["ardupilot_like.py", "--delay-ms", "20", "--drop", "2,9"],
+        python_peer("ardupilot_like.py", &["--delay-ms", "20", "--drop", "2,9"]),
+        Peer::finish,
         &["--probe", "timesync", "-c", "12", "-i", "0.25s"],
     );
     let rt = &log["round_trips"];
@@ -341,4 +350,49 @@ fn mavproxy_logs_timesync_with_an_ardupilot_like_responder_matched_by_ts1() {
         "{why}"
     );
     assert!(p["rtt"].is_object(), "{why}");
+}
+
+#[test]
+fn mavproxy_logs_mavpings_commands_with_their_retransmissions() {
+    // `mavping respond` drops a quarter of its ACKs (seeded): mavping
+    // re-sends those commands (confirmation 1, 2, ...).
+    let (live, truth, log) = through_mavproxy(
+        "rtt-mavproxy-command",
+        |master| Respond::start(&["--drop", "25", &format!("udpout:127.0.0.1:{master}")]),
+        |r| {
+            let (code, counts) = r.finish();
+            assert_eq!(code, 0);
+            json!(counts)
+        },
+        &["--probe", "command", "-c", "12", "-i", "0.5s"],
+    );
+    let rt = &log["round_trips"];
+    let p = pair(rt, "command", "250/190", "1/1");
+    let r = requests(rt, "command", "250/190");
+    let target = &live["targets"][0];
+    let why = format!(
+        "{p}
+{r}
+respond: {truth}
+live: {target}"
+    );
+    // respond's counts: requests, ping, timesync, command, retransmissions, ...
+    let (commands, retransmissions) = (truth[3].as_u64().unwrap(), truth[4].as_u64().unwrap());
+    assert!(retransmissions > 0, "{why}");
+    assert_eq!(r["requests"], target["commands"], "{why}");
+    assert_eq!(
+        r["requests"].as_u64().unwrap() + retransmissions,
+        commands,
+        "{why}"
+    );
+    assert_eq!(r["repeats"].as_u64(), Some(retransmissions), "{why}");
+    assert_eq!(p["matched"], target["acknowledged"], "{why}");
+    assert_eq!(p["unanswered"], target["failed"], "{why}");
+    // Acknowledged at a later attempt than the first: after a
+    // retransmission.
+    let later: u64 = target["attempts"].as_array().unwrap()[1..]
+        .iter()
+        .map(|n| n.as_u64().unwrap())
+        .sum();
+    assert_eq!(p["after_retransmission"].as_u64(), Some(later), "{why}");
 }
