@@ -16,17 +16,17 @@ use serde_json::{json, Value};
 use crate::common::*;
 
 /// A scratch directory of one test, removed when dropped.
-struct Scratch(PathBuf);
+pub(crate) struct Scratch(pub(crate) PathBuf);
 
 impl Scratch {
-    fn new(name: &str) -> Scratch {
+    pub(crate) fn new(name: &str) -> Scratch {
         let dir = std::env::temp_dir().join(format!("mavping-tlog-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
         Scratch(dir)
     }
 
-    fn path(&self, file: &str) -> PathBuf {
+    pub(crate) fn path(&self, file: &str) -> PathBuf {
         self.0.join(file)
     }
 }
@@ -38,7 +38,7 @@ impl Drop for Scratch {
 }
 
 /// Writes `plan` as a log with pymavlink; its ground truth.
-fn write_log(path: &Path, plan: &Value) -> Value {
+pub(crate) fn write_log(path: &Path, plan: &Value) -> Value {
     let out = Command::new(python())
         .arg(peer_script("tlog_writer.py"))
         .arg(path)
@@ -99,7 +99,7 @@ fn mavloss(path: &Path) -> MavLoss {
 
 /// mavping `--json` on `link`: exit code, the passive summary (every line
 /// checked against the schema), stderr.
-fn read(args: &[&str], link: &str) -> (i32, Value, String) {
+pub(crate) fn read(args: &[&str], link: &str) -> (i32, Value, String) {
     let mut all = vec!["--json"];
     all.extend_from_slice(args);
     all.push(link);
@@ -113,7 +113,7 @@ fn read(args: &[&str], link: &str) -> (i32, Value, String) {
     (code, summary, err)
 }
 
-fn tlog(path: &Path) -> String {
+pub(crate) fn tlog(path: &Path) -> String {
     format!("tlog:{}", path.display())
 }
 

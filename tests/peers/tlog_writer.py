@@ -24,6 +24,19 @@ The plan:
                  less that link's drops; plain: true stamps the source's
                  frames with a clock's µs (MAVProxy logs what its outputs
                  send so), whatever the plan's stamps
+  exchanges    each: kind ("timesync", "ping", "command"), requester and
+               responder [sysid, compid], count requests period_us apart
+               from phase_us, each answered rtt_us + rtt_step_us * (k % 10)
+               after it (link: [request link, reply link] for mavproxy
+               stamps), command (its id), and by request number k:
+                 drop [k...]      never answered (unanswered)
+                 dup [k...]       answered twice, 1 ms apart
+                 late [k...]      answered after late_us (unanswered, late)
+                 retransmit {k: n} (commands) sent n more times retry_us
+                                  apart (confirmation 1..n), answered
+                                  after the last
+                 orphan [k...]    the reply written, the request not
+               The truth per exchange: its exact counts and every RTT.
   junk         [[r, hex]]: those bytes after the r-th record written
   cut          bytes cut off the end (a last record cut short)
 
@@ -117,10 +130,75 @@ def plan_source(src, out, truth_of):
         truth["written"] += len(writes)
 
 
+def plan_exchange(ex, out, mavs):
+    """Puts an exchange's requests and replies on `out`; its truth."""
+    req_id, resp_id = tuple(ex["requester"]), tuple(ex["responder"])
+    for ids in (req_id, resp_id):
+        if ids not in mavs:
+            mavs[ids] = mavlink.MAVLink(None, srcSystem=ids[0], srcComponent=ids[1])
+    req, resp = mavs[req_id], mavs[resp_id]
+    kind = ex["kind"]
+    req_link, reply_link = ex.get("link", [0, 0])
+    drop, dup, late = (set(ex.get(k, [])) for k in ("drop", "dup", "late"))
+    orphan = set(ex.get("orphan", []))
+    retransmit = {int(k): n for k, n in ex.get("retransmit", {}).items()}
+    truth = {"kind": kind, "requester": "%d/%d" % req_id, "responder": "%d/%d" % resp_id,
+             "requests": 0, "repeats": 0, "matched": 0, "after_retransmission": 0,
+             "unanswered": 0, "late": 0, "duplicate": 0, "no_request": 0, "rtts_us": []}
+
+    def emit(mav, msg, t, link):
+        # Packed when written, so each system numbers its frames in time
+        # order.
+        out.append((int(t), link, None, (mav, msg)))
+
+    for k in range(ex["count"]):
+        t = ex.get("phase_us", 0) + k * ex["period_us"]
+        ts1 = 1_700_000_000_000_000_000 + t * 1000 + k
+        attempts = 1 + retransmit.get(k, 0)
+        if k not in orphan:
+            truth["requests"] += 1
+            for i in range(attempts):
+                at = t + i * ex.get("retry_us", 1_000_000)
+                if kind == "timesync":
+                    msg = req.timesync_encode(0, ts1)
+                elif kind == "ping":
+                    msg = req.ping_encode(1_000_000 + t, k, 0, 0)
+                else:
+                    msg = req.command_long_encode(resp_id[0], resp_id[1], ex["command"], i,
+                                                  0, 0, 0, 0, 0, 0, 0)
+                emit(req, msg, at, req_link)
+            truth["repeats"] += attempts - 1
+        last = t + (attempts - 1) * ex.get("retry_us", 1_000_000)
+        if k in drop:
+            truth["unanswered"] += 1
+            continue
+        rtt = ex["late_us"] if k in late else ex["rtt_us"] + ex.get("rtt_step_us", 0) * (k % 10)
+        if kind == "timesync":
+            msg = resp.timesync_encode(123_456 + k, ts1)
+        elif kind == "ping":
+            msg = resp.ping_encode(1_000_000 + t, k, req_id[0], req_id[1])
+        else:
+            msg = resp.command_ack_encode(ex["command"], 0, 0, 0, req_id[0], req_id[1])
+        copies = 2 if k in dup else 1
+        for c in range(copies):
+            emit(resp, msg, last + rtt + c * 1000, reply_link)
+        if k in orphan:
+            truth["no_request"] += copies
+        elif k in late:
+            truth["unanswered"] += 1
+            truth["late"] += copies
+        else:
+            truth["matched"] += 1
+            truth["duplicate"] += copies - 1
+            truth["after_retransmission"] += attempts > 1
+            truth["rtts_us"].append(rtt)
+    return truth
+
+
 def stamp(plan, src, t_us, link, rng):
     us = plan["start_us"] + t_us
     kind = plan.get("stamps", "us")
-    if src.get("plain"):
+    if src is not None and src.get("plain"):
         return us | rng.randrange(4)
     if kind == "ms":
         return (us // 1000) * 1000
@@ -143,8 +221,10 @@ def main():
                                        "links": {}})
 
     writes = []
-    for src in plan["sources"]:
+    for src in plan.get("sources", []):
         plan_source(src, writes, truth_of)
+    mavs = {}
+    exchanges = [plan_exchange(ex, writes, mavs) for ex in plan.get("exchanges", [])]
     # In time order; equal times in the order planned.
     order = [(t, i, link, src, data) for i, (t, link, src, data) in enumerate(writes)]
     heapq.heapify(order)
@@ -158,6 +238,10 @@ def main():
     last_len = 0
     while order:
         t, _, link, src, data = heapq.heappop(order)
+        if isinstance(data, tuple):
+            mav, msg = data
+            data = bytes(msg.pack(mav))
+            mav.seq = (mav.seq + 1) % 256
         record = struct.pack(">Q", stamp(plan, src, t, link, rng)) + data
         log.write(record)
         size += len(record)
@@ -172,7 +256,7 @@ def main():
     if cut:
         with open(path, "r+b") as f:
             f.truncate(size - cut)
-    print(json.dumps({"sources": truths, "records": records, "junk_bytes": junk_bytes,
+    print(json.dumps({"sources": truths, "exchanges": exchanges, "records": records, "junk_bytes": junk_bytes,
                       "cut": cut, "last_record_len": last_len}), flush=True)
 
 

@@ -381,7 +381,7 @@ impl<'a> Responder<'a> {
 
 /// The RTT figures, in µs.
 #[derive(Serialize)]
-struct Rtt {
+pub(super) struct Rtt {
     min: f64,
     mean: f64,
     max: f64,
@@ -394,7 +394,7 @@ struct Rtt {
 }
 
 impl Rtt {
-    fn of(s: &RttSummary) -> Self {
+    pub(super) fn of(s: &RttSummary) -> Self {
         Rtt {
             min: s.min_us,
             mean: s.mean_us,

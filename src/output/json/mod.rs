@@ -11,6 +11,7 @@
 mod command;
 mod echo;
 mod passive;
+mod round_trips;
 mod sweep;
 #[cfg(test)]
 mod tests;

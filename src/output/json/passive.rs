@@ -4,6 +4,7 @@
 
 use serde::Serialize;
 
+use super::round_trips::RoundTrips;
 use super::{seconds, Line, Lines, SCHEMA_VERSION};
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
@@ -125,6 +126,9 @@ pub(super) struct Summary<'a> {
     /// A telemetry log's figures per MAVProxy link.
     #[serde(skip_serializing_if = "Option::is_none")]
     per_link: Option<Links<'a>>,
+    /// A telemetry log's requests matched to replies by their stamps.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    round_trips: Option<RoundTrips<'a>>,
     verdict: &'a Verdict,
     exit_code: u8,
 }
@@ -151,6 +155,10 @@ impl<'a> Summary<'a> {
             signing: s.signing,
             log: s.log.as_ref(),
             per_link: s.per_link.as_ref().map(|p| Links::of(s, p)),
+            round_trips: s
+                .round_trips
+                .as_ref()
+                .map(|rt| RoundTrips::of(rt, s.log.as_ref())),
             verdict,
             exit_code: verdict.exit_code(),
         }

@@ -536,6 +536,7 @@ fn passive_run() -> Vec<Told<'static>> {
         signing: crate::frame::signing::Gate::new(None).summary(),
         log: None,
         per_link: None,
+        round_trips: None,
     };
     let verdict = verdict::judge_passive(
         &summary,
@@ -592,6 +593,7 @@ fn log_run() -> Vec<Told<'static>> {
         heartbeat: false,
         duration_s: 0.8,
         per_link: per_link(&table, &by_path),
+        round_trips: None,
         table,
         identities: vec![(ONE, identity())],
         own_frames: 0,

@@ -6,6 +6,7 @@
 mod command;
 mod echo;
 mod passive;
+mod round_trips;
 mod sweep;
 
 use std::io::{self, Write};

@@ -294,6 +294,9 @@ pub(super) fn write_summary(
     if let Some(per) = &s.per_link {
         write_links(out, s, per)?;
     }
+    if let Some(rt) = &s.round_trips {
+        super::round_trips::write_round_trips(out, rt, s.log.as_ref())?;
+    }
     for r in &s.table.sources {
         write_messages(out, r)?;
     }

@@ -12,6 +12,7 @@ use std::io;
 use std::time::Duration;
 
 use super::links;
+use super::round_trips::RoundTrips;
 use super::ticks::Ticks;
 use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use crate::engine::link_io::{Clock, Sender};
@@ -47,6 +48,9 @@ pub struct PassiveDriver {
     /// Reading a telemetry log: a table per path (the stamps' two low
     /// bits, MAVProxy's link number), for [`links::per_link`].
     paths: Option<Paths>,
+    /// Reading a telemetry log: requests matched to replies by their
+    /// stamps, our own ids' requests included (a log mavping recorded).
+    round_trips: Option<RoundTrips>,
 }
 
 /// The tables per path of a log.
@@ -67,6 +71,7 @@ impl PassiveDriver {
             own_frames: 0,
             ticks: Ticks::default(),
             paths: None,
+            round_trips: None,
         }
     }
 
@@ -74,6 +79,9 @@ impl PassiveDriver {
     pub fn for_log(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
         PassiveDriver {
             paths: Some(Paths::AllZero),
+            round_trips: Some(RoundTrips::new(
+                Nanos::try_from(cfg.timeout.as_nanos()).unwrap_or(Nanos::MAX),
+            )),
             ..Self::new(cfg, gap)
         }
     }
@@ -159,6 +167,9 @@ impl Driver for PassiveDriver {
     }
 
     fn on_received(&mut self, frame: &Frame, path: PathId, at: Nanos) {
+        if let Some(rt) = &mut self.round_trips {
+            rt.on_frame(frame, at);
+        }
         if frame.source == self.ours {
             self.own_frames += 1;
             return;
@@ -186,7 +197,7 @@ impl Driver for PassiveDriver {
         false
     }
 
-    fn finish(self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
+    fn finish(mut self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let at = (end.duration_s * 1e9) as Nanos;
         let table = self.table.summary(at);
         let per_link = match self.paths {
@@ -214,6 +225,7 @@ impl Driver for PassiveDriver {
             signing: end.gate.summary(),
             log: None,
             per_link,
+            round_trips: self.round_trips.as_mut().map(|rt| rt.summary(at)),
         };
         (LinkSummary::Passive(Box::new(summary)), Vec::new())
     }

@@ -4,5 +4,6 @@
 pub mod driver;
 pub mod links;
 mod rate;
+pub mod round_trips;
 pub mod ticks;
 pub mod tracker;

@@ -1,0 +1,194 @@
+//! The round trips recovered from a telemetry log, as text: a line per
+//! requester → responder with its counts and RTT figures, the stamps'
+//! resolution and what the figure includes.
+
+use std::io::{self, Write};
+
+use super::ms_us;
+use crate::engine::probe::passive::round_trips::{PairSummary, RequesterSummary, RoundTripSummary};
+use crate::transport::tlog::LogFacts;
+
+/// Nothing when the log held no exchange.
+pub(super) fn write_round_trips(
+    out: &mut impl Write,
+    rt: &RoundTripSummary,
+    log: Option<&LogFacts>,
+) -> io::Result<()> {
+    if rt.pairs.is_empty() && rt.requesters.is_empty() {
+        return Ok(());
+    }
+    let resolution = match log {
+        Some(l) if l.stamps.whole_ms => "whole milliseconds, as QGroundControl writes them",
+        _ => "microseconds",
+    };
+    writeln!(
+        out,
+        "round trips recovered from the log's stamps ({resolution}; unanswered after {}):",
+        humantime::format_duration(std::time::Duration::from_secs_f64(rt.timeout_s))
+    )?;
+    for p in &rt.pairs {
+        write_pair(out, p)?;
+    }
+    for r in &rt.requesters {
+        write_requests(out, r)?;
+    }
+    if rt.untracked > 0 {
+        writeln!(
+            out,
+            "  and {} requests or replies beyond the tables' caps, not matched",
+            rt.untracked
+        )?;
+    }
+    writeln!(
+        out,
+        "  (a frame the ground station sent is stamped when it wrote it, one it received when \
+         it read it: the RTT is the link both ways and the responder's time)"
+    )
+}
+
+/// `timesync 255/190 -> 1/1: 98 matched, 2 unanswered; rtt n=98
+/// min/p50/p90/p99/max = ... ms`.
+fn write_pair(out: &mut impl Write, p: &PairSummary) -> io::Result<()> {
+    let c = &p.counts;
+    let mut parts = vec![format!("{} matched", c.matched)];
+    if c.after_retransmission > 0 {
+        parts.push(format!(
+            "{} of them after a retransmission (measured from the last attempt)",
+            c.after_retransmission
+        ));
+    }
+    parts.push(format!("{} unanswered", c.unanswered));
+    for (n, what) in [
+        (c.late, "late"),
+        (c.duplicate, "duplicate"),
+        (c.no_request, "with no request in the log"),
+    ] {
+        if n > 0 {
+            parts.push(format!("{n} {what}"));
+        }
+    }
+    let rtt = p.rtt.map_or_else(String::new, |r| {
+        format!(
+            "; rtt n={} min/p50/p90/p99/max = {}/{}/{}/{}/{} ms",
+            c.matched,
+            ms_us(r.min_us),
+            ms_us(r.p50_us),
+            ms_us(r.p90_us),
+            ms_us(r.p99_us),
+            ms_us(r.max_us)
+        )
+    });
+    let responder = if p.responder.sysid == 0 && p.responder.compid == 0 {
+        "any (none heard answering)".to_string()
+    } else {
+        p.responder.to_string()
+    };
+    let requester = if p.requester.sysid == 0 && p.requester.compid == 0 {
+        "(no requester named)".to_string()
+    } else {
+        p.requester.to_string()
+    };
+    writeln!(
+        out,
+        "  {} {requester} -> {responder}: {}{rtt}",
+        p.kind.as_str(),
+        parts.join(", ")
+    )
+}
+
+/// `requests: timesync from 255/190: 100 (1 logged again)`.
+fn write_requests(out: &mut impl Write, r: &RequesterSummary) -> io::Result<()> {
+    let c = &r.counts;
+    let mut extra = Vec::new();
+    if c.repeats > 0 {
+        extra.push(if r.kind.as_str() == "command" {
+            format!("{} retransmissions", c.repeats)
+        } else {
+            format!("{} logged again", c.repeats)
+        });
+    }
+    if c.evicted > 0 {
+        extra.push(format!("{} pushed out of the table in flight", c.evicted));
+    }
+    if c.in_flight_at_end > 0 {
+        extra.push(format!(
+            "{} in flight when the log ended",
+            c.in_flight_at_end
+        ));
+    }
+    let extra = if extra.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", extra.join(", "))
+    };
+    writeln!(
+        out,
+        "  requests: {} from {}: {}{extra}",
+        r.kind.as_str(),
+        r.requester,
+        c.requests
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::probe::passive::round_trips::RoundTrips;
+    use crate::frame::{Frame, Msg, SysComp, Version};
+
+    const MS: u64 = 1_000_000;
+
+    fn frame(sysid: u8, msg: Msg) -> Frame {
+        Frame {
+            version: Version::V2,
+            source: SysComp::new(sysid, 1),
+            packet_seq: 0,
+            msgid: 0,
+            signed: false,
+            len: 0,
+            msg,
+        }
+    }
+
+    fn timesync(tc1: i64, ts1: i64) -> Msg {
+        Msg::Timesync {
+            tc1,
+            ts1,
+            target_system: 0,
+            target_component: 0,
+        }
+    }
+
+    #[test]
+    fn a_line_per_pair_and_per_requester_and_nothing_without_exchanges() {
+        let mut rt = RoundTrips::new(2_000 * MS);
+        let mut out = Vec::new();
+        write_round_trips(&mut out, &rt.summary(0), None).unwrap();
+        assert!(out.is_empty());
+        // 255/1 syncs with 1/1: 12 ms, then nothing; a reply to a request
+        // before the log; 3/1 pings anyone and nobody answers.
+        rt.on_frame(&frame(255, timesync(0, 10)), 0);
+        rt.on_frame(&frame(1, timesync(7, 10)), 12 * MS);
+        rt.on_frame(&frame(255, timesync(0, 20)), 1_000 * MS);
+        rt.on_frame(&frame(1, timesync(7, 5)), 1_100 * MS);
+        let ping = Msg::Ping {
+            time_usec: 1,
+            seq: 1,
+            target_system: 0,
+            target_component: 0,
+        };
+        rt.on_frame(&frame(3, ping), 1_200 * MS);
+        write_round_trips(&mut out, &rt.summary(9_000 * MS), None).unwrap();
+        assert_eq!(
+            String::from_utf8(out).unwrap(),
+            "round trips recovered from the log's stamps (microseconds; unanswered after 2s):\n\
+             \x20 timesync (no requester named) -> 1/1: 0 matched, 0 unanswered, 1 with no request in the log\n\
+             \x20 timesync 255/1 -> 1/1: 1 matched, 1 unanswered; rtt n=1 min/p50/p90/p99/max = 12.000/12.000/12.000/12.000/12.000 ms\n\
+             \x20 ping 3/1 -> any (none heard answering): 0 matched, 1 unanswered\n\
+             \x20 requests: timesync from 255/1: 2\n\
+             \x20 requests: ping from 3/1: 1\n\
+             \x20 (a frame the ground station sent is stamped when it wrote it, one it received when \
+             it read it: the RTT is the link both ways and the responder's time)\n"
+        );
+    }
+}
