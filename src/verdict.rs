@@ -575,6 +575,7 @@ mod tests {
             signing: crate::frame::signing::Gate::new(None).summary(),
             log: None,
             per_link: None,
+            flight: None,
         };
         let s = passive(&table);
         assert!(judge_passive(&s, &Thresholds::default()).ok());

@@ -283,6 +283,7 @@ mod tests {
             signing: crate::frame::signing::Gate::new(None).summary(),
             log: None,
             per_link: None,
+            flight: None,
         }))
     }
 

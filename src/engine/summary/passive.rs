@@ -3,6 +3,7 @@
 //! pymavlink's figure beside ours, and the link's totals. Built by the
 //! passive probe's tracker; every report format renders it.
 
+use crate::engine::probe::passive::flight::FlightSummary;
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
 use crate::engine::Nanos;
@@ -36,6 +37,8 @@ pub struct PassiveSummary {
     /// A log's figures per MAVProxy link, when its stamps carry link
     /// numbers.
     pub per_link: Option<PerLink>,
+    /// A log's flight: its windows' summary, silences and bursts.
+    pub flight: Option<FlightSummary>,
 }
 
 impl PassiveSummary {

@@ -125,12 +125,20 @@ pub(super) struct Summary<'a> {
     /// A telemetry log's figures per MAVProxy link.
     #[serde(skip_serializing_if = "Option::is_none")]
     per_link: Option<Links<'a>>,
+    /// A telemetry log's timeline: its windows' summary, silences, bursts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    flight: Option<super::flight::Summary<'a>>,
     verdict: &'a Verdict,
     exit_code: u8,
 }
 
 impl<'a> Summary<'a> {
-    pub(super) fn of(s: &'a PassiveSummary, verdict: &'a Verdict, link: &'a str) -> Self {
+    pub(super) fn of(
+        s: &'a PassiveSummary,
+        verdict: &'a Verdict,
+        link: &'a str,
+        lines: &Lines,
+    ) -> Self {
         Summary {
             r#type: "passive_summary",
             schema_version: SCHEMA_VERSION,
@@ -151,6 +159,7 @@ impl<'a> Summary<'a> {
             signing: s.signing,
             log: s.log.as_ref(),
             per_link: s.per_link.as_ref().map(|p| Links::of(s, p)),
+            flight: s.flight.as_ref().map(|f| lines.flight_summary(f)),
             verdict,
             exit_code: verdict.exit_code(),
         }

@@ -125,6 +125,7 @@ impl LiveState {
                 | Event::Clock { .. }
                 | Event::Step(_)
                 | Event::Sources { .. }
+                | Event::Flight(_)
                 | Event::LinkFailed { .. },
                 _,
             ) => {}

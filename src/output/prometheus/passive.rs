@@ -359,6 +359,7 @@ mod tests {
             },
             log: None,
             per_link: None,
+            flight: None,
         }
     }
 

@@ -143,6 +143,7 @@ impl<W: Write> TextReporter<W> {
             | Event::Clock { .. }
             | Event::Step(_)
             | Event::Sources { .. }
+            | Event::Flight(_)
             | Event::LinkFailed { .. } => Ok(()),
         }
     }

@@ -11,6 +11,7 @@
 use std::io;
 use std::time::Duration;
 
+use super::flight::{self, Flight, Totals};
 use super::links;
 use super::ticks::Ticks;
 use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
@@ -47,6 +48,8 @@ pub struct PassiveDriver {
     /// Reading a telemetry log: a table per path (the stamps' two low
     /// bits, MAVProxy's link number), for [`links::per_link`].
     paths: Option<Paths>,
+    /// Reading a telemetry log: the flight's timeline.
+    flight: Option<Flight>,
 }
 
 /// The tables per path of a log.
@@ -67,14 +70,28 @@ impl PassiveDriver {
             own_frames: 0,
             ticks: Ticks::default(),
             paths: None,
+            flight: None,
         }
     }
 
     /// The driver of a telemetry log: also a table per MAVProxy link.
     pub fn for_log(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
+        let silence = gap.map_or(flight::DEFAULT_SILENCE_NS, |g| {
+            Nanos::try_from(g.as_nanos()).unwrap_or(Nanos::MAX)
+        });
         PassiveDriver {
             paths: Some(Paths::AllZero),
+            flight: Some(Flight::new(flight::DEFAULT_WINDOW_NS, silence)),
             ..Self::new(cfg, gap)
+        }
+    }
+
+    /// Closes the flight's windows that end by `at`, with the table as it
+    /// stands before anything at `at` is taken.
+    fn close_windows(&mut self, at: Nanos) {
+        let Some(f) = &mut self.flight else { return };
+        while f.due(at) {
+            f.close(totals(&self.table, at));
         }
     }
 
@@ -98,6 +115,28 @@ impl PassiveDriver {
             t.on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
         }
     }
+}
+
+/// The link's totals, for the flight's windows.
+fn totals(table: &SourceTable, at: Nanos) -> Totals {
+    let c = table.summary(at).totals.counts;
+    Totals {
+        received: c.received,
+        duplicate: c.duplicate,
+        lost: c.lost,
+    }
+}
+
+/// Tells `observer` the flight's events closed since the last telling.
+fn tell_flight(flight: Option<&mut Flight>, observer: &mut dyn Observer) -> io::Result<()> {
+    let Some(f) = flight else { return Ok(()) };
+    let mut result = Ok(());
+    for e in f.drain() {
+        if result.is_ok() {
+            result = observer.event(&Event::Flight(&e));
+        }
+    }
+    result
 }
 
 /// Tells `observer` the table, if a telling is due.
@@ -156,6 +195,7 @@ impl Driver for PassiveDriver {
 
     fn expire(&mut self, now: Nanos) {
         self.ticks.expire(now);
+        self.close_windows(now);
     }
 
     fn on_received(&mut self, frame: &Frame, path: PathId, at: Nanos) {
@@ -166,6 +206,10 @@ impl Driver for PassiveDriver {
         // Before the table of all frames takes it: a first frame by another
         // path copies that table as path 0's.
         self.by_path(frame, path, at);
+        self.close_windows(at);
+        if let Some(f) = &mut self.flight {
+            f.on_frame(frame.source, &frame.msg, at);
+        }
         let len = usize::from(frame.len);
         self.table
             .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
@@ -174,7 +218,8 @@ impl Driver for PassiveDriver {
     fn on_frame(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
 
     fn report(&mut self, _radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
-        tell_sources(&self.table, &mut self.ticks, observer)
+        let flight = tell_flight(self.flight.as_mut(), observer);
+        flight.and(tell_sources(&self.table, &mut self.ticks, observer))
     }
 
     fn next_deadline(&self) -> Option<Nanos> {
@@ -198,6 +243,17 @@ impl Driver for PassiveDriver {
             Some(Paths::AllZero) | None => None,
         };
         let identities = identities(&table, &end.roster);
+        let flight = self.flight.as_ref().map(|f| {
+            let c = table.totals.counts;
+            f.summary(
+                at,
+                Totals {
+                    received: c.received,
+                    duplicate: c.duplicate,
+                    lost: c.lost,
+                },
+            )
+        });
         let summary = PassiveSummary {
             link: end.cfg.link_name.clone(),
             ours: end.cfg.ours,
@@ -214,6 +270,7 @@ impl Driver for PassiveDriver {
             signing: end.gate.summary(),
             log: None,
             per_link,
+            flight,
         };
         (LinkSummary::Passive(Box::new(summary)), Vec::new())
     }
