@@ -667,20 +667,24 @@ fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
     };
     assert!(summary.per_link.is_some());
     let verdict = verdict::judge_passive(&summary, &Thresholds::default());
-    vec![
-        Told::Start(StartInfo {
-            link: "tlog:flight.tlog".into(),
-            probe: ProbeName::Passive,
-            count: None,
-            run: RunKind::Passive {
-                heartbeat: false,
-                log: true,
-            },
-            ..start("ping")
-        }),
-    ]
+    vec![Told::Start(StartInfo {
+        link: "tlog:flight.tlog".into(),
+        probe: ProbeName::Passive,
+        count: None,
+        run: RunKind::Passive {
+            heartbeat: false,
+            log: true,
+        },
+        ..start("ping")
+    })]
     .into_iter()
-    .chain(borrowed.flight.0.iter().map(|e| Told::Event(Event::Flight(e))))
+    .chain(
+        borrowed
+            .flight
+            .0
+            .iter()
+            .map(|e| Told::Event(Event::Flight(e))),
+    )
     .chain([Told::Summary(
         LinkSummary::Passive(Box::new(summary)),
         verdict,

@@ -318,10 +318,7 @@ impl Observer for Metrics {
             Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
             Event::LinkFailed { .. } => self.set_up(false),
             Event::Sources { table, .. } => self.on_sources(table, false),
-            Event::Heard { .. }
-            | Event::WaitingForPeer
-            | Event::Step(_)
-            | Event::Flight(_) => {}
+            Event::Heard { .. } | Event::WaitingForPeer | Event::Step(_) | Event::Flight(_) => {}
         }
         Ok(())
     }

@@ -291,7 +291,10 @@ impl Flight {
             b.ongoing = true;
             s.keep_burst(b);
         }
-        if let Some(from) = s.last_frame.filter(|&f| at.saturating_sub(f) >= s.silence_ns) {
+        if let Some(from) = s
+            .last_frame
+            .filter(|&f| at.saturating_sub(f) >= s.silence_ns)
+        {
             s.keep_silence(Span {
                 start: from,
                 end: at,
@@ -417,7 +420,10 @@ impl Flight {
         self.rxerrors.record(r.rxerrors);
         let c = &mut self.current;
         c.reports += 1;
-        for (k, v) in [r.rssi, r.remrssi, r.noise, r.remnoise].into_iter().enumerate() {
+        for (k, v) in [r.rssi, r.remrssi, r.noise, r.remnoise]
+            .into_iter()
+            .enumerate()
+        {
             if v != UNKNOWN {
                 c.sums[k] += f64::from(v);
                 c.counts[k] += 1;
@@ -579,7 +585,9 @@ mod tests {
         let w = windows(&mut f);
         assert_eq!(w.len(), 3);
         assert_eq!(
-            w.iter().map(|w| (w.start / S, w.end / S, w.received, w.lost)).collect::<Vec<_>>(),
+            w.iter()
+                .map(|w| (w.start / S, w.end / S, w.received, w.lost))
+                .collect::<Vec<_>>(),
             [(0, 10, 500, 0), (10, 20, 500, 0), (20, 30, 450, 50)]
         );
         assert_eq!(w[2].loss_pct, Some(10.0));
@@ -719,12 +727,20 @@ mod tests {
         f.on_frame(VEHICLE, &fix(FixKind::Estimate, 100.0, 100.0), S);
         f.on_frame(VEHICLE, &fix(FixKind::Estimate, 400.0, 140.0), 2 * S);
         // Once the vehicle sends estimates, its raw GPS is not read.
-        f.on_frame(VEHICLE, &fix(FixKind::Gps { fix_type: 3 }, 9_000.0, 0.0), 3 * S);
+        f.on_frame(
+            VEHICLE,
+            &fix(FixKind::Gps { fix_type: 3 }, 9_000.0, 0.0),
+            3 * S,
+        );
         f.close(Totals::default());
         f.on_frame(VEHICLE, &fix(FixKind::Home, 0.0, 100.0), 11 * S);
         f.on_frame(VEHICLE, &fix(FixKind::Estimate, 1_000.0, 100.0), 12 * S);
         // Another system's positions are not the vehicle's.
-        f.on_frame(SysComp::new(2, 1), &fix(FixKind::Estimate, 5e5, 0.0), 13 * S);
+        f.on_frame(
+            SysComp::new(2, 1),
+            &fix(FixKind::Estimate, 5e5, 0.0),
+            13 * S,
+        );
         f.close(Totals::default());
         let w = windows(&mut f);
         let r0 = w[0].range.unwrap();
