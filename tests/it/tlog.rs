@@ -945,3 +945,51 @@ fn a_flight_is_told_window_by_window_with_its_losses_radio_and_distance() {
         assert_eq!(sum("lost"), totals["lost"].as_i64().unwrap());
     }
 }
+
+/// `--plot` on a log: the flight report, drawn from the windows (loss
+/// over time, RSSI over time, loss against distance) and rendered.
+#[test]
+fn the_flight_report_is_drawn_from_the_logs_windows() {
+    let dir = Scratch::new("flight-plot");
+    let path = dir.path("flight.tlog");
+    write_log(&path, &flight_plan("global"));
+    let svg_path = dir.path("flight.svg");
+    let (code, text, err) = run_mavping(&["--plot", svg_path.to_str().unwrap(), &tlog(&path)]);
+    assert_eq!(code, 0, "{err}");
+    // The text's summary: the worst window first (the fourth, 20 %), the
+    // burst, the planned silence.
+    for line in [
+        "flight: 7 windows of 10 s; 2 silences",
+        "flight worst: 30.0-40.0 s (2025-11-30T10:53:50Z to 10:54:00Z): 400 received, 100 lost (20.00%)",
+        "flight burst: 30.0-50.0 s (2025-11-30T10:53:50Z to 10:54:10Z), 20.0 s: 825 received, 175 lost (17.50%)",
+        "flight silence: 50.0-58.0 s (2025-11-30T10:54:10Z to 10:54:18Z), 8.0 s",
+    ] {
+        assert!(text.contains(line), "{line:?} not in\n{text}");
+    }
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
+    for part in [
+        "the flight, 7 windows of 10 s, 2 silences, 1 loss bursts, farthest 1394 m",
+        "sequence loss over time",
+        "radio RSSI over time",
+        "sequence loss against distance",
+        // 200 lost of 3 100 (25 + 100 + 75); the worst window 20 %.
+        "\n6.45\n",
+        "\n20.00\n",
+    ] {
+        assert!(svg.contains(part), "{part:?} is not in the plot");
+    }
+    // Loss, RSSI and remote RSSI lines; bars of loss by distance.
+    assert!(svg.matches("<polyline").count() >= 3, "{svg}");
+    let png = Rendered::of(&svg, "flight");
+    assert!(png.colours.len() > 30, "{}", png.path.display());
+    assert!(
+        png.count(0x0072B2) > 200,
+        "little blue in {}",
+        png.path.display()
+    );
+    assert!(
+        png.dark_in_rows(0..40) > 300,
+        "no title in {}",
+        png.path.display()
+    );
+}

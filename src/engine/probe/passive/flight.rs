@@ -85,6 +85,8 @@ pub struct FlightWindow {
     pub start: Nanos,
     pub end: Nanos,
     pub received: u64,
+    /// Of `received`, frames whose number had been seen already.
+    pub duplicate: u64,
     pub lost: i64,
     /// `100 * lost / (lost + distinct received)`; `None` with neither.
     pub loss_pct: Option<f64>,
@@ -333,6 +335,7 @@ impl Flight {
             start: c.start,
             end,
             received,
+            duplicate,
             lost,
             loss_pct: loss_pct(received.saturating_sub(duplicate), lost),
             radio: (c.reports > 0).then(|| RadioWindow {
