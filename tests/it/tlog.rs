@@ -968,7 +968,7 @@ fn the_flight_report_is_drawn_from_the_logs_windows() {
     }
     let svg = std::fs::read_to_string(&svg_path).unwrap();
     for part in [
-        "the flight, 7 windows of 10 s, 2 silences, 1 loss bursts, farthest 1394 m",
+        "the flight, 7 windows of 10 s, 2 silences, 1 loss burst, farthest 1394 m",
         "sequence loss over time",
         "radio RSSI over time",
         "sequence loss against distance",

@@ -30,8 +30,8 @@ The plan:
                  (or GPS_RAW_INT, 3D fix) of a vehicle moving north and up
                  at those speeds from (lat0, lon0, alt0_m)
                radio: {"rxerrors0": e, "rxerrors_step": d}: the source is a
-                 radio: every frame a RADIO_STATUS, rssi 200 less a point a
-                 second, rxerrors e + d per report (mod 65536), no HEARTBEAT
+                 radio: every frame a RADIO_STATUS, rssi 200 less
+                 rssi_drop_per_s (default 1) a second, rxerrors e + d per report (mod 65536), no HEARTBEAT
   window_us    per window of this many µs of the frames' time (the first
                frame at 0): numbered and written frames, the last written
                position's true distance, the radio's reports and rxerrors
@@ -78,7 +78,7 @@ def position_msg(mav, pos, t):
 
 def radio_msg(mav, radio, t, n):
     rxerrors = (radio.get("rxerrors0", 0) + n * radio.get("rxerrors_step", 0)) % 65536
-    rssi = max(0, 200 - int(t / 1e6))
+    rssi = max(0, 200 - int(radio.get("rssi_drop_per_s", 1) * t / 1e6))
     return mav.radio_status_encode(rssi, 190, 80, 40, 41, rxerrors, 0), rxerrors
 
 

@@ -302,7 +302,7 @@ impl<W: Write> Observer for JsonReporter<W> {
 impl<W: Write> Reporter for JsonReporter<W> {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
         // A log's last, partial, window ends with the log: told here.
-        if let LinkSummary::Passive(s) = summary {
+        if let (LinkSummary::Passive(s), false) = (summary, self.quiet) {
             if let Some(last) = s.flight.as_ref().and_then(|f| f.last.as_ref()) {
                 let line = Line::FlightWindow(self.lines.flight_window(last));
                 self.lines.write(&mut self.out, &line)?;

@@ -319,11 +319,13 @@ pub(super) fn title(link: &str, track: &FlightTrack) -> String {
         .and_then(|w| w.range)
         .map_or_else(String::new, |r| format!(", farthest {:.0} m", r.distance_m));
     format!(
-        "mavping {link}: the flight, {} windows of {:.0} s, {} silences, {} loss bursts{far}",
+        "mavping {link}: the flight, {} windows of {:.0} s, {} silence{}, {} loss burst{}{far}",
         s.windows,
         s.window_ns as f64 / 1e9,
         s.silence_count,
-        s.burst_count
+        if s.silence_count == 1 { "" } else { "s" },
+        s.burst_count,
+        if s.burst_count == 1 { "" } else { "s" },
     )
 }
 

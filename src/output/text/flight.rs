@@ -45,13 +45,13 @@ pub(super) fn write_flight(
 ) -> io::Result<()> {
     writeln!(
         out,
-        "flight: {} windows of {:.0} s; {} silences (nothing but the radio for {:.1} s or more), \
-         {} loss bursts (windows losing {:.0}% or more in a row)",
+        "flight: {} windows of {:.0} s; {} (nothing but the radio for {:.1} s or more), {} \
+         (windows losing {:.0}% or more in a row)",
         f.windows,
         f.window_ns as f64 / 1e9,
-        f.silence_count,
+        counted(f.silence_count, "silence"),
         f.silence_ns as f64 / 1e9,
-        f.burst_count,
+        counted(f.burst_count, "loss burst"),
         f.burst_loss_pct,
     )?;
     write_range(out, f, clock)?;
@@ -77,6 +77,11 @@ pub(super) fn write_flight(
         writeln!(out, "flight: {} windows not told (output behind)", f.untold)?;
     }
     Ok(())
+}
+
+/// `1 silence`, `2 silences`.
+fn counted(n: u64, what: &str) -> String {
+    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }
 
 /// Where distances are from, and the farthest window.
