@@ -946,6 +946,36 @@ fn a_flight_is_told_window_by_window_with_its_losses_radio_and_distance() {
     }
 }
 
+/// A HOME_POSITION before the first fix: distances are from home (the
+/// start of the flight), not from the first position 4 m north of it.
+#[test]
+fn distances_are_from_home_when_the_log_has_one() {
+    let dir = Scratch::new("flight-home");
+    let path = dir.path("home.tlog");
+    let mut plan = flight_plan("global");
+    plan["sources"][0]["position"]["home_frame"] = json!(1);
+    let t = write_log(&path, &plan);
+    assert_eq!(t["sources"]["1/1"]["home"], true);
+    let lines = json_lines_of(&[], &tlog(&path));
+    let windows: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["type"] == "flight_window")
+        .collect();
+    assert_eq!(windows.len(), 7);
+    for (k, w) in windows.iter().enumerate() {
+        let truth = &t["sources"]["1/1"]["windows"][k.to_string()];
+        let got = w["range"]["distance_m"].as_f64().unwrap();
+        let want = truth["distance_m"].as_f64().unwrap();
+        assert!((got - want).abs() < 1.0, "window {k}: {got} vs {want}");
+    }
+    // The last position, at 69.8 s: 1396 m north, 69.8 m up.
+    let last = windows[6]["range"]["distance_m"].as_f64().unwrap();
+    assert!((last - 1396f64.hypot(69.8)).abs() < 0.1, "{last}");
+    let summary = lines.last().unwrap();
+    assert_eq!(summary["flight"]["origin"]["kind"], "home");
+    assert_eq!(summary["flight"]["origin"]["lat_deg"], 47.0);
+}
+
 /// `--plot` on a log: the flight report, drawn from the windows (loss
 /// over time, RSSI over time, loss against distance) and rendered.
 #[test]

@@ -28,7 +28,8 @@ The plan:
                  "north_mps", "climb_mps", "message": "global" or "gps"}:
                  every k-th frame (not a HEARTBEAT) is a GLOBAL_POSITION_INT
                  (or GPS_RAW_INT, 3D fix) of a vehicle moving north and up
-                 at those speeds from (lat0, lon0, alt0_m)
+                 at those speeds from (lat0, lon0, alt0_m); "home_frame": n
+                 makes frame n a HOME_POSITION at (lat0, lon0, alt0_m)
                radio: {"rxerrors0": e, "rxerrors_step": d}: the source is a
                  radio: every frame a RADIO_STATUS, rssi 200 less
                  rssi_drop_per_s (default 1) a second, rxerrors e + d per report (mod 65536), no HEARTBEAT
@@ -100,6 +101,12 @@ def frames_of(src, mav):
             msg = mav.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR,
                                        mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, 0)
             next_hb += 1e6
+        elif pos is not None and n == pos.get("home_frame"):
+            msg = mav.home_position_encode(int(round(pos["lat0"] * 1e7)),
+                                           int(round(pos["lon0"] * 1e7)),
+                                           int(round(pos["alt0_m"] * 1000)),
+                                           0, 0, 0, [1, 0, 0, 0], 0, 0, 0)
+            facts = {"home": True}
         elif pos is not None and n % pos["every"] == 0:
             msg, (north, up) = position_msg(mav, pos, t)
             facts = {"north_m": north, "up_m": up}
@@ -159,8 +166,12 @@ def plan_source(src, out, truth_of, window_us=None):
             continue
         if window_us:
             win["written"] += 1
+            if facts and "home" in facts:
+                truth["first_fix"] = (0.0, 0.0)
+                truth["home"] = True
             if facts and "north_m" in facts:
-                # From the first position written, as a ground station has it.
+                # From the first position written (or home, from when it
+                # is written), as a ground station has it.
                 n0, u0 = truth.setdefault("first_fix", (facts["north_m"], facts["up_m"]))
                 win["ground_m"] = facts["north_m"] - n0
                 win["distance_m"] = math.hypot(facts["north_m"] - n0, facts["up_m"] - u0)
