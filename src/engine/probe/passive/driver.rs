@@ -119,12 +119,7 @@ impl PassiveDriver {
 
 /// The link's totals, for the flight's windows.
 fn totals(table: &SourceTable, at: Nanos) -> Totals {
-    let c = table.summary(at).totals.counts;
-    Totals {
-        received: c.received,
-        duplicate: c.duplicate,
-        lost: c.lost,
-    }
+    Totals::of(&table.summary(at).totals.counts)
 }
 
 /// Tells `observer` the flight's events closed since the last telling.
@@ -243,17 +238,10 @@ impl Driver for PassiveDriver {
             Some(Paths::AllZero) | None => None,
         };
         let identities = identities(&table, &end.roster);
-        let flight = self.flight.as_ref().map(|f| {
-            let c = table.totals.counts;
-            f.summary(
-                at,
-                Totals {
-                    received: c.received,
-                    duplicate: c.duplicate,
-                    lost: c.lost,
-                },
-            )
-        });
+        let flight = self
+            .flight
+            .as_ref()
+            .map(|f| f.summary(at, Totals::of(&table.totals.counts)));
         let summary = PassiveSummary {
             link: end.cfg.link_name.clone(),
             ours: end.cfg.ours,

@@ -29,6 +29,7 @@ use serde::Serialize;
 
 use super::tracker::RADIO_SOURCE;
 use crate::engine::radio::SinceBootCounter;
+use crate::engine::summary::passive::SeqCounts;
 use crate::engine::Nanos;
 use crate::frame::{Fix, FixKind, Msg, RadioStatus, SysComp};
 
@@ -131,6 +132,16 @@ pub struct Totals {
     pub received: u64,
     pub duplicate: u64,
     pub lost: u64,
+}
+
+impl Totals {
+    pub fn of(c: &SeqCounts) -> Self {
+        Totals {
+            received: c.received,
+            duplicate: c.duplicate,
+            lost: c.lost,
+        }
+    }
 }
 
 /// Where the distances are measured from.
