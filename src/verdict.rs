@@ -576,6 +576,7 @@ mod tests {
             log: None,
             per_link: None,
             round_trips: None,
+            flight: None,
         };
         let s = passive(&table);
         assert!(judge_passive(&s, &Thresholds::default()).ok());

@@ -7,6 +7,7 @@ use std::time::Duration;
 
 use super::clock_offset::ClockSummary;
 use super::matcher::MatchEvent;
+use super::probe::passive::flight::FlightEvent;
 use super::radio::RadioReport;
 use super::roster::Identity;
 use super::summary::passive::TableSummary;
@@ -99,6 +100,9 @@ pub enum Event<'a> {
     /// second of session time: passive runs, and echo runs for the
     /// direction split.
     Sources { at: Nanos, table: &'a TableSummary },
+    /// A telemetry log's timeline: a window of log time closed, or a
+    /// silence or a loss burst ended.
+    Flight(&'a FlightEvent),
     /// The link failed; the session ends (told before its summary, so an
     /// exporter shows it while a run's other links go on).
     LinkFailed { at: Nanos, error: &'a str },

@@ -6,7 +6,7 @@ use mavlink::{MAVLinkV1MessageRaw, MAVLinkV2MessageRaw, MavHeader, MavlinkVersio
 use num_traits::FromPrimitive;
 
 use super::scanner::{IFLAG_SIGNED, STX_V1};
-use super::{ids, Frame, Msg, RadioStatus, SysComp};
+use super::{ids, Fix, FixKind, Frame, Msg, RadioStatus, SysComp};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Version {
@@ -127,8 +127,35 @@ fn to_mavlink(msg: &Msg) -> dialect::MavMessage {
             ..Default::default()
         }),
         Msg::RadioStatus(r) => M::RADIO_STATUS(r.into()),
+        Msg::Fix(f) => fix_message(f),
         Msg::Attitude { .. } | Msg::GlobalPositionInt { .. } | Msg::Filler { .. } => load(msg),
         Msg::Other => unreachable!("Msg::Other is never sent"),
+    }
+}
+
+/// A position as the message it came from.
+fn fix_message(f: Fix) -> dialect::MavMessage {
+    use dialect::MavMessage as M;
+    match f.kind {
+        FixKind::Estimate => M::GLOBAL_POSITION_INT(dialect::GLOBAL_POSITION_INT_DATA {
+            lat: f.lat,
+            lon: f.lon,
+            alt: f.alt_mm,
+            ..Default::default()
+        }),
+        FixKind::Gps { fix_type } => M::GPS_RAW_INT(dialect::GPS_RAW_INT_DATA {
+            lat: f.lat,
+            lon: f.lon,
+            alt: f.alt_mm,
+            fix_type: dialect::GpsFixType::from_u8(fix_type).unwrap_or_default(),
+            ..Default::default()
+        }),
+        FixKind::Home => M::HOME_POSITION(dialect::HOME_POSITION_DATA {
+            latitude: f.lat,
+            longitude: f.lon,
+            altitude: f.alt_mm,
+            ..Default::default()
+        }),
     }
 }
 
@@ -242,6 +269,9 @@ fn decode_payload(version: Version, msgid: u32, payload: &[u8]) -> Msg {
             | ids::COMMAND_LONG
             | ids::COMMAND_ACK
             | ids::RADIO_STATUS
+            | ids::GLOBAL_POSITION_INT
+            | ids::GPS_RAW_INT
+            | ids::HOME_POSITION
     ) {
         return Msg::Other;
     }
@@ -288,6 +318,26 @@ fn decode_payload(version: Version, msgid: u32, payload: &[u8]) -> Msg {
             target_component: a.target_component,
         },
         Ok(M::RADIO_STATUS(r)) => Msg::RadioStatus(r.into()),
+        Ok(M::GLOBAL_POSITION_INT(p)) => Msg::Fix(Fix {
+            kind: FixKind::Estimate,
+            lat: p.lat,
+            lon: p.lon,
+            alt_mm: p.alt,
+        }),
+        Ok(M::GPS_RAW_INT(g)) => Msg::Fix(Fix {
+            kind: FixKind::Gps {
+                fix_type: g.fix_type as u8,
+            },
+            lat: g.lat,
+            lon: g.lon,
+            alt_mm: g.alt,
+        }),
+        Ok(M::HOME_POSITION(h)) => Msg::Fix(Fix {
+            kind: FixKind::Home,
+            lat: h.latitude,
+            lon: h.longitude,
+            alt_mm: h.altitude,
+        }),
         _ => Msg::Other,
     }
 }
@@ -427,7 +477,7 @@ mod tests {
     }
 
     #[test]
-    fn load_frames_are_full_length_and_decode_as_other_messages() {
+    fn load_frames_are_full_length_and_decode_as_other_messages_or_a_fix() {
         let len = |version, msg: Msg| {
             let mut bytes = Vec::new();
             let header = Header {
@@ -447,12 +497,38 @@ mod tests {
         );
         // Filler: 5 bytes of type and targets, then `len` bytes.
         assert_eq!(len(Version::V2, Msg::Filler { len: 100 }), 12 + 5 + 100);
-        for msg in [
-            Msg::Attitude { time_boot_ms: 7 },
-            Msg::GlobalPositionInt { time_boot_ms: 7 },
-            Msg::Filler { len: 249 },
-        ] {
+        for msg in [Msg::Attitude { time_boot_ms: 7 }, Msg::Filler { len: 249 }] {
             assert_eq!(round_trip(Version::V2, msg).msg, Msg::Other);
+        }
+        // The load's GLOBAL_POSITION_INT is read back as the position it holds.
+        let fix = round_trip(Version::V2, Msg::GlobalPositionInt { time_boot_ms: 7 }).msg;
+        assert_eq!(
+            fix,
+            Msg::Fix(Fix {
+                kind: FixKind::Estimate,
+                lat: 473_977_420,
+                lon: 85_455_940,
+                alt_mm: 488_000,
+            })
+        );
+    }
+
+    #[test]
+    fn positions_decode_from_the_three_messages_in_both_versions() {
+        for kind in [
+            FixKind::Estimate,
+            FixKind::Gps { fix_type: 3 },
+            FixKind::Home,
+        ] {
+            let fix = Fix {
+                kind,
+                lat: -337_000_001,
+                lon: 1_512_000_002,
+                alt_mm: 123_456,
+            };
+            for version in [Version::V1, Version::V2] {
+                assert_eq!(round_trip(version, Msg::Fix(fix)).msg, Msg::Fix(fix));
+            }
         }
     }
 

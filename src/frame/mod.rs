@@ -79,6 +79,9 @@ pub enum Msg {
     GlobalPositionInt {
         time_boot_ms: u32,
     },
+    /// A position received (GLOBAL_POSITION_INT, GPS_RAW_INT or
+    /// HOME_POSITION), for the flight's distance; also sent by tests.
+    Fix(Fix),
     /// Filler bytes (`--load BYTES@RATE`): a V2_EXTENSION of `len` payload
     /// bytes with a message type from the range MAVLink leaves to local
     /// experiments, so no system acts on it.
@@ -104,6 +107,29 @@ pub struct RadioStatus {
     pub fixed: u16,
 }
 
+/// Where a vehicle says it is, or its home. Only the figures a range
+/// needs: the rest of each message stays in the frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Fix {
+    pub kind: FixKind,
+    /// Degrees × 10^7, as on the wire.
+    pub lat: i32,
+    pub lon: i32,
+    /// Millimetres above mean sea level.
+    pub alt_mm: i32,
+}
+
+/// Which message a [`Fix`] came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FixKind {
+    /// GLOBAL_POSITION_INT: the autopilot's estimate (0/0 before it has one).
+    Estimate,
+    /// GPS_RAW_INT, with its GPS_FIX_TYPE (2 and up: a position).
+    Gps { fix_type: u8 },
+    /// HOME_POSITION.
+    Home,
+}
+
 /// One received frame, CRC checked.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Frame {
@@ -122,11 +148,14 @@ pub struct Frame {
 /// MAVLink message ids mavping names.
 pub mod ids {
     pub const HEARTBEAT: u32 = 0;
+    pub const GPS_RAW_INT: u32 = 24;
+    pub const GLOBAL_POSITION_INT: u32 = 33;
     pub const PING: u32 = 4;
     pub const COMMAND_LONG: u32 = 76;
     pub const COMMAND_ACK: u32 = 77;
     pub const RADIO_STATUS: u32 = 109;
     pub const TIMESYNC: u32 = 111;
+    pub const HOME_POSITION: u32 = 242;
 }
 
 /// MAV_TYPE values mavping treats specially.

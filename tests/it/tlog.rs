@@ -811,3 +811,215 @@ fn interim_figures_come_at_the_logs_own_seconds() {
         "{out}"
     );
 }
+
+/// A flight as pymavlink writes it: a vehicle at 50 Hz moving north at
+/// 20 m/s and climbing at 1 m/s, its position every tenth frame
+/// (GLOBAL_POSITION_INT or GPS_RAW_INT), losses planned in known windows
+/// (25 frames in the second, 100 in the fourth, 75 in the fifth) and an
+/// 8 s silence; its radio reporting each second, its rxerrors wrapping.
+fn flight_plan(message: &str) -> Value {
+    let drops: Vec<u64> = (600..625).chain(1600..1700).chain(2000..2075).collect();
+    json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "window_us": 10_000_000,
+        "sources": [
+            {"sysid": 1, "compid": 1, "rate": 50, "frames": 3500, "drop": drops,
+             "silence": [[2500, 400]],
+             "position": {"every": 10, "lat0": 47.0, "lon0": 8.0, "alt0_m": 500.0,
+                          "north_mps": 20.0, "climb_mps": 1.0, "message": message}},
+            {"sysid": 51, "compid": 68, "rate": 1, "frames": 70, "phase_us": 500_000,
+             "radio": {"rxerrors0": 65_500, "rxerrors_step": 7}}
+        ]
+    })
+}
+
+/// mavping `--json` on a log: every line (checked against the schema).
+fn json_lines_of(args: &[&str], link: &str) -> Vec<Value> {
+    let mut all = vec!["--json"];
+    all.extend_from_slice(args);
+    all.push(link);
+    let (code, out, err) = run_mavping(&all);
+    assert_eq!(code, 0, "{err}");
+    let lines = json_lines(&out);
+    assert_schema(&lines);
+    lines
+}
+
+#[test]
+fn a_flight_is_told_window_by_window_with_its_losses_radio_and_distance() {
+    let dir = Scratch::new("flight");
+    for message in ["global", "gps"] {
+        let path = dir.path(&format!("{message}.tlog"));
+        let t = write_log(&path, &flight_plan(message));
+        let lines = json_lines_of(&[], &tlog(&path));
+        let windows: Vec<&Value> = lines
+            .iter()
+            .filter(|l| l["type"] == "flight_window")
+            .collect();
+        // 70 s of log: seven windows, the last ending with the log.
+        assert_eq!(windows.len(), 7, "{message}");
+        let vehicle = &t["sources"]["1/1"]["windows"];
+        let radio = &t["sources"]["51/68"]["windows"];
+        let mut last_rxerrors = 65_500u64;
+        for (k, w) in windows.iter().enumerate() {
+            let truth = &vehicle[k.to_string()];
+            assert_eq!(w["index"], k as u64);
+            assert_eq!(w["t_s"], 10.0 * k as f64);
+            let written = truth["written"].as_u64().unwrap();
+            assert_eq!(w["received"].as_u64(), Some(written), "window {k}: {w}");
+            // Window 5 holds the silence: its 400 frames are past what the
+            // sequence can span (resynchronised, not counted lost).
+            if k != 5 {
+                let lost = truth["numbered"].as_u64().unwrap() - written;
+                assert_eq!(w["lost"].as_u64(), Some(lost), "window {k}: {w}");
+            }
+            // Within a metre of the truth (positions are 1e-7 degree).
+            let range = &w["range"];
+            let near = |key: &str| {
+                let got = range[key].as_f64().unwrap();
+                let want = truth[key].as_f64().unwrap();
+                assert!(
+                    (got - want).abs() < 1.0,
+                    "window {k} {key}: {got} vs {want}"
+                );
+            };
+            near("ground_m");
+            near("distance_m");
+            // RADIO_STATUS: rssi 200 less a point a second, so each
+            // window's mean; rxerrors' growth through the wrap.
+            let r = &radio[k.to_string()];
+            let reports = r["reports"].as_u64().unwrap();
+            assert_eq!(w["radio"]["reports"].as_u64(), Some(reports), "{w}");
+            assert_eq!(w["radio"]["rssi"].as_f64(), Some(195.5 - 10.0 * k as f64));
+            let rx = r["rxerrors_last"].as_u64().unwrap();
+            let grown = (rx + 65_536 - last_rxerrors) % 65_536;
+            assert_eq!(w["radio"]["rxerrors"].as_u64(), Some(grown), "{w}");
+            last_rxerrors = rx;
+        }
+        // Windows 3 and 4 lose 20 % and 15 %: one burst, 30 s to 50 s.
+        let bursts: Vec<&Value> = lines
+            .iter()
+            .filter(|l| l["type"] == "flight_burst")
+            .collect();
+        assert_eq!(bursts.len(), 1, "{bursts:?}");
+        assert_eq!(
+            (bursts[0]["t_s"].as_f64(), bursts[0]["end_t_s"].as_f64()),
+            (Some(30.0), Some(50.0))
+        );
+        assert_eq!(bursts[0]["lost"], 175);
+        assert_eq!(bursts[0]["time"], "2025-11-30T10:53:50.000000Z");
+        // Silences (the radio still talking): the 100 frames dropped in a
+        // row, from frame 1599 (31.98 s) to frame 1700 (34 s); the planned
+        // one, from frame 2500 (50 s) to frame 2901 (58.02 s).
+        let silences: Vec<(f64, f64, &str)> = lines
+            .iter()
+            .filter(|l| l["type"] == "flight_silence")
+            .map(|l| {
+                let t = |k: &str| l[k].as_f64().unwrap();
+                (t("t_s"), t("end_t_s"), l["end_time"].as_str().unwrap())
+            })
+            .collect();
+        assert_eq!(
+            silences,
+            [
+                (31.98, 34.0, "2025-11-30T10:53:54.000000Z"),
+                (50.0, 58.02, "2025-11-30T10:54:18.020000Z")
+            ]
+        );
+        let summary = lines.last().unwrap();
+        assert_eq!(summary["type"], "passive_summary");
+        let f = &summary["flight"];
+        assert_eq!(f["windows"], 7);
+        assert_eq!(f["origin"]["kind"], "first_fix");
+        assert_eq!(f["farthest"]["index"], 6, "{f}");
+        assert_eq!(f["worst"][0]["index"], 3, "{f}");
+        // The windows add up to the summary's counts.
+        let sum = |key: &str| {
+            windows
+                .iter()
+                .map(|w| w[key].as_i64().unwrap())
+                .sum::<i64>()
+        };
+        let totals = &summary["totals"]["counts"];
+        assert_eq!(sum("received"), totals["received"].as_i64().unwrap());
+        assert_eq!(sum("lost"), totals["lost"].as_i64().unwrap());
+    }
+}
+
+/// A HOME_POSITION before the first fix: distances are from home (the
+/// start of the flight), not from the first position 4 m north of it.
+#[test]
+fn distances_are_from_home_when_the_log_has_one() {
+    let dir = Scratch::new("flight-home");
+    let path = dir.path("home.tlog");
+    let mut plan = flight_plan("global");
+    plan["sources"][0]["position"]["home_frame"] = json!(1);
+    let t = write_log(&path, &plan);
+    assert_eq!(t["sources"]["1/1"]["home"], true);
+    let lines = json_lines_of(&[], &tlog(&path));
+    let windows: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["type"] == "flight_window")
+        .collect();
+    assert_eq!(windows.len(), 7);
+    for (k, w) in windows.iter().enumerate() {
+        let truth = &t["sources"]["1/1"]["windows"][k.to_string()];
+        let got = w["range"]["distance_m"].as_f64().unwrap();
+        let want = truth["distance_m"].as_f64().unwrap();
+        assert!((got - want).abs() < 1.0, "window {k}: {got} vs {want}");
+    }
+    // The last position, at 69.8 s: 1396 m north, 69.8 m up.
+    let last = windows[6]["range"]["distance_m"].as_f64().unwrap();
+    assert!((last - 1396f64.hypot(69.8)).abs() < 0.1, "{last}");
+    let summary = lines.last().unwrap();
+    assert_eq!(summary["flight"]["origin"]["kind"], "home");
+    assert_eq!(summary["flight"]["origin"]["lat_deg"], 47.0);
+}
+
+/// `--plot` on a log: the flight report, drawn from the windows (loss
+/// over time, RSSI over time, loss against distance) and rendered.
+#[test]
+fn the_flight_report_is_drawn_from_the_logs_windows() {
+    let dir = Scratch::new("flight-plot");
+    let path = dir.path("flight.tlog");
+    write_log(&path, &flight_plan("global"));
+    let svg_path = dir.path("flight.svg");
+    let (code, text, err) = run_mavping(&["--plot", svg_path.to_str().unwrap(), &tlog(&path)]);
+    assert_eq!(code, 0, "{err}");
+    // The text's summary: the worst window first (the fourth, 20 %), the
+    // burst, the planned silence.
+    for line in [
+        "flight: 7 windows of 10 s; 2 silences",
+        "flight worst: 30.0-40.0 s (2025-11-30T10:53:50Z to 10:54:00Z): 400 received, 100 lost (20.00%)",
+        "flight burst: 30.0-50.0 s (2025-11-30T10:53:50Z to 10:54:10Z), 20.0 s: 825 received, 175 lost (17.50%)",
+        "flight silence: 50.0-58.0 s (2025-11-30T10:54:10Z to 10:54:18Z), 8.0 s",
+    ] {
+        assert!(text.contains(line), "{line:?} not in\n{text}");
+    }
+    let svg = std::fs::read_to_string(&svg_path).unwrap();
+    for part in [
+        "the flight, 7 windows of 10 s, 2 silences, 1 loss burst, farthest 1394 m",
+        "sequence loss over time",
+        "radio RSSI over time",
+        "sequence loss against distance",
+        // 200 lost of 3 100 (25 + 100 + 75); the worst window 20 %.
+        "\n6.45\n",
+        "\n20.00\n",
+    ] {
+        assert!(svg.contains(part), "{part:?} is not in the plot");
+    }
+    // Loss, RSSI and remote RSSI lines; bars of loss by distance.
+    assert!(svg.matches("<polyline").count() >= 3, "{svg}");
+    let png = Rendered::of(&svg, "flight");
+    assert!(png.colours.len() > 30, "{}", png.path.display());
+    assert!(
+        png.count(0x0072B2) > 200,
+        "little blue in {}",
+        png.path.display()
+    );
+    assert!(
+        png.dark_in_rows(0..40) > 300,
+        "no title in {}",
+        png.path.display()
+    );
+}

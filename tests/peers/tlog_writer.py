@@ -37,6 +37,20 @@ The plan:
                                   after the last
                  orphan [k...]    the reply written, the request not
                The truth per exchange: its exact counts and every RTT.
+               position: {"every": k, "lat0", "lon0", "alt0_m",
+                 "north_mps", "climb_mps", "message": "global" or "gps"}:
+                 every k-th frame (not a HEARTBEAT) is a GLOBAL_POSITION_INT
+                 (or GPS_RAW_INT, 3D fix) of a vehicle moving north and up
+                 at those speeds from (lat0, lon0, alt0_m); "home_frame": n
+                 makes frame n a HOME_POSITION at (lat0, lon0, alt0_m)
+               radio: {"rxerrors0": e, "rxerrors_step": d}: the source is a
+                 radio: every frame a RADIO_STATUS, rssi 200 less
+                 rssi_drop_per_s (default 1) a second, rxerrors e + d per report (mod 65536), no HEARTBEAT
+  window_us    per window of this many µs of the frames' time (the first
+               frame at 0): numbered and written frames, the last written
+               position's true distance, the radio's reports and rxerrors
+               growth, in the truth's "windows" (distances from the first
+               position written, its (north_m, up_m) in "first_fix")
   junk         [[r, hex]]: those bytes after the r-th record written
   cut          bytes cut off the end (a last record cut short)
 
@@ -46,6 +60,7 @@ per link) counts what was numbered and what was written.
 """
 import heapq
 import json
+import math
 import os
 import random
 import struct
@@ -57,22 +72,62 @@ from pymavlink import mavutil  # noqa: E402
 mavlink = mavutil.mavlink
 
 
+EARTH_RADIUS_M = 6371008.8
+
+
+def position_msg(mav, pos, t):
+    """The vehicle's position at t µs, and (north_m, up_m) from its start."""
+    north = pos.get("north_mps", 0) * t / 1e6
+    up = pos.get("climb_mps", 0) * t / 1e6
+    lat = int(round((pos["lat0"] + math.degrees(north / EARTH_RADIUS_M)) * 1e7))
+    lon = int(round(pos["lon0"] * 1e7))
+    alt = int(round((pos["alt0_m"] + up) * 1000))
+    if pos.get("message") == "gps":
+        msg = mav.gps_raw_int_encode(int(t), 3, lat, lon, alt, 100, 100, 0, 0, 10)
+    else:
+        msg = mav.global_position_int_encode(int(t / 1000), lat, lon, alt, int(up * 1000),
+                                             0, 0, 0, 0)
+    return msg, (north, up)
+
+
+def radio_msg(mav, radio, t, n):
+    rxerrors = (radio.get("rxerrors0", 0) + n * radio.get("rxerrors_step", 0)) % 65536
+    rssi = max(0, 200 - int(radio.get("rssi_drop_per_s", 1) * t / 1e6))
+    return mav.radio_status_encode(rssi, 190, 80, 40, 41, rxerrors, 0), rxerrors
+
+
 def frames_of(src, mav):
-    """(time_us, frame number, bytes) of every frame the source numbers."""
+    """(time_us, frame number, bytes, facts) of every frame the source
+    numbers; facts: a position's (north_m, up_m) or a report's rxerrors."""
     period = 1e6 / src["rate"]
     t = src.get("phase_us", 0)
     next_hb = t
     n = 0
+    pos = src.get("position")
+    radio = src.get("radio")
     while n < src["frames"]:
-        if t >= next_hb:
+        facts = None
+        if radio is not None:
+            msg, rxerrors = radio_msg(mav, radio, t, n)
+            facts = {"rxerrors": rxerrors}
+        elif t >= next_hb:
             msg = mav.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR,
                                        mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, 0)
             next_hb += 1e6
+        elif pos is not None and n == pos.get("home_frame"):
+            msg = mav.home_position_encode(int(round(pos["lat0"] * 1e7)),
+                                           int(round(pos["lon0"] * 1e7)),
+                                           int(round(pos["alt0_m"] * 1000)),
+                                           0, 0, 0, [1, 0, 0, 0], 0, 0, 0)
+            facts = {"home": True}
+        elif pos is not None and n % pos["every"] == 0:
+            msg, (north, up) = position_msg(mav, pos, t)
+            facts = {"north_m": north, "up_m": up}
         else:
             msg = mav.attitude_encode(int(t / 1000), 0.1, 0.2, 0.3, 0.01, 0.02, 0.03)
         data = msg.pack(mav, force_mavlink1=src.get("version", 2) == 1)
         mav.seq = (mav.seq + 1) % 256
-        yield int(t), n, bytes(data)
+        yield int(t), n, bytes(data), facts
         n += 1
         t += period
 
@@ -87,7 +142,15 @@ def mav_for(src):
     return mav
 
 
-def plan_source(src, out, truth_of):
+def window_truth(truth, window_us, t):
+    """The truth of the window at t µs, made on first use."""
+    windows = truth.setdefault("windows", {})
+    return windows.setdefault(str(int(t // window_us)), {
+        "numbered": 0, "written": 0, "distance_m": None, "ground_m": None,
+        "reports": 0, "rxerrors_last": None})
+
+
+def plan_source(src, out, truth_of, window_us=None):
     """Puts the source's writes on `out`: (time_us, order, link, bytes)."""
     drop = set(src.get("drop", []))
     dup = set(src.get("dup", []))
@@ -97,8 +160,10 @@ def plan_source(src, out, truth_of):
     truth = truth_of(src)
     held = None
     skip_until = -1
-    for t, n, data in frames_of(src, mav_for(src)):
+    for t, n, data, facts in frames_of(src, mav_for(src)):
         truth["numbered"] += 1
+        win = window_truth(truth, window_us, t) if window_us else {}
+        win["numbered"] = win.get("numbered", 0) + 1
         if n <= skip_until:
             truth["silenced"] += 1
             continue
@@ -112,6 +177,20 @@ def plan_source(src, out, truth_of):
             held = (n, data)
             truth["swapped"] += 1
             continue
+        if window_us:
+            win["written"] += 1
+            if facts and "home" in facts:
+                truth["first_fix"] = (0.0, 0.0)
+                truth["home"] = True
+            if facts and "north_m" in facts:
+                # From the first position written (or home, from when it
+                # is written), as a ground station has it.
+                n0, u0 = truth.setdefault("first_fix", (facts["north_m"], facts["up_m"]))
+                win["ground_m"] = facts["north_m"] - n0
+                win["distance_m"] = math.hypot(facts["north_m"] - n0, facts["up_m"] - u0)
+            if facts and "rxerrors" in facts:
+                win["reports"] += 1
+                win["rxerrors_last"] = facts["rxerrors"]
         writes = [(t, n, data)]
         if n in dup:
             writes.append((t + 1000, n, data))
@@ -222,7 +301,7 @@ def main():
 
     writes = []
     for src in plan.get("sources", []):
-        plan_source(src, writes, truth_of)
+        plan_source(src, writes, truth_of, plan.get("window_us"))
     mavs = {}
     exchanges = [plan_exchange(ex, writes, mavs) for ex in plan.get("exchanges", [])]
     # In time order; equal times in the order planned.

@@ -4,6 +4,7 @@
 //! passive probe's tracker; every report format renders it.
 
 use crate::engine::probe::passive::round_trips::RoundTripSummary;
+use crate::engine::probe::passive::flight::FlightSummary;
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
 use crate::engine::Nanos;
@@ -39,6 +40,8 @@ pub struct PassiveSummary {
     pub per_link: Option<PerLink>,
     /// A log's requests matched to their replies by the stamps.
     pub round_trips: Option<RoundTripSummary>,
+    /// A log's flight: its windows' summary, silences and bursts.
+    pub flight: Option<FlightSummary>,
 }
 
 impl PassiveSummary {

@@ -227,6 +227,7 @@ impl Lines {
                 reason: "no peer heard yet",
             }),
             Event::Step(step) => Line::Step(self.step(step)),
+            Event::Flight(e) => self.flight_event(e),
             // The summary has each clock and the link's error; a stream
             // of estimates is for the exporters.
             Event::Command(_)

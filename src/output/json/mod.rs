@@ -10,6 +10,7 @@
 
 mod command;
 mod echo;
+mod flight;
 mod passive;
 mod round_trips;
 mod sweep;
@@ -54,6 +55,9 @@ enum Line<'a> {
     DuplicateAck(command::AckAgain),
     CommandSummary(Box<command::Summary<'a>>),
     PassiveSummary(Box<passive::Summary<'a>>),
+    FlightWindow(flight::Window),
+    FlightSilence(flight::Timed),
+    FlightBurst(flight::Timed),
 }
 
 impl Line<'_> {
@@ -80,7 +84,10 @@ impl Line<'_> {
             | Line::CommandFailed(_)
             | Line::Skipped(_)
             | Line::LateAck(_)
-            | Line::DuplicateAck(_) => false,
+            | Line::DuplicateAck(_)
+            | Line::FlightWindow(_)
+            | Line::FlightSilence(_)
+            | Line::FlightBurst(_) => false,
         }
     }
 }
@@ -230,6 +237,7 @@ impl Lines {
                 s,
                 verdict,
                 self.link_or(&s.link),
+                self,
             ))),
         }
     }
@@ -294,6 +302,13 @@ impl<W: Write> Observer for JsonReporter<W> {
 
 impl<W: Write> Reporter for JsonReporter<W> {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
+        // A log's last, partial, window ends with the log: told here.
+        if let (LinkSummary::Passive(s), false) = (summary, self.quiet) {
+            if let Some(last) = s.flight.as_ref().and_then(|f| f.last.as_ref()) {
+                let line = Line::FlightWindow(self.lines.flight_window(last));
+                self.lines.write(&mut self.out, &line)?;
+            }
+        }
         self.lines
             .write(&mut self.out, &self.lines.summary(summary, verdict))?;
         self.out.flush()

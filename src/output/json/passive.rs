@@ -129,12 +129,20 @@ pub(super) struct Summary<'a> {
     /// A telemetry log's requests matched to replies by their stamps.
     #[serde(skip_serializing_if = "Option::is_none")]
     round_trips: Option<RoundTrips<'a>>,
+    /// A telemetry log's timeline: its windows' summary, silences, bursts.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    flight: Option<super::flight::Summary<'a>>,
     verdict: &'a Verdict,
     exit_code: u8,
 }
 
 impl<'a> Summary<'a> {
-    pub(super) fn of(s: &'a PassiveSummary, verdict: &'a Verdict, link: &'a str) -> Self {
+    pub(super) fn of(
+        s: &'a PassiveSummary,
+        verdict: &'a Verdict,
+        link: &'a str,
+        lines: &Lines,
+    ) -> Self {
         Summary {
             r#type: "passive_summary",
             schema_version: SCHEMA_VERSION,
@@ -159,6 +167,7 @@ impl<'a> Summary<'a> {
                 .round_trips
                 .as_ref()
                 .map(|rt| RoundTrips::of(rt, s.log.as_ref())),
+            flight: s.flight.as_ref().map(|f| lines.flight_summary(f)),
             verdict,
             exit_code: verdict.exit_code(),
         }

@@ -14,6 +14,8 @@ use crate::engine::hint::{Hint, HintCode};
 use crate::engine::load::{Load, LoadKind, LoadSpec};
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::observe::{CommandEvent, RunKind};
+use crate::engine::probe::passive::flight::{Flight, FlightEvent, FlightSummary, Totals};
+use crate::engine::probe::passive::tracker::RADIO_SOURCE;
 use crate::engine::radio::{RadioReport, Radios, UNKNOWN};
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
@@ -218,6 +220,7 @@ enum Told<'a> {
 struct Borrowed {
     identity: Identity,
     steps: Vec<StepFigures>,
+    flight: (Vec<FlightEvent>, FlightSummary),
 }
 
 impl Borrowed {
@@ -225,8 +228,48 @@ impl Borrowed {
         Borrowed {
             identity: identity(),
             steps: steps(),
+            flight: flight(),
         }
     }
+}
+
+/// A log's timeline: a radio and a vehicle moving away, a window that
+/// loses a fifth (a burst), a silence.
+fn flight() -> (Vec<FlightEvent>, FlightSummary) {
+    use crate::frame::{Fix, FixKind, Msg, RadioStatus};
+    let s = 1_000_000_000;
+    let mut f = Flight::new(10 * s, 2 * s);
+    let mut totals = Totals::default();
+    let mut events = Vec::new();
+    for k in 0..4u64 {
+        let at = k * 10 * s + s;
+        let status = RadioStatus {
+            rssi: 200 - k as u8,
+            remrssi: 190,
+            noise: 40,
+            remnoise: 255,
+            rxerrors: 65_534u16.wrapping_add(k as u16),
+            ..RadioStatus::default()
+        };
+        f.on_frame(RADIO_SOURCE, &Msg::RadioStatus(status), at);
+        let fix = Fix {
+            kind: FixKind::Estimate,
+            lat: 470_000_000 + k as i32 * 10_000,
+            lon: 80_000_000,
+            alt_mm: 500_000,
+        };
+        // The positions are the vehicle's only frames, 10 s apart and
+        // none at 21 s: two silences.
+        if k != 2 {
+            f.on_frame(ONE, &Msg::Fix(fix), at);
+        }
+        totals.received += 80;
+        totals.lost += if k == 1 { 20 } else { 0 };
+        f.close(totals);
+        events.extend(f.drain());
+    }
+    let summary = f.summary(45 * s, totals);
+    (events, summary)
 }
 
 /// A PING (or TIMESYNC) run: every echo event, figures so far, the summary.
@@ -502,7 +545,7 @@ fn command_run() -> Vec<Told<'static>> {
 /// A `--passive` run: two sources with losses, a duplicate, a swap and a
 /// silence, the SiK radio apart, one source beyond a table of two.
 fn passive_run() -> Vec<Told<'static>> {
-    use crate::engine::probe::passive::tracker::{SourceTable, RADIO_SOURCE};
+    use crate::engine::probe::passive::tracker::SourceTable;
     use crate::engine::summary::passive::PassiveSummary;
     let mut table = SourceTable::new(None, 2);
     let ms = 1_000_000;
@@ -537,6 +580,7 @@ fn passive_run() -> Vec<Told<'static>> {
         log: None,
         per_link: None,
         round_trips: None,
+        flight: None,
     };
     let verdict = verdict::judge_passive(
         &summary,
@@ -563,7 +607,7 @@ fn passive_run() -> Vec<Told<'static>> {
 /// A telemetry log read: a vehicle on MAVProxy's links 0 and 1 (link 1
 /// loses a frame), MAVProxy's own frames on link 3, junk and a cut last
 /// record.
-fn log_run() -> Vec<Told<'static>> {
+fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
     use crate::engine::probe::passive::links::per_link;
     use crate::engine::probe::passive::tracker::SourceTable;
     use crate::engine::summary::passive::PassiveSummary;
@@ -603,6 +647,7 @@ fn log_run() -> Vec<Told<'static>> {
         interrupted: false,
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
+        flight: Some(borrowed.flight.1.clone()),
         log: Some(LogFacts {
             records: RecordStats {
                 records: 119,
@@ -625,19 +670,29 @@ fn log_run() -> Vec<Told<'static>> {
     };
     assert!(summary.per_link.is_some());
     let verdict = verdict::judge_passive(&summary, &Thresholds::default());
-    vec![
-        Told::Start(StartInfo {
-            link: "tlog:flight.tlog".into(),
-            probe: ProbeName::Passive,
-            count: None,
-            run: RunKind::Passive {
-                heartbeat: false,
-                log: true,
-            },
-            ..start("ping")
-        }),
-        Told::Summary(LinkSummary::Passive(Box::new(summary)), verdict),
-    ]
+    vec![Told::Start(StartInfo {
+        link: "tlog:flight.tlog".into(),
+        probe: ProbeName::Passive,
+        count: None,
+        run: RunKind::Passive {
+            heartbeat: false,
+            log: true,
+        },
+        ..start("ping")
+    })]
+    .into_iter()
+    .chain(
+        borrowed
+            .flight
+            .0
+            .iter()
+            .map(|e| Told::Event(Event::Flight(e))),
+    )
+    .chain([Told::Summary(
+        LinkSummary::Passive(Box::new(summary)),
+        verdict,
+    )])
+    .collect()
 }
 
 /// The kinds of run, each with what it writes.
@@ -687,7 +742,7 @@ impl Run {
             Run::Sweep(plan) => sweep_run(plan, borrowed),
             Run::Command => command_run(),
             Run::Passive => passive_run(),
-            Run::Log => log_run(),
+            Run::Log => log_run(borrowed),
         }
     }
 }
@@ -776,6 +831,9 @@ struct Seen {
     duplicate_ack: bool,
     command_summary: bool,
     passive_summary: bool,
+    flight_window: bool,
+    flight_silence: bool,
+    flight_burst: bool,
 }
 
 impl Seen {
@@ -802,6 +860,9 @@ impl Seen {
             Line::DuplicateAck(_) => (&mut self.duplicate_ack, "duplicate_ack"),
             Line::CommandSummary(_) => (&mut self.command_summary, "command_summary"),
             Line::PassiveSummary(_) => (&mut self.passive_summary, "passive_summary"),
+            Line::FlightWindow(_) => (&mut self.flight_window, "flight_window"),
+            Line::FlightSilence(_) => (&mut self.flight_silence, "flight_silence"),
+            Line::FlightBurst(_) => (&mut self.flight_burst, "flight_burst"),
         };
         *seen = true;
         r#type
@@ -830,6 +891,9 @@ impl Seen {
             duplicate_ack,
             command_summary,
             passive_summary,
+            flight_window,
+            flight_silence,
+            flight_burst,
         } = *self;
         [
             (start, "start"),
@@ -852,6 +916,9 @@ impl Seen {
             (duplicate_ack, "duplicate_ack"),
             (command_summary, "command_summary"),
             (passive_summary, "passive_summary"),
+            (flight_window, "flight_window"),
+            (flight_silence, "flight_silence"),
+            (flight_burst, "flight_burst"),
         ]
         .into_iter()
         .filter(|&(seen, _)| !seen)

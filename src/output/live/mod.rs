@@ -129,6 +129,7 @@ impl LiveState {
                 | Event::Step(_)
                 | Event::Sources { .. }
                 | Event::Progress { .. }
+                | Event::Flight(_)
                 | Event::LinkFailed { .. },
                 _,
             ) => {}

@@ -10,6 +10,7 @@
 //! The legend's loss and percentiles are the run's own summary figures.
 
 mod draw;
+mod flight;
 mod frame;
 mod passive;
 mod style;
@@ -22,10 +23,12 @@ use std::rc::Rc;
 
 use thiserror::Error;
 
+use self::flight::FlightTrack;
 use self::passive::SourceTrack;
 use super::windows::Windows;
 use super::{Event, Observer, Reporter, RunKind, StartInfo};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::{LinkSummary, ResponderSummary};
 use crate::engine::sweep::verdict::SweepSummary;
@@ -140,6 +143,8 @@ pub struct PlotData {
     sweeps: BTreeMap<usize, SweepSummary>,
     /// A passive run's sources (at most its table's, per link).
     sources: BTreeMap<(usize, SysComp), SourceTrack>,
+    /// A telemetry log's flight, window by window, per link.
+    flights: BTreeMap<usize, FlightTrack>,
 }
 
 impl PlotData {
@@ -205,6 +210,11 @@ impl PlotData {
     /// Draws the SVG document: RTT and loss against the offered rate for
     /// a sweep, else RTT over time and its distribution.
     pub fn svg(&self) -> Result<String, PlotError> {
+        // A log's flight report (the first log's, if there are several).
+        if let Some((&link, track)) = self.flights.iter().find(|(_, t)| !t.is_empty()) {
+            let name = self.links.get(link).map_or("?", String::as_str);
+            return flight::svg(&flight::title(name, track), track);
+        }
         if !self.sources.is_empty() {
             return self.passive_svg();
         }
@@ -328,6 +338,13 @@ impl Observer for PlotLink {
         match *event {
             Event::Match(ref e) => self.data.borrow_mut().on_event(self.index, e),
             Event::Sources { at, table } => self.windows(at, table),
+            Event::Flight(FlightEvent::Window(w)) => self
+                .data
+                .borrow_mut()
+                .flights
+                .entry(self.index)
+                .or_default()
+                .window(w),
             _ => {}
         }
         Ok(())
@@ -347,7 +364,11 @@ impl Reporter for PlotLink {
             // The last, partial, window, and the figures for the legend.
             LinkSummary::Passive(s) => {
                 self.windows((s.duration_s * 1e9) as Nanos, &s.table);
-                self.data.borrow_mut().on_sources(self.index, &s.table);
+                let mut data = self.data.borrow_mut();
+                data.on_sources(self.index, &s.table);
+                if let Some(f) = &s.flight {
+                    data.flights.entry(self.index).or_default().on_summary(f);
+                }
             }
             // The command probe sends no echo requests, so it has no lines.
             LinkSummary::Command(_) => {}

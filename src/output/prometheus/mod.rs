@@ -359,7 +359,7 @@ impl Observer for Metrics {
             Event::LinkFailed { .. } => self.set_up(false),
             Event::Sources { table, .. } => self.on_sources(table, false),
             Event::Progress { requests, .. } => self.requests.session = *requests,
-            Event::Heard { .. } | Event::WaitingForPeer | Event::Step(_) => {}
+            Event::Heard { .. } | Event::WaitingForPeer | Event::Step(_) | Event::Flight(_) => {}
         }
         Ok(())
     }

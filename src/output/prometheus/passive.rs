@@ -360,6 +360,7 @@ mod tests {
             log: None,
             per_link: None,
             round_trips: None,
+            flight: None,
         }
     }
 

@@ -145,6 +145,7 @@ impl<W: Write> TextReporter<W> {
             | Event::Step(_)
             | Event::Sources { .. }
             | Event::Progress { .. }
+            | Event::Flight(_)
             | Event::LinkFailed { .. } => Ok(()),
         }
     }

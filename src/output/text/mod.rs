@@ -5,6 +5,7 @@
 
 mod command;
 mod echo;
+mod flight;
 mod passive;
 mod round_trips;
 mod sweep;

@@ -308,6 +308,9 @@ pub(super) fn write_summary(
             writeln!(out, "silence: {} and {} more", r.source, r.silences_omitted)?;
         }
     }
+    if let (Some(f), Some(log)) = (&s.flight, &s.log) {
+        super::flight::write_flight(out, f, super::flight::LogClock(log.stamps.first_us))?;
+    }
     let u = &s.table.untracked;
     if u.sources > 0 {
         writeln!(

@@ -11,6 +11,7 @@
 use std::io;
 use std::time::Duration;
 
+use super::flight::{self, Flight, Totals};
 use super::links;
 use super::round_trips::RoundTrips;
 use super::ticks::Ticks;
@@ -51,6 +52,8 @@ pub struct PassiveDriver {
     /// Reading a telemetry log: requests matched to replies by their
     /// stamps, our own ids' requests included (a log mavping recorded).
     round_trips: Option<RoundTrips>,
+    /// Reading a telemetry log: the flight's timeline.
+    flight: Option<Flight>,
 }
 
 /// The tables per path of a log.
@@ -72,17 +75,31 @@ impl PassiveDriver {
             ticks: Ticks::default(),
             paths: None,
             round_trips: None,
+            flight: None,
         }
     }
 
     /// The driver of a telemetry log: also a table per MAVProxy link.
     pub fn for_log(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
+        let silence = gap.map_or(flight::DEFAULT_SILENCE_NS, |g| {
+            Nanos::try_from(g.as_nanos()).unwrap_or(Nanos::MAX)
+        });
         PassiveDriver {
             paths: Some(Paths::AllZero),
             round_trips: Some(RoundTrips::new(
                 Nanos::try_from(cfg.timeout.as_nanos()).unwrap_or(Nanos::MAX),
             )),
+            flight: Some(Flight::new(flight::DEFAULT_WINDOW_NS, silence)),
             ..Self::new(cfg, gap)
+        }
+    }
+
+    /// Closes the flight's windows that end by `at`, with the table as it
+    /// stands before anything at `at` is taken.
+    fn close_windows(&mut self, at: Nanos) {
+        let Some(f) = &mut self.flight else { return };
+        while f.due(at) {
+            f.close(totals(&self.table, at));
         }
     }
 
@@ -106,6 +123,23 @@ impl PassiveDriver {
             t.on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
         }
     }
+}
+
+/// The link's totals, for the flight's windows.
+fn totals(table: &SourceTable, at: Nanos) -> Totals {
+    Totals::of(&table.summary(at).totals.counts)
+}
+
+/// Tells `observer` the flight's events closed since the last telling.
+fn tell_flight(flight: Option<&mut Flight>, observer: &mut dyn Observer) -> io::Result<()> {
+    let Some(f) = flight else { return Ok(()) };
+    let mut result = Ok(());
+    for e in f.drain() {
+        if result.is_ok() {
+            result = observer.event(&Event::Flight(&e));
+        }
+    }
+    result
 }
 
 /// Tells `observer` the table, if a telling is due.
@@ -164,6 +198,7 @@ impl Driver for PassiveDriver {
 
     fn expire(&mut self, now: Nanos) {
         self.ticks.expire(now);
+        self.close_windows(now);
     }
 
     fn on_received(&mut self, frame: &Frame, path: PathId, at: Nanos) {
@@ -177,6 +212,10 @@ impl Driver for PassiveDriver {
         // Before the table of all frames takes it: a first frame by another
         // path copies that table as path 0's.
         self.by_path(frame, path, at);
+        self.close_windows(at);
+        if let Some(f) = &mut self.flight {
+            f.on_frame(frame.source, &frame.msg, at);
+        }
         let len = usize::from(frame.len);
         self.table
             .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
@@ -185,7 +224,8 @@ impl Driver for PassiveDriver {
     fn on_frame(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
 
     fn report(&mut self, _radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
-        tell_sources(&self.table, &mut self.ticks, observer)
+        let flight = tell_flight(self.flight.as_mut(), observer);
+        flight.and(tell_sources(&self.table, &mut self.ticks, observer))
     }
 
     fn next_deadline(&self) -> Option<Nanos> {
@@ -209,6 +249,10 @@ impl Driver for PassiveDriver {
             Some(Paths::AllZero) | None => None,
         };
         let identities = identities(&table, &end.roster);
+        let flight = self
+            .flight
+            .as_ref()
+            .map(|f| f.summary(at, Totals::of(&table.totals.counts)));
         let summary = PassiveSummary {
             link: end.cfg.link_name.clone(),
             ours: end.cfg.ours,
@@ -226,6 +270,7 @@ impl Driver for PassiveDriver {
             log: None,
             per_link,
             round_trips: self.round_trips.as_mut().map(|rt| rt.summary(at)),
+            flight,
         };
         (LinkSummary::Passive(Box::new(summary)), Vec::new())
     }

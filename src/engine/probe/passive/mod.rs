@@ -2,6 +2,7 @@
 //! without sending anything on it.
 
 pub mod driver;
+pub mod flight;
 pub mod links;
 mod rate;
 pub mod round_trips;

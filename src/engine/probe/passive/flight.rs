@@ -1,0 +1,803 @@
+//! The flight as a timeline, for a telemetry log: fixed windows of log
+//! time, each with the frames received and lost (every source but the
+//! radio's own, as the link's totals), the radio's RADIO_STATUS figures
+//! and how far the vehicle was; and, between them, the link's silences
+//! and its loss bursts.
+//!
+//! - **Constant memory.** A window is handed out as it closes (the driver
+//!   tells it to the observers) and forgotten; only the window under way,
+//!   a few events not yet told ([`PENDING`]), the [`WORST`] windows by
+//!   loss and the [`KEPT`] longest silences and bursts are kept.
+//! - **Loss per window** is what the source table's totals grew by in it:
+//!   the driver closes a window with the totals as they stand before the
+//!   first frame at or after its end is taken, so the windows add up to
+//!   the summary's figures. A late frame moves a loss back (see the
+//!   tracker), so a window's `lost` can be negative.
+//! - **Distance** is from the first position (GLOBAL_POSITION_INT, else
+//!   GPS_RAW_INT with at least a 2D fix; 0/0 is "no position yet") of the
+//!   first system that sends one, or from its HOME_POSITION once one
+//!   comes: the ground distance by haversine, and the slant range with
+//!   the altitude difference. A window gives its last position's.
+//! - **Silences** are gaps of at least the silence threshold between two
+//!   frames of any source but the radio's own: nothing came over the link.
+//! - **A loss burst** is a run of consecutive windows each losing at least
+//!   [`BURST_LOSS_PCT`] of their frames.
+
+use std::collections::VecDeque;
+
+use serde::Serialize;
+
+use super::tracker::RADIO_SOURCE;
+use crate::engine::radio::SinceBootCounter;
+use crate::engine::summary::passive::SeqCounts;
+use crate::engine::Nanos;
+use crate::frame::{Fix, FixKind, Msg, RadioStatus, SysComp};
+
+/// The windows' length unless told otherwise: a few hundred frames of a
+/// usual telemetry stream, short beside a flight.
+pub const DEFAULT_WINDOW_NS: Nanos = 10_000_000_000;
+/// A gap this long with nothing over the link is a silence (unless `--gap`).
+pub const DEFAULT_SILENCE_NS: Nanos = 2_000_000_000;
+/// A window losing at least this share of its frames is part of a burst.
+pub const BURST_LOSS_PCT: f64 = 10.0;
+/// Windows kept for the summary: the most lossy.
+pub const WORST: usize = 5;
+/// Silences and bursts kept for the summary: the longest.
+pub const KEPT: usize = 5;
+/// Events closed and not yet told: the driver tells them after each batch
+/// of frames, which covers at most a second of log time.
+pub const PENDING: usize = 64;
+/// The mean Earth radius (IUGG), metres.
+pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
+/// 255 in RADIO_STATUS's 8-bit figures means unknown.
+const UNKNOWN: u8 = 255;
+
+/// Where the vehicle was, against the origin.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Range {
+    /// Along the ground (haversine), metres.
+    pub ground_m: f64,
+    /// In a straight line: ground and altitude difference, metres.
+    pub distance_m: f64,
+    /// Above mean sea level, metres.
+    pub alt_m: f64,
+}
+
+/// The radio's figures in a window: the means of its reports (unknown
+/// values left out) and what its error counter grew by.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct RadioWindow {
+    pub reports: u64,
+    pub rssi: Option<f64>,
+    pub remrssi: Option<f64>,
+    pub noise: Option<f64>,
+    pub remnoise: Option<f64>,
+    /// Wrap-safe growth of `rxerrors` from the report before the window's
+    /// first to its last.
+    pub rxerrors: u64,
+}
+
+/// One window of log time, `start` to `end` (ns since the log's first
+/// record).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FlightWindow {
+    /// Its place, from 0.
+    pub index: u64,
+    pub start: Nanos,
+    pub end: Nanos,
+    pub received: u64,
+    /// Of `received`, frames whose number had been seen already.
+    pub duplicate: u64,
+    pub lost: i64,
+    /// `100 * lost / (lost + distinct received)`; `None` with neither.
+    pub loss_pct: Option<f64>,
+    pub radio: Option<RadioWindow>,
+    /// At the window's last position.
+    pub range: Option<Range>,
+}
+
+/// A silence or a loss burst, `start` to `end`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Span {
+    pub start: Nanos,
+    pub end: Nanos,
+    /// Frames received and lost in it (a burst's windows; 0 for a silence).
+    pub received: u64,
+    pub lost: i64,
+    /// Still on at the end of the log.
+    pub ongoing: bool,
+}
+
+impl Span {
+    pub fn length_ns(&self) -> Nanos {
+        self.end.saturating_sub(self.start)
+    }
+
+    pub fn loss_pct(&self) -> Option<f64> {
+        loss_pct(self.received, self.lost)
+    }
+}
+
+/// What the timeline tells, in order.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FlightEvent {
+    Window(FlightWindow),
+    Silence(Span),
+    Burst(Span),
+}
+
+/// The link's totals as the source table has them (the radio left out).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Totals {
+    pub received: u64,
+    pub duplicate: u64,
+    pub lost: u64,
+}
+
+impl Totals {
+    pub fn of(c: &SeqCounts) -> Self {
+        Totals {
+            received: c.received,
+            duplicate: c.duplicate,
+            lost: c.lost,
+        }
+    }
+}
+
+/// Where the distances are measured from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OriginKind {
+    FirstFix,
+    Home,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Origin {
+    pub kind: OriginKind,
+    pub lat_deg: f64,
+    pub lon_deg: f64,
+    pub alt_m: f64,
+    /// The system whose positions are read.
+    pub vehicle: SysComp,
+}
+
+/// The timeline's summary, at the end of the log.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct FlightSummary {
+    pub window_ns: Nanos,
+    pub silence_ns: Nanos,
+    pub burst_loss_pct: f64,
+    /// Windows told, the last (partial) one included.
+    pub windows: u64,
+    /// Windows closed while [`PENDING`] were waiting: counted, not told.
+    pub untold: u64,
+    /// The last window, up to the end of the log (told with the summary).
+    pub last: Option<FlightWindow>,
+    /// The most lossy windows, worst first.
+    pub worst: Vec<FlightWindow>,
+    pub silence_count: u64,
+    pub silences: Vec<Span>,
+    pub burst_count: u64,
+    pub bursts: Vec<Span>,
+    pub origin: Option<Origin>,
+    /// The farthest window (by its last position), and its loss.
+    pub farthest: Option<FlightWindow>,
+    pub positions: u64,
+    pub radio: Option<SysComp>,
+}
+
+/// The window under way.
+#[derive(Debug, Clone, Default)]
+struct Current {
+    index: u64,
+    start: Nanos,
+    /// The table's totals when it began.
+    totals: Totals,
+    reports: u64,
+    sums: [f64; 4],
+    counts: [u64; 4],
+    /// The radio's error counter's growth when it began.
+    rxerrors_at_start: u64,
+    range: Option<Range>,
+}
+
+#[derive(Debug, Clone)]
+pub struct Flight {
+    window_ns: Nanos,
+    silence_ns: Nanos,
+    current: Current,
+    pending: VecDeque<FlightEvent>,
+    untold: u64,
+    told: u64,
+    last_frame: Option<Nanos>,
+    burst: Option<Span>,
+    worst: Vec<FlightWindow>,
+    silence_count: u64,
+    silences: Vec<Span>,
+    burst_count: u64,
+    bursts: Vec<Span>,
+    vehicle: Option<SysComp>,
+    /// The vehicle sends GLOBAL_POSITION_INT: its GPS_RAW_INT is not read.
+    estimates: bool,
+    origin: Option<Origin>,
+    positions: u64,
+    farthest: Option<FlightWindow>,
+    radio: Option<SysComp>,
+    rxerrors: SinceBootCounter,
+}
+
+impl Flight {
+    pub fn new(window_ns: Nanos, silence_ns: Nanos) -> Self {
+        Flight {
+            window_ns: window_ns.max(1),
+            silence_ns,
+            current: Current::default(),
+            pending: VecDeque::new(),
+            untold: 0,
+            told: 0,
+            last_frame: None,
+            burst: None,
+            worst: Vec::new(),
+            silence_count: 0,
+            silences: Vec::new(),
+            burst_count: 0,
+            bursts: Vec::new(),
+            vehicle: None,
+            estimates: false,
+            origin: None,
+            positions: 0,
+            farthest: None,
+            radio: None,
+            rxerrors: SinceBootCounter::default(),
+        }
+    }
+
+    /// The window under way ends at or before `at`: the driver closes it
+    /// (with [`Flight::close`]) before it takes anything at `at`.
+    pub fn due(&self, at: Nanos) -> bool {
+        at >= self.end()
+    }
+
+    fn end(&self) -> Nanos {
+        self.current.start.saturating_add(self.window_ns)
+    }
+
+    /// Closes the window under way, the table's totals being `totals`, and
+    /// begins the next.
+    pub fn close(&mut self, totals: Totals) {
+        let end = self.end();
+        let window = self.window(end, totals);
+        self.next_window(end, totals);
+        self.after_window(&window);
+        self.push(FlightEvent::Window(window));
+    }
+
+    /// Takes one frame in: its time for the silences, a RADIO_STATUS or a
+    /// position for the window under way.
+    pub fn on_frame(&mut self, source: SysComp, msg: &Msg, at: Nanos) {
+        if source != RADIO_SOURCE {
+            self.heard(at);
+        }
+        match msg {
+            Msg::RadioStatus(r) => self.radio_status(source, r),
+            Msg::Fix(f) => self.fix(source, f),
+            _ => {}
+        }
+    }
+
+    /// The events closed since the last call, in order.
+    pub fn drain(&mut self) -> impl Iterator<Item = FlightEvent> + '_ {
+        self.pending.drain(..)
+    }
+
+    /// The summary at `at`, the end of the log: the window under way is
+    /// the last, an open burst or a silence still on is listed as ongoing.
+    pub fn summary(&self, at: Nanos, totals: Totals) -> FlightSummary {
+        let mut s = self.clone();
+        let last = (at > s.current.start || s.told == 0).then(|| {
+            let w = s.window(at.max(s.current.start), totals);
+            s.after_window(&w);
+            w
+        });
+        if let Some(mut b) = s.burst.take() {
+            b.ongoing = true;
+            s.keep_burst(b);
+        }
+        if let Some(from) = s
+            .last_frame
+            .filter(|&f| at.saturating_sub(f) >= s.silence_ns)
+        {
+            s.keep_silence(Span {
+                start: from,
+                end: at,
+                received: 0,
+                lost: 0,
+                ongoing: true,
+            });
+        }
+        FlightSummary {
+            window_ns: s.window_ns,
+            silence_ns: s.silence_ns,
+            burst_loss_pct: BURST_LOSS_PCT,
+            windows: s.told + s.untold + u64::from(last.is_some()),
+            untold: s.untold,
+            last,
+            worst: s.worst,
+            silence_count: s.silence_count,
+            silences: s.silences,
+            burst_count: s.burst_count,
+            bursts: s.bursts,
+            origin: s.origin,
+            farthest: s.farthest,
+            positions: s.positions,
+            radio: s.radio,
+        }
+    }
+
+    fn window(&self, end: Nanos, totals: Totals) -> FlightWindow {
+        let c = &self.current;
+        let received = totals.received.saturating_sub(c.totals.received);
+        let duplicate = totals.duplicate.saturating_sub(c.totals.duplicate);
+        let lost = totals.lost as i64 - c.totals.lost as i64;
+        let mean = |k: usize| (c.counts[k] > 0).then(|| c.sums[k] / c.counts[k] as f64);
+        FlightWindow {
+            index: c.index,
+            start: c.start,
+            end,
+            received,
+            duplicate,
+            lost,
+            loss_pct: loss_pct(received.saturating_sub(duplicate), lost),
+            radio: (c.reports > 0).then(|| RadioWindow {
+                reports: c.reports,
+                rssi: mean(0),
+                remrssi: mean(1),
+                noise: mean(2),
+                remnoise: mean(3),
+                rxerrors: self.rxerrors.grown() - c.rxerrors_at_start,
+            }),
+            range: c.range,
+        }
+    }
+
+    fn next_window(&mut self, start: Nanos, totals: Totals) {
+        self.current = Current {
+            index: self.current.index + 1,
+            start,
+            totals,
+            rxerrors_at_start: self.rxerrors.grown(),
+            ..Current::default()
+        };
+    }
+
+    /// What a closed window changes: the worst and farthest kept, a burst
+    /// begun, grown or ended.
+    fn after_window(&mut self, w: &FlightWindow) {
+        self.keep_worst(*w);
+        if let Some(r) = w.range {
+            let farther = self
+                .farthest
+                .and_then(|f| f.range)
+                .is_none_or(|f| r.distance_m > f.distance_m);
+            if farther {
+                self.farthest = Some(*w);
+            }
+        }
+        let bursting = w.loss_pct.is_some_and(|p| p >= BURST_LOSS_PCT);
+        match (&mut self.burst, bursting) {
+            (Some(b), true) => {
+                b.end = w.end;
+                b.received += w.received;
+                b.lost += w.lost;
+            }
+            (None, true) => {
+                self.burst = Some(Span {
+                    start: w.start,
+                    end: w.end,
+                    received: w.received,
+                    lost: w.lost,
+                    ongoing: false,
+                });
+            }
+            (Some(_), false) => {
+                let b = self.burst.take().expect("a burst under way");
+                self.keep_burst(b);
+                self.push(FlightEvent::Burst(b));
+            }
+            (None, false) => {}
+        }
+    }
+
+    fn heard(&mut self, at: Nanos) {
+        if let Some(last) = self.last_frame {
+            if at.saturating_sub(last) >= self.silence_ns {
+                let s = Span {
+                    start: last,
+                    end: at,
+                    received: 0,
+                    lost: 0,
+                    ongoing: false,
+                };
+                self.keep_silence(s);
+                self.push(FlightEvent::Silence(s));
+            }
+        }
+        self.last_frame = Some(at);
+    }
+
+    /// The first radio heard is the one followed.
+    fn radio_status(&mut self, source: SysComp, r: &RadioStatus) {
+        if *self.radio.get_or_insert(source) != source {
+            return;
+        }
+        self.rxerrors.record(r.rxerrors);
+        let c = &mut self.current;
+        c.reports += 1;
+        for (k, v) in [r.rssi, r.remrssi, r.noise, r.remnoise]
+            .into_iter()
+            .enumerate()
+        {
+            if v != UNKNOWN {
+                c.sums[k] += f64::from(v);
+                c.counts[k] += 1;
+            }
+        }
+    }
+
+    fn fix(&mut self, source: SysComp, f: &Fix) {
+        let usable = match f.kind {
+            FixKind::Home => true,
+            FixKind::Estimate => !(f.lat == 0 && f.lon == 0),
+            FixKind::Gps { fix_type } => fix_type >= 2 && !self.estimates,
+        };
+        if !usable || *self.vehicle.get_or_insert(source) != source {
+            return;
+        }
+        let (lat, lon, alt) = (
+            f64::from(f.lat) / 1e7,
+            f64::from(f.lon) / 1e7,
+            f64::from(f.alt_mm) / 1e3,
+        );
+        if f.kind == FixKind::Home {
+            self.origin = Some(Origin {
+                kind: OriginKind::Home,
+                lat_deg: lat,
+                lon_deg: lon,
+                alt_m: alt,
+                vehicle: source,
+            });
+            return;
+        }
+        self.estimates |= f.kind == FixKind::Estimate;
+        self.positions += 1;
+        let o = *self.origin.get_or_insert(Origin {
+            kind: OriginKind::FirstFix,
+            lat_deg: lat,
+            lon_deg: lon,
+            alt_m: alt,
+            vehicle: source,
+        });
+        let ground = haversine_m((o.lat_deg, o.lon_deg), (lat, lon));
+        self.current.range = Some(Range {
+            ground_m: ground,
+            distance_m: ground.hypot(alt - o.alt_m),
+            alt_m: alt,
+        });
+    }
+
+    fn push(&mut self, e: FlightEvent) {
+        if self.pending.len() >= PENDING {
+            self.untold += 1;
+            return;
+        }
+        if matches!(e, FlightEvent::Window(_)) {
+            self.told += 1;
+        }
+        self.pending.push_back(e);
+    }
+
+    fn keep_worst(&mut self, w: FlightWindow) {
+        let Some(pct) = w.loss_pct.filter(|&p| p > 0.0) else {
+            return;
+        };
+        let at = self
+            .worst
+            .iter()
+            .position(|k| k.loss_pct.unwrap_or(0.0) < pct)
+            .unwrap_or(self.worst.len());
+        if at < WORST {
+            self.worst.insert(at, w);
+            self.worst.truncate(WORST);
+        }
+    }
+
+    fn keep_silence(&mut self, s: Span) {
+        self.silence_count += 1;
+        keep_longest(&mut self.silences, s);
+    }
+
+    fn keep_burst(&mut self, b: Span) {
+        self.burst_count += 1;
+        keep_longest(&mut self.bursts, b);
+    }
+}
+
+/// Keeps the [`KEPT`] longest of `spans`, in time order.
+fn keep_longest(spans: &mut Vec<Span>, s: Span) {
+    spans.push(s);
+    if spans.len() > KEPT {
+        let shortest = spans
+            .iter()
+            .enumerate()
+            .min_by_key(|(_, k)| k.length_ns())
+            .map(|(i, _)| i)
+            .expect("not empty");
+        spans.remove(shortest);
+    }
+    spans.sort_by_key(|k| k.start);
+}
+
+fn loss_pct(distinct: u64, lost: i64) -> Option<f64> {
+    let lost = lost.max(0) as f64;
+    let whole = lost + distinct as f64;
+    (whole > 0.0).then(|| 100.0 * lost / whole)
+}
+
+/// The great-circle distance between two (lat, lon) in degrees, metres.
+pub fn haversine_m(a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (la1, lo1) = (a.0.to_radians(), a.1.to_radians());
+    let (la2, lo2) = (b.0.to_radians(), b.1.to_radians());
+    let h = ((la2 - la1) / 2.0).sin().powi(2)
+        + la1.cos() * la2.cos() * ((lo2 - lo1) / 2.0).sin().powi(2);
+    2.0 * EARTH_RADIUS_M * h.sqrt().min(1.0).asin()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const S: Nanos = 1_000_000_000;
+    const VEHICLE: SysComp = SysComp::new(1, 1);
+
+    fn windows(f: &mut Flight) -> Vec<FlightWindow> {
+        f.drain()
+            .filter_map(|e| match e {
+                FlightEvent::Window(w) => Some(w),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// A 50 Hz stream for `seconds`, `lost(second)` frames lost each
+    /// second, fed as the driver does: due windows closed with the totals
+    /// before the frame is taken.
+    fn stream(f: &mut Flight, seconds: u64, lost: impl Fn(u64) -> u64) -> Totals {
+        let mut t = Totals::default();
+        for n in 0..seconds * 50 {
+            let at = n * S / 50;
+            while f.due(at) {
+                f.close(t);
+            }
+            let second = n / 50;
+            // The first `lost(second)` frames of each second are gaps.
+            if n % 50 < lost(second) {
+                t.lost += 1;
+                continue;
+            }
+            t.received += 1;
+            f.on_frame(VEHICLE, &Msg::Other, at);
+        }
+        t
+    }
+
+    #[test]
+    fn windows_count_what_the_totals_grew_by_and_add_up() {
+        let mut f = Flight::new(10 * S, DEFAULT_SILENCE_NS);
+        // Seconds 20 to 29 lose 5 of 50 each: window 2 loses 50 of 500.
+        let t = stream(&mut f, 35, |s| if (20..30).contains(&s) { 5 } else { 0 });
+        let w = windows(&mut f);
+        assert_eq!(w.len(), 3);
+        assert_eq!(
+            w.iter()
+                .map(|w| (w.start / S, w.end / S, w.received, w.lost))
+                .collect::<Vec<_>>(),
+            [(0, 10, 500, 0), (10, 20, 500, 0), (20, 30, 450, 50)]
+        );
+        assert_eq!(w[2].loss_pct, Some(10.0));
+        let s = f.summary(35 * S, t);
+        let last = s.last.unwrap();
+        assert_eq!((last.start, last.end, last.received), (30 * S, 35 * S, 250));
+        assert_eq!(s.windows, 4);
+        assert_eq!(s.worst.len(), 1);
+        assert_eq!(s.worst[0].index, 2);
+        // 10 % is a burst: the one window.
+        assert_eq!(s.burst_count, 1);
+        assert_eq!((s.bursts[0].start, s.bursts[0].end), (20 * S, 30 * S));
+        assert_eq!(s.bursts[0].lost, 50);
+    }
+
+    #[test]
+    fn consecutive_lossy_windows_are_one_burst_and_its_end_is_told() {
+        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        let t = stream(&mut f, 12, |s| match s {
+            3..=5 => 10,
+            7 => 2,
+            _ => 0,
+        });
+        let bursts: Vec<Span> = f
+            .drain()
+            .filter_map(|e| match e {
+                FlightEvent::Burst(b) => Some(b),
+                _ => None,
+            })
+            .collect();
+        // Seconds 3 to 5 (20 %); second 7 loses 4 %: no burst.
+        assert_eq!(bursts.len(), 1);
+        assert_eq!((bursts[0].start, bursts[0].end), (3 * S, 6 * S));
+        assert_eq!((bursts[0].received, bursts[0].lost), (120, 30));
+        assert_eq!(bursts[0].loss_pct(), Some(20.0));
+        let s = f.summary(12 * S, t);
+        // Worst first; the three 20 % windows, then second 7's.
+        let worst: Vec<u64> = s.worst.iter().map(|w| w.index).collect();
+        assert_eq!(worst, [3, 4, 5, 7]);
+    }
+
+    #[test]
+    fn a_silence_is_told_with_its_start_and_end_and_windows_go_on_empty() {
+        let mut f = Flight::new(10 * S, 2 * S);
+        let mut t = Totals::default();
+        let mut feed = |f: &mut Flight, at: Nanos| {
+            while f.due(at) {
+                f.close(t);
+            }
+            t.received += 1;
+            f.on_frame(VEHICLE, &Msg::Other, at);
+        };
+        feed(&mut f, S);
+        // The radio's own frames are not the link talking.
+        f.on_frame(RADIO_SOURCE, &Msg::Other, 20 * S);
+        feed(&mut f, 25 * S + 500_000_000);
+        let events: Vec<FlightEvent> = f.drain().collect();
+        assert_eq!(events.len(), 3, "{events:?}");
+        // The windows it spans close first, the second one empty.
+        assert!(matches!(events[0], FlightEvent::Window(w) if w.received == 1));
+        assert!(
+            matches!(events[1], FlightEvent::Window(w) if w.received == 0 && w.loss_pct.is_none())
+        );
+        let FlightEvent::Silence(s) = events[2] else {
+            panic!("{events:?}")
+        };
+        assert_eq!((s.start, s.end), (S, 25 * S + 500_000_000));
+        // Quiet again to the end of the log: an ongoing silence.
+        let s = f.summary(40 * S, t);
+        assert_eq!(s.silence_count, 2);
+        assert!(s.silences[1].ongoing);
+        assert_eq!(s.silences[1].end, 40 * S);
+    }
+
+    #[test]
+    fn rxerrors_grow_across_a_wrap_per_window_and_rssi_is_the_mean() {
+        let mut f = Flight::new(10 * S, DEFAULT_SILENCE_NS);
+        let radio = |rssi: u8, rxerrors: u16| {
+            Msg::RadioStatus(RadioStatus {
+                rssi,
+                remrssi: 255,
+                noise: 40,
+                remnoise: 41,
+                rxerrors,
+                ..RadioStatus::default()
+            })
+        };
+        f.on_frame(RADIO_SOURCE, &radio(200, 65_530), S);
+        f.on_frame(RADIO_SOURCE, &radio(180, 65_534), 5 * S);
+        f.close(Totals::default());
+        f.on_frame(RADIO_SOURCE, &radio(150, 4), 15 * S);
+        // Another radio's reports are not mixed in.
+        f.on_frame(SysComp::new(52, 68), &radio(10, 9_000), 16 * S);
+        f.close(Totals::default());
+        let w = windows(&mut f);
+        let r0 = w[0].radio.unwrap();
+        assert_eq!((r0.reports, r0.rssi, r0.remrssi), (2, Some(190.0), None));
+        assert_eq!((r0.noise, r0.rxerrors), (Some(40.0), 4));
+        let r1 = w[1].radio.unwrap();
+        // 65 534 → 4 through the wrap: 6.
+        assert_eq!((r1.reports, r1.rssi, r1.rxerrors), (1, Some(150.0), 6));
+    }
+
+    #[test]
+    fn haversine_matches_known_distances() {
+        // One degree of latitude on this sphere: 2πR/360.
+        let degree = 2.0 * std::f64::consts::PI * EARTH_RADIUS_M / 360.0;
+        assert!((haversine_m((47.0, 8.0), (48.0, 8.0)) - degree).abs() < 1e-6);
+        // Zürich to Geneva, about 224 km as the crow flies.
+        let d = haversine_m((47.3769, 8.5417), (46.2044, 6.1432));
+        assert!((d - 224_000.0).abs() < 2_000.0, "{d}");
+        assert_eq!(haversine_m((10.0, 20.0), (10.0, 20.0)), 0.0);
+    }
+
+    fn fix(kind: FixKind, north_m: f64, alt_m: f64) -> Msg {
+        let lat = 47.0 + (north_m / EARTH_RADIUS_M).to_degrees();
+        Msg::Fix(Fix {
+            kind,
+            lat: (lat * 1e7).round() as i32,
+            lon: 80_000_000,
+            alt_mm: (alt_m * 1e3) as i32,
+        })
+    }
+
+    #[test]
+    fn distance_is_from_the_first_fix_then_from_home() {
+        let mut f = Flight::new(10 * S, DEFAULT_SILENCE_NS);
+        // No position yet, then a 2D-less GPS: neither is a fix.
+        let none = Msg::Fix(Fix {
+            kind: FixKind::Estimate,
+            lat: 0,
+            lon: 0,
+            alt_mm: 0,
+        });
+        f.on_frame(VEHICLE, &none, 0);
+        f.on_frame(VEHICLE, &fix(FixKind::Gps { fix_type: 1 }, 500.0, 100.0), 0);
+        f.on_frame(VEHICLE, &fix(FixKind::Estimate, 100.0, 100.0), S);
+        f.on_frame(VEHICLE, &fix(FixKind::Estimate, 400.0, 140.0), 2 * S);
+        // Once the vehicle sends estimates, its raw GPS is not read.
+        f.on_frame(
+            VEHICLE,
+            &fix(FixKind::Gps { fix_type: 3 }, 9_000.0, 0.0),
+            3 * S,
+        );
+        f.close(Totals::default());
+        f.on_frame(VEHICLE, &fix(FixKind::Home, 0.0, 100.0), 11 * S);
+        f.on_frame(VEHICLE, &fix(FixKind::Estimate, 1_000.0, 100.0), 12 * S);
+        // Another system's positions are not the vehicle's.
+        f.on_frame(
+            SysComp::new(2, 1),
+            &fix(FixKind::Estimate, 5e5, 0.0),
+            13 * S,
+        );
+        f.close(Totals::default());
+        let w = windows(&mut f);
+        let r0 = w[0].range.unwrap();
+        // 300 m north of the first fix, 40 m up: 500 m in a line.
+        assert!((r0.ground_m - 300.0).abs() < 0.02, "{r0:?}");
+        assert!((r0.distance_m - 300f64.hypot(40.0)).abs() < 0.02, "{r0:?}");
+        assert_eq!(r0.alt_m, 140.0);
+        let r1 = w[1].range.unwrap();
+        assert!((r1.ground_m - 1_000.0).abs() < 0.02, "{r1:?}");
+        let s = f.summary(20 * S, Totals::default());
+        assert_eq!(s.origin.unwrap().kind, OriginKind::Home);
+        assert_eq!(s.positions, 3);
+        assert_eq!(s.farthest.unwrap().index, 1);
+    }
+
+    #[test]
+    fn memory_is_bounded_over_a_day_of_windows() {
+        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        let mut t = Totals::default();
+        for n in 0..86_400u64 {
+            // Every window loses something, every other one a burst.
+            t.received += 90;
+            t.lost += 1 + 20 * (n % 2);
+            f.on_frame(VEHICLE, &Msg::Other, n * S + 1);
+            f.close(t);
+            assert!(f.pending.len() <= 3);
+            f.drain().for_each(drop);
+        }
+        let s = f.summary(86_400 * S, t);
+        assert_eq!(s.worst.len(), WORST);
+        assert_eq!(s.bursts.len(), KEPT);
+        assert_eq!(s.burst_count, 43_200);
+        assert_eq!(s.untold, 0);
+    }
+
+    #[test]
+    fn events_past_the_pending_bound_are_counted_not_kept() {
+        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        for _ in 0..PENDING + 10 {
+            f.close(Totals::default());
+        }
+        assert_eq!(f.pending.len(), PENDING);
+        let s = f.summary(f.current.start, Totals::default());
+        assert_eq!((s.windows, s.untold), (PENDING as u64 + 10, 10));
+    }
+}

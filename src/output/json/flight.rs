@@ -1,0 +1,127 @@
+//! A telemetry log's timeline as JSON: a `flight_window` line per window
+//! of log time as it closes (the last, partial, one just before the
+//! summary), a `flight_silence` or `flight_burst` line as each ends, and
+//! the `flight` object of the `passive_summary`. Each time is given twice:
+//! since the log's first record (`t_s`, `end_t_s`) and as the log's wall
+//! clock (`time`, `end_time`).
+
+use serde::Serialize;
+
+use super::{seconds, Lines};
+use crate::engine::probe::passive::flight::{
+    FlightEvent, FlightSummary, FlightWindow, Origin, RadioWindow, Range, Span,
+};
+use crate::frame::SysComp;
+
+#[derive(Serialize)]
+pub(super) struct Window {
+    r#type: &'static str,
+    index: u64,
+    t_s: f64,
+    end_t_s: f64,
+    time: String,
+    end_time: String,
+    received: u64,
+    duplicate: u64,
+    lost: i64,
+    loss_pct: Option<f64>,
+    radio: Option<RadioWindow>,
+    range: Option<Range>,
+}
+
+#[derive(Serialize)]
+pub(super) struct Timed {
+    r#type: &'static str,
+    t_s: f64,
+    end_t_s: f64,
+    time: String,
+    end_time: String,
+    length_s: f64,
+    received: u64,
+    lost: i64,
+    loss_pct: Option<f64>,
+    ongoing: bool,
+}
+
+/// The summary's `flight` object.
+#[derive(Serialize)]
+pub(super) struct Summary<'a> {
+    window_s: f64,
+    silence_s: f64,
+    burst_loss_pct: f64,
+    windows: u64,
+    untold: u64,
+    positions: u64,
+    origin: Option<&'a Origin>,
+    radio: Option<SysComp>,
+    farthest: Option<Window>,
+    worst: Vec<Window>,
+    silence_count: u64,
+    silences: Vec<Timed>,
+    burst_count: u64,
+    bursts: Vec<Timed>,
+}
+
+impl Lines {
+    pub(super) fn flight_window(&self, w: &FlightWindow) -> Window {
+        Window {
+            r#type: "flight_window",
+            index: w.index,
+            t_s: seconds(w.start),
+            end_t_s: seconds(w.end),
+            time: self.wall.rfc3339(w.start),
+            end_time: self.wall.rfc3339(w.end),
+            received: w.received,
+            duplicate: w.duplicate,
+            lost: w.lost,
+            loss_pct: w.loss_pct,
+            radio: w.radio,
+            range: w.range,
+        }
+    }
+
+    fn flight_span(&self, kind: &'static str, s: &Span) -> Timed {
+        Timed {
+            r#type: kind,
+            t_s: seconds(s.start),
+            end_t_s: seconds(s.end),
+            time: self.wall.rfc3339(s.start),
+            end_time: self.wall.rfc3339(s.end),
+            length_s: seconds(s.length_ns()),
+            received: s.received,
+            lost: s.lost,
+            loss_pct: s.loss_pct(),
+            ongoing: s.ongoing,
+        }
+    }
+
+    pub(super) fn flight_event(&self, e: &FlightEvent) -> super::Line<'static> {
+        match e {
+            FlightEvent::Window(w) => super::Line::FlightWindow(self.flight_window(w)),
+            FlightEvent::Silence(s) => {
+                super::Line::FlightSilence(self.flight_span("flight_silence", s))
+            }
+            FlightEvent::Burst(b) => super::Line::FlightBurst(self.flight_span("flight_burst", b)),
+        }
+    }
+
+    pub(super) fn flight_summary<'a>(&self, f: &'a FlightSummary) -> Summary<'a> {
+        let spans = |kind, v: &[Span]| v.iter().map(|s| self.flight_span(kind, s)).collect();
+        Summary {
+            window_s: seconds(f.window_ns),
+            silence_s: seconds(f.silence_ns),
+            burst_loss_pct: f.burst_loss_pct,
+            windows: f.windows,
+            untold: f.untold,
+            positions: f.positions,
+            origin: f.origin.as_ref(),
+            radio: f.radio,
+            farthest: f.farthest.as_ref().map(|w| self.flight_window(w)),
+            worst: f.worst.iter().map(|w| self.flight_window(w)).collect(),
+            silence_count: f.silence_count,
+            silences: spans("flight_silence", &f.silences),
+            burst_count: f.burst_count,
+            bursts: spans("flight_burst", &f.bursts),
+        }
+    }
+}

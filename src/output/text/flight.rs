@@ -1,0 +1,161 @@
+//! A telemetry log's timeline as text, under its summary: the windows,
+//! where distances are from and the farthest window, the worst windows by
+//! loss, and the longest silences and loss bursts, each at its time since
+//! the log began and on the log's own clock.
+
+use std::io::{self, Write};
+use std::time::{Duration, SystemTime};
+
+use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, OriginKind, Span};
+use crate::engine::Nanos;
+
+/// The log's clock: its first record's stamp, µs since the Unix epoch.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LogClock(pub u64);
+
+impl LogClock {
+    fn at(self, t: Nanos) -> String {
+        let at = SystemTime::UNIX_EPOCH + Duration::from_micros(self.0) + Duration::from_nanos(t);
+        humantime::format_rfc3339_seconds(at).to_string()
+    }
+
+    /// `120.0-130.0 s (10:15:20Z-10:15:30Z)`: since the log began, and on
+    /// its clock.
+    fn span(self, start: Nanos, end: Nanos) -> String {
+        let wall = |t| {
+            let full = self.at(t);
+            // The date once, from the start.
+            full.split_once('T')
+                .map_or(full.clone(), |(_, time)| time.to_string())
+        };
+        format!(
+            "{:.1}-{:.1} s ({} to {})",
+            start as f64 / 1e9,
+            end as f64 / 1e9,
+            self.at(start),
+            wall(end)
+        )
+    }
+}
+
+pub(super) fn write_flight(
+    out: &mut impl Write,
+    f: &FlightSummary,
+    clock: LogClock,
+) -> io::Result<()> {
+    writeln!(
+        out,
+        "flight: {} windows of {:.0} s; {} (nothing but the radio for {:.1} s or more), {} \
+         (windows losing {:.0}% or more in a row)",
+        f.windows,
+        f.window_ns as f64 / 1e9,
+        counted(f.silence_count, "silence"),
+        f.silence_ns as f64 / 1e9,
+        counted(f.burst_count, "loss burst"),
+        f.burst_loss_pct,
+    )?;
+    write_range(out, f, clock)?;
+    for w in &f.worst {
+        writeln!(out, "flight worst: {}", window(w, clock))?;
+    }
+    for s in &f.silences {
+        writeln!(out, "flight silence: {}", span(s, clock, false))?;
+    }
+    for b in &f.bursts {
+        writeln!(out, "flight burst: {}", span(b, clock, true))?;
+    }
+    let more = |count: u64, kept: usize| count.saturating_sub(kept as u64);
+    if more(f.silence_count, f.silences.len()) + more(f.burst_count, f.bursts.len()) > 0 {
+        writeln!(
+            out,
+            "flight: {} shorter silences and {} shorter bursts not listed (every one is in --json)",
+            more(f.silence_count, f.silences.len()),
+            more(f.burst_count, f.bursts.len())
+        )?;
+    }
+    if f.untold > 0 {
+        writeln!(out, "flight: {} windows not told (output behind)", f.untold)?;
+    }
+    Ok(())
+}
+
+/// `1 silence`, `2 silences`.
+fn counted(n: u64, what: &str) -> String {
+    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
+}
+
+/// Where distances are from, and the farthest window.
+fn write_range(out: &mut impl Write, f: &FlightSummary, clock: LogClock) -> io::Result<()> {
+    let Some(o) = &f.origin else {
+        return writeln!(out, "flight: no position in the log, no distances");
+    };
+    writeln!(
+        out,
+        "flight: {} positions of {}; distances from its {} ({:.7}, {:.7}, {:.1} m)",
+        f.positions,
+        o.vehicle,
+        match o.kind {
+            OriginKind::FirstFix => "first fix",
+            OriginKind::Home => "HOME_POSITION",
+        },
+        o.lat_deg,
+        o.lon_deg,
+        o.alt_m
+    )?;
+    if let Some(w) = &f.farthest {
+        writeln!(out, "flight farthest: {}", window(w, clock))?;
+    }
+    Ok(())
+}
+
+/// `120.0-130.0 s (...): 450 received, 50 lost (10.00%); rssi 150/148
+/// noise 40/41 rxerrors +12; 1203 m (ground 1200 m, alt 150.0 m)`.
+fn window(w: &FlightWindow, clock: LogClock) -> String {
+    let mut line = format!(
+        "{}: {} received, {} lost ({})",
+        clock.span(w.start, w.end),
+        w.received,
+        w.lost,
+        w.loss_pct
+            .map_or_else(|| "-".into(), |p| format!("{p:.2}%"))
+    );
+    let one = |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.0}"));
+    if let Some(r) = &w.radio {
+        line += &format!(
+            "; rssi {}/{} noise {}/{} rxerrors +{}",
+            one(r.rssi),
+            one(r.remrssi),
+            one(r.noise),
+            one(r.remnoise),
+            r.rxerrors
+        );
+    }
+    if let Some(r) = &w.range {
+        line += &format!(
+            "; {:.0} m (ground {:.0} m, alt {:.1} m)",
+            r.distance_m, r.ground_m, r.alt_m
+        );
+    }
+    line
+}
+
+fn span(s: &Span, clock: LogClock, burst: bool) -> String {
+    let mut line = format!(
+        "{}, {:.1} s",
+        clock.span(s.start, s.end),
+        s.length_ns() as f64 / 1e9
+    );
+    if burst {
+        line += &format!(
+            ": {} received, {} lost ({})",
+            s.received,
+            s.lost,
+            s.loss_pct()
+                .map_or_else(|| "-".into(), |p| format!("{p:.2}%"))
+        );
+    }
+    if s.ongoing {
+        line += ", still on at the end of the log";
+    }
+    line
+}
