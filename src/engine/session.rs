@@ -149,6 +149,7 @@ impl Heard {
             at,
             signature,
             path,
+            ..
         } in inbound.drain(..)
         {
             if !admitted(&mut self.gate, &frame, signature.as_ref()) {
