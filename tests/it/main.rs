@@ -37,6 +37,7 @@ mod streams;
 mod sweep;
 mod tcp_pymavlink;
 mod tlog;
+mod tlog_record;
 mod udp_bcast_ipv6;
 mod udp_pymavlink;
 mod views;
