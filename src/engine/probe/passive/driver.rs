@@ -159,7 +159,10 @@ impl Driver for PassiveDriver {
     }
 
     fn on_received(&mut self, frame: &Frame, path: PathId, at: Nanos) {
-        if frame.source == self.ours {
+        // A log read sends nothing, so nothing in it is an echo of ours:
+        // frames with our ids there are a source (`--tlog` records
+        // mavping's own frames as 250/190).
+        if frame.source == self.ours && self.paths.is_none() {
             self.own_frames += 1;
             return;
         }
