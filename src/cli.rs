@@ -584,6 +584,16 @@ pub struct PingArgs {
     )]
     pub plot: Option<PathBuf>,
 
+    /// Record every frame received and sent to FILE, a telemetry log that
+    /// mavping (tlog:FILE), pymavlink and MAVProxy read
+    #[arg(
+        help_heading = "Output",
+        allow_negative_numbers = true,
+        long,
+        value_name = "FILE"
+    )]
+    pub tlog: Option<PathBuf>,
+
     /// Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent, env = "MAVPING_MAX_LOSS")]
     pub max_loss: Option<f64>,

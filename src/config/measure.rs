@@ -17,6 +17,7 @@ use crate::frame::signing::SigningConfig;
 use crate::frame::{codec, SysComp, Version};
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;
+use crate::transport::tlog::writer;
 use crate::transport::{Family, LinkOptions};
 use crate::verdict::{Expected, Thresholds};
 
@@ -183,6 +184,31 @@ fn refuse_probes_on_logs(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), Confi
         ))),
         None => Ok(()),
     }
+}
+
+/// `--tlog`: the links of a run are told apart in the log by the stamps'
+/// two lowest bits, which hold three (the fourth marks what we sent); a
+/// telemetry log read is not recorded again.
+fn validate_tlog(cli: &PingArgs, given: &[String], links: &[LinkSpec]) -> Result<(), ConfigError> {
+    let Some(path) = &cli.tlog else {
+        return Ok(());
+    };
+    let shown = path.display();
+    if let Some(log) = links.iter().find(|l| l.is_log()) {
+        return Err(invalid(format!(
+            "--tlog {shown}: {log} is a telemetry log already; --tlog records live links"
+        )));
+    }
+    if links.len() > writer::MAX_LINKS {
+        return Err(invalid(format!(
+            "--tlog {shown}: records at most {} links in one log (the stamps' link bits), not {}: \
+             run {} separately",
+            writer::MAX_LINKS,
+            links.len(),
+            given[writer::MAX_LINKS..].join(" ")
+        )));
+    }
+    Ok(())
 }
 
 /// `--plot`: only SVG; the PNG backend needs system font libraries.
@@ -523,6 +549,7 @@ fn output(cli: &PingArgs) -> Result<OutputConfig, ConfigError> {
         hgrm: cli.hgrm.clone(),
         samples: cli.samples.clone(),
         plot: cli.plot.as_deref().map(validate_plot).transpose()?,
+        tlog: cli.tlog.clone(),
         prometheus: cli
             .prometheus
             .as_deref()
@@ -558,6 +585,7 @@ impl TryFrom<&PingArgs> for Config {
         validate_baud(cli.baud)?;
         validate_views(cli)?;
         refuse_probes_on_logs(cli, &specs)?;
+        validate_tlog(cli, &given, &specs)?;
         let probe = validate_probe(cli, &specs)?;
         let session = session(cli, &specs, &probe)?;
         let everywhere = Thresholds {

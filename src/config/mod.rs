@@ -80,6 +80,8 @@ pub struct OutputConfig {
     pub samples: Option<PathBuf>,
     pub plot: Option<PathBuf>,
     pub prometheus: Option<SocketAddr>,
+    /// `--tlog`: record what every link received and sent.
+    pub tlog: Option<PathBuf>,
 }
 
 /// Which probe, with what it needs.

@@ -160,6 +160,7 @@ impl Heard {
             at,
             signature,
             path,
+            ..
         } in inbound.drain(..)
         {
             if !admitted(&mut self.gate, &frame, signature.as_ref()) {

@@ -452,6 +452,8 @@ mod tests {
         fn kind(&self) -> LinkKind {
             LinkKind::Connecting
         }
+
+        fn keep_raw(&mut self) {}
     }
 
     #[tokio::test(start_paused = true)]

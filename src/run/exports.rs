@@ -1,5 +1,5 @@
-//! What a run writes besides its report: `--samples`, `--plot`, `--hgrm`
-//! and the `--prometheus` endpoint. Each is opened (files created) before
+//! What a run writes besides its report: `--samples`, `--plot`, `--hgrm`,
+//! the `--tlog` recording and the `--prometheus` endpoint. Each is opened (files created) before
 //! the first request, so a bad path or a port in use fails before anything
 //! is sent and a long run's result is never lost to one; the plot and the
 //! histograms are written once every link has ended.
@@ -19,12 +19,14 @@ use crate::output::prometheus::{Metrics, PrometheusExporter};
 use crate::output::samples::SampleLog;
 use crate::output::{Reporter, Shared};
 use crate::stderr;
+use crate::transport::recording::{Recording, Tap};
 
 pub struct Exports {
     samples: Option<Shared<BufWriter<File>>>,
     plot: Option<(Plot, BufWriter<File>, PathBuf)>,
     prometheus: Option<PrometheusExporter>,
     hgrm: Option<(BufWriter<File>, PathBuf)>,
+    tlog: Option<Recording>,
     /// Several links: sample rows name their link.
     several: bool,
 }
@@ -48,6 +50,9 @@ pub enum ExportError {
     PlotWritten { path: PathBuf, source: io::Error },
     #[error("cannot write --hgrm {}: {source}", path.display())]
     Hgrm { path: PathBuf, source: io::Error },
+    /// A write of the recording failed during the run or at its end.
+    #[error("cannot write --tlog {}: {source}", path.display())]
+    Tlog { path: PathBuf, source: io::Error },
 }
 
 fn create(path: &Path, what: &'static str) -> Result<BufWriter<File>, ExportError> {
@@ -90,11 +95,23 @@ impl Exports {
             .as_deref()
             .map(|p| create(p, "--hgrm").map(|f| (f, p.to_path_buf())))
             .transpose()?;
+        let tlog = out
+            .tlog
+            .as_deref()
+            .map(|path| {
+                Recording::create(path).map_err(|source| ExportError::Create {
+                    what: "--tlog",
+                    path: path.to_path_buf(),
+                    source,
+                })
+            })
+            .transpose()?;
         Ok(Exports {
             samples,
             plot,
             prometheus,
             hgrm,
+            tlog,
             several: config.links.len() > 1,
         })
     }
@@ -119,6 +136,11 @@ impl Exports {
         reporters
     }
 
+    /// What the `index`-th link records through (`--tlog`).
+    pub fn tap(&self, index: usize) -> Option<Tap> {
+        self.tlog.as_ref().map(|r| r.tap(index))
+    }
+
     /// A link that could not be opened, given the `index` after every
     /// opened one's: the exporter shows it down.
     pub fn unopened(&self, index: usize, name: &str) {
@@ -127,12 +149,20 @@ impl Exports {
         }
     }
 
-    /// Writes the plot and the histograms of every link; an error says
-    /// which file could not be written.
+    /// Flushes the recording, writes the plot and the histograms of every
+    /// link; an error says which file could not be written. A recording
+    /// that failed does not keep the plot and histograms from being
+    /// written: its error is told after theirs.
     pub fn finish<'a>(
         self,
         outcomes: impl IntoIterator<Item = &'a Measurement>,
     ) -> Result<(), ExportError> {
+        let recorded = self.tlog.as_ref().map(|r| {
+            r.finish().map_err(|source| ExportError::Tlog {
+                path: r.path().to_path_buf(),
+                source,
+            })
+        });
         if let Some((plot, mut file, path)) = self.plot {
             let svg = match plot.svg() {
                 Ok(svg) => svg,
@@ -145,7 +175,7 @@ impl Exports {
         if let Some((file, path)) = self.hgrm {
             write_hgrm(file, outcomes).map_err(|source| ExportError::Hgrm { path, source })?;
         }
-        Ok(())
+        recorded.transpose().map(|_| ())
     }
 }
 

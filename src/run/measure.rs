@@ -21,7 +21,7 @@ use futures_util::future::join_all;
 use tokio::sync::Notify;
 
 use super::exports::Exports;
-use super::one_link::measure;
+use super::one_link::measure_recorded;
 use crate::cli::Format;
 use crate::config::{Config, LinkConfig, OutputConfig, Probe};
 use crate::engine::observe::OutputFate;
@@ -32,6 +32,7 @@ use crate::output::live::LiveView;
 use crate::output::text::TextReporter;
 use crate::output::{Fanout, Reporter, Shared, WallClock};
 use crate::stderr;
+use crate::transport::recording::Tap;
 use crate::transport::Link;
 use crate::verdict;
 
@@ -73,6 +74,8 @@ struct LinkRun<'a> {
     /// only after the errors and warnings are printed).
     report: Fanout<'a>,
     controls: Controls,
+    /// Its way into the `--tlog` recording.
+    tap: Option<Tap>,
 }
 
 /// A link whose session ended.
@@ -221,12 +224,20 @@ fn attach<'a>(
             };
             let mut reporters = screen.reporter(&config.output, name, several, wall);
             reporters.extend(exports.reporters(index, name));
+            // Its stamps' link bits are its place on the command line,
+            // whichever links failed to open.
+            let place = config
+                .links
+                .iter()
+                .position(|l| std::ptr::eq(l, link_config))
+                .unwrap_or(index);
             LinkRun {
                 config: link_config,
                 link,
                 wall,
                 report: Fanout::new(reporters),
                 controls: Controls::default(),
+                tap: exports.tap(place),
             }
         })
         .collect();
@@ -253,8 +264,10 @@ async fn measure_one<'a>(run: LinkRun<'a>, probe: &Probe, announce: bool) -> Fin
         wall,
         mut report,
         controls,
+        tap,
     } = run;
-    let measurement = measure(config, link, probe, wall, &mut report, &controls).await;
+    let measurement =
+        measure_recorded(config, link, tap, probe, wall, &mut report, &controls).await;
     if let Some(e) = measurement.summary.link_error().filter(|_| announce) {
         stderr::error(&error_line(true, &config.name, e));
     }

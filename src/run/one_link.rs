@@ -13,12 +13,13 @@ use crate::engine::session::{self, Controls, Measurement};
 use crate::engine::summary::LinkSummary;
 use crate::engine::{sweep, SessionConfig};
 use crate::output::WallClock;
+use crate::transport::recording::{Recorded, Tap};
 use crate::transport::{Link, LinkSpec};
 
 /// An echo probe's run, in steps when `--sweep` or `--load` asks.
 async fn echo_or_steps<P: EchoProbe>(
     session: &SessionConfig,
-    link: &mut Link,
+    link: &mut Recorded<Link>,
     probe: P,
     observer: &mut dyn Observer,
     controls: &Controls,
@@ -32,17 +33,32 @@ async fn echo_or_steps<P: EchoProbe>(
 /// Runs `probe` on the opened `link` until the session ends; its outcome.
 pub async fn measure(
     config: &LinkConfig,
-    mut link: Link,
+    link: Link,
     probe: &Probe,
     wall: WallClock,
     observer: &mut dyn Observer,
     controls: &Controls,
 ) -> Measurement {
+    measure_recorded(config, link, None, probe, wall, observer, controls).await
+}
+
+/// [`measure`], recording what the link receives and sends through `tap`
+/// (`--tlog`) when there is one.
+pub async fn measure_recorded(
+    config: &LinkConfig,
+    link: Link,
+    tap: Option<Tap>,
+    probe: &Probe,
+    wall: WallClock,
+    observer: &mut dyn Observer,
+    controls: &Controls,
+) -> Measurement {
+    let mut link = Recorded::new(link, tap);
     let session = &config.session;
     let mut outcome = match probe {
         Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,
         // A log: a table per MAVProxy link too, and what the log held.
-        Probe::Passive { gap } if matches!(link, Link::Tlog(_)) => {
+        Probe::Passive { gap } if matches!(link.inner(), Link::Tlog(_)) => {
             let driver = PassiveDriver::for_log(session, *gap);
             session::run(session, &mut link, driver, observer, controls).await
         }
@@ -59,11 +75,11 @@ pub async fn measure(
             echo_or_steps(session, &mut link, probe, observer, controls).await
         }
     };
-    if let (Link::Tlog(log), LinkSummary::Passive(s)) = (&link, &mut outcome.summary) {
+    if let (Link::Tlog(log), LinkSummary::Passive(s)) = (link.inner(), &mut outcome.summary) {
         s.log = log.facts();
     }
     // The simulated link's ground truth, for soak scripts (`-v`).
-    if let Link::Sim(sim) = &link {
+    if let Link::Sim(sim) = link.inner() {
         for (id, t) in sim.truth() {
             tracing::info!(
                 link = %config.name,

@@ -10,6 +10,7 @@ mod advice;
 mod mmsg;
 mod out_queue;
 pub mod outbox;
+pub mod recording;
 pub mod route;
 pub mod rx_time;
 pub mod serial;
@@ -46,16 +47,22 @@ pub struct Inbound {
     /// The frame's bytes when it is signed, for the signature check
     /// ([`crate::frame::signing::Gate`]); `None` for unsigned frames.
     pub signature: Option<SignedBytes>,
+    /// The frame's bytes as received, kept only on a link told to
+    /// ([`Transport::keep_raw`]) for a recording (`--tlog`), which takes
+    /// them.
+    pub raw: Option<Box<[u8]>>,
 }
 
 impl Inbound {
-    /// The inbound form of one whole, CRC-checked frame.
-    pub fn of(raw: &[u8], at: Instant, path: PathId) -> Self {
+    /// The inbound form of one whole, CRC-checked frame, with its bytes
+    /// when `keep_raw`.
+    pub fn of(raw: &[u8], at: Instant, path: PathId, keep_raw: bool) -> Self {
         Inbound {
             frame: frame::decode(raw),
             at,
             path,
             signature: SignedBytes::of(raw),
+            raw: keep_raw.then(|| raw.into()),
         }
     }
 }
@@ -216,17 +223,25 @@ pub trait Transport {
     /// (a telemetry log) hands over in one `recv` every frame due by
     /// then and none later; live links ignore it.
     fn next_wake(&mut self, _at: Option<Instant>) {}
+    /// From now on, every frame handed over carries its bytes
+    /// ([`Inbound::raw`]): a recording (`--tlog`) writes them as they came.
+    /// No default: a link that forgot would leave frames out of the file.
+    fn keep_raw(&mut self);
 }
 
-/// Scans one datagram and appends its frames, all stamped `at`.
+/// Scans one datagram and appends its frames, all stamped `at`, with their
+/// bytes when `keep_raw`.
 pub(crate) fn push_datagram(
     data: &[u8],
     at: Instant,
     path: PathId,
+    keep_raw: bool,
     stats: &mut ScanStats,
     out: &mut Vec<Inbound>,
 ) {
-    frame::scan_datagram(data, stats, &mut |raw| out.push(Inbound::of(raw, at, path)));
+    frame::scan_datagram(data, stats, &mut |raw| {
+        out.push(Inbound::of(raw, at, path, keep_raw))
+    });
 }
 
 /// An IP address family, for `-4` and `-6`.
@@ -370,6 +385,10 @@ impl Transport for Link {
 
     fn next_wake(&mut self, at: Option<Instant>) {
         each_link!(self, l => l.next_wake(at))
+    }
+
+    fn keep_raw(&mut self) {
+        each_link!(self, l => l.keep_raw())
     }
 }
 #[cfg(test)]

@@ -67,6 +67,8 @@ pub struct StreamLink<C: Connect> {
     /// Finished down periods; the current one is added by `downtime`.
     downtime: Duration,
     out: OutQueue,
+    /// Frames carry their bytes (`--tlog`).
+    keep_raw: bool,
 }
 
 fn backoff(attempt: u32) -> Duration {
@@ -101,6 +103,7 @@ impl<C: Connect> StreamLink<C> {
             buf: vec![0; READ_BUF].into_boxed_slice(),
             downtime: Duration::ZERO,
             out: OutQueue::default(),
+            keep_raw: false,
         }
     }
 
@@ -285,6 +288,10 @@ impl<C: Connect> Transport for StreamLink<C> {
         C::KIND
     }
 
+    fn keep_raw(&mut self) {
+        self.keep_raw = true;
+    }
+
     /// One peer: every path is the same stream.
     async fn send_to(&mut self, _path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
         self.write(frame)
@@ -302,8 +309,10 @@ impl<C: Connect> Transport for StreamLink<C> {
                     match read {
                         Ok(0) => self.lost(io::ErrorKind::UnexpectedEof.into())?,
                         Ok(n) => {
-                            self.scanner
-                                .push(&self.buf[..n], &mut |raw| out.push(Inbound::of(raw, at, 0)));
+                            let keep = self.keep_raw;
+                            self.scanner.push(&self.buf[..n], &mut |raw| {
+                                out.push(Inbound::of(raw, at, 0, keep))
+                            });
                             return Ok(());
                         }
                         Err(e) if e.kind() == io::ErrorKind::Interrupted => {}

@@ -87,6 +87,8 @@ pub struct TcpServer {
     /// What the scanners of departed clients saw.
     departed: ScanStats,
     buf: Box<[u8]>,
+    /// Frames carry their bytes (`--tlog`).
+    keep_raw: bool,
 }
 
 impl TcpServer {
@@ -109,6 +111,7 @@ impl TcpServer {
             next_path: 0,
             departed: ScanStats::default(),
             buf: vec![0; READ_BUF].into_boxed_slice(),
+            keep_raw: false,
         })
     }
 
@@ -174,6 +177,10 @@ impl Transport for TcpServer {
         LinkKind::Listening
     }
 
+    fn keep_raw(&mut self) {
+        self.keep_raw = true;
+    }
+
     async fn send_to(&mut self, path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
         let sent = Instant::now();
         if let Some(i) = self.clients.iter().position(|c| c.path == path) {
@@ -227,8 +234,9 @@ impl Transport for TcpServer {
                         Ok(n) => {
                             let at = Instant::now();
                             let path = client.path;
+                            let keep = self.keep_raw;
                             client.scanner.push(&self.buf[..n], &mut |raw| {
-                                out.push(Inbound::of(raw, at, path))
+                                out.push(Inbound::of(raw, at, path, keep))
                             });
                             progress = true;
                             break;

@@ -91,6 +91,7 @@ impl UdpLink {
                 batch: RecvBatch::new(),
                 stats: ScanStats::default(),
                 time: RxTime::new(),
+                keep_raw: false,
             },
             send_batch: SendBatch::new(),
             gso: true,
@@ -322,6 +323,8 @@ struct Receiver {
     stats: ScanStats,
     /// Kernel stamps (wall clock) to the monotonic clock, steps excluded.
     time: RxTime,
+    /// Frames carry their bytes (`--tlog`).
+    keep_raw: bool,
 }
 
 impl Receiver {
@@ -360,7 +363,14 @@ impl Receiver {
                 let before = out.len();
                 // Each datagram on its own, also those GRO joined.
                 for datagram in data.chunks(r.segment.unwrap_or(data.len()).max(1)) {
-                    push_datagram(datagram, at, PathId::MAX, &mut self.stats, out);
+                    push_datagram(
+                        datagram,
+                        at,
+                        PathId::MAX,
+                        self.keep_raw,
+                        &mut self.stats,
+                        out,
+                    );
                 }
                 // Only a sender of real MAVLink becomes a peer, not a port scanner.
                 if out.len() > before {
@@ -488,6 +498,10 @@ impl Transport for UdpLink {
             Ok((read, _)) => Ok(read > 0),
             Err(e) => Err(self.failed(e)),
         }
+    }
+
+    fn keep_raw(&mut self) {
+        self.rx.keep_raw = true;
     }
 
     fn kind(&self) -> LinkKind {

@@ -38,6 +38,7 @@ mod streams;
 mod sweep;
 mod tcp_pymavlink;
 mod tlog;
+mod tlog_record;
 mod tlog_rtt;
 mod udp_bcast_ipv6;
 mod udp_pymavlink;

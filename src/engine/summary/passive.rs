@@ -3,8 +3,8 @@
 //! pymavlink's figure beside ours, and the link's totals. Built by the
 //! passive probe's tracker; every report format renders it.
 
-use crate::engine::probe::passive::round_trips::RoundTripSummary;
 use crate::engine::probe::passive::flight::FlightSummary;
+use crate::engine::probe::passive::round_trips::RoundTripSummary;
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
 use crate::engine::Nanos;

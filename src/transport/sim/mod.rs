@@ -297,6 +297,8 @@ pub struct SimLink {
     stats: ScanStats,
     started: Instant,
     scratch: Vec<Inbound>,
+    /// Frames carry their bytes (`--tlog`).
+    keep_raw: bool,
     wire: Wire,
     next_radio: Instant,
     radio_seq: u8,
@@ -351,6 +353,7 @@ impl SimLink {
             stats: ScanStats::default(),
             started: now,
             scratch: Vec::new(),
+            keep_raw: false,
             wire: Wire::default(),
             next_radio: now,
             radio_seq: 0,
@@ -702,7 +705,7 @@ impl Transport for SimLink {
         requests.clear();
         // Requests go through the real scanner, as on a wire.
         let mut ignored = ScanStats::default();
-        push_datagram(bytes, now, 0, &mut ignored, &mut requests);
+        push_datagram(bytes, now, 0, false, &mut ignored, &mut requests);
         // The request's own wire time; a full buffer loses it for everyone.
         let Some(sent_done) = self.uplink(now, bytes.len()) else {
             for request in &requests {
@@ -759,7 +762,7 @@ impl Transport for SimLink {
                 }
                 // Stamped with the simulated arrival time: the RTT is
                 // exactly the simulated delay, free of scheduler noise.
-                push_datagram(&d.bytes, d.at, 0, &mut self.stats, out);
+                push_datagram(&d.bytes, d.at, 0, self.keep_raw, &mut self.stats, out);
             }
             if out.len() > before {
                 return Ok(());
@@ -773,6 +776,10 @@ impl Transport for SimLink {
 
     fn kind(&self) -> LinkKind {
         LinkKind::Simulated
+    }
+
+    fn keep_raw(&mut self) {
+        self.keep_raw = true;
     }
 
     fn rx_clock(&self) -> RxClock {

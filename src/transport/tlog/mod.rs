@@ -25,6 +25,7 @@
 
 pub mod records;
 pub mod stamps;
+pub mod writer;
 
 use std::fmt;
 use std::io::{self, Read};
@@ -128,6 +129,7 @@ impl Record {
             at: origin + Duration::from_nanos(self.t),
             path: self.path,
             signature: self.signature,
+            raw: None,
         }
     }
 }
@@ -404,6 +406,9 @@ impl Transport for TlogLink {
     fn kind(&self) -> LinkKind {
         LinkKind::Log
     }
+
+    /// A log is never recorded (`--tlog` refuses one as input).
+    fn keep_raw(&mut self) {}
 }
 
 #[cfg(test)]

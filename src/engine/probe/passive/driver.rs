@@ -205,7 +205,10 @@ impl Driver for PassiveDriver {
         if let Some(rt) = &mut self.round_trips {
             rt.on_frame(frame, at);
         }
-        if frame.source == self.ours {
+        // A log read sends nothing, so nothing in it is an echo of ours:
+        // frames with our ids there are a source (`--tlog` records
+        // mavping's own frames as 250/190).
+        if frame.source == self.ours && self.paths.is_none() {
             self.own_frames += 1;
             return;
         }
