@@ -124,7 +124,7 @@ impl Table {
         let kind = match &self.probe {
             None => ProbeKind::Ping,
             Some(p) => ProbeKind::from_str(p, true)
-                .map_err(|_| invalid(format!("probe '{p}': expected ping, timesync or command")))?,
+                .map_err(|_| invalid(format!("probe '{p}': expected auto, ping, timesync or command")))?,
         };
         let retry_interval = match &self.retry_interval {
             Some(d) => d.get("retry_interval")?,
