@@ -452,6 +452,7 @@ mod tests {
                 rtt: rtt.summary(),
                 histogram: vec![],
                 identity: None,
+                probe: None,
                 clock: None,
                 direction: None,
             }],
