@@ -123,7 +123,9 @@ fn wire_budget(
 ) -> Option<WireBudget> {
     match probe {
         Probe::Command(_) | Probe::Passive { .. } => None,
-        Probe::Auto | Probe::Ping | Probe::Timesync { .. } => capacity::for_link(spec, default_baud, session),
+        Probe::Auto | Probe::Ping | Probe::Timesync { .. } => {
+            capacity::for_link(spec, default_baud, session)
+        }
     }
 }
 

@@ -34,7 +34,10 @@ pub const SWITCH_AFTER: u64 = 3;
 enum Choice {
     /// Not decided yet: PINGs sent since it was heard, and when the first
     /// of them went.
-    Waiting { pings: u64, first_ping: Option<Nanos> },
+    Waiting {
+        pings: u64,
+        first_ping: Option<Nanos>,
+    },
     /// It answered a PING: PING for the rest of the run.
     Ping,
     /// TIMESYNC for the rest of the run.
@@ -122,7 +125,9 @@ impl AutoProbe {
 
     /// The TIMESYNC `ts1` that carries `token`.
     fn ts1_of(&self, token: u64) -> i64 {
-        let since_zero_ns = token.saturating_sub(self.ping_base_us).saturating_mul(1_000);
+        let since_zero_ns = token
+            .saturating_sub(self.ping_base_us)
+            .saturating_mul(1_000);
         self.timesync_base_ns.saturating_add(since_zero_ns) as i64
     }
 
@@ -175,11 +180,10 @@ impl EchoProbe for AutoProbe {
             // A PING answered (in time or not) keeps its responder on PING
             // unless it was already switched.
             Msg::Ping { .. } => {
-                let answered = matches!(
-                    self.ping.classify(frame, ours),
-                    Classified::Reply(_)
-                );
-                let undecided = self.choice(frame.source).is_none_or(|c| c != Choice::Timesync);
+                let answered = matches!(self.ping.classify(frame, ours), Classified::Reply(_));
+                let undecided = self
+                    .choice(frame.source)
+                    .is_none_or(|c| c != Choice::Timesync);
                 if answered
                     && undecided
                     && (self.choices.len() < MAX_RESPONDERS

@@ -214,7 +214,8 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             if let Some(second) = &second {
                 self.outbox.push(sender.frame(second), To::Every);
             }
-            self.burst.push((planned, token, 1 + u8::from(second.is_some())));
+            self.burst
+                .push((planned, token, 1 + u8::from(second.is_some())));
         }
         if self.burst.is_empty() {
             return Ok(());
