@@ -135,7 +135,7 @@ impl AutoProbe {
     /// it is not one of ours.
     fn token_of(&self, ts1: i64) -> u64 {
         let since_zero_ns = (ts1 as u64).wrapping_sub(self.timesync_base_ns);
-        if ts1 < 0 || (ts1 as u64) < self.timesync_base_ns || since_zero_ns % 1_000 != 0 {
+        if ts1 < 0 || (ts1 as u64) < self.timesync_base_ns || !since_zero_ns.is_multiple_of(1_000) {
             return 0;
         }
         self.ping_base_us.saturating_add(since_zero_ns / 1_000)
