@@ -37,7 +37,7 @@ pub const EXAMPLES: &[(&str, &str)] = &[
     ),
     (
         "mavping --probe timesync udp:127.0.0.1:14550",
-        "ArduPilot, which answers TIMESYNC only; also its clock offset",
+        "TIMESYNC only (what ArduPilot answers; the default finds it alone); also its clock offset",
     ),
     (
         "mavping -f links.txt -Q 10s",
@@ -93,8 +93,10 @@ pub fn command() -> clap::Command {
     long_about = "Measure MAVLink link latency and loss: ping for drones and radios.\n\n\
         Sends MAVLink PING requests on a schedule over UDP, TCP, serial or a simulated link, \
         matches each reply to its request by sequence and responder, and reports per-responder \
-        RTT, loss, late and duplicate replies. --probe timesync uses TIMESYNC instead (ArduPilot \
-        answers nothing else) and also measures each responder's clock offset and drift; \
+        RTT, loss, late and duplicate replies; a responder that does not answer PING (ArduPilot \
+        answers only TIMESYNC) is asked by TIMESYNC instead (--probe auto, the default). \
+        --probe ping sends PING only; --probe timesync TIMESYNC only, and measures each \
+        responder's clock offset and drift; \
         --probe command re-sends a COMMAND_LONG until acknowledged. `mavping respond` is the \
         other end: a MAVLink system that answers all three.",
     after_help = "Examples, connection strings and exit codes: mavping --help"
@@ -301,6 +303,8 @@ pub enum Mode {
 /// What to send.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum ProbeKind {
+    /// PING, and TIMESYNC to each responder that shows it does not answer PING (ArduPilot)
+    Auto,
     /// MAVLink PING (PX4, QGroundControl, MAVSDK answer it)
     Ping,
     /// TIMESYNC: answered everywhere, ArduPilot included; also measures clock offset
@@ -381,7 +385,7 @@ pub struct PingArgs {
     pub gap: Option<Duration>,
 
     /// What to send: ping, timesync (also ArduPilot; measures clock offset), command
-    #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Ping,
+    #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Auto,
           env = "MAVPING_PROBE")]
     pub probe: ProbeKind,
 

@@ -411,6 +411,7 @@ mod tests {
             }),
             histogram: vec![],
             identity: None,
+            probe: None,
             clock: None,
             direction: None,
         }

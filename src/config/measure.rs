@@ -161,7 +161,7 @@ fn refuse_probes_on_logs(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), Confi
         return Ok(());
     };
     let probe = match cli.probe {
-        ProbeKind::Ping => None,
+        ProbeKind::Auto | ProbeKind::Ping => None,
         ProbeKind::Timesync => Some("--probe timesync"),
         ProbeKind::Command => Some("--probe command"),
     };
@@ -382,7 +382,7 @@ pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, Con
     let target = choice.target.map(|t| parse_target(key, t)).transpose()?;
     let flag = |name| key.name(name);
     match choice.kind {
-        ProbeKind::Ping => {
+        ProbeKind::Ping | ProbeKind::Auto => {
             if target.is_some() {
                 return Err(invalid(format!(
                     "{}: PING requests are always broadcast; use it with {} timesync or command",
@@ -390,7 +390,11 @@ pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, Con
                     flag("probe")
                 )));
             }
-            Ok(Probe::Ping)
+            Ok(if choice.kind == ProbeKind::Auto {
+                Probe::Auto
+            } else {
+                Probe::Ping
+            })
         }
         ProbeKind::Timesync => Ok(Probe::Timesync {
             target: target.unwrap_or(SysComp::new(0, 0)),
@@ -719,7 +723,8 @@ mod tests {
                 route: Route::default(),
             }
         );
-        assert_eq!(config("sim:").unwrap().probe, Probe::Ping);
+        assert_eq!(config("sim:").unwrap().probe, Probe::Auto);
+        assert_eq!(config("--probe ping sim:").unwrap().probe, Probe::Ping);
         assert_eq!(
             config("--probe timesync sim:").unwrap().probe,
             Probe::Timesync {

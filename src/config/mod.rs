@@ -87,6 +87,8 @@ pub struct OutputConfig {
 /// Which probe, with what it needs.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Probe {
+    /// PING, and TIMESYNC for responders that do not answer it.
+    Auto,
     Ping,
     Timesync {
         target: SysComp,
@@ -103,6 +105,7 @@ impl Probe {
     /// The name reports give the probe (`probe="ping"`).
     pub fn name(&self) -> ProbeName {
         match self {
+            Probe::Auto => ProbeName::Auto,
             Probe::Ping => ProbeName::Ping,
             Probe::Timesync { .. } => ProbeName::Timesync,
             Probe::Command(_) => ProbeName::Command,
@@ -122,7 +125,9 @@ fn wire_budget(
 ) -> Option<WireBudget> {
     match probe {
         Probe::Command(_) | Probe::Passive { .. } => None,
-        Probe::Ping | Probe::Timesync { .. } => capacity::for_link(spec, default_baud, session),
+        Probe::Auto | Probe::Ping | Probe::Timesync { .. } => {
+            capacity::for_link(spec, default_baud, session)
+        }
     }
 }
 

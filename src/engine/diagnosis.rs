@@ -113,7 +113,12 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
     }
     let identity = source.identity.as_ref()?;
     let who = format!("{id} ({}, {})", identity.vehicle, identity.autopilot_said());
-    let probe = o.probe.as_str().to_uppercase();
+    // Auto asked an ArduPilot by TIMESYNC alone, anyone else by both.
+    let probe = match o.probe {
+        ProbeName::Auto if identity.is_ardupilot() => "TIMESYNC".to_string(),
+        ProbeName::Auto => "PING or TIMESYNC".to_string(),
+        p => p.as_str().to_uppercase(),
+    };
     if identity.mav_type == mav_type::GCS {
         if o.ours == QGC_IDS {
             return Some(our_ids_are_qgcs(&format!("{who} never answered: ")));
@@ -125,7 +130,7 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
         if vehicles {
             return None;
         }
-        let timesync = if o.probe == ProbeName::Timesync {
+        let timesync = if matches!(o.probe, ProbeName::Timesync | ProbeName::Auto) {
             " (MAVProxy answers TIMESYNC with `module load system_time` and \
              --target-system set to our system id)"
         } else {
@@ -555,6 +560,7 @@ mod tests {
             rtt: None,
             histogram: vec![],
             identity: None,
+            probe: None,
             clock: None,
             direction: None,
         }];
@@ -575,6 +581,7 @@ mod tests {
             identity: None,
             clock: None,
             direction: None,
+            probe: None,
         }
     }
 

@@ -3,6 +3,7 @@
 
 use crate::config::{LinkConfig, Probe};
 use crate::engine::observe::Observer;
+use crate::engine::probe::auto::AutoProbe;
 use crate::engine::probe::command::driver as command;
 use crate::engine::probe::echo;
 use crate::engine::probe::passive::driver::{self as passive, PassiveDriver};
@@ -68,6 +69,12 @@ pub async fn measure_recorded(
             // from its start, and so do we there (reproducible output).
             let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
             let probe = TimesyncProbe::new(*target, wall_clock);
+            echo_or_steps(session, &mut link, probe, observer, controls).await
+        }
+        Probe::Auto => {
+            let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
+            let timeout = session.timeout.as_nanos() as u64;
+            let probe = AutoProbe::new(wall.micros_since_epoch(), wall_clock, timeout);
             echo_or_steps(session, &mut link, probe, observer, controls).await
         }
         Probe::Ping => {

@@ -143,7 +143,7 @@ fn one_link_fits_80x24_and_a_wider_terminal_shows_more() {
                 && rows.iter().all(|r| strip(r).chars().count() >= full)
         });
         assert_eq!(assert_fits(&screen, width.into(), height.into()), 1);
-        for text in ["mavping · ping · ", "┌ sim:?responders=2&"] {
+        for text in ["mavping · auto · ", "┌ sim:?responders=2&"] {
             assert!(screen.contains(text), "{text:?} not on screen:\n{screen}");
         }
         quit(&tmux, &["sim:?responders=2&"]);
@@ -162,7 +162,7 @@ fn several_links_fit_80x24() {
     let screen = tmux.wait_for_screen("six rows", |s| rows(s).len() == 6);
     assert_eq!(assert_fits(&screen, 80, 24), 3, "{screen}");
     assert!(
-        screen.starts_with("mavping · 3 links · ping · "),
+        screen.starts_with("mavping · 3 links · auto · "),
         "{screen}"
     );
     for link in links {

@@ -357,7 +357,7 @@ fn live_view_has_a_section_per_link() {
         rows.len() == 2 && rows[0].contains('×')
     });
     for text in [
-        "mavping · 2 links · ping",
+        "mavping · 2 links · auto",
         "┌ sim:?loss=20%&seed=5 ─",
         "┌ sim:?delay=30ms ─",
     ] {
@@ -383,7 +383,7 @@ fn prometheus_serves_a_series_per_link() {
     let run = Exporting::start(&["-i", "0.01", links[0], links[1]]);
     let series = |link: &str| {
         format!(
-            "mavping_received_total{{link=\"{link}\",probe=\"ping\",sysid=\"1\",compid=\"1\"}} "
+            "mavping_received_total{{link=\"{link}\",probe=\"auto\",sysid=\"1\",compid=\"1\"}} "
         )
     };
     // Both links have answered and the lossy one has lost a request.

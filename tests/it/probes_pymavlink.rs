@@ -342,3 +342,140 @@ fn respond_answers_a_pymavlink_prober_over_a_pty() {
     assert_eq!(code, 0);
     assert_eq!(counts, vec![62, 30, 30, 2, 1, 62, 0, 0]);
 }
+
+/// The default probe against the ArduPilot-like peer: its TIMESYNC
+/// requests and replies, by its own count, against what mavping charged.
+fn auto_against_ardupilot_like(autopilot: &str) -> String {
+    let port = free_udp_port();
+    let peer = Peer::start(
+        "ardupilot_like.py",
+        &[
+            &format!("udpin:127.0.0.1:{port}"),
+            "--drop",
+            "4,7",
+            "--autopilot",
+            autopilot,
+        ],
+    );
+    let (code, out, err) = run_mavping(&[
+        "-c",
+        "30",
+        "-i",
+        "0.1",
+        "-W",
+        "500ms",
+        &format!("udpout:127.0.0.1:{port}"),
+    ]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(
+        out.contains("PING 10/s (TIMESYNC where PING is not answered)"),
+        "{out}"
+    );
+    assert!(out.contains("1/1 (quadrotor, "), "{out}");
+    assert!(out.contains(") via TIMESYNC: "), "{out}");
+    let c = text_counts(&out, "1/1").expect(&out);
+    let truth = peer.finish();
+    // Every TIMESYNC request it saw is charged (its first was answered, so
+    // the window opens there), and only those: the PINGs before are not.
+    let requests = truth["timesync_requests"].as_u64().unwrap();
+    assert!(requests >= 8, "{truth}\n{out}");
+    assert_eq!(truth["ping_ignored"], 30, "{truth}");
+    assert_eq!(
+        (c.sent, c.received, c.lost, c.late, c.duplicate, c.stale),
+        (requests, truth["replies"].as_u64().unwrap(), 2, 0, 0, 0),
+        "{truth}\n{out}"
+    );
+    out
+}
+
+#[test]
+fn auto_measures_an_ardupilot_on_the_first_try() {
+    let out = auto_against_ardupilot_like("3");
+    // Its clock too, as --probe timesync would.
+    assert!(out.contains("  clock offset "), "{out}");
+    assert!(!out.contains("hint:"), "{out}");
+}
+
+#[test]
+fn auto_switches_a_silent_px4_heartbeat_after_three_unanswered_pings() {
+    // Says PX4, answers TIMESYNC only: asked by TIMESYNC once 3 PINGs went
+    // unanswered for a whole timeout (500 ms).
+    auto_against_ardupilot_like("12");
+}
+
+#[test]
+fn auto_picks_a_probe_per_responder_on_one_link() {
+    // One listening link, two peers: `mavping respond` (answers PING, 1/1)
+    // and the ArduPilot-like peer (TIMESYNC only, 2/1).
+    let port = free_udp_port();
+    let listen = format!("udp:127.0.0.1:{port}");
+    let pinger = start_mavping(&[
+        "--json", "-c", "30", "-i", "0.1", "-W", "500ms", "--wait", "20s", &listen,
+    ]);
+    std::thread::sleep(Duration::from_millis(300));
+    let ardupilot = Peer::start(
+        "ardupilot_like.py",
+        &[&format!("udpout:127.0.0.1:{port}"), "--sysid", "2"],
+    );
+    let respond = Respond::start(&[&format!("udpout:127.0.0.1:{port}")]);
+    let (code, out, err) = pinger.wait(Duration::from_secs(30));
+    assert_eq!(code, 0, "{out}\n{err}");
+    let s = checked_summary(&out);
+    assert_eq!(s["probe"], "auto");
+    let px4 = responder(&s, "1/1");
+    let ardu = responder(&s, "2/1");
+    assert_eq!(px4["probe"], "ping", "{s}");
+    assert_eq!(ardu["probe"], "timesync", "{s}");
+    let truth = ardupilot.finish();
+    let (_, counts) = respond.finish();
+    // Exact for both: each charged what it answered, by its own count.
+    assert_eq!(
+        n(ardu, "sent"),
+        truth["timesync_requests"].as_u64().unwrap(),
+        "{s}"
+    );
+    assert_eq!(
+        n(ardu, "received"),
+        truth["replies"].as_u64().unwrap(),
+        "{s}"
+    );
+    assert_eq!(n(ardu, "lost"), 0, "{s}");
+    // respond's counts: requests, ping, timesync, ...: it answered every
+    // PING it got and no TIMESYNC reply of its counted for it.
+    assert_eq!(n(px4, "sent"), counts[1], "{s}\n{counts:?}");
+    assert_eq!(n(px4, "received"), counts[1], "{s}\n{counts:?}");
+    assert_eq!(n(px4, "duplicate"), 0, "{s}");
+    assert!(ardu["clock"].is_object() && px4["clock"].is_null(), "{s}");
+}
+
+#[test]
+fn sim_ping_off_is_an_ardupilot_measured_by_timesync() {
+    let link = "sim:?ping=off&clock=virtual&loss=10%&seed=3";
+    let (code, out, err) = run_mavping(&["-v", "--json", "-q", "-c", "200", "-i", "50ms", link]);
+    assert!(code <= 1, "{out}\n{err}");
+    let s = checked_summary(&out);
+    let r = responder(&s, "1/1");
+    assert_eq!(r["identity"]["autopilot_name"], "ardupilotmega", "{s}");
+    assert_eq!(r["probe"], "timesync", "{s}");
+    // The sim's own count of what it answered and dropped, after the first
+    // request it answered (those before are not charged).
+    let answered = sim_truth(&err, "1/1", "answered");
+    let dropped = sim_truth(&err, "1/1", "dropped");
+    let before = sim_truth(&err, "1/1", "dropped_before_first");
+    assert_eq!(n(r, "received"), answered - dropped, "{s}\n{err}");
+    assert_eq!(n(r, "lost"), dropped - before, "{s}\n{err}");
+    assert_eq!(n(r, "sent") + n(r, "not_charged"), 200, "{s}");
+    assert!(n(r, "lost") > 5, "{s}");
+}
+
+#[test]
+fn probe_ping_keeps_pinging_an_ardupilot_and_says_try_timesync() {
+    let (code, out, _) = run_mavping(&["--probe", "ping", "-c", "5", "-i", "0.1", "sim:?ping=off"]);
+    assert_eq!(code, 1, "{out}");
+    assert!(out.contains("from 250/190: PING 10/s, timeout"), "{out}");
+    assert!(out.contains("no replies"), "{out}");
+    assert!(
+        out.contains("never answered PING; ArduPilot answers only TIMESYNC: try --probe timesync"),
+        "{out}"
+    );
+}

@@ -91,13 +91,13 @@ fn prometheus_metrics_are_served_while_the_run_goes_on() {
             .find(|s| s.metric == "mavping_rtt_seconds" && s.labels.get("sysid") == Some(id))
             .expect("an RTT histogram");
         assert_eq!(hist.labels.get("compid"), Some("1"));
-        assert_eq!(hist.labels.get("probe"), Some("ping"));
+        assert_eq!(hist.labels.get("probe"), Some("auto"));
         // prometheus-parse splits label values on `=` and `,`, which the
         // link's query string has: that label is checked on the raw text
         // (and its syntax by promtool below).
         assert!(
             body.contains(&format!(
-                "mavping_rtt_seconds_count{{link=\"sim:?responders=2&delay=1ms&jitter=1ms&loss=20%&dup=0%&reorder=0%&seed=4\",probe=\"ping\",sysid=\"{id}\",compid=\"1\"}}"
+                "mavping_rtt_seconds_count{{link=\"sim:?responders=2&delay=1ms&jitter=1ms&loss=20%&dup=0%&reorder=0%&seed=4\",probe=\"auto\",sysid=\"{id}\",compid=\"1\"}}"
             )),
             "{body}"
         );

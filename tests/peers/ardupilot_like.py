@@ -28,6 +28,8 @@ def main():
     ap.add_argument("--clock", choices=["boot", "unix"], default="boot",
                     help="boot: ns since start (as ArduPilot); unix: the wall clock")
     ap.add_argument("--offset-s", type=float, default=0.0, help="added to the unix clock")
+    ap.add_argument("--autopilot", type=int, default=3,
+                    help="its HEARTBEAT's autopilot (3 ArduPilot; 12 hides it as PX4)")
     args = ap.parse_args()
 
     os.environ["MAVLINK20"] = "1"
@@ -56,7 +58,7 @@ def main():
     signal.signal(signal.SIGTERM, stop)
     signal.signal(signal.SIGINT, stop)
     hb = lambda: mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_QUADROTOR,
-                                    mavutil.mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, 0)
+                                    args.autopilot, 0, 0, 0)
     hb()
     print("ready", flush=True)
     next_hb = time.monotonic() + 1.0

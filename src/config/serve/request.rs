@@ -86,7 +86,7 @@ impl ServeSettings {
         };
         let kind = match params.get("probe") {
             Some(p) => ProbeKind::from_str(p, true)
-                .map_err(|_| format!("probe '{p}': expected ping, timesync or command"))?,
+                .map_err(|_| format!("probe '{p}': expected auto, ping, timesync or command"))?,
             None => module.kind,
         };
         let probe = probe_of(

@@ -59,10 +59,10 @@ pub struct EchoDriver<P> {
     paths: HashMap<SysComp, (PathId, Nanos)>,
     wrong_path_replies: u64,
     pacing: Pacing,
-    /// The burst being sent: its frames, and each request's planned time
-    /// and token (kept between bursts so sending does not allocate).
+    /// The burst being sent: its frames, and each request's planned time,
+    /// token and number of frames (kept between bursts so sending does not allocate).
     outbox: Outbox,
-    burst: Vec<(Nanos, u64)>,
+    burst: Vec<(Nanos, u64, u8)>,
     /// When each responder's clock offset was last told (TIMESYNC), and
     /// the ones due now.
     clocks_told: HashMap<SysComp, Nanos>,
@@ -147,6 +147,16 @@ impl<P: EchoProbe> EchoDriver<P> {
 }
 
 impl<P: EchoProbe> EchoDriver<P> {
+    /// The responders' figures so far, each named by its probe where
+    /// responders may differ in it.
+    fn summaries(&self, roster: &Roster) -> Vec<crate::engine::summary::ResponderSummary> {
+        let mut responders = responder_summaries(&self.matcher, roster);
+        for r in &mut responders {
+            r.probe = self.probe.used_by(r.id);
+        }
+        responders
+    }
+
     fn clock_may_be_due(&mut self, responder: SysComp, at: Nanos) {
         let due = match self.clocks_told.get(&responder) {
             Some(&told) => at >= told.saturating_add(CLOCK_TOLD_EVERY),
@@ -200,7 +210,12 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
                 .wrapping_add((issued + self.burst.len() as u64) as u32);
             let request = self.probe.request(seq, token);
             self.outbox.push(sender.frame(&request), To::Every);
-            self.burst.push((planned, token));
+            let second = self.probe.second_request(seq, token);
+            if let Some(second) = &second {
+                self.outbox.push(sender.frame(second), To::Every);
+            }
+            self.burst
+                .push((planned, token, 1 + u8::from(second.is_some())));
         }
         if self.burst.is_empty() {
             return Ok(());
@@ -210,15 +225,16 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let refused_before = link.refused();
         let sent = clock.ns(link.send_all(&self.outbox).await?);
         // A link whose peer stopped reading refuses the tail of a burst:
-        // those requests never left, so they are neither sent nor lost.
-        let refused = (link.refused() - refused_before).min(self.burst.len() as u64) as usize;
-        let accepted = self.burst.len() - refused;
+        // those requests never left, so they are neither sent nor lost (a
+        // request of two frames left only if both did).
+        let refused_frames = link.refused() - refused_before;
+        let accepted = accepted_requests(&self.burst, refused_frames);
         let events = &mut self.events;
-        for &(planned, token) in &self.burst[..accepted] {
+        for &(planned, token, _) in &self.burst[..accepted] {
             self.pacing.sent(planned, sent);
             self.matcher.on_send(token, sent, &mut |e| events.push(e));
         }
-        for &(planned, _) in &self.burst[accepted..] {
+        for &(planned, _, _) in &self.burst[accepted..] {
             self.pacing.refused(planned, sent);
         }
         Ok(())
@@ -231,6 +247,8 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     }
 
     fn on_received(&mut self, frame: &Frame, _path: PathId, at: Nanos) {
+        // HEARTBEATs included: the auto probe chooses by them.
+        self.probe.heard(frame, self.ours);
         let len = usize::from(frame.len);
         self.sequences
             .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
@@ -274,7 +292,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         Some(Interim::Echo(EchoInterim {
             at,
             requests: self.matcher.issued(),
-            responders: responder_summaries(&self.matcher, roster),
+            responders: self.summaries(roster),
         }))
     }
 
@@ -290,7 +308,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let cfg = ended.cfg;
         let undecided = self.matcher.undecided();
         let in_flight = self.matcher.finish();
-        let mut responders = responder_summaries(&self.matcher, &ended.roster);
+        let mut responders = self.summaries(&ended.roster);
         for r in &mut responders {
             r.clock = self.probe.clock(r.id);
             r.direction = self
@@ -371,6 +389,21 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             .collect();
         (LinkSummary::Echo(Box::new(summary)), histograms)
     }
+}
+
+/// How many of a burst's requests left whole when the link refused the
+/// last `refused_frames` of its frames.
+fn accepted_requests(burst: &[(Nanos, u64, u8)], refused_frames: u64) -> usize {
+    let frames: u64 = burst.iter().map(|&(_, _, n)| u64::from(n)).sum();
+    let mut left = frames.saturating_sub(refused_frames);
+    burst
+        .iter()
+        .take_while(|&&(_, _, n)| {
+            let whole = left >= u64::from(n);
+            left = left.saturating_sub(u64::from(n));
+            whole
+        })
+        .count()
 }
 
 /// The link refused requests: what it took, of what was asked.

@@ -7,6 +7,7 @@
 //! Probes build on the engine's pure parts and its session; nothing else
 //! in the engine names a probe.
 
+pub mod auto;
 pub mod command;
 pub mod echo;
 pub mod passive;
@@ -43,6 +44,14 @@ pub trait EchoProbe {
     fn token(&mut self, now_ns: u64) -> u64;
     /// The request to send.
     fn request(&self, seq: u32, token: u64) -> Msg;
+    /// A second request carrying the same token, sent beside the first
+    /// (auto: TIMESYNC beside PING once a responder needs it).
+    fn second_request(&self, _seq: u32, _token: u64) -> Option<Msg> {
+        None
+    }
+    /// Sees every frame before it is classified (auto: who sent
+    /// HEARTBEAT, who answered PING).
+    fn heard(&mut self, _frame: &Frame, _ours: SysComp) {}
     /// Classifies a received frame; `ours` is our own address.
     fn classify(&self, frame: &Frame, ours: SysComp) -> Classified;
     /// Called with each in-time reply the matcher accepted (TIMESYNC reads
@@ -51,6 +60,11 @@ pub trait EchoProbe {
     /// Whether this probe measures the responders' clocks.
     fn measures_clocks(&self) -> bool {
         false
+    }
+    /// The probe a responder is measured by, where it may differ between
+    /// responders (auto); `None`: the probe's own name says it.
+    fn used_by(&self, _responder: SysComp) -> Option<ProbeName> {
+        None
     }
     /// The responder's clock offset, for probes that measure one.
     fn clock(&self, _responder: SysComp) -> Option<ClockSummary> {

@@ -37,6 +37,14 @@ impl TimesyncProbe {
     }
 }
 
+impl TimesyncProbe {
+    /// Our clock at session time 0, in ns (0 until `begin`, and on the
+    /// simulated link).
+    pub fn base_ns(&self) -> u64 {
+        self.base_ns as u64
+    }
+}
+
 impl EchoProbe for TimesyncProbe {
     fn name(&self) -> ProbeName {
         ProbeName::Timesync

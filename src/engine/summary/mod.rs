@@ -26,6 +26,8 @@ use crate::transport::RxClock;
 pub enum ProbeName {
     Ping,
     Timesync,
+    /// PING, and TIMESYNC for responders that do not answer PING.
+    Auto,
     Command,
     /// No probes: the sequence numbers of what the link carries.
     Passive,
@@ -36,6 +38,7 @@ impl ProbeName {
         match self {
             ProbeName::Ping => "ping",
             ProbeName::Timesync => "timesync",
+            ProbeName::Auto => "auto",
             ProbeName::Command => "command",
             ProbeName::Passive => "passive",
         }
@@ -59,6 +62,10 @@ pub struct ResponderSummary {
     pub rtt: Option<RttSummary>,
     pub histogram: Vec<Bucket>,
     pub identity: Option<Identity>,
+    /// The probe it was measured by (`--probe auto` only: PING or
+    /// TIMESYNC, chosen per responder).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub probe: Option<ProbeName>,
     /// Clock offset and drift (TIMESYNC probe only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub clock: Option<ClockSummary>,
@@ -258,6 +265,7 @@ pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderS
             rtt: r.rtt.summary(),
             histogram: r.rtt.distribution(HISTOGRAM_ROWS),
             identity: roster.get(r.id).cloned(),
+            probe: None,
             clock: None,
             direction: None,
         })
@@ -446,6 +454,7 @@ mod tests {
                 rtt: rtt.summary(),
                 histogram: vec![],
                 identity: None,
+                probe: None,
                 clock: None,
                 direction: None,
             }],

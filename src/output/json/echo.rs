@@ -344,6 +344,9 @@ struct Responder<'a> {
     in_flight: u64,
     rtt_us: Option<Rtt>,
     histogram: &'a [Bucket],
+    /// `--probe auto`: the probe this responder was measured by.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    probe: Option<ProbeName>,
     clock: Option<Clock>,
     /// The verdict's messages about it.
     failures: Vec<&'a str>,
@@ -368,6 +371,7 @@ impl<'a> Responder<'a> {
             in_flight: r.counts.in_flight,
             rtt_us: r.rtt.as_ref().map(Rtt::of),
             histogram: &r.histogram,
+            probe: r.probe,
             clock: r.clock.as_ref().map(Clock::of),
             failures: verdict
                 .failures

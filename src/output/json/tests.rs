@@ -138,6 +138,7 @@ fn responder(id: SysComp, answered: bool) -> ResponderSummary {
         rtt: rtt.summary(),
         histogram: rtt.distribution(4),
         identity: answered.then(identity),
+        probe: None,
         clock: None,
         // Which way it lost: 2 of its 40 frames on the way down.
         direction: answered

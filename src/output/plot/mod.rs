@@ -487,6 +487,7 @@ mod tests {
             rtt: rtt.summary(),
             histogram: Vec::new(),
             identity: None,
+            probe: None,
             clock: None,
             direction: None,
         }

@@ -69,6 +69,8 @@ struct Series {
     p50_s: Option<f64>,
     p99_s: Option<f64>,
     clock_offset_s: Option<f64>,
+    /// `--probe auto`: whether it is measured by TIMESYNC (else PING).
+    via_timesync: Option<u8>,
     split: Split,
     /// It answered a request of the link's current session (in time or
     /// late).
@@ -250,10 +252,14 @@ impl Metrics {
     pub fn on_event(&mut self, e: &MatchEvent) {
         match *e {
             MatchEvent::Reply { responder, rtt, .. } => {
-                self.responders
-                    .entry(responder)
-                    .or_default()
-                    .decided(Some(rtt));
+                let auto = self.probe == Some(ProbeName::Auto);
+                let s = self.responders.entry(responder).or_default();
+                s.decided(Some(rtt));
+                // PING until its clock says TIMESYNC (told with its first
+                // reply, in the same report).
+                if auto && s.via_timesync.is_none() {
+                    s.via_timesync = Some(0);
+                }
             }
             MatchEvent::Lost { responder, .. } => {
                 self.responders.entry(responder).or_default().decided(None);
@@ -315,7 +321,12 @@ impl Metrics {
     /// A TIMESYNC responder's clock offset so far, carried from the run's
     /// start to `at` along the measured drift (none until it is measured).
     pub fn on_clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) {
+        let auto = self.probe == Some(ProbeName::Auto);
         if let Some(s) = self.responders.get_mut(&id) {
+            // Only TIMESYNC replies give a clock.
+            if auto {
+                s.via_timesync = Some(1);
+            }
             let drift_ns = clock.drift_ppm.unwrap_or(0.0) * 1e-6 * at as f64;
             s.clock_offset_s = Some((clock.offset_ns as f64 + drift_ns) / 1e9);
         }
@@ -335,6 +346,9 @@ impl Metrics {
                 s.p99_s = Some(rtt.p99_us / 1e6);
             }
             s.split = Split::AtEnd(r.direction);
+            if let Some(p) = r.probe {
+                s.via_timesync = Some(u8::from(p == ProbeName::Timesync));
+            }
         }
     }
 

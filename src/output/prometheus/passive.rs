@@ -507,6 +507,7 @@ mod tests {
             rtt: None,
             histogram: vec![],
             identity: None,
+            probe: None,
             clock: None,
             direction,
         };

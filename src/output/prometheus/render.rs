@@ -80,7 +80,7 @@ fn rtt_histogram(scope: Scope) -> Family {
 /// A per-responder gauge; a series without the figure is left out.
 type Gauge = Figure<fn(&Series) -> Option<f64>>;
 
-const GAUGES: [Gauge; 4] = [
+const GAUGES: [Gauge; 5] = [
     Figure {
         family: Family::gauge(
             "mavping_last_rtt_seconds",
@@ -108,6 +108,13 @@ const GAUGES: [Gauge; 4] = [
             "Responder's clock minus ours at its latest reply (TIMESYNC probe; updated at most once a second).",
         ),
         value: |s| s.clock_offset_s,
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_responder_via_timesync",
+            "--probe auto: 1 when the responder is measured by TIMESYNC (it does not answer PING), 0 by PING.",
+        ),
+        value: |s| s.via_timesync.map(f64::from),
     },
 ];
 
@@ -575,6 +582,7 @@ mod tests {
             rtt: rtt.summary(),
             histogram: vec![],
             identity: None,
+            probe: None,
             clock: Some(crate::engine::clock_offset::ClockSummary {
                 offset_ns: 1_500_000,
                 uncertainty_ns: 500,

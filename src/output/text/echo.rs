@@ -6,7 +6,7 @@ use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, Lines, 
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, RadioReport, RadioSummary};
-use crate::engine::summary::{Direction, EchoInterim, ResponderSummary, Summary};
+use crate::engine::summary::{Direction, EchoInterim, ProbeName, ResponderSummary, Summary};
 use crate::engine::Nanos;
 use crate::output::{Event, StartInfo};
 use crate::verdict::{Check, Verdict};
@@ -34,12 +34,16 @@ impl<W: Write> TextReporter<W> {
         if summarised {
             self.progress = Some(Progress::default());
         }
+        // Auto sends PING to all, TIMESYNC only to some: say both.
+        let (probe, also) = match info.probe {
+            ProbeName::Auto => ("PING".to_string(), " (TIMESYNC where PING is not answered)"),
+            p => (p.as_str().to_uppercase(), ""),
+        };
         writeln!(
             self.out,
-            "MAVPING {} from {}: {} {}, timeout {}{}",
+            "MAVPING {} from {}: {probe} {}{also}, timeout {}{}",
             info.link,
             info.ours,
-            info.probe.as_str().to_uppercase(),
             rate(info.interval),
             humantime::format_duration(info.timeout),
             if summarised {
@@ -334,10 +338,13 @@ fn percent(ratio: f64) -> String {
 
 fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()> {
     let c = &r.counts;
-    let who = match &r.identity {
+    let mut who = match &r.identity {
         Some(i) => format!("{} ({}, {})", r.id, i.vehicle, i.autopilot_said()),
         None => r.id.to_string(),
     };
+    if let Some(probe) = r.probe {
+        who = format!("{who} via {}", probe.as_str().to_uppercase());
+    }
     write!(
         out,
         "{who}: {} sent, {} received, {} lost ({}), {} late, {} duplicate, {} out of order",

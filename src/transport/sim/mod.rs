@@ -256,11 +256,18 @@ enum Payload {
 /// memory without bound; past it, replies are dropped like a full queue.
 const MAX_QUEUED: usize = 1 << 20;
 
-/// The simulated responders' HEARTBEAT: a PX4 quadrotor.
-const HEARTBEAT: Msg = Msg::Heartbeat {
-    mav_type: 2,   // quadrotor
-    autopilot: 12, // PX4
-};
+/// The simulated responders' HEARTBEAT: a PX4 quadrotor, or with
+/// `ping=off` an ArduPilot one (which answers TIMESYNC, never PING).
+const fn heartbeat(answers_ping: bool) -> Msg {
+    Msg::Heartbeat {
+        mav_type: 2, // quadrotor
+        autopilot: if answers_ping {
+            12 // PX4
+        } else {
+            crate::engine::roster::AUTOPILOT_ARDUPILOT
+        },
+    }
+}
 
 /// Seeds the responders' own draws (telemetry phases, the per-direction
 /// faults) beside `seed=`, so adding them leaves the other faults of a
@@ -501,7 +508,12 @@ impl SimLink {
     fn send_heartbeat(&mut self, i: usize, sent: Instant) {
         let (header, index) = self.responders[i].header();
         let mut bytes = Vec::new();
-        frame::encode(&mut bytes, Version::V2, header, &HEARTBEAT);
+        frame::encode(
+            &mut bytes,
+            Version::V2,
+            header,
+            &heartbeat(self.params.answer_ping),
+        );
         let at = sent + self.params.delay;
         self.send_down(i, index, bytes, at);
     }
@@ -517,7 +529,7 @@ impl SimLink {
             &mut bytes,
             Version::V2,
             header,
-            &kind.msg(time_boot_ms, &HEARTBEAT),
+            &kind.msg(time_boot_ms, &heartbeat(self.params.answer_ping)),
         );
         if self.in_outage(sent) {
             self.responders[i].truth.down.dropped += 1;

@@ -34,7 +34,8 @@ pub struct SimParams {
     pub seed: u64,
     /// Paused tokio clock: deterministic output, no waiting.
     pub virtual_clock: bool,
-    /// False: responders send HEARTBEAT but ignore PING (like ArduPilot).
+    /// False: responders are ArduPilot: their HEARTBEAT says so, and they
+    /// answer TIMESYNC but never PING.
     pub answer_ping: bool,
     pub heartbeat: bool,
     /// Responders' clocks read `offset + (1 + drift·1e-6)·t`, t = ns since

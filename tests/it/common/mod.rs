@@ -389,7 +389,7 @@ pub struct TextCounts {
 pub fn text_counts(stdout: &str, responder: &str) -> Option<TextCounts> {
     let summary = stdout.split("mavping statistics ---").nth(1)?;
     let line = summary.lines().find(|l| {
-        l.starts_with(&format!("{responder}:")) || l.starts_with(&format!("{responder} ("))
+        l.starts_with(&format!("{responder}:")) || l.starts_with(&format!("{responder} "))
     })?;
     let counts = line
         .split("): ")
