@@ -120,7 +120,13 @@ fn wire_budget(
 ) -> Option<WireBudget> {
     match probe {
         Probe::Command(_) | Probe::Passive { .. } => None,
-        Probe::Ping | Probe::Timesync { .. } => capacity::for_link(spec, default_baud, session),
+        Probe::Ping => capacity::for_link(spec, default_baud, session, capacity::Exchange::Ping),
+        Probe::Timesync { target } => capacity::for_link(
+            spec,
+            default_baud,
+            session,
+            capacity::Exchange::Timesync { target: *target },
+        ),
     }
 }
 

@@ -204,6 +204,7 @@ fn row(s: &StepFigures) -> String {
 pub(super) fn write_summary(
     out: &mut impl Write,
     s: &SweepSummary,
+    probe: &str,
     wire: Option<&WireBudget>,
     shown: usize,
 ) -> io::Result<()> {
@@ -233,7 +234,7 @@ pub(super) fn write_summary(
         )
     });
     if s.kind == "sweep" {
-        write_knee(out, s, baud.as_deref())?;
+        write_knee(out, s, probe, baud.as_deref())?;
         if let Some(q) = &s.queueing {
             write_queueing(out, q)?;
         }
@@ -252,7 +253,7 @@ pub(super) fn write_summary(
     if let Some(e) = &s.load_effect {
         writeln!(
             out,
-            "under load: PING p99 at {}/s {} from {} ms to {} ms: {:+.3} ms ({:+.0}%); p50 {} -> {} ms",
+            "under load: {probe} p99 at {}/s {} from {} ms to {} ms: {:+.3} ms ({:+.0}%); p50 {} -> {} ms",
             hz(e.rate_hz),
             if e.p99_rise_us >= 0.0 { "rose" } else { "fell" },
             ms_us(e.unloaded_p99_us),
@@ -267,7 +268,12 @@ pub(super) fn write_summary(
 }
 
 /// Where the sweep found the knee, beside what the baud rate alone says.
-fn write_knee(out: &mut impl Write, s: &SweepSummary, baud: Option<&str>) -> io::Result<()> {
+fn write_knee(
+    out: &mut impl Write,
+    s: &SweepSummary,
+    probe: &str,
+    baud: Option<&str>,
+) -> io::Result<()> {
     match &s.knee {
         Some(k) => {
             let above = match k.failed_above_hz {
@@ -278,7 +284,7 @@ fn write_knee(out: &mut impl Write, s: &SweepSummary, baud: Option<&str>) -> io:
             };
             writeln!(
                 out,
-                "knee: {} PINGs/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, \
+                "knee: {} {probe}s/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, \
                  loss {:.2}%, p99 {} ms{above}{}",
                 hz(k.rate_hz),
                 k.bytes_per_s,
@@ -292,26 +298,30 @@ fn write_knee(out: &mut impl Write, s: &SweepSummary, baud: Option<&str>) -> io:
         }
         None => writeln!(
             out,
-            "knee: none: no step lost under 1% with a p99 under twice the first step's{}",
+            "knee: none: no step lost under 1% with a p99 under twice the first step's (or under \
+             30 ms over it){}",
             baud.unwrap_or_default()
         )?,
     }
     Ok(())
 }
 
-/// Whether the link queued before it dropped (bufferbloat).
+/// Whether the link queued before it dropped: the latency it added under
+/// load, graded, and "bufferbloat" from grade C down.
 fn write_queueing(
     out: &mut impl Write,
     q: &crate::engine::sweep::verdict::Queueing,
 ) -> io::Result<()> {
+    let grade = q.grade.as_str();
+    let added = ms_us(q.added_us);
     if q.bufferbloat {
         writeln!(
             out,
-            "queueing: bufferbloat: at {}/s the link lost under 1% yet its p99 reached {} ms, \
-             {} ms over the first step's {} ms: it queues before it drops",
+            "queueing: bufferbloat, grade {grade} (+{added} ms under load): at {}/s the link lost \
+             under 1% yet its p99 reached {} ms, over the first step's {} ms: it queues before it \
+             drops",
             hz(q.worst_at_hz),
             ms_us(q.worst_p99_us),
-            ms_us(q.added_us),
             ms_us(q.reference_p99_us)
         )?;
     } else {
@@ -324,8 +334,8 @@ fn write_queueing(
         };
         writeln!(
             out,
-            "queueing: none to speak of: while it lost under 1%, the p99 stayed under twice the \
-             first step's {} ms (at most {} ms, at {}/s){then}",
+            "queueing: grade {grade} (+{added} ms under load), no bufferbloat: while it lost under \
+             1%, the p99 rose from the first step's {} ms to at most {} ms (at {}/s){then}",
             ms_us(q.reference_p99_us),
             ms_us(q.worst_p99_us),
             hz(q.worst_at_hz)
@@ -365,7 +375,7 @@ mod tests {
     fn the_summary_names_the_knee_beside_the_baud_capacity() {
         let mut out = Vec::new();
         let wire = crate::engine::capacity::budget(57_600, crate::frame::Version::V2, 99, 1);
-        write_summary(&mut out, &summary(), Some(&wire), 0).unwrap();
+        write_summary(&mut out, &summary(), "PING", Some(&wire), 0).unwrap();
         let text = String::from_utf8(out).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         let header = header();
