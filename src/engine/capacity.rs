@@ -29,7 +29,9 @@ const TIMESYNC_TARGETS: u64 = 2;
 pub enum Exchange {
     Ping,
     /// Our request names `target` (0/0: any).
-    Timesync { target: crate::frame::SysComp },
+    Timesync {
+        target: crate::frame::SysComp,
+    },
 }
 
 impl Exchange {
@@ -57,7 +59,10 @@ impl Exchange {
 /// PX4 and `mavping respond` send it (ArduPilot's 0/0 is 2 bytes less).
 fn timesync_bytes(version: Version, target: crate::frame::SysComp) -> (u64, u64) {
     match version {
-        Version::V1 => (V1_OVERHEAD + TIMESYNC_PAYLOAD, V1_OVERHEAD + TIMESYNC_PAYLOAD),
+        Version::V1 => (
+            V1_OVERHEAD + TIMESYNC_PAYLOAD,
+            V1_OVERHEAD + TIMESYNC_PAYLOAD,
+        ),
         Version::V2 => {
             let targets = match (target.sysid, target.compid) {
                 (_, c) if c != 0 => 2,
