@@ -51,6 +51,8 @@ pub struct PlannedStep {
     pub load: bool,
     /// Requests it sends: the rate over the step's duration, at least one.
     pub count: u64,
+    /// The rate of the step before again, which failed on latency alone.
+    pub retry: bool,
 }
 
 impl PlannedStep {
@@ -60,6 +62,15 @@ impl PlannedStep {
             rate_hz,
             load,
             count: ((rate_hz * duration.as_secs_f64()).round() as u64).max(1),
+            retry: false,
+        }
+    }
+
+    /// The same step once more.
+    pub fn retried(self) -> Self {
+        PlannedStep {
+            retry: true,
+            ..self
         }
     }
 
@@ -143,6 +154,11 @@ pub struct StepFigures {
     /// The knee test (sweep steps only): loss under 1 % and p99 under
     /// twice the first sweep step's or less than 30 ms over it.
     pub passed: Option<bool>,
+    /// The rate of the step before, run again because that one failed the
+    /// knee test on latency alone: one burst behind a scheduling hiccup
+    /// queues as a link does, so a rate fails on latency only twice in a
+    /// row, and this step decides.
+    pub retry: bool,
 }
 
 impl StepFigures {
@@ -155,6 +171,15 @@ impl StepFigures {
             && self
                 .rtt
                 .is_some_and(|r| r.p99_us < p99_limit_us(reference_p99_us))
+    }
+
+    /// It failed the knee test on its p99 alone (it lost under 1 %): the
+    /// rate is tried once more before it counts as failed.
+    pub fn failed_on_latency_alone(&self) -> bool {
+        self.passed == Some(false)
+            && self.complete
+            && self.received > 0
+            && self.loss_ratio < KNEE_MAX_LOSS
     }
 
     /// Bytes per second both ways.
@@ -187,6 +212,7 @@ impl StepFigures {
             radio: None,
             complete: true,
             passed: None,
+            retry: false,
         }
     }
 }
@@ -422,6 +448,7 @@ impl StepTally {
             }),
             complete,
             passed: None,
+            retry: self.plan.retry,
         }
     }
 }
@@ -436,6 +463,7 @@ mod tests {
             rate_hz: rate,
             load: false,
             count: 10,
+            retry: false,
         }
     }
 

@@ -158,9 +158,11 @@ fn knee_mark(s: &StepFigures) -> &'static str {
 }
 
 fn row(s: &StepFigures) -> String {
+    // A retry is named as such: the rate of the row above, once more.
+    let name = if s.retry { "retry" } else { s.phase.name() };
     let phase = match (s.phase, s.load) {
-        (Phase::Ramp | Phase::Refine, true) => format!("{}+load", s.phase.name()),
-        _ => s.phase.name().to_string(),
+        (Phase::Ramp | Phase::Refine, true) => format!("{name}+load"),
+        _ => name.to_string(),
     };
     let (p50, p99) = match s.rtt {
         Some(r) => (ms_us(r.p50_us), ms_us(r.p99_us)),
