@@ -690,8 +690,7 @@ fn a_timesync_sweep_counts_timesync_frames_and_says_timesyncs() {
         (knee - capacity).abs() <= 0.15 * capacity,
         "knee {knee}/s, capacity {capacity:.1}/s\n{s:#}"
     );
-    let (code, text, err) =
-        run_mavping(&["--sweep", "--step", "2s", "--probe", "timesync", link]);
+    let (code, text, err) = run_mavping(&["--sweep", "--step", "2s", "--probe", "timesync", link]);
     assert_eq!(code, 0, "{text}\n{err}");
     let first = text.lines().next().unwrap();
     assert!(

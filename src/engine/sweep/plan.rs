@@ -288,11 +288,16 @@ mod tests {
         let mut hiccup = StepFigures::test(Phase::Ramp, 5.0, 0.0);
         hiccup.passed = Some(false);
         let again = planner.next(&[first.clone(), hiccup.clone()]).unwrap();
-        assert_eq!((again.phase, again.rate_hz, again.retry), (Phase::Ramp, 5.0, true));
+        assert_eq!(
+            (again.phase, again.rate_hz, again.retry),
+            (Phase::Ramp, 5.0, true)
+        );
         // It passed the second time: the ramp goes on where it was.
         let mut passed = StepFigures::test(Phase::Ramp, 5.0, 0.0);
         (passed.passed, passed.retry) = (Some(true), true);
-        let next = planner.next(&[first.clone(), hiccup.clone(), passed]).unwrap();
+        let next = planner
+            .next(&[first.clone(), hiccup.clone(), passed])
+            .unwrap();
         assert_eq!((next.rate_hz, next.retry), (10.0, false));
         // Failed twice: no third try; the refine takes it from there.
         let mut twice = StepFigures::test(Phase::Ramp, 5.0, 0.0);
