@@ -394,6 +394,10 @@ mod tests {
             "{text}"
         );
         assert!(text.contains("drops before it queues"), "{text}");
+        assert!(
+            text.contains("queueing: grade A+ (+0.000 ms under load), no bufferbloat: "),
+            "{text}"
+        );
         // Rows line up under the header: every column ends where its
         // header does.
         for col in ["rate/s", "p99 ms", "rx B/s"] {
@@ -403,5 +407,29 @@ mod tests {
                 assert_eq!(row.as_bytes()[end], b' ', "{col}: {row}");
             }
         }
+    }
+
+    #[test]
+    fn a_retry_is_named_in_its_row_and_a_bloated_queue_by_its_grade() {
+        let mut s = StepFigures::test(Phase::Refine, 59.5, 0.0);
+        (s.index, s.passed, s.retry) = (10, Some(false), true);
+        let line = row(&s);
+        assert!(line.starts_with("  10 retry         59.5 "), "{line}");
+        assert!(line.ends_with("  p99"), "{line}");
+        s.load = true;
+        assert!(row(&s).contains(" retry+load "), "{}", row(&s));
+        let mut summary = summary();
+        let q = summary.queueing.as_mut().unwrap();
+        (q.added_us, q.worst_p99_us) = (371_368.0, 383_368.0);
+        q.grade = crate::engine::sweep::verdict::Grade::of(q.added_us);
+        q.bufferbloat = q.grade.is_bufferbloat();
+        let mut out = Vec::new();
+        write_summary(&mut out, &summary, "TIMESYNC", None, 3).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(
+            text.contains("queueing: bufferbloat, grade D (+371.368 ms under load): at 20/s"),
+            "{text}"
+        );
+        assert!(text.contains("knee: 20 TIMESYNCs/s ("), "{text}");
     }
 }
