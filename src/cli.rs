@@ -470,8 +470,10 @@ pub struct PingArgs {
     ///
     /// Steps at 2, 5, 10, 20, 50, ... requests/s (from --rate or -i when given) up to
     /// --sweep-max, each --step long; then bisects around the knee: the highest rate that
-    /// lost under 1% with a p99 under twice the first step's. Also says whether the link
-    /// queues before it drops (bufferbloat). Ctrl-C stops at once with the steps so far
+    /// lost under 1% with a p99 under twice the first step's or less than 30 ms over it (a
+    /// rate that fails on latency alone is tried once more). Grades the latency the link
+    /// adds under load, A+ to F as bufferbloat tests do. Ctrl-C stops at once with the steps
+    /// so far
     #[arg(help_heading = "Capacity", long)]
     pub sweep: bool,
 

@@ -125,9 +125,17 @@ fn wire_budget(
 ) -> Option<WireBudget> {
     match probe {
         Probe::Command(_) | Probe::Passive { .. } => None,
-        Probe::Auto | Probe::Ping | Probe::Timesync { .. } => {
-            capacity::for_link(spec, default_baud, session)
+        // Auto sends a PING each slot (and a TIMESYNC only to those that
+        // need it): the PING's sizes are the floor.
+        Probe::Auto | Probe::Ping => {
+            capacity::for_link(spec, default_baud, session, capacity::Exchange::Ping)
         }
+        Probe::Timesync { target } => capacity::for_link(
+            spec,
+            default_baud,
+            session,
+            capacity::Exchange::Timesync { target: *target },
+        ),
     }
 }
 

@@ -1,5 +1,6 @@
-//! What a serial link can carry: frame sizes, PINGs per second at a baud
-//! rate, and the serialisation floor under every RTT. Pure arithmetic.
+//! What a serial link can carry: frame sizes, requests per second at a
+//! baud rate (PING or TIMESYNC exchanges, each its own sizes), and the
+//! serialisation floor under every RTT. Pure arithmetic.
 //!
 //! A pty or a USB adapter may ignore the baud rate, but the radio behind
 //! a real port cannot: these figures are what the radio's UART delivers.
@@ -18,6 +19,63 @@ const V1_OVERHEAD: u64 = 6 + 2;
 const V2_OVERHEAD: u64 = 10 + 2;
 /// A MAVLink 2 signature (link id, timestamp, signature).
 pub const SIGNATURE: u64 = 13;
+/// TIMESYNC's payload: tc1 and ts1 (i64 each); MAVLink 2 adds the
+/// target system and component as extensions.
+const TIMESYNC_PAYLOAD: u64 = 16;
+const TIMESYNC_TARGETS: u64 = 2;
+
+/// The request and reply a probe's exchange is made of.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Exchange {
+    Ping,
+    /// Our request names `target` (0/0: any).
+    Timesync {
+        target: crate::frame::SysComp,
+    },
+}
+
+impl Exchange {
+    /// The message, as the text names it ("PINGs/s").
+    pub fn message(self) -> &'static str {
+        match self {
+            Exchange::Ping => "PING",
+            Exchange::Timesync { .. } => "TIMESYNC",
+        }
+    }
+
+    /// Bytes of a request (with sequence numbers up to `max_seq`) and of
+    /// a reply, unsigned.
+    pub fn bytes(self, version: Version, max_seq: u32) -> (u64, u64) {
+        match self {
+            Exchange::Ping => (request_bytes(version, max_seq), reply_bytes(version, false)),
+            Exchange::Timesync { target } => timesync_bytes(version, target),
+        }
+    }
+}
+
+/// A TIMESYNC request and reply. MAVLink 2 trims trailing zero bytes: a
+/// request to 0/0 ends at ts1 (our clock in ns, never zero in its high
+/// byte on a wall clock); a reply is counted with its targets set, as
+/// PX4 and `mavping respond` send it (ArduPilot's 0/0 is 2 bytes less).
+fn timesync_bytes(version: Version, target: crate::frame::SysComp) -> (u64, u64) {
+    match version {
+        Version::V1 => (
+            V1_OVERHEAD + TIMESYNC_PAYLOAD,
+            V1_OVERHEAD + TIMESYNC_PAYLOAD,
+        ),
+        Version::V2 => {
+            let targets = match (target.sysid, target.compid) {
+                (_, c) if c != 0 => 2,
+                (s, _) if s != 0 => 1,
+                _ => 0,
+            };
+            (
+                V2_OVERHEAD + TIMESYNC_PAYLOAD + targets,
+                V2_OVERHEAD + TIMESYNC_PAYLOAD + TIMESYNC_TARGETS,
+            )
+        }
+    }
+}
 
 /// Bytes of a PING reply: its targets are set, so nothing is trimmed.
 pub fn reply_bytes(version: Version, signed: bool) -> u64 {
@@ -45,6 +103,10 @@ pub fn request_bytes(version: Version, max_seq: u32) -> u64 {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct WireBudget {
     pub baud: u32,
+    /// The request's message, as the text names it ("PINGs/s"); the
+    /// start line names the probe in JSON.
+    #[serde(skip)]
+    pub message: &'static str,
     pub request_bytes: u64,
     pub reply_bytes: u64,
     /// Replies each request is expected to draw.
@@ -57,19 +119,27 @@ pub struct WireBudget {
     pub floor_us: f64,
 }
 
+/// A PING exchange's budget.
 pub fn budget(baud: u32, version: Version, max_seq: u32, replies: u64) -> WireBudget {
-    sized(
-        baud,
-        request_bytes(version, max_seq),
-        reply_bytes(version, false),
-        replies,
-    )
+    exchange_budget(Exchange::Ping, baud, version, max_seq, replies)
 }
 
-fn sized(baud: u32, request: u64, reply: u64, replies: u64) -> WireBudget {
+pub fn exchange_budget(
+    exchange: Exchange,
+    baud: u32,
+    version: Version,
+    max_seq: u32,
+    replies: u64,
+) -> WireBudget {
+    let (request, reply) = exchange.bytes(version, max_seq);
+    sized(exchange.message(), baud, request, reply, replies)
+}
+
+fn sized(message: &'static str, baud: u32, request: u64, reply: u64, replies: u64) -> WireBudget {
     let bytes_per_s = u64::from(baud) as f64 / BITS_PER_BYTE as f64;
     WireBudget {
         baud,
+        message,
         request_bytes: request,
         reply_bytes: reply,
         replies: 0,
@@ -79,8 +149,14 @@ fn sized(baud: u32, request: u64, reply: u64, replies: u64) -> WireBudget {
     .with_replies(replies)
 }
 
-/// The budget of a link that has a baud rate; None for the others.
-pub fn for_link(link: &LinkSpec, default_baud: u32, session: &SessionConfig) -> Option<WireBudget> {
+/// The budget of `exchange` on a link that has a baud rate; None for the
+/// others.
+pub fn for_link(
+    link: &LinkSpec,
+    default_baud: u32,
+    session: &SessionConfig,
+    exchange: Exchange,
+) -> Option<WireBudget> {
     let (baud, replies) = match link {
         LinkSpec::Serial { baud, .. } => (baud.unwrap_or(default_baud), 1),
         LinkSpec::Sim(p) => (p.baud?, u64::from(p.responders)),
@@ -95,11 +171,12 @@ pub fn for_link(link: &LinkSpec, default_baud: u32, session: &SessionConfig) -> 
         .unwrap_or(u32::MAX);
     // One responder on a real link unless the run shows more: the warning
     // is a floor.
-    let b = budget(baud, session.version, max_seq, replies);
+    let b = exchange_budget(exchange, baud, session.version, max_seq, replies);
     // Signed, our request and (from a peer that signs) each reply carry a
     // 13-byte signature more.
     Some(match session.signing {
         Some(_) => sized(
+            b.message,
             baud,
             b.request_bytes + SIGNATURE,
             b.reply_bytes + SIGNATURE,
@@ -125,9 +202,10 @@ impl WireBudget {
     pub fn warning(&self, rate_hz: f64) -> Option<String> {
         (rate_hz > self.max_rate_hz).then(|| {
             format!(
-                "at {} baud this link carries at most ~{:.0} PINGs/s each way; {}/s will queue and then lose",
+                "at {} baud this link carries at most ~{:.0} {}s/s each way; {}/s will queue and then lose",
                 self.baud,
                 self.max_rate_hz.floor(),
+                self.message,
                 trim(rate_hz)
             )
         })
@@ -188,6 +266,7 @@ mod tests {
                 &link,
                 crate::transport::LinkOptions::default().baud,
                 &session,
+                Exchange::Ping,
             )
             .unwrap()
         };
@@ -220,5 +299,29 @@ mod tests {
         );
         // Two responders: 21 + 52 bytes.
         assert_eq!(budget(57_600, Version::V2, 99, 2).max_rate_hz.floor(), 78.0);
+    }
+
+    #[test]
+    fn a_timesync_exchange_has_its_own_sizes_and_name() {
+        use crate::frame::SysComp;
+        let any = Exchange::Timesync {
+            target: SysComp::new(0, 0),
+        };
+        let one = Exchange::Timesync {
+            target: SysComp::new(1, 1),
+        };
+        // 12 bytes of MAVLink 2 frame around tc1 and ts1, and the targets
+        // when set (a reply's always, as PX4 sends it).
+        assert_eq!(any.bytes(Version::V2, 99), (28, 30));
+        assert_eq!(one.bytes(Version::V2, 99), (30, 30));
+        assert_eq!(any.bytes(Version::V1, 99), (24, 24));
+        // 5760 bytes/s over 28 + 30: 99.3 TIMESYNCs/s, not PING's 122.
+        let b = exchange_budget(any, 57_600, Version::V2, 99, 1);
+        assert_eq!((b.max_rate_hz.floor(), b.message), (99.0, "TIMESYNC"));
+        assert_eq!(
+            b.warning(500.0).unwrap(),
+            "at 57600 baud this link carries at most ~99 TIMESYNCs/s each way; 500/s will queue and then lose"
+        );
+        assert!((b.floor_us - 58.0 / 5760.0 * 1e6).abs() < 1e-6);
     }
 }

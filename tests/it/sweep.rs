@@ -492,3 +492,230 @@ fn the_plot_of_a_sweep_draws_rtt_and_loss_against_the_offered_rate() {
         png.path.display()
     );
 }
+
+/// A network namespace of its own whose loopback is a token bucket at
+/// 57600 bit/s (`tc qdisc ... tbf`): one queue that both directions share,
+/// `limit` bytes deep, like a radio's buffer in front of its air time. The
+/// kernel does the pacing, so the knee is measured against a real queue.
+struct Bucket {
+    name: String,
+}
+
+/// 57600 bit/s.
+const BUCKET_BYTES_PER_S: f64 = 7200.0;
+
+impl Bucket {
+    /// None (and a line saying why) where the namespace or the qdisc
+    /// cannot be made: not root, no `ip`, a kernel without tbf.
+    fn new(tag: &str, queue: Duration) -> Option<Bucket> {
+        let name = format!("mavping-{tag}-{}", std::process::id());
+        let ip = |args: &[&str]| {
+            std::process::Command::new("ip")
+                .args(args)
+                .output()
+                .map_err(|e| e.to_string())
+                .and_then(|o| {
+                    o.status
+                        .success()
+                        .then_some(())
+                        .ok_or_else(|| String::from_utf8_lossy(&o.stderr).trim().to_string())
+                })
+        };
+        if let Err(e) = ip(&["netns", "add", &name]) {
+            eprintln!("skipped: no network namespace for the token bucket (ip netns add: {e})");
+            return None;
+        }
+        let bucket = Bucket { name };
+        let limit = (BUCKET_BYTES_PER_S * queue.as_secs_f64())
+            .round()
+            .to_string();
+        ip(&["-n", &bucket.name, "link", "set", "lo", "up"]).unwrap();
+        // A bucket of 200 bytes holds any one frame here (68 at most)
+        // and lets no burst past the rate; the queue behind it is `limit`.
+        let tbf = [
+            "-n",
+            &bucket.name,
+            "qdisc",
+            "add",
+            "dev",
+            "lo",
+            "root",
+            "tbf",
+            "rate",
+            "57600bit",
+            "burst",
+            "200",
+            "limit",
+            &limit,
+        ];
+        let tc = std::process::Command::new("tc").args(tbf).output();
+        match tc {
+            Ok(o) if o.status.success() => Some(bucket),
+            Ok(o) => {
+                eprintln!(
+                    "skipped: this kernel has no token bucket qdisc (tc qdisc add ... tbf: {})",
+                    String::from_utf8_lossy(&o.stderr).trim()
+                );
+                None
+            }
+            Err(e) => {
+                eprintln!("skipped: no tc to make a token bucket ({e})");
+                None
+            }
+        }
+    }
+
+    /// `mavping ARGS` inside the namespace.
+    fn mavping(&self) -> std::process::Command {
+        let mut c = std::process::Command::new("ip");
+        c.args(["netns", "exec", &self.name, env!("CARGO_BIN_EXE_mavping")]);
+        c
+    }
+}
+
+impl Drop for Bucket {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("ip")
+            .args(["netns", "del", &self.name])
+            .status();
+    }
+}
+
+/// A child process spinning on a core, as another program keeps it busy.
+struct BusyLoop(std::process::Child);
+
+impl BusyLoop {
+    fn start() -> BusyLoop {
+        BusyLoop(
+            std::process::Command::new("sh")
+                .args(["-c", "while :; do :; done"])
+                .spawn()
+                .unwrap(),
+        )
+    }
+}
+
+impl Drop for BusyLoop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// A sweep through a token bucket with a `queue` deep queue, beside a
+/// busy core, `mavping respond` the far end in the same namespace: the
+/// summary's `sweep` (every event checked against the schema).
+fn bucket_sweep(tag: &str, queue: Duration) -> Option<Value> {
+    let bucket = Bucket::new(tag, queue)?;
+    let port = 14_550;
+    let mut respond = bucket
+        .mavping()
+        .args(["respond", &format!("udpin:127.0.0.1:{port}")])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .unwrap();
+    let mut ready = String::new();
+    BufReader::new(respond.stdout.take().unwrap())
+        .read_line(&mut ready)
+        .unwrap();
+    assert!(ready.starts_with("mavping respond: "), "{ready:?}");
+    let busy = BusyLoop::start();
+    // Steps of a second from 5/s: a queue past the capacity grows by a
+    // tenth of a second per second at a tenth over it.
+    let run = bucket
+        .mavping()
+        .args(["--sweep", "--json", "-q", "--rate", "5", "--step", "1s"])
+        .args(["-W", "3s", &format!("udpout:127.0.0.1:{port}")])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let (code, out, err) = wait_output(run, Duration::from_secs(60));
+    drop(busy);
+    let _ = respond.kill();
+    let _ = respond.wait();
+    assert_eq!(code, 0, "{out}\n{err}");
+    Some(checked_summary(&out)["sweep"].clone())
+}
+
+/// The knee through a kernel token bucket beside a busy core is the
+/// bucket's capacity (80-110 %: a scheduling hiccup of a few ms is not a
+/// queue), and the queueing grade tells a 30 ms queue (B or better, no
+/// bufferbloat) from a 2 s one (bufferbloat, D or F).
+#[test]
+fn the_knee_of_a_kernel_token_bucket_holds_beside_a_busy_core() {
+    // On the loopback each frame carries 42 bytes of Ethernet, IP and UDP
+    // headers: a 22-byte request and a 26-byte reply are 132 bytes of the
+    // 7200 a second: 54.5 PINGs/s (our and the responder's heartbeats take
+    // 2 % of it).
+    let capacity = BUCKET_BYTES_PER_S / (22.0 + 26.0 + 2.0 * 42.0);
+    for (tag, queue) in [
+        ("q30ms", Duration::from_millis(30)),
+        ("q2s", Duration::from_secs(2)),
+    ] {
+        let Some(s) = bucket_sweep(tag, queue) else {
+            return;
+        };
+        let knee = f(&s["knee"], "rate_hz");
+        assert!(
+            (0.8 * capacity..=1.1 * capacity).contains(&knee),
+            "{tag}: knee {knee}/s, capacity {capacity:.1}/s\n{s:#}"
+        );
+        let q = &s["queueing"];
+        let grade = q["grade"].as_str().unwrap();
+        eprintln!("{tag}: knee {knee}/s of {capacity:.1}/s; queueing {q}");
+        if queue < Duration::from_millis(100) {
+            assert!(["A+", "A", "B"].contains(&grade), "{tag}: {q}");
+            assert_eq!(q["bufferbloat"], false, "{tag}: {q}");
+        } else {
+            assert!(["D", "F"].contains(&grade), "{tag}: {q}");
+            assert_eq!(q["bufferbloat"], true, "{tag}: {q}");
+        }
+    }
+}
+
+/// A TIMESYNC sweep is sized and named by its own frames: a 28-byte
+/// request (to 0/0, so its targets are trimmed) and a 30-byte reply share
+/// the 5760 bytes a second of 57600 baud: 99.3 TIMESYNCs/s, where PING's
+/// smaller frames make 120.
+#[test]
+fn a_timesync_sweep_counts_timesync_frames_and_says_timesyncs() {
+    let link = "sim:?baud=57600&clock=virtual";
+    let capacity = 5760.0 / (28.0 + 30.0);
+    let s = sweep(link, &["-q", "--step", "2s", "--probe", "timesync"]);
+    assert!((f(&s, "baud_capacity_hz") - capacity).abs() < 0.01, "{s:#}");
+    let knee = f(&s["knee"], "rate_hz");
+    assert!(
+        (knee - capacity).abs() <= 0.15 * capacity,
+        "knee {knee}/s, capacity {capacity:.1}/s\n{s:#}"
+    );
+    let (code, text, err) = run_mavping(&["--sweep", "--step", "2s", "--probe", "timesync", link]);
+    assert_eq!(code, 0, "{text}\n{err}");
+    let first = text.lines().next().unwrap();
+    assert!(
+        first.contains(
+            "TIMESYNC sweep from 2/s up to 199/s (twice the ~99/s that 57600 baud carries"
+        ),
+        "{first}"
+    );
+    let line = |start: &str| {
+        text.lines()
+            .find(|l| l.starts_with(start))
+            .unwrap_or_else(|| panic!("no {start:?} in {text}"))
+            .to_string()
+    };
+    let knee_line = line("knee: ");
+    assert!(
+        knee_line.starts_with(&format!("knee: {knee:.0} TIMESYNCs/s ("))
+            && knee_line.ends_with("; the baud rate alone says ~99/s (57600 baud)"),
+        "{knee_line}"
+    );
+    let wire = line("wire: ");
+    assert!(
+        wire.starts_with("wire: 57600 baud carries ~99 TIMESYNCs/s; ")
+            && wire.contains("(request 28 B + reply 30 B)"),
+        "{wire}"
+    );
+    assert!(!text.contains("PINGs/s"), "{text}");
+}

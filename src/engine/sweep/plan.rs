@@ -95,12 +95,19 @@ impl Planner {
                     return self.step(Phase::Baseline, first_hz, false);
                 }
                 let sweep: Vec<&StepFigures> = done.iter().filter(|s| s.phase.sweeps()).collect();
-                let ramped = sweep.iter().filter(|s| s.phase == Phase::Ramp).count();
+                if let Some(again) = self.retry(&sweep) {
+                    return Some(again);
+                }
+                let ramped = sweep
+                    .iter()
+                    .filter(|s| s.phase == Phase::Ramp && !s.retry)
+                    .count();
+                let refined = sweep.iter().any(|s| s.phase == Phase::Refine);
                 // Nothing answered: more of the same floods a silent link.
                 let over_limit = sweep
                     .iter()
                     .any(|s| s.loss_ratio > loss_limit || s.received == 0);
-                if !over_limit && ramped < self.ramp.len() && sweep.len() == ramped {
+                if !over_limit && ramped < self.ramp.len() && !refined {
                     return self.step(Phase::Ramp, self.ramp[ramped], loaded);
                 }
                 self.refine(&sweep, loaded)
@@ -108,10 +115,24 @@ impl Planner {
         }
     }
 
+    /// The last step again when it failed on latency alone and was not
+    /// itself a retry: a failure counts once it is seen twice.
+    fn retry(&self, sweep: &[&StepFigures]) -> Option<PlannedStep> {
+        let last = sweep.last()?;
+        if last.retry || !last.failed_on_latency_alone() {
+            return None;
+        }
+        self.step(last.phase, last.offered_hz, last.load)
+            .map(PlannedStep::retried)
+    }
+
     /// The geometric middle of the bracket around the knee, while it is
     /// wider than [`RESOLUTION`].
     fn refine(&self, sweep: &[&StepFigures], loaded: bool) -> Option<PlannedStep> {
-        let refines = sweep.iter().filter(|s| s.phase == Phase::Refine).count();
+        let refines = sweep
+            .iter()
+            .filter(|s| s.phase == Phase::Refine && !s.retry)
+            .count();
         if refines >= MAX_REFINES {
             return None;
         }
@@ -173,7 +194,7 @@ mod tests {
             assert!(done.len() < 40, "the plan never ends");
             let over = (p.rate_hz - capacity).max(0.0) / p.rate_hz;
             let mut s = StepFigures::test(p.phase, p.rate_hz, over);
-            s.load = p.load;
+            (s.load, s.retry) = (p.load, p.retry);
             if p.phase.sweeps() {
                 s.passed = Some(p.rate_hz <= capacity);
             }
@@ -255,6 +276,38 @@ mod tests {
         let mut s = StepFigures::test(Phase::Ramp, 2.0, 0.0);
         s.complete = false;
         assert_eq!(planner.next(&[s]), None);
+    }
+
+    #[test]
+    fn a_step_that_failed_on_latency_alone_is_run_once_more() {
+        let config = sweep(2.0, 100.0, &[]);
+        let planner = Planner::new(&config);
+        let mut first = StepFigures::test(Phase::Ramp, 2.0, 0.0);
+        first.passed = Some(true);
+        // 5/s lost nothing but its p99 failed: 5/s again, marked a retry.
+        let mut hiccup = StepFigures::test(Phase::Ramp, 5.0, 0.0);
+        hiccup.passed = Some(false);
+        let again = planner.next(&[first.clone(), hiccup.clone()]).unwrap();
+        assert_eq!(
+            (again.phase, again.rate_hz, again.retry),
+            (Phase::Ramp, 5.0, true)
+        );
+        // It passed the second time: the ramp goes on where it was.
+        let mut passed = StepFigures::test(Phase::Ramp, 5.0, 0.0);
+        (passed.passed, passed.retry) = (Some(true), true);
+        let next = planner
+            .next(&[first.clone(), hiccup.clone(), passed])
+            .unwrap();
+        assert_eq!((next.rate_hz, next.retry), (10.0, false));
+        // Failed twice: no third try; the refine takes it from there.
+        let mut twice = StepFigures::test(Phase::Ramp, 5.0, 0.0);
+        (twice.passed, twice.retry) = (Some(false), true);
+        let next = planner.next(&[first.clone(), hiccup, twice]).unwrap();
+        assert!(!next.retry, "{next:?}");
+        // A step that lost is never retried: loss is not a hiccup.
+        let mut lossy = StepFigures::test(Phase::Ramp, 5.0, 0.3);
+        lossy.passed = Some(false);
+        assert!(!planner.next(&[first, lossy]).unwrap().retry);
     }
 
     #[test]

@@ -4,7 +4,7 @@
 
 use serde::Serialize;
 
-use super::step::{Phase, StepFigures, KNEE_MAX_LOSS, KNEE_MAX_P99_RATIO};
+use super::step::{Phase, StepFigures, KNEE_MAX_LOSS};
 use crate::engine::load::LoadSummary;
 
 /// The highest rate the link carried cleanly: the step with the highest
@@ -25,12 +25,63 @@ pub struct Knee {
     pub failed_above_hz: Option<f64>,
 }
 
+/// The latency a queue adds under load, on the scale bufferbloat tests
+/// grade it (Waveform's, DSLReports'): A+ under 5 ms, A under 30, B under
+/// 60, C under 200, D under 400, F beyond.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
+pub enum Grade {
+    #[serde(rename = "A+")]
+    APlus,
+    A,
+    B,
+    C,
+    D,
+    F,
+}
+
+impl Grade {
+    /// Upper bounds of each grade but F, in µs of added latency.
+    const BOUNDS: [(f64, Grade); 5] = [
+        (5_000.0, Grade::APlus),
+        (30_000.0, Grade::A),
+        (60_000.0, Grade::B),
+        (200_000.0, Grade::C),
+        (400_000.0, Grade::D),
+    ];
+
+    pub fn of(added_us: f64) -> Grade {
+        Self::BOUNDS
+            .iter()
+            .find(|(bound, _)| added_us < *bound)
+            .map_or(Grade::F, |(_, g)| *g)
+    }
+
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Grade::APlus => "A+",
+            Grade::A => "A",
+            Grade::B => "B",
+            Grade::C => "C",
+            Grade::D => "D",
+            Grade::F => "F",
+        }
+    }
+
+    /// C and below: the queue adds enough to be felt (a command 200 ms
+    /// late, video stutter); what a bufferbloat test calls bloat.
+    pub fn is_bufferbloat(self) -> bool {
+        self >= Grade::C
+    }
+}
+
 /// Whether the link queues before it drops: the highest p99 of a step
 /// that still lost under 1 %, against the first sweep step's.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Queueing {
-    /// Some step lost under 1 % yet its p99 reached twice the first's.
+    /// The latency added under load graded C or worse (60 ms or more).
     pub bufferbloat: bool,
+    /// `added_us` on the bufferbloat tests' scale.
+    pub grade: Grade,
     pub reference_p99_us: f64,
     pub worst_p99_us: f64,
     pub worst_at_hz: f64,
@@ -128,12 +179,15 @@ pub fn queueing(steps: &[StepFigures]) -> Option<Queueing> {
         .filter(|s| s.phase.sweeps() && s.complete && s.loss_ratio >= KNEE_MAX_LOSS)
         .map(|s| s.offered_hz)
         .reduce(f64::min);
+    let added_us = (worst_p99_us - reference).max(0.0);
+    let grade = Grade::of(added_us);
     Some(Queueing {
-        bufferbloat: worst_p99_us >= KNEE_MAX_P99_RATIO * reference,
+        bufferbloat: grade.is_bufferbloat(),
+        grade,
         reference_p99_us: reference,
         worst_p99_us,
         worst_at_hz,
-        added_us: (worst_p99_us - reference).max(0.0),
+        added_us,
         lost_at_hz,
     })
 }
@@ -200,6 +254,7 @@ mod tests {
         // Dropping before queueing: no step under 1 % loss reached 60 ms.
         let q = queueing(&steps).unwrap();
         assert!(!q.bufferbloat);
+        assert_eq!(q.grade, Grade::A, "20 ms added");
         assert_eq!((q.worst_p99_us, q.worst_at_hz), (50_000.0, 154.0));
         assert_eq!((q.added_us, q.lost_at_hz), (20_000.0, Some(168.0)));
     }
@@ -215,7 +270,43 @@ mod tests {
         assert_eq!(knee(&steps).unwrap().rate_hz, 100.0);
         let q = queueing(&steps).unwrap();
         assert!(q.bufferbloat);
+        assert_eq!(q.grade, Grade::F);
         assert_eq!((q.worst_at_hz, q.added_us), (200.0, 870_000.0));
+    }
+
+    #[test]
+    fn the_grade_follows_the_bufferbloat_scale_and_bloat_starts_at_c() {
+        let graded = [
+            (0.0, "A+"),
+            (4_999.0, "A+"),
+            (5_000.0, "A"),
+            (29_999.0, "A"),
+            (30_000.0, "B"),
+            (59_999.0, "B"),
+            (60_000.0, "C"),
+            (199_999.0, "C"),
+            (200_000.0, "D"),
+            (399_999.0, "D"),
+            (400_000.0, "F"),
+            (2e6, "F"),
+        ];
+        for (added, grade) in graded {
+            let g = Grade::of(added);
+            assert_eq!(g.as_str(), grade, "{added} µs");
+            assert_eq!(serde_json::to_value(g).unwrap(), grade);
+            assert_eq!(g.is_bufferbloat(), added >= 60_000.0, "{added} µs");
+        }
+        // A 30 ms queue on a 0.1 ms link: B, not bloat; 1 s of queue is.
+        let q = |p99_ms| {
+            let steps = judged(vec![
+                step(1, Phase::Ramp, 10.0, 0.0, 0.1),
+                step(2, Phase::Ramp, 50.0, 0.0, p99_ms),
+                step(3, Phase::Ramp, 100.0, 0.3, 2000.0),
+            ]);
+            queueing(&steps).unwrap()
+        };
+        assert_eq!((q(45.0).grade, q(45.0).bufferbloat), (Grade::B, false));
+        assert_eq!((q(1000.0).grade, q(1000.0).bufferbloat), (Grade::F, true));
     }
 
     #[test]

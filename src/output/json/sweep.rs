@@ -94,6 +94,7 @@ struct Figures {
     radio: Option<StepRadio>,
     complete: bool,
     passed: Option<bool>,
+    retry: bool,
 }
 
 /// A step's RTT over every responder's in-time replies, in µs.
@@ -129,6 +130,7 @@ impl Figures {
             radio: s.radio,
             complete: s.complete,
             passed: s.passed,
+            retry: s.retry,
         }
     }
 }

@@ -482,14 +482,16 @@ pub(super) fn write_summary(
         write_radio(out, r)?;
     }
     if let Some(sweep) = &s.sweep {
-        super::sweep::write_summary(out, sweep, s.wire.as_ref(), steps_shown)?;
+        let probe = s.probe.as_str().to_uppercase();
+        super::sweep::write_summary(out, sweep, &probe, s.wire.as_ref(), steps_shown)?;
     }
     if let Some(w) = &s.wire {
         write!(
             out,
-            "wire: {} baud carries ~{:.0} PINGs/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
+            "wire: {} baud carries ~{:.0} {}s/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
             w.baud,
             w.max_rate_hz.floor(),
+            w.message,
             ms_us(w.floor_us),
             w.request_bytes,
             w.reply_bytes

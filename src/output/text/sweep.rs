@@ -158,9 +158,11 @@ fn knee_mark(s: &StepFigures) -> &'static str {
 }
 
 fn row(s: &StepFigures) -> String {
+    // A retry is named as such: the rate of the row above, once more.
+    let name = if s.retry { "retry" } else { s.phase.name() };
     let phase = match (s.phase, s.load) {
-        (Phase::Ramp | Phase::Refine, true) => format!("{}+load", s.phase.name()),
-        _ => s.phase.name().to_string(),
+        (Phase::Ramp | Phase::Refine, true) => format!("{name}+load"),
+        _ => name.to_string(),
     };
     let (p50, p99) = match s.rtt {
         Some(r) => (ms_us(r.p50_us), ms_us(r.p99_us)),
@@ -204,6 +206,7 @@ fn row(s: &StepFigures) -> String {
 pub(super) fn write_summary(
     out: &mut impl Write,
     s: &SweepSummary,
+    probe: &str,
     wire: Option<&WireBudget>,
     shown: usize,
 ) -> io::Result<()> {
@@ -233,7 +236,7 @@ pub(super) fn write_summary(
         )
     });
     if s.kind == "sweep" {
-        write_knee(out, s, baud.as_deref())?;
+        write_knee(out, s, probe, baud.as_deref())?;
         if let Some(q) = &s.queueing {
             write_queueing(out, q)?;
         }
@@ -252,7 +255,7 @@ pub(super) fn write_summary(
     if let Some(e) = &s.load_effect {
         writeln!(
             out,
-            "under load: PING p99 at {}/s {} from {} ms to {} ms: {:+.3} ms ({:+.0}%); p50 {} -> {} ms",
+            "under load: {probe} p99 at {}/s {} from {} ms to {} ms: {:+.3} ms ({:+.0}%); p50 {} -> {} ms",
             hz(e.rate_hz),
             if e.p99_rise_us >= 0.0 { "rose" } else { "fell" },
             ms_us(e.unloaded_p99_us),
@@ -267,7 +270,12 @@ pub(super) fn write_summary(
 }
 
 /// Where the sweep found the knee, beside what the baud rate alone says.
-fn write_knee(out: &mut impl Write, s: &SweepSummary, baud: Option<&str>) -> io::Result<()> {
+fn write_knee(
+    out: &mut impl Write,
+    s: &SweepSummary,
+    probe: &str,
+    baud: Option<&str>,
+) -> io::Result<()> {
     match &s.knee {
         Some(k) => {
             let above = match k.failed_above_hz {
@@ -278,7 +286,7 @@ fn write_knee(out: &mut impl Write, s: &SweepSummary, baud: Option<&str>) -> io:
             };
             writeln!(
                 out,
-                "knee: {} PINGs/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, \
+                "knee: {} {probe}s/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, \
                  loss {:.2}%, p99 {} ms{above}{}",
                 hz(k.rate_hz),
                 k.bytes_per_s,
@@ -292,26 +300,30 @@ fn write_knee(out: &mut impl Write, s: &SweepSummary, baud: Option<&str>) -> io:
         }
         None => writeln!(
             out,
-            "knee: none: no step lost under 1% with a p99 under twice the first step's{}",
+            "knee: none: no step lost under 1% with a p99 under twice the first step's (or under \
+             30 ms over it){}",
             baud.unwrap_or_default()
         )?,
     }
     Ok(())
 }
 
-/// Whether the link queued before it dropped (bufferbloat).
+/// Whether the link queued before it dropped: the latency it added under
+/// load, graded, and "bufferbloat" from grade C down.
 fn write_queueing(
     out: &mut impl Write,
     q: &crate::engine::sweep::verdict::Queueing,
 ) -> io::Result<()> {
+    let grade = q.grade.as_str();
+    let added = ms_us(q.added_us);
     if q.bufferbloat {
         writeln!(
             out,
-            "queueing: bufferbloat: at {}/s the link lost under 1% yet its p99 reached {} ms, \
-             {} ms over the first step's {} ms: it queues before it drops",
+            "queueing: bufferbloat, grade {grade} (+{added} ms under load): at {}/s the link lost \
+             under 1% yet its p99 reached {} ms, over the first step's {} ms: it queues before it \
+             drops",
             hz(q.worst_at_hz),
             ms_us(q.worst_p99_us),
-            ms_us(q.added_us),
             ms_us(q.reference_p99_us)
         )?;
     } else {
@@ -324,8 +336,8 @@ fn write_queueing(
         };
         writeln!(
             out,
-            "queueing: none to speak of: while it lost under 1%, the p99 stayed under twice the \
-             first step's {} ms (at most {} ms, at {}/s){then}",
+            "queueing: grade {grade} (+{added} ms under load), no bufferbloat: while it lost under \
+             1%, the p99 rose from the first step's {} ms to at most {} ms (at {}/s){then}",
             ms_us(q.reference_p99_us),
             ms_us(q.worst_p99_us),
             hz(q.worst_at_hz)
@@ -365,7 +377,7 @@ mod tests {
     fn the_summary_names_the_knee_beside_the_baud_capacity() {
         let mut out = Vec::new();
         let wire = crate::engine::capacity::budget(57_600, crate::frame::Version::V2, 99, 1);
-        write_summary(&mut out, &summary(), Some(&wire), 0).unwrap();
+        write_summary(&mut out, &summary(), "PING", Some(&wire), 0).unwrap();
         let text = String::from_utf8(out).unwrap();
         let lines: Vec<&str> = text.lines().collect();
         let header = header();
@@ -382,6 +394,10 @@ mod tests {
             "{text}"
         );
         assert!(text.contains("drops before it queues"), "{text}");
+        assert!(
+            text.contains("queueing: grade A+ (+0.000 ms under load), no bufferbloat: "),
+            "{text}"
+        );
         // Rows line up under the header: every column ends where its
         // header does.
         for col in ["rate/s", "p99 ms", "rx B/s"] {
@@ -391,5 +407,29 @@ mod tests {
                 assert_eq!(row.as_bytes()[end], b' ', "{col}: {row}");
             }
         }
+    }
+
+    #[test]
+    fn a_retry_is_named_in_its_row_and_a_bloated_queue_by_its_grade() {
+        let mut s = StepFigures::test(Phase::Refine, 59.5, 0.0);
+        (s.index, s.passed, s.retry) = (10, Some(false), true);
+        let line = row(&s);
+        assert!(line.starts_with("  10 retry         59.5 "), "{line}");
+        assert!(line.ends_with("  p99"), "{line}");
+        s.load = true;
+        assert!(row(&s).contains(" retry+load "), "{}", row(&s));
+        let mut summary = summary();
+        let q = summary.queueing.as_mut().unwrap();
+        (q.added_us, q.worst_p99_us) = (371_368.0, 383_368.0);
+        q.grade = crate::engine::sweep::verdict::Grade::of(q.added_us);
+        q.bufferbloat = q.grade.is_bufferbloat();
+        let mut out = Vec::new();
+        write_summary(&mut out, &summary, "TIMESYNC", None, 3).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(
+            text.contains("queueing: bufferbloat, grade D (+371.368 ms under load): at 20/s"),
+            "{text}"
+        );
+        assert!(text.contains("knee: 20 TIMESYNCs/s ("), "{text}");
     }
 }
