@@ -467,10 +467,18 @@ fn validate_probe(cli: &PingArgs, links: &[LinkSpec]) -> Result<Probe, ConfigErr
         }
         return Ok(Probe::Passive { gap: cli.gap });
     }
+    // A sweep or a load run measures one exchange whose frame sizes its
+    // wire figures and knee are in: under `auto` that is PING (an
+    // ArduPilot is swept with --probe timesync).
+    let in_steps = cli.sweep || !cli.load.is_empty();
+    let kind = match cli.probe {
+        ProbeKind::Auto if in_steps => ProbeKind::Ping,
+        kind => kind,
+    };
     probe_of(
         Keys::Flags,
         &ProbeChoice {
-            kind: cli.probe,
+            kind,
             target: cli.target.as_deref(),
             command: &cli.command,
             retry_interval: cli.retry_interval,
@@ -724,6 +732,11 @@ mod tests {
             }
         );
         assert_eq!(config("sim:").unwrap().probe, Probe::Auto);
+        assert_eq!(config("--sweep sim:").unwrap().probe, Probe::Ping);
+        assert_eq!(
+            config("--load ATTITUDE@10 sim:").unwrap().probe,
+            Probe::Ping
+        );
         assert_eq!(config("--probe ping sim:").unwrap().probe, Probe::Ping);
         assert_eq!(
             config("--probe timesync sim:").unwrap().probe,

@@ -325,8 +325,14 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
         return hints;
     }
     let junk = f.skipped_bytes + f.bad_crc + f.truncated > 0;
+    // Answered requests stay undecided until their timeout (a duplicate
+    // may follow): too early only while nothing has answered at all.
     let decided = o.requests.saturating_sub(o.undecided);
-    if decided == 0 && o.requests > 0 {
+    let answered_any = o
+        .responders
+        .iter()
+        .any(|r| r.counts.received > 0 || r.counts.late > 0);
+    if decided == 0 && o.requests > 0 && !answered_any {
         // Silence proves nothing yet; bytes that are no MAVLink do.
         if f.frames == 0 && junk {
             hints.push(not_mavlink(o));

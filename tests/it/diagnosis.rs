@@ -118,15 +118,15 @@ fn silent_run(peer_args: &[&str], mavping_args: &[&str]) -> Value {
 
 #[test]
 fn a_silent_system_is_diagnosed_by_what_it_showed() {
-    let s = silent_run(&["--autopilot", "3"], &[]);
+    let s = silent_run(&["--autopilot", "3"], &["--probe", "ping"]);
     assert_eq!(codes(&s), ["timesync_only"], "{s}");
     assert!(hint(&s, "timesync_only").ends_with("try --probe timesync"));
     let s = silent_run(&["--autopilot", "3"], &["--probe", "timesync"]);
     assert_eq!(codes(&s), ["sysid_enforced"], "{s}");
-    let s = silent_run(&["--autopilot", "12"], &[]);
+    let s = silent_run(&["--autopilot", "12"], &["--probe", "ping"]);
     assert_eq!(codes(&s), ["never_answered"], "{s}");
     assert!(hint(&s, "never_answered").contains("ignores our ids 250/190"));
-    let s = silent_run(&["--autopilot", "12", "--mavlink1"], &[]);
+    let s = silent_run(&["--autopilot", "12", "--mavlink1"], &["--probe", "ping"]);
     assert_eq!(codes(&s), ["mavlink1_only"], "{s}");
 }
 

@@ -207,6 +207,10 @@ fn flood_of_foreign_traffic_leaves_the_responders_counts_exact() {
     let mut ping = mavping()
         .args([
             "--json",
+            // PING to everyone: the flood's systems would draw TIMESYNC
+            // under auto, which respond answers too (its own counts).
+            "--probe",
+            "ping",
             "-c",
             "300",
             "-i",

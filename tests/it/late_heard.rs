@@ -25,10 +25,12 @@ fn figures(s: &Value, id: &str) -> [u64; 7] {
 
 #[test]
 fn replies_that_all_come_late_are_charged_as_lost_and_late() {
+    // PING throughout (auto would move an unanswered PX4 to TIMESYNC).
     // A request every 30 s, 70 s round trip, 2 s timeout: replies to 0 and
     // 1 come (late) within the run, the others after it ends.
     let link = "sim:?delay=35s&clock=virtual";
-    let (code, out, err) = run_mavping(&["--json", "-c", "5", "-i", "30s", link]);
+    let (code, out, err) =
+        run_mavping(&["--json", "--probe", "ping", "-c", "5", "-i", "30s", link]);
     assert_eq!(code, 1, "nothing came in time: {out}\n{err}");
     let s = checked_summary(&out);
     assert_eq!(n(&s, "requests"), 5);
@@ -40,7 +42,7 @@ fn replies_that_all_come_late_are_charged_as_lost_and_late() {
         .count();
     assert_eq!(lost, 5, "a lost event for every request: {out}");
 
-    let (_, text, _) = run_mavping(&["-c", "5", "-i", "30s", link]);
+    let (_, text, _) = run_mavping(&["--probe", "ping", "-c", "5", "-i", "30s", link]);
     assert!(
         text.contains(
             "1/1 (quadrotor, px4): 5 sent, 0 received, 5 lost (100.0%), 2 late, 0 duplicate, 0 out of order\n"
@@ -54,7 +56,9 @@ fn requests_before_the_first_answer_are_not_charged_and_the_text_says_so() {
     // The link is out for the first 40 s (requests 0-3), then answers every
     // request in time (70 s round trip, 80 s timeout).
     let link = "sim:?delay=35s&outage=0s+40s&clock=virtual";
-    let args = ["-c", "10", "-i", "10s", "-W", "80s", link];
+    let args = [
+        "--probe", "ping", "-c", "10", "-i", "10s", "-W", "80s", link,
+    ];
     let (code, out, err) = run_mavping(&[&["--json", "-q"][..], &args].concat());
     assert_eq!(code, 0, "{out}\n{err}");
     let s = checked_summary(&out);

@@ -104,12 +104,12 @@ fn sim_links_that_differ_in_ids_or_ping_run_side_by_side() {
     let list = std::env::temp_dir().join(format!("mavping-sim-ids-{}.txt", std::process::id()));
     std::fs::write(
         &list,
-        "sim:?sysid=7&clock=virtual\nsim:?sysid=8&clock=virtual\nsim:?ping=off&clock=virtual\n",
+        "sim:?sysid=7&clock=virtual\nsim:?sysid=8&clock=virtual\nsim:?ping=off&clock=virtual&loss=100%\n",
     )
     .unwrap();
     let (code, out, err) = run_mavping(&["-c", "3", "-q", "-f", list.to_str().unwrap()]);
     let _ = std::fs::remove_file(&list);
-    assert_eq!(code, 1, "the PING-less one answers nothing: {out}{err}");
+    assert_eq!(code, 1, "the one that loses everything fails: {out}{err}");
     for (name, responder) in [("sysid=7", "7/1"), ("sysid=8", "8/1")] {
         let section = out
             .split("--- ")

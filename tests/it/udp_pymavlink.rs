@@ -91,6 +91,8 @@ fn a_system_that_never_answers_ping_gets_the_timesync_hint() {
         ],
     );
     let (code, out, err) = run_mavping(&[
+        "--probe",
+        "ping",
         "-c",
         "3",
         "-i",
