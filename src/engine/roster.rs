@@ -10,8 +10,7 @@ use serde::Serialize;
 use super::Nanos;
 use crate::frame::{self, SysComp, Version};
 
-/// MAV_AUTOPILOT_ARDUPILOTMEGA: every ArduPilot vehicle.
-pub const AUTOPILOT_ARDUPILOT: u8 = 3;
+pub use crate::frame::AUTOPILOT_ARDUPILOT;
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Identity {

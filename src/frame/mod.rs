@@ -167,6 +167,9 @@ pub mod mav_type {
 /// MAV_AUTOPILOT_INVALID: what a GCS puts in its HEARTBEAT.
 pub const AUTOPILOT_INVALID: u8 = 8;
 
+/// MAV_AUTOPILOT_ARDUPILOTMEGA: every ArduPilot vehicle.
+pub const AUTOPILOT_ARDUPILOT: u8 = 3;
+
 /// Human name of a MAV_TYPE value ("quadrotor"), from the dialect.
 pub fn vehicle_type_name(value: u8) -> String {
     codec::enum_name::<mavlink::dialects::ardupilotmega::MavType>(u32::from(value), "MAV_TYPE_")

@@ -264,7 +264,7 @@ const fn heartbeat(answers_ping: bool) -> Msg {
         autopilot: if answers_ping {
             12 // PX4
         } else {
-            crate::engine::roster::AUTOPILOT_ARDUPILOT
+            crate::frame::AUTOPILOT_ARDUPILOT
         },
     }
 }

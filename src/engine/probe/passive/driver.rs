@@ -23,7 +23,7 @@ use crate::engine::roster::{Identity, Roster};
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
-use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::summary::passive::{PassiveSummary, SeqCounts, TableSummary};
 use crate::engine::summary::{Interim, LinkSummary, PassiveInterim, ProbeName};
 use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{Frame, SysComp};
@@ -127,7 +127,17 @@ impl PassiveDriver {
 
 /// The link's totals, for the flight's windows.
 fn totals(table: &SourceTable, at: Nanos) -> Totals {
-    Totals::of(&table.summary(at).totals.counts)
+    totals_of(&table.summary(at).totals.counts)
+}
+
+/// The figures of `c` the flight's windows count. (The flight module
+/// names no summary type: the summary names the flight's.)
+fn totals_of(c: &SeqCounts) -> Totals {
+    Totals {
+        received: c.received,
+        duplicate: c.duplicate,
+        lost: c.lost,
+    }
 }
 
 /// Tells `observer` the flight's events closed since the last telling.
@@ -255,7 +265,7 @@ impl Driver for PassiveDriver {
         let flight = self
             .flight
             .as_ref()
-            .map(|f| f.summary(at, Totals::of(&table.totals.counts)));
+            .map(|f| f.summary(at, totals_of(&table.totals.counts)));
         let summary = PassiveSummary {
             link: end.cfg.link_name.clone(),
             ours: end.cfg.ours,

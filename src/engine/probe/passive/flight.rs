@@ -27,9 +27,7 @@ use std::collections::VecDeque;
 
 use serde::Serialize;
 
-use super::tracker::RADIO_SOURCE;
 use crate::engine::radio::SinceBootCounter;
-use crate::engine::summary::passive::SeqCounts;
 use crate::engine::Nanos;
 use crate::frame::{Fix, FixKind, Msg, RadioStatus, SysComp};
 
@@ -132,16 +130,6 @@ pub struct Totals {
     pub received: u64,
     pub duplicate: u64,
     pub lost: u64,
-}
-
-impl Totals {
-    pub fn of(c: &SeqCounts) -> Self {
-        Totals {
-            received: c.received,
-            duplicate: c.duplicate,
-            lost: c.lost,
-        }
-    }
 }
 
 /// Where the distances are measured from.
@@ -276,7 +264,7 @@ impl Flight {
     /// Takes one frame in: its time for the silences, a RADIO_STATUS or a
     /// position for the window under way.
     pub fn on_frame(&mut self, source: SysComp, msg: &Msg, at: Nanos) {
-        if source != RADIO_SOURCE {
+        if !crate::engine::radio::is_sik_default(source) {
             self.heard(at);
         }
         match msg {
@@ -555,6 +543,8 @@ pub fn haversine_m(a: (f64, f64), b: (f64, f64)) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    /// The SiK radio's own ids (51/68), as the source table names them.
+    const RADIO_SOURCE: SysComp = SysComp::new(51, 68);
     use super::*;
 
     const S: Nanos = 1_000_000_000;
