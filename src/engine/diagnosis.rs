@@ -341,9 +341,10 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
         return hints;
     }
     if f.frames == 0 && hints.is_empty() {
-        hints.push(match junk {
-            true => not_mavlink(o),
-            false => nothing_heard(o),
+        hints.push(if junk {
+            not_mavlink(o)
+        } else {
+            nothing_heard(o)
         });
         if o.ours == QGC_IDS && o.kind != LinkKind::Serial {
             hints.push(our_ids_are_qgcs(""));
