@@ -162,7 +162,7 @@ impl Screen {
 /// Opens every link; the ones that opened, and the names of the others.
 /// Errors and warnings are printed here, before a live view takes the
 /// screen.
-async fn open(config: &Config) -> (Vec<(&LinkConfig, Link)>, Vec<&str>) {
+async fn open(config: &Config) -> (Vec<(&LinkConfig, Link)>, Vec<(&str, String)>) {
     let several = config.links.len() > 1;
     let opening = config
         .links
@@ -181,7 +181,7 @@ async fn open(config: &Config) -> (Vec<(&LinkConfig, Link)>, Vec<&str>) {
             }
             Err(e) => {
                 stderr::error(&error_line(several, name, &e.to_string()));
-                unopened.push(name.as_str());
+                unopened.push((name.as_str(), e.to_string()));
             }
         }
     }
@@ -318,8 +318,11 @@ pub async fn run(config: &Config, controls: Controls) -> Ending {
         Err(ending) => return ending,
     };
     let runs = attach(opened, config, &screen, &exports, &controls, wall);
-    for (k, name) in unopened.iter().enumerate() {
+    for (k, (name, error)) in unopened.iter().enumerate() {
         exports.unopened(runs.len() + k, name);
+        if let Some(view) = &screen.view {
+            view.unopened(name, error);
+        }
     }
     let announce = several && screen.view.is_none();
     let live = screen.view.is_some();

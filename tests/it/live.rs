@@ -267,3 +267,30 @@ fn live_falls_back_to_text_when_stdout_is_not_a_terminal() {
     assert!(stdout.contains("reply from 1/1: seq=2"), "{stdout}");
     assert!(stdout.contains("mavping statistics"), "{stdout}");
 }
+
+/// A link that cannot be opened shows in the view, among those that run,
+/// with the reason its error line gives (it was hidden until the view
+/// closed); the run ends with exit 2 for it.
+#[test]
+fn a_link_that_failed_to_open_is_shown_in_the_view() {
+    let missing = format!("/dev/mavping-missing-{}", std::process::id());
+    let sim = "sim:?delay=5ms";
+    let tmux = live("unopened", &format!("'{sim}' serial:{missing}:57600"), 100, 24);
+    let screen = tmux.wait_for_screen("a row and the failed link", |s| {
+        rows(s).len() == 1 && s.contains(": failed: cannot open serial:")
+    });
+    assert!(
+        screen.contains(&format!("serial:{missing}:57600: failed: cannot open")),
+        "{screen}"
+    );
+    assert!(screen.contains("No such file or directory"), "{screen}");
+    tmux.send_keys("q");
+    let screen = tmux.wait_for("exit=", |s| s.contains("exit="));
+    assert!(screen.contains("exit=2"), "{screen}");
+    assert!(
+        screen
+            .lines()
+            .any(|l| l.starts_with("--- sim:?delay=5ms") && l.ends_with("mavping statistics ---")),
+        "{screen}"
+    );
+}

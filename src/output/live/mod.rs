@@ -90,6 +90,9 @@ pub struct LiveState {
     /// Session time of the latest event.
     now: Nanos,
     waiting: bool,
+    /// The link failed (to open, or during the run): why, as its error
+    /// line says, shown in its section while the others go on.
+    failed: Option<String>,
     tracks: BTreeMap<SysComp, Track>,
     /// A passive run's sources (`None` in a probe run, whose table is told
     /// for its direction split only).
@@ -129,10 +132,10 @@ impl LiveState {
                 | Event::Step(_)
                 | Event::Sources { .. }
                 | Event::Progress { .. }
-                | Event::Flight(_)
-                | Event::LinkFailed { .. },
+                | Event::Flight(_),
                 _,
             ) => {}
+            (Event::LinkFailed { error, .. }, _) => self.failed = Some(error.to_string()),
         }
     }
 
@@ -176,6 +179,7 @@ impl LiveState {
             probe: self.probe,
             now: self.now,
             waiting: self.waiting,
+            failed: self.failed.clone(),
             rows: match &self.sources {
                 Some(sources) => Rows::Passive(sources.rows()),
                 None => Rows::Echo(self.echo_rows()),
@@ -254,6 +258,8 @@ pub struct Screen {
     /// Session time of the latest event.
     pub now: Nanos,
     pub waiting: bool,
+    /// Why the link failed, if it did.
+    pub failed: Option<String>,
     pub rows: Rows,
 }
 
@@ -338,6 +344,17 @@ impl LiveView {
             states: self.states.clone(),
             index: states.len() - 1,
         }
+    }
+
+    /// A link that could not be opened: a section that says so, among
+    /// the links that run (its error line printed before the view took
+    /// the screen is hidden while it shows).
+    pub fn unopened(&self, link: &str, error: &str) {
+        lock(&self.states).push(LiveState {
+            link: link.to_string(),
+            failed: Some(error.to_string()),
+            ..LiveState::default()
+        });
     }
 
     /// Gives the terminal back.

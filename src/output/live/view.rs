@@ -212,9 +212,11 @@ fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, cells: &[Cells], 
 
     let slots = usize::from(area.height.saturating_sub(SECTION_FRAME));
     let hidden = screen.rows.len().saturating_sub(slots);
-    let status = match &screen.rows {
-        Rows::Echo(_) if screen.waiting => ": waiting for a peer",
-        rows @ Rows::Passive(_) if rows.is_empty() => ": nothing heard yet",
+    let failed = screen.failed.as_ref().map(|e| format!(": failed: {e}"));
+    let status = match (&screen.rows, &failed) {
+        (_, Some(failed)) => failed.as_str(),
+        (Rows::Echo(_), None) if screen.waiting => ": waiting for a peer",
+        (rows @ Rows::Passive(_), None) if rows.is_empty() => ": nothing heard yet",
         _ => "",
     };
     let mut block = Block::bordered().title(format!(
