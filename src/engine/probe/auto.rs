@@ -21,7 +21,7 @@ use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::{Lookup, MAX_RESPONDERS};
 use crate::engine::roster::AUTOPILOT_ARDUPILOT;
 use crate::engine::Nanos;
-use crate::frame::{Frame, Msg, SysComp};
+use crate::frame::{mav_type, Frame, Msg, SysComp};
 
 /// PINGs a responder heard by its HEARTBEAT may leave unanswered (the
 /// first of them for a whole timeout) before it is asked by TIMESYNC:
@@ -174,6 +174,10 @@ impl EchoProbe for AutoProbe {
 
     fn heard(&mut self, frame: &Frame, ours: SysComp) {
         match frame.msg {
+            // A ground station or router (QGroundControl, MAVProxy) answers
+            // neither probe: asking it by TIMESYNC too would only double
+            // what goes on the link.
+            Msg::Heartbeat { mav_type, .. } if mav_type == mav_type::GCS => {}
             Msg::Heartbeat { autopilot, .. } if frame.source != ours => {
                 self.heard_heartbeat(frame.source, autopilot);
             }
@@ -380,5 +384,23 @@ mod tests {
         p.heard(&heartbeat(US, AUTOPILOT_ARDUPILOT), US);
         assert!(p.choices.is_empty());
         assert!(!p.measures_clocks());
+    }
+
+    #[test]
+    fn a_ground_station_heard_draws_no_timesync() {
+        let mut p = AutoProbe::new(1_000_000, false, SECOND);
+        let gcs = frame(
+            SysComp::new(255, 190),
+            Msg::Heartbeat {
+                mav_type: mav_type::GCS,
+                autopilot: crate::frame::AUTOPILOT_INVALID,
+            },
+        );
+        p.heard(&gcs, US);
+        for k in 0..10 {
+            let token = p.token(k * SECOND);
+            assert_eq!(p.second_request(k as u32, token), None, "request {k}");
+        }
+        assert_eq!(p.used_by(SysComp::new(255, 190)), Some(ProbeName::Ping));
     }
 }
