@@ -35,6 +35,9 @@ fi
 missing=()
 { command -v prometheus && command -v promtool; } >/dev/null || missing+=(prometheus)
 command -v tmux >/dev/null || missing+=(tmux)
+# tc and ip make the token-bucket queue in a network namespace that the
+# sweep's kernel-queue test measures.
+{ command -v tc && command -v ip; } >/dev/null || missing+=(iproute2)
 # man renders the committed man pages in a test (man-db brings groff).
 command -v man >/dev/null || missing+=(man-db)
 [ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || missing+=(fonts-dejavu-core)

@@ -114,19 +114,7 @@ impl ResponderCore {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::Version;
-
-    fn from(source: SysComp, msg: Msg) -> Frame {
-        Frame {
-            version: Version::V2,
-            source,
-            packet_seq: 0,
-            msgid: 0,
-            signed: false,
-            len: 0,
-            msg,
-        }
-    }
+    use crate::frame::test_frame as from;
 
     const GCS: SysComp = SysComp::new(255, 190);
 

@@ -318,38 +318,45 @@ fn respond_on_a_port_in_use_exits_2() {
     assert!(err.contains("in use"), "{err}");
 }
 
+/// `mavping respond RESPOND_LINK` started 1.5 s before a pinger on
+/// `pinger_link` (5 PINGs, `interval` apart, timeout `wait`): the pinger's
+/// 5/5 and what respond printed (its exit code, stdout, stderr).
+fn respond_before_its_pinger(
+    respond_link: &str,
+    pinger_link: &str,
+    interval: &str,
+    wait: &str,
+) -> (i32, String, String) {
+    let respond = mavping()
+        .args(["respond", respond_link])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Long enough for HEARTBEATs to hit the closed port and draw ICMP, or
+    // for a tcp client to be refused several times.
+    std::thread::sleep(Duration::from_millis(1500));
+    let (code, out, err) = run_mavping(&["-c", "5", "-i", interval, "-W", wait, pinger_link]);
+    signal(respond.id(), "TERM");
+    let (respond_code, respond_out, respond_err) = wait_output(respond, Duration::from_secs(10));
+    assert_eq!(code, 0, "{out}{err}\nrespond: {respond_out}{respond_err}");
+    let counts = text_counts(&out, "1/1").expect("1/1 answered");
+    assert_eq!((counts.received, counts.lost), (5, 0), "{out}");
+    assert!(respond_out.contains("5 replies sent"), "{respond_out}");
+    (respond_code, respond_out, respond_err)
+}
+
 /// A responder may start before its pinger: the ICMP "port unreachable"
 /// its first HEARTBEATs draw must not end it (this raced in a test).
 #[test]
 fn respond_udpout_outlives_a_pinger_that_is_not_up_yet() {
     let port = free_udp_port();
-    let respond = mavping()
-        .args(["respond", &format!("udpout:127.0.0.1:{port}")])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    // Long enough for HEARTBEATs to hit the closed port and draw ICMP.
-    std::thread::sleep(Duration::from_millis(1500));
-    let (code, out, err) = run_mavping(&[
-        "-c",
-        "5",
-        "-i",
-        "50ms",
-        "-W",
-        "2s",
+    respond_before_its_pinger(
+        &format!("udpout:127.0.0.1:{port}"),
         &format!("udpin:127.0.0.1:{port}"),
-    ]);
-    signal(respond.id(), "TERM");
-    let (_, respond_out, respond_err) = wait_output(respond, Duration::from_secs(10));
-    assert_eq!(
-        code, 0,
-        "{out}{err}
-respond: {respond_out}{respond_err}"
+        "50ms",
+        "2s",
     );
-    let counts = text_counts(&out, "1/1").expect("1/1 answered");
-    assert_eq!((counts.received, counts.lost), (5, 0), "{out}");
-    assert!(respond_out.contains("5 replies sent"), "{respond_out}");
 }
 
 /// The same on `tcp:`: a responder started before the pinger's listener
@@ -357,28 +364,12 @@ respond: {respond_out}{respond_err}"
 #[test]
 fn respond_tcp_waits_for_a_listener_that_is_not_up_yet() {
     let port = free_tcp_port();
-    let respond = mavping()
-        .args(["respond", &format!("tcp:127.0.0.1:{port}")])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    std::thread::sleep(Duration::from_millis(1500));
-    let (code, out, err) = run_mavping(&[
-        "-c",
-        "5",
-        "-i",
-        "100ms",
-        "-W",
-        "5s",
+    let (respond_code, _, respond_err) = respond_before_its_pinger(
+        &format!("tcp:127.0.0.1:{port}"),
         &format!("tcpin:127.0.0.1:{port}"),
-    ]);
-    signal(respond.id(), "TERM");
-    let (respond_code, respond_out, respond_err) = wait_output(respond, Duration::from_secs(10));
-    assert_eq!(code, 0, "{out}{err}\nrespond: {respond_out}{respond_err}");
-    let counts = text_counts(&out, "1/1").expect("1/1 answered");
-    assert_eq!((counts.received, counts.lost), (5, 0), "{out}");
-    assert!(respond_out.contains("5 replies sent"), "{respond_out}");
+        "100ms",
+        "5s",
+    );
     assert!(
         respond_err.contains("nothing listening yet"),
         "{respond_err}"

@@ -239,24 +239,12 @@ impl EchoProbe for AutoProbe {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::Version;
+    use crate::frame::test_frame as frame;
 
     const US: SysComp = SysComp::new(250, 190);
     const PX4: SysComp = SysComp::new(1, 1);
     const ARDU: SysComp = SysComp::new(2, 1);
     const SECOND: Nanos = 1_000_000_000;
-
-    fn frame(source: SysComp, msg: Msg) -> Frame {
-        Frame {
-            version: Version::V2,
-            source,
-            packet_seq: 0,
-            msgid: 0,
-            signed: false,
-            len: 0,
-            msg,
-        }
-    }
 
     fn heartbeat(source: SysComp, autopilot: u8) -> Frame {
         frame(

@@ -624,24 +624,12 @@ fn answer(r: &mut Request, responder: SysComp, in_progress: bool) -> Answer {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::frame::Version;
+    use crate::frame::test_frame as frame;
 
     const MS: Nanos = 1_000_000;
     const GCS: SysComp = SysComp::new(255, 190);
     const VEHICLE: SysComp = SysComp::new(1, 1);
     const CAMERA: SysComp = SysComp::new(1, 100);
-
-    fn frame(source: SysComp, msg: Msg) -> Frame {
-        Frame {
-            version: Version::V2,
-            source,
-            packet_seq: 0,
-            msgid: 0,
-            signed: false,
-            len: 0,
-            msg,
-        }
-    }
 
     fn ping(seq: u32, to: SysComp) -> Msg {
         Msg::Ping {
