@@ -181,13 +181,14 @@ impl EchoProbe for AutoProbe {
             Msg::Heartbeat { autopilot, .. } if frame.source != ours => {
                 self.heard_heartbeat(frame.source, autopilot);
             }
-            // A PING answered (in time or not) keeps its responder on PING
-            // unless it was already switched.
+            // A PING answered (in time or not) keeps its responder on PING,
+            // or takes it back to PING while no TIMESYNC of ours was
+            // answered (a HEARTBEAT that says ArduPilot, from a system that
+            // answers PING).
             Msg::Ping { .. } => {
                 let answered = matches!(self.ping.classify(frame, ours), Classified::Reply(_));
-                let undecided = self
-                    .choice(frame.source)
-                    .is_none_or(|c| c != Choice::Timesync);
+                let undecided = self.choice(frame.source) != Some(Choice::Timesync)
+                    || self.timesync.clock(frame.source).is_none();
                 if answered
                     && undecided
                     && (self.choices.len() < MAX_RESPONDERS
@@ -390,5 +391,25 @@ mod tests {
             assert_eq!(p.second_request(k as u32, token), None, "request {k}");
         }
         assert_eq!(p.used_by(SysComp::new(255, 190)), Some(ProbeName::Ping));
+    }
+
+    #[test]
+    fn a_heartbeat_that_says_ardupilot_from_a_system_answering_ping_goes_back_to_ping() {
+        let mut p = AutoProbe::new(1_000_000, false, SECOND);
+        p.heard(&heartbeat(ARDU, AUTOPILOT_ARDUPILOT), US);
+        let token = p.token(0);
+        let reply = frame(
+            ARDU,
+            Msg::Ping {
+                time_usec: token,
+                seq: 0,
+                target_system: US.sysid,
+                target_component: US.compid,
+            },
+        );
+        assert_eq!(p.used_by(ARDU), Some(ProbeName::Timesync));
+        p.heard(&reply, US);
+        assert_eq!(p.used_by(ARDU), Some(ProbeName::Ping));
+        assert!(matches!(p.classify(&reply, US), Classified::Reply(_)));
     }
 }
