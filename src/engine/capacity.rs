@@ -117,6 +117,15 @@ pub struct WireBudget {
     /// Request plus one reply at the baud: the part of every RTT the wire
     /// itself costs, before any radio or autopilot processing.
     pub floor_us: f64,
+    /// The device may pass data faster than the baud (a pty, USB CDC):
+    /// then the figures are a bound the run may not be under, and the
+    /// summary says whether the replies could tell.
+    #[serde(rename = "may_ignore_baud", serialize_with = "is_some")]
+    pub ignorer: Option<&'static str>,
+}
+
+fn is_some<S: serde::Serializer>(v: &Option<&'static str>, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_bool(v.is_some())
 }
 
 /// A PING exchange's budget.
@@ -145,6 +154,7 @@ fn sized(message: &'static str, baud: u32, request: u64, reply: u64, replies: u6
         replies: 0,
         max_rate_hz: 0.0,
         floor_us: (request + reply) as f64 / bytes_per_s * 1e6,
+        ignorer: None,
     }
     .with_replies(replies)
 }
@@ -174,7 +184,7 @@ pub fn for_link(
     let b = exchange_budget(exchange, baud, session.version, max_seq, replies);
     // Signed, our request and (from a peer that signs) each reply carry a
     // 13-byte signature more.
-    Some(match session.signing {
+    let b = match session.signing {
         Some(_) => sized(
             b.message,
             baud,
@@ -183,6 +193,10 @@ pub fn for_link(
             replies,
         ),
         None => b,
+    };
+    Some(WireBudget {
+        ignorer: link.baud_ignorer(),
+        ..b
     })
 }
 

@@ -50,6 +50,9 @@ pub enum HintCode {
     /// Replies came back faster than the baud rate allows: the device
     /// ignores it (USB CDC, a pty).
     BaudNotInEffect,
+    /// The device may ignore the baud rate (a pty, USB CDC) and the replies
+    /// were too slow to show whether it did: the wire figures are unproven.
+    BaudUnverified,
     /// A responder's causal clock-offset bounds do not intersect.
     ClockInconsistent,
     /// The link refused requests: its peer is not reading what we send.

@@ -50,16 +50,23 @@ impl LinkSpec {
     /// (a flight controller's own USB) or a pseudo-terminal pass data as
     /// fast as they can, whatever the baud rate says.
     pub fn may_ignore_baud(&self) -> bool {
+        self.baud_ignorer().is_some()
+    }
+
+    /// What kind of device may ignore the baud rate, as a summary names it.
+    pub fn baud_ignorer(&self) -> Option<&'static str> {
+        const KINDS: [(&str, &str); 4] = [
+            ("/dev/ttyACM", "a USB CDC port"),
+            ("/dev/pts/", "a pty"),
+            ("/dev/cu.usbmodem", "a USB CDC port"),
+            ("/dev/tty.usbmodem", "a USB CDC port"),
+        ];
         match self {
-            LinkSpec::Serial { path, .. } => [
-                "/dev/ttyACM",
-                "/dev/pts/",
-                "/dev/cu.usbmodem",
-                "/dev/tty.usbmodem",
-            ]
-            .iter()
-            .any(|prefix| path.starts_with(prefix)),
-            _ => false,
+            LinkSpec::Serial { path, .. } => KINDS
+                .iter()
+                .find(|(prefix, _)| path.starts_with(prefix))
+                .map(|&(_, kind)| kind),
+            _ => None,
         }
     }
 
@@ -279,6 +286,8 @@ mod tests {
         assert!(!spec("/dev/ttyUSB0").may_ignore_baud());
         assert!(!spec("serial:/dev/ttyAMA0:57600").may_ignore_baud());
         assert!(!spec("udpout:127.0.0.1:14550").may_ignore_baud());
+        assert_eq!(spec("/dev/pts/3").baud_ignorer(), Some("a pty"));
+        assert_eq!(spec("/dev/ttyACM0").baud_ignorer(), Some("a USB CDC port"));
     }
 
     fn hp(host: &str, port: u16) -> HostPort {

@@ -187,6 +187,46 @@ fn a_pty_ignores_the_baud_rate_and_the_summary_says_so() {
     assert!(!hints.iter().any(|h| h["code"] == "wire_overrun"), "{s}");
 }
 
+#[test]
+fn a_pty_at_a_high_baud_that_the_replies_cannot_disprove_is_flagged_unproven() {
+    // 921600 baud: a PING and its reply take 0.510 ms on a real UART. A pty
+    // may ignore that, but here the bridge sends replies in 4-byte pieces
+    // 2 ms apart, so every round trip is far above the floor: the replies
+    // cannot tell, and the summary must not present the wire figures as
+    // measured facts.
+    let (_bridge, a, b) = pty_bridge(&["--chunk", "4", "--chunk-delay-ms", "2"]);
+    let _responder = Peer::start("responder.py", &[&b, "--baud", "921600"]);
+    let link = format!("serial:{a}:921600");
+    let (code, out, err) =
+        run_mavping(&["--json", "-q", "-c", "5", "-i", "0.1", "-W", "1s", &link]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    let s = checked_summary(&out);
+    assert_eq!(n(responder(&s, "1/1"), "received"), 5, "{s}");
+    assert_eq!(s["wire"]["may_ignore_baud"], true, "{s}");
+    assert_eq!(s["wire"]["baud"], 921600, "{s}");
+    let hints = s["hints"].as_array().unwrap();
+    let codes: Vec<&str> = hints.iter().filter_map(|h| h["code"].as_str()).collect();
+    assert!(codes.contains(&"baud_unverified"), "{s}");
+    assert!(!codes.contains(&"baud_not_in_effect"), "{s}");
+    let text = hints
+        .iter()
+        .find(|h| h["code"] == "baud_unverified")
+        .unwrap()["text"]
+        .as_str()
+        .unwrap();
+    assert!(
+        text.contains("921600 baud") && text.contains("a pty") && text.contains("0.510 ms"),
+        "{text}"
+    );
+    // The text summary says it on the wire line itself.
+    let (code, out, err) = run_mavping(&["-c", "3", "-i", "0.1", "-W", "1s", &link]);
+    assert_eq!(code, 0, "{out}\n{err}");
+    assert!(
+        out.contains("wire (unproven on a pty): 921600 baud carries"),
+        "{out}"
+    );
+}
+
 /// A serial device another program holds exclusively (TIOCEXCL, as
 /// mavping and most ground stations open it) is "busy": exit 2 with the
 /// OS reason. Root ignores TIOCEXCL, so as root mavping runs as nobody.

@@ -231,6 +231,21 @@ impl Summary {
             ));
             return;
         }
+        if let (Some(device), Some(fastest)) = (budget.ignorer, fastest) {
+            self.hints.push(Hint::new(
+                HintCode::BaudUnverified,
+                format!(
+                    "the wire figures assume {} baud paces this link, but the device is {}, \
+                     which passes data as fast as it is read unless something behind it \
+                     paces it; the fastest reply ({:.3} ms) fits a {:.3} ms wire floor either \
+                     way, so they are unproven",
+                    budget.baud,
+                    device,
+                    fastest / 1e3,
+                    budget.floor_us / 1e3
+                ),
+            ));
+        }
         self.wire = Some(budget);
         let Some(rate) = self.schedule.map(|s| s.requested_rate_hz) else {
             return;

@@ -486,9 +486,13 @@ pub(super) fn write_summary(
         super::sweep::write_summary(out, sweep, &probe, s.wire.as_ref(), steps_shown)?;
     }
     if let Some(w) = &s.wire {
+        let unproven = w
+            .ignorer
+            .map(|device| format!(" (unproven on {device})"))
+            .unwrap_or_default();
         write!(
             out,
-            "wire: {} baud carries ~{:.0} {}s/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
+            "wire{unproven}: {} baud carries ~{:.0} {}s/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
             w.baud,
             w.max_rate_hz.floor(),
             w.message,
