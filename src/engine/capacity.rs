@@ -120,13 +120,11 @@ pub struct WireBudget {
     /// The device may pass data faster than the baud (a pty, USB CDC):
     /// then the figures are a bound the run may not be under, and the
     /// summary says whether the replies could tell.
-    #[serde(rename = "may_ignore_baud", serialize_with = "is_some")]
+    #[serde(skip)]
     pub ignorer: Option<&'static str>,
+    pub may_ignore_baud: bool,
 }
 
-fn is_some<S: serde::Serializer>(v: &Option<&'static str>, s: S) -> Result<S::Ok, S::Error> {
-    s.serialize_bool(v.is_some())
-}
 
 /// A PING exchange's budget.
 pub fn budget(baud: u32, version: Version, max_seq: u32, replies: u64) -> WireBudget {
@@ -155,6 +153,7 @@ fn sized(message: &'static str, baud: u32, request: u64, reply: u64, replies: u6
         max_rate_hz: 0.0,
         floor_us: (request + reply) as f64 / bytes_per_s * 1e6,
         ignorer: None,
+        may_ignore_baud: false,
     }
     .with_replies(replies)
 }
@@ -196,6 +195,7 @@ pub fn for_link(
     };
     Some(WireBudget {
         ignorer: link.baud_ignorer(),
+        may_ignore_baud: link.may_ignore_baud(),
         ..b
     })
 }
