@@ -146,7 +146,11 @@ fn dpkg(args: &[&str]) -> Output {
 fn installed() -> Option<String> {
     let out = run(
         "dpkg-query",
-        &["-W", "--showformat=${Version} ${db:Status-Status}", "mavping"],
+        &[
+            "-W",
+            "--showformat=${Version} ${db:Status-Status}",
+            "mavping",
+        ],
     );
     out.status.success().then(|| stdout(&out))
 }
@@ -193,7 +197,13 @@ fn build_deb(out: &Path) -> PathBuf {
         .arg(root.join("scripts/deb.sh"))
         .args(["--binary", env!("CARGO_BIN_EXE_mavping"), "--arch"])
         .arg(debian_arch())
-        .args(["--version", &test_version(), "--compression", "none", "--out"])
+        .args([
+            "--version",
+            &test_version(),
+            "--compression",
+            "none",
+            "--out",
+        ])
         .arg(out)
         .output()
         .unwrap();
@@ -235,7 +245,10 @@ fn the_debian_package_installs_a_hardened_disabled_service_and_purges_clean() {
         left.as_deref().is_none_or(|s| s.ends_with("not-installed")),
         "dpkg still knows mavping after the purge: {left:?}"
     );
-    for file in FILES.iter().chain(&["/etc/mavping", "/usr/share/doc/mavping"]) {
+    for file in FILES
+        .iter()
+        .chain(&["/etc/mavping", "/usr/share/doc/mavping"])
+    {
         assert!(!Path::new(file).exists(), "{file} is left after the purge");
     }
 }
@@ -243,10 +256,7 @@ fn the_debian_package_installs_a_hardened_disabled_service_and_purges_clean() {
 /// `dpkg -L`, the binary, the man pages, completions and the conffile.
 fn assert_files_installed() {
     let listed = stdout(&dpkg(&["-L", "mavping"]));
-    let mut files: Vec<&str> = listed
-        .lines()
-        .filter(|p| Path::new(p).is_file())
-        .collect();
+    let mut files: Vec<&str> = listed.lines().filter(|p| Path::new(p).is_file()).collect();
     files.sort_unstable();
     assert_eq!(files, FILES, "dpkg -L mavping:\n{listed}");
 
@@ -258,16 +268,25 @@ fn assert_files_installed() {
     );
     for (page, path) in [
         ("mavping", "/usr/share/man/man1/mavping.1.gz"),
-        ("mavping-respond", "/usr/share/man/man1/mavping-respond.1.gz"),
+        (
+            "mavping-respond",
+            "/usr/share/man/man1/mavping-respond.1.gz",
+        ),
     ] {
         let found = run("man", &["-w", page]);
         assert_eq!(stdout(&found).trim(), path, "man -w {page}: {found:?}");
     }
     let committed = Path::new(env!("CARGO_MANIFEST_DIR")).join("completions");
     for (file, installed) in [
-        ("mavping.bash", "/usr/share/bash-completion/completions/mavping"),
+        (
+            "mavping.bash",
+            "/usr/share/bash-completion/completions/mavping",
+        ),
         ("_mavping", "/usr/share/zsh/vendor-completions/_mavping"),
-        ("mavping.fish", "/usr/share/fish/vendor_completions.d/mavping.fish"),
+        (
+            "mavping.fish",
+            "/usr/share/fish/vendor_completions.d/mavping.fish",
+        ),
     ] {
         assert_eq!(
             std::fs::read(installed).unwrap(),
@@ -357,7 +376,11 @@ fn assert_serve_runs_unprivileged_with_the_installed_config() {
     ]);
     let server = Server::start_as(command, &["--config", CONFIG]);
     let status = std::fs::read_to_string(format!("/proc/{}/status", server.pid())).unwrap();
-    for line in ["Uid:\t65534\t65534\t65534\t65534", "NoNewPrivs:\t1", "CapEff:\t0000000000000000"] {
+    for line in [
+        "Uid:\t65534\t65534\t65534\t65534",
+        "NoNewPrivs:\t1",
+        "CapEff:\t0000000000000000",
+    ] {
         assert!(status.contains(line), "{line:?} not in:\n{status}");
     }
     let metrics = server.get("/metrics");
@@ -385,7 +408,11 @@ fn assert_serve_runs_unprivileged_with_the_installed_config() {
     let metrics = server.get("/metrics").body;
     assert_eq!(reloads(&metrics), Some(1.0), "{metrics}");
     assert_eq!(
-        sample(&metrics, "mavping_exporter_config_last_reload_successful", &[]),
+        sample(
+            &metrics,
+            "mavping_exporter_config_last_reload_successful",
+            &[]
+        ),
         Some(1.0)
     );
     assert_eq!(server.stop(), Some(0));
