@@ -155,19 +155,17 @@ fn installed() -> Option<String> {
     out.status.success().then(|| stdout(&out))
 }
 
+fn purge() -> Output {
+    dpkg(&["--purge", "mavping"])
+}
+
 /// Purges the package when dropped, whether the test passed or not.
 struct Installed;
-
-impl Installed {
-    fn purge(&self) -> Output {
-        dpkg(&["--purge", "mavping"])
-    }
-}
 
 impl Drop for Installed {
     fn drop(&mut self) {
         if installed().is_some() {
-            let out = self.purge();
+            let out = purge();
             assert!(out.status.success(), "dpkg --purge: {}", stderr(&out));
         }
     }
@@ -231,14 +229,14 @@ fn the_debian_package_installs_a_hardened_disabled_service_and_purges_clean() {
     let _lock = MachineLock::take();
     let out = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("deb-{}", std::process::id()));
     let deb = build_deb(&out);
-    let package = install(&deb);
+    let _installed = install(&deb);
     std::fs::remove_dir_all(&out).unwrap();
 
     assert_files_installed();
     assert_unit_verified_and_scored();
     assert_serve_runs_unprivileged_with_the_installed_config();
 
-    let purged = package.purge();
+    let purged = purge();
     assert!(purged.status.success(), "dpkg --purge: {}", stderr(&purged));
     let left = installed();
     assert!(
