@@ -3,7 +3,8 @@
 # peers the interop tests use in .venv — pymavlink (and pyserial, which it
 # needs to open a serial port), MAVProxy, and MAVSDK's mavsdk_server (the
 # static binary inside the mavsdk-grpc wheel) — installs the Prometheus
-# server and promtool, tmux, man and the DejaVu fonts, then runs cargo test.
+# server and promtool, tmux, man, systemd's tools and the DejaVu fonts,
+# then runs cargo test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -40,6 +41,9 @@ command -v tmux >/dev/null || missing+=(tmux)
 { command -v tc && command -v ip; } >/dev/null || missing+=(iproute2)
 # man renders the committed man pages in a test (man-db brings groff).
 command -v man >/dev/null || missing+=(man-db)
+# systemd-analyze and systemctl check the Debian package's unit in
+# tests/it/deb.rs (the package boots nothing; dpkg is always there).
+command -v systemd-analyze >/dev/null || missing+=(systemd)
 [ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || missing+=(fonts-dejavu-core)
 if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq

@@ -8,6 +8,7 @@ mod advice;
 mod cli;
 mod completions;
 mod contrib;
+mod deb;
 mod diagnosis;
 mod docs;
 mod endpoints;

@@ -599,6 +599,18 @@ rate = 2
         assert!(s.plan("target=udpout:10.0.1.9:14550").is_err());
     }
 
+    /// The Debian package's /etc/mavping/serve.toml: valid, and safe as
+    /// shipped (this machine only, nothing allowed, no link).
+    #[test]
+    fn the_packaged_config_is_valid_and_opens_nothing() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("packaging/debian/serve.toml");
+        let (s, listen) = ServeSettings::load(&args(""), Some(&path)).unwrap();
+        assert_eq!(listen.as_deref(), Some(DEFAULT_LISTEN));
+        assert!(s.allow.is_empty() && s.links.is_empty());
+        assert_eq!(s.modules.keys().collect::<Vec<_>>(), [DEFAULT_MODULE]);
+        assert!(s.plan("target=udpout:127.0.0.1:14550").is_err());
+    }
+
     #[test]
     fn bad_files_name_the_place() {
         for (toml, needle) in [

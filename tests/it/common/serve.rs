@@ -1,7 +1,7 @@
 //! A `mavping serve` running in the background for a test.
 
 use std::io::{BufRead, BufReader};
-use std::process::{Child, Stdio};
+use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex};
 
 use super::http::{http_get, Response};
@@ -20,7 +20,12 @@ impl Server {
     /// Starts `mavping serve ARGS` on a free loopback port (unless ARGS
     /// name one) and waits until it serves.
     pub fn start(args: &[&str]) -> Server {
-        let mut command = mavping();
+        Server::start_as(mavping(), args)
+    }
+
+    /// As [`Server::start`], `serve ARGS` given to `command` (another
+    /// binary, or mavping under setpriv).
+    pub fn start_as(mut command: Command, args: &[&str]) -> Server {
         command.arg("serve");
         if !args.contains(&"--listen") {
             command.args(["--listen", "127.0.0.1:0"]);
@@ -63,6 +68,10 @@ impl Server {
     /// What it printed on stderr after its first line, so far.
     pub fn stderr(&self) -> String {
         self.stderr.lock().unwrap().clone()
+    }
+
+    pub fn pid(&self) -> u32 {
+        self.child.id()
     }
 
     pub fn signal(&self, name: &str) {
