@@ -125,7 +125,6 @@ pub struct WireBudget {
     pub may_ignore_baud: bool,
 }
 
-
 /// A PING exchange's budget.
 pub fn budget(baud: u32, version: Version, max_seq: u32, replies: u64) -> WireBudget {
     exchange_budget(Exchange::Ping, baud, version, max_seq, replies)

@@ -464,6 +464,13 @@ fn the_plot_of_a_sweep_draws_rtt_and_loss_against_the_offered_rate() {
     std::fs::remove_dir_all(&dir).unwrap();
     let s = &checked_summary(&out)["sweep"];
     let knee = f(&s["knee"], "rate_hz");
+    let grade = s["queueing"]["grade"].as_str().unwrap();
+    let bloat = if s["queueing"]["bufferbloat"] == true {
+        ", bufferbloat"
+    } else {
+        ""
+    };
+    let queueing = format!("\n{grade}{bloat}\n");
     for text in [
         "mavping sweep sim:",
         "RTT against offered rate",
@@ -471,7 +478,8 @@ fn the_plot_of_a_sweep_draws_rtt_and_loss_against_the_offered_rate() {
         "offered rate (requests/s, log scale)",
         &format!("knee {knee:.0}/s"),
         &format!("\n{knee:.1}\n"),
-        "\nyes\n",
+        &queueing,
+        "queueing",
     ] {
         assert!(svg.contains(text), "{text:?} is not in the plot");
     }

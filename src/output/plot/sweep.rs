@@ -177,7 +177,8 @@ fn loss_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64
 }
 
 /// A row per link: its knee (rate and bytes per second), the first step's
-/// p99 it was judged against, and whether it queues before it drops.
+/// p99 it was judged against, and its queueing grade (A+ to F, as the
+/// bufferbloat tests grade added latency).
 fn legend_table(entries: &[SweepEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
     let rows: Vec<LegendRow<'_>> = entries
         .iter()
@@ -190,12 +191,14 @@ fn legend_table(entries: &[SweepEntry<'_>], area: &Area<'_>, layout: &Layout) ->
                     s.knee.map(|k| format!("{:.1}", k.rate_hz)),
                     s.knee.map(|k| format!("{:.0}", k.bytes_per_s)),
                     s.reference_p99_us.map(|p| format!("{:.3}", p / 1e3)),
-                    s.queueing
-                        .map(|q| if q.bufferbloat { "yes" } else { "no" }.to_string()),
+                    s.queueing.map(|q| {
+                        let bloat = if q.bufferbloat { ", bufferbloat" } else { "" };
+                        format!("{}{bloat}", q.grade.as_str())
+                    }),
                 ],
             }
         })
         .collect();
-    let columns = ["knee /s", "knee B/s", "first p99 ms", "bufferbloat"];
+    let columns = ["knee /s", "knee B/s", "first p99 ms", "queueing"];
     frame::legend(area, layout, ("link", &columns), &rows, "no sweep")
 }
