@@ -862,6 +862,19 @@ pub struct ServeArgs {
     #[arg(long, value_name = "N")]
     pub max_concurrent: Option<usize>,
 
+    /// YAML file in the exporter-toolkit format (tls_server_config, basic_auth_users,
+    /// http_server_config.headers): TLS, client certificates, basic auth; reread on reload
+    #[arg(long = "web.config.file", value_name = "FILE", env = "MAVPING_WEB_CONFIG")]
+    pub web_config_file: Option<PathBuf>,
+
+    /// Let POST /-/reload reread the configuration and web configuration, as SIGHUP does
+    #[arg(long = "web.enable-lifecycle")]
+    pub enable_lifecycle: bool,
+
+    /// Check --config and --web.config.file, say what they hold, and exit (0 good, 2 bad)
+    #[arg(long = "config.check")]
+    pub config_check: bool,
+
     /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]
     pub verbose: u8,

@@ -14,7 +14,8 @@ use std::time::Duration;
 use thiserror::Error;
 
 pub use serve::{
-    BadProbeRequest, ContinuousLink, Module, Pattern, ProbePlan, ServeConfig, ServeSettings,
+    BadProbeRequest, ClientAuth, ContinuousLink, Module, Pattern, ProbePlan, ServeConfig,
+    ServeSettings, WebConfig,
 };
 
 use crate::cli::{Format, SigningArgs};
