@@ -261,7 +261,7 @@ async fn secured<H>(
             // make the close a reset, which can beat the answer to it.
             let mut sink = [0u8; 4096];
             let drain = async {
-                let mut left = 64 * 1024;
+                let mut left: usize = 64 * 1024;
                 while left > 0 {
                     match tokio::io::AsyncReadExt::read(&mut stream, &mut sink).await {
                         Ok(0) | Err(_) => break,
