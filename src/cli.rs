@@ -581,6 +581,16 @@ pub struct PingArgs {
     )]
     pub prometheus: Option<String>,
 
+    /// At the end, write the run's metrics to FILE.prom for node_exporter's textfile collector
+    /// (written to a temporary file, then renamed: never seen half-written)
+    #[arg(
+        help_heading = "Output",
+        allow_negative_numbers = true,
+        long,
+        value_name = "FILE.prom"
+    )]
+    pub prometheus_textfile: Option<PathBuf>,
+
     /// At the end, draw RTT over time and the RTT distribution to FILE.svg
     #[arg(
         help_heading = "Output",

@@ -81,6 +81,8 @@ pub struct OutputConfig {
     pub samples: Option<PathBuf>,
     pub plot: Option<PathBuf>,
     pub prometheus: Option<SocketAddr>,
+    /// `--prometheus-textfile`: the run's metrics, written at its end.
+    pub prometheus_textfile: Option<PathBuf>,
     /// `--tlog`: record what every link received and sent.
     pub tlog: Option<PathBuf>,
 }

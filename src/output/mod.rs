@@ -10,6 +10,7 @@ pub mod plot;
 pub mod prometheus;
 pub mod samples;
 pub mod text;
+pub mod textfile;
 pub mod windows;
 
 use std::io;
