@@ -31,6 +31,7 @@ mod radio;
 mod scripting;
 mod serial_pty;
 mod serve;
+mod serve_secure;
 mod signing;
 mod sim_soak;
 mod stalled;
