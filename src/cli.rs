@@ -874,7 +874,11 @@ pub struct ServeArgs {
 
     /// YAML file in the exporter-toolkit format (tls_server_config, basic_auth_users,
     /// http_server_config.headers): TLS, client certificates, basic auth; reread on reload
-    #[arg(long = "web.config.file", value_name = "FILE", env = "MAVPING_WEB_CONFIG")]
+    #[arg(
+        long = "web.config.file",
+        value_name = "FILE",
+        env = "MAVPING_WEB_CONFIG"
+    )]
     pub web_config_file: Option<PathBuf>,
 
     /// Let POST /-/reload reread the configuration and web configuration, as SIGHUP does

@@ -34,7 +34,10 @@ impl Checker {
         // An unknown user costs a bcrypt too, so timing tells no names.
         let (hash, known_user) = match web.users.get(&user) {
             Some(h) => (h.clone(), true),
-            None => (web.users.values().next().cloned().unwrap_or_default(), false),
+            None => (
+                web.users.values().next().cloned().unwrap_or_default(),
+                false,
+            ),
         };
         let key: [u8; 32] = Sha256::new()
             .chain_update(user.as_bytes())
@@ -101,7 +104,11 @@ mod tests {
     async fn only_the_right_user_and_password_pass() {
         let checker = Checker::default();
         let w = web("prometheus", "s3cret");
-        assert!(checker.allows(&WebConfig::default(), &HeaderMap::new()).await);
+        assert!(
+            checker
+                .allows(&WebConfig::default(), &HeaderMap::new())
+                .await
+        );
         assert!(!checker.allows(&w, &HeaderMap::new()).await);
         assert!(checker.allows(&w, &basic("prometheus:s3cret")).await);
         // Twice: the remembered answer is the same.

@@ -225,7 +225,14 @@ where
         web: Rc::default(),
         checker: Rc::default(),
     };
-    connection(TokioIo::new(stream), limits, waiting, guard, Rc::new(handler)).await;
+    connection(
+        TokioIo::new(stream),
+        limits,
+        waiting,
+        guard,
+        Rc::new(handler),
+    )
+    .await;
 }
 
 /// What a connection enforces: the web config taken at its accept.

@@ -167,7 +167,11 @@ impl Exports {
     /// A link that could not be opened, given the `index` after every
     /// opened one's: the exporter shows it down.
     pub fn unopened(&self, index: usize, name: &str) {
-        for p in self.prometheus.iter().chain(self.textfile.iter().map(|(_, p)| p)) {
+        for p in self
+            .prometheus
+            .iter()
+            .chain(self.textfile.iter().map(|(_, p)| p))
+        {
             p.link(index).update(|m| *m = Metrics::unopened(name));
         }
     }

@@ -44,8 +44,21 @@ impl Pki {
     fn ca(&self, name: &str) {
         let (key, pem) = (format!("{name}.key"), format!("{name}.pem"));
         self.openssl(&[
-            "req", "-x509", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:P-256", "-nodes",
-            "-days", "2", "-subj", &format!("/CN={name}"), "-keyout", &key, "-out", &pem,
+            "req",
+            "-x509",
+            "-newkey",
+            "ec",
+            "-pkeyopt",
+            "ec_paramgen_curve:P-256",
+            "-nodes",
+            "-days",
+            "2",
+            "-subj",
+            &format!("/CN={name}"),
+            "-keyout",
+            &key,
+            "-out",
+            &pem,
         ]);
     }
 
@@ -56,14 +69,40 @@ impl Pki {
             text.push_str("subjectAltName=DNS:localhost,IP:127.0.0.1\n");
         }
         std::fs::write(self.dir.join(&ext), text).unwrap();
-        let (key, csr, pem) = (format!("{name}.key"), format!("{name}.csr"), format!("{name}.pem"));
+        let (key, csr, pem) = (
+            format!("{name}.key"),
+            format!("{name}.csr"),
+            format!("{name}.pem"),
+        );
         self.openssl(&[
-            "req", "-newkey", "ec", "-pkeyopt", "ec_paramgen_curve:P-256", "-nodes", "-subj",
-            &format!("/CN={cn}"), "-keyout", &key, "-out", &csr,
+            "req",
+            "-newkey",
+            "ec",
+            "-pkeyopt",
+            "ec_paramgen_curve:P-256",
+            "-nodes",
+            "-subj",
+            &format!("/CN={cn}"),
+            "-keyout",
+            &key,
+            "-out",
+            &csr,
         ]);
         self.openssl(&[
-            "x509", "-req", "-in", &csr, "-CA", &format!("{ca}.pem"), "-CAkey",
-            &format!("{ca}.key"), "-CAcreateserial", "-days", "2", "-extfile", &ext, "-out",
+            "x509",
+            "-req",
+            "-in",
+            &csr,
+            "-CA",
+            &format!("{ca}.pem"),
+            "-CAkey",
+            &format!("{ca}.key"),
+            "-CAcreateserial",
+            "-days",
+            "2",
+            "-extfile",
+            &ext,
+            "-out",
             &pem,
         ]);
     }
@@ -125,8 +164,7 @@ fn wait_for(what: &str, mut done: impl FnMut() -> bool) {
 }
 
 #[test]
-fn a_real_prometheus_scrapes_probes_over_tls_with_basic_auth_and_a_wrong_password_probes_nothing()
-{
+fn a_real_prometheus_scrapes_probes_over_tls_with_basic_auth_and_a_wrong_password_probes_nothing() {
     let pki = Pki::make("prometheus");
     let web = pki.write(
         "web.yml",
@@ -214,7 +252,10 @@ fn a_real_prometheus_scrapes_probes_over_tls_with_basic_auth_and_a_wrong_passwor
     });
     assert_eq!(prometheus.value(r#"up{job="secure"}"#, at), 1.0);
     assert_eq!(
-        prometheus.value(&format!(r#"mavping_probe_success{{instance="{good}"}}"#), at),
+        prometheus.value(
+            &format!(r#"mavping_probe_success{{instance="{good}"}}"#),
+            at
+        ),
         1.0
     );
     assert_eq!(
@@ -239,8 +280,16 @@ fn a_real_prometheus_scrapes_probes_over_tls_with_basic_auth_and_a_wrong_passwor
             .map(|t| t["lastError"].as_str().unwrap_or("").to_string())
             .unwrap()
     };
-    assert!(error_of("wrong_password").contains("401"), "{}", error_of("wrong_password"));
-    assert!(error_of("plain_http").contains("400"), "{}", error_of("plain_http"));
+    assert!(
+        error_of("wrong_password").contains("401"),
+        "{}",
+        error_of("wrong_password")
+    );
+    assert!(
+        error_of("plain_http").contains("400"),
+        "{}",
+        error_of("plain_http")
+    );
 
     // Freeze Prometheus, let the last probe end, then the ground truth:
     // nothing reached the refused targets; the good one heard exactly 10
@@ -263,7 +312,11 @@ fn a_real_prometheus_scrapes_probes_over_tls_with_basic_auth_and_a_wrong_passwor
     let probes = sample(&metrics(), "mavping_exporter_probes_total", &[]).unwrap();
     assert!(probes >= 2.0, "{probes}");
     let truth = responder.finish();
-    assert_eq!(truth["ping_requests"].as_f64().unwrap(), 10.0 * probes, "{truth}");
+    assert_eq!(
+        truth["ping_requests"].as_f64().unwrap(),
+        10.0 * probes,
+        "{truth}"
+    );
     assert_eq!(wrong_target.pings(), 0);
     assert_eq!(plain_target.pings(), 0);
     drop(prometheus);
@@ -319,7 +372,11 @@ fn client_certificates_are_required_and_verified() {
         head.contains("strict-transport-security: max-age=31536000"),
         "{head}"
     );
-    assert_eq!(sample(body, "mavping_probe_requests", &[]), Some(2.0), "{body}");
+    assert_eq!(
+        sample(body, "mavping_probe_requests", &[]),
+        Some(2.0),
+        "{body}"
+    );
     assert_eq!(target.pings(), 2);
 }
 
@@ -333,9 +390,19 @@ fn reload_over_http_only_with_the_lifecycle_api_and_a_new_password_takes_effect(
 
     // Off: refused as Prometheus refuses it.
     let off = Server::start(&["--config", &config, "--web.config.file", &web]);
-    let post = curl(&["-u", "ops:first", "-X", "POST", &format!("{}/-/reload", base(&off))]);
+    let post = curl(&[
+        "-u",
+        "ops:first",
+        "-X",
+        "POST",
+        &format!("{}/-/reload", base(&off)),
+    ]);
     assert_eq!(post.status, 403, "{}", post.body);
-    assert!(post.body.contains("--web.enable-lifecycle"), "{}", post.body);
+    assert!(
+        post.body.contains("--web.enable-lifecycle"),
+        "{}",
+        post.body
+    );
     let get = curl(&["-u", "ops:first", &format!("{}/-/reload", base(&off))]);
     assert_eq!(get.status, 405, "{}", get.body);
     // Without the password the lifecycle API is not even reached.
@@ -355,7 +422,11 @@ fn reload_over_http_only_with_the_lifecycle_api_and_a_new_password_takes_effect(
     let quick = url("/probe?target=udpout:127.0.0.1:9&module=quick");
     let before = curl(&["-u", "ops:first", &quick]);
     assert_eq!(before.status, 400, "{}", before.body);
-    assert!(before.body.contains("unknown module 'quick'"), "{}", before.body);
+    assert!(
+        before.body.contains("unknown module 'quick'"),
+        "{}",
+        before.body
+    );
     std::fs::write(
         &config,
         "allow = [\"udpout:127.0.0.1:*\"]\n[module.quick]\ncount = 1\ntimeout = \"100ms\"\n",
@@ -412,7 +483,10 @@ fn debug_true_shows_why_a_probe_failed() {
     assert!(text.contains("\nLogs for the probe:\n"), "{text}");
     assert!(text.contains("3 requests sent"), "{text}");
     assert!(text.contains("\nResult: failure (no_reply"), "{text}");
-    assert!(text.contains("\nMetrics that would have been returned:\n"), "{text}");
+    assert!(
+        text.contains("\nMetrics that would have been returned:\n"),
+        "{text}"
+    );
     assert!(text.contains("\nmavping_probe_success 0\n"), "{text}");
     assert_eq!(target.pings(), 3);
     // debug=false is the usual exposition.
@@ -455,12 +529,24 @@ fn config_check_says_what_it_found_or_why_not_on_one_line() {
          web: TLS, 1 basic-auth user\n"
     );
     for (file, text, said) in [
-        ("bad.toml", "allow = [\"udpout:127.0.0.1:*\"]\nmax_concurrent = 0\n", "max_concurrent 0"),
-        ("bad-web.yml", "tls_server_config:\n  cert_file: server.pem\n  key_file: client.key\n", "the key is not the certificate's"),
+        (
+            "bad.toml",
+            "allow = [\"udpout:127.0.0.1:*\"]\nmax_concurrent = 0\n",
+            "max_concurrent 0",
+        ),
+        (
+            "bad-web.yml",
+            "tls_server_config:\n  cert_file: server.pem\n  key_file: client.key\n",
+            "the key is not the certificate's",
+        ),
         ("bad-yaml.yml", "basic_auth_users: [\n", "--web.config.file"),
     ] {
         let path = pki.write(file, text);
-        let option = if file.ends_with(".toml") { "--config" } else { "--web.config.file" };
+        let option = if file.ends_with(".toml") {
+            "--config"
+        } else {
+            "--web.config.file"
+        };
         let (code, out, err) = run_mavping(&["serve", option, &path, "--config.check"]);
         assert_eq!(code, 2, "{file}: {out}{err}");
         assert!(out.is_empty(), "{out}");
@@ -501,8 +587,16 @@ fn the_textfile_is_never_seen_half_written_and_promtool_accepts_it() {
     let runs = 10;
     for seed in 1..=runs {
         let link = format!("sim:?loss=20%&seed={seed}&clock=virtual");
-        let (code, _, err) =
-            run_mavping(&["-q", "-c", "50", "-i", "10ms", &link, "--prometheus-textfile", &path]);
+        let (code, _, err) = run_mavping(&[
+            "-q",
+            "-c",
+            "50",
+            "-i",
+            "10ms",
+            &link,
+            "--prometheus-textfile",
+            &path,
+        ]);
         assert!(code == 0 || code == 1, "{err}");
         let text = std::fs::read_to_string(&file).unwrap();
         assert!(whole(&text), "{text}");
@@ -518,7 +612,12 @@ fn the_textfile_is_never_seen_half_written_and_promtool_accepts_it() {
     stop.store(true, std::sync::atomic::Ordering::Relaxed);
     let (reads, torn) = reader.join().unwrap();
     assert!(reads > 0);
-    assert!(torn.is_empty(), "{} of {reads} reads torn: {:?}", torn.len(), torn.first());
+    assert!(
+        torn.is_empty(),
+        "{} of {reads} reads torn: {:?}",
+        torn.len(),
+        torn.first()
+    );
     eprintln!("{reads} reads of the textfile while {runs} runs rewrote it, none torn");
     // Nothing but the file is left in the directory.
     let names: Vec<_> = std::fs::read_dir(&dir)

@@ -77,9 +77,8 @@ impl ServeConfig {
     /// What `--config.check` prints: one line on what was found.
     pub fn describe(&self) -> String {
         let s = &self.settings;
-        let plural = |n: usize, one: &str, many: &str| {
-            format!("{n} {}", if n == 1 { one } else { many })
-        };
+        let plural =
+            |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
         format!(
             "configuration OK: {}, {}, {}, max_concurrent {}; web: {}",
             plural(s.allow.len(), "allowed pattern", "allowed patterns"),

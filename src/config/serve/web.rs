@@ -113,7 +113,8 @@ impl WebConfig {
             return Ok(WebConfig::default());
         };
         let fail = |e: String| invalid(format!("--web.config.file {}: {e}", path.display()));
-        let text = std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read it: {e}")))?;
+        let text =
+            std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read it: {e}")))?;
         let file: File = if text.trim().is_empty() {
             File::default()
         } else {
@@ -280,11 +281,13 @@ fn versions(
     if min > max {
         return Err("min_version is above max_version".into());
     }
-    Ok([(12, &rustls::version::TLS12), (13, &rustls::version::TLS13)]
-        .into_iter()
-        .filter(|(v, _)| (min..=max).contains(v))
-        .map(|(_, p)| p)
-        .collect())
+    Ok(
+        [(12, &rustls::version::TLS12), (13, &rustls::version::TLS13)]
+            .into_iter()
+            .filter(|(v, _)| (min..=max).contains(v))
+            .map(|(_, p)| p)
+            .collect(),
+    )
 }
 
 /// Each hash must be bcrypt's (`$2y$10$...`): a plain password there would

@@ -183,7 +183,11 @@ fn handler(server: &Rc<Server>) -> impl Fn(Head) -> Replying + 'static {
 pub fn handler_for(settings: ServeSettings) -> impl Fn(Head) -> Replying + 'static {
     let kept = settings.clone();
     let reload = Box::new(move || Ok((kept.clone(), WebConfig::default())));
-    handler(&Rc::new(Server::new(settings, WebConfig::default(), reload)))
+    handler(&Rc::new(Server::new(
+        settings,
+        WebConfig::default(),
+        reload,
+    )))
 }
 
 /// `--config.check`: both files were read and checked on the way here.

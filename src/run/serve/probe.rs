@@ -125,38 +125,39 @@ pub async fn answer(server: &Server, query: &str, headers: &HeaderMap) -> Reply 
     let budget = budget(headers);
     let metrics = SharedMetrics::default();
     let log = Shared::new(Vec::new());
-    let result =
-        match tokio::time::timeout(budget, Link::open(&plan.link.spec, &plan.options)).await {
-            Err(_) => failed(
-                started,
-                "open_failed",
-                format!(
-                    "opening {} took longer than the scrape allows ({})",
-                    plan.link.name,
-                    humantime::format_duration(budget)
-                ),
+    let result = match tokio::time::timeout(budget, Link::open(&plan.link.spec, &plan.options))
+        .await
+    {
+        Err(_) => failed(
+            started,
+            "open_failed",
+            format!(
+                "opening {} took longer than the scrape allows ({})",
+                plan.link.name,
+                humantime::format_duration(budget)
             ),
-            Ok(Err(e)) => failed(started, "open_failed", e.to_string()),
-            Ok(Ok(link)) => {
-                running.link_open = true;
-                server.health(|h| h.open_links += 1);
-                let mut config = plan.link.clone();
-                // The session stops when the scrape's time is up, whatever is
-                // still in flight.
-                config.session.deadline = Some(budget.saturating_sub(started.elapsed()));
-                let wall = WallClock::starting(false);
-                let never = Controls::default();
-                let mut observers: Vec<Box<dyn Reporter>> = vec![Box::new(metrics.clone())];
-                if debug {
-                    observers.push(Box::new(TextReporter::new(log.clone(), false)));
-                }
-                let mut observer = Fanout::new(observers);
-                let outcome = measure(&config, link, &plan.probe, wall, &mut observer, &never).await;
-                let verdict = verdict::judge_link(&outcome.summary, &plan.link.thresholds);
-                let _ = observer.summary(&outcome.summary, &verdict);
-                judged(started, &outcome.summary, &verdict)
+        ),
+        Ok(Err(e)) => failed(started, "open_failed", e.to_string()),
+        Ok(Ok(link)) => {
+            running.link_open = true;
+            server.health(|h| h.open_links += 1);
+            let mut config = plan.link.clone();
+            // The session stops when the scrape's time is up, whatever is
+            // still in flight.
+            config.session.deadline = Some(budget.saturating_sub(started.elapsed()));
+            let wall = WallClock::starting(false);
+            let never = Controls::default();
+            let mut observers: Vec<Box<dyn Reporter>> = vec![Box::new(metrics.clone())];
+            if debug {
+                observers.push(Box::new(TextReporter::new(log.clone(), false)));
             }
-        };
+            let mut observer = Fanout::new(observers);
+            let outcome = measure(&config, link, &plan.probe, wall, &mut observer, &never).await;
+            let verdict = verdict::judge_link(&outcome.summary, &plan.link.thresholds);
+            let _ = observer.summary(&outcome.summary, &verdict);
+            judged(started, &outcome.summary, &verdict)
+        }
+    };
     drop(running);
     if !result.success {
         server.health(|h| h.probes_failed += 1);
@@ -164,7 +165,10 @@ pub async fn answer(server: &Server, query: &str, headers: &HeaderMap) -> Reply 
     let exposition = render_probe(&metrics.get(), &result);
     if debug {
         let log = String::from_utf8_lossy(&log.0.borrow()).into_owned();
-        return Reply::text(StatusCode::OK, debug_text(&plan, budget, &log, &result, &exposition));
+        return Reply::text(
+            StatusCode::OK,
+            debug_text(&plan, budget, &log, &result, &exposition),
+        );
     }
     Reply::metrics(exposition)
 }
