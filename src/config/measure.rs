@@ -227,7 +227,7 @@ fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
 
 /// node_exporter's textfile collector reads `*.prom` files only.
 fn validate_textfile(path: &Path) -> Result<PathBuf, ConfigError> {
-    if !path.extension().is_some_and(|e| e == "prom") {
+    if path.extension().is_none_or(|e| e != "prom") {
         return Err(invalid(format!(
             "--prometheus-textfile {}: node_exporter's textfile collector reads only files named *.prom",
             path.display()

@@ -542,7 +542,7 @@ fn config_check_says_what_it_found_or_why_not_on_one_line() {
         ("bad-yaml.yml", "basic_auth_users: [\n", "--web.config.file"),
     ] {
         let path = pki.write(file, text);
-        let option = if file.ends_with(".toml") {
+        let option = if file.starts_with("bad.") {
             "--config"
         } else {
             "--web.config.file"

@@ -40,8 +40,7 @@ impl Server {
             .trim()
             .strip_prefix("mavping: serving /probe and /metrics at ")
             .and_then(|l| l.strip_prefix("http://").or(l.strip_prefix("https://")))
-            .and_then(|l| l.split_once('/'))
-            .map(|(addr, _)| addr)
+            .and_then(|l| l.split_once('/').map(|(addr, _)| addr))
             .unwrap_or_else(|| panic!("mavping serve did not start: {line:?}"))
             .to_string();
         let collected = Arc::new(Mutex::new(String::new()));
