@@ -151,8 +151,10 @@ impl WebConfig {
             1 => "1 basic-auth user".to_string(),
             n => format!("{n} basic-auth users"),
         });
-        if !self.headers.is_empty() {
-            parts.push(format!("{} extra headers", self.headers.len()));
+        match self.headers.len() {
+            0 => {}
+            1 => parts.push("1 extra header".to_string()),
+            n => parts.push(format!("{n} extra headers")),
         }
         parts.join(", ")
     }
@@ -364,7 +366,7 @@ mod tests {
         assert_eq!(w.headers[0].0, "x-frame-options");
         assert_eq!(
             w.describe(),
-            "plain HTTP, 1 basic-auth user, 1 extra headers"
+            "plain HTTP, 1 basic-auth user, 1 extra header"
         );
     }
 
