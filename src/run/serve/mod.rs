@@ -86,13 +86,15 @@ impl Server {
         let (settings, web) = match (self.reload)() {
             Ok(both) => both,
             Err(e) => {
+                // Said before it is counted: whoever sees the count can
+                // find the reason.
+                stderr::error(&format_args!(
+                    "reload refused, the old configuration stays: {e}"
+                ));
                 self.health(|h| {
                     h.reloads_failed += 1;
                     h.last_reload_ok = false;
                 });
-                stderr::error(&format_args!(
-                    "reload refused, the old configuration stays: {e}"
-                ));
                 return Err(e);
             }
         };
