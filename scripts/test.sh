@@ -45,6 +45,12 @@ command -v man >/dev/null || missing+=(man-db)
 # tests/it/deb.rs (the package boots nothing; dpkg is always there).
 command -v systemd-analyze >/dev/null || missing+=(systemd)
 [ -f /usr/share/fonts/truetype/dejavu/DejaVuSans.ttf ] || missing+=(fonts-dejavu-core)
+# curl and openssl drive the TLS tests of `serve --web.config.file` (client
+# certificates, reload); clang and llvm-ar cross-compile ring's C for the musl
+# and Apple targets (.cargo/config.toml).
+command -v curl >/dev/null || missing+=(curl)
+command -v openssl >/dev/null || missing+=(openssl)
+{ command -v clang && command -v llvm-ar; } >/dev/null || missing+=(clang llvm)
 if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"

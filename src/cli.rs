@@ -581,6 +581,16 @@ pub struct PingArgs {
     )]
     pub prometheus: Option<String>,
 
+    /// At the end, write the run's metrics to FILE.prom for node_exporter's textfile collector
+    /// (written to a temporary file, then renamed: never seen half-written)
+    #[arg(
+        help_heading = "Output",
+        allow_negative_numbers = true,
+        long,
+        value_name = "FILE.prom"
+    )]
+    pub prometheus_textfile: Option<PathBuf>,
+
     /// At the end, draw RTT over time and the RTT distribution to FILE.svg
     #[arg(
         help_heading = "Output",
@@ -861,6 +871,23 @@ pub struct ServeArgs {
     /// max_concurrent in --config]
     #[arg(long, value_name = "N")]
     pub max_concurrent: Option<usize>,
+
+    /// YAML file in the exporter-toolkit format (tls_server_config, basic_auth_users,
+    /// http_server_config.headers): TLS, client certificates, basic auth; reread on reload
+    #[arg(
+        long = "web.config.file",
+        value_name = "FILE",
+        env = "MAVPING_WEB_CONFIG"
+    )]
+    pub web_config_file: Option<PathBuf>,
+
+    /// Let POST /-/reload reread the configuration and web configuration, as SIGHUP does
+    #[arg(long = "web.enable-lifecycle")]
+    pub enable_lifecycle: bool,
+
+    /// Check --config and --web.config.file, say what they hold, and exit (0 good, 2 bad)
+    #[arg(long = "config.check")]
+    pub config_check: bool,
 
     /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]

@@ -225,6 +225,17 @@ fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
     Ok(path.to_path_buf())
 }
 
+/// node_exporter's textfile collector reads `*.prom` files only.
+fn validate_textfile(path: &Path) -> Result<PathBuf, ConfigError> {
+    if path.extension().is_none_or(|e| e != "prom") {
+        return Err(invalid(format!(
+            "--prometheus-textfile {}: node_exporter's textfile collector reads only files named *.prom",
+            path.display()
+        )));
+    }
+    Ok(path.to_path_buf())
+}
+
 /// The live view, exporter, plot and sample log follow echo probes'
 /// replies; a command probe has none.
 fn validate_views(cli: &PingArgs) -> Result<(), ConfigError> {
@@ -232,6 +243,7 @@ fn validate_views(cli: &PingArgs) -> Result<(), ConfigError> {
         for (set, flag) in [
             (cli.live, "--live"),
             (cli.prometheus.is_some(), "--prometheus"),
+            (cli.prometheus_textfile.is_some(), "--prometheus-textfile"),
             (cli.plot.is_some(), "--plot"),
             (cli.samples.is_some(), "--samples"),
         ] {
@@ -566,6 +578,11 @@ fn output(cli: &PingArgs) -> Result<OutputConfig, ConfigError> {
             .prometheus
             .as_deref()
             .map(|a| validate_listen("--prometheus", a))
+            .transpose()?,
+        prometheus_textfile: cli
+            .prometheus_textfile
+            .as_deref()
+            .map(validate_textfile)
             .transpose()?,
     })
 }

@@ -14,7 +14,8 @@ use std::time::Duration;
 use thiserror::Error;
 
 pub use serve::{
-    BadProbeRequest, ContinuousLink, Module, Pattern, ProbePlan, ServeConfig, ServeSettings,
+    BadProbeRequest, ClientAuth, ContinuousLink, Module, Pattern, ProbePlan, ServeConfig,
+    ServeSettings, WebConfig,
 };
 
 use crate::cli::{Format, SigningArgs};
@@ -80,6 +81,8 @@ pub struct OutputConfig {
     pub samples: Option<PathBuf>,
     pub plot: Option<PathBuf>,
     pub prometheus: Option<SocketAddr>,
+    /// `--prometheus-textfile`: the run's metrics, written at its end.
+    pub prometheus_textfile: Option<PathBuf>,
     /// `--tlog`: record what every link received and sent.
     pub tlog: Option<PathBuf>,
 }

@@ -9,7 +9,13 @@
 //!   waiting for its head or serving: at [`Limits::max_connections`], a new
 //!   client evicts the oldest connection still waiting for its head. Idle
 //!   connections, however many, never lock a scraper out.
-//! - Only `GET` and `HEAD` reach the handler; no request body is read.
+//! - Only `GET` and `HEAD` reach the handler, and `POST` to the paths
+//!   [`Limits::posts`] names; no request body is read.
+//! - With a web config ([`WebConfig`], `--web.config.file`): TLS first (a
+//!   handshake within the header timeout; a plain-HTTP client gets nothing),
+//!   then basic auth (401, the handler never called), then the config's
+//!   extra headers on every response. The config is read at each accept, so
+//!   a reload applies to the next connection.
 //!
 //! Everything runs on the current thread's `LocalSet`, so handlers may run
 //! sessions, which are not `Send`.
@@ -25,13 +31,19 @@ use std::time::Duration;
 
 use bytes::Bytes;
 use http_body_util::Full;
-use hyper::header::{HeaderValue, ALLOW, CONTENT_TYPE};
+use hyper::header::{HeaderValue, ALLOW, CONTENT_TYPE, WWW_AUTHENTICATE};
 use hyper::{Method, Request, Response, StatusCode};
 use hyper_util::rt::{TokioIo, TokioTimer};
 use tokio::net::TcpListener;
 use tokio::sync::oneshot;
 
+use super::basic_auth::Checker;
+use crate::config::WebConfig;
+
 pub use hyper::http::request::Parts as Head;
+
+/// The web config now in force; a reload swaps it.
+pub type SharedWeb = Rc<RefCell<Rc<WebConfig>>>;
 
 /// How much a client may ask of the server.
 #[derive(Debug, Clone, Copy)]
@@ -45,6 +57,8 @@ pub struct Limits {
     /// Longest a connection lives, serving included: a client that never
     /// reads its response does not hold a slot for ever.
     pub max_connection_time: Duration,
+    /// Paths a `POST` may reach the handler at (`/-/reload`).
+    pub posts: &'static [&'static str],
 }
 
 impl Default for Limits {
@@ -54,6 +68,7 @@ impl Default for Limits {
             header_read_timeout: Duration::from_secs(10),
             max_header_bytes: 16 * 1024,
             max_connection_time: Duration::from_secs(15 * 60),
+            posts: &[],
         }
     }
 }
@@ -144,12 +159,21 @@ impl Connections {
 }
 
 /// Serves `listener` on the current `LocalSet` until the runtime ends,
-/// answering each `GET`/`HEAD` with `handler`.
+/// answering each `GET`/`HEAD` with `handler`, in plain HTTP open to all.
 pub fn serve<H>(listener: TcpListener, limits: Limits, handler: H)
 where
     H: Fn(Head) -> Replying + 'static,
 {
+    serve_with(listener, limits, SharedWeb::default(), handler);
+}
+
+/// [`serve`] under the web config `web` holds at each accept.
+pub fn serve_with<H>(listener: TcpListener, limits: Limits, web: SharedWeb, handler: H)
+where
+    H: Fn(Head) -> Replying + 'static,
+{
     let handler = Rc::new(handler);
+    let checker = Rc::new(Checker::default());
     let connections = Rc::new(RefCell::new(Connections::default()));
     tokio::task::spawn_local(async move {
         loop {
@@ -169,7 +193,12 @@ where
                 continue;
             }
             let (id, waiting, evicted) = connections.borrow_mut().add();
-            let task = connection(TokioIo::new(stream), limits, waiting, handler.clone());
+            let web = web.borrow().clone();
+            let guard = Guard {
+                web: web.clone(),
+                checker: checker.clone(),
+            };
+            let task = secured(stream, web, limits, waiting, guard, handler.clone());
             let connections = connections.clone();
             tokio::task::spawn_local(async move {
                 tokio::select! {
@@ -192,7 +221,80 @@ where
     H: Fn(Head) -> Replying + 'static,
 {
     let waiting = Rc::new(Cell::new(true));
-    connection(TokioIo::new(stream), limits, waiting, Rc::new(handler)).await;
+    let guard = Guard {
+        web: Rc::default(),
+        checker: Rc::default(),
+    };
+    connection(
+        TokioIo::new(stream),
+        limits,
+        waiting,
+        guard,
+        Rc::new(handler),
+    )
+    .await;
+}
+
+/// What a connection enforces: the web config taken at its accept.
+struct Guard {
+    web: Rc<WebConfig>,
+    checker: Rc<Checker>,
+}
+
+/// The TLS handshake when the web config asks for TLS (within the header
+/// timeout, so a silent client holds nothing), then the connection.
+async fn secured<H>(
+    stream: tokio::net::TcpStream,
+    web: Rc<WebConfig>,
+    limits: Limits,
+    waiting: Rc<Cell<bool>>,
+    guard: Guard,
+    handler: Rc<H>,
+) where
+    H: Fn(Head) -> Replying + 'static,
+{
+    let Some(tls) = web.tls.clone() else {
+        return connection(TokioIo::new(stream), limits, waiting, guard, handler).await;
+    };
+    let acceptor = tokio_rustls::TlsAcceptor::from(tls);
+    let handshake = async {
+        let mut stream = stream;
+        if !starts_tls(&stream).await {
+            // As Go's servers say it: plain HTTP to this port is a mistake
+            // worth a readable answer (Prometheus shows the status).
+            let _ = tokio::io::AsyncWriteExt::write_all(&mut stream, PLAIN_TO_TLS).await;
+            let _ = tokio::io::AsyncWriteExt::shutdown(&mut stream).await;
+            // Read what the client sent before closing: unread bytes would
+            // make the close a reset, which can beat the answer to it.
+            let mut sink = [0u8; 4096];
+            let drain = async {
+                let mut left: usize = 64 * 1024;
+                while left > 0 {
+                    match tokio::io::AsyncReadExt::read(&mut stream, &mut sink).await {
+                        Ok(0) | Err(_) => break,
+                        Ok(n) => left = left.saturating_sub(n),
+                    }
+                }
+            };
+            let _ = tokio::time::timeout(Duration::from_secs(1), drain).await;
+            return Err(io::Error::other("plain HTTP to the TLS port"));
+        }
+        acceptor.accept(stream).await
+    };
+    match tokio::time::timeout(limits.header_read_timeout, handshake).await {
+        Ok(Ok(stream)) => connection(TokioIo::new(stream), limits, waiting, guard, handler).await,
+        // Plain HTTP, no or a bad client certificate, a stalled handshake.
+        Ok(Err(e)) => tracing::debug!("tls handshake: {e}"),
+        Err(_) => tracing::debug!("tls handshake: timed out"),
+    }
+}
+
+const PLAIN_TO_TLS: &[u8] = b"HTTP/1.0 400 Bad Request\r\nContent-Type: text/plain; charset=utf-8\r\nConnection: close\r\n\r\nClient sent an HTTP request to an HTTPS server.\n";
+
+/// Whether the client's first byte opens a TLS handshake record (22).
+async fn starts_tls(stream: &tokio::net::TcpStream) -> bool {
+    let mut first = [0u8; 1];
+    matches!(stream.peek(&mut first).await, Ok(1) if first[0] == 0x16)
 }
 
 /// One connection: a request head, the handler's reply, then close.
@@ -200,19 +302,34 @@ async fn connection<S, H>(
     stream: TokioIo<S>,
     limits: Limits,
     waiting: Rc<Cell<bool>>,
+    guard: Guard,
     handler: Rc<H>,
 ) where
     S: tokio::io::AsyncRead + tokio::io::AsyncWrite + Unpin + 'static,
     H: Fn(Head) -> Replying + 'static,
 {
+    let guard = Rc::new(guard);
     let service = hyper::service::service_fn(move |request: Request<hyper::body::Incoming>| {
         waiting.set(false);
         let (head, _body) = request.into_parts();
-        let reply: Replying = match head.method {
-            Method::GET | Method::HEAD => handler(head),
-            _ => Box::pin(async { Reply::text(StatusCode::METHOD_NOT_ALLOWED, "only GET\n") }),
-        };
-        async move { Ok::<_, Infallible>(response(reply.await)) }
+        let (guard, handler) = (guard.clone(), handler.clone());
+        async move {
+            let reply = if guard.checker.allows(&guard.web, &head.headers).await {
+                let allowed = match head.method {
+                    Method::GET | Method::HEAD => true,
+                    Method::POST => limits.posts.contains(&head.uri.path()),
+                    _ => false,
+                };
+                if allowed {
+                    handler(head).await
+                } else {
+                    Reply::text(StatusCode::METHOD_NOT_ALLOWED, "only GET\n")
+                }
+            } else {
+                Reply::text(StatusCode::UNAUTHORIZED, "Unauthorized\n")
+            };
+            Ok::<_, Infallible>(response(reply, &guard.web))
+        }
     });
     let mut http = hyper::server::conn::http1::Builder::new();
     http.timer(TokioTimer::new())
@@ -224,13 +341,19 @@ async fn connection<S, H>(
     }
 }
 
-fn response(reply: Reply) -> Response<Full<Bytes>> {
+fn response(reply: Reply, web: &WebConfig) -> Response<Full<Bytes>> {
     let mut response = Response::new(Full::new(Bytes::from(reply.body)));
     *response.status_mut() = reply.status;
     let headers = response.headers_mut();
     headers.insert(CONTENT_TYPE, HeaderValue::from_static(reply.content_type));
     if reply.status == StatusCode::METHOD_NOT_ALLOWED {
         headers.insert(ALLOW, HeaderValue::from_static("GET, HEAD"));
+    }
+    if reply.status == StatusCode::UNAUTHORIZED {
+        headers.insert(WWW_AUTHENTICATE, HeaderValue::from_static("Basic"));
+    }
+    for (name, value) in &web.headers {
+        headers.insert(name.clone(), value.clone());
     }
     response
 }

@@ -1,6 +1,7 @@
 //! Reports: each output format follows a session as an engine
 //! [`Observer`] and renders the judged summary at the end ([`Reporter`]).
 
+pub mod basic_auth;
 pub mod hgrm;
 pub mod http;
 pub mod json;
@@ -9,6 +10,7 @@ pub mod plot;
 pub mod prometheus;
 pub mod samples;
 pub mod text;
+pub mod textfile;
 pub mod windows;
 
 use std::io;

@@ -1,5 +1,6 @@
 //! What a run writes besides its report: `--samples`, `--plot`, `--hgrm`,
-//! the `--tlog` recording and the `--prometheus` endpoint. Each is opened (files created) before
+//! the `--tlog` recording, the `--prometheus` endpoint and
+//! `--prometheus-textfile`. Each is opened (files created) before
 //! the first request, so a bad path or a port in use fails before anything
 //! is sent and a long run's result is never lost to one; the plot and the
 //! histograms are written once every link has ended.
@@ -17,6 +18,7 @@ use crate::output::hgrm;
 use crate::output::plot::{Plot, PlotError};
 use crate::output::prometheus::{Metrics, PrometheusExporter};
 use crate::output::samples::SampleLog;
+use crate::output::textfile::Textfile;
 use crate::output::{Reporter, Shared};
 use crate::stderr;
 use crate::transport::recording::{Recording, Tap};
@@ -27,6 +29,8 @@ pub struct Exports {
     prometheus: Option<PrometheusExporter>,
     hgrm: Option<(BufWriter<File>, PathBuf)>,
     tlog: Option<Recording>,
+    /// The metrics the textfile gets at the end, gathered as for `/metrics`.
+    textfile: Option<(Textfile, PrometheusExporter)>,
     /// Several links: sample rows name their link.
     several: bool,
 }
@@ -50,6 +54,8 @@ pub enum ExportError {
     PlotWritten { path: PathBuf, source: io::Error },
     #[error("cannot write --hgrm {}: {source}", path.display())]
     Hgrm { path: PathBuf, source: io::Error },
+    #[error("cannot write --prometheus-textfile {}: {source}", path.display())]
+    Textfile { path: PathBuf, source: io::Error },
     /// A write of the recording failed during the run or at its end.
     #[error("cannot write --tlog {}: {source}", path.display())]
     Tlog { path: PathBuf, source: io::Error },
@@ -106,12 +112,26 @@ impl Exports {
                 })
             })
             .transpose()?;
+        let textfile = out
+            .prometheus_textfile
+            .as_deref()
+            .map(|path| {
+                Textfile::create(path)
+                    .map(|t| (t, PrometheusExporter::default()))
+                    .map_err(|source| ExportError::Create {
+                        what: "--prometheus-textfile",
+                        path: path.to_path_buf(),
+                        source,
+                    })
+            })
+            .transpose()?;
         Ok(Exports {
             samples,
             plot,
             prometheus,
             hgrm,
             tlog,
+            textfile,
             several: config.links.len() > 1,
         })
     }
@@ -130,6 +150,9 @@ impl Exports {
         if let Some(p) = &self.prometheus {
             reporters.push(Box::new(p.link(index)));
         }
+        if let Some((_, p)) = &self.textfile {
+            reporters.push(Box::new(p.link(index)));
+        }
         if let Some((plot, _, _)) = &self.plot {
             reporters.push(Box::new(plot.link()));
         }
@@ -144,7 +167,11 @@ impl Exports {
     /// A link that could not be opened, given the `index` after every
     /// opened one's: the exporter shows it down.
     pub fn unopened(&self, index: usize, name: &str) {
-        if let Some(p) = &self.prometheus {
+        for p in self
+            .prometheus
+            .iter()
+            .chain(self.textfile.iter().map(|(_, p)| p))
+        {
             p.link(index).update(|m| *m = Metrics::unopened(name));
         }
     }
@@ -175,8 +202,30 @@ impl Exports {
         if let Some((file, path)) = self.hgrm {
             write_hgrm(file, outcomes).map_err(|source| ExportError::Hgrm { path, source })?;
         }
+        if let Some((textfile, metrics)) = self.textfile {
+            let path = textfile.path().to_path_buf();
+            textfile
+                .commit(&with_end_time(metrics.render_now()))
+                .map_err(|source| ExportError::Textfile { path, source })?;
+        }
         recorded.transpose().map(|_| ())
     }
+}
+
+/// The textfile's metrics and when the run ended: a timer that stopped
+/// running mavping leaves a file that only this says is old.
+fn with_end_time(mut text: String) -> String {
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64());
+    text.push_str(
+        "# HELP mavping_textfile_run_end_timestamp_seconds When the run that wrote this file ended (Unix time).\n\
+         # TYPE mavping_textfile_run_end_timestamp_seconds gauge\n",
+    );
+    text.push_str(&format!(
+        "mavping_textfile_run_end_timestamp_seconds {now:.3}\n"
+    ));
+    text
 }
 
 /// Every link's responders, one section each, in one file.

@@ -184,10 +184,12 @@ pub fn main(cli: &Cli) -> Ending {
             }
         },
         Some(Mode::Serve(args)) => match ServeConfig::try_from(args) {
+            Ok(config) if config.check => serve::check(&config),
             Ok(config) => {
                 init_logging(config.verbose);
+                let config = std::rc::Rc::new(config);
                 block_on(false, |controls| async move {
-                    serve::run(&config, controls).await
+                    serve::run(config, controls).await
                 })
             }
             Err(e) => {

@@ -32,6 +32,7 @@ mod radio;
 mod scripting;
 mod serial_pty;
 mod serve;
+mod serve_secure;
 mod signing;
 mod sim_soak;
 mod stalled;

@@ -18,19 +18,19 @@ use crate::common::{
 
 /// Prometheus starts, scrapes every two seconds and needs two scrapes of
 /// each job; far more than that means something is broken.
-const PATIENCE: Duration = Duration::from_secs(90);
+pub const PATIENCE: Duration = Duration::from_secs(90);
 
 /// A Prometheus server with its own data directory; killed and cleaned
-/// up when dropped.
-struct Prometheus {
-    child: Child,
+/// up when dropped (also the TLS tests' in serve_secure.rs).
+pub struct Prometheus {
+    pub child: Child,
     dir: PathBuf,
-    addr: String,
+    pub addr: String,
 }
 
 impl Prometheus {
     /// A server of its own for the test `name` (tests run side by side).
-    fn start(name: &str, config: &str) -> Prometheus {
+    pub fn start(name: &str, config: &str) -> Prometheus {
         let dir =
             std::env::temp_dir().join(format!("mavping-prometheus-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
@@ -55,7 +55,7 @@ impl Prometheus {
 
     /// An instant query through the HTTP API, evaluated at `time` (Unix
     /// seconds) when given: its result vector.
-    fn query(&self, promql: &str, time: Option<f64>) -> Vec<Value> {
+    pub fn query(&self, promql: &str, time: Option<f64>) -> Vec<Value> {
         let mut path = format!(
             "/api/v1/query?query={}",
             form_urlencoded::byte_serialize(promql.as_bytes()).collect::<String>()
@@ -71,13 +71,13 @@ impl Prometheus {
     }
 
     /// The one value `promql` gives at `time`.
-    fn value(&self, promql: &str, time: f64) -> f64 {
+    pub fn value(&self, promql: &str, time: f64) -> f64 {
         let result = self.query(promql, Some(time));
         assert_eq!(result.len(), 1, "{promql}: {result:?}");
         result[0]["value"][1].as_str().unwrap().parse().unwrap()
     }
 
-    fn ready(&self) -> bool {
+    pub fn ready(&self) -> bool {
         std::net::TcpStream::connect(&self.addr).is_ok()
             && http_get(&self.addr, "/-/ready", &[]).status == 200
     }

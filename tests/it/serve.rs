@@ -280,9 +280,20 @@ fn continuous_links_come_back_and_reloads_keep_their_history() {
         sample(&m, "mavping_exporter_config_last_reload_successful", &[]),
         Some(0.0)
     );
-    assert!(server
+    // The stderr line is written before the count grows, and read by a
+    // thread of the test's: wait for it.
+    let start = std::time::Instant::now();
+    while !server
         .stderr()
-        .contains("reload refused, the old configuration stays:"));
+        .contains("reload refused, the old configuration stays:")
+    {
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "{}",
+            server.stderr()
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
     let kept = sample(&m, "mavping_sent_total", &one).unwrap();
 
     // A changed link is restarted under its name, history kept; a link

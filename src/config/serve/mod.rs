@@ -9,6 +9,7 @@
 mod allow;
 mod file;
 mod request;
+mod web;
 
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
@@ -28,6 +29,7 @@ use crate::verdict::Thresholds;
 pub use allow::Pattern;
 use file::{continuous_link, default_module, file_error, within, File, Table};
 pub use request::BadProbeRequest;
+pub use web::{ClientAuth, WebConfig};
 
 /// `mavping serve` listens here unless told otherwise: this machine only.
 pub const DEFAULT_LISTEN: &str = "127.0.0.1:9465";
@@ -52,6 +54,13 @@ pub struct ServeConfig {
     /// Reread on SIGHUP.
     pub file: Option<PathBuf>,
     pub settings: ServeSettings,
+    /// `--web.config.file`, reread on reload with the configuration.
+    pub web_file: Option<PathBuf>,
+    pub web: WebConfig,
+    /// `--web.enable-lifecycle`: `POST /-/reload` reloads.
+    pub lifecycle: bool,
+    /// `--config.check`: validate, say what was found, and exit.
+    pub check: bool,
     pub verbose: u8,
     /// The command line, whose `--allow` and `--link` a reload keeps.
     args: ServeArgs,
@@ -60,8 +69,24 @@ pub struct ServeConfig {
 impl ServeConfig {
     /// The settings as they are now: the file read again, beside the
     /// command line's. The address stays what it was at the start.
-    pub fn reload(&self) -> Result<ServeSettings, ConfigError> {
-        ServeSettings::load(&self.args, self.file.as_deref()).map(|(settings, _)| settings)
+    pub fn reload(&self) -> Result<(ServeSettings, WebConfig), ConfigError> {
+        let (settings, _) = ServeSettings::load(&self.args, self.file.as_deref())?;
+        Ok((settings, WebConfig::load(self.web_file.as_deref())?))
+    }
+
+    /// What `--config.check` prints: one line on what was found.
+    pub fn describe(&self) -> String {
+        let s = &self.settings;
+        let plural =
+            |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+        format!(
+            "configuration OK: {}, {}, {}, max_concurrent {}; web: {}",
+            plural(s.allow.len(), "allowed pattern", "allowed patterns"),
+            plural(s.modules.len(), "module", "modules"),
+            plural(s.links.len(), "continuous link", "continuous links"),
+            s.max_concurrent,
+            self.web.describe()
+        )
     }
 }
 
@@ -330,6 +355,10 @@ impl TryFrom<&ServeArgs> for ServeConfig {
             listen,
             file: args.config.clone(),
             settings,
+            web: WebConfig::load(args.web_config_file.as_deref())?,
+            web_file: args.web_config_file.clone(),
+            lifecycle: args.enable_lifecycle,
+            check: args.config_check,
             verbose: args.verbose,
             args: args.clone(),
         })

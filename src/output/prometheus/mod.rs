@@ -470,6 +470,14 @@ impl PrometheusExporter {
         }
     }
 
+    /// Every link as it is now, as `/metrics` would show it.
+    pub fn render_now(&self) -> String {
+        let links = self.links.borrow();
+        let all = borrow_all(&links);
+        let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();
+        render(&refs)
+    }
+
     /// The reporter of the `index`-th link, served at the same address.
     pub fn link(&self, index: usize) -> SharedMetrics {
         let mut links = self.links.borrow_mut();

@@ -397,7 +397,7 @@ const HEALTH: [HealthFigure; 8] = [
     Figure {
         family: Family::counter(
             "mavping_exporter_config_reloads_total",
-            "Configuration reloads asked for (SIGHUP).",
+            "Configuration reloads asked for (SIGHUP, POST /-/reload).",
         ),
         value: |h| h.reloads,
     },

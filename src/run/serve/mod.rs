@@ -1,8 +1,9 @@
 //! `mavping serve`: Prometheus's multi-target exporter pattern for MAVLink.
 //! `/probe?target=...` runs one bounded probe ([`probe`]); continuous links
 //! are measured all the time ([`links`]) and shown at `/metrics` with the
-//! exporter's own health. SIGHUP rereads the configuration: an invalid one
-//! is refused and the old one kept.
+//! exporter's own health. SIGHUP, or `POST /-/reload` with
+//! `--web.enable-lifecycle`, rereads the configuration and the web config
+//! (TLS, basic auth): an invalid one is refused and the old ones kept.
 //!
 //! Everything runs on one thread: the HTTP server's handlers, every probe
 //! and every link's session share it, none of them spinning.
@@ -20,9 +21,9 @@ use tokio::sync::Semaphore;
 use crate::engine::session::Controls;
 
 use super::signals::Hangups;
-use crate::config::{ServeConfig, ServeSettings};
+use crate::config::{ServeConfig, ServeSettings, WebConfig};
 use crate::exit::Ending;
-use crate::output::http::{self, Head, Limits, Reply, Replying};
+use crate::output::http::{self, Head, Limits, Reply, Replying, SharedWeb};
 use crate::output::prometheus::{borrow_all, render_serve, Health, Metrics};
 use crate::stderr;
 use links::Links;
@@ -35,11 +36,22 @@ pub struct Server {
     slots: RefCell<Arc<Semaphore>>,
     health: RefCell<Health>,
     links: RefCell<Links>,
+    /// The web config the HTTP server enforces; a reload swaps it.
+    web: SharedWeb,
+    /// Rereads both files (the configuration, the web config).
+    reload: Box<dyn Fn() -> Reloaded>,
+    /// `--web.enable-lifecycle`.
+    lifecycle: bool,
 }
 
+type Reloaded = Result<(ServeSettings, WebConfig), String>;
+
 impl Server {
-    fn new(settings: ServeSettings) -> Self {
+    fn new(settings: ServeSettings, web: WebConfig, reload: Box<dyn Fn() -> Reloaded>) -> Self {
         let server = Server {
+            web: Rc::new(RefCell::new(Rc::new(web))),
+            reload,
+            lifecycle: false,
             slots: RefCell::new(Arc::new(Semaphore::new(settings.max_concurrent))),
             settings: RefCell::new(Rc::new(settings)),
             health: RefCell::new(Health {
@@ -67,22 +79,26 @@ impl Server {
         f(&mut self.health.borrow_mut());
     }
 
-    /// Takes the settings a reload read, or keeps the old ones and says why.
-    fn apply(&self, reloaded: Result<ServeSettings, String>) {
+    /// Rereads the files and takes what they say, or keeps the old ones and
+    /// says why (also the answer to `POST /-/reload`).
+    fn reload(&self) -> Result<(), String> {
         self.health(|h| h.reloads += 1);
-        let settings = match reloaded {
-            Ok(settings) => settings,
+        let (settings, web) = match (self.reload)() {
+            Ok(both) => both,
             Err(e) => {
+                // Said before it is counted: whoever sees the count can
+                // find the reason.
+                stderr::error(&format_args!(
+                    "reload refused, the old configuration stays: {e}"
+                ));
                 self.health(|h| {
                     h.reloads_failed += 1;
                     h.last_reload_ok = false;
                 });
-                stderr::error(&format_args!(
-                    "reload refused, the old configuration stays: {e}"
-                ));
-                return;
+                return Err(e);
             }
         };
+        *self.web.borrow_mut() = Rc::new(web);
         if settings.max_concurrent != self.settings().max_concurrent {
             *self.slots.borrow_mut() = Arc::new(Semaphore::new(settings.max_concurrent));
         }
@@ -90,6 +106,31 @@ impl Server {
         *self.settings.borrow_mut() = Rc::new(settings);
         self.health(|h| h.last_reload_ok = true);
         stderr::error(&"configuration reloaded");
+        Ok(())
+    }
+
+    /// `/-/reload`, as Prometheus answers it: POST only, and only with the
+    /// lifecycle API enabled.
+    fn reload_request(&self, head: &Head) -> Reply {
+        if head.method != hyper::Method::POST {
+            return Reply::text(
+                StatusCode::METHOD_NOT_ALLOWED,
+                "Only POST requests allowed\n",
+            );
+        }
+        if !self.lifecycle {
+            return Reply::text(
+                StatusCode::FORBIDDEN,
+                "Lifecycle API is not enabled (--web.enable-lifecycle)\n",
+            );
+        }
+        match self.reload() {
+            Ok(()) => Reply::text(StatusCode::OK, "configuration reloaded\n"),
+            Err(e) => Reply::text(
+                StatusCode::INTERNAL_SERVER_ERROR,
+                format!("failed to reload config: {e}\n"),
+            ),
+        }
     }
 
     /// `/metrics`: the exporter's health and every continuous link.
@@ -106,6 +147,7 @@ impl Server {
         match head.uri.path() {
             "/probe" => probe::answer(&self, head.uri.query().unwrap_or(""), &head.headers).await,
             "/metrics" => self.metrics(),
+            "/-/reload" => self.reload_request(&head),
             "/" => Reply::text(
                 StatusCode::OK,
                 "mavping serve: /probe?target=LINK[&module=NAME] probes a link; /metrics shows \
@@ -141,11 +183,23 @@ fn handler(server: &Rc<Server>) -> impl Fn(Head) -> Replying + 'static {
 /// (its continuous links do run, on the current `LocalSet`): the HTTP
 /// fuzz target's way in.
 pub fn handler_for(settings: ServeSettings) -> impl Fn(Head) -> Replying + 'static {
-    handler(&Rc::new(Server::new(settings)))
+    let kept = settings.clone();
+    let reload = Box::new(move || Ok((kept.clone(), WebConfig::default())));
+    handler(&Rc::new(Server::new(
+        settings,
+        WebConfig::default(),
+        reload,
+    )))
+}
+
+/// `--config.check`: both files were read and checked on the way here.
+pub fn check(config: &ServeConfig) -> Ending {
+    println!("{}", config.describe());
+    Ending::Done
 }
 
 /// Serves until Ctrl-C or SIGTERM.
-pub async fn run(config: &ServeConfig, controls: Controls) -> Ending {
+pub async fn run(config: Rc<ServeConfig>, controls: Controls) -> Ending {
     let stop = controls.stop;
     raise_descriptor_limit();
     let listener = match std::net::TcpListener::bind(config.listen).and_then(http::listener) {
@@ -162,17 +216,30 @@ pub async fn run(config: &ServeConfig, controls: Controls) -> Ending {
             return Ending::Refused;
         }
     };
-    let server = Rc::new(Server::new(config.settings.clone()));
-    http::serve(listener, Limits::default(), handler(&server));
+    let rereads = config.clone();
+    let reload = Box::new(move || rereads.reload().map_err(|e| e.to_string()));
+    let mut server = Server::new(config.settings.clone(), config.web.clone(), reload);
+    server.lifecycle = config.lifecycle;
+    let server = Rc::new(server);
+    let limits = Limits {
+        posts: &["/-/reload"],
+        ..Limits::default()
+    };
+    http::serve_with(listener, limits, server.web.clone(), handler(&server));
     // Says the port when 0 was asked for; scripts and tests read it.
+    let enforced = match config.web_file {
+        Some(_) => format!(" ({})", config.web.describe()),
+        None => String::new(),
+    };
     stderr::error(&format_args!(
-        "serving /probe and /metrics at http://{addr}/"
+        "serving /probe and /metrics at {}://{addr}/{enforced}",
+        config.web.scheme(),
     ));
     let mut hangups = Hangups::new();
     loop {
         tokio::select! {
             () = stop.notified() => return Ending::Done,
-            () = hangups.next() => server.apply(config.reload().map_err(|e| e.to_string())),
+            () = hangups.next() => { let _ = server.reload(); }
         }
     }
 }

@@ -4,6 +4,11 @@
 //! allows, judged by the module's thresholds, and answered with that
 //! probe's metrics. A probe that fails is an answer too:
 //! `mavping_probe_success 0` and `mavping_probe_failure{reason=...}`.
+//!
+//! With `debug=true` the answer is the probe's own log instead, as the
+//! blackbox exporter gives it: what was asked, each request and reply as
+//! `mavping` prints them, the summary, why it failed, and the metrics a
+//! scrape would have had. For a person at a browser, not for Prometheus.
 
 use std::time::{Duration, Instant};
 
@@ -15,8 +20,9 @@ use super::Server;
 use crate::engine::hint::HintCode;
 use crate::engine::summary::LinkSummary;
 use crate::output::http::Reply;
-use crate::output::prometheus::{render_probe, Metrics, ProbeResult};
-use crate::output::{Reporter, WallClock};
+use crate::output::prometheus::{render_probe, ProbeResult, SharedMetrics};
+use crate::output::text::TextReporter;
+use crate::output::{Fanout, Reporter, Shared, WallClock};
 use crate::run::one_link::measure;
 use crate::transport::Link;
 use crate::verdict::{self, Check};
@@ -60,10 +66,37 @@ impl Drop for Running<'_> {
     }
 }
 
+/// `debug=true` taken out of the query (the rest is the probe's).
+fn debug_flag(query: &str) -> (String, Result<bool, String>) {
+    let mut rest = form_urlencoded::Serializer::new(String::new());
+    let mut debug = Ok(false);
+    for (key, value) in form_urlencoded::parse(query.as_bytes()) {
+        if key == "debug" {
+            debug = match &*value {
+                "true" | "1" => Ok(true),
+                "false" | "0" | "" => Ok(false),
+                other => Err(format!("debug '{other}': expected true or false")),
+            };
+        } else {
+            rest.append_pair(&key, &value);
+        }
+    }
+    (rest.finish(), debug)
+}
+
 /// Answers one `/probe` request.
 pub async fn answer(server: &Server, query: &str, headers: &HeaderMap) -> Reply {
     let started = Instant::now();
     let settings = server.settings();
+    let (query, debug) = debug_flag(query);
+    let debug = match debug {
+        Ok(debug) => debug,
+        Err(line) => {
+            server.health(|h| h.probes_refused += 1);
+            return Reply::text(StatusCode::BAD_REQUEST, format!("{line}\n"));
+        }
+    };
+    let query = query.as_str();
     let plan = match settings.plan(query) {
         Ok(plan) => plan,
         Err(line) => {
@@ -90,39 +123,95 @@ pub async fn answer(server: &Server, query: &str, headers: &HeaderMap) -> Reply 
         link_open: false,
     };
     let budget = budget(headers);
-    let mut metrics = Metrics::default();
-    let result =
-        match tokio::time::timeout(budget, Link::open(&plan.link.spec, &plan.options)).await {
-            Err(_) => failed(
-                started,
-                "open_failed",
-                format!(
-                    "opening {} took longer than the scrape allows ({})",
-                    plan.link.name,
-                    humantime::format_duration(budget)
-                ),
+    let metrics = SharedMetrics::default();
+    let log = Shared::new(Vec::new());
+    let result = match tokio::time::timeout(budget, Link::open(&plan.link.spec, &plan.options))
+        .await
+    {
+        Err(_) => failed(
+            started,
+            "open_failed",
+            format!(
+                "opening {} took longer than the scrape allows ({})",
+                plan.link.name,
+                humantime::format_duration(budget)
             ),
-            Ok(Err(e)) => failed(started, "open_failed", e.to_string()),
-            Ok(Ok(link)) => {
-                running.link_open = true;
-                server.health(|h| h.open_links += 1);
-                let mut config = plan.link.clone();
-                // The session stops when the scrape's time is up, whatever is
-                // still in flight.
-                config.session.deadline = Some(budget.saturating_sub(started.elapsed()));
-                let wall = WallClock::starting(false);
-                let never = Controls::default();
-                let outcome = measure(&config, link, &plan.probe, wall, &mut metrics, &never).await;
-                let verdict = verdict::judge_link(&outcome.summary, &plan.link.thresholds);
-                let _ = metrics.summary(&outcome.summary, &verdict);
-                judged(started, &outcome.summary, &verdict)
+        ),
+        Ok(Err(e)) => failed(started, "open_failed", e.to_string()),
+        Ok(Ok(link)) => {
+            running.link_open = true;
+            server.health(|h| h.open_links += 1);
+            let mut config = plan.link.clone();
+            // The session stops when the scrape's time is up, whatever is
+            // still in flight.
+            config.session.deadline = Some(budget.saturating_sub(started.elapsed()));
+            let wall = WallClock::starting(false);
+            let never = Controls::default();
+            let mut observers: Vec<Box<dyn Reporter>> = vec![Box::new(metrics.clone())];
+            if debug {
+                observers.push(Box::new(TextReporter::new(log.clone(), false)));
             }
-        };
+            let mut observer = Fanout::new(observers);
+            let outcome = measure(&config, link, &plan.probe, wall, &mut observer, &never).await;
+            let verdict = verdict::judge_link(&outcome.summary, &plan.link.thresholds);
+            let _ = observer.summary(&outcome.summary, &verdict);
+            judged(started, &outcome.summary, &verdict)
+        }
+    };
     drop(running);
     if !result.success {
         server.health(|h| h.probes_failed += 1);
     }
-    Reply::metrics(render_probe(&metrics, &result))
+    let exposition = render_probe(&metrics.get(), &result);
+    if debug {
+        let log = String::from_utf8_lossy(&log.0.borrow()).into_owned();
+        return Reply::text(
+            StatusCode::OK,
+            debug_text(&plan, budget, &log, &result, &exposition),
+        );
+    }
+    Reply::metrics(exposition)
+}
+
+/// The blackbox exporter's debug page, for mavping's probe.
+fn debug_text(
+    plan: &crate::config::ProbePlan,
+    budget: Duration,
+    log: &str,
+    result: &ProbeResult,
+    exposition: &str,
+) -> String {
+    let s = &plan.link.session;
+    let mut out = format!(
+        "Probe of {} with module {}: {} {} requests, every {}, each answered within {}; the \
+         scrape allows {}\n\n",
+        plan.link.name,
+        plan.module,
+        s.count.unwrap_or(0),
+        plan.probe.name(),
+        humantime::format_duration(s.interval),
+        humantime::format_duration(s.timeout),
+        humantime::format_duration(budget),
+    );
+    out.push_str("Logs for the probe:\n");
+    if log.is_empty() {
+        out.push_str("(nothing measured: the link did not open)\n");
+    } else {
+        out.push_str(log);
+    }
+    out.push_str(&format!(
+        "\nResult: {}",
+        if result.success { "success" } else { "failure" }
+    ));
+    if !result.reasons.is_empty() {
+        out.push_str(&format!(" ({})", result.reasons.join(", ")));
+    }
+    if let Some(m) = &result.message {
+        out.push_str(&format!(": {m}"));
+    }
+    out.push_str("\n\n\nMetrics that would have been returned:\n");
+    out.push_str(exposition);
+    out
 }
 
 fn failed(started: Instant, reason: &'static str, message: String) -> ProbeResult {

@@ -39,10 +39,13 @@ impl Server {
         let mut stderr = BufReader::new(child.stderr.take().unwrap());
         let mut line = String::new();
         stderr.read_line(&mut line).unwrap();
+        // "...at http://ADDR/", or "at https://ADDR/ (TLS, ...)" with a web
+        // config.
         let addr = line
             .trim()
-            .strip_prefix("mavping: serving /probe and /metrics at http://")
-            .and_then(|l| l.strip_suffix('/'))
+            .strip_prefix("mavping: serving /probe and /metrics at ")
+            .and_then(|l| l.strip_prefix("http://").or(l.strip_prefix("https://")))
+            .and_then(|l| l.split_once('/').map(|(addr, _)| addr))
             .unwrap_or_else(|| panic!("mavping serve did not start: {line:?}"))
             .to_string();
         let collected = Arc::new(Mutex::new(String::new()));
