@@ -5,12 +5,14 @@
 #   mavping_VERSION_ARCH.deb        (scripts/deb.sh, when it is there)
 #   mavping_cli-VERSION-*.whl       the binary as a Python wheel (maturin)
 #   SHA256SUMS
+# and checks the crate as crates.io builds it (`cargo publish --dry-run`,
+# verified: a dev build of the packaged sources; --no-publish-check skips it).
 # for x86_64, aarch64 and 32-bit ARM Linux, every binary static (no libc
 # needed on the board), built in the size-tuned `dist` profile. Every
 # foreign binary is run under qemu-user (scripts/cross-test.sh), and the
 # x86_64 wheel is installed into a fresh venv and run.
 #
-# Usage: scripts/dist.sh [TARGET...]
+# Usage: scripts/dist.sh [--no-publish-check] [TARGET...]
 # Installs what it lacks: rustup targets (rustup), qemu-user, the ARM cross
 # linker and gcc file (apt-get, as root), maturin (pip, in target/dist-venv).
 # Nothing else is downloaded. Idempotent: a second run rebuilds nothing
@@ -27,6 +29,11 @@ default_targets=(
   # linked statically (.cargo/config.toml); see docs/install.md.
   armv7-unknown-linux-gnueabihf
 )
+publish_check=1
+if [ "${1-}" = --no-publish-check ]; then
+  publish_check=0
+  shift
+fi
 [ $# -gt 0 ] && targets=("$@") || targets=("${default_targets[@]}")
 version=$(sed -nE 's/^version = "(.*)"/\1/p' Cargo.toml | head -1)
 out=dist
@@ -178,6 +185,13 @@ sums() {
   done
 }
 
+# What `cargo install --locked mavping` will build, before it is published.
+publish_check() {
+  [ "$publish_check" = 1 ] || { echo "dist: publish check skipped (--no-publish-check)"; return 0; }
+  say "cargo publish --dry-run --locked"
+  cargo publish --dry-run --locked
+}
+
 install_tools
 build
 say "scripts/cross-test.sh (qemu-user for the foreign CPUs)"
@@ -191,3 +205,4 @@ debs
 wheels
 test_wheel
 sums
+publish_check
