@@ -51,9 +51,28 @@ command -v systemd-analyze >/dev/null || missing+=(systemd)
 command -v curl >/dev/null || missing+=(curl)
 command -v openssl >/dev/null || missing+=(openssl)
 { command -v clang && command -v llvm-ar; } >/dev/null || missing+=(clang llvm)
+# qemu-aarch64 runs the aarch64 build (below).
+command -v qemu-aarch64 >/dev/null || missing+=(qemu-user)
 if [ ${#missing[@]} -gt 0 ]; then
   apt-get update -qq
   DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
 export MAVPING_PYTHON="$PWD/.venv/bin/python"
 cargo test --all-targets "$@"
+
+# The whole suite (no arguments) also builds mavping for aarch64, a
+# companion computer's CPU, and runs it under qemu-aarch64 against the host
+# build (scripts/cross-test.sh: the simulated link's counts, both ends of a
+# UDP run, exit codes). In the dev profile, which builds in a fraction of
+# dist's time, and in a target directory kept in ~/.cache per Cargo.lock, so
+# that only mavping itself is compiled again while the dependencies stay.
+if [ $# -eq 0 ]; then
+  cross=aarch64-unknown-linux-musl
+  rustup target list --installed | grep -qx "$cross" || rustup target add "$cross"
+  cache=${XDG_CACHE_HOME:-$HOME/.cache}/mavping
+  key=cross-$(sha256sum Cargo.lock | cut -c1-16)
+  mkdir -p "$cache"
+  find "$cache" -mindepth 1 -maxdepth 1 -name 'cross-*' ! -name "$key" -exec rm -rf {} +
+  cargo build --locked --target "$cross" --target-dir "$cache/$key"
+  bash scripts/cross-test.sh --target-dir "$cache/$key" --profile debug "$cross"
+fi

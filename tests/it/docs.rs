@@ -113,6 +113,7 @@ fn the_readme_is_short_and_lists_every_page() {
     let expected = [
         "## Contents",
         "## Try it (two commands on a fresh machine)",
+        "## Install",
         "## Everyday use",
         "## Habits from ping, fping and irtt",
         "## For scripts and CI",
