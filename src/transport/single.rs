@@ -174,7 +174,12 @@ mod tests {
         while done < datagrams.len() {
             let (len, grouped) = next_send(&datagrams[done..], true);
             assert!(!grouped);
-            done += send.send(&b, &datagrams[done..done + len]).unwrap();
+            // As udp.rs does: a send that would block waits for room.
+            match send.send(&b, &datagrams[done..done + len]) {
+                Ok(n) => done += n,
+                Err(e) if e.kind() == io::ErrorKind::WouldBlock => b.writable().await.unwrap(),
+                Err(e) => panic!("{e}"),
+            }
         }
         let mut recv = RecvBatch::new();
         let mut got = Vec::new();
