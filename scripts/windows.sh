@@ -95,7 +95,9 @@ kill "$respond_pid" 2>/dev/null || true
 respond_pid=
 
 set +e
-mav -q -c 3 -i 100ms -W 300ms "udpout:127.0.0.1:$((port + 1))" >/dev/null 2>&1; rc=$?
+# Bounded: in the first run under Wine this one spun (state R) instead of
+# ending, an open bug (the report of issue 30).
+timeout 60 "$runner" "$exe" -q -c 3 -i 100ms -W 300ms "udpout:127.0.0.1:$((port + 1))" >/dev/null 2>&1; rc=$?
 check "nobody answers: exit code" 1 "$rc"
 err=$(mav -c 1 carrier-pigeon:1:2 2>&1 >/dev/null); rc=$?
 check "bad address: exit code" 2 "$rc"
@@ -112,7 +114,9 @@ step "what the PowerShell completions offer, mavping.exe accepts"
 # each subcommand must parse.
 help=$(mav --help | tr -d '\r')
 offered=$(COMPLETE=powershell mav -- mavping -- | tr -d '\r' | cut -f1)
-subs=$(COMPLETE=powershell mav -- mavping '' | tr -d '\r' | cut -f1 | grep -v ':$' | grep -v '^help$' || true)
+# Subcommands only: the offer for an empty word also lists options and
+# the connection-string schemes.
+subs=$(COMPLETE=powershell mav -- mavping '' | tr -d '\r' | cut -f1 | grep -v ':$' | grep -v '^-' | grep -v '^help$' || true)
 n=0
 for opt in $offered; do
   n=$((n + 1))
