@@ -34,6 +34,9 @@ ARGS = sys.argv[1:]
 MAVPING = (os.path.abspath(ARGS[ARGS.index("--binary") + 1]) if "--binary" in ARGS
            else os.path.join(ROOT, "target", "release", "mavping"))
 FLOOR = os.path.join(ROOT, "target", "release", "examples", "wake_floor")
+# The portable path (what Windows and macOS get), built by bench.sh with
+# --features portable into its own target directory.
+PORTABLE = os.path.join(ROOT, "target", "portable", "release", "mavping")
 PY = sys.executable
 QUICK = "--quick" in ARGS
 TRIAL_S = 2 if QUICK else 3
@@ -103,9 +106,9 @@ class Responder:
         return int(truth.split(" replies sent")[0].split(", ")[-1]) if " replies sent" in truth else None
 
 
-def mavping_json(args, responder):
+def mavping_json(args, responder, binary=None):
     out, err, rss, cpu, wall = run_rusage(
-        [MAVPING, "--json", "-q", *args, f"udpout:127.0.0.1:{responder.port}"])
+        [binary or MAVPING, "--json", "-q", *args, f"udpout:127.0.0.1:{responder.port}"])
     s = json.loads(out.strip().splitlines()[-1])
     r = s["responders"][0] if s["responders"] else None
     return s, r, rss, cpu, wall
@@ -201,8 +204,54 @@ def hundred_links(rows):
     print("bench: 100 links done", flush=True)
 
 
+def portable_rows(rows, resp):
+    """The portable path beside the Linux one, the same runs in turn: RTT
+    and CPU per PING at 100 Hz and 1 kHz."""
+    if not os.path.exists(PORTABLE):
+        print(f"bench: no {PORTABLE}: the portable rows are skipped", flush=True)
+        return
+    for rate, name in [(100, "100 Hz"), (1000, "1 kHz")]:
+        runs = {}
+        for label, binary in [("linux", MAVPING), ("portable", PORTABLE)]:
+            s, r, rss, cpu, _ = mavping_json(
+                ["--rate", str(rate), "-w", f"{PACED_S}s", "-W", "1s"], resp, binary)
+            runs[label] = (s, r, cpu)
+        (ls, lr, lcpu), (ps, pr, pcpu) = runs["linux"], runs["portable"]
+        rows.append((f"portable path: RTT p50 / p99 at {name} (µs)",
+                     f"{pr['rtt_us']['p50']:.0f} / {pr['rtt_us']['p99']:.0f}",
+                     f"{lr['rtt_us']['p50']:.0f} / {lr['rtt_us']['p99']:.0f} (Linux path)",
+                     f"{pr['rtt_us']['p50'] / lr['rtt_us']['p50']:.2f}x"))
+        rows.append((f"portable path: send lateness p50 / p99 at {name} (µs)",
+                     f"{ps['schedule']['lateness_p50_us']:.1f} / {ps['schedule']['lateness_p99_us']:.1f}",
+                     f"{ls['schedule']['lateness_p50_us']:.1f} / {ls['schedule']['lateness_p99_us']:.1f}"
+                     " (Linux path)", ""))
+        rows.append((f"portable path: CPU per PING at {name} (µs), sent / received",
+                     f"{per_ping_us(pcpu, ps):.1f}, {pr['sent']:,} / {pr['received']:,}",
+                     f"{per_ping_us(lcpu, ls):.1f}, {lr['sent']:,} / {lr['received']:,} (Linux path)",
+                     f"{per_ping_us(pcpu, ps) / per_ping_us(lcpu, ls):.1f}x"))
+        print(f"bench: portable path at {name} done", flush=True)
+
+
+def print_rows(rows):
+    head = ("figure", "mavping", "baseline", "ratio")
+    print("| " + " | ".join(head) + " |")
+    print("|---|---|---|---|")
+    for row in rows:
+        print("| " + " | ".join(row) + " |")
+
+
 def main():
     rows = []
+    if "--portable" in ARGS:
+        resp = Responder()
+        try:
+            portable_rows(rows, resp)
+        finally:
+            if resp.p.poll() is None:
+                resp.stop()
+        print(f"\nload average {os.getloadavg()[0]:.2f} (1-minute; {os.cpu_count()} CPUs)\n")
+        print_rows(rows)
+        return
     load_start = os.getloadavg()
     resp = Responder()
     try:
@@ -233,6 +282,7 @@ def main():
             rows.append((f"CPU per PING at {name} (µs)", f"{per_ping_us(cpu, s):.1f}",
                          f"{floor:.1f} (wake floor)", f"{per_ping_us(cpu, s) / floor:.1f}x"))
             print(f"bench: {name} done", flush=True)
+        portable_rows(rows, resp)
 
         # 3. Highest clean rate (< 0.1 % loss): mavping vs the pymavlink pinger.
         best_py = 0
@@ -300,11 +350,7 @@ def main():
     load_end = os.getloadavg()
     print(f"\nload average at start {load_start[0]:.2f}, at end {load_end[0]:.2f} "
           f"(1-minute; {os.cpu_count()} CPUs)\n")
-    head = ("figure", "mavping", "baseline", "ratio")
-    print("| " + " | ".join(head) + " |")
-    print("|---|---|---|---|")
-    for row in rows:
-        print("| " + " | ".join(row) + " |")
+    print_rows(rows)
 
 
 if __name__ == "__main__":

@@ -7,6 +7,8 @@
 #   bash scripts/bench.sh --binary /tmp/before/target/release/mavping
 #                                  # the same bench against another build
 #                                  # (for a before/after table)
+#   bash scripts/bench.sh --portable # only the portable path's rows beside
+#                                  # the Linux path's (about 1 minute)
 #   bash scripts/bench.sh --passive  # only the passive rows (about 2 minutes):
 #                                  # --passive at 100,000 frames/s beside a
 #                                  # plain reader and pymavlink's mavutil
@@ -15,6 +17,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo build --release --quiet
+# The portable path (Windows', macOS') on Linux, in its own target
+# directory so the release binary above stays the Linux path.
+cargo build --release --quiet --features portable --target-dir target/portable
 # The baseline of the CPU-per-PING rows: a loop that only sleeps, reads and
 # sends once per PING (examples/wake_floor.rs).
 cargo build --release --quiet --example wake_floor

@@ -59,6 +59,14 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 export MAVPING_PYTHON="$PWD/.venv/bin/python"
 cargo test --all-targets "$@"
+# The portable path (what Windows and macOS get: build.rs) on Linux, so it
+# cannot rot: the UDP, TCP, serial (pty) and sim: tests again, against a
+# build with --features portable (and its one-line -I refusal).
+if [ $# -eq 0 ]; then
+  cargo test --features portable --test it -- \
+    udp_pymavlink:: tcp_pymavlink:: serial_pty:: sim_soak:: udp_bcast_ipv6:: \
+    multilink:: stalled:: habits::dash_i
+fi
 
 # The whole suite (no arguments) also builds mavping for aarch64, a
 # companion computer's CPU, and runs it under qemu-aarch64 against the host

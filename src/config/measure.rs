@@ -93,6 +93,11 @@ fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigE
                 "-I {name}: expected a network interface name (up to 15 characters), e.g. wlan0"
             )))
         }
+        Some(name) if cfg!(mavping_portable) => {
+            return Err(invalid(crate::transport::route::interface_needs_linux(
+                name,
+            )))
+        }
         Some(name) => Some(name.to_string()),
     };
     Ok(Route {

@@ -19,6 +19,11 @@ pub mod session;
 pub mod stats;
 pub mod summary;
 pub mod sweep;
+#[cfg(not(mavping_portable))]
+pub mod wait;
+// The portable path's waits (build.rs): same interface, no Linux timers.
+#[cfg(mavping_portable)]
+#[path = "wait_portable.rs"]
 pub mod wait;
 
 use std::time::Duration;

@@ -1,10 +1,12 @@
 //! Signals: the first Ctrl-C or SIGTERM stops the run (it still reports,
 //! as ping does); a second one means "leave now". SIGQUIT (Ctrl-\) asks for
 //! an interim summary and the run goes on, as with Linux `ping`. SIGHUP
-//! asks `mavping serve` to reread its configuration.
+//! asks `mavping serve` to reread its configuration. Windows has Ctrl-C
+//! (and Ctrl-Break, closing the console) only: no SIGQUIT, no SIGHUP.
 
 use std::future::pending;
 
+#[cfg(unix)]
 use tokio::signal::unix::{signal, SignalKind};
 
 use crate::engine::session::Controls;
@@ -13,6 +15,7 @@ use crate::engine::session::Controls;
 /// `controls.interim` at every SIGQUIT; resolves at the second Ctrl-C or
 /// SIGTERM. Raced against the run, so the run is dropped (and the terminal
 /// given back) when it wins.
+#[cfg(unix)]
 pub async fn watch(controls: Controls) {
     let (Ok(mut int), Ok(mut term)) = (
         signal(SignalKind::interrupt()),
@@ -37,6 +40,28 @@ pub async fn watch(controls: Controls) {
                 controls.interim.notify_one();
                 continue;
             }
+        }
+        if stops == 1 {
+            controls.stop.notify_one();
+        } else {
+            return;
+        }
+    }
+}
+
+/// Windows: the first Ctrl-C (or Ctrl-Break) stops the run, a second
+/// leaves; there is no interim-summary signal.
+#[cfg(not(unix))]
+pub async fn watch(controls: Controls) {
+    use tokio::signal::windows::{ctrl_break, ctrl_c};
+    let (Ok(mut int), Ok(mut brk)) = (ctrl_c(), ctrl_break()) else {
+        return pending().await;
+    };
+    let mut stops = 0;
+    loop {
+        tokio::select! {
+            _ = int.recv() => stops += 1,
+            _ = brk.recv() => stops += 1,
         }
         if stops == 1 {
             controls.stop.notify_one();

@@ -103,7 +103,7 @@ impl fmt::Display for LinkSpec {
 /// Accepted forms, listed in every parse error.
 pub const ACCEPTED_FORMS: &str = "udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, \
 udpbcast:ADDR:PORT, tcp:HOST:PORT, tcpout:HOST:PORT, tcpin:HOST:PORT, serial:DEVICE[:BAUD], \
-/dev/DEVICE, sim:[?key=value&...], tlog:FILE or FILE.tlog (a telemetry log; tlog:- reads standard \
+/dev/DEVICE, COMn[:BAUD], sim:[?key=value&...], tlog:FILE or FILE.tlog (a telemetry log; tlog:- reads standard \
 input) (IPv6 hosts in brackets: udpout:[::1]:14550)";
 
 #[derive(Debug, Error, PartialEq)]
@@ -186,7 +186,7 @@ fn serial(input: &str, rest: &str) -> Result<LinkSpec, AddressError> {
         // `/dev/ttyS0:abc`: a mistyped baud, not a device named so (device
         // names with colons, as /dev/serial/by-path's, end in `-port0`).
         Some((path, baud))
-            if path.starts_with("/dev/")
+            if (path.starts_with("/dev/") || is_windows_port(path))
                 && !baud.is_empty()
                 && baud.bytes().all(|b| b.is_ascii_alphanumeric()) =>
         {
@@ -200,6 +200,17 @@ fn serial(input: &str, rest: &str) -> Result<LinkSpec, AddressError> {
             baud: None,
         }),
     }
+}
+
+/// A Windows serial port named as Windows names it: `COM3`, `com12`, or
+/// the device path `\\.\COM12` (what ports above COM9 need in some
+/// programs), with an optional `:BAUD`. On every system, so a
+/// configuration file means the same wherever it is read.
+fn is_windows_port(input: &str) -> bool {
+    let name = input.split_once(':').map_or(input, |(name, _)| name);
+    let name = name.strip_prefix(r"\\.\").unwrap_or(name);
+    strip_prefix_ignoring_case(name, "COM")
+        .is_some_and(|n| !n.is_empty() && n.len() <= 3 && n.bytes().all(|b| b.is_ascii_digit()))
 }
 
 /// `input` less `prefix`, if it starts with it in any case.
@@ -238,7 +249,7 @@ impl std::str::FromStr for LinkSpec {
         if !input.contains(':') && input.to_ascii_lowercase().ends_with(".tlog") {
             return Ok(LinkSpec::Tlog(TlogPath(input.to_string())));
         }
-        if input.starts_with('/') || input.starts_with("COM") {
+        if input.starts_with('/') || is_windows_port(input) {
             return serial(input, input);
         }
         if let Some((scheme, rest)) = input.split_once(':') {
@@ -430,11 +441,60 @@ mod tests {
     }
 
     #[test]
+    fn windows_and_macos_serial_names_parse_on_every_system() {
+        let serial = |path: &str, baud: Option<u32>| LinkSpec::Serial {
+            path: path.into(),
+            baud,
+        };
+        for (input, expected) in [
+            ("COM3", serial("COM3", None)),
+            ("com3", serial("com3", None)),
+            ("COM3:57600", serial("COM3", Some(57600))),
+            ("serial:COM3:57600", serial("COM3", Some(57600))),
+            ("serial:COM12", serial("COM12", None)),
+            (r"\\.\COM12:115200", serial(r"\\.\COM12", Some(115200))),
+            (
+                "serial:/dev/cu.usbserial-1410:57600",
+                serial("/dev/cu.usbserial-1410", Some(57600)),
+            ),
+            (
+                "/dev/tty.usbserial-A10K",
+                serial("/dev/tty.usbserial-A10K", None),
+            ),
+            (
+                "/dev/cu.usbmodem14101",
+                serial("/dev/cu.usbmodem14101", None),
+            ),
+        ] {
+            assert_eq!(input.parse::<LinkSpec>(), Ok(expected), "{input}");
+        }
+        // A host whose name starts with COM is still a host.
+        assert_eq!(
+            "computer:14550".parse::<LinkSpec>(),
+            Ok(LinkSpec::UdpIn(hp("computer", 14550)))
+        );
+        assert_eq!(
+            "COM1X:14550".parse::<LinkSpec>(),
+            Ok(LinkSpec::UdpIn(hp("COM1X", 14550)))
+        );
+        for bad in ["COM3:fast", "COM3:0", "serial:COM3:0"] {
+            let err = bad.parse::<LinkSpec>().unwrap_err();
+            assert!(err.reason.contains("baud rate"), "{bad}: {err}");
+        }
+        assert!("/dev/cu.usbmodem14101"
+            .parse::<LinkSpec>()
+            .unwrap()
+            .may_ignore_baud());
+        assert!(!"COM3".parse::<LinkSpec>().unwrap().may_ignore_baud());
+    }
+
+    #[test]
     fn display_round_trips() {
         for input in [
             "udpout:[::1]:14550",
             "tcpin:0.0.0.0:5760",
             "serial:/dev/ttyUSB0:57600",
+            "serial:COM3:57600",
             "tlog:-",
         ] {
             assert_eq!(input.parse::<LinkSpec>().unwrap().to_string(), input);

@@ -62,6 +62,7 @@ pub fn not_broadcast(target: Ipv4Addr) -> Option<String> {
 /// the interface gives it, or its address with the host bits set (the
 /// loopback has no broadcast flag, yet 127.255.255.255 reaches every
 /// socket on it).
+#[cfg(unix)]
 fn interface_broadcasts() -> Vec<Ipv4Addr> {
     let Ok(addrs) = nix::ifaddrs::getifaddrs() else {
         return Vec::new();
@@ -82,6 +83,13 @@ fn interface_broadcasts() -> Vec<Ipv4Addr> {
     found.sort();
     found.dedup();
     found
+}
+
+/// Windows: no getifaddrs; the check then knows the limited broadcast
+/// (255.255.255.255) and the loopback's only.
+#[cfg(not(unix))]
+fn interface_broadcasts() -> Vec<Ipv4Addr> {
+    vec![Ipv4Addr::new(127, 255, 255, 255)]
 }
 
 #[cfg(test)]

@@ -14,12 +14,49 @@
 //! recvmmsg 1.0 µs; GSO 0.10 µs and GRO 0.06 µs.
 
 use std::io::{self, IoSlice, IoSliceMut};
-use std::os::fd::RawFd;
+use std::net::SocketAddr;
+use std::os::fd::{AsRawFd, RawFd};
 
 use nix::sys::socket::{
     self as nixsock, ControlMessage, ControlMessageOwned, MsgFlags, MultiHeaders, SockaddrStorage,
 };
 use nix::sys::time::TimeSpec;
+use tokio::net::UdpSocket;
+
+use super::rx_time::WallNs;
+
+/// What the calls below take a socket as (the portable path's
+/// `single.rs` takes the socket itself).
+pub type Fd<'a> = RawFd;
+/// A datagram's address as the calls below carry it.
+pub type Addr = SockaddrStorage;
+
+pub fn fd(socket: &UdpSocket) -> Fd<'_> {
+    socket.as_raw_fd()
+}
+
+pub fn socket_addr(addr: &Addr) -> Option<SocketAddr> {
+    if let Some(v4) = addr.as_sockaddr_in() {
+        Some(SocketAddr::from((v4.ip(), v4.port())))
+    } else {
+        addr.as_sockaddr_in6()
+            .map(|v6| SocketAddr::from((v6.ip(), v6.port())))
+    }
+}
+
+/// Asks the kernel to stamp each datagram as it reaches the socket
+/// (SO_TIMESTAMPNS): whether it will.
+pub fn kernel_stamps(socket: &UdpSocket) -> bool {
+    nixsock::setsockopt(socket, nixsock::sockopt::ReceiveTimestampns, &true).is_ok()
+}
+
+/// Same-sized datagrams from one sender that arrive together (a GSO send,
+/// or what a NIC coalesces) come up as one message (UDP_GRO), cut apart
+/// again by the reader: one read for a whole burst. They share one
+/// receive timestamp, as they arrived together.
+pub fn join_arrivals(socket: &UdpSocket) {
+    let _ = nixsock::setsockopt(socket, nixsock::sockopt::UdpGroSegment, &true);
+}
 
 /// Messages per `recvmmsg`.
 pub const RECV_BATCH: usize = 16;
@@ -41,7 +78,7 @@ pub struct Received {
     pub len: usize,
     pub from: Option<SockaddrStorage>,
     /// When the kernel queued it (SO_TIMESTAMPNS), on the wall clock.
-    pub kernel: Option<TimeSpec>,
+    pub kernel: Option<WallNs>,
     /// UDP GRO joined several datagrams of this size (the last may be
     /// shorter) into this message.
     pub segment: Option<usize>,
@@ -98,7 +135,10 @@ impl RecvBatch {
             }
             for cmsg in cmsgs.into_iter().flatten() {
                 match cmsg {
-                    ControlMessageOwned::ScmTimestampns(ts) => r.kernel = Some(ts),
+                    ControlMessageOwned::ScmTimestampns(ts) => {
+                        r.kernel =
+                            Some(i128::from(ts.tv_sec()) * 1_000_000_000 + i128::from(ts.tv_nsec()))
+                    }
                     ControlMessageOwned::UdpGroSegments(size) if size > 0 => {
                         r.segment = Some(size as usize)
                     }

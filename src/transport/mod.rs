@@ -7,6 +7,7 @@
 
 pub mod address;
 mod advice;
+#[cfg(not(mavping_portable))]
 mod mmsg;
 mod out_queue;
 pub mod outbox;
@@ -15,6 +16,8 @@ pub mod route;
 pub mod rx_time;
 pub mod serial;
 pub mod sim;
+#[cfg(mavping_portable)]
+mod single;
 pub mod stream;
 pub mod tcp;
 pub mod tlog;

@@ -49,6 +49,14 @@ pub(crate) async fn resolve(
     })
 }
 
+/// `-I` on the portable path, in one line.
+pub fn interface_needs_linux(iface: &str) -> String {
+    format!(
+        "-I {iface}: tying a socket to a network interface needs Linux (SO_BINDTODEVICE); \
+         this build has the portable path only: choose the route by address (--bind ADDR, udpin:ADDR:PORT)"
+    )
+}
+
 impl Route {
     /// The local address an outgoing link towards `peer` sends from:
     /// `--bind`, else any address of the peer's family.
@@ -65,6 +73,7 @@ impl Route {
 
     /// What SO_BINDTODEVICE's failures mean, in one line. Before Linux 5.7
     /// it needs CAP_NET_RAW.
+    #[cfg(not(mavping_portable))]
     fn interface_error(&self, e: io::Error) -> LinkError {
         let iface = self.interface.as_deref().unwrap_or_default();
         match e.raw_os_error() {
@@ -79,14 +88,24 @@ impl Route {
         }
     }
 
+    #[cfg(not(mavping_portable))]
     fn tie(&self, socket: &Socket) -> Result<(), LinkError> {
-        #[cfg(any(target_os = "linux", target_os = "android"))]
         if let Some(iface) = &self.interface {
             socket
                 .bind_device(Some(iface.as_bytes()))
                 .map_err(|e| self.interface_error(e))?;
         }
         Ok(())
+    }
+
+    /// The portable path cannot tie a socket to an interface; the options
+    /// refuse `-I` before any link opens (config), so this is a backstop.
+    #[cfg(mavping_portable)]
+    fn tie(&self, _socket: &Socket) -> Result<(), LinkError> {
+        match &self.interface {
+            Some(iface) => Err(LinkError::Closed(interface_needs_linux(iface))),
+            None => Ok(()),
+        }
     }
 
     /// A UDP socket bound to `local`, tied to the interface if one is set.
@@ -139,6 +158,7 @@ mod tests {
         );
     }
 
+    #[cfg(not(mavping_portable))]
     #[test]
     fn interface_errors_say_what_is_needed() {
         let route = Route {

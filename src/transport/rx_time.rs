@@ -21,11 +21,13 @@
 //!   window, so no step of any size moves it further than our own reading
 //!   delay does without kernel stamps.
 //!
-//! The clocks are read through [`Clocks`], so tests step them.
+//! The clocks are read through [`Clocks`], so tests step them. A stamp is
+//! the wall clock in ns since the epoch ([`WallNs`]), whatever system
+//! call brought it (the portable path has none: every datagram is timed
+//! at its read).
 
 use std::time::{Duration, SystemTime};
 
-use nix::sys::time::TimeSpec;
 use tokio::time::Instant;
 
 /// A stamp older than this is not trusted (the socket cannot hold a
@@ -36,6 +38,9 @@ const MAX_QUEUE_AGE: Duration = Duration::from_secs(10);
 /// other. A smaller step can move an arrival by at most this much, and
 /// never before the socket was last found empty.
 const STEP_TOLERANCE_NS: i128 = 1_000_000;
+
+/// A kernel receive stamp: the wall clock, ns since the epoch.
+pub type WallNs = i128;
 
 /// Reads the monotonic and the wall clock together.
 pub trait Clocks {
@@ -123,7 +128,7 @@ impl<C: Clocks> RxTime<C> {
     /// was), reached the socket, on the monotonic clock. (The socket reads
     /// a batch with one [`RxTime::read`] and [`RxTime::arrival_at`] each.)
     #[cfg(test)]
-    fn arrival(&mut self, kernel: Option<TimeSpec>) -> Instant {
+    fn arrival(&mut self, kernel: Option<WallNs>) -> Instant {
         let reading = self.read();
         self.arrival_at(reading, kernel)
     }
@@ -137,12 +142,11 @@ impl<C: Clocks> RxTime<C> {
     /// When a datagram of the batch read just before `reading` was taken,
     /// stamped `kernel` by the kernel (if it was), reached the socket, on
     /// the monotonic clock.
-    pub fn arrival_at(&self, reading: Reading, kernel: Option<TimeSpec>) -> Instant {
+    pub fn arrival_at(&self, reading: Reading, kernel: Option<WallNs>) -> Instant {
         let Reading { now, wall } = reading;
-        let Some(ts) = kernel else {
+        let Some(stamp) = kernel else {
             return now;
         };
-        let stamp = i128::from(ts.tv_sec()) * 1_000_000_000 + i128::from(ts.tv_nsec());
         let age = wall - stamp;
         if self.trust_from.is_some_and(|from| stamp < from)
             || age < 0
@@ -215,9 +219,8 @@ mod tests {
             self.wall_ns.set(self.wall_ns.get() + ns);
         }
         /// What the kernel stamps a datagram arriving now with.
-        fn stamp(&self) -> TimeSpec {
-            let ns = self.wall_ns.get();
-            TimeSpec::new((ns / 1_000_000_000) as _, (ns % 1_000_000_000) as _)
+        fn stamp(&self) -> WallNs {
+            self.wall_ns.get()
         }
         fn mono(&self) -> Instant {
             self.base + Duration::from_nanos(self.mono_ns.get())

@@ -53,6 +53,7 @@ impl Connect for SerialConnector {
 
 /// libc's "Not a typewriter" for a file that is no serial device (a
 /// regular file, /dev/null), said in words a user can act on.
+#[cfg(unix)]
 fn not_a_terminal(path: &str, e: io::Error) -> io::Error {
     // serialport keeps only the errno's words, not its number.
     let enotty = nix::errno::Errno::ENOTTY;
@@ -63,4 +64,11 @@ fn not_a_terminal(path: &str, e: io::Error) -> io::Error {
         "{path} is not a serial device (the system says it is not a terminal): name a serial \
          port (/dev/ttyUSB0, /dev/ttyACM0, /dev/serial/by-id/...) or a pty"
     ))
+}
+
+/// Windows names ports (COM3), not files: the system's own error says
+/// enough.
+#[cfg(not(unix))]
+fn not_a_terminal(_path: &str, e: io::Error) -> io::Error {
+    e
 }

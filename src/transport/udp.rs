@@ -5,20 +5,23 @@
 use std::io;
 use std::net::SocketAddr;
 
-use std::os::fd::AsRawFd;
-
-use nix::sys::socket::{self as nixsock, SockaddrStorage};
 use tokio::io::Interest;
 use tokio::net::UdpSocket;
 use tokio::time::Instant;
 
 use super::address::HostPort;
 use super::advice;
-use super::mmsg::{self, Datagram, RecvBatch, SendBatch, RECV_BATCH, SEND_BATCH};
+// Linux reads and writes many datagrams a call; the portable path one
+// (build.rs): the same interface.
+#[cfg(not(mavping_portable))]
+use super::mmsg;
 use super::route::{resolve, Route};
 use super::rx_time::RxTime;
+#[cfg(mavping_portable)]
+use super::single as mmsg;
 use super::{push_datagram, Inbound, LinkError, LinkKind, Outbox, PathId, RxClock, To, Transport};
 use crate::frame::ScanStats;
+use mmsg::{socket_addr, Addr, Datagram, RecvBatch, SendBatch, RECV_BATCH, SEND_BATCH};
 
 /// At most this many peers are remembered on a listening socket; more than
 /// that is a flood or a misconfiguration, and memory must stay bounded.
@@ -58,15 +61,6 @@ pub struct UdpLink {
     kernel_timestamps: bool,
 }
 
-fn socket_addr(addr: &SockaddrStorage) -> Option<SocketAddr> {
-    if let Some(v4) = addr.as_sockaddr_in() {
-        Some(SocketAddr::from((v4.ip(), v4.port())))
-    } else {
-        addr.as_sockaddr_in6()
-            .map(|v6| SocketAddr::from((v6.ip(), v6.port())))
-    }
-}
-
 impl UdpLink {
     fn with(socket: UdpSocket, mode: Mode) -> Self {
         let sock = socket2::SockRef::from(&socket);
@@ -77,13 +71,8 @@ impl UdpLink {
         // Kernel receive timestamps take our own wake-up delay out of the
         // RTT: a reply is timed when it reached the socket, not when we
         // got round to reading it.
-        let kernel_timestamps =
-            nixsock::setsockopt(&socket, nixsock::sockopt::ReceiveTimestampns, &true).is_ok();
-        // Same-sized datagrams from one sender that arrive together (a GSO
-        // send, or what a NIC coalesces) come up as one message, cut apart
-        // again in `drain`: one read for a whole burst. They share one
-        // receive timestamp, as they arrived together.
-        let _ = nixsock::setsockopt(&socket, nixsock::sockopt::UdpGroSegment, &true);
+        let kernel_timestamps = mmsg::kernel_stamps(&socket);
+        mmsg::join_arrivals(&socket);
         UdpLink {
             socket,
             mode,
@@ -202,7 +191,6 @@ impl UdpLink {
     /// waiting when the socket buffer is full. A send the kernel refuses
     /// is judged alone: the others still go.
     async fn write(&mut self, datagrams: &[Datagram<'_>]) -> Result<(), LinkError> {
-        let fd = self.socket.as_raw_fd();
         let mut done = 0;
         while done < datagrams.len() {
             let (len, grouped) = mmsg::next_send(&datagrams[done..], self.gso);
@@ -210,6 +198,7 @@ impl UdpLink {
             let UdpLink {
                 socket, send_batch, ..
             } = self;
+            let fd = mmsg::fd(socket);
             let sent = socket.try_io(Interest::WRITABLE, || {
                 if grouped {
                     send_batch.send_group(fd, next)
@@ -279,7 +268,7 @@ impl Mode {
         }
     }
 
-    fn destination(&self, to: To, k: usize) -> Option<SockaddrStorage> {
+    fn destination(&self, to: To, k: usize) -> Option<Addr> {
         let addr = match (self, to) {
             (Mode::Connected { .. }, _) => return None,
             (Mode::Broadcast { target, .. }, To::Every) => *target,
@@ -288,7 +277,7 @@ impl Mode {
                 peers[p as usize]
             }
         };
-        Some(SockaddrStorage::from(addr))
+        Some(Addr::from(addr))
     }
 
     /// Whether `e` is an ICMP "port unreachable" that a connected link
@@ -336,7 +325,7 @@ impl Receiver {
     /// socket was found empty.
     fn drain(
         &mut self,
-        fd: std::os::fd::RawFd,
+        fd: mmsg::Fd<'_>,
         mode: &mut Mode,
         out: &mut Vec<Inbound>,
     ) -> io::Result<(usize, bool)> {
@@ -465,13 +454,13 @@ impl Transport for UdpLink {
     }
 
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
-        let fd = self.socket.as_raw_fd();
         loop {
             let readable = self.socket.readable().await;
             readable.map_err(|e| self.failed(e))?;
             let UdpLink {
                 socket, mode, rx, ..
             } = self;
+            let fd = mmsg::fd(socket);
             let mut read = 0;
             // Through try_io: a WouldBlock clears the runtime's readiness,
             // so a socket found empty is waited for again, not polled.
@@ -493,8 +482,7 @@ impl Transport for UdpLink {
     }
 
     fn read_waiting(&mut self, out: &mut Vec<Inbound>) -> Result<bool, LinkError> {
-        let fd = self.socket.as_raw_fd();
-        match self.rx.drain(fd, &mut self.mode, out) {
+        match self.rx.drain(mmsg::fd(&self.socket), &mut self.mode, out) {
             Ok((read, _)) => Ok(read > 0),
             Err(e) => Err(self.failed(e)),
         }

@@ -223,6 +223,7 @@ fn bind_sends_from_the_local_address_given() {
     );
 }
 
+#[cfg(not(mavping_portable))]
 #[test]
 fn dash_i_ties_the_link_to_an_interface_and_says_what_it_needs() {
     let (_respond, link) = respond();
@@ -254,6 +255,22 @@ fn dash_i_ties_the_link_to_an_interface_and_says_what_it_needs() {
         .expect("setpriv (util-linux) runs mavping as nobody");
     let (code, out, err) = wait_output(child, Duration::from_secs(30));
     assert_eq!(code, 0, "{out}\n{err}");
+}
+
+/// The portable path (Windows, macOS, `--features portable`) cannot tie a
+/// socket to an interface: one line, exit 2, before any link opens.
+#[cfg(mavping_portable)]
+#[test]
+fn dash_i_is_refused_in_one_line_on_the_portable_path() {
+    let (code, out, err) = run_mavping(&["-I", "lo", "-c", "1", "udpout:127.0.0.1:14550"]);
+    assert_eq!(code, 2, "{out}\n{err}");
+    assert_eq!(
+        err.trim(),
+        "mavping: -I lo: tying a socket to a network interface needs Linux (SO_BINDTODEVICE); \
+         this build has the portable path only: choose the route by address (--bind ADDR, \
+         udpin:ADDR:PORT)"
+    );
+    assert!(out.is_empty(), "{out}");
 }
 
 #[test]

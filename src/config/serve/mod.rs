@@ -518,7 +518,8 @@ timeout = 0.5
 max_loss = "5%"
 max_rtt = ["p99=50ms", "200ms"]
 expect = ["1/1"]
-signing_key_file = "{}"
+# A literal string: a Windows temp path is full of backslashes.
+signing_key_file = '{}'
 
 [module.default]
 count = 3
