@@ -86,6 +86,7 @@ put 0644 completions/mavping.bash usr/share/bash-completion/completions/mavping
 put 0644 completions/_mavping usr/share/zsh/vendor-completions/_mavping
 put 0644 completions/mavping.fish usr/share/fish/vendor_completions.d/mavping.fish
 put 0644 packaging/debian/serve.toml etc/mavping/serve.toml
+put 0644 packaging/debian/web.yml etc/mavping/web.yml
 put 0644 packaging/debian/mavping-serve.service usr/lib/systemd/system/mavping-serve.service
 put 0644 packaging/debian/copyright usr/share/doc/mavping/copyright
 put 0644 docs/service.md usr/share/doc/mavping/service.md
@@ -110,7 +111,7 @@ chmod 0644 "$doc/changelog.Debian.gz"
 # and removed only by a purge. No maintainer scripts: the service is
 # installed and left disabled, the operator enables it.
 install -d -m 0755 "$root/DEBIAN"
-echo /etc/mavping/serve.toml > "$root/DEBIAN/conffiles"
+printf '%s\n' /etc/mavping/serve.toml /etc/mavping/web.yml > "$root/DEBIAN/conffiles"
 (cd "$root" && find . -path ./DEBIAN -prune -o -path ./etc -prune -o -type f -printf '%P\n' |
   LC_ALL=C sort | xargs md5sum) > "$root/DEBIAN/md5sums"
 size=$(du -sk --exclude=DEBIAN "$root" | cut -f1)

@@ -21,10 +21,12 @@ use crate::common::*;
 
 const UNIT: &str = "/usr/lib/systemd/system/mavping-serve.service";
 const CONFIG: &str = "/etc/mavping/serve.toml";
+const WEB_CONFIG: &str = "/etc/mavping/web.yml";
 
 /// Every file the package installs, directories left out.
 const FILES: &[&str] = &[
     "/etc/mavping/serve.toml",
+    "/etc/mavping/web.yml",
     "/usr/bin/mavping",
     "/usr/lib/systemd/system/mavping-serve.service",
     "/usr/share/bash-completion/completions/mavping",
@@ -300,7 +302,7 @@ fn assert_files_installed() {
         .lines()
         .filter_map(|l| l.split_whitespace().next())
         .collect();
-    assert_eq!(listed, [CONFIG], "conffiles: {conffiles:?}");
+    assert_eq!(listed, [CONFIG, WEB_CONFIG], "conffiles: {conffiles:?}");
 }
 
 /// `systemd-analyze verify` is silent, `security --offline` says OK or
@@ -372,7 +374,10 @@ fn assert_serve_runs_unprivileged_with_the_installed_config() {
         "--inh-caps=-all",
         "/usr/bin/mavping",
     ]);
-    let server = Server::start_as(command, &["--config", CONFIG]);
+    let server = Server::start_as(
+        command,
+        &["--config", CONFIG, "--web.config.file", WEB_CONFIG],
+    );
     let status = std::fs::read_to_string(format!("/proc/{}/status", server.pid())).unwrap();
     for line in [
         "Uid:\t65534\t65534\t65534\t65534",
