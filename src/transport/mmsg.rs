@@ -58,6 +58,12 @@ pub fn join_arrivals(socket: &UdpSocket) {
     let _ = nixsock::setsockopt(socket, nixsock::sockopt::UdpGroSegment, &true);
 }
 
+/// Linux names an ICMP "port unreachable" ECONNREFUSED already (the
+/// portable path's has Windows' name to translate).
+pub fn as_refused(e: std::io::Error) -> std::io::Error {
+    e
+}
+
 /// Messages per `recvmmsg`.
 pub const RECV_BATCH: usize = 16;
 /// Datagrams per `sendmmsg`.

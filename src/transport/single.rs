@@ -42,7 +42,7 @@ pub fn join_arrivals(_socket: &UdpSocket) {}
 
 /// Windows reports an ICMP "port unreachable" to a UDP socket as a reset
 /// connection (WSAECONNRESET); the link's policy knows it as refused.
-fn as_refused(e: io::Error) -> io::Error {
+pub fn as_refused(e: io::Error) -> io::Error {
     if e.kind() == io::ErrorKind::ConnectionReset {
         io::Error::new(io::ErrorKind::ConnectionRefused, e)
     } else {

@@ -2,6 +2,7 @@
 //! address from an ephemeral port; `udpbcast` sends to a broadcast address
 //! and hears whoever answers. Each datagram is parsed on its own.
 
+use std::cell::Cell;
 use std::io;
 use std::net::SocketAddr;
 
@@ -41,6 +42,8 @@ enum Mode {
         peer: SocketAddr,
         /// ICMP "port unreachable" is logged, not fatal.
         refused_is_transient: bool,
+        /// How many were, for the diagnosis.
+        unreachable: Cell<u64>,
     },
     /// Requests go to a broadcast address; answers come from each system's
     /// own address, learned like udpin's peers so one can be answered alone.
@@ -111,6 +114,7 @@ impl UdpLink {
             Mode::Connected {
                 peer,
                 refused_is_transient: false,
+                unreachable: Cell::new(0),
             },
         ))
     }
@@ -185,6 +189,33 @@ impl UdpLink {
             }
             _ => LinkError::io("udp link failed", e),
         }
+    }
+
+    /// A UDP socket is never closed for reading, but on Windows an ICMP
+    /// error can leave it reported as closed or failed with nothing to
+    /// read (seen under Wine: `readable()` ready at once, every read
+    /// WouldBlock, the session starved at 100 % CPU). The runtime keeps a
+    /// closed state for good, so the pending error is taken (and judged as
+    /// a read's would be) and the socket is registered afresh, on a
+    /// duplicate of its handle.
+    fn unstick(&mut self) -> Result<(), LinkError> {
+        let sock = socket2::SockRef::from(&self.socket);
+        if let Some(e) = sock.take_error().map_err(|e| self.failed(e))? {
+            let e = mmsg::as_refused(e);
+            if !self.mode.read_error_is_harmless(&e) {
+                return Err(self.failed(e));
+            }
+        }
+        tracing::debug!("udp socket reported closed with nothing to read: registered afresh");
+        let fresh = sock
+            .try_clone()
+            .and_then(|dup| {
+                dup.set_nonblocking(true)?;
+                UdpSocket::from_std(dup.into())
+            })
+            .map_err(|e| self.failed(e))?;
+        self.socket = fresh;
+        Ok(())
     }
 
     /// Writes `datagrams` with as few system calls as the kernel allows,
@@ -283,18 +314,20 @@ impl Mode {
     /// Whether `e` is an ICMP "port unreachable" that a connected link
     /// shrugs off (see [`UdpLink::keep_going_when_refused`]).
     fn refused_is_transient(&self, e: &io::Error) -> bool {
-        let transient = e.kind() == io::ErrorKind::ConnectionRefused
-            && matches!(
-                self,
-                Mode::Connected {
-                    refused_is_transient: true,
-                    ..
-                }
-            );
-        if transient {
-            tracing::debug!(error = %e, "udp peer unreachable for now");
+        let Mode::Connected {
+            refused_is_transient: true,
+            unreachable,
+            ..
+        } = self
+        else {
+            return false;
+        };
+        if e.kind() != io::ErrorKind::ConnectionRefused {
+            return false;
         }
-        transient
+        tracing::debug!(error = %e, "udp peer unreachable for now");
+        unreachable.set(unreachable.get() + 1);
+        true
     }
 
     /// A read error that is no reason to stop: a listening socket can see
@@ -330,6 +363,7 @@ impl Receiver {
         out: &mut Vec<Inbound>,
     ) -> io::Result<(usize, bool)> {
         let mut read = 0;
+        let mut shrugged = 0;
         while read < DRAIN_LIMIT {
             let n = match self.batch.recv(fd) {
                 Ok(n) => n,
@@ -337,7 +371,15 @@ impl Receiver {
                     self.time.drained();
                     return Ok((read, true));
                 }
-                Err(e) if mode.read_error_is_harmless(&e) => continue,
+                // Bounded: an error that does not clear must not hold the
+                // session here.
+                Err(e) if mode.read_error_is_harmless(&e) => {
+                    shrugged += 1;
+                    if shrugged == DRAIN_LIMIT {
+                        return Ok((read, true));
+                    }
+                    continue;
+                }
                 Err(e) => return Err(e),
             };
             let reading = self.time.read();
@@ -455,8 +497,8 @@ impl Transport for UdpLink {
 
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
         loop {
-            let readable = self.socket.readable().await;
-            readable.map_err(|e| self.failed(e))?;
+            let ready = self.socket.ready(Interest::READABLE).await;
+            let ready = ready.map_err(|e| self.failed(e))?;
             let UdpLink {
                 socket, mode, rx, ..
             } = self;
@@ -476,6 +518,7 @@ impl Transport for UdpLink {
             match drained {
                 Err(e) if e.kind() != io::ErrorKind::WouldBlock => return Err(self.failed(e)),
                 _ if read > 0 => return Ok(()),
+                _ if ready.is_read_closed() || ready.is_error() => self.unstick()?,
                 _ => {}
             }
         }
@@ -509,6 +552,13 @@ impl Transport for UdpLink {
 
     fn scan_stats(&self) -> ScanStats {
         self.rx.stats
+    }
+
+    fn unreachable(&self) -> u64 {
+        match &self.mode {
+            Mode::Connected { unreachable, .. } => unreachable.get(),
+            Mode::Listen { .. } | Mode::Broadcast { .. } => 0,
+        }
     }
 
     fn rx_clock(&self) -> RxClock {
