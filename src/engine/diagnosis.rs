@@ -31,6 +31,9 @@ pub struct Observed<'a> {
     /// What the signing gate accepted and refused.
     pub signing: SigningCounts,
     pub frames: ScanStats,
+    /// ICMP "port unreachable" reports the link shrugged off (`udpout:`
+    /// with `--reconnect`).
+    pub unreachable: u64,
     pub roster: &'a Roster,
     pub responders: &'a [ResponderSummary],
     /// Radios heard by their RADIO_STATUS: no answer is expected of them.
@@ -54,7 +57,17 @@ pub fn seconds(d: Duration) -> String {
 }
 
 fn nothing_heard(o: &Observed<'_>) -> Hint {
+    let refusals;
     let advice = match o.kind {
+        LinkKind::Connecting if o.unreachable > 0 => {
+            refusals = format!(
+                "no reply, no HEARTBEAT, and {} ICMP \"port unreachable\" in return: nothing \
+                 listens on that port; a vehicle, SITL or router that sends to this port needs a \
+                 listening link (udp:HOST:PORT)",
+                o.unreachable
+            );
+            &refusals
+        }
         LinkKind::Connecting => {
             "no reply, no HEARTBEAT, not even a refusal: check the address and port; a vehicle, \
              SITL or router that sends to this port needs a listening link (udp:HOST:PORT)"
@@ -396,6 +409,7 @@ mod tests {
                 frames,
                 ..ScanStats::default()
             },
+            unreachable: 0,
             roster,
             responders: &[],
             radios: &[],
@@ -429,6 +443,21 @@ mod tests {
         let hints = diagnose(&o);
         assert_eq!(codes(&hints), [HintCode::NothingHeard]);
         assert!(hints[0].text.contains("udp:HOST:PORT"), "{hints:?}");
+        assert!(hints[0].text.contains("not even a refusal"), "{hints:?}");
+        // With --reconnect the refusals were shrugged off, not unseen.
+        let o = Observed {
+            unreachable: 3,
+            ..observed(&roster, 0)
+        };
+        let hints = diagnose(&o);
+        assert_eq!(codes(&hints), [HintCode::NothingHeard]);
+        assert!(
+            hints[0]
+                .text
+                .contains("3 ICMP \"port unreachable\" in return"),
+            "{hints:?}"
+        );
+        assert!(!hints[0].text.contains("not even a refusal"), "{hints:?}");
         let o = Observed {
             ours: QGC_IDS,
             ..observed(&roster, 0)

@@ -53,6 +53,8 @@ pub struct SessionEnd<'a> {
     pub interrupted: bool,
     pub link_error: Option<String>,
     pub frames: ScanStats,
+    /// ICMP "port unreachable" reports the link shrugged off.
+    pub unreachable: u64,
     pub downtime_s: f64,
     pub rx_clock: RxClock,
     pub kind: LinkKind,
@@ -596,6 +598,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             interrupted,
             link_error,
             frames: self.link.scan_stats(),
+            unreachable: self.link.unreachable(),
             downtime_s: self.link.downtime().as_secs_f64(),
             rx_clock: self.link.rx_clock(),
             kind: self.link.kind(),

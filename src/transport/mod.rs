@@ -219,6 +219,11 @@ pub trait Transport {
     fn refused(&self) -> u64 {
         0
     }
+    /// ICMP "port unreachable" reports that the link shrugged off so far
+    /// (`udpout:` with `--reconnect`): evidence that nothing listens there.
+    fn unreachable(&self) -> u64 {
+        0
+    }
     /// How the link meets its peers.
     fn kind(&self) -> LinkKind;
     /// The session's next wake-up on its own timers, told before each
@@ -376,6 +381,10 @@ impl Transport for Link {
 
     fn refused(&self) -> u64 {
         each_link!(self, l => l.refused())
+    }
+
+    fn unreachable(&self) -> u64 {
+        each_link!(self, l => l.unreachable())
     }
 
     fn rx_clock(&self) -> RxClock {

@@ -216,6 +216,10 @@ impl<T: Transport> Transport for Recorded<T> {
         self.link.refused()
     }
 
+    fn unreachable(&self) -> u64 {
+        self.link.unreachable()
+    }
+
     fn kind(&self) -> LinkKind {
         self.link.kind()
     }

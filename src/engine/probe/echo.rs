@@ -330,6 +330,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             key: signing.key,
             signing: signing.counts,
             frames: ended.frames,
+            unreachable: ended.unreachable,
             roster: &ended.roster,
             responders: &responders,
             radios: &radio_ids,

@@ -77,6 +77,7 @@ impl CommandDriver {
             key: signing.key,
             signing: signing.counts,
             frames: ended.frames,
+            unreachable: ended.unreachable,
             roster: &ended.roster,
             responders: &[],
             radios: &[],
