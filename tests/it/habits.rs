@@ -278,3 +278,28 @@ fn dash_o_is_accepted_for_ping_users() {
     let (code, out, err) = run_mavping(&["-O", "-c", "1", "sim:?clock=virtual"]);
     assert_eq!(code, 0, "{out}\n{err}");
 }
+
+#[test]
+fn mavping_log_takes_target_level_lists_and_falls_back_on_nonsense() {
+    let port = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let link = format!("udpout:{}", port.local_addr().unwrap());
+    let run = |spec: &str| {
+        let child = mavping()
+            .env("MAVPING_LOG", spec)
+            .args(["-c", "1", "-W", "100ms", &link])
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let (code, out, err) = wait_output(child, Duration::from_secs(60));
+        assert_eq!(code, 1, "MAVPING_LOG={spec}\n{out}\n{err}");
+        err
+    };
+    // The UDP link logs the receive buffer it was granted at info.
+    let granted = "udp receive buffer granted";
+    assert!(run("mavping::transport::udp=info").contains(granted));
+    assert!(run("warn,mavping::transport=debug").contains(granted));
+    assert!(!run("mavping::transport::udp=warn").contains(granted));
+    // Not a list: the default (warnings only), as with no MAVPING_LOG.
+    assert!(!run("=[nonsense").contains(granted));
+}
