@@ -4,6 +4,9 @@
 #                                   LICENSE, README, CHANGELOG
 #   mavping_VERSION_ARCH.deb        (scripts/deb.sh, when it is there)
 #   mavping_cli-VERSION-*.whl       the binary as a Python wheel (maturin)
+#   mavping-VERSION-x86_64-pc-windows-gnu.zip
+#                                   mavping.exe, tested under Wine first
+#                                   (scripts/windows.sh --zip)
 #   SHA256SUMS
 # and checks the crate as crates.io builds it (`cargo publish --dry-run`,
 # verified: a dev build of the packaged sources; --no-publish-check skips it).
@@ -12,7 +15,7 @@
 # foreign binary is run under qemu-user (scripts/cross-test.sh), and the
 # x86_64 wheel is installed into a fresh venv and run.
 #
-# Usage: scripts/dist.sh [--no-publish-check] [TARGET...]
+# Usage: scripts/dist.sh [--no-publish-check] [--no-windows] [TARGET...]
 # Installs what it lacks: rustup targets (rustup), qemu-user, the ARM cross
 # linker and gcc file (apt-get, as root), maturin (pip, in target/dist-venv).
 # Nothing else is downloaded. Idempotent: a second run rebuilds nothing
@@ -30,10 +33,15 @@ default_targets=(
   armv7-unknown-linux-gnueabihf
 )
 publish_check=1
-if [ "${1-}" = --no-publish-check ]; then
-  publish_check=0
+windows=1
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --no-publish-check) publish_check=0 ;;
+    --no-windows) windows=0 ;;
+    *) break ;;
+  esac
   shift
-fi
+done
 [ $# -gt 0 ] && targets=("$@") || targets=("${default_targets[@]}")
 version=$(sed -nE 's/^version = "(.*)"/\1/p' Cargo.toml | head -1)
 out=dist
@@ -173,8 +181,17 @@ test_wheel() {
   rm -rf "$venv"
 }
 
+# The Windows zip: windows.sh checks mavping.exe under Wine (unit tests,
+# sim:, UDP counts, exit codes, completions) before it packs the dist build.
+windows_zip() {
+  [ "$windows" = 1 ] || { echo "dist: Windows zip skipped (--no-windows)"; return 0; }
+  say "scripts/windows.sh --zip"
+  bash scripts/windows.sh --zip
+  cp "target/dist/mavping-$version-x86_64-pc-windows-gnu.zip" "$out/"
+}
+
 sums() {
-  (cd "$out" && sha256sum -- *.tar.gz $(ls -- *.deb *.whl 2>/dev/null) >SHA256SUMS)
+  (cd "$out" && sha256sum -- *.tar.gz $(ls -- *.deb *.whl *.zip 2>/dev/null) >SHA256SUMS)
   say "dist/ (bytes, SHA-256)"
   local f
   while read -r sum f; do
@@ -204,5 +221,6 @@ for t in "${targets[@]}"; do archive "$t"; done
 debs
 wheels
 test_wheel
+windows_zip
 sums
 publish_check
