@@ -272,8 +272,16 @@ impl ClockOffset {
     /// Records one exchange: the request left at `sent_at` (our session
     /// time, ns; no later than the moment it was written), was answered
     /// with their clock `theirs`, and the reply arrived at `at`. `base` is
-    /// what our clock read at time 0 (the value our timestamps count from).
-    pub fn record(&mut self, sent_at: Nanos, at: Nanos, theirs: i64, base: i128) {
+    /// what our clock read at time 0 (the value our timestamps count from),
+    /// known to within `base_within` ns either way.
+    pub fn record(
+        &mut self,
+        sent_at: Nanos,
+        at: Nanos,
+        theirs: i64,
+        base: i128,
+        base_within: i128,
+    ) {
         let at = at.max(sent_at);
         let rtt = at - sent_at;
         let mid = sent_at + rtt / 2;
@@ -283,8 +291,8 @@ impl ClockOffset {
         self.seen += 1;
         // Causality: they read their clock between our send and receive.
         let (lower, upper) = (
-            theirs - base - i128::from(at),
-            theirs - base - i128::from(sent_at),
+            theirs - base - i128::from(at) - base_within,
+            theirs - base - i128::from(sent_at) + base_within,
         );
         for (b, &ppm) in self.bounds.iter_mut().zip(&DRIFT_LIMITS_PPM) {
             let slack = drift_allowance(at, ppm);
@@ -407,7 +415,7 @@ mod tests {
     fn exchange(c: &mut ClockOffset, t: Nanos, up: Nanos, down: Nanos, offset: i64, ppm: f64) {
         let arrival = t + up;
         let theirs = offset + arrival as i64 + (arrival as f64 * ppm * 1e-6).round() as i64;
-        c.record(t, arrival + down, theirs, 0);
+        c.record(t, arrival + down, theirs, 0, 0);
     }
 
     fn inside(s: &ClockSummary, truth: i128) -> bool {
@@ -502,12 +510,30 @@ mod tests {
         for i in 0..100u64 {
             let t = i * 20_000_000;
             // Their clock counts from their boot, 42 s before our time 0.
-            c.record(t, t + 1_000, (42_000_000_000 + t + 500) as i64, base);
+            c.record(t, t + 1_000, (42_000_000_000 + t + 500) as i64, base, 0);
         }
         let s = c.summary().unwrap();
         assert_eq!(s.offset_ns, 42_000_000_000 - base);
         assert!(inside(&s, 42_000_000_000 - base), "{s:?}");
         assert_eq!(s.drift_ppm, None);
+    }
+
+    #[test]
+    fn a_base_read_late_is_still_inside_bounds_widened_by_its_error() {
+        // Our wall clock at time 0 was read 5 µs late (a preempted
+        // thread): every exchange then seems 5 µs earlier to them.
+        let late = 5_000;
+        let record = |within: i128| {
+            let mut c = ClockOffset::default();
+            for i in 0..50u64 {
+                let t = i * 20_000_000;
+                c.record(t, t + 2_000, (t + 1_000) as i64, late, within);
+            }
+            c.summary().unwrap()
+        };
+        assert!(!inside(&record(0), 0), "{:?}", record(0));
+        let widened = record(late);
+        assert!(inside(&widened, 0), "{widened:?}");
     }
 
     /// 12 s at 50 Hz on one shared clock (true drift 0) with a busy

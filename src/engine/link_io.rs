@@ -12,24 +12,49 @@ use crate::frame::signing::{self, Gate, SignedBytes, Signer};
 use crate::frame::{self, Frame, Header, Msg, SysComp, Version};
 use crate::transport::{LinkError, Transport};
 
+/// The wall clock at session time 0, and how far off it may be: the two
+/// clocks cannot be read at one instant, and a thread preempted between
+/// the reads would put the wall clock late by however long it waited.
+/// TIMESYNC's causal bounds widen by `within` so they stay true anyway.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct WallAtZero {
+    pub wall: std::time::SystemTime,
+    pub within: Duration,
+}
+
+impl WallAtZero {
+    /// Exactly `wall` (tests, and clocks that are not read).
+    pub fn exactly(wall: std::time::SystemTime) -> Self {
+        WallAtZero {
+            wall,
+            within: Duration::ZERO,
+        }
+    }
+}
+
+/// Readings of the monotonic-wall-monotonic triple taken to find a tight
+/// one: one is nearly always tight (tens of ns), unless the thread was
+/// preempted in every try.
+const PAIR_TRIES: usize = 8;
+
 /// Session time: nanoseconds since the session started, from the
 /// monotonic clock (tokio's, so a paused runtime's virtual time too).
 pub struct Clock {
     epoch: Instant,
-    /// The wall clock at `epoch`, read right after it.
-    wall_at_zero: std::time::SystemTime,
+    wall_at_zero: WallAtZero,
 }
 
 impl Clock {
     pub fn start() -> Self {
+        let (epoch, wall_at_zero) = read_together();
         Clock {
-            epoch: Instant::now(),
-            wall_at_zero: std::time::SystemTime::now(),
+            epoch,
+            wall_at_zero,
         }
     }
 
     /// The wall clock at session time 0.
-    pub fn wall_at_zero(&self) -> std::time::SystemTime {
+    pub fn wall_at_zero(&self) -> WallAtZero {
         self.wall_at_zero
     }
 
@@ -52,6 +77,28 @@ impl Clock {
             None => std::future::pending().await,
         }
     }
+}
+
+/// The monotonic clock and the wall clock at that moment: of several
+/// readings bracketed by the monotonic clock, the narrowest, with the wall
+/// time taken to the bracket's middle and half its width as the error.
+fn read_together() -> (Instant, WallAtZero) {
+    let mut best: Option<(Instant, std::time::SystemTime, Duration)> = None;
+    for _ in 0..PAIR_TRIES {
+        let before = Instant::now();
+        let wall = std::time::SystemTime::now();
+        let gap = Instant::now().saturating_duration_since(before);
+        if best.is_none_or(|(_, _, g)| gap < g) {
+            best = Some((before, wall, gap));
+        }
+    }
+    let (epoch, wall, gap) = best.expect("PAIR_TRIES > 0");
+    let half = gap / 2;
+    let wall = WallAtZero {
+        wall: wall.checked_sub(half).unwrap_or(wall),
+        within: gap - half,
+    };
+    (epoch, wall)
 }
 
 /// A HEARTBEAT a second: routers and MAVSDK learn who is on the link from
@@ -182,4 +229,19 @@ pub fn admitted(gate: &mut Gate, frame: &Frame, signature: Option<&SignedBytes>)
         tracing::debug!(from = %frame.source, msgid = frame.msgid, ?verdict, "frame refused");
     }
     verdict.accepted()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_wall_clock_at_zero_lies_between_readings_before_and_after() {
+        let before = std::time::SystemTime::now();
+        let clock = Clock::start();
+        let after = std::time::SystemTime::now();
+        let at_zero = clock.wall_at_zero();
+        assert!(at_zero.wall + at_zero.within >= before, "{at_zero:?}");
+        assert!(at_zero.wall <= after, "{at_zero:?}");
+    }
 }

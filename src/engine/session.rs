@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 use tokio::sync::Notify;
 
-use super::link_io::{admitted, Clock, Heartbeat, Sender};
+use super::link_io::{admitted, Clock, Heartbeat, Sender, WallAtZero};
 use super::observe::{Event, Observer, OutputFate, StartInfo};
 use super::radio::{RadioReport, Radios};
 use super::roster::Roster;
@@ -77,7 +77,7 @@ pub trait Driver {
         true
     }
     /// The session's time 0 is `wall_at_zero` on the wall clock.
-    fn begin(&mut self, _wall_at_zero: std::time::SystemTime) {}
+    fn begin(&mut self, _wall_at_zero: WallAtZero) {}
     /// Puts what is due now on the wire: requests the schedule has due,
     /// re-sends.
     async fn send_due<T: Transport>(

@@ -53,7 +53,13 @@ pub struct SystemClocks;
 
 impl Clocks for SystemClocks {
     fn now(&self) -> (Instant, SystemTime) {
-        (Instant::now(), SystemTime::now())
+        // The wall clock first: a thread preempted between the two reads
+        // then sees the monotonic clock late, which puts an arrival later,
+        // never earlier, than it was. An arrival placed early could come
+        // before the reply's TIMESYNC stamp and break the clock bounds'
+        // causality; late only widens them.
+        let wall = SystemTime::now();
+        (Instant::now(), wall)
     }
 }
 

@@ -18,6 +18,7 @@ use super::ping::PingProbe;
 use super::timesync::TimesyncProbe;
 use super::{Classified, EchoProbe, ProbeName};
 use crate::engine::clock_offset::ClockSummary;
+use crate::engine::link_io::WallAtZero;
 use crate::engine::matcher::{Lookup, MAX_RESPONDERS};
 use crate::engine::roster::AUTOPILOT_ARDUPILOT;
 use crate::engine::Nanos;
@@ -143,7 +144,7 @@ impl AutoProbe {
 }
 
 impl EchoProbe for AutoProbe {
-    fn begin(&mut self, wall_at_zero: std::time::SystemTime) {
+    fn begin(&mut self, wall_at_zero: WallAtZero) {
         self.timesync.begin(wall_at_zero);
         self.timesync_base_ns = self.timesync.base_ns();
     }
@@ -283,7 +284,7 @@ mod tests {
 
     fn probe() -> AutoProbe {
         let mut p = AutoProbe::new(5_000_000, false, 2 * SECOND);
-        p.begin(std::time::UNIX_EPOCH);
+        p.begin(WallAtZero::exactly(std::time::UNIX_EPOCH));
         p
     }
 

@@ -11,7 +11,7 @@ use super::passive::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{Classified, EchoProbe};
 use crate::engine::diagnosis::{diagnose, Observed};
 use crate::engine::hint::{Hint, HintCode};
-use crate::engine::link_io::{Clock, Sender};
+use crate::engine::link_io::{Clock, Sender, WallAtZero};
 use crate::engine::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
 use crate::engine::observe::{tell_each, Event, Observer, RunKind, StartInfo};
 use crate::engine::radio::{radio_hints, Radios};
@@ -182,7 +182,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         }
     }
 
-    fn begin(&mut self, wall_at_zero: std::time::SystemTime) {
+    fn begin(&mut self, wall_at_zero: WallAtZero) {
         self.probe.begin(wall_at_zero);
     }
 

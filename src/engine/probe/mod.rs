@@ -15,6 +15,7 @@ pub mod ping;
 pub mod timesync;
 
 use crate::engine::clock_offset::ClockSummary;
+use crate::engine::link_io::WallAtZero;
 use crate::engine::matcher::Lookup;
 use crate::engine::summary::ProbeName;
 use crate::engine::Nanos;
@@ -36,7 +37,7 @@ pub trait EchoProbe {
     /// The session starts: its time 0 is `wall_at_zero` on the wall clock
     /// (both read together, so our clock is the wall clock, not late by
     /// however long the run took to start).
-    fn begin(&mut self, _wall_at_zero: std::time::SystemTime) {}
+    fn begin(&mut self, _wall_at_zero: WallAtZero) {}
     /// Which probe it is, as reports name it.
     fn name(&self) -> ProbeName;
     /// The token for a request sent at `now_ns` (session clock); tokens

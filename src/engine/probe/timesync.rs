@@ -6,6 +6,7 @@ use std::collections::HashMap;
 
 use super::{Classified, EchoProbe, ProbeName};
 use crate::engine::clock_offset::{ClockOffset, ClockSummary};
+use crate::engine::link_io::WallAtZero;
 use crate::engine::matcher::{Lookup, MAX_RESPONDERS};
 use crate::engine::Nanos;
 use crate::frame::{Frame, Msg, SysComp};
@@ -17,6 +18,9 @@ pub struct TimesyncProbe {
     /// repeat a token. 0 on the simulated link, whose responders count
     /// from its start.
     base_ns: i128,
+    /// How far `base_ns` may be off the wall clock at time 0 (ns): the
+    /// clock bounds widen by it.
+    base_within_ns: i128,
     wall: bool,
     target: SysComp,
     last_token: u64,
@@ -29,6 +33,7 @@ impl TimesyncProbe {
     pub fn new(target: SysComp, wall: bool) -> Self {
         TimesyncProbe {
             base_ns: 0,
+            base_within_ns: 0,
             wall,
             target,
             last_token: 0,
@@ -50,11 +55,13 @@ impl EchoProbe for TimesyncProbe {
         ProbeName::Timesync
     }
 
-    fn begin(&mut self, wall_at_zero: std::time::SystemTime) {
+    fn begin(&mut self, wall_at_zero: WallAtZero) {
         if self.wall {
             self.base_ns = wall_at_zero
+                .wall
                 .duration_since(std::time::UNIX_EPOCH)
                 .map_or(0, |d| d.as_nanos() as i128);
+            self.base_within_ns = wall_at_zero.within.as_nanos() as i128;
         }
     }
 
@@ -109,10 +116,13 @@ impl EchoProbe for TimesyncProbe {
         if self.clocks.len() >= MAX_RESPONDERS && !self.clocks.contains_key(&frame.source) {
             return;
         }
-        self.clocks
-            .entry(frame.source)
-            .or_default()
-            .record(sent_at, at, tc1, self.base_ns);
+        self.clocks.entry(frame.source).or_default().record(
+            sent_at,
+            at,
+            tc1,
+            self.base_ns,
+            self.base_within_ns,
+        );
     }
 
     fn measures_clocks(&self) -> bool {
@@ -192,7 +202,9 @@ mod tests {
             }
         );
         let mut wall = TimesyncProbe::new(SysComp::new(0, 0), true);
-        let at_zero = std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000);
+        let at_zero = WallAtZero::exactly(
+            std::time::UNIX_EPOCH + std::time::Duration::from_secs(1_700_000_000),
+        );
         wall.begin(at_zero);
         assert_eq!(wall.token(5), 1_700_000_000_000_000_005);
         // Session time only, on the simulated link.
@@ -204,7 +216,9 @@ mod tests {
     #[test]
     fn offsets_are_kept_per_responder() {
         let mut p = TimesyncProbe::new(SysComp::new(0, 0), true);
-        p.begin(std::time::UNIX_EPOCH + std::time::Duration::from_micros(1));
+        p.begin(WallAtZero::exactly(
+            std::time::UNIX_EPOCH + std::time::Duration::from_micros(1),
+        ));
         // Made at 100 (ts1 1_100), answered at 300: their clock read 5_200
         // between our 1_100 and 1_300.
         p.on_reply(&reply(5_200, 1_100, 0, 0), 100, 300);
@@ -215,5 +229,17 @@ mod tests {
         assert_eq!(c.bounds_ns, Some((3_899, 4_101)));
         assert_eq!(c.uncertainty_ns, 101);
         assert!(p.clock(SysComp::new(2, 1)).is_none());
+    }
+
+    #[test]
+    fn bounds_widen_by_how_far_the_wall_clock_at_zero_may_be_off() {
+        let mut p = TimesyncProbe::new(SysComp::new(0, 0), true);
+        p.begin(WallAtZero {
+            wall: std::time::UNIX_EPOCH + std::time::Duration::from_micros(1),
+            within: std::time::Duration::from_nanos(50),
+        });
+        p.on_reply(&reply(5_200, 1_100, 0, 0), 100, 300);
+        let c = p.clock(SysComp::new(1, 1)).unwrap();
+        assert_eq!(c.bounds_ns, Some((3_849, 4_151)));
     }
 }

@@ -19,7 +19,7 @@ use super::step::{StepFigures, StepTally};
 use super::verdict::{self, SweepEnd, SweepSummary};
 use super::{PlanKind, SweepConfig};
 use crate::engine::hint::HintCode;
-use crate::engine::link_io::{Clock, Sender};
+use crate::engine::link_io::{Clock, Sender, WallAtZero};
 use crate::engine::load::Load;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{Event, Observer, StartInfo};
@@ -205,7 +205,7 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
         self.inner.start_info(cfg)
     }
 
-    fn begin(&mut self, wall_at_zero: std::time::SystemTime) {
+    fn begin(&mut self, wall_at_zero: WallAtZero) {
         self.inner.begin(wall_at_zero);
     }
 
