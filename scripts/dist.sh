@@ -24,6 +24,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 MATURIN_VERSION=1.16.0
+# A static Linux binary may be at most 5 MB (10^6 bytes each).
+MAX_BYTES=5000000
 default_targets=(
   x86_64-unknown-linux-musl
   aarch64-unknown-linux-musl
@@ -98,7 +100,10 @@ build() {
     # Static or it does not run on an older system than this one.
     kind=$(file -b "$bin")
     grep -Eq 'statically linked|static-pie linked' <<<"$kind" || die "$bin is not static: $kind"
-    echo "$bin: $(stat -c %s "$bin") bytes; $kind"
+    size=$(stat -c %s "$bin")
+    echo "$bin: $size bytes; $kind"
+    # The promise to companion computers (issue 29): at most 5 MB.
+    [ "$size" -le "$MAX_BYTES" ] || die "$bin is $size bytes, over the $MAX_BYTES-byte goal"
   done
 }
 
