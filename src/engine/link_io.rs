@@ -96,7 +96,7 @@ fn read_together() -> (Instant, WallAtZero) {
     let half = gap / 2;
     let wall = WallAtZero {
         wall: wall.checked_sub(half).unwrap_or(wall),
-        within: gap - half,
+        within: gap.saturating_sub(half),
     };
     (epoch, wall)
 }
