@@ -83,16 +83,16 @@ impl Clock {
 /// readings bracketed by the monotonic clock, the narrowest, with the wall
 /// time taken to the bracket's middle and half its width as the error.
 fn read_together() -> (Instant, WallAtZero) {
-    let mut best: Option<(Instant, std::time::SystemTime, Duration)> = None;
-    for _ in 0..PAIR_TRIES {
+    let bracket = || {
         let before = Instant::now();
         let wall = std::time::SystemTime::now();
         let gap = Instant::now().saturating_duration_since(before);
-        if best.is_none_or(|(_, _, g)| gap < g) {
-            best = Some((before, wall, gap));
-        }
-    }
-    let (epoch, wall, gap) = best.expect("PAIR_TRIES > 0");
+        (before, wall, gap)
+    };
+    let (epoch, wall, gap) = (0..PAIR_TRIES)
+        .map(|_| bracket())
+        .min_by_key(|&(_, _, gap)| gap)
+        .expect("PAIR_TRIES > 0");
     let half = gap / 2;
     let wall = WallAtZero {
         wall: wall.checked_sub(half).unwrap_or(wall),
