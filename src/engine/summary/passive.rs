@@ -62,8 +62,11 @@ impl PassiveSummary {
 /// The sequence counts of one source.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct SeqCounts {
-    /// Every frame, duplicates included.
+    /// Every frame with a good CRC, duplicates included.
     pub received: u64,
+    /// Frames whose CRC failed with their header whole (damaged, or of a
+    /// dialect whose CRC differs): they arrived, and filled their number.
+    pub damaged: u64,
     /// Sequence numbers skipped and not (yet) filled by a late frame.
     pub lost: u64,
     /// Frames whose number had been seen already.
@@ -79,7 +82,19 @@ impl SeqCounts {
     /// Sequence numbers the source used that the count accounts for: each
     /// received once or lost.
     pub fn numbered(&self) -> u64 {
-        self.received - self.duplicate + self.lost
+        self.received + self.damaged - self.duplicate + self.lost
+    }
+
+    /// Two counters' figures together.
+    pub fn plus(&self, o: &SeqCounts) -> SeqCounts {
+        SeqCounts {
+            received: self.received + o.received,
+            damaged: self.damaged + o.damaged,
+            lost: self.lost + o.lost,
+            duplicate: self.duplicate + o.duplicate,
+            reordered: self.reordered + o.reordered,
+            resyncs: self.resyncs + o.resyncs,
+        }
     }
 }
 
@@ -114,9 +129,17 @@ pub struct Silence {
     /// Frames the source would have sent in it at its usual rate; `None`
     /// while no rate was known.
     pub frames_estimated: Option<u64>,
-    /// The frames the sequence proved lost across it (included in
-    /// `lost`), or `None` if it could not span it and was resynchronised.
+    /// The frames the sequence proves lost across it (included in
+    /// `lost`): its gap, modulo 256 where the pause may hide wraps of the
+    /// counter; `None` after a restart of the counter, or while ongoing.
+    /// `Some(0)`: no number missing: the frames were delayed, not lost.
     pub seq_lost: Option<u64>,
+    /// Where the pause is too long for the 8-bit counter to span at the
+    /// source's rate: the likely number lost, `seq_lost` plus the wraps
+    /// the rate suggests (the difference is not in `lost`).
+    pub lost_estimated: Option<u64>,
+    /// The counter started again at 0 after it: the source restarted.
+    pub restart: bool,
     /// Still on when the summary was taken.
     pub ongoing: bool,
 }
@@ -134,6 +157,9 @@ pub struct SourceSummary {
     pub source: SysComp,
     /// The SiK radio's own RADIO_STATUS source (out of the link's totals).
     pub radio: bool,
+    /// In a telemetry log, the ground station's own frames, logged as it
+    /// sent them (out of the link's totals: not what the link delivered).
+    pub ground: bool,
     pub counts: SeqCounts,
     /// `100 * lost / (lost + distinct frames received)`; `None` with
     /// nothing to compare.
@@ -155,6 +181,10 @@ pub struct SourceSummary {
     pub bytes_per_s: Option<f64>,
     /// The usual time per sequence step, once known.
     pub interval_ns: Option<Nanos>,
+    /// The longest pause the source makes in a second, as a rule (a
+    /// logger's batches), once a second is in: no silence is shorter than
+    /// 1.5 times it.
+    pub routine_pause_ns: Option<Nanos>,
     /// The first silences and the longest later ones, by start, then the
     /// ongoing one if any.
     pub silences: Vec<Silence>,
@@ -164,14 +194,29 @@ pub struct SourceSummary {
     pub silences_omitted: u64,
     /// Total length of all silences.
     pub silence_ns: Nanos,
-    /// Estimated frames of the silences the sequence could not span (never
-    /// also in `lost`).
+    /// What the silences too long for the counter to span likely hid
+    /// beyond the sequence's gap: the wraps the rate suggests (never also
+    /// in `lost`).
     pub silence_frames_estimated: u64,
     /// Frames by message id, most frequent first (the first
     /// `MAX_MSG_IDS` distinct ids seen).
     pub msg_ids: Vec<MsgCount>,
     /// Frames of ids seen after that many distinct ones.
     pub msg_ids_other: u64,
+    /// Damaged frames by message id, most frequent first.
+    pub damaged_ids: Vec<MsgCount>,
+    /// A second sender numbering frames under the same ids with a counter
+    /// of its own (two programs, or one on two channels), counted on its
+    /// own; its figures are in `counts` too.
+    pub second_counter: Option<SecondCounter>,
+}
+
+/// A second counter under one source's ids.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct SecondCounter {
+    pub counts: SeqCounts,
+    /// Its frames by message id, most frequent first.
+    pub msg_ids: Vec<MsgCount>,
 }
 
 /// Frames from sources beyond the table's cap: counted, not tracked.
@@ -198,6 +243,9 @@ pub struct LinkTotals {
     pub silence_frames_estimated: u64,
     /// Frames from the radio's own source (counted, not in the totals).
     pub radio_received: u64,
+    /// Frames the ground station logged as it sent them (not in the
+    /// totals).
+    pub ground_received: u64,
 }
 
 impl LinkTotals {
@@ -206,33 +254,36 @@ impl LinkTotals {
     pub fn of(sources: &[SourceSummary]) -> Self {
         let mut c = SeqCounts::default();
         let (mut bytes, mut silence_count, mut unspanned, mut pymav_loss) = (0, 0, 0, 0);
-        let mut radio_received = 0;
+        let mut pymav_count = 0;
+        let (mut radio_received, mut ground_received) = (0, 0);
         let mut count = 0;
         for s in sources {
             if s.radio {
                 radio_received += s.counts.received;
                 continue;
             }
+            if s.ground {
+                ground_received += s.counts.received;
+                continue;
+            }
             count += 1;
-            c.received += s.counts.received;
-            c.lost += s.counts.lost;
-            c.duplicate += s.counts.duplicate;
-            c.reordered += s.counts.reordered;
-            c.resyncs += s.counts.resyncs;
+            c = c.plus(&s.counts);
             bytes += s.bytes;
             silence_count += s.silence_count;
             unspanned += s.silence_frames_estimated;
             pymav_loss += s.pymav.loss;
+            pymav_count += s.pymav.count;
         }
         LinkTotals {
             sources: count,
             counts: c,
-            loss_pct: percent(c.lost, c.received - c.duplicate + c.lost),
-            pymav: PymavFigure::new(c.received, pymav_loss),
+            loss_pct: percent(c.lost, c.numbered()),
+            pymav: PymavFigure::new(pymav_count, pymav_loss),
             bytes,
             silence_count,
             silence_frames_estimated: unspanned,
             radio_received,
+            ground_received,
         }
     }
 }

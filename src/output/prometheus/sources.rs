@@ -54,6 +54,7 @@ impl Figures {
         Figures {
             seq: SeqCounts {
                 received: seq(|c| c.received),
+                damaged: seq(|c| c.damaged),
                 lost: seq(|c| c.lost),
                 duplicate: seq(|c| c.duplicate),
                 reordered: seq(|c| c.reordered),
@@ -91,13 +92,7 @@ impl Figures {
 }
 
 fn add_seq(a: SeqCounts, b: SeqCounts) -> SeqCounts {
-    SeqCounts {
-        received: a.received + b.received,
-        lost: a.lost + b.lost,
-        duplicate: a.duplicate + b.duplicate,
-        reordered: a.reordered + b.reordered,
-        resyncs: a.resyncs + b.resyncs,
-    }
+    a.plus(&b)
 }
 
 /// The latest table's figures that are not counters.

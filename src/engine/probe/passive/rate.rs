@@ -1,32 +1,57 @@
-//! A source's usual interval: its time per sequence step, over its last
-//! 256 to 512 steps or one to two seconds, whichever comes first. Pure:
-//! times are passed in.
+//! A source's usual interval and its routine pause: its time per sequence
+//! step over the last few seconds of its own time, and the longest pause
+//! it makes in a second, as a rule. Pure: times are passed in.
 //!
-//! A mean over a window, not a per-step average: frames often arrive in
-//! bursts (an autopilot's scheduler sends its messages together, a
-//! sender or a router flushes a batch, a radio delivers a TDM round), and
-//! an average that forgets within a burst falls to the spacing inside it,
-//! which then makes every pause between bursts look like a long silence.
-//! The window holds whole bursts and the pauses between them. It is two
-//! buckets: the one filling, and the last full one.
+//! Seconds, not steps or frames: real ground stations do not hand frames
+//! over as they come. QGroundControl writes whole milliseconds and its
+//! log in batches about once a second (vtol.tlog: 140 frames within
+//! 0.2 s, then a 1.05 s pause), Mission Planner stamps a whole read at
+//! once, and an autopilot's scheduler sends its messages together. A
+//! window of 256 steps fell inside one batch, took 0.47 ms a frame for a
+//! source sending 115 frames/s, and made each pause between batches a
+//! silence of ~961 frames. A window of seconds holds whole batches and
+//! the pauses between them. It is up to [`FULL_BUCKETS`] full buckets of
+//! at least [`BUCKET_NS`] each, and the one filling; the mean's error is
+//! at most one batch's length over the window's.
+//!
+//! The routine pause is the median, over the full buckets, of the longest
+//! pause inside each: a pause the source (or its logger) makes every
+//! second is routine, and a silence is a pause well beyond it. Pauses
+//! that were silences are not recorded, so one outage never becomes the
+//! rule.
 
 use crate::engine::Nanos;
 
-/// A bucket is full after this many steps...
-const BUCKET_STEPS: u64 = 256;
-/// ...or this long.
+/// A bucket is full after this long.
 const BUCKET_NS: Nanos = 1_000_000_000;
+/// Full buckets kept behind the filling one.
+const FULL_BUCKETS: usize = 4;
 
 #[derive(Debug, Clone, Copy)]
 struct Bucket {
     start: Nanos,
+    /// Its length, once full (the window leaves out a silence skipped).
+    span: Nanos,
     steps: u64,
+    /// The longest pause between two frames inside it (silences aside).
+    longest_pause: Nanos,
+}
+
+impl Bucket {
+    fn at(start: Nanos) -> Self {
+        Bucket {
+            start,
+            span: 0,
+            steps: 0,
+            longest_pause: 0,
+        }
+    }
 }
 
 #[derive(Debug, Clone)]
 pub(super) struct Rate {
-    /// The last full bucket, once there is one.
-    full: Option<Bucket>,
+    /// The last full buckets, oldest first.
+    full: [Option<Bucket>; FULL_BUCKETS],
     filling: Bucket,
     /// The arrival of the latest step's frame: where the window ends.
     head_at: Nanos,
@@ -39,35 +64,51 @@ impl Rate {
     /// The source's first frame, at `at`.
     pub(super) fn new(at: Nanos) -> Self {
         Rate {
-            full: None,
-            filling: Bucket {
-                start: at,
-                steps: 0,
-            },
+            full: [None; FULL_BUCKETS],
+            filling: Bucket::at(at),
             head_at: at,
             before: None,
         }
+    }
+
+    /// A pause of `length` between two frames that was not a silence.
+    pub(super) fn pause(&mut self, length: Nanos) {
+        self.filling.longest_pause = self.filling.longest_pause.max(length);
     }
 
     /// The sequence moved `k` steps ahead with a frame arriving at `at`.
     pub(super) fn step(&mut self, k: u64, at: Nanos) {
         self.filling.steps += k;
         self.head_at = self.head_at.max(at);
-        let age = self.head_at.saturating_sub(self.filling.start);
-        if self.filling.steps >= BUCKET_STEPS || age >= BUCKET_NS {
-            self.full = Some(self.filling);
-            self.filling = Bucket {
-                start: self.head_at,
-                steps: 0,
-            };
+        let span = self.head_at.saturating_sub(self.filling.start);
+        if span >= BUCKET_NS {
+            self.full.rotate_left(1);
+            self.full[FULL_BUCKETS - 1] = Some(Bucket {
+                span,
+                ..self.filling
+            });
+            self.filling = Bucket::at(self.head_at);
         }
+    }
+
+    /// A pause whose steps the sequence cannot tell was skipped: the
+    /// window goes on from `at` without it (its steps and its time both
+    /// left out), and the partial bucket before it is dropped.
+    pub(super) fn skip(&mut self, at: Nanos) {
+        self.filling = Bucket::at(at);
+        self.head_at = at;
+    }
+
+    fn full(&self) -> impl Iterator<Item = &Bucket> {
+        self.full.iter().flatten()
     }
 
     /// Time and steps in the window.
     fn window(&self) -> (Nanos, u64) {
-        let start = self.full.map_or(self.filling.start, |b| b.start);
-        let steps = self.full.map_or(0, |b| b.steps) + self.filling.steps;
-        (self.head_at.saturating_sub(start), steps)
+        let span = self.full().map(|b| b.span).sum::<Nanos>()
+            + self.head_at.saturating_sub(self.filling.start);
+        let steps = self.full().map(|b| b.steps).sum::<u64>() + self.filling.steps;
+        (span, steps)
     }
 
     /// The usual time per step (at least 1 ns), once a step was seen.
@@ -79,18 +120,24 @@ impl Rate {
         Some((span / steps).max(1))
     }
 
-    /// A full bucket is behind the estimate (256 steps, or a second):
-    /// enough to judge a pause by it alone.
-    pub(super) fn settled(&self) -> bool {
-        self.full.is_some()
+    /// The routine pause: the median of the full buckets' longest pauses
+    /// (the upper one of an even count), once a bucket is full.
+    pub(super) fn routine_pause(&self) -> Option<Nanos> {
+        let mut pauses: Vec<Nanos> = self.full().map(|b| b.longest_pause).collect();
+        pauses.sort_unstable();
+        pauses.get(pauses.len() / 2).copied()
     }
 
-    /// The count restarted at `at` (after a silence it could not span, or
-    /// a frame it could not place): the rate is measured afresh too. Kept
-    /// instead, an estimate gone wrong (a batch of frames stamped alike
-    /// makes a window of no time) would judge every pause a silence too
-    /// long to span, each one restarting the count and none a step, for
-    /// ever; afresh, it judges by the 1 s floor until a bucket is full.
+    /// A full bucket is behind the estimate: enough to judge a pause by
+    /// it alone.
+    pub(super) fn settled(&self) -> bool {
+        self.full().next().is_some()
+    }
+
+    /// The count restarted at `at` (a frame it could not place, or a
+    /// restart of the source's counter): the rate is measured afresh too.
+    /// Kept instead, an estimate gone wrong (a batch of frames stamped
+    /// alike makes a window of no time) would keep judging pauses by it.
     pub(super) fn rebase(&mut self, at: Nanos) {
         let before = self.interval();
         *self = Rate::new(at);
@@ -122,10 +169,9 @@ mod tests {
     #[test]
     fn a_bursty_source_has_its_mean() {
         // 50 frames 100 ns apart every 0.5 ms: 10 µs a frame on average,
-        // within a pause either way of it wherever the window ends (the
-        // window holds 5 to 10 bursts).
+        // within a pause either way of it wherever the window ends.
         let mut r = Rate::new(0);
-        for p in 1..5_000u64 {
+        for p in 1..500_000u64 {
             r.step(1, p / 50 * 500 * US + p % 50 * 100);
             if p > 256 {
                 let i = r.interval().unwrap();
@@ -141,14 +187,43 @@ mod tests {
         assert!((3_500 * US..=4_500 * US).contains(&i), "{i}");
     }
 
+    /// vtol.tlog's shape: 140 frames within 0.2 s (whole milliseconds, so
+    /// most of them on one stamp), then a pause of 1.05 s.
+    fn batches(r: &mut Rate, seconds: u64) -> Nanos {
+        let period = 1_250 * MS;
+        let mut at = 0;
+        for b in 0..seconds * 4 / 5 {
+            for f in 0..140u64 {
+                let now = b * period + f / 20 * 30 * MS;
+                if now > at {
+                    r.pause(now - at);
+                }
+                at = now;
+                r.step(1, at);
+            }
+        }
+        at
+    }
+
     #[test]
-    fn it_settles_after_256_steps_or_a_second() {
+    fn batches_a_second_apart_have_the_mean_rate_and_their_pause_is_routine() {
         let mut r = Rate::new(0);
-        for p in 1..256u64 {
-            r.step(1, p * MS / 2);
+        batches(&mut r, 30);
+        // 112 frames/s: 8.93 ms a frame, within one batch in the window.
+        let i = r.interval().unwrap();
+        assert!((8 * MS..=10 * MS).contains(&i), "{i}");
+        // The pause between batches: 1.25 s less the batch's 0.18 s.
+        assert_eq!(r.routine_pause(), Some(1_070 * MS));
+    }
+
+    #[test]
+    fn it_settles_after_a_second() {
+        let mut r = Rate::new(0);
+        for p in 1..2_000u64 {
+            r.step(1, p * 400 * US);
         }
         assert!(!r.settled());
-        r.step(1, 128 * MS);
+        r.step(1, 1_000 * MS);
         assert!(r.settled());
         let mut slow = Rate::new(0);
         slow.step(1, 400 * MS);
@@ -161,22 +236,19 @@ mod tests {
 
     #[test]
     fn a_restarted_count_measures_the_rate_afresh() {
-        // A window of no time (a batch stamped alike) gives 1 ns a step...
         let mut r = Rate::new(0);
         r.step(300, 0);
-        assert_eq!((r.interval(), r.settled()), (Some(1), true));
-        // ...and once the count restarts, it no longer settles anything
-        // (shown until the next step) until a bucket of real steps is in.
+        assert_eq!((r.interval(), r.settled()), (Some(1), false));
         r.rebase(5 * MS);
         assert_eq!((r.interval(), r.settled()), (Some(1), false));
-        for p in 1..=256u64 {
+        for p in 1..=100_000u64 {
             r.step(1, 5 * MS + p * 10 * US);
         }
         assert_eq!((r.interval(), r.settled()), (Some(10 * US), true));
     }
 
     #[test]
-    fn a_rate_change_shows_within_two_buckets() {
+    fn a_rate_change_shows_within_the_window() {
         let mut r = Rate::new(0);
         let mut at = 0;
         for _ in 0..100 {
@@ -184,11 +256,28 @@ mod tests {
             r.step(1, at);
         }
         assert_eq!(r.interval(), Some(1_000 * MS));
-        // From 1 Hz to 100 Hz: two seconds later, the new rate.
-        for _ in 0..300 {
+        // From 1 Hz to 100 Hz: six seconds later, the new rate.
+        for _ in 0..600 {
             at += 10 * MS;
             r.step(1, at);
         }
         assert_eq!(r.interval(), Some(10 * MS));
+    }
+
+    #[test]
+    fn the_routine_pause_is_a_median_so_one_long_pause_is_not_the_rule() {
+        let mut r = Rate::new(0);
+        let mut at = 0;
+        for s in 0..6u64 {
+            for _ in 0..50 {
+                at += 20 * MS;
+                r.step(1, at);
+                r.pause(20 * MS);
+            }
+            if s == 3 {
+                r.pause(900 * MS);
+            }
+        }
+        assert_eq!(r.routine_pause(), Some(20 * MS));
     }
 }

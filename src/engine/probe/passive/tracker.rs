@@ -68,8 +68,8 @@ use std::collections::BTreeMap;
 
 use super::rate::Rate;
 use crate::engine::summary::passive::{
-    percent, LinkTotals, MsgCount, PymavFigure, SeqCounts, Silence, SourceSummary, TableSummary,
-    Untracked,
+    percent, LinkTotals, MsgCount, PymavFigure, SecondCounter, SeqCounts, Silence, SourceSummary,
+    TableSummary, Untracked,
 };
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -90,6 +90,17 @@ const SILENCE_CAP_INTERVALS: u64 = 64;
 /// A silence shorter than this many frames at the usual rate is spanned by
 /// the sequence (half of 256: room for a rate estimate off by 2x).
 const SPAN_FRAMES: u64 = 128;
+/// Frames this far ahead of or behind a counter's head are read at once;
+/// farther ones wait for the next frame ([`SeqTracker::route`]). Past
+/// any short loss burst or reorder a link makes, and short of the
+/// distances two interleaved counters drift apart by.
+const REACH: u8 = 32;
+/// A pause longer than 3/2 of the routine pause (in halves: 3) may be a
+/// silence: the batches of a logger a second apart never are.
+const ROUTINE_FACTOR_X2: u64 = 3;
+/// Frames a second counter under the same ids must have numbered to be
+/// reported as one; fewer are stray frames, received and nothing else.
+const SECOND_COUNTER_FRAMES: u64 = 3;
 /// Silences listed: the first ones...
 const KEEP_FIRST_SILENCES: usize = 8;
 /// ...and the longest of the later ones.
@@ -215,15 +226,17 @@ struct SilenceLog {
     count: u64,
     omitted: u64,
     total_ns: Nanos,
-    unspanned_frames: u64,
+    /// What the pauses the counter may have wrapped in likely hid beyond
+    /// the sequence's gap.
+    wraps_estimated: u64,
 }
 
 impl SilenceLog {
     fn push(&mut self, s: Silence) {
         self.count += 1;
         self.total_ns = self.total_ns.saturating_add(s.length_ns);
-        if s.seq_lost.is_none() {
-            self.unspanned_frames += s.frames_estimated.unwrap_or(0);
+        if let (Some(floor), Some(likely)) = (s.seq_lost, s.lost_estimated) {
+            self.wraps_estimated += likely - floor;
         }
         if self.first.len() < KEEP_FIRST_SILENCES {
             self.first.push(s);
@@ -261,6 +274,11 @@ impl MsgIds {
         }
     }
 
+    /// Every frame counted.
+    fn total(&self) -> u64 {
+        self.kept.iter().map(|m| m.count).sum::<u64>() + self.other
+    }
+
     fn by_count(&self) -> Vec<MsgCount> {
         let mut v = self.kept.clone();
         v.sort_unstable_by(|a, b| b.count.cmp(&a.count).then(a.id.cmp(&b.id)));
@@ -273,7 +291,15 @@ impl MsgIds {
 pub struct SeqTracker {
     gap: Option<Nanos>,
     state: Option<SeqState>,
+    /// The main counter's figures.
     counts: SeqCounts,
+    /// A second counter under the same ids, once a frame was shown to
+    /// belong to neither the main counter's reach nor its gaps.
+    second: Option<Counter>,
+    /// A frame far from the main counter's head, waiting for the next
+    /// frame to say whether the counter jumped there or another sender
+    /// numbered it.
+    deferred: Option<Deferred>,
     pymav_last: Option<u8>,
     pymav_loss: u64,
     bytes: u64,
@@ -283,6 +309,67 @@ pub struct SeqTracker {
     rate: Rate,
     silences: SilenceLog,
     msg_ids: MsgIds,
+    damaged_ids: MsgIds,
+    second_ids: MsgIds,
+}
+
+/// A frame held back by one frame; see [`SeqTracker::route`].
+#[derive(Debug, Clone, Copy)]
+struct Deferred {
+    seq: u8,
+    msg_id: u32,
+    at: Nanos,
+    damaged: bool,
+}
+
+/// A second sender's counter under the same ids.
+#[derive(Debug, Clone)]
+struct Counter {
+    state: SeqState,
+    counts: SeqCounts,
+}
+
+impl Counter {
+    /// `seq` is within [`REACH`] of its head, either way.
+    fn near(&self, seq: u8) -> bool {
+        near(&self.state, seq)
+    }
+}
+
+fn near(state: &SeqState, seq: u8) -> bool {
+    let ahead = seq.wrapping_sub(state.head);
+    (1..=REACH).contains(&ahead) || state.head.wrapping_sub(seq) <= REACH
+}
+
+/// A frame received whole, or one whose CRC failed with its header whole.
+fn tally(counts: &mut SeqCounts, damaged: bool) {
+    if damaged {
+        counts.damaged += 1;
+    } else {
+        counts.received += 1;
+    }
+}
+
+/// Counts where a frame landed in a counter's sequence; the steps ahead,
+/// for the rate.
+fn count_step(counts: &mut SeqCounts, step: Step) -> Option<u64> {
+    match step {
+        Step::Ahead(k) => {
+            counts.lost += u64::from(k - 1);
+            return Some(u64::from(k));
+        }
+        Step::Duplicate => counts.duplicate += 1,
+        Step::Filled => {
+            counts.lost -= 1;
+            counts.reordered += 1;
+        }
+        Step::BeforeStart { lost } => {
+            counts.lost += lost;
+            counts.reordered += 1;
+        }
+        Step::Resync => counts.resyncs += 1,
+    }
+    None
 }
 
 impl SeqTracker {
@@ -293,6 +380,8 @@ impl SeqTracker {
             gap,
             state: None,
             counts: SeqCounts::default(),
+            second: None,
+            deferred: None,
             pymav_last: None,
             pymav_loss: 0,
             bytes: 0,
@@ -302,72 +391,178 @@ impl SeqTracker {
             rate: Rate::new(0),
             silences: SilenceLog::default(),
             msg_ids: MsgIds::default(),
+            damaged_ids: MsgIds::default(),
+            second_ids: MsgIds::default(),
         }
     }
 
     /// Takes one frame: its header sequence, message id, length on the
     /// wire and arrival time (not earlier than the previous frame's).
     pub fn on_frame(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
-        let len = u64::try_from(len_bytes).unwrap_or(u64::MAX);
-        self.counts.received += 1;
-        self.bytes = self.bytes.saturating_add(len);
         self.msg_ids.count(msg_id);
         self.pymav(seq);
+        self.take(seq, msg_id, len_bytes, at, false);
+    }
+
+    /// Takes a frame whose CRC failed but whose header is whole: it
+    /// arrived, damaged (or in a dialect whose CRC differs), so it fills
+    /// its number and is counted apart. pymavlink never sees it.
+    pub fn on_damaged(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
+        self.damaged_ids.count(msg_id);
+        self.take(seq, msg_id, len_bytes, at, true);
+    }
+
+    fn take(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos, damaged: bool) {
+        let len = u64::try_from(len_bytes).unwrap_or(u64::MAX);
+        self.bytes = self.bytes.saturating_add(len);
         let threshold = self.threshold();
-        let Some(state) = self.state.as_mut() else {
+        if self.state.is_none() {
             self.state = Some(SeqState::new(seq, at));
+            tally(&mut self.counts, damaged);
             self.rate = Rate::new(at);
             self.first_len = len;
             self.first_seen = at;
             self.last_seen = at;
             return;
-        };
+        }
         let elapsed = at.saturating_sub(self.last_seen);
-        let silent = elapsed > threshold;
         self.last_seen = self.last_seen.max(at);
-        if silent {
-            let frames = self.rate.interval().map(|i| frames_in(elapsed, i));
-            let ahead = seq.wrapping_sub(state.head);
-            let spanned = frames.is_some_and(|f| f < SPAN_FRAMES) && (1..=WINDOW).contains(&ahead);
-            self.silences.push(Silence {
-                start: at - elapsed,
-                length_ns: elapsed,
-                frames_estimated: frames,
-                seq_lost: spanned.then(|| u64::from(ahead - 1)),
-                ongoing: false,
-            });
-            if spanned {
-                // The sequence proves the steps in it: steps like any
-                // other. (Left out, a window of bursts would lose the
-                // pauses between them.)
-                state.advance(ahead, at);
-                self.counts.lost += u64::from(ahead - 1);
-                self.rate.step(u64::from(ahead), at);
-            } else {
-                *state = SeqState::new(seq, at);
-                self.counts.resyncs += 1;
-                self.rate.rebase(at);
-            }
+        if elapsed > threshold {
+            self.flush();
+            tally(&mut self.counts, damaged);
+            self.end_silence(seq, at, elapsed);
             return;
         }
-        match state.take(seq, at) {
-            Step::Ahead(k) => {
-                self.counts.lost += u64::from(k - 1);
-                self.rate.step(u64::from(k), at);
+        self.rate.pause(elapsed);
+        if let Some(d) = self.deferred.take() {
+            self.resolve(d, seq);
+        }
+        self.route(Deferred {
+            seq,
+            msg_id,
+            at,
+            damaged,
+        });
+    }
+
+    /// A frame within reach of the main counter's head is its; one that
+    /// continues the second counter is that one's; any other waits for the
+    /// next frame ([`Self::resolve`]). Without the wait, another sender's
+    /// frame under the same ids (QGroundControl's REQUEST_DATA_STREAM,
+    /// numbered 1 to 7 between its MANUAL_CONTROL frames) read as a jump
+    /// of the main counter: a hundred lost, then a hundred reordered.
+    fn route(&mut self, f: Deferred) {
+        let state = self.state.as_ref().expect("a frame was taken");
+        if near(state, f.seq) {
+            self.main_takes(f);
+        } else if self.second.as_ref().is_some_and(|c| c.near(f.seq)) {
+            self.second_takes(f);
+        } else {
+            self.deferred = Some(f);
+        }
+    }
+
+    /// The frame after a deferred one: back within reach of the main
+    /// counter's head, the deferred frame was another sender's; anything
+    /// else, the main counter moved there (a burst of losses, a restart).
+    fn resolve(&mut self, d: Deferred, next: u8) {
+        let state = self.state.as_ref().expect("a frame was taken");
+        if near(state, next) {
+            self.second_takes(d);
+        } else {
+            self.main_takes(d);
+        }
+    }
+
+    /// Settles a deferred frame with no next frame to judge it by: the
+    /// main counter's.
+    fn flush(&mut self) {
+        if let Some(d) = self.deferred.take() {
+            self.main_takes(d);
+        }
+    }
+
+    fn main_takes(&mut self, f: Deferred) {
+        let state = self.state.as_mut().expect("a frame was taken");
+        tally(&mut self.counts, f.damaged);
+        let step = state.take(f.seq, f.at);
+        let resync = matches!(step, Step::Resync);
+        if let Some(k) = count_step(&mut self.counts, step) {
+            self.rate.step(k, f.at);
+        }
+        if resync {
+            self.rate.rebase(f.at);
+        }
+    }
+
+    fn second_takes(&mut self, f: Deferred) {
+        if !f.damaged {
+            self.second_ids.count(f.msg_id);
+        }
+        match &mut self.second {
+            Some(c) => {
+                tally(&mut c.counts, f.damaged);
+                let step = c.state.take(f.seq, f.at);
+                count_step(&mut c.counts, step);
             }
-            Step::Duplicate => self.counts.duplicate += 1,
-            Step::Filled => {
-                self.counts.lost -= 1;
-                self.counts.reordered += 1;
+            None => {
+                let mut counts = SeqCounts::default();
+                tally(&mut counts, f.damaged);
+                self.second = Some(Counter {
+                    state: SeqState::new(f.seq, f.at),
+                    counts,
+                });
             }
-            Step::BeforeStart { lost } => {
-                self.counts.lost += lost;
-                self.counts.reordered += 1;
-            }
-            Step::Resync => {
-                self.counts.resyncs += 1;
-                self.rate.rebase(at);
-            }
+        }
+    }
+
+    /// The first frame after a silence of `elapsed`: what the sequence
+    /// proves across it, and what the rate suggests it hid.
+    fn end_silence(&mut self, seq: u8, at: Nanos, elapsed: Nanos) {
+        let state = self.state.as_mut().expect("a frame was taken");
+        let frames = self.rate.interval().map(|i| frames_in(elapsed, i));
+        let ahead = seq.wrapping_sub(state.head);
+        let mut silence = Silence {
+            start: at - elapsed,
+            length_ns: elapsed,
+            frames_estimated: frames,
+            seq_lost: None,
+            lost_estimated: None,
+            restart: false,
+            ongoing: false,
+        };
+        // A counter that starts again at 0 after a pause: the source
+        // restarted (ArduPilot's SITL rebooting in flight_logs.tlog), and
+        // its gap is no loss.
+        if seq == 0 && ahead != 1 {
+            silence.restart = true;
+            self.silences.push(silence);
+            *state = SeqState::new(seq, at);
+            self.counts.resyncs += 1;
+            self.rate.rebase(at);
+            return;
+        }
+        // At least the sequence's gap was numbered and not heard, whatever
+        // the pause hid besides.
+        let floor = u64::from(ahead.wrapping_sub(1));
+        let spanned = frames.is_some_and(|f| f < SPAN_FRAMES) && (1..=WINDOW).contains(&ahead);
+        silence.seq_lost = Some(floor);
+        if !spanned {
+            silence.lost_estimated = Some(frames.map_or(floor, |f| nearest_wrap(floor, f)));
+        }
+        self.silences.push(silence);
+        self.counts.lost += floor;
+        if ahead == 0 {
+            *state = SeqState::new(seq, at);
+        } else {
+            state.advance(ahead, at);
+        }
+        if spanned {
+            // The sequence proves the steps in it: steps like any other.
+            // (Left out, a window of bursts would lose the pauses between.)
+            self.rate.step(u64::from(ahead), at);
+        } else {
+            self.rate.skip(at);
         }
     }
 
@@ -384,20 +579,59 @@ impl SeqTracker {
     }
 
     /// How long a pause must last to be a silence: see [`threshold`]; the
-    /// cap waits for the usual interval to be settled.
+    /// cap waits for the usual interval to be settled, and without a
+    /// `gap` given, a pause the source makes routinely is never one.
     fn threshold(&self) -> Nanos {
         let interval = self.rate.interval();
         let settled = interval.filter(|_| self.rate.settled());
-        threshold(self.gap, interval, settled)
+        let t = threshold(self.gap, interval, settled);
+        match (self.gap, self.rate.routine_pause()) {
+            (None, Some(routine)) => t.max(routine.saturating_mul(ROUTINE_FACTOR_X2) / 2),
+            _ => t,
+        }
     }
 
+    /// The figures with a deferred frame settled as the main counter's:
+    /// what a summary taken now reports.
+    fn settled_now(&self) -> std::borrow::Cow<'_, SeqTracker> {
+        if self.deferred.is_none() {
+            return std::borrow::Cow::Borrowed(self);
+        }
+        let mut t = self.clone();
+        t.flush();
+        std::borrow::Cow::Owned(t)
+    }
+
+    /// The source's counts: every counter's, and the frames of a second
+    /// counter too small to be one.
     pub fn counts(&self) -> SeqCounts {
-        self.counts
+        let t = self.settled_now();
+        match &t.second {
+            Some(c) if c.counts.received + c.counts.damaged >= SECOND_COUNTER_FRAMES => {
+                t.counts.plus(&c.counts)
+            }
+            Some(c) => SeqCounts {
+                received: t.counts.received + c.counts.received,
+                damaged: t.counts.damaged + c.counts.damaged,
+                ..t.counts
+            },
+            None => t.counts,
+        }
+    }
+
+    /// A second sender's counter, once it has numbered enough frames to
+    /// be one.
+    fn second_counter(&self) -> Option<SecondCounter> {
+        let c = self.second.as_ref()?;
+        (c.counts.received + c.counts.damaged >= SECOND_COUNTER_FRAMES).then(|| SecondCounter {
+            counts: c.counts,
+            msg_ids: self.second_ids.by_count(),
+        })
     }
 
     /// pymavlink's figure for this source alone.
     pub fn pymav_figure(&self) -> PymavFigure {
-        PymavFigure::new(self.counts.received, self.pymav_loss)
+        PymavFigure::new(self.msg_ids.total(), self.pymav_loss)
     }
 
     /// The usual time per sequence step, once known.
@@ -415,6 +649,8 @@ impl SeqTracker {
             length_ns: elapsed,
             frames_estimated: self.rate.interval().map(|i| frames_in(elapsed, i)),
             seq_lost: None,
+            lost_estimated: None,
+            restart: false,
             ongoing: true,
         })
     }
@@ -422,53 +658,63 @@ impl SeqTracker {
     /// The figures as of `at` (the end of the run, or now): a silence
     /// still on then is included.
     pub fn summary(&self, source: SysComp, at: Nanos) -> SourceSummary {
-        let mut silences: Vec<Silence> = self
+        let t = self.settled_now();
+        let mut silences: Vec<Silence> = t
             .silences
             .first
             .iter()
-            .chain(&self.silences.longest)
+            .chain(&t.silences.longest)
             .copied()
             .collect();
         silences.sort_by_key(|s| s.start);
-        let mut log_count = self.silences.count;
-        let mut silence_ns = self.silences.total_ns;
-        let mut unspanned = self.silences.unspanned_frames;
+        let mut log_count = t.silences.count;
+        let mut silence_ns = t.silences.total_ns;
         // After a silence no frame can fill a gap (the next one advances or
         // resynchronises), so nothing is pending in one.
-        let mut lost_pending = self.state.map_or(0, |s| s.pending());
-        if let Some(s) = self.ongoing(at) {
+        let mut lost_pending = t.state.map_or(0, |s| s.pending());
+        if let Some(s) = t.ongoing(at) {
             lost_pending = 0;
             log_count += 1;
             silence_ns = silence_ns.saturating_add(s.length_ns);
-            unspanned += s.frames_estimated.unwrap_or(0);
             silences.push(s);
         }
-        let c = self.counts;
-        let span = self.last_seen - self.first_seen;
+        let c = t.counts();
+        let span = t.last_seen - t.first_seen;
+        let arrived = c.received + c.damaged;
         SourceSummary {
             source,
             radio: source == RADIO_SOURCE,
+            ground: false,
             counts: c,
-            loss_pct: percent(c.lost, c.received - c.duplicate + c.lost),
+            loss_pct: percent(c.lost, c.numbered()),
             lost_pending,
-            pymav: self.pymav_figure(),
-            bytes: self.bytes,
-            first_seen: self.first_seen,
-            last_seen: self.last_seen,
-            frames_per_s: per_second(c.received.saturating_sub(1), span),
-            bytes_per_s: per_second(self.bytes.saturating_sub(self.first_len), span),
-            interval_ns: self.rate.interval(),
+            pymav: t.pymav_figure(),
+            bytes: t.bytes,
+            first_seen: t.first_seen,
+            last_seen: t.last_seen,
+            frames_per_s: per_second(arrived.saturating_sub(1), span),
+            bytes_per_s: per_second(t.bytes.saturating_sub(t.first_len), span),
+            interval_ns: t.rate.interval(),
+            routine_pause_ns: t.rate.routine_pause(),
             silences,
             silence_count: log_count,
-            silences_omitted: self.silences.omitted,
+            silences_omitted: t.silences.omitted,
             silence_ns,
-            silence_frames_estimated: unspanned,
-            msg_ids: self.msg_ids.by_count(),
-            msg_ids_other: self.msg_ids.other,
+            silence_frames_estimated: t.silences.wraps_estimated,
+            msg_ids: t.msg_ids.by_count(),
+            msg_ids_other: t.msg_ids.other,
+            damaged_ids: t.damaged_ids.by_count(),
+            second_counter: t.second_counter(),
         }
     }
 }
 
+/// `floor + 256 k`, for the `k >= 0` nearest to `frames`: the frames a
+/// pause the 8-bit counter may have wrapped in most likely numbered.
+fn nearest_wrap(floor: u64, frames: u64) -> u64 {
+    let wraps = (frames.saturating_sub(floor) + 128) / 256;
+    floor + 256 * wraps
+}
 /// The silence threshold for a source with usual interval `interval`,
 /// capped at 64 of `settled` (the interval once a full bucket set it).
 fn threshold(gap: Option<Nanos>, interval: Option<Nanos>, settled: Option<Nanos>) -> Nanos {
@@ -501,6 +747,8 @@ pub struct SourceTable {
     sources: BTreeMap<SysComp, SeqTracker>,
     /// The SiK radio's source, apart (not against the cap).
     radio: Option<SeqTracker>,
+    /// Sources that are the ground station's own frames (a log's).
+    ground: Vec<SysComp>,
     untracked: Untracked,
     /// One bit per (sysid, compid): untracked sources already counted.
     untracked_seen: Box<[u64]>,
@@ -515,6 +763,7 @@ impl SourceTable {
             max_sources,
             sources: BTreeMap::new(),
             radio: None,
+            ground: Vec::new(),
             untracked: Untracked::default(),
             untracked_seen: vec![0; 65536 / 64].into_boxed_slice(),
         }
@@ -527,28 +776,60 @@ impl SourceTable {
 
     /// Takes one received frame.
     pub fn on_frame(&mut self, source: SysComp, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
+        if let Some(t) = self.tracker(source, len_bytes) {
+            t.on_frame(seq, msg_id, len_bytes, at);
+        }
+    }
+
+    /// Takes a frame whose CRC failed with its header whole
+    /// ([`SeqTracker::on_damaged`]).
+    pub fn on_damaged(
+        &mut self,
+        source: SysComp,
+        seq: u8,
+        msg_id: u32,
+        len_bytes: usize,
+        at: Nanos,
+    ) {
+        if let Some(t) = self.tracker(source, len_bytes) {
+            t.on_damaged(seq, msg_id, len_bytes, at);
+        }
+    }
+
+    /// Marks `source` as the ground station's own (in a log: frames it
+    /// logged as it sent them), out of the link's totals from now on.
+    pub fn set_ground(&mut self, source: SysComp) {
+        if self.ground.len() < self.max_sources && !self.ground.contains(&source) {
+            self.ground.push(source);
+        }
+    }
+
+    /// The tracker of `source`, made if there is room; `None` (the frame
+    /// counted as untracked) if not.
+    fn tracker(&mut self, source: SysComp, len_bytes: usize) -> Option<&mut SeqTracker> {
         let gap = self.gap;
-        let tracker = if source == RADIO_SOURCE {
-            self.radio.get_or_insert_with(|| SeqTracker::new(gap))
-        } else if self.sources.len() < self.max_sources || self.sources.contains_key(&source) {
-            self.sources
-                .entry(source)
-                .or_insert_with(|| SeqTracker::new(gap))
-        } else {
-            let i = usize::from(source.sysid) << 8 | usize::from(source.compid);
-            let (word, bit) = (i / 64, i % 64);
-            if self.untracked_seen[word] & (1 << bit) == 0 {
-                self.untracked_seen[word] |= 1 << bit;
-                self.untracked.sources += 1;
-            }
-            self.untracked.frames += 1;
-            self.untracked.bytes = self
-                .untracked
-                .bytes
-                .saturating_add(u64::try_from(len_bytes).unwrap_or(u64::MAX));
-            return;
-        };
-        tracker.on_frame(seq, msg_id, len_bytes, at);
+        if source == RADIO_SOURCE {
+            return Some(self.radio.get_or_insert_with(|| SeqTracker::new(gap)));
+        }
+        if self.sources.len() < self.max_sources || self.sources.contains_key(&source) {
+            return Some(
+                self.sources
+                    .entry(source)
+                    .or_insert_with(|| SeqTracker::new(gap)),
+            );
+        }
+        let i = usize::from(source.sysid) << 8 | usize::from(source.compid);
+        let (word, bit) = (i / 64, i % 64);
+        if self.untracked_seen[word] & (1 << bit) == 0 {
+            self.untracked_seen[word] |= 1 << bit;
+            self.untracked.sources += 1;
+        }
+        self.untracked.frames += 1;
+        self.untracked.bytes = self
+            .untracked
+            .bytes
+            .saturating_add(u64::try_from(len_bytes).unwrap_or(u64::MAX));
+        None
     }
 
     /// The tracker of one source, if tracked.
@@ -565,7 +846,10 @@ impl SourceTable {
         let mut sources: Vec<SourceSummary> = self
             .sources
             .iter()
-            .map(|(id, t)| t.summary(*id, at))
+            .map(|(id, t)| SourceSummary {
+                ground: self.ground.contains(id),
+                ..t.summary(*id, at)
+            })
             .collect();
         if let Some(r) = &self.radio {
             sources.push(r.summary(RADIO_SOURCE, at));
