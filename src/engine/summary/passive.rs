@@ -126,8 +126,10 @@ pub struct Silence {
     pub start: Nanos,
     /// From that frame to the one after it (to the summary, if ongoing).
     pub length_ns: Nanos,
-    /// Frames the source would have sent in it at its usual rate; `None`
-    /// while no rate was known.
+    /// Frames the source would have sent in it at its usual rate, in the
+    /// time beyond its routine pause (a logger's batches: the frames of a
+    /// routine pause come with the next batch); `None` while no rate was
+    /// known.
     pub frames_estimated: Option<u64>,
     /// The frames the sequence proves lost across it (included in
     /// `lost`): its gap, modulo 256 where the pause may hide wraps of the

@@ -7,7 +7,9 @@ use std::io::{self, Write};
 
 use super::{per_second, TextReporter};
 use crate::engine::observe::StartInfo;
-use crate::engine::summary::passive::{PassiveSummary, PerLink, Silence, SourceSummary};
+use crate::engine::summary::passive::{
+    LinkTotals, MsgCount, PassiveSummary, PerLink, Silence, SourceSummary,
+};
 use crate::engine::summary::PassiveInterim;
 use crate::frame::codec::message_name;
 use crate::transport::tlog::LogFacts;
@@ -139,16 +141,9 @@ fn write_messages(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
 }
 
 fn write_silence(out: &mut impl Write, r: &SourceSummary, silence: &Silence) -> io::Result<()> {
-    let frames = match (silence.seq_lost, silence.frames_estimated) {
-        (Some(lost), _) => format!("{lost} frames lost, counted by the sequence"),
-        (None, Some(est)) => {
-            format!("~{est} frames at its rate, not counted lost (the sequence cannot span it)")
-        }
-        (None, None) => "its rate was not known yet".into(),
-    };
     writeln!(
         out,
-        "silence: {} heard nothing for {} from {}{}: {frames}",
+        "silence: {} heard nothing for {} from {}{}: {}",
         r.source,
         seconds(silence.length_ns),
         seconds(silence.start),
@@ -157,7 +152,33 @@ fn write_silence(out: &mut impl Write, r: &SourceSummary, silence: &Silence) -> 
         } else {
             ""
         },
+        silence_figures(silence)
     )
+}
+
+/// What the sequence proves across a silence, and what the rate suggests.
+fn silence_figures(silence: &Silence) -> String {
+    if silence.restart {
+        return "its counter started again at 0 (the source restarted): no loss counted".into();
+    }
+    match (
+        silence.seq_lost,
+        silence.lost_estimated,
+        silence.frames_estimated,
+    ) {
+        (Some(0), None, _) => {
+            "no number missing across it: delayed (or not sent), none lost".into()
+        }
+        (Some(lost), Some(likely), _) if likely > lost => format!(
+            "{lost} frames lost by the sequence, ~{likely} likely at its rate (the 8-bit counter \
+             wrapped {} times more, likely: the {} more are not counted)",
+            (likely - lost) / 256,
+            likely - lost
+        ),
+        (Some(lost), _, _) => format!("{lost} frames lost, counted by the sequence"),
+        (None, _, Some(est)) => format!("~{est} frames at its rate so far"),
+        (None, _, None) => "its rate was not known yet".into(),
+    }
 }
 
 /// What a telemetry log held: its span on the wall clock, its records,
@@ -266,31 +287,24 @@ pub(super) fn write_summary(
         },
         t.sources,
         t.counts.received,
-        if t.radio_received > 0 {
-            format!(" (and {} from the radio)", t.radio_received)
-        } else {
-            String::new()
+        match (t.radio_received, t.ground_received) {
+            (0, 0) => String::new(),
+            (r, 0) => format!(" (and {r} from the radio)"),
+            (0, g) => format!(" (and {g} the ground station logged as it sent them)"),
+            (r, g) =>
+                format!(" (and {r} from the radio, {g} the ground station logged as it sent them)"),
         }
     )?;
-    if s.table.sources.is_empty() {
+    if s.table.sources.iter().all(|r| r.ground) {
         writeln!(out, "nothing heard")?;
     } else {
         table_header(out, "")?;
-        for r in &s.table.sources {
+        for r in s.table.sources.iter().filter(|r| !r.ground) {
             row(out, s, r)?;
         }
-        writeln!(
-            out,
-            "link: {} received, {} lost ({}), {} duplicate, {} reordered; pymavlink's figure: {} lost ({:.2}%)",
-            t.counts.received,
-            t.counts.lost,
-            loss_column(t.loss_pct),
-            t.counts.duplicate,
-            t.counts.reordered,
-            t.pymav.loss,
-            t.pymav.loss_pct
-        )?;
+        write_link_line(out, t)?;
     }
+    write_ground(out, s)?;
     if let Some(per) = &s.per_link {
         write_links(out, s, per)?;
     }
@@ -299,6 +313,10 @@ pub(super) fn write_summary(
     }
     for r in &s.table.sources {
         write_messages(out, r)?;
+    }
+    for r in &s.table.sources {
+        write_damaged(out, r)?;
+        write_second_counter(out, r)?;
     }
     for r in &s.table.sources {
         for silence in &r.silences {
@@ -327,6 +345,101 @@ pub(super) fn write_summary(
         }
     }
     Ok(())
+}
+
+/// `link:`, the totals of every source but the radio's and the ground
+/// station's own.
+fn write_link_line(out: &mut impl Write, t: &LinkTotals) -> io::Result<()> {
+    writeln!(
+        out,
+        "link: {} received, {} lost ({}), {} duplicate, {} reordered{}{}; pymavlink's figure: {} lost ({:.2}%)",
+        t.counts.received,
+        t.counts.lost,
+        loss_column(t.loss_pct),
+        t.counts.duplicate,
+        t.counts.reordered,
+        if t.counts.damaged > 0 {
+            format!(", {} damaged", t.counts.damaged)
+        } else {
+            String::new()
+        },
+        if t.silence_frames_estimated > 0 {
+            format!(
+                ", ~{} more likely lost in silences the 8-bit counter wrapped in",
+                t.silence_frames_estimated
+            )
+        } else {
+            String::new()
+        },
+        t.pymav.loss,
+        t.pymav.loss_pct
+    )
+}
+
+/// A log's ground station's own frames, apart: logged as it sent them,
+/// so their gaps are what the logger did not record, not the link's loss.
+fn write_ground(out: &mut impl Write, s: &PassiveSummary) -> io::Result<()> {
+    let ground: Vec<&SourceSummary> = s.table.sources.iter().filter(|r| r.ground).collect();
+    if ground.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "the ground station's own frames (logged as it sent them: not the link's; their gaps are \
+         numbers it did not log):"
+    )?;
+    table_header(out, "")?;
+    for r in ground {
+        row(out, s, r)?;
+    }
+    Ok(())
+}
+
+/// `damaged: 1/194 1949 frames ...`: frames that arrived with a failed
+/// CRC and a whole header, by message id.
+fn write_damaged(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
+    if r.counts.damaged == 0 {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "damaged: {} {} frames failed their CRC with their header whole ({}): they arrived \
+         (interference, or a dialect whose CRC differs), so they fill their numbers and are not \
+         lost",
+        r.source,
+        r.counts.damaged,
+        name_counts(&r.damaged_ids)
+    )
+}
+
+/// `two senders behind 255/190: ...`: a second counter under one id.
+fn write_second_counter(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
+    let Some(c) = &r.second_counter else {
+        return Ok(());
+    };
+    writeln!(
+        out,
+        "two senders behind {}: a second counter numbered {} of its frames ({}), counted on its \
+         own: {} lost, {} restarts of its count",
+        r.source,
+        c.counts.received + c.counts.damaged,
+        name_counts(&c.msg_ids),
+        c.counts.lost,
+        c.counts.resyncs
+    )
+}
+
+/// `DISTANCE_SENSOR ×1949, id 60045 ×3`.
+fn name_counts(ids: &[MsgCount]) -> String {
+    let each: Vec<String> = ids
+        .iter()
+        .take(TOP_MSG_IDS)
+        .map(|m| {
+            let name = message_name(m.id).map_or_else(|| format!("id {}", m.id), String::from);
+            format!("{name} ×{}", m.count)
+        })
+        .collect();
+    each.join(", ")
 }
 
 /// The source table's column names, after `lead` (the per-link table's

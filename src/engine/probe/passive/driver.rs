@@ -26,7 +26,7 @@ use crate::engine::stats::RttStats;
 use crate::engine::summary::passive::{PassiveSummary, SeqCounts, TableSummary};
 use crate::engine::summary::{Interim, LinkSummary, PassiveInterim, ProbeName};
 use crate::engine::{Nanos, SessionConfig};
-use crate::frame::{Frame, SysComp};
+use crate::frame::{mav_type, Frame, Msg, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
 
 /// Listens on `link` until the run ends.
@@ -54,6 +54,37 @@ pub struct PassiveDriver {
     round_trips: Option<RoundTrips>,
     /// Reading a telemetry log: the flight's timeline.
     flight: Option<Flight>,
+    /// Reading a telemetry log: which sources are the recording ground
+    /// station's own frames.
+    ground: Option<GroundIds>,
+}
+
+/// The ground station's own ids in a log, by evidence: a HEARTBEAT of
+/// type GCS, and every component of a system so identified
+/// (QGroundControl sends as 255/190 and 255/0). MAVProxy's link 3 (what
+/// it sent) is decided with the links, at the end.
+#[derive(Debug, Clone, Copy, Default)]
+struct GroundIds {
+    /// One bit per system id.
+    systems: [u64; 4],
+}
+
+impl GroundIds {
+    /// Whether `frame` is the ground station's, learning from it. (A
+    /// frame on MAVProxy's link 3 is not evidence yet: the stamps' low
+    /// bits are links only if the log shows it, at its end.)
+    fn sees(&mut self, frame: &Frame) -> bool {
+        let gcs_heartbeat = matches!(
+            frame.msg,
+            Msg::Heartbeat { mav_type, .. } if mav_type == mav_type::GCS
+        );
+        if gcs_heartbeat {
+            let s = frame.source.sysid;
+            self.systems[usize::from(s / 64)] |= 1 << (s % 64);
+        }
+        let s = frame.source.sysid;
+        self.systems[usize::from(s / 64)] & (1 << (s % 64)) != 0
+    }
 }
 
 /// The tables per path of a log.
@@ -76,6 +107,17 @@ impl PassiveDriver {
             paths: None,
             round_trips: None,
             flight: None,
+            ground: None,
+        }
+    }
+
+    /// Marks `source` as the ground station's in every table.
+    fn mark_ground(&mut self, source: SysComp) {
+        self.table.set_ground(source);
+        if let Some(Paths::Split(tables)) = &mut self.paths {
+            for t in tables.iter_mut() {
+                t.set_ground(source);
+            }
         }
     }
 
@@ -90,6 +132,7 @@ impl PassiveDriver {
                 Nanos::try_from(cfg.timeout.as_nanos()).unwrap_or(Nanos::MAX),
             )),
             flight: Some(Flight::new(flight::DEFAULT_WINDOW_NS, silence)),
+            ground: Some(GroundIds::default()),
             ..Self::new(cfg, gap)
         }
     }
@@ -222,11 +265,17 @@ impl Driver for PassiveDriver {
             self.own_frames += 1;
             return;
         }
+        let ground = self.ground.as_mut().is_some_and(|g| g.sees(frame));
+        if ground {
+            self.mark_ground(frame.source);
+        }
         // Before the table of all frames takes it: a first frame by another
         // path copies that table as path 0's.
         self.by_path(frame, path, at);
         self.close_windows(at);
-        if let Some(f) = &mut self.flight {
+        // What the ground station sent is not what it heard: never
+        // "heard" for the flight's silences.
+        if let Some(f) = self.flight.as_mut().filter(|_| !ground) {
             f.on_frame(frame.source, &frame.msg, at);
         }
         let len = usize::from(frame.len);
@@ -252,8 +301,8 @@ impl Driver for PassiveDriver {
 
     fn finish(mut self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let at = (end.duration_s * 1e9) as Nanos;
-        let table = self.table.summary(at);
-        let per_link = match self.paths {
+        let mut table = self.table.summary(at);
+        let per_link = match &self.paths {
             Some(Paths::Split(paths)) => {
                 let by_path: Vec<_> = paths.iter().map(|t| t.summary(at)).collect();
                 links::per_link(&table, &by_path)
@@ -261,6 +310,14 @@ impl Driver for PassiveDriver {
             // All by path 0, or not a log: no links to tell apart.
             Some(Paths::AllZero) | None => None,
         };
+        // With links shown, what only MAVProxy's link 3 carried is what it
+        // sent itself.
+        if let Some(own) = per_link.as_ref().map(links::sent_by_mavproxy) {
+            for source in own {
+                self.table.set_ground(source);
+            }
+            table = self.table.summary(at);
+        }
         let identities = identities(&table, &end.roster);
         let flight = self
             .flight

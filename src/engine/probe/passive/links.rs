@@ -24,12 +24,26 @@
 use crate::engine::summary::passive::{
     LinkTable, LinkTotals, PerLink, SeqCounts, SourceSummary, TableSummary,
 };
+use crate::frame::SysComp;
 
 /// Frames on one non-zero link value that make a source evidence.
 pub const EVIDENCE_FRAMES: u64 = 16;
 
 fn disorder(c: &SeqCounts) -> u64 {
     c.lost + c.duplicate + c.reordered + c.resyncs
+}
+
+/// The sources only MAVProxy's link 3 carried: what it sent itself.
+pub fn sent_by_mavproxy(per: &PerLink) -> Vec<SysComp> {
+    let on = |link: u8| {
+        per.links
+            .iter()
+            .filter(move |t| t.link == link)
+            .flat_map(|t| t.table.sources.iter().map(|s| s.source))
+    };
+    on(3)
+        .filter(|s| !(0..3).any(|link| on(link).any(|o| o == *s)))
+        .collect()
 }
 
 /// The figures per link, from the table of all frames (`merged`) and one

@@ -104,11 +104,18 @@ impl Rate {
     }
 
     /// Time and steps in the window.
+    /// Whole buckets only, once there is one: each starts and ends on a
+    /// frame, so with a logger's batches each holds whole periods, where
+    /// the bucket filling may end inside a batch, at its densest.
     fn window(&self) -> (Nanos, u64) {
-        let span = self.full().map(|b| b.span).sum::<Nanos>()
-            + self.head_at.saturating_sub(self.filling.start);
-        let steps = self.full().map(|b| b.steps).sum::<u64>() + self.filling.steps;
-        (span, steps)
+        if self.settled() {
+            let span = self.full().map(|b| b.span).sum::<Nanos>();
+            return (span, self.full().map(|b| b.steps).sum());
+        }
+        (
+            self.head_at.saturating_sub(self.filling.start),
+            self.filling.steps,
+        )
     }
 
     /// The usual time per step (at least 1 ns), once a step was seen.
