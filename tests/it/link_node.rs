@@ -192,3 +192,81 @@ fn a_vehicle_whose_count_contradicts_the_relay_is_said_to_disagree() {
         "{hint}"
     );
 }
+
+/// A node's figures in a summary.
+fn node<'a>(summary: &'a Value, id: &str) -> &'a Value {
+    summary["link_node"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| format!("{}/{}", n["id"]["sysid"], n["id"]["compid"]) == id)
+        .unwrap_or_else(|| panic!("no node {id} in {summary}"))
+}
+
+#[test]
+fn a_log_of_link_node_status_is_read_across_wraps_a_reboot_and_lost_reports() {
+    use crate::tlog::{read, tlog, write_log, Scratch};
+    let dir = Scratch::new("link-node");
+    let path = dir.path("px4.tlog");
+    // 1/1: its received count wraps 2^32 at report 16, its parse errors
+    // 2^16 at report 7; reports 5 and 12 are never written. 2/1 reboots at
+    // report 9 with every counter in the top sixteenth of its range: only
+    // its boot clock going back tells that from a wrap.
+    let plan = serde_json::json!({
+        "start_us": 1_700_000_000_000_000u64,
+        "sources": [
+            {"sysid": 1, "compid": 1, "rate": 10, "frames": 300, "drop": [50, 120],
+             "link_node": {"every": 10, "received0": 4_294_963_296u64, "received_step": 250,
+                           "lost0": 5, "lost_step": 3, "parse0": 65_400, "parse_step": 20}},
+            {"sysid": 2, "compid": 1, "rate": 10, "frames": 200, "phase_us": 5_000,
+             "link_node": {"every": 10, "received0": 4_294_867_296u64, "received_step": 1000,
+                           "lost0": 4_294_967_246u64, "lost_step": 2, "parse0": 65_000,
+                           "parse_step": 1, "reboot_at": 9}},
+        ],
+    });
+    let truth = write_log(&path, &plan);
+    let (code, s, err) = read(&[], &tlog(&path));
+    assert_eq!(code, 0, "{err}");
+    for (id, reboots, written) in [("1/1", 0, 28), ("2/1", 1, 20)] {
+        let t = &truth["sources"][id]["link_node"];
+        let n = node(&s, id);
+        assert_eq!(t["written"].as_array().unwrap().len(), written, "{t}");
+        assert_eq!(u(&n["reports"]), written as u64, "{id}: {n}");
+        assert_eq!(n["reboots"], reboots, "{id}: {n}");
+        assert_eq!(t["reboots"], reboots, "{id}: {t}");
+        for (ours, theirs) in [
+            ("received_delta", "received_grown"),
+            ("lost_delta", "lost_grown"),
+            ("rx_parse_err_delta", "parse_grown"),
+        ] {
+            assert_eq!(n[ours], t[theirs], "{id} {ours}: {n}\n{t}");
+        }
+        let (received, lost) = (u(&n["received_delta"]), u(&n["lost_delta"]));
+        assert_eq!(
+            n["uplink_loss"].as_f64(),
+            Some(lost as f64 / (received + lost) as f64)
+        );
+        // Passive: nothing to hold it against.
+        assert!(n.get("compared").is_none(), "{n}");
+    }
+    // 1/1's 28 reports span 29 steps of 250: through the wrap.
+    assert_eq!(u(&node(&s, "1/1")["received_delta"]), 29 * 250);
+    assert_eq!(node(&s, "2/1")["first"]["timestamp"], 3_600_000);
+    assert_eq!(node(&s, "2/1")["last"]["timestamp"], 700 + 10 * 1000);
+    // The text says the same.
+    let (code, out, err) = run_mavping(&["-q", &tlog(&path)]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.lines().any(|l| l
+            == "vehicle 1/1 says (LINK_NODE_STATUS, 28 reports): received 7,250, lost 87 \
+                (1.19%), parse errors +580, overflows rx +0 tx +0"),
+        "{out}"
+    );
+    assert!(
+        out.lines().any(
+            |l| l.starts_with("vehicle 2/1 says (LINK_NODE_STATUS, 20 reports): ")
+                && l.ends_with("; it rebooted once")
+        ),
+        "{out}"
+    );
+}
