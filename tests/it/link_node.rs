@@ -155,18 +155,16 @@ fn a_vehicle_whose_count_contradicts_the_relay_is_said_to_disagree() {
     let (out, relay, vehicle) = probe_through_relay("no-loss", &[]);
     let up = &relay["up"][0];
     assert!(u(&up["dropped"]) > 20, "{up}");
-    assert_eq!(u(&vehicle["link_node"]["lost"]) > 20, true, "{vehicle}");
+    assert!(u(&vehicle["link_node"]["lost"]) > 20, "{vehicle}");
     let line = out
         .lines()
         .find(|l| l.starts_with("vehicle 1/1 says (LINK_NODE_STATUS, "))
         .unwrap_or_else(|| panic!("no vehicle line in\n{out}"));
     assert!(line.contains(", lost 0 (0.00%), parse errors +0"), "{line}");
     // The received count is the growth between two reports it sent.
-    let received: u64 = line
-        .split_once("received ")
-        .and_then(|(_, rest)| rest.split_once(','))
-        .map(|(n, _)| n.replace(',', "").parse().unwrap())
-        .unwrap_or_else(|| panic!("{line}"));
+    let (_, rest) = line.split_once("received ").expect(line);
+    let (grouped, _) = rest.split_once(", lost").expect(line);
+    let received: u64 = grouped.replace(',', "").parse().expect(line);
     let sent: Vec<u64> = vehicle["link_node"]["reports"]
         .as_array()
         .unwrap()

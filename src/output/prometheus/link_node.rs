@@ -141,8 +141,10 @@ mod tests {
 
     #[test]
     fn counters_only_grow_through_a_wrap_and_a_reboot() {
-        let mut m = Metrics::default();
-        m.link = "udpout:127.0.0.1:14550".into();
+        let mut m = Metrics {
+            link: "udpout:127.0.0.1:14550".into(),
+            ..Metrics::default()
+        };
         let id = SysComp::new(1, 1);
         // 100 through the wrap, then a reboot (its clock went back): 40
         // more counted from 0.
