@@ -330,8 +330,8 @@ fn disagreement(id: SysComp, c: &UplinkComparison) -> Hint {
     Hint::new(
         HintCode::VehicleUplinkDisagrees,
         format!(
-            "{id} counts {} of what reached it lost (LINK_NODE_STATUS), mavping's up estimate \
-             for {} is {} ± {} ({:.1} standard errors apart): {why}",
+            "vehicle {id} counts {} of what reached it lost (LINK_NODE_STATUS), mavping's up \
+             estimate for {} is {} ± {} ({:.1} standard errors apart): {why}",
             percent(c.vehicle),
             c.responder,
             percent(c.estimate),
@@ -483,7 +483,7 @@ mod tests {
         assert!(
             hints[0]
                 .text
-                .starts_with("1/1 counts 0.00% of what reached it lost (LINK_NODE_STATUS), mavping's up estimate for 1/1 is 10.00% ± 1.26% (7.9 standard errors apart)"),
+                .starts_with("vehicle 1/1 counts 0.00% of what reached it lost (LINK_NODE_STATUS), mavping's up estimate for 1/1 is 10.00% ± 1.26% (7.9 standard errors apart)"),
             "{}",
             hints[0].text
         );

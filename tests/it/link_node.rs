@@ -183,7 +183,7 @@ fn a_vehicle_whose_count_contradicts_the_relay_is_said_to_disagree() {
     assert!(beside.contains(" for 1/1: DISAGREES ("), "{beside}");
     let hint = out
         .lines()
-        .find(|l| l.starts_with("hint: 1/1 counts 0.00% of what reached it lost"))
+        .find(|l| l.starts_with("hint: vehicle 1/1 counts 0.00% of what reached it lost"))
         .unwrap_or_else(|| panic!("no disagreement hint in\n{out}"));
     assert!(
         hint.ends_with("it received requests it did not answer, something between re-numbers our frames, or it counts another link"),
