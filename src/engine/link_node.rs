@@ -214,10 +214,6 @@ impl LinkNodes {
         first
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.nodes.is_empty()
-    }
-
     pub fn summaries(&self) -> Vec<LinkNodeSummary> {
         self.nodes
             .iter()
