@@ -574,6 +574,7 @@ mod tests {
             interrupted: false,
             link_error: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
+            link_node: vec![],
             log: None,
             per_link: None,
             round_trips: None,

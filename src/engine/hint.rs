@@ -64,6 +64,9 @@ pub enum HintCode {
     OwnFramesEchoed,
     /// A command's target was never heard, another system was.
     WrongTarget,
+    /// A vehicle's own count of what it lost on the way to it
+    /// (LINK_NODE_STATUS) is outside mavping's uplink estimate for it.
+    VehicleUplinkDisagrees,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]

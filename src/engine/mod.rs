@@ -8,6 +8,7 @@ pub mod clock_offset;
 pub mod diagnosis;
 pub mod hint;
 pub mod link_io;
+pub mod link_node;
 pub mod load;
 pub mod matcher;
 pub mod observe;

@@ -6,6 +6,7 @@ use std::io;
 use std::time::Duration;
 
 use super::clock_offset::ClockSummary;
+use super::link_node::LinkNodeReport;
 use super::matcher::MatchEvent;
 use super::probe::passive::flight::FlightEvent;
 use super::radio::RadioReport;
@@ -78,6 +79,14 @@ pub enum Event<'a> {
         id: SysComp,
         at: Nanos,
         report: RadioReport,
+        first: bool,
+    },
+    /// A LINK_NODE_STATUS: a node's own count of the link; `first` for
+    /// each node's first report.
+    LinkNode {
+        id: SysComp,
+        at: Nanos,
+        report: LinkNodeReport,
         first: bool,
     },
     /// A TIMESYNC responder's clock offset so far: at its first reply,

@@ -5,7 +5,8 @@
 //! The only place that reads a clock. What a probe's requests and replies
 //! mean is its [`Driver`]'s business (echo probes: [`super::echo`];
 //! commands: [`super::command`]); this loop owns the timing, our
-//! HEARTBEAT, the signing gate and the systems and radios heard.
+//! HEARTBEAT, the signing gate and the systems, radios and link nodes
+//! heard.
 
 use std::io;
 use std::time::Duration;
@@ -15,6 +16,7 @@ use std::sync::Arc;
 use tokio::sync::Notify;
 
 use super::link_io::{admitted, Clock, Heartbeat, Sender, WallAtZero};
+use super::link_node::LinkNodes;
 use super::observe::{Event, Observer, OutputFate, StartInfo};
 use super::radio::{RadioReport, Radios};
 use super::roster::Roster;
@@ -62,6 +64,8 @@ pub struct SessionEnd<'a> {
     pub no_peer_within: Option<Duration>,
     pub roster: Roster,
     pub radios: Radios,
+    /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view).
+    pub link_nodes: LinkNodes,
     pub gate: Gate,
 }
 
@@ -92,7 +96,8 @@ pub trait Driver {
     /// Every frame the signing gate admitted, before the session reads it
     /// (the passive probe counts them all), with the path it came by.
     fn on_received(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
-    /// A received frame that is neither a HEARTBEAT nor a RADIO_STATUS.
+    /// A received frame that is neither a HEARTBEAT, a RADIO_STATUS nor a
+    /// LINK_NODE_STATUS.
     fn on_frame(&mut self, frame: &Frame, path: PathId, at: Nanos);
     /// A radio's RADIO_STATUS (the session keeps the run's figures; a
     /// driver may follow them too).
@@ -138,17 +143,19 @@ const FLUSH_EVERY_NS: Nanos = 50_000_000;
 /// While a run sends, its requests so far are told at most this often.
 const PROGRESS_EVERY_NS: Nanos = 1_000_000_000;
 
-/// The systems and radios heard, and the signing gate: what every session
-/// learns from the link whatever its probe.
+/// The systems, radios and link nodes heard, and the signing gate: what
+/// every session learns from the link whatever its probe.
 struct Heard {
     roster: Roster,
     radios: Radios,
+    link_nodes: LinkNodes,
     gate: Gate,
 }
 
 impl Heard {
-    /// Takes in received frames: HEARTBEAT and RADIO_STATUS here, the rest
-    /// to the driver, then reports what was decided.
+    /// Takes in received frames: HEARTBEAT, RADIO_STATUS and
+    /// LINK_NODE_STATUS here, the rest to the driver, then reports what was
+    /// decided.
     fn take<D: Driver>(
         &mut self,
         clock: &Clock,
@@ -189,6 +196,17 @@ impl Heard {
                     let first = self.radios.record(frame.source, report, at);
                     driver.on_radio(frame.source, &report, at);
                     output = output.and(observer.event(&Event::Radio {
+                        id: frame.source,
+                        at,
+                        report,
+                        first,
+                    }));
+                }
+                // A node's own count of the link it sends this on (PX4's,
+                // at 1 Hz): every kind of run keeps it.
+                Msg::LinkNodeStatus(report) => {
+                    let first = self.link_nodes.record(frame.source, report, at);
+                    output = output.and(observer.event(&Event::LinkNode {
                         id: frame.source,
                         at,
                         report,
@@ -336,6 +354,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             heard: Heard {
                 roster: Roster::default(),
                 radios: Radios::default(),
+                link_nodes: LinkNodes::default(),
                 gate: Gate::new(cfg.signing),
             },
             schedule: None,
@@ -605,6 +624,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             no_peer_within,
             roster: self.heard.roster,
             radios: self.heard.radios,
+            link_nodes: self.heard.link_nodes,
             gate: self.heard.gate,
         });
         // Last, as it judges the finished figures (a sweep's included).

@@ -6,7 +6,7 @@ use mavlink::{MAVLinkV1MessageRaw, MAVLinkV2MessageRaw, MavHeader, MavlinkVersio
 use num_traits::FromPrimitive;
 
 use super::scanner::{IFLAG_SIGNED, STX_V1};
-use super::{ids, Fix, FixKind, Frame, Msg, RadioStatus, SysComp};
+use super::{ids, Fix, FixKind, Frame, LinkNodeStatus, Msg, RadioStatus, SysComp};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum Version {
@@ -55,6 +55,43 @@ impl From<dialect::RADIO_STATUS_DATA> for RadioStatus {
             remnoise: d.remnoise,
             rxerrors: d.rxerrors,
             fixed: d.fixed,
+        }
+    }
+}
+
+// LINK_NODE_STATUS's, the same way.
+impl From<LinkNodeStatus> for dialect::LINK_NODE_STATUS_DATA {
+    fn from(l: LinkNodeStatus) -> Self {
+        dialect::LINK_NODE_STATUS_DATA {
+            timestamp: l.timestamp,
+            tx_rate: l.tx_rate,
+            rx_rate: l.rx_rate,
+            messages_sent: l.messages_sent,
+            messages_received: l.messages_received,
+            messages_lost: l.messages_lost,
+            rx_parse_err: l.rx_parse_err,
+            tx_overflows: l.tx_overflows,
+            rx_overflows: l.rx_overflows,
+            tx_buf: l.tx_buf,
+            rx_buf: l.rx_buf,
+        }
+    }
+}
+
+impl From<dialect::LINK_NODE_STATUS_DATA> for LinkNodeStatus {
+    fn from(d: dialect::LINK_NODE_STATUS_DATA) -> Self {
+        LinkNodeStatus {
+            timestamp: d.timestamp,
+            tx_buf: d.tx_buf,
+            rx_buf: d.rx_buf,
+            tx_rate: d.tx_rate,
+            rx_rate: d.rx_rate,
+            rx_parse_err: d.rx_parse_err,
+            tx_overflows: d.tx_overflows,
+            rx_overflows: d.rx_overflows,
+            messages_sent: d.messages_sent,
+            messages_received: d.messages_received,
+            messages_lost: d.messages_lost,
         }
     }
 }
@@ -127,6 +164,7 @@ fn to_mavlink(msg: &Msg) -> dialect::MavMessage {
             ..Default::default()
         }),
         Msg::RadioStatus(r) => M::RADIO_STATUS(r.into()),
+        Msg::LinkNodeStatus(l) => M::LINK_NODE_STATUS(l.into()),
         Msg::Fix(f) => fix_message(f),
         Msg::Attitude { .. } | Msg::GlobalPositionInt { .. } | Msg::Filler { .. } => load(msg),
         Msg::Other => unreachable!("Msg::Other is never sent"),
@@ -269,6 +307,7 @@ fn decode_payload(version: Version, msgid: u32, payload: &[u8]) -> Msg {
             | ids::COMMAND_LONG
             | ids::COMMAND_ACK
             | ids::RADIO_STATUS
+            | ids::LINK_NODE_STATUS
             | ids::GLOBAL_POSITION_INT
             | ids::GPS_RAW_INT
             | ids::HOME_POSITION
@@ -318,6 +357,7 @@ fn decode_payload(version: Version, msgid: u32, payload: &[u8]) -> Msg {
             target_component: a.target_component,
         },
         Ok(M::RADIO_STATUS(r)) => Msg::RadioStatus(r.into()),
+        Ok(M::LINK_NODE_STATUS(l)) => Msg::LinkNodeStatus(l.into()),
         Ok(M::GLOBAL_POSITION_INT(p)) => Msg::Fix(Fix {
             kind: FixKind::Estimate,
             lat: p.lat,
@@ -439,6 +479,19 @@ mod tests {
                 rxerrors: 65535,
                 fixed: 3,
             }),
+            Msg::LinkNodeStatus(LinkNodeStatus {
+                timestamp: 123_456_789,
+                tx_buf: 90,
+                rx_buf: 80,
+                tx_rate: 12_000,
+                rx_rate: 600,
+                rx_parse_err: 3,
+                tx_overflows: 65_535,
+                rx_overflows: 1,
+                messages_sent: 40_000,
+                messages_received: u32::MAX,
+                messages_lost: 12,
+            }),
         ];
         for version in [Version::V1, Version::V2] {
             for msg in messages {
@@ -542,6 +595,7 @@ mod tests {
         assert_eq!(result_name(0), "accepted");
         assert_eq!(message_name(30), Some("ATTITUDE"));
         assert_eq!(message_name(109), Some("RADIO_STATUS"));
+        assert_eq!(message_name(8), Some("LINK_NODE_STATUS"));
         assert_eq!(message_name(65_000), None);
     }
 }

@@ -69,6 +69,9 @@ pub enum Msg {
         target_component: u8,
     },
     RadioStatus(RadioStatus),
+    /// A node's LINK_NODE_STATUS: its own count of what it received and
+    /// lost on the link it sends this on.
+    LinkNodeStatus(LinkNodeStatus),
     /// Telemetry a vehicle streams (`--load ATTITUDE@HZ`): plausible,
     /// non-zero figures, so MAVLink 2 trims nothing and the frame is as
     /// long as a real one.
@@ -105,6 +108,30 @@ pub struct RadioStatus {
     pub remnoise: u8,
     pub rxerrors: u16,
     pub fixed: u16,
+}
+
+/// A node's LINK_NODE_STATUS (message 8, MAVLink common, work in
+/// progress): PX4 sends it at 1 Hz on most links, with its own count of
+/// the messages it received and lost there (by their packet sequence),
+/// its parse errors and buffer overflows. The message counters are 32-bit
+/// and the others 16-bit, all since the node booted, and they wrap;
+/// `timestamp` is milliseconds since boot.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
+pub struct LinkNodeStatus {
+    pub timestamp: u64,
+    /// Percent of the transmit and receive buffers free.
+    pub tx_buf: u8,
+    pub rx_buf: u8,
+    /// Bytes per second.
+    pub tx_rate: u32,
+    pub rx_rate: u32,
+    /// Bytes it could not parse.
+    pub rx_parse_err: u16,
+    pub tx_overflows: u16,
+    pub rx_overflows: u16,
+    pub messages_sent: u32,
+    pub messages_received: u32,
+    pub messages_lost: u32,
 }
 
 /// Where a vehicle says it is, or its home. Only the figures a range
@@ -163,6 +190,7 @@ pub fn test_frame(source: SysComp, msg: Msg) -> Frame {
 /// MAVLink message ids mavping names.
 pub mod ids {
     pub const HEARTBEAT: u32 = 0;
+    pub const LINK_NODE_STATUS: u32 = 8;
     pub const GPS_RAW_INT: u32 = 24;
     pub const GLOBAL_POSITION_INT: u32 = 33;
     pub const PING: u32 = 4;

@@ -17,6 +17,7 @@ mod habits;
 mod high_rate;
 mod hostile;
 mod late_heard;
+mod link_node;
 mod live;
 mod multilink;
 mod mutants;

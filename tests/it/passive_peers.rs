@@ -22,7 +22,7 @@ use crate::common::*;
 /// Faults in both directions: requests and our HEARTBEATs lost and doubled
 /// on the way up, each vehicle's frames lost, doubled and swapped on the
 /// way down.
-const FAULTS: [&str; 12] = [
+pub(crate) const FAULTS: [&str; 12] = [
     "--seed",
     "7",
     "--drop-up",
@@ -38,7 +38,7 @@ const FAULTS: [&str; 12] = [
 ];
 
 /// A pymavlink vehicle `sysid`/1 listening on a free port.
-fn vehicle(sysid: u8, args: &[&str]) -> (Peer, u16) {
+pub(crate) fn vehicle(sysid: u8, args: &[&str]) -> (Peer, u16) {
     let port = free_udp_port();
     let sysid = sysid.to_string();
     let mut all = vec![format!("udpin:127.0.0.1:{port}"), "--sysid".into(), sysid];
@@ -49,7 +49,7 @@ fn vehicle(sysid: u8, args: &[&str]) -> (Peer, u16) {
 
 /// The relay in front of vehicles on `ports`, and the port it listens on
 /// for the ground side.
-fn relay(ports: &[u16], args: &[&str]) -> (Peer, u16) {
+pub(crate) fn relay(ports: &[u16], args: &[&str]) -> (Peer, u16) {
     let mut all: Vec<String> = ports
         .iter()
         .flat_map(|p| ["--vehicle".to_string(), format!("127.0.0.1:{p}")])
@@ -73,7 +73,7 @@ pub(crate) fn truth_when_done(peer: &mut Peer) -> Value {
 }
 
 /// The last JSON line of `kind`.
-fn json_line(stdout: &str, kind: &str) -> Value {
+pub(crate) fn json_line(stdout: &str, kind: &str) -> Value {
     let line = stdout
         .lines()
         .rfind(|l| l.contains(&format!("\"type\":\"{kind}\"")))
@@ -81,7 +81,7 @@ fn json_line(stdout: &str, kind: &str) -> Value {
     serde_json::from_str(line).unwrap()
 }
 
-fn u(v: &Value) -> u64 {
+pub(crate) fn u(v: &Value) -> u64 {
     v.as_u64().unwrap_or_else(|| panic!("not a count: {v}"))
 }
 

@@ -35,10 +35,11 @@ On SIGTERM, one JSON line: per downlink source, frames from the vehicle,
 forwarded (copies included), dropped, dropped after the last forwarded
 frame (no later frame shows those gaps), duplicated, reordered, PING
 replies and how many of them were dropped; per vehicle on the uplink,
-frames, dropped, duplicated, and every PING request's fate: its copies
-forwarded, its replies forwarded and dropped ([seq, copies, replies forwarded, replies
-dropped], in the order the requests came), and the first replies that
-went down after the reply to a later request.
+frames, dropped, duplicated, dropped after the last forwarded frame, and
+every PING request's fate: its copies forwarded, its replies forwarded
+and dropped ([seq, copies, replies forwarded, replies dropped], in the
+order the requests came), and the first replies that went down after the
+reply to a later request.
 """
 import argparse
 import json
@@ -139,6 +140,10 @@ class Uplink:
         self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
         self.sock.bind(("127.0.0.1", 0))
         self.frames = self.dropped = self.duplicated = 0
+        # Frame numbers dropped, and the last forwarded: a drop after it
+        # leaves no gap the vehicle can see.
+        self.dropped_at = []
+        self.last_forwarded = -1
         self.requests = []  # [seq] in arrival order
         self.fate = {}  # seq -> [copies forwarded, replies forwarded, replies dropped]
         self.index = {}  # seq -> its place in `requests`
@@ -160,6 +165,7 @@ class Uplink:
         reqs = [[s, *self.fate[s]] for s in self.requests]
         return {"vehicle": f"{self.addr[0]}:{self.addr[1]}", "sources": sorted(self.sources),
                 "frames": self.frames, "dropped": self.dropped, "duplicated": self.duplicated,
+                "dropped_after_last": sum(1 for k in self.dropped_at if k > self.last_forwarded),
                 "requests": reqs, "unanswered_copies": self.outstanding,
                 "replies_out_of_order": self.replies_out_of_order}
 
@@ -204,7 +210,9 @@ class Relay:
         copies = 0
         if fate == "drop":
             link.dropped += 1
+            link.dropped_at.append(k)
         else:
+            link.last_forwarded = k
             copies = 2 if doubled else 1
             link.duplicated += copies - 1
             for _ in range(copies):

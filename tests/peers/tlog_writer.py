@@ -43,6 +43,17 @@ The plan:
                  (or GPS_RAW_INT, 3D fix) of a vehicle moving north and up
                  at those speeds from (lat0, lon0, alt0_m); "home_frame": n
                  makes frame n a HOME_POSITION at (lat0, lon0, alt0_m)
+               link_node: {"every": k, "received0", "received_step",
+                 "lost0", "lost_step", "parse0", "parse_step", "reboot_at": m}:
+                 every k-th frame (not a HEARTBEAT) is a LINK_NODE_STATUS, the
+                 m-th (from 0) with messages_received received0 + m x step
+                 (mod 2^32; lost likewise; rx_parse_err mod 2^16), its boot
+                 clock 3,600,000 ms + m s; from report reboot_at on the node
+                 has rebooted: its clock 700 ms + (m - reboot_at) s, each
+                 counter (m - reboot_at + 1) x step (messages_sent: 40 a
+                 report). The truth: the reports
+                 written, and what each counter grew by between the first
+                 and the last written (after a reboot its new value counts)
                radio: {"rxerrors0": e, "rxerrors_step": d}: the source is a
                  radio: every frame a RADIO_STATUS, rssi 200 less
                  rssi_drop_per_s (default 1) a second, rxerrors e + d per report (mod 65536), no HEARTBEAT
@@ -68,6 +79,8 @@ import sys
 
 os.environ["MAVLINK20"] = "1"
 from pymavlink import mavutil  # noqa: E402
+
+import link_node  # noqa: E402
 
 mavlink = mavutil.mavlink
 
@@ -96,6 +109,44 @@ def radio_msg(mav, radio, t, n):
     return mav.radio_status_encode(rssi, 190, 80, 40, 41, rxerrors, 0), rxerrors
 
 
+def link_node_msg(mav, spec, m):
+    """The m-th LINK_NODE_STATUS of a node planned by `spec`."""
+    reboot = spec.get("reboot_at")
+    if reboot is not None and m >= reboot:
+        since = m - reboot + 1
+        t_ms = 700 + (m - reboot) * 1000
+        received, lost, parse = (since * spec.get(k, 0) for k in
+                                 ("received_step", "lost_step", "parse_step"))
+        sent = since * 40
+    else:
+        t_ms = 3_600_000 + m * 1000
+        received = spec.get("received0", 0) + m * spec.get("received_step", 0)
+        lost = spec.get("lost0", 0) + m * spec.get("lost_step", 0)
+        parse = spec.get("parse0", 0) + m * spec.get("parse_step", 0)
+        sent = m * 40
+    cls = link_node.install(mavlink)
+    return cls(timestamp=t_ms, tx_buf=90, rx_buf=100, tx_rate=1200, rx_rate=640,
+               rx_parse_err=parse % 2**16, messages_sent=sent,
+               messages_received=received % 2**32, messages_lost=lost % 2**32)
+
+
+def link_node_truth(spec, written):
+    """What each counter grew by between the first and last report
+    written: per pair of reports written in turn, the steps between them,
+    or after a reboot between them the counter's new value."""
+    reboot = spec.get("reboot_at")
+    grown = {"received": 0, "lost": 0, "parse": 0}
+    reboots = 0
+    for a, b in zip(written, written[1:]):
+        periods = b - a
+        if reboot is not None and a < reboot <= b:
+            periods = b - reboot + 1
+            reboots += 1
+        for k in grown:
+            grown[k] += periods * spec.get(k + "_step", 0)
+    return {"written": written, "reboots": reboots, **{k + "_grown": v for k, v in grown.items()}}
+
+
 def frames_of(src, mav):
     """(time_us, frame number, bytes, facts) of every frame the source
     numbers; facts: a position's (north_m, up_m) or a report's rxerrors."""
@@ -105,11 +156,17 @@ def frames_of(src, mav):
     n = 0
     pos = src.get("position")
     radio = src.get("radio")
+    node = src.get("link_node")
+    reports = 0
     while n < src["frames"]:
         facts = None
         if radio is not None:
             msg, rxerrors = radio_msg(mav, radio, t, n)
             facts = {"rxerrors": rxerrors}
+        elif node is not None and n % node["every"] == 0:
+            msg = link_node_msg(mav, node, reports)
+            facts = {"link_node": reports}
+            reports += 1
         elif t >= next_hb:
             msg = mav.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR,
                                        mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, 0, 0, 0)
@@ -177,6 +234,8 @@ def plan_source(src, out, truth_of, window_us=None):
             held = (n, data)
             truth["swapped"] += 1
             continue
+        if facts and "link_node" in facts:
+            truth.setdefault("link_node_written", []).append(facts["link_node"])
         if window_us:
             win["written"] += 1
             if facts and "home" in facts:
@@ -302,6 +361,10 @@ def main():
     writes = []
     for src in plan.get("sources", []):
         plan_source(src, writes, truth_of, plan.get("window_us"))
+        if "link_node" in src:
+            truth = truth_of(src)
+            truth["link_node"] = link_node_truth(src["link_node"],
+                                                 truth.pop("link_node_written", []))
     mavs = {}
     exchanges = [plan_exchange(ex, writes, mavs) for ex in plan.get("exchanges", [])]
     # In time order; equal times in the order planned.

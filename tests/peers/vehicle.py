@@ -17,6 +17,13 @@ replies and telemetry lost alike). With --radio-hz it also plays the SiK
 radio beside it: RADIO_STATUS from 51/68, numbered by the radio's own
 sequence, as a radio injects it, while the stream lasts.
 
+With --link-node-status it counts what it receives by each sender's packet
+sequence (`link_node.SeqCount`: received, lost) and sends LINK_NODE_STATUS
+at 1 Hz from its first heard HEARTBEAT, as PX4 does, in its own sequence:
+"honest" says those counts, "no-loss" says the same received and 0 lost
+(a vehicle whose count contradicts the link). Its truth then has every
+report it sent ("link_node": "reports", and its final count).
+
 It sends to the peer it has heard (udpin: waits for a HEARTBEAT, as a
 vehicle behind a router does) for --frames frames, then prints one JSON
 line of ground truth and goes on answering PINGs until SIGTERM. Frames
@@ -31,6 +38,8 @@ import signal
 import sys
 import time
 
+import link_node
+
 
 def numbers(text):
     return {int(x) for x in text.split(",") if x.strip()} if text else set()
@@ -39,7 +48,7 @@ def numbers(text):
 class Vehicle:
     """The connection, its sequence counter and the ground truth."""
 
-    def __init__(self, m, mavutil, radio_hz):
+    def __init__(self, m, mavutil, radio_hz, link_node_mode=None):
         self.m = m
         self.mavutil = mavutil
         self.start = time.monotonic()
@@ -51,6 +60,13 @@ class Vehicle:
         self.radio = mavutil.mavlink.MAVLink(m, srcSystem=ord("3"), srcComponent=ord("D"))
         self.radio_period = 1.0 / radio_hz if radio_hz > 0 else None
         self.next_radio = 0.0
+        self.link_node_mode = link_node_mode
+        self.next_link_node = None
+        self.uplink = link_node.SeqCount()
+        self.rx_bytes = 0
+        if link_node_mode is not None:
+            self.LinkNodeStatus = link_node.install(mavutil.mavlink)
+            self.truth["link_node"] = {"mode": link_node_mode, "reports": []}
 
     def encode(self, msg):
         """The frame of `msg` with the next sequence number. pack() stamps
@@ -75,11 +91,29 @@ class Vehicle:
         self.m.write(data)
         self.truth["sent"] += 1
 
+    def send_link_node_status(self, now):
+        """Its own count of the link, at 1 Hz."""
+        self.next_link_node += 1.0
+        if self.next_link_node < now:
+            self.next_link_node = now + 1.0
+        lost = self.uplink.lost if self.link_node_mode == "honest" else 0
+        report = {"timestamp": int((now - self.start) * 1000), "tx_buf": 95, "rx_buf": 100,
+                  "tx_rate": 0, "rx_rate": self.rx_bytes, "rx_parse_err": 0,
+                  "tx_overflows": 0, "rx_overflows": 0,
+                  "messages_sent": (self.truth["sent"] + 1) % 2**32,
+                  "messages_received": self.uplink.received % 2**32,
+                  "messages_lost": lost % 2**32}
+        self.rx_bytes = 0
+        self.send(self.encode(self.LinkNodeStatus(**report)))
+        self.truth["link_node"]["reports"].append(report)
+
     def serve(self, until):
         """Answers what arrives until `until` (monotonic seconds), and
-        sends the radio's RADIO_STATUS when due."""
+        sends the radio's RADIO_STATUS and its LINK_NODE_STATUS when due."""
         while True:
             now = time.monotonic()
+            if self.next_link_node is not None and now >= self.next_link_node:
+                self.send_link_node_status(now)
             if self.radio_period is not None and self.heard_heartbeat and now >= self.next_radio:
                 self.next_radio += self.radio_period
                 if self.next_radio < now:
@@ -92,6 +126,8 @@ class Vehicle:
             wait = until - now
             if self.radio_period is not None and self.heard_heartbeat:
                 wait = min(wait, max(0.0, self.next_radio - now))
+            if self.next_link_node is not None:
+                wait = min(wait, max(0.0, self.next_link_node - now))
             # tcpin has no port until a client connects: wait on its listener.
             port = getattr(self.m, "port", None)
             fd = port.fileno() if port is not None else self.m.fd
@@ -107,9 +143,15 @@ class Vehicle:
             if msg is None:
                 return
             kind = msg.get_type()
+            if kind == "BAD_DATA":
+                continue
+            self.uplink.frame((msg.get_srcSystem(), msg.get_srcComponent()), msg.get_seq())
+            self.rx_bytes += len(msg.get_msgbuf())
             if kind == "HEARTBEAT" and not self.heard_heartbeat:
                 self.heard_heartbeat = True
                 self.next_radio = time.monotonic()
+                if self.link_node_mode is not None:
+                    self.next_link_node = self.next_radio
             elif kind == "PING" and (msg.target_system, msg.target_component) in [(0, 0), ours]:
                 reply = self.m.mav.ping_encode(msg.time_usec, msg.seq, msg.get_srcSystem(),
                                                msg.get_srcComponent())
@@ -132,13 +174,15 @@ def main():
     ap.add_argument("--silence", default="", help="N:K")
     ap.add_argument("--radio-hz", type=float, default=0.0,
                     help="also RADIO_STATUS from 51/68 this often (a SiK radio)")
+    ap.add_argument("--link-node-status", choices=["honest", "no-loss"], default=None,
+                    help="count the uplink by sequence and say so in LINK_NODE_STATUS at 1 Hz")
     args = ap.parse_args()
     os.environ["MAVLINK20"] = "1"
     from pymavlink import mavutil
 
     m = mavutil.mavlink_connection(args.connection, baud=args.baud, source_system=args.sysid,
                                    source_component=args.compid)
-    v = Vehicle(m, mavutil, args.radio_hz)
+    v = Vehicle(m, mavutil, args.radio_hz, args.link_node_status)
     drop, dup, swap = numbers(args.drop), numbers(args.dup), numbers(args.swap)
     silence_after, silence_len = (None, 0)
     if args.silence:
@@ -189,6 +233,8 @@ def main():
     # The radio goes quiet with the vehicle, so a count taken after the
     # stream holds all of it.
     v.radio_period = None
+    if "link_node" in v.truth:
+        v.truth["link_node"].update(received=v.uplink.received, lost=v.uplink.lost)
     print(json.dumps(v.truth), flush=True)
     while not stop:
         v.serve(time.monotonic() + 0.2)

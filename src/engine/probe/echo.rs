@@ -12,6 +12,7 @@ use super::{Classified, EchoProbe};
 use crate::engine::diagnosis::{diagnose, Observed};
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::link_io::{Clock, Sender, WallAtZero};
+use crate::engine::link_node::compare_uplink;
 use crate::engine::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
 use crate::engine::observe::{tell_each, Event, Observer, RunKind, StartInfo};
 use crate::engine::radio::{radio_hints, Radios};
@@ -344,6 +345,8 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             hints.insert(0, not_reading(&cfg.link_name, &p, self.matcher.issued()));
         }
         hints.extend(radio_hints(&radios, loss_by_txbuf));
+        let mut link_node = ended.link_nodes.summaries();
+        hints.extend(compare_uplink(&mut link_node, &responders));
         hints.extend(responders.iter().filter_map(|r| {
             let clock = r.clock.filter(|c| c.bounds_ns.is_none())?;
             Some(Hint::new(
@@ -376,6 +379,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             schedule: self.pacing.summary(cfg.interval),
             rx_clock: ended.rx_clock,
             radios,
+            link_node,
             wire: None,
             signing,
             sweep: None,

@@ -10,6 +10,7 @@ use serde::Serialize;
 use super::capacity::WireBudget;
 use super::clock_offset::ClockSummary;
 use super::hint::{Hint, HintCode};
+use super::link_node::LinkNodeSummary;
 use super::matcher::{Counts, Matcher};
 use super::radio::RadioSummary;
 use super::roster::{Identity, Roster};
@@ -188,6 +189,9 @@ pub struct Summary {
     pub rx_clock: RxClock,
     /// Radios heard by their RADIO_STATUS.
     pub radios: Vec<RadioSummary>,
+    /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view of
+    /// the link), each beside mavping's uplink estimate for its system.
+    pub link_node: Vec<LinkNodeSummary>,
     /// What a serial link's baud rate carries (serial links only).
     pub wire: Option<WireBudget>,
     /// What the signing gate accepted and refused, or, without a key, what
@@ -378,6 +382,9 @@ pub struct CommandSummary {
     /// What the signing gate accepted and refused, or, without a key, what
     /// came signed unchecked.
     pub signing: SigningSummary,
+    /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view of
+    /// the link).
+    pub link_node: Vec<LinkNodeSummary>,
 }
 
 impl CommandSummary {
@@ -440,6 +447,7 @@ impl Summary {
             schedule: None,
             rx_clock: RxClock::Simulated,
             radios: vec![],
+            link_node: vec![],
             wire: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
             sweep: None,

@@ -3,6 +3,7 @@
 //! pymavlink's figure beside ours, and the link's totals. Built by the
 //! passive probe's tracker; every report format renders it.
 
+use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::probe::passive::flight::FlightSummary;
 use crate::engine::probe::passive::round_trips::RoundTripSummary;
 use crate::engine::radio::RadioSummary;
@@ -27,6 +28,8 @@ pub struct PassiveSummary {
     /// Frames with our own ids (echoed back by a router): not a source.
     pub own_frames: u64,
     pub radios: Vec<RadioSummary>,
+    /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view).
+    pub link_node: Vec<LinkNodeSummary>,
     pub frames: ScanStats,
     pub rx_clock: RxClock,
     pub interrupted: bool,

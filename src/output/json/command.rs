@@ -4,6 +4,7 @@ use serde::Serialize;
 
 use super::{seconds, us, Line, SCHEMA_VERSION};
 use crate::engine::hint::Hint;
+use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::summary::{CommandSummary, CommandTargetSummary};
 use crate::engine::{observe::CommandEvent, CommandSpec};
 use crate::frame::codec;
@@ -166,6 +167,7 @@ pub(super) struct Summary<'a> {
     interrupted: bool,
     link_error: Option<&'a str>,
     signing: SigningSummary,
+    link_node: &'a [LinkNodeSummary],
     r#type: &'static str,
     schema_version: u32,
     exit_code: u8,
@@ -187,6 +189,7 @@ impl<'a> Summary<'a> {
             interrupted: s.interrupted,
             link_error: s.link_error.as_deref(),
             signing: s.signing,
+            link_node: &s.link_node,
             r#type: "command_summary",
             schema_version: SCHEMA_VERSION,
             exit_code: verdict.exit_code(),

@@ -6,6 +6,7 @@ use super::{seconds, sweep, us, Line, Lines, Stamp, SCHEMA_VERSION};
 use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::Hint;
+use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{RadioReport, RadioSummary};
 use crate::engine::roster::Identity;
@@ -231,6 +232,7 @@ impl Lines {
             // The summary has each clock and the link's error; a stream
             // of estimates is for the exporters.
             Event::Command(_)
+            | Event::LinkNode { .. }
             | Event::Clock { .. }
             | Event::Sources { .. }
             | Event::Progress { .. }
@@ -278,6 +280,7 @@ pub(super) struct Summary<'a> {
     untracked_replies: u64,
     hints: &'a [Hint],
     radios: &'a [RadioSummary],
+    link_node: &'a [LinkNodeSummary],
     wire: Option<WireBudget>,
     signing: SigningSummary,
     responders: Vec<Responder<'a>>,
@@ -310,6 +313,7 @@ impl<'a> Summary<'a> {
             untracked_replies: s.untracked_replies,
             hints: &s.hints,
             radios: &s.radios,
+            link_node: &s.link_node,
             wire: s.wire,
             signing: s.signing,
             responders: s

@@ -6,6 +6,7 @@ use serde::Serialize;
 
 use super::round_trips::RoundTrips;
 use super::{seconds, Line, Lines, SCHEMA_VERSION};
+use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{
@@ -119,6 +120,7 @@ pub(super) struct Summary<'a> {
     untracked: Untracked,
     own_frames: u64,
     radios: &'a [RadioSummary],
+    link_node: &'a [LinkNodeSummary],
     signing: SigningSummary,
     /// A telemetry log's records and stamps.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -160,6 +162,7 @@ impl<'a> Summary<'a> {
             untracked: s.table.untracked,
             own_frames: s.own_frames,
             radios: &s.radios,
+            link_node: &s.link_node,
             signing: s.signing,
             log: s.log.as_ref(),
             per_link: s.per_link.as_ref().map(|p| Links::of(s, p)),

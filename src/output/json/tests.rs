@@ -11,6 +11,7 @@ use serde_json::Value;
 use super::{JsonReporter, Line};
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
+use crate::engine::link_node::{LinkNodeReport, LinkNodeSummary, LinkNodes, UplinkComparison};
 use crate::engine::load::{Load, LoadKind, LoadSpec};
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::observe::{CommandEvent, RunKind};
@@ -155,6 +156,38 @@ fn radios() -> Vec<crate::engine::radio::RadioSummary> {
     radios.summaries()
 }
 
+/// A vehicle's LINK_NODE_STATUS over a run: 2103 of its link received
+/// and 12 lost; with `compared`, mavping's estimate for 1/1 beside it.
+fn link_nodes(compared: bool) -> Vec<LinkNodeSummary> {
+    let report = |timestamp, messages_received, messages_lost| LinkNodeReport {
+        timestamp,
+        messages_received,
+        messages_lost,
+        messages_sent: 3 * messages_received,
+        rx_rate: 640,
+        tx_rate: 12_000,
+        tx_buf: 90,
+        rx_buf: 100,
+        ..LinkNodeReport::default()
+    };
+    let mut nodes = LinkNodes::default();
+    nodes.record(ONE, report(1_000, 100, 3), 1_000_000_000);
+    nodes.record(ONE, report(43_000, 2_203, 15), 43_000_000_000);
+    let mut summaries = nodes.summaries();
+    if compared {
+        summaries[0].compared = Some(UplinkComparison {
+            responder: ONE,
+            estimate: 0.097,
+            estimate_stderr: 0.013,
+            vehicle: 12.0 / 2115.0,
+            vehicle_stderr: 0.0016,
+            sigmas: 7.0,
+            agrees: false,
+        });
+    }
+    summaries
+}
+
 fn echo_summary(probe: &'static str) -> Summary {
     let mut first = responder(ONE, true);
     if probe == "timesync" {
@@ -198,6 +231,7 @@ fn echo_summary(probe: &'static str) -> Summary {
         rx_clock: RxClock::Simulated,
         radios: radios(),
         wire: Some(capacity::budget(57_600, Version::V2, 99, 2)),
+        link_node: link_nodes(true),
         ..Summary::empty("sim:?seed=1", 8)
     }
 }
@@ -474,6 +508,7 @@ fn command_summary() -> CommandSummary {
         interrupted: true,
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
+        link_node: link_nodes(false),
     }
 }
 
@@ -578,6 +613,7 @@ fn passive_run() -> Vec<Told<'static>> {
         interrupted: false,
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
+        link_node: link_nodes(false),
         log: None,
         per_link: None,
         round_trips: None,
@@ -648,6 +684,7 @@ fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
         interrupted: false,
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
+        link_node: vec![],
         flight: Some(borrowed.flight.1.clone()),
         log: Some(LogFacts {
             records: RecordStats {

@@ -127,6 +127,7 @@ impl LiveState {
             (Event::Match(e), _) => self.on_match(e),
             (
                 Event::Radio { .. }
+                | Event::LinkNode { .. }
                 | Event::Command(_)
                 | Event::Clock { .. }
                 | Event::Step(_)

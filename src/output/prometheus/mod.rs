@@ -1,5 +1,5 @@
 //! Metrics in the Prometheus text format: per-responder counters and RTT
-//! histogram, RADIO_STATUS gauges, and what `mavping serve` adds (a
+//! histogram, RADIO_STATUS gauges, LINK_NODE_STATUS counters, and what `mavping serve` adds (a
 //! continuous link's state, one `/probe`'s result, the exporter's health).
 //! The one renderer of every exposition mavping serves.
 //!
@@ -12,6 +12,7 @@
 //! sources the engine tells once a second ([`sources`]).
 
 mod exposition;
+mod link_node;
 mod passive;
 mod render;
 mod sources;
@@ -152,6 +153,8 @@ pub struct Metrics {
     responders: BTreeMap<SysComp, Series>,
     /// Each radio heard.
     radios: BTreeMap<SysComp, RadioSeries>,
+    /// Each node heard by its LINK_NODE_STATUS.
+    link_nodes: link_node::Nodes,
     /// Each source's packet sequence (a passive run's figures; an echo
     /// run's responders' downlink).
     sources: sources::Sources,
@@ -369,6 +372,7 @@ impl Observer for Metrics {
             Event::Match(e) => self.on_event(e),
             Event::Command(e) => self.on_command(e),
             Event::Radio { id, report, .. } => self.on_radio(*id, *report),
+            Event::LinkNode { id, report, .. } => self.link_nodes.record(*id, *report),
             Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
             Event::LinkFailed { .. } => self.set_up(false),
             Event::Sources { table, .. } => self.on_sources(table, false),

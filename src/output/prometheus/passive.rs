@@ -347,6 +347,7 @@ mod tests {
             identities: vec![],
             own_frames: 0,
             radios: vec![],
+            link_node: vec![],
             frames: crate::frame::ScanStats::default(),
             rx_clock: crate::transport::RxClock::Kernel,
             interrupted: false,

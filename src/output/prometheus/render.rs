@@ -6,6 +6,7 @@
 use std::fmt::Write as _;
 
 use super::exposition::{escape, Exposition, Family, Figure};
+use super::link_node::write_link_nodes;
 use super::passive::{write_directions, write_sources};
 use super::{Metrics, RadioSeries, Scope, Series, BUCKETS_S};
 use crate::engine::radio::{is_sik, sik_dbm, UNKNOWN};
@@ -294,6 +295,7 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
         });
         out.family(family, radios);
     }
+    write_link_nodes(out, links);
     write_directions(out, links);
     write_sources(out, links);
 }

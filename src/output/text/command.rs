@@ -132,6 +132,7 @@ pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Res
             writeln!(out, "  ack results: {}", results.join(", "))?;
         }
     }
+    super::link_node::write_link_nodes(out, &s.link_node)?;
     if s.unmatched_acks > 0 {
         writeln!(
             out,

@@ -144,6 +144,7 @@ impl<W: Write> TextReporter<W> {
             ),
             Event::WaitingForPeer => writeln!(self.out, "waiting for a peer to send MAVLink..."),
             Event::Radio { .. }
+            | Event::LinkNode { .. }
             | Event::Command(_)
             | Event::Clock { .. }
             | Event::Step(_)
@@ -481,6 +482,7 @@ pub(super) fn write_summary(
     for r in &s.radios {
         write_radio(out, r)?;
     }
+    super::link_node::write_link_nodes(out, &s.link_node)?;
     if let Some(sweep) = &s.sweep {
         let probe = s.probe.as_str().to_uppercase();
         super::sweep::write_summary(out, sweep, &probe, s.wire.as_ref(), steps_shown)?;

@@ -308,6 +308,7 @@ pub(super) fn write_summary(
     if let Some(per) = &s.per_link {
         write_links(out, s, per)?;
     }
+    super::link_node::write_link_nodes(out, &s.link_node)?;
     if let Some(rt) = &s.round_trips {
         super::round_trips::write_round_trips(out, rt, s.log.as_ref())?;
     }

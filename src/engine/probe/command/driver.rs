@@ -203,6 +203,7 @@ impl Driver for CommandDriver {
             interrupted: ended.interrupted,
             link_error: ended.link_error,
             signing: ended.gate.summary(),
+            link_node: ended.link_nodes.summaries(),
         };
         let histograms = self
             .tracker

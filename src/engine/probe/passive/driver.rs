@@ -332,6 +332,7 @@ impl Driver for PassiveDriver {
             identities,
             own_frames: self.own_frames,
             radios: end.radios.summaries(),
+            link_node: end.link_nodes.summaries(),
             frames: end.frames,
             rx_clock: end.rx_clock,
             interrupted: end.interrupted,

@@ -1,0 +1,533 @@
+//! The vehicle's own view of the link: LINK_NODE_STATUS (message 8), which
+//! PX4 sends at 1 Hz on most links. Per node (the sender's ids): its first
+//! and last report, and how much each since-boot counter grew between
+//! them: the messages it received, lost (by their packet sequence) and
+//! sent on that link, its parse errors and buffer overflows. Its uplink
+//! loss is lost / (received + lost) of that growth: what the vehicle saw
+//! of everything sent to it on that link, ours and anyone else's.
+//!
+//! In a probe run the vehicle's figure is held against mavping's own
+//! uplink estimate (the round trip split by the responder's sequence,
+//! [`Direction`]), and [`compare_uplink`] says when the two disagree.
+//!
+//! Pure: the session feeds reports with their times; nothing here reads a
+//! clock. Memory is bounded by [`MAX_NODES`].
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+
+use super::hint::{Hint, HintCode};
+use super::summary::{Direction, ResponderSummary};
+use super::Nanos;
+use crate::frame::SysComp;
+
+/// One LINK_NODE_STATUS as received: the frame's own struct, under the
+/// name the engine and the reports know it by.
+pub use crate::frame::LinkNodeStatus as LinkNodeReport;
+
+/// A spoofing flood cannot grow memory beyond this many nodes.
+pub const MAX_NODES: usize = 16;
+/// The vehicle's figure and mavping's estimate disagree when they are
+/// more than this many (combined) standard errors apart.
+pub const DISAGREE_SIGMAS: f64 = 3.0;
+
+/// The widths of the since-boot counters: LINK_NODE_STATUS has 32-bit
+/// message counts and 16-bit error counts.
+pub trait Width: Copy + Ord + Into<u64> {
+    /// A fall from at or above this is a wrap (the top sixteenth of the
+    /// range); from below, the node counting again from 0.
+    const WRAP_ZONE: Self;
+    fn wrapping_sub(self, other: Self) -> Self;
+}
+
+impl Width for u16 {
+    const WRAP_ZONE: u16 = 0xF000;
+    fn wrapping_sub(self, other: u16) -> u16 {
+        u16::wrapping_sub(self, other)
+    }
+}
+
+impl Width for u32 {
+    const WRAP_ZONE: u32 = 0xF000_0000;
+    fn wrapping_sub(self, other: u32) -> u32 {
+        u32::wrapping_sub(self, other)
+    }
+}
+
+/// A since-boot counter: what it grew by since it was first seen. Each
+/// step is taken modulo its width, so a wrap (2^32 − 6 → 5) counts as 11;
+/// but after a reboot (the report's own boot clock fell, or the counter
+/// fell from well below the top) the node counts from 0 again, and the
+/// step is the new value. As `radio::SinceBootCounter`, for either width.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SinceBoot<T> {
+    last: Option<T>,
+    grown: u64,
+}
+
+impl<T: Width> SinceBoot<T> {
+    /// The counter reads `v`; `rebooted`: the node restarted since the
+    /// last reading, whatever the counter shows.
+    pub fn record(&mut self, v: T, rebooted: bool) {
+        if let Some(last) = self.last {
+            let restarted = rebooted || (v < last && last < T::WRAP_ZONE);
+            self.grown += if restarted {
+                v.into()
+            } else {
+                v.wrapping_sub(last).into()
+            };
+        }
+        self.last = Some(v);
+    }
+
+    pub fn grown(&self) -> u64 {
+        self.grown
+    }
+}
+
+/// Every counter of one node, followed across wraps and reboots.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct NodeCounters {
+    /// The boot clock of the last report (ms): a fall is a reboot.
+    last_timestamp: Option<u64>,
+    pub reboots: u64,
+    pub received: SinceBoot<u32>,
+    pub lost: SinceBoot<u32>,
+    pub sent: SinceBoot<u32>,
+    pub rx_parse_err: SinceBoot<u16>,
+    pub rx_overflows: SinceBoot<u16>,
+    pub tx_overflows: SinceBoot<u16>,
+}
+
+impl NodeCounters {
+    pub fn record(&mut self, r: &LinkNodeReport) {
+        let rebooted = self.last_timestamp.is_some_and(|t| r.timestamp < t);
+        self.reboots += u64::from(rebooted);
+        self.last_timestamp = Some(r.timestamp);
+        self.received.record(r.messages_received, rebooted);
+        self.lost.record(r.messages_lost, rebooted);
+        self.sent.record(r.messages_sent, rebooted);
+        self.rx_parse_err.record(r.rx_parse_err, rebooted);
+        self.rx_overflows.record(r.rx_overflows, rebooted);
+        self.tx_overflows.record(r.tx_overflows, rebooted);
+    }
+
+    /// Lost over what the node saw of the link (received + lost), once it
+    /// saw anything.
+    pub fn loss(&self) -> Option<f64> {
+        let seen = self.received.grown() + self.lost.grown();
+        (seen > 0).then(|| self.lost.grown() as f64 / seen as f64)
+    }
+}
+
+#[derive(Debug, Clone)]
+struct Node {
+    reports: u64,
+    first_at: Nanos,
+    last_at: Nanos,
+    first: LinkNodeReport,
+    last: LinkNodeReport,
+    counters: NodeCounters,
+}
+
+/// The end-of-run figures of one node.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LinkNodeSummary {
+    pub id: SysComp,
+    pub reports: u64,
+    /// Session time of its first and last report, s.
+    pub first_t_s: f64,
+    pub last_t_s: f64,
+    pub first: LinkNodeReport,
+    pub last: LinkNodeReport,
+    /// Times its boot clock went back between reports.
+    pub reboots: u64,
+    /// What each since-boot counter grew by between the first report and
+    /// the last (wrap- and reboot-safe).
+    pub received_delta: u64,
+    pub lost_delta: u64,
+    pub sent_delta: u64,
+    pub rx_parse_err_delta: u64,
+    pub rx_overflows_delta: u64,
+    pub tx_overflows_delta: u64,
+    /// lost / (received + lost) of the growth: the loss on the way to it,
+    /// of everything sent to it on that link. `None` before it counted any.
+    pub uplink_loss: Option<f64>,
+    /// A probe run: the figure beside mavping's uplink estimate for the
+    /// same system.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compared: Option<UplinkComparison>,
+}
+
+impl LinkNodeSummary {
+    /// What the node saw of the link: received + lost.
+    pub fn seen(&self) -> u64 {
+        self.received_delta + self.lost_delta
+    }
+}
+
+/// The vehicle's uplink loss against mavping's estimate for one responder.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct UplinkComparison {
+    /// The responder whose requests the estimate is of.
+    pub responder: SysComp,
+    /// mavping's uplink loss estimate and its standard error (the
+    /// direction split; 0 when no request was lost).
+    pub estimate: f64,
+    pub estimate_stderr: f64,
+    /// The vehicle's figure and its own binomial standard error.
+    pub vehicle: f64,
+    pub vehicle_stderr: f64,
+    /// |vehicle − estimate| in their combined standard errors.
+    pub sigmas: f64,
+    /// Within [`DISAGREE_SIGMAS`].
+    pub agrees: bool,
+}
+
+/// All nodes heard, keyed by their MAVLink source.
+#[derive(Debug, Default)]
+pub struct LinkNodes {
+    nodes: BTreeMap<SysComp, Node>,
+}
+
+impl LinkNodes {
+    /// Records a report; returns true for a node's first one. Reports
+    /// from nodes beyond [`MAX_NODES`] are ignored.
+    pub fn record(&mut self, id: SysComp, r: LinkNodeReport, at: Nanos) -> bool {
+        let first = !self.nodes.contains_key(&id);
+        if first && self.nodes.len() >= MAX_NODES {
+            return false;
+        }
+        let node = self.nodes.entry(id).or_insert_with(|| Node {
+            reports: 0,
+            first_at: at,
+            last_at: at,
+            first: r,
+            last: r,
+            counters: NodeCounters::default(),
+        });
+        node.reports += 1;
+        node.last_at = at;
+        node.last = r;
+        node.counters.record(&r);
+        first
+    }
+
+    pub fn summaries(&self) -> Vec<LinkNodeSummary> {
+        self.nodes
+            .iter()
+            .map(|(&id, n)| {
+                let c = &n.counters;
+                LinkNodeSummary {
+                    id,
+                    reports: n.reports,
+                    first_t_s: n.first_at as f64 / 1e9,
+                    last_t_s: n.last_at as f64 / 1e9,
+                    first: n.first,
+                    last: n.last,
+                    reboots: c.reboots,
+                    received_delta: c.received.grown(),
+                    lost_delta: c.lost.grown(),
+                    sent_delta: c.sent.grown(),
+                    rx_parse_err_delta: c.rx_parse_err.grown(),
+                    rx_overflows_delta: c.rx_overflows.grown(),
+                    tx_overflows_delta: c.tx_overflows.grown(),
+                    uplink_loss: c.loss(),
+                    compared: None,
+                }
+            })
+            .collect()
+    }
+}
+
+/// The binomial standard error of `p` over `n`, never under 1/n (with
+/// nothing lost of n, 3/n is the usual 95 % bound: the rule of three).
+fn stderr(p: f64, n: u64) -> f64 {
+    let n = n.max(1) as f64;
+    (p * (1.0 - p) / n).sqrt().max(1.0 / n)
+}
+
+/// mavping's uplink estimate for a responder and its standard error: the
+/// direction split's when it holds; 0 when nothing was lost at all.
+fn estimate(r: &ResponderSummary) -> Option<(f64, f64)> {
+    let requests = r.counts.sent;
+    match r.direction {
+        Some(Direction {
+            uplink_loss: Some(up),
+            uplink_stderr: Some(se),
+            consistent: true,
+            ..
+        }) => Some((up, se.max(1.0 / requests.max(1) as f64))),
+        None if requests > 0 && r.counts.lost == 0 => Some((0.0, stderr(0.0, requests))),
+        // No split, or one that does not hold: nothing to compare with.
+        _ => None,
+    }
+}
+
+/// The responder a node speaks for: the one with its ids, else the one
+/// responder of its system.
+fn responder_of(id: SysComp, responders: &[ResponderSummary]) -> Option<&ResponderSummary> {
+    responders.iter().find(|r| r.id == id).or_else(|| {
+        let mut same = responders.iter().filter(|r| r.id.sysid == id.sysid);
+        match (same.next(), same.next()) {
+            (Some(r), None) => Some(r),
+            _ => None,
+        }
+    })
+}
+
+/// Puts each node's uplink figure beside mavping's estimate for its
+/// system, and a hint for each that disagrees.
+pub fn compare_uplink(nodes: &mut [LinkNodeSummary], responders: &[ResponderSummary]) -> Vec<Hint> {
+    let mut hints = Vec::new();
+    for node in nodes {
+        let Some(vehicle) = node.uplink_loss else {
+            continue;
+        };
+        let Some(r) = responder_of(node.id, responders) else {
+            continue;
+        };
+        let Some((est, est_se)) = estimate(r) else {
+            continue;
+        };
+        let vehicle_se = stderr(vehicle, node.seen());
+        let sigmas = (vehicle - est).abs() / est_se.hypot(vehicle_se);
+        let c = UplinkComparison {
+            responder: r.id,
+            estimate: est,
+            estimate_stderr: est_se,
+            vehicle,
+            vehicle_stderr: vehicle_se,
+            sigmas,
+            agrees: sigmas <= DISAGREE_SIGMAS,
+        };
+        node.compared = Some(c);
+        if !c.agrees {
+            hints.push(disagreement(node.id, &c));
+        }
+    }
+    hints
+}
+
+fn percent(ratio: f64) -> String {
+    format!("{:.2}%", ratio * 100.0)
+}
+
+/// What the disagreement says, whichever way it goes.
+fn disagreement(id: SysComp, c: &UplinkComparison) -> Hint {
+    let why = if c.vehicle < c.estimate {
+        "our requests are lost where its count does not see them: it received requests it \
+         did not answer, something between re-numbers our frames, or it counts another link"
+    } else {
+        "it counts losses our requests did not suffer: other senders on its link, another \
+         link, or a sequence count that charges duplicates and reordering as loss"
+    };
+    Hint::new(
+        HintCode::VehicleUplinkDisagrees,
+        format!(
+            "vehicle {id} counts {} of what reached it lost (LINK_NODE_STATUS), mavping's up \
+             estimate for {} is {} ± {} ({:.1} standard errors apart): {why}",
+            percent(c.vehicle),
+            c.responder,
+            percent(c.estimate),
+            percent(c.estimate_stderr),
+            c.sigmas
+        ),
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::matcher::Counts;
+
+    const VEHICLE: SysComp = SysComp {
+        sysid: 1,
+        compid: 1,
+    };
+
+    fn report(t_ms: u64, received: u32, lost: u32, parse: u16) -> LinkNodeReport {
+        LinkNodeReport {
+            timestamp: t_ms,
+            messages_received: received,
+            messages_lost: lost,
+            messages_sent: received.wrapping_mul(3),
+            rx_parse_err: parse,
+            ..LinkNodeReport::default()
+        }
+    }
+
+    #[test]
+    fn a_u32_counter_grows_across_its_wrap() {
+        let mut c = SinceBoot::<u32>::default();
+        for v in [u32::MAX - 10, u32::MAX - 5, 5, 20] {
+            c.record(v, false);
+        }
+        // 5, then 11 through the wrap (2^32 − 6 → 5), then 15.
+        assert_eq!(c.grown(), 31);
+    }
+
+    #[test]
+    fn a_fall_from_below_the_top_is_a_reboot_in_either_width() {
+        let mut c = SinceBoot::<u32>::default();
+        for v in [900_000, 1_000_000, 4, 10] {
+            c.record(v, false);
+        }
+        // 100 000, then 4 since the restart, then 6: not 2^32 − 999 996.
+        assert_eq!(c.grown(), 100_010);
+        let mut c = SinceBoot::<u16>::default();
+        for v in [65_530, 3, 100, 7] {
+            c.record(v, false);
+        }
+        // 9 through the wrap, 97, then 7 since the restart.
+        assert_eq!(c.grown(), 113);
+    }
+
+    #[test]
+    fn a_boot_clock_that_falls_is_a_reboot_even_near_the_top() {
+        let mut nodes = LinkNodes::default();
+        // Near the top of the range a fall alone would read as a wrap:
+        // the boot clock (ms) going back says the node restarted.
+        nodes.record(VEHICLE, report(50_000, u32::MAX - 100, 10, 65_000), 0);
+        nodes.record(VEHICLE, report(51_000, u32::MAX - 50, 12, 65_100), 1);
+        nodes.record(VEHICLE, report(900, 30, 1, 2), 2);
+        nodes.record(VEHICLE, report(1_900, 80, 1, 2), 3);
+        let s = &nodes.summaries()[0];
+        assert_eq!(s.reboots, 1);
+        // 50, then 30 counted since the reboot, then 50.
+        assert_eq!(s.received_delta, 130);
+        assert_eq!(s.lost_delta, 3);
+        assert_eq!(s.rx_parse_err_delta, 102);
+        assert_eq!(s.uplink_loss, Some(3.0 / 133.0));
+        assert_eq!((s.first.timestamp, s.last.timestamp), (50_000, 1_900));
+        assert_eq!((s.first_t_s, s.last_t_s, s.reports), (0.0, 3e-9, 4));
+    }
+
+    #[test]
+    fn a_single_report_grows_nothing_and_has_no_loss() {
+        let mut nodes = LinkNodes::default();
+        assert!(nodes.record(VEHICLE, report(1, 500, 7, 1), 10));
+        let s = &nodes.summaries()[0];
+        assert_eq!((s.received_delta, s.lost_delta, s.reports), (0, 0, 1));
+        assert_eq!(s.uplink_loss, None);
+        assert_eq!(s.first, s.last);
+    }
+
+    #[test]
+    fn nodes_are_bounded() {
+        let mut nodes = LinkNodes::default();
+        for sysid in 0..=255u8 {
+            nodes.record(SysComp::new(sysid, 1), report(1, 1, 0, 0), 0);
+        }
+        assert_eq!(nodes.summaries().len(), MAX_NODES);
+        assert!(!nodes.record(SysComp::new(200, 1), report(2, 2, 0, 0), 1));
+    }
+
+    fn responder(
+        id: SysComp,
+        sent: u64,
+        lost: u64,
+        direction: Option<Direction>,
+    ) -> ResponderSummary {
+        ResponderSummary {
+            id,
+            counts: Counts {
+                sent,
+                received: sent - lost,
+                lost,
+                ..Counts::default()
+            },
+            loss_ratio: lost as f64 / sent as f64,
+            rtt: None,
+            histogram: vec![],
+            identity: None,
+            probe: None,
+            clock: None,
+            direction,
+        }
+    }
+
+    /// A node that saw `received` and `lost` of the link.
+    fn node(id: SysComp, received: u32, lost: u32) -> LinkNodeSummary {
+        let mut nodes = LinkNodes::default();
+        nodes.record(id, report(0, 0, 0, 0), 0);
+        nodes.record(id, report(1_000, received, lost, 0), 1);
+        nodes.summaries().remove(0)
+    }
+
+    #[test]
+    fn the_vehicles_figure_is_held_against_the_split() {
+        // 1000 requests, 145 lost round trip; its downlink lost 100 of
+        // 2000: up ~10 % ± ~1.1 %.
+        let d = Direction::split(0.145, 1000, 2000, 100);
+        let r = responder(VEHICLE, 1000, 145, d);
+        let up = d.unwrap().uplink_loss.unwrap();
+        // The vehicle counts 110 of 1100 lost (10 %): agrees.
+        let mut nodes = vec![node(VEHICLE, 990, 110)];
+        assert!(compare_uplink(&mut nodes, std::slice::from_ref(&r)).is_empty());
+        let c = nodes[0].compared.unwrap();
+        assert!(c.agrees && c.sigmas < 1.0, "{c:?}");
+        assert_eq!((c.estimate, c.vehicle, c.responder), (up, 0.1, VEHICLE));
+        // It claims none lost: 0 against ~10 %, said.
+        let mut nodes = vec![node(VEHICLE, 1100, 0)];
+        let hints = compare_uplink(&mut nodes, std::slice::from_ref(&r));
+        let c = nodes[0].compared.unwrap();
+        assert!(!c.agrees && c.sigmas > 6.0, "{c:?}");
+        assert_eq!(hints.len(), 1);
+        assert_eq!(hints[0].code, HintCode::VehicleUplinkDisagrees);
+        assert!(
+            hints[0]
+                .text
+                .starts_with("vehicle 1/1 counts 0.00% of what reached it lost (LINK_NODE_STATUS), mavping's up estimate for 1/1 is 10.00% ± 1.26% (7.9 standard errors apart)"),
+            "{}",
+            hints[0].text
+        );
+        assert!(hints[0]
+            .text
+            .contains("it received requests it did not answer"));
+        // Another component of the same system speaks for it; another
+        // system does not.
+        let mut nodes = vec![
+            node(SysComp::new(1, 191), 1100, 0),
+            node(SysComp::new(2, 1), 1100, 0),
+        ];
+        assert_eq!(compare_uplink(&mut nodes, &[r]).len(), 1);
+        assert!(nodes[0].compared.is_some() && nodes[1].compared.is_none());
+    }
+
+    #[test]
+    fn nothing_lost_is_an_estimate_of_zero_within_the_rule_of_three() {
+        // 1000 requests, none lost, no direction split.
+        let r = responder(VEHICLE, 1000, 0, None);
+        // 2 of 1000 is within 3/1000 ...
+        let mut nodes = vec![node(VEHICLE, 998, 2)];
+        assert!(compare_uplink(&mut nodes, std::slice::from_ref(&r)).is_empty());
+        assert!(nodes[0].compared.unwrap().agrees);
+        // ... 50 of 1000 is not: it counts losses we did not suffer.
+        let mut nodes = vec![node(VEHICLE, 950, 50)];
+        let hints = compare_uplink(&mut nodes, &[r]);
+        assert_eq!(hints.len(), 1, "{hints:?}");
+        assert!(hints[0]
+            .text
+            .contains("it counts losses our requests did not suffer"));
+    }
+
+    #[test]
+    fn no_comparison_without_a_split_or_a_count() {
+        // The split does not hold (the downlink loses more than the round
+        // trip): nothing to hold the vehicle against.
+        let d = Direction::split(0.01, 1000, 1000, 200);
+        assert!(!d.unwrap().consistent);
+        let mut nodes = vec![node(VEHICLE, 900, 100)];
+        assert!(compare_uplink(&mut nodes, &[responder(VEHICLE, 1000, 10, d)]).is_empty());
+        assert!(nodes[0].compared.is_none());
+        // One report: the node counted nothing yet.
+        let mut nodes = LinkNodes::default();
+        nodes.record(VEHICLE, report(0, 5, 5, 0), 0);
+        let mut nodes = nodes.summaries();
+        let r = responder(VEHICLE, 100, 0, None);
+        assert!(compare_uplink(&mut nodes, &[r]).is_empty());
+        assert!(nodes[0].compared.is_none());
+    }
+}
