@@ -13,6 +13,7 @@ mod diagnosis;
 mod docs;
 mod endpoints;
 mod exporter;
+mod field_logs;
 mod habits;
 mod high_rate;
 mod hostile;

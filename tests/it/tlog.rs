@@ -55,15 +55,22 @@ pub(crate) fn write_log(path: &Path, plan: &Value) -> Value {
 
 /// `mavloss.py` on `path`: packets and lost per (sysid, compid), and the
 /// total.
-struct MavLoss {
-    sources: BTreeMap<(u64, u64), (u64, u64)>,
-    total: (u64, u64),
+pub(crate) struct MavLoss {
+    pub(crate) sources: BTreeMap<(u64, u64), (u64, u64)>,
+    pub(crate) total: (u64, u64),
 }
 
 fn mavloss(path: &Path) -> MavLoss {
+    mavloss_env(path, &[])
+}
+
+/// `mavloss.py` on `path` with `env` set (MAVLINK20=1: MAVLink 2 from the
+/// first frame).
+pub(crate) fn mavloss_env(path: &Path, env: &[(&str, &str)]) -> MavLoss {
     let out = Command::new(python())
         .arg(venv_program("mavloss.py"))
         .arg(path)
+        .envs(env.iter().copied())
         .output()
         .unwrap();
     let text = String::from_utf8_lossy(&out.stdout);
