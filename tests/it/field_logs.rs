@@ -94,7 +94,22 @@ impl Field {
     }
 
     fn received(&self, id: &str) -> u64 {
-        self.source(id)["counts"]["received"].as_u64().unwrap()
+        self.count(id, "received")
+    }
+
+    /// One of mavping's sequence counts for source "S/C".
+    fn count(&self, id: &str, key: &str) -> u64 {
+        self.source(id)["counts"][key].as_u64().unwrap()
+    }
+
+    /// mavping's silences of source "S/C" that ended before the log did.
+    fn silences(&self, id: &str) -> Vec<&Value> {
+        self.source(id)["silences"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|s| s["ongoing"] == false)
+            .collect()
     }
 }
 
@@ -259,15 +274,23 @@ fn qgroundcontrol_batches_a_second_apart_as_in_vtol_tlog() {
     assert_eq!(ours["whole_ms"], true);
     let summary = &f.summary;
     assert_eq!(summary["log"]["stamps"]["whole_ms"], true);
-    // lead: assert counts(1/1).lost == truth sources["1/1"].lost (10): the
-    //       batch pauses hide no number; the losses next to them count
-    //       as any other.
-    // lead: assert source(1/1).silence_count == 0 and counts.resyncs == 0:
-    //       a pause of ~1.05 s every second is the logger's routine
-    //       (routine_pause_ns within 0.8..1.2 s), not a silence.
-    // lead: assert source(1/1).pymav.loss == 10 (pymavlink agrees here:
-    //       mavloss.py's lost column for 1/1).
-    // lead: assert totals.counts.lost == truth totals.lost.
+    // The batch pauses hide no number; the losses next to them count as
+    // any other, exactly.
+    assert_eq!(f.count("1/1", "lost"), f.truth_u64("1/1", "lost"));
+    assert_eq!(f.count("1/1", "resyncs"), 0);
+    assert_eq!(summary["totals"]["counts"]["lost"], t["totals"]["lost"]);
+    assert_eq!(f.source("1/1")["pymav"]["loss"], 10);
+    // A pause of ~1.05 s every second is the logger's routine, not a
+    // silence: at most the first pauses, before a second of its rhythm is
+    // in, are told, and as delayed (nothing missing across them).
+    let routine = f.source("1/1")["routine_pause_ns"].as_u64().unwrap();
+    assert!((800_000_000..1_200_000_000).contains(&routine), "{routine}");
+    let silences = f.silences("1/1");
+    assert!(silences.len() <= 2, "{silences:?}");
+    for s in silences {
+        assert!(s["lost_estimated"].is_null(), "{s}");
+        assert!(s["start"].as_u64().unwrap() < 4_000_000_000, "{s}");
+    }
 }
 
 #[test]
@@ -302,20 +325,42 @@ fn outages_that_wrap_the_counter_and_a_burst_after_a_pause() {
     // The radio went on: every report it numbered is in the log.
     assert_eq!(f.truth_u64("51/68", "lost"), 0);
     assert_eq!(f.received("51/68"), f.truth_u64("51/68", "sent"));
-    // lead: assert counts(1/1).lost == truth sources["1/1"].lost (4)
-    //       + outages[0].counters["1/1"].apparent_gap_mod_256 (227)
-    //       + outages[1].counters["1/1"].apparent_gap_mod_256 (253):
-    //       the gap across a silence counted, modulo 256.
-    // lead: assert source(1/1).silences[i].seq_lost ==
-    //       Some(outages[i].counters["1/1"].apparent_gap_mod_256) and
-    //       lost_estimated within 2 % of outages[i].counters["1/1"].numbered
-    //       (483, 253), for i in 0, 1; restart == false.
-    // lead: assert the delayed pause (outages[2]) is a silence with
-    //       seq_lost == Some(0): delayed, not lost; nothing in lost for it.
-    // lead: assert source(1/1).silence_count == 3 (the outages and the
-    //       delayed pause; no batch pause).
-    // lead: assert source(51/68).counts.lost == 0 and no silence: the radio
-    //       reported through the outages.
+    // What the sequence proves across each outage is counted (its gap,
+    // modulo 256), never less; the rest the rate suggests is apart.
+    let gap = |k: usize| one(k)["apparent_gap_mod_256"].as_u64().unwrap();
+    assert_eq!(
+        f.count("1/1", "lost"),
+        f.truth_u64("1/1", "lost") + gap(0) + gap(1)
+    );
+    // The outages and the delayed pause are silences (besides, at most,
+    // the first batch pauses before their rhythm is known, told as
+    // delayed).
+    let long: Vec<&Value> = f
+        .silences("1/1")
+        .into_iter()
+        .filter(|s| s["length_ns"].as_u64().unwrap() > 2_000_000_000)
+        .collect();
+    assert_eq!(long.len(), 3, "{long:?}");
+    for (k, s) in long.iter().enumerate() {
+        assert_eq!(s["restart"], false, "{s}");
+        assert_eq!(s["seq_lost"].as_u64(), Some(gap(k)), "{s}");
+    }
+    // The 4.2 s outage wrapped the counter: the rate says how often,
+    // within a few frames of the numbers it held.
+    let numbered = one(0)["numbered"].as_u64().unwrap();
+    let likely = long[0]["lost_estimated"].as_u64().unwrap();
+    assert!(likely.abs_diff(numbered) <= numbered / 50, "{}", long[0]);
+    // The 2.2 s one did not (253 < 256): its gap alone, no wrap likelier.
+    assert!(
+        long[1]["lost_estimated"].is_null() || long[1]["lost_estimated"] == long[1]["seq_lost"],
+        "{}",
+        long[1]
+    );
+    // The pause after which the frames came in a burst: delayed, not lost.
+    assert!(long[2]["lost_estimated"].is_null(), "{}", long[2]);
+    // The radio reported through the outages: no loss, no silence.
+    assert_eq!(f.count("51/68", "lost"), 0);
+    assert!(f.silences("51/68").is_empty());
 }
 
 #[test]
@@ -333,10 +378,21 @@ fn a_reboot_starts_the_counter_again_at_zero() {
     assert_eq!(reboot["first_seq_after"], 0);
     assert_eq!(reboot["first_msgs_after"][0], "STATUSTEXT");
     assert_eq!(reboot["numbered_while_off"], 0);
-    // lead: assert counts(1/1).lost == truth sources["1/1"].lost (2): the
-    //       restart loses nothing (not reboots[0].apparent_gap_mod_256).
-    // lead: assert source(1/1).silences[0].restart == true, seq_lost ==
-    //       None, and its length within 0.1 s of reboots[0].log_pause_s.
+    // The restart loses nothing: only the planned losses count.
+    assert_eq!(f.count("1/1", "lost"), f.truth_u64("1/1", "lost"));
+    let restarts: Vec<&Value> = f
+        .silences("1/1")
+        .into_iter()
+        .filter(|s| s["restart"] == true)
+        .collect();
+    assert_eq!(restarts.len(), 1, "{:?}", f.silences("1/1"));
+    assert!(restarts[0]["seq_lost"].is_null());
+    let length = restarts[0]["length_ns"].as_f64().unwrap() / 1e9;
+    let pause = reboot["log_pause_s"].as_f64().unwrap();
+    assert!(
+        (length - pause).abs() < 0.1,
+        "{length} s, the log's {pause} s"
+    );
 }
 
 #[test]
@@ -371,18 +427,34 @@ fn the_ground_stations_own_frames_logged_in_part_and_its_second_counter() {
         f.received("255/190"),
         a["good"].as_u64().unwrap() + b["good"].as_u64().unwrap()
     );
-    // lead: assert source(255/190).ground == true, and
-    //       totals.ground_received == truth sources["255/190"].good; the
-    //       totals' counts are the link's alone (1/1): totals.counts.received
-    //       == truth sources["1/1"].good, totals.counts.lost == 2.
-    // lead: assert source(255/190).second_counter.counts.received ==
-    //       counters["255/190:B"].good (35) and its lost == 0: its numbers
-    //       run 1..7 and start again (counters["255/190:B"].cycle), no
-    //       gap (logged_seq_gaps == 0).
-    // lead: assert source(255/190).counts.lost - second_counter lost ==
-    //       counters["255/190:A"].not_logged: numbers spent on frames never
-    //       logged (not lost on a link); no resyncs.
-    // lead: assert counts(1/1).lost == truth sources["1/1"].lost (2).
+    // The ground station's own frames are apart: out of the link's
+    // totals, which are the vehicle's alone.
+    assert_eq!(f.source("255/190")["ground"], true);
+    assert_eq!(f.source("1/1")["ground"], false);
+    let totals = &f.summary["totals"];
+    assert_eq!(totals["ground_received"], f.truth("255/190")["good"]);
+    assert_eq!(totals["counts"]["received"], f.truth("1/1")["good"]);
+    assert_eq!(totals["counts"]["lost"], 2);
+    assert_eq!(f.count("1/1", "lost"), f.truth_u64("1/1", "lost"));
+    // Its REQUEST_DATA_STREAM counter, read on its own: all but at most
+    // the first frame (heard before a second counter was evident, or on
+    // the main counter's very next number), none lost.
+    let second = &f.source("255/190")["second_counter"];
+    let got = second["counts"]["received"].as_u64().unwrap();
+    let b_good = b["good"].as_u64().unwrap();
+    assert!((b_good - 2..=b_good + 2).contains(&got), "{second}");
+    assert_eq!(second["msg_ids"][0]["id"], 66, "{second}");
+    // The main counter's gaps are the numbers it spent on frames it did
+    // not log (and the second counter's frames it took), not link loss.
+    let not_logged = a["not_logged"].as_u64().unwrap();
+    let main_lost = f.count("255/190", "lost") - second["counts"]["lost"].as_u64().unwrap();
+    assert!(
+        main_lost.abs_diff(not_logged) <= 3,
+        "{main_lost} vs {not_logged} not logged: {}",
+        f.source("255/190")
+    );
+    assert_eq!(f.count("255/190", "duplicate"), 0);
+    assert_eq!(f.count("255/190", "reordered"), 0);
 }
 
 #[test]
@@ -443,11 +515,20 @@ fn two_programs_numbering_frames_under_one_id() {
         counter("1/191:A", "good") + counter("1/191:B", "good")
     );
     assert!(counter("1/191:A", "lost") > 0 && counter("1/191:B", "lost") > 0);
-    // lead: assert counts(1/191).lost == truth sources["1/191"].lost
-    //       (A's and B's together) and counts.resyncs == 0.
-    // lead: assert source(1/191).second_counter.counts.lost ==
-    //       counters[B].lost (or A's: whichever the tracker calls second)
-    //       and second_counter.counts.received == that counter's good.
+    // Each counter is read on its own: its own losses, none made up.
+    assert_eq!(f.count("1/191", "lost"), f.truth_u64("1/191", "lost"));
+    assert_eq!(f.count("1/191", "duplicate"), 0);
+    assert_eq!(f.count("1/191", "reordered"), 0);
+    let second = &f.source("1/191")["second_counter"];
+    let got = second["counts"]["received"].as_u64().unwrap();
+    let which = ["1/191:A", "1/191:B"]
+        .into_iter()
+        .find(|c| counter(c, "good") == got)
+        .unwrap_or_else(|| panic!("{second} is neither counter: {two}"));
+    assert_eq!(
+        second["counts"]["lost"].as_u64(),
+        Some(counter(which, "lost"))
+    );
 }
 
 #[test]
@@ -493,8 +574,15 @@ fn mavproxy_link_bits_tell_what_the_ground_station_sent() {
         on(3),
         BTreeMap::from([("255/0".to_string(), good("255/0"))])
     );
-    // lead: assert source(255/0).ground == true (link 3, its own frames)
-    //       and counts(1/1).lost == truth sources["1/1"].lost (3).
+    // What only link 3 carried is what MAVProxy sent: the ground
+    // station's, out of the link's totals.
+    assert_eq!(f.source("255/0")["ground"], true);
+    assert_eq!(f.source("1/1")["ground"], false);
+    assert_eq!(f.count("1/1", "lost"), f.truth_u64("1/1", "lost"));
+    assert_eq!(
+        f.summary["totals"]["ground_received"],
+        f.truth("255/0")["good"]
+    );
 }
 
 #[test]

@@ -129,10 +129,8 @@ pub struct Silence {
     pub start: Nanos,
     /// From that frame to the one after it (to the summary, if ongoing).
     pub length_ns: Nanos,
-    /// Frames the source would have sent in it at its usual rate, in the
-    /// time beyond its routine pause (a logger's batches: the frames of a
-    /// routine pause come with the next batch); `None` while no rate was
-    /// known.
+    /// Frames the source would have sent in it at its usual rate; `None`
+    /// while no rate was settled (a second of the source's frames).
     pub frames_estimated: Option<u64>,
     /// The frames the sequence proves lost across it (included in
     /// `lost`): its gap, modulo 256 where the pause may hide wraps of the
@@ -141,7 +139,8 @@ pub struct Silence {
     pub seq_lost: Option<u64>,
     /// Where the pause is too long for the 8-bit counter to span at the
     /// source's rate: the likely number lost, `seq_lost` plus the wraps
-    /// the rate suggests (the difference is not in `lost`).
+    /// the rate suggests (the difference is not in `lost`); `None` when
+    /// it could span it, nothing is missing, or no rate was settled.
     pub lost_estimated: Option<u64>,
     /// The counter started again at 0 after it: the source restarted.
     pub restart: bool,

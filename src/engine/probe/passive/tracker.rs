@@ -548,13 +548,14 @@ impl SeqTracker {
     /// proves across it, and what the rate suggests it hid.
     fn end_silence(&mut self, seq: u8, at: Nanos, elapsed: Nanos) {
         let state = self.state.as_mut().expect("a frame was taken");
-        // Frames come in after a routine pause all the same (a logger's
-        // batch holds its period's frames), so only the time beyond it
-        // can have hidden any.
-        let frames = self.rate.interval().map(|i| {
-            let routine = self.rate.routine_pause().unwrap_or(0);
-            frames_in(elapsed.saturating_sub(routine.saturating_sub(i)), i)
-        });
+        // Only a settled rate says anything of a pause: before a second is
+        // in, a logger's first batch (140 frames on a few stamps) would
+        // make a pause of a second hold hundreds.
+        let frames = self
+            .rate
+            .interval()
+            .filter(|_| self.rate.settled())
+            .map(|i| frames_in(elapsed, i));
         let ahead = seq.wrapping_sub(state.head);
         let mut silence = Silence {
             start: at - elapsed,
@@ -584,7 +585,7 @@ impl SeqTracker {
         // No number missing is what a pause that lost nothing shows every
         // time, and a loss of exactly 256 k frames once in 256: delayed.
         if !spanned && floor > 0 {
-            silence.lost_estimated = Some(frames.map_or(floor, |f| nearest_wrap(floor, f)));
+            silence.lost_estimated = frames.map(|f| nearest_wrap(floor, f));
         }
         self.silences.push(silence);
         self.counts.lost += floor;
@@ -1238,12 +1239,19 @@ mod tests {
     #[test]
     fn a_given_gap_sets_the_threshold() {
         let mut t = SeqTracker::new(Some(300 * MS));
-        feed(&mut t, &[0, 1, 2, 3, 8, 9], 100 * MS);
-        let s = t.summary(SRC, 900 * MS);
-        assert_eq!(t.counts(), counts(6, 4, 0, 0, 0));
+        let p: Vec<u64> = (0..=12).chain([17, 18]).collect();
+        feed(&mut t, &p, 100 * MS);
+        let s = t.summary(SRC, 1_800 * MS);
+        assert_eq!(t.counts(), counts(15, 4, 0, 0, 0));
         assert_eq!(s.silences.len(), 1);
         assert_eq!(s.silences[0].seq_lost, Some(4));
         assert_eq!(s.silences[0].frames_estimated, Some(4));
+        // Before a second of the source is in, its rate says nothing.
+        let mut t = SeqTracker::new(Some(300 * MS));
+        feed(&mut t, &[0, 1, 2, 3, 8, 9], 100 * MS);
+        let s = t.summary(SRC, 900 * MS);
+        assert_eq!(t.counts(), counts(6, 4, 0, 0, 0));
+        assert_eq!(s.silences[0].frames_estimated, None);
     }
 
     #[test]
