@@ -31,6 +31,7 @@ mod probes_pymavlink;
 mod prometheus_server;
 mod properties;
 mod radio;
+mod real_logs;
 mod scripting;
 mod serial_pty;
 mod serve;

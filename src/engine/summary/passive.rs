@@ -240,7 +240,8 @@ pub struct LinkTotals {
     /// As [`SourceSummary::loss_pct`], over the sums.
     pub loss_pct: Option<f64>,
     /// pymavlink's link-wide `mav_count`/`mav_loss` (it too leaves the
-    /// radio out; untracked sources are not in it).
+    /// radio out; untracked sources are not in it; the ground station's
+    /// own frames in a log are, as `mavloss.py` counts them).
     pub pymav: PymavFigure,
     pub bytes: u64,
     pub silence_count: u64,
@@ -266,6 +267,10 @@ impl LinkTotals {
                 radio_received += s.counts.received;
                 continue;
             }
+            // pymavlink's figure is the whole log's, as mavloss.py reads it:
+            // the ground station's frames in it too.
+            pymav_loss += s.pymav.loss;
+            pymav_count += s.pymav.count;
             if s.ground {
                 ground_received += s.counts.received;
                 continue;
@@ -275,8 +280,6 @@ impl LinkTotals {
             bytes += s.bytes;
             silence_count += s.silence_count;
             unspanned += s.silence_frames_estimated;
-            pymav_loss += s.pymav.loss;
-            pymav_count += s.pymav.count;
         }
         LinkTotals {
             sources: count,
