@@ -259,9 +259,12 @@ proptest! {
         let frame_bytes: u64 = whole.iter().map(|f| f.len() as u64).sum();
         let accounted = frame_bytes + whole_stats.skipped_bytes + whole_pending as u64;
         prop_assert!(accounted <= data.len() as u64);
-        let unknown = data.len() as u64 - accounted;
-        prop_assert!(unknown >= 8 * whole_stats.unknown_id);
-        prop_assert!(unknown <= MAX_FRAME_LEN as u64 * whole_stats.unknown_id);
+        // Unknown-id and damaged frames are taken whole, neither delivered
+        // as good nor skipped.
+        let unchecked = data.len() as u64 - accounted;
+        let whole_unchecked = whole_stats.unknown_id + whole_stats.damaged;
+        prop_assert!(unchecked >= 8 * whole_unchecked);
+        prop_assert!(unchecked <= MAX_FRAME_LEN as u64 * whole_unchecked);
 
         let (dgram, dgram_stats) = datagram(&data);
         // A datagram keeps a good frame whose payload holds another good
