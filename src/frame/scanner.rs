@@ -429,22 +429,22 @@ fn damaged_or_junk(
     at_end: bool,
     memo: &mut FrameMemo,
 ) -> Step {
+    // A good frame inside decides at once, before any wait for what
+    // follows (which would hold that frame back).
+    let inside = good_frame_starts_inside(whole, start, len, at_end, memo);
+    if inside == Some(true) {
+        return Step::Reject { bad_crc: true };
+    }
     let next = start + len;
     let lined_up = if next == whole.len() {
         at_end.then_some(true)
     } else {
         good_frame_at(whole, next, at_end, memo)
     };
-    let whole_frame = match lined_up {
-        Some(true) => {
-            good_frame_starts_inside(whole, start, len, at_end, memo).map(|inside| !inside)
-        }
-        other => other,
-    };
-    match whole_frame {
-        Some(true) => Step::Damaged(len),
-        Some(false) => Step::Reject { bad_crc: true },
-        None => Step::NeedMore,
+    match (lined_up, inside) {
+        (Some(false), _) => Step::Reject { bad_crc: true },
+        (Some(true), Some(false)) => Step::Damaged(len),
+        _ => Step::NeedMore,
     }
 }
 
