@@ -175,10 +175,14 @@ fn the_ardusub_log_counts_its_distance_sensor_frames_damaged_not_lost() {
 #[test]
 fn frames_a_peer_damaged_on_udp_are_counted_damaged_per_source_and_not_lost() {
     let listen = free_udp_port();
+    let recording =
+        std::env::temp_dir().join(format!("mavping-damaged-{}.tlog", std::process::id()));
     let run = start_mavping(&[
         "--passive",
         "--json",
         "--no-heartbeat",
+        "--tlog",
+        recording.to_str().unwrap(),
         &format!("udpin:127.0.0.1:{listen}"),
     ]);
     let mut peer = Peer::start(
@@ -220,4 +224,31 @@ fn frames_a_peer_damaged_on_udp_are_counted_damaged_per_source_and_not_lost() {
     assert_eq!(n(&s["frames"], "bad_crc"), 0, "{}", s["frames"]);
     assert_eq!(n(&s["totals"]["counts"], "damaged"), damaged);
     assert_schema(&json_lines(&out));
+
+    // The recording keeps the damaged frames as they came: read back, they
+    // are damaged records, between the good ones.
+    let (code, out, err) = run_mavping(&["--json", "-q", recording.to_str().unwrap()]);
+    let _ = std::fs::remove_file(&recording);
+    assert_eq!(code, 0, "{out}{err}");
+    let back = passive_summary(&out);
+    assert_eq!(
+        n(&back["log"]["records"], "damaged"),
+        damaged,
+        "{}",
+        back["log"]
+    );
+    assert_eq!(
+        n(&back["log"]["records"], "junk_bytes"),
+        0,
+        "{}",
+        back["log"]
+    );
+    for id in ["1/1", "2/1"] {
+        let c = &source(&back, id)["counts"];
+        assert_eq!(
+            (n(c, "received"), n(c, "damaged"), n(c, "lost")),
+            (n(&truth[id], "good"), n(&truth[id], "damaged"), 0),
+            "{id}: {c}"
+        );
+    }
 }
