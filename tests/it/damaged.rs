@@ -193,6 +193,9 @@ fn frames_a_peer_damaged_on_udp_are_counted_damaged_per_source_and_not_lost() {
             "1:10",
             "--source",
             "2:7",
+            // Every HEARTBEAT of 3/1 damaged: no system is heard by them.
+            "--source",
+            "3:1:heartbeat",
             "--frames",
             "300",
             "--rate",
@@ -219,7 +222,27 @@ fn frames_a_peer_damaged_on_udp_are_counted_damaged_per_source_and_not_lost() {
         // ATTITUDE is id 30.
         assert_eq!(damaged_ids(got), [(30, n(want, "damaged"))], "{id}");
     }
-    let damaged = n(&truth["1/1"], "damaged") + n(&truth["2/1"], "damaged");
+    let hb = source(&s, "3/1");
+    assert_eq!(n(&truth["3/1"], "good"), 0, "{truth}");
+    assert_eq!(
+        (n(&hb["counts"], "received"), n(&hb["counts"], "damaged")),
+        (0, n(&truth["3/1"], "damaged")),
+        "{hb}"
+    );
+    assert_eq!(damaged_ids(hb), [(0, n(&truth["3/1"], "damaged"))]);
+    assert!(
+        hb["identity"].is_null(),
+        "heard by a damaged HEARTBEAT: {hb}"
+    );
+    assert!(
+        !out.lines()
+            .any(|l| l.contains("\"responder\"") && l.contains("\"sysid\":3")),
+        "{out}"
+    );
+    let damaged: u64 = ["1/1", "2/1", "3/1"]
+        .iter()
+        .map(|id| n(&truth[*id], "damaged"))
+        .sum();
     assert_eq!(n(&s["frames"], "damaged"), damaged, "{}", s["frames"]);
     assert_eq!(n(&s["frames"], "bad_crc"), 0, "{}", s["frames"]);
     assert_eq!(n(&s["totals"]["counts"], "damaged"), damaged);

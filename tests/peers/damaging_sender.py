@@ -4,8 +4,10 @@ frame a datagram of its own, and breaks the CRC of every k-th frame of a
 source (both CRC bytes flipped): frames that arrive whole but damaged. When
 done, prints one JSON line of ground truth and exits.
 
-    damaging_sender.py udpout:HOST:PORT --source SYSID:K [--source ...]
+    damaging_sender.py udpout:HOST:PORT --source SYSID:K[:heartbeat] [--source ...]
                        [--frames N] [--rate HZ]
+
+A source given ":heartbeat" sends HEARTBEATs (a quadrotor, PX4) instead.
 
 Truth per source "sysid/1": sent (every frame numbered and sent), damaged
 (those sent with a broken CRC), good (sent - damaged).
@@ -30,15 +32,18 @@ def main():
     conn = mavutil.mavlink_connection(args.link, source_system=1, source_component=1)
     sources = []
     for spec in args.source:
-        sysid, every = (int(v) for v in spec.split(":"))
-        mav = mavutil.mavlink.MAVLink(conn, srcSystem=sysid, srcComponent=1)
-        sources.append((sysid, every, mav))
-    truth = {f"{s}/1": {"sent": 0, "damaged": 0, "good": 0} for s, _, _ in sources}
+        sysid, every, *kind = spec.split(":")
+        mav = mavutil.mavlink.MAVLink(conn, srcSystem=int(sysid), srcComponent=1)
+        sources.append((int(sysid), int(every), kind == ["heartbeat"], mav))
+    truth = {f"{s}/1": {"sent": 0, "damaged": 0, "good": 0} for s, _, _, _ in sources}
     print("ready", flush=True)
     start = time.monotonic()
     for n in range(args.frames):
-        for sysid, every, mav in sources:
-            msg = mav.attitude_encode(n * 10, 0.1, 0.2, 0.3, 0.01, 0.02, 0.03)
+        for sysid, every, heartbeat, mav in sources:
+            if heartbeat:
+                msg = mav.heartbeat_encode(2, 12, 0, 0, 4)
+            else:
+                msg = mav.attitude_encode(n * 10, 0.1, 0.2, 0.3, 0.01, 0.02, 0.03)
             frame = bytearray(msg.pack(mav))
             # pack() numbers the frame with mav.seq; send() would step it.
             mav.seq = (mav.seq + 1) % 256
