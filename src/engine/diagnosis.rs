@@ -99,9 +99,12 @@ fn not_mavlink(o: &Observed<'_>) -> Hint {
     Hint::new(
         HintCode::NotMavlink,
         format!(
-            "{} bytes heard on {} but no valid MAVLink frame ({} failed their CRC): {baud}not \
-             MAVLink, or a dialect whose messages have other CRCs",
-            f.skipped_bytes, o.link, f.bad_crc
+            "{} bytes heard on {} but no valid MAVLink frame ({} failed their CRC, {} of them \
+             whole frames): {baud}not MAVLink, or a dialect whose messages have other CRCs",
+            f.skipped_bytes,
+            o.link,
+            f.bad_crc + f.damaged,
+            f.damaged
         ),
     )
 }
@@ -281,7 +284,7 @@ pub fn command_hints(o: &Observed<'_>, unacknowledged: &[SysComp]) -> Vec<Hint> 
         return Vec::new();
     }
     if f.frames == 0 {
-        let junk = f.skipped_bytes + f.bad_crc + f.truncated > 0;
+        let junk = f.skipped_bytes + f.bad_crc + f.damaged + f.truncated > 0;
         return vec![if junk {
             not_mavlink(o)
         } else {
@@ -337,7 +340,7 @@ pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
     if f.frames == 0 && o.link_failed {
         return hints;
     }
-    let junk = f.skipped_bytes + f.bad_crc + f.truncated > 0;
+    let junk = f.skipped_bytes + f.bad_crc + f.damaged + f.truncated > 0;
     // Answered requests stay undecided until their timeout (a duplicate
     // may follow): too early only while nothing has answered at all.
     let decided = o.requests.saturating_sub(o.undecided);

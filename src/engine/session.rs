@@ -94,7 +94,8 @@ pub trait Driver {
     /// Decides what is overdue at `now`.
     fn expire(&mut self, now: Nanos);
     /// Every frame the signing gate admitted, before the session reads it
-    /// (the passive probe counts them all), with the path it came by.
+    /// (the passive probe counts them all), with the path it came by; and
+    /// every damaged frame ([`Msg::Damaged`]), which goes nowhere else.
     fn on_received(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
     /// A received frame that is neither a HEARTBEAT, a RADIO_STATUS nor a
     /// LINK_NODE_STATUS.
@@ -172,11 +173,19 @@ impl Heard {
             ..
         } in inbound.drain(..)
         {
+            let at = clock.ns(at);
+            // A damaged frame's header is all it has: it fills its source's
+            // sequence, and is no evidence of anything else (its signature
+            // cannot be checked against bytes that changed, and no system is
+            // heard by it).
+            if matches!(frame.msg, Msg::Damaged) {
+                driver.on_received(&frame, path, at);
+                continue;
+            }
             if !admitted(&mut self.gate, &frame, signature.as_ref()) {
                 continue;
             }
             self.roster.frame(frame.source, frame.version, frame.signed);
-            let at = clock.ns(at);
             driver.on_received(&frame, path, at);
             match frame.msg {
                 Msg::Heartbeat {

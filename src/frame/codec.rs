@@ -5,7 +5,7 @@ use mavlink::dialects::ardupilotmega as dialect;
 use mavlink::{MAVLinkV1MessageRaw, MAVLinkV2MessageRaw, MavHeader, MavlinkVersion, Message};
 use num_traits::FromPrimitive;
 
-use super::scanner::{IFLAG_SIGNED, STX_V1};
+use super::scanner::{header_len, Kind, IFLAG_SIGNED, STX_V1};
 use super::{ids, Fix, FixKind, Frame, LinkNodeStatus, Msg, RadioStatus, SysComp};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -167,7 +167,7 @@ fn to_mavlink(msg: &Msg) -> dialect::MavMessage {
         Msg::LinkNodeStatus(l) => M::LINK_NODE_STATUS(l.into()),
         Msg::Fix(f) => fix_message(f),
         Msg::Attitude { .. } | Msg::GlobalPositionInt { .. } | Msg::Filler { .. } => load(msg),
-        Msg::Other => unreachable!("Msg::Other is never sent"),
+        Msg::Other | Msg::Damaged => unreachable!("{msg:?} is never sent"),
     }
 }
 
@@ -261,16 +261,39 @@ pub fn encode(out: &mut Vec<u8>, version: Version, header: Header, msg: &Msg) {
     }
 }
 
+/// Decodes a frame the scanner handed over as `kind`: a good one whole; of
+/// a damaged one or one of an unknown id only the header, which is all
+/// that can be believed ([`Msg::Damaged`], [`Msg::Other`]).
+pub fn decode_as(raw: &[u8], kind: Kind) -> Frame {
+    match kind {
+        Kind::Good => decode(raw),
+        Kind::Damaged => Frame {
+            msg: Msg::Damaged,
+            ..header_of(raw)
+        },
+        Kind::Unknown => header_of(raw),
+    }
+}
+
 /// Decodes a frame the scanner has already CRC-checked.
 pub fn decode(raw: &[u8]) -> Frame {
-    let (version, packet_seq, sysid, compid, msgid, payload, signed) = if raw[0] == STX_V1 {
+    let frame = header_of(raw);
+    let payload = &raw[header_len(raw[0])..][..usize::from(raw[1])];
+    Frame {
+        msg: decode_payload(frame.version, frame.msgid, payload),
+        ..frame
+    }
+}
+
+/// The header's figures of a whole frame, its message [`Msg::Other`].
+fn header_of(raw: &[u8]) -> Frame {
+    let (version, packet_seq, sysid, compid, msgid, signed) = if raw[0] == STX_V1 {
         (
             Version::V1,
             raw[2],
             raw[3],
             raw[4],
             u32::from(raw[5]),
-            &raw[6..6 + usize::from(raw[1])],
             false,
         )
     } else {
@@ -280,7 +303,6 @@ pub fn decode(raw: &[u8]) -> Frame {
             raw[5],
             raw[6],
             u32::from_le_bytes([raw[7], raw[8], raw[9], 0]),
-            &raw[10..10 + usize::from(raw[1])],
             raw[2] & IFLAG_SIGNED != 0,
         )
     };
@@ -292,7 +314,7 @@ pub fn decode(raw: &[u8]) -> Frame {
         signed,
         // A frame is at most 280 bytes.
         len: u16::try_from(raw.len()).unwrap_or(u16::MAX),
-        msg: decode_payload(version, msgid, payload),
+        msg: Msg::Other,
     }
 }
 

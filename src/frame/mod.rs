@@ -8,8 +8,8 @@ pub mod codec;
 pub mod scanner;
 pub mod signing;
 
-pub use codec::{decode, encode, Header, Version};
-pub use scanner::{scan_datagram, ScanStats, StreamScanner};
+pub use codec::{decode, decode_as, encode, Header, Version};
+pub use scanner::{scan_datagram, scan_datagram_all, Kind, ScanStats, StreamScanner};
 
 /// A system/component address on a MAVLink network.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, serde::Serialize)]
@@ -91,8 +91,15 @@ pub enum Msg {
     Filler {
         len: u8,
     },
-    /// Any other message: valid frame, contents not needed.
+    /// Any other message: valid frame, contents not needed (or an id the
+    /// dialect does not know, lined up with what follows: see
+    /// [`Kind::Unknown`]).
     Other,
+    /// A whole frame whose CRC failed ([`Kind::Damaged`]): only its header
+    /// (source, sequence number, id, length) is known. It fills its
+    /// source's sequence, and is nothing else: no system is heard by it,
+    /// no request or reply matched.
+    Damaged,
 }
 
 /// A radio's RADIO_STATUS (message 109): its link figures, as received and
@@ -157,7 +164,7 @@ pub enum FixKind {
     Home,
 }
 
-/// One received frame, CRC checked.
+/// One received frame: CRC checked, unless its `msg` is [`Msg::Damaged`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Frame {
     pub version: Version,

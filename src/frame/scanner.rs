@@ -14,6 +14,19 @@
 //! overlaps junk is found. The rule this gives: every whole good frame that
 //! overlaps no other good frame is delivered (on a stream, by the read that
 //! brings its last byte).
+//!
+//! Two kinds of candidate are not junk although nothing checks them out,
+//! because the bytes around them say they are whole frames: an id the
+//! dialect does not know ([`Kind::Unknown`]), and a known id whose CRC (or
+//! MAVLink 1 length) fails ([`Kind::Damaged`]: damaged on the way, or sent
+//! in a dialect whose CRC differs, as pymavlink issue 807's DISTANCE_SENSOR).
+//! Either is taken whole, never byte by byte, only when no good frame starts
+//! inside it and it lines up: an unknown id with the data's end or a
+//! start byte; a damaged frame with the end of a datagram or with a good
+//! frame right after it. Their headers (source, sequence number, id) are
+//! what the link's sequence figures need: they arrived, so their numbers
+//! are not lost. [`scan_datagram`] and [`StreamScanner::push`] hand over
+//! good frames only; the `_all` forms hand over all three kinds.
 
 use std::sync::OnceLock;
 
@@ -35,25 +48,47 @@ pub const MAX_FRAME_LEN: usize = V2_HEADER + 255 + CHECKSUM_LEN + SIGNATURE_LEN;
 /// The most a [`StreamScanner`] keeps between reads. The tail is one
 /// unfinished candidate (at most one frame; exactly one whole frame when an
 /// unknown id waits for the next byte to show it lines up, found by the
-/// fuzzer), or a lined-up unknown id waiting for a candidate that starts
-/// inside it to be whole: at most 279 bytes of the unknown one before a
-/// candidate on its last byte, whose length byte is then the start byte
-/// that lines it up (253 or 254), so at most 279 bytes long, less the byte
-/// still missing.
-pub const MAX_PENDING: usize = 2 * MAX_FRAME_LEN - 3;
+/// fuzzer), or a whole candidate waiting for the next one to be whole: a
+/// lined-up unknown id waiting for a candidate that starts inside it (at
+/// most 279 + 278 bytes), or a damaged frame waiting for the frame after
+/// it to prove good: a whole frame and all but the last byte of the
+/// next, at most 280 + 279.
+pub const MAX_PENDING: usize = 2 * MAX_FRAME_LEN - 1;
+
+/// What a candidate the scanner hands over is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// A known message, its CRC checked.
+    Good,
+    /// A known message whose CRC (or MAVLink 1 length) fails, lined up
+    /// with what follows: a whole frame that arrived damaged (or in a
+    /// dialect whose CRC differs). Only its header can be believed.
+    Damaged,
+    /// A message id the dialect does not know, lined up with what follows:
+    /// nothing to check it against, its header believed.
+    Unknown,
+}
 
 /// What the scanner saw besides good frames. Every byte that is not part of
-/// a good frame or an unknown-but-aligned frame is counted in `skipped_bytes`.
+/// a good, a damaged or an unknown-but-aligned frame is counted in
+/// `skipped_bytes`.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub struct ScanStats {
     /// Frames with a valid CRC.
     pub frames: u64,
     /// Candidates of a known message whose CRC did not match (or, in
-    /// MAVLink 1, whose length is not that message's).
+    /// MAVLink 1, whose length is not that message's) and that nothing
+    /// showed to be a whole frame: junk, skipped byte by byte. Never also
+    /// in `damaged`.
     pub bad_crc: u64,
+    /// Whole frames of a known message whose CRC did not match, lined up
+    /// with what follows ([`Kind::Damaged`]): skipped whole, their headers
+    /// delivered. Never also in `bad_crc`.
+    pub damaged: u64,
     /// Well-aligned frames of a message id this build does not know.
     pub unknown_id: u64,
-    /// Bytes dropped while resynchronising (junk, broken frames).
+    /// Bytes dropped while resynchronising (junk, broken frames), not
+    /// those of damaged or unknown-id frames.
     pub skipped_bytes: u64,
     /// Datagrams (or stream ends) that stopped in the middle of a frame.
     pub truncated: u64,
@@ -67,6 +102,7 @@ impl ScanStats {
     pub fn add(&mut self, other: &ScanStats) {
         self.frames += other.frames;
         self.bad_crc += other.bad_crc;
+        self.damaged += other.damaged;
         self.unknown_id += other.unknown_id;
         self.skipped_bytes += other.skipped_bytes;
         self.truncated += other.truncated;
@@ -114,7 +150,8 @@ fn frame_len(buf: &[u8]) -> Result<Option<usize>, ()> {
     }
 }
 
-fn header_len(stx: u8) -> usize {
+/// The header's length of a frame starting with `stx`.
+pub(crate) fn header_len(stx: u8) -> usize {
     if stx == STX_V1 {
         V1_HEADER
     } else {
@@ -150,6 +187,8 @@ enum Step {
     Frame(usize),
     /// An unknown message that lines up with what follows: skip it whole.
     Unknown(usize),
+    /// A damaged frame that lines up with what follows: skip it whole.
+    Damaged(usize),
     /// Not a frame: resume one byte later.
     Reject { bad_crc: bool },
     /// The candidate runs past the data we have.
@@ -345,7 +384,7 @@ fn judge(whole: &[u8], start: usize, at_end: bool, memo: &mut FrameMemo) -> Step
     let frame = &buf[..len];
     match check(frame) {
         Check::Good => Step::Frame(len),
-        Check::Bad => Step::Reject { bad_crc: true },
+        Check::Bad => damaged_or_junk(whole, start, len, at_end, memo),
         // An id we cannot check: believe its length only when the frame
         // ends exactly where the data ends or another start byte follows,
         // and no checked frame starts inside it.
@@ -361,14 +400,63 @@ fn judge(whole: &[u8], start: usize, at_end: bool, memo: &mut FrameMemo) -> Step
     }
 }
 
-/// Scans `buf`, calling `on_frame` with each good frame. Returns how many
-/// leading bytes are finished with; with `at_end` that is all of them.
+/// Whether a whole good frame starts at `buf[at]`: `None` while its bytes
+/// are not all there (and its claimed extent holds no good frame, which
+/// would rule it out at once).
+fn good_frame_at(buf: &[u8], at: usize, at_end: bool, memo: &mut FrameMemo) -> Option<bool> {
+    match memo.frame_at(buf, at) {
+        At::Good(_) => Some(true),
+        At::NotGood => Some(false),
+        At::NotYet if at_end => Some(false),
+        At::NotYet => match frame_len(&buf[at..]) {
+            Ok(Some(claimed)) if hides_a_good_frame(buf, at, claimed, memo) => Some(false),
+            _ => None,
+        },
+    }
+}
+
+/// Judges the whole candidate of `len` bytes at `whole[start]` whose check
+/// failed. Its header is believed (a damaged frame) only on the evidence
+/// that it is a whole frame: it ends where a datagram ends or where a good
+/// frame starts, and no good frame starts inside it. Anything else is junk
+/// (a false start byte whose claimed extent happens to end on a frame is
+/// still junk when a good frame starts inside it). On a stream the frame
+/// after it must be whole to tell, as for an unknown id.
+fn damaged_or_junk(
+    whole: &[u8],
+    start: usize,
+    len: usize,
+    at_end: bool,
+    memo: &mut FrameMemo,
+) -> Step {
+    // A good frame inside decides at once, before any wait for what
+    // follows (which would hold that frame back).
+    let inside = good_frame_starts_inside(whole, start, len, at_end, memo);
+    if inside == Some(true) {
+        return Step::Reject { bad_crc: true };
+    }
+    let next = start + len;
+    let lined_up = if next == whole.len() {
+        at_end.then_some(true)
+    } else {
+        good_frame_at(whole, next, at_end, memo)
+    };
+    match (lined_up, inside) {
+        (Some(false), _) => Step::Reject { bad_crc: true },
+        (Some(true), Some(false)) => Step::Damaged(len),
+        _ => Step::NeedMore,
+    }
+}
+
+/// Scans `buf`, calling `on_frame` with each good, damaged or unknown-id
+/// frame. Returns how many leading bytes are finished with; with `at_end`
+/// that is all of them.
 fn scan(
     buf: &[u8],
     at_end: bool,
     stats: &mut ScanStats,
     memo: &mut FrameMemo,
-    on_frame: &mut dyn FnMut(&[u8]),
+    on_frame: &mut dyn FnMut(&[u8], Kind),
 ) -> usize {
     let mut pos = 0;
     loop {
@@ -382,11 +470,17 @@ fn scan(
             Step::Frame(len) => {
                 stats.frames += 1;
                 stats.frame_bytes += len as u64;
-                on_frame(&buf[pos..pos + len]);
+                on_frame(&buf[pos..pos + len], Kind::Good);
                 pos += len;
             }
             Step::Unknown(len) => {
                 stats.unknown_id += 1;
+                on_frame(&buf[pos..pos + len], Kind::Unknown);
+                pos += len;
+            }
+            Step::Damaged(len) => {
+                stats.damaged += 1;
+                on_frame(&buf[pos..pos + len], Kind::Damaged);
                 pos += len;
             }
             Step::Reject { bad_crc } => {
@@ -411,9 +505,28 @@ fn scan(
     }
 }
 
-/// Scans one datagram on its own.
+/// Scans one datagram on its own; `on_frame` gets the good frames.
 pub fn scan_datagram(datagram: &[u8], stats: &mut ScanStats, on_frame: &mut dyn FnMut(&[u8])) {
+    scan_datagram_all(datagram, stats, &mut good_only(on_frame));
+}
+
+/// Scans one datagram on its own; `on_frame` gets every frame, each with
+/// its kind.
+pub fn scan_datagram_all(
+    datagram: &[u8],
+    stats: &mut ScanStats,
+    on_frame: &mut dyn FnMut(&[u8], Kind),
+) {
     scan(datagram, true, stats, &mut FrameMemo::default(), on_frame);
+}
+
+/// A callback for every kind that passes on the good frames only.
+fn good_only(on_frame: &mut dyn FnMut(&[u8])) -> impl FnMut(&[u8], Kind) + '_ {
+    move |raw, kind| {
+        if kind == Kind::Good {
+            on_frame(raw);
+        }
+    }
 }
 
 /// Scanner for a byte stream: keeps an unfinished frame between reads.
@@ -439,8 +552,14 @@ impl StreamScanner {
         }
     }
 
-    /// Feeds bytes read from the stream.
+    /// Feeds bytes read from the stream; `on_frame` gets the good frames.
     pub fn push(&mut self, data: &[u8], on_frame: &mut dyn FnMut(&[u8])) {
+        self.push_all(data, &mut good_only(on_frame));
+    }
+
+    /// Feeds bytes read from the stream; `on_frame` gets every frame, each
+    /// with its kind.
+    pub fn push_all(&mut self, data: &[u8], on_frame: &mut dyn FnMut(&[u8], Kind)) {
         if self.buf.is_empty() {
             // Fast path: no carried tail, scan the read in place.
             let done = scan(data, false, &mut self.stats, &mut self.memo, on_frame);
@@ -591,10 +710,149 @@ mod tests {
         let mut bad = ping_frame(Version::V2, 1);
         let last = bad.len() - 1;
         bad[last] ^= 0xFF;
+        bad.extend([0x42, 0x43]);
         bad.extend(ping_frame(Version::V2, 2));
         let (frames, stats) = collect_datagram(&bad);
         assert_eq!(frames.len(), 1);
-        assert_eq!(stats.bad_crc, 1);
+        assert_eq!((stats.bad_crc, stats.damaged), (1, 0));
+    }
+
+    /// Every frame of every kind in `data` scanned as a datagram and as a
+    /// stream split at every read size: the same each way.
+    fn kinds_every_way(data: &[u8]) -> (Vec<(Vec<u8>, Kind)>, ScanStats) {
+        let mut stats = ScanStats::default();
+        let mut found = Vec::new();
+        scan_datagram_all(data, &mut stats, &mut |f, k| found.push((f.to_vec(), k)));
+        for chunk in 1..=data.len() {
+            let mut scanner = StreamScanner::new();
+            let mut streamed = Vec::new();
+            for piece in data.chunks(chunk) {
+                scanner.push_all(piece, &mut |f, k| streamed.push((f.to_vec(), k)));
+            }
+            assert_eq!(streamed, found, "read size {chunk}");
+            assert_eq!(scanner.stats, stats, "read size {chunk}");
+            assert_eq!(scanner.pending_bytes(), 0, "read size {chunk}");
+        }
+        (found, stats)
+    }
+
+    /// A PING from 1/1 numbered `seq` whose CRC is broken.
+    fn damaged_ping(version: Version, seq: u8) -> Vec<u8> {
+        let mut out = Vec::new();
+        let header = Header {
+            sysid: 1,
+            compid: 1,
+            seq,
+        };
+        let ping = Msg::Ping {
+            time_usec: 123_456,
+            seq: 9,
+            target_system: 255,
+            target_component: 190,
+        };
+        encode(&mut out, version, header, &ping);
+        let crc = out.len() - 2;
+        out[crc] ^= 0x5A;
+        assert!(!out[1..].iter().any(|&b| b == STX_V1 || b == STX_V2));
+        out
+    }
+
+    #[test]
+    fn a_damaged_frame_between_good_ones_is_delivered_once_with_its_header() {
+        for version in [Version::V1, Version::V2] {
+            let before = ping_frame(Version::V2, 1);
+            let damaged = damaged_ping(version, 200);
+            let after = ping_frame(Version::V1, 2);
+            let data = [&before[..], &damaged[..], &after[..]].concat();
+            let (found, stats) = kinds_every_way(&data);
+            assert_eq!(
+                found,
+                [
+                    (before.clone(), Kind::Good),
+                    (damaged.clone(), Kind::Damaged),
+                    (after.clone(), Kind::Good)
+                ]
+            );
+            assert_eq!(
+                (
+                    stats.frames,
+                    stats.damaged,
+                    stats.bad_crc,
+                    stats.skipped_bytes
+                ),
+                (2, 1, 0, 0)
+            );
+            let frame = crate::frame::decode_as(&damaged, Kind::Damaged);
+            assert_eq!(frame.msg, Msg::Damaged);
+            assert_eq!(
+                (frame.source, frame.packet_seq, frame.msgid, frame.version),
+                (crate::frame::SysComp::new(1, 1), 200, 4, version)
+            );
+            assert_eq!(usize::from(frame.len), damaged.len());
+        }
+    }
+
+    #[test]
+    fn a_damaged_frame_ending_a_datagram_is_delivered() {
+        let data = [ping_frame(Version::V2, 1), damaged_ping(Version::V2, 2)].concat();
+        let mut stats = ScanStats::default();
+        let mut kinds = Vec::new();
+        scan_datagram_all(&data, &mut stats, &mut |_, k| kinds.push(k));
+        assert_eq!(kinds, [Kind::Good, Kind::Damaged]);
+        // On a stream, nothing yet says it is whole: it waits.
+        let mut scanner = StreamScanner::new();
+        let mut kinds = Vec::new();
+        scanner.push_all(&data, &mut |_, k| kinds.push(k));
+        assert_eq!(kinds, [Kind::Good]);
+        assert_eq!(scanner.pending_bytes(), data.len() / 2);
+    }
+
+    #[test]
+    fn a_damaged_looking_candidate_followed_by_junk_stays_junk() {
+        let damaged = damaged_ping(Version::V2, 3);
+        let after = ping_frame(Version::V2, 4);
+        // Junk after it, and a start byte that starts no good frame.
+        for junk in [&[0x42u8, 0x43][..], &[STX_V2, 0x03, 0x00, 0x00][..]] {
+            let data = [&damaged[..], junk, &after[..]].concat();
+            let (found, stats) = kinds_every_way(&data);
+            assert_eq!(found, [(after.clone(), Kind::Good)], "{junk:02x?}");
+            assert_eq!(
+                (stats.damaged, stats.bad_crc, stats.skipped_bytes as usize),
+                (0, 1, damaged.len() + junk.len()),
+                "{junk:02x?}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_damaged_looking_candidate_with_a_good_frame_inside_is_junk() {
+        // A MAVLink 1 PING header claiming 26 payload bytes that hold a
+        // whole good frame, its extent lined up with a good frame after it.
+        let inner = ping_frame(Version::V1, 5);
+        let mut junk = vec![STX_V1, inner.len() as u8, 0, 1, 1, 4];
+        junk.extend(&inner);
+        junk.extend([0x11, 0x22]);
+        let after = ping_frame(Version::V2, 6);
+        let data = [&junk[..], &after[..]].concat();
+        let (found, stats) = kinds_every_way(&data);
+        assert_eq!(found, [(inner, Kind::Good), (after, Kind::Good)]);
+        assert_eq!((stats.damaged, stats.skipped_bytes), (0, 8));
+    }
+
+    #[test]
+    fn a_lying_start_after_a_damaged_frame_holds_back_no_good_frame() {
+        // After the damaged frame, `FE FF` claims 263 bytes; the good frame
+        // behind it is whole, so the false start can never be a good frame:
+        // the damaged one is junk at once, and the good one delivered.
+        let damaged = damaged_ping(Version::V2, 7);
+        let after = ping_frame(Version::V2, 8);
+        let data = [&damaged[..], &[STX_V1, 0xFF, 0x01, 0x01][..], &after[..]].concat();
+        let mut scanner = StreamScanner::new();
+        let mut found = Vec::new();
+        scanner.push_all(&data, &mut |f, k| found.push((f.to_vec(), k)));
+        assert_eq!(found, [(after, Kind::Good)]);
+        assert_eq!(scanner.pending_bytes(), 0);
+        assert_eq!((scanner.stats.damaged, scanner.stats.bad_crc), (0, 1));
     }
 
     #[test]
@@ -762,23 +1020,57 @@ mod tests {
         );
     }
 
+    /// A signed MAVLink 2 ENCAPSULATED_DATA frame with 255 payload bytes
+    /// of 0x42 (the longest frame there is), its CRC good or not.
+    fn longest_frame(good: bool) -> Vec<u8> {
+        let mut frame = vec![STX_V2, 255, IFLAG_SIGNED, 0, 0, 1, 1, 131, 0, 0];
+        frame.resize(V2_HEADER + 255, 0x42);
+        let mut digest = X25.digest();
+        digest.update(&frame[1..]);
+        digest.update(&[extra_crc(131).unwrap()]);
+        let crc = digest.finalize() ^ u16::from(!good);
+        frame.extend(crc.to_le_bytes());
+        frame.resize(MAX_FRAME_LEN, 0x42);
+        frame
+    }
+
     #[test]
     fn the_longest_tail_a_stream_keeps_is_max_pending() {
+        // A longest damaged frame waits for the longest good frame after
+        // it to be whole: all of one and all but the last byte of the other.
+        let data = [longest_frame(false), longest_frame(true)].concat();
+        assert!(matches!(check(&data[..MAX_FRAME_LEN]), Check::Bad));
+        assert!(matches!(check(&data[MAX_FRAME_LEN..]), Check::Good));
+        let mut scanner = StreamScanner::new();
+        let (last, most) = data.split_last().unwrap();
+        for byte in most {
+            scanner.push_all(std::slice::from_ref(byte), &mut |_, _| panic!("no frame"));
+        }
+        assert_eq!(scanner.pending_bytes(), MAX_PENDING);
+        let mut kinds = Vec::new();
+        scanner.push_all(std::slice::from_ref(last), &mut |_, k| kinds.push(k));
+        assert_eq!(kinds, [Kind::Damaged, Kind::Good]);
+        assert_eq!(scanner.pending_bytes(), 0);
+    }
+
+    #[test]
+    fn an_unknown_message_waits_for_a_candidate_inside_it() {
         // A maximal unknown message (signed, 255 payload bytes) lined up
         // with the `FE` after it, whose last byte starts a signed MAVLink 2
         // candidate of 254 payload bytes (the `FE`): both wait until that
-        // candidate is whole, 279 + 279 bytes from the first start byte.
+        // candidate is whole, 279 + 279 bytes from the first start byte:
+        // 557 are kept while its last byte is missing.
         let header = [STX_V2, 255, IFLAG_SIGNED, 0, 0, 1, 1, 0xEE, 0xEE, 0xEE];
         let mut data = header.to_vec();
         data.resize(MAX_FRAME_LEN - 1, 0x42);
         data.extend([STX_V2, STX_V1, IFLAG_SIGNED]);
         data.extend(&header[3..]);
-        data.resize(MAX_PENDING, 0x42);
+        data.resize(MAX_PENDING - 2, 0x42);
         let mut scanner = StreamScanner::new();
         for byte in &data {
             scanner.push(std::slice::from_ref(byte), &mut |_| panic!("no frame"));
         }
-        assert_eq!(scanner.pending_bytes(), MAX_PENDING);
+        assert_eq!(scanner.pending_bytes(), MAX_PENDING - 2);
         assert_eq!(scanner.stats.unknown_id, 0);
         // Whole now, and not a good frame: the unknown message is skipped.
         scanner.push(&[0x42], &mut |_| panic!("no frame"));

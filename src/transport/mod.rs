@@ -33,7 +33,7 @@ use thiserror::Error;
 use tokio::time::Instant;
 
 use crate::frame::signing::SignedBytes;
-use crate::frame::{self, Frame, ScanStats};
+use crate::frame::{self, Frame, Kind, ScanStats};
 pub use address::LinkSpec;
 pub use outbox::{Outbox, To};
 
@@ -57,11 +57,12 @@ pub struct Inbound {
 }
 
 impl Inbound {
-    /// The inbound form of one whole, CRC-checked frame, with its bytes
-    /// when `keep_raw`.
-    pub fn of(raw: &[u8], at: Instant, path: PathId, keep_raw: bool) -> Self {
+    /// The inbound form of one whole frame the scanner handed over as
+    /// `kind`, with its bytes when `keep_raw` (a damaged frame too: a
+    /// recording keeps what arrived, as QGroundControl's logs do).
+    pub fn of(raw: &[u8], kind: Kind, at: Instant, path: PathId, keep_raw: bool) -> Self {
         Inbound {
-            frame: frame::decode(raw),
+            frame: frame::decode_as(raw, kind),
             at,
             path,
             signature: SignedBytes::of(raw),
@@ -237,8 +238,8 @@ pub trait Transport {
     fn keep_raw(&mut self);
 }
 
-/// Scans one datagram and appends its frames, all stamped `at`, with their
-/// bytes when `keep_raw`.
+/// Scans one datagram and appends its frames (damaged and unknown-id ones
+/// too), all stamped `at`, with their bytes when `keep_raw`.
 pub(crate) fn push_datagram(
     data: &[u8],
     at: Instant,
@@ -247,8 +248,8 @@ pub(crate) fn push_datagram(
     stats: &mut ScanStats,
     out: &mut Vec<Inbound>,
 ) {
-    frame::scan_datagram(data, stats, &mut |raw| {
-        out.push(Inbound::of(raw, at, path, keep_raw))
+    frame::scan_datagram_all(data, stats, &mut |raw, kind| {
+        out.push(Inbound::of(raw, kind, at, path, keep_raw))
     });
 }
 

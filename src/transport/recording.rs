@@ -10,6 +10,10 @@
 //! - The links of one run share one file, each received frame marked with
 //!   its link's index in the stamp's two lowest bits and what mavping sent
 //!   with 3, as MAVProxy does ([`writer`](super::tlog::writer)).
+//! - A damaged frame (its CRC failed, its header whole: the scanner's
+//!   [`Kind::Damaged`](crate::frame::Kind)) is recorded as it arrived, as
+//!   QGroundControl records one: read back, it is a damaged record again,
+//!   where a logger that kept only good frames would leave its number lost.
 //! - A frame the link did not write is not recorded: nothing is sent while
 //!   a listening link has no peer, and a byte stream refuses the tail of a
 //!   burst it cannot queue ([`Transport::refused`]).

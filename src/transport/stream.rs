@@ -310,8 +310,8 @@ impl<C: Connect> Transport for StreamLink<C> {
                         Ok(0) => self.lost(io::ErrorKind::UnexpectedEof.into())?,
                         Ok(n) => {
                             let keep = self.keep_raw;
-                            self.scanner.push(&self.buf[..n], &mut |raw| {
-                                out.push(Inbound::of(raw, at, 0, keep))
+                            self.scanner.push_all(&self.buf[..n], &mut |raw, kind| {
+                                out.push(Inbound::of(raw, kind, at, 0, keep))
                             });
                             return Ok(());
                         }

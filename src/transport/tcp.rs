@@ -235,8 +235,8 @@ impl Transport for TcpServer {
                             let at = Instant::now();
                             let path = client.path;
                             let keep = self.keep_raw;
-                            client.scanner.push(&self.buf[..n], &mut |raw| {
-                                out.push(Inbound::of(raw, at, path, keep))
+                            client.scanner.push_all(&self.buf[..n], &mut |raw, kind| {
+                                out.push(Inbound::of(raw, kind, at, path, keep))
                             });
                             progress = true;
                             break;

@@ -67,6 +67,8 @@ fn hostile_udp_peer_costs_no_reply_and_every_rejection_is_counted() {
     // The scanner's figures, exactly.
     let f = &s["frames"];
     assert_eq!(n(f, "bad_crc"), t("bad_crc"), "{f} {truth}");
+    assert!(t("damaged") > 0, "{truth}");
+    assert_eq!(n(f, "damaged"), t("damaged"), "{f} {truth}");
     assert_eq!(n(f, "unknown_id"), t("unknown_id"), "{f} {truth}");
     assert_eq!(n(f, "skipped_bytes"), t("skipped_bytes"), "{f} {truth}");
     assert_eq!(n(f, "truncated"), 0, "{f}");
@@ -140,6 +142,7 @@ fn hostile_serial_peer_frames_split_and_truncated_across_reads() {
         t("replies") + t("wrong_time") + t("unsent_seq") + t("spoofed")
     );
     assert_eq!(n(f, "bad_crc"), scanner.stats.bad_crc, "{f}");
+    assert_eq!(n(f, "damaged"), scanner.stats.damaged, "{f}");
     assert!(n(f, "bad_crc") >= t("bad_crc"), "{f} {truth}");
     assert_eq!(n(f, "unknown_id"), scanner.stats.unknown_id, "{f}");
     assert_eq!(n(f, "skipped_bytes"), scanner.stats.skipped_bytes, "{f}");

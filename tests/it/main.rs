@@ -8,6 +8,7 @@ mod advice;
 mod cli;
 mod completions;
 mod contrib;
+mod damaged;
 mod deb;
 mod diagnosis;
 mod docs;

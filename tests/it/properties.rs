@@ -9,7 +9,8 @@ use mavlink::Message;
 use mavping::engine::matcher::{Lookup, MatchEvent, Matcher};
 use mavping::frame::scanner::{MAX_FRAME_LEN, MAX_PENDING};
 use mavping::frame::{
-    encode, scan_datagram, Header, Msg, ScanStats, StreamScanner, SysComp, Version,
+    encode, scan_datagram, scan_datagram_all, Header, Msg, ScanStats, StreamScanner, SysComp,
+    Version,
 };
 use proptest::prelude::*;
 
@@ -132,6 +133,34 @@ fn datagram(data: &[u8]) -> (Vec<Vec<u8>>, ScanStats) {
     (frames, stats)
 }
 
+/// `frame` with its CRC broken (its header, payload and signature kept).
+fn damaged(mut frame: Vec<u8>) -> Vec<u8> {
+    let header = if frame[0] == 0xFE { 6 } else { 10 };
+    let crc = header + usize::from(frame[1]);
+    frame[crc] ^= 0x5A;
+    frame
+}
+
+/// Every frame of every kind, fed in `splits` read sizes, as (bytes, kind).
+fn stream_all(
+    data: &[u8],
+    splits: &[usize],
+) -> (Vec<(Vec<u8>, mavping::frame::Kind)>, ScanStats, usize) {
+    let mut scanner = StreamScanner::new();
+    let mut found = Vec::new();
+    let mut rest = data;
+    for &size in splits.iter().cycle() {
+        if rest.is_empty() {
+            break;
+        }
+        let (now, later) = rest.split_at(size.clamp(1, rest.len()));
+        scanner.push_all(now, &mut |f, k| found.push((f.to_vec(), k)));
+        assert!(scanner.pending_bytes() <= MAX_PENDING);
+        rest = later;
+    }
+    (found, scanner.stats, scanner.pending_bytes())
+}
+
 /// A false header: MAVLink 1 with any length and an id the dialect may or
 /// may not know (14 it does not), or MAVLink 2 with an unknown id, so its
 /// claimed extent can end anywhere in what follows.
@@ -234,6 +263,44 @@ proptest! {
         prop_assert_eq!((stats.bad_crc, stats.unknown_id, stats.truncated), (0, 0, 0));
     }
 
+    /// Good frames, some right after a damaged one (a real frame whose CRC
+    /// was broken), with junk that holds no start byte between: every
+    /// damaged frame is delivered once as damaged at its place, every good
+    /// one as good, by a datagram scan and by a stream in any read splits
+    /// alike; only the junk is skipped.
+    #[test]
+    fn damaged_frames_before_good_ones_are_delivered_whatever_the_reads(
+        parts in prop::collection::vec((clean_junk(), prop::option::of(frame()), frame()), 1..10),
+        splits in splits(),
+    ) {
+        use mavping::frame::Kind as K;
+        let mut data = Vec::new();
+        let mut expected = Vec::new();
+        let mut junk = 0u64;
+        for (j, d, f) in &parts {
+            data.extend_from_slice(j);
+            junk += j.len() as u64;
+            if let Some(d) = d {
+                let d = damaged(d.clone());
+                data.extend_from_slice(&d);
+                expected.push((d, K::Damaged));
+            }
+            data.extend_from_slice(f);
+            expected.push((f.clone(), K::Good));
+        }
+        let (found, stats, pending) = stream_all(&data, &splits);
+        prop_assert_eq!(&found, &expected);
+        prop_assert_eq!((stats.skipped_bytes, stats.bad_crc, pending), (junk, 0, 0));
+        let damaged_count = expected.iter().filter(|e| e.1 == K::Damaged).count() as u64;
+        prop_assert_eq!(stats.damaged, damaged_count);
+
+        let mut dgram_stats = ScanStats::default();
+        let mut dgram = Vec::new();
+        scan_datagram_all(&data, &mut dgram_stats, &mut |f, k| dgram.push((f.to_vec(), k)));
+        prop_assert_eq!(&dgram, &expected);
+        prop_assert_eq!(dgram_stats, stats);
+    }
+
     /// Arbitrary junk (start bytes, lying lengths, cut frames) between
     /// valid frames: no panic, the same result whatever the split, every
     /// byte accounted for, and the stream's frames are a prefix of what the
@@ -259,9 +326,12 @@ proptest! {
         let frame_bytes: u64 = whole.iter().map(|f| f.len() as u64).sum();
         let accounted = frame_bytes + whole_stats.skipped_bytes + whole_pending as u64;
         prop_assert!(accounted <= data.len() as u64);
-        let unknown = data.len() as u64 - accounted;
-        prop_assert!(unknown >= 8 * whole_stats.unknown_id);
-        prop_assert!(unknown <= MAX_FRAME_LEN as u64 * whole_stats.unknown_id);
+        // Unknown-id and damaged frames are taken whole, neither delivered
+        // as good nor skipped.
+        let unchecked = data.len() as u64 - accounted;
+        let whole_unchecked = whole_stats.unknown_id + whole_stats.damaged;
+        prop_assert!(unchecked >= 8 * whole_unchecked);
+        prop_assert!(unchecked <= MAX_FRAME_LEN as u64 * whole_unchecked);
 
         let (dgram, dgram_stats) = datagram(&data);
         // A datagram keeps a good frame whose payload holds another good

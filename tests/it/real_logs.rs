@@ -125,7 +125,10 @@ fn pauses(path: &Path, source: (u8, u8), secs: f64) -> usize {
         let f = &data[at + 8..];
         let (len, ids) = match f[0] {
             0xFE => (8 + usize::from(f[1]), (f[3], f[4])),
-            0xFD => (12 + usize::from(f[1]) + 13 * usize::from(f[2] & 1), (f[5], f[6])),
+            0xFD => (
+                12 + usize::from(f[1]) + 13 * usize::from(f[2] & 1),
+                (f[5], f[6]),
+            ),
             _ => {
                 at += 1;
                 continue;
@@ -165,20 +168,31 @@ fn vtol_batches_are_no_silences_and_its_losses_are_never_below_the_sequence() {
     assert!(silences.len() <= long + 2, "{silences:?}");
     // The batch pause is the source's routine (about 1.05 s).
     let routine = r.source("1/1")["routine_pause_ns"].as_u64().unwrap();
-    assert!((1_000_000_000..1_300_000_000).contains(&routine), "{routine}");
+    assert!(
+        (1_000_000_000..1_300_000_000).contains(&routine),
+        "{routine}"
+    );
     // The rate is the source's: 115 frames/s, not the 2,100 of a batch.
     let interval = r.source("1/1")["interval_ns"].as_u64().unwrap();
     assert!((7_000_000..11_000_000).contains(&interval), "{interval}");
     // What the wraps may hide is said apart: at most a wrap per long
     // silence that lost any number.
-    let extra = r.source("1/1")["silence_frames_estimated"].as_u64().unwrap();
-    assert!(extra % 256 == 0 && extra <= 256 * 4, "{extra}");
+    let extra = r.source("1/1")["silence_frames_estimated"]
+        .as_u64()
+        .unwrap();
+    assert!(extra.is_multiple_of(256) && extra <= 256 * 4, "{extra}");
     // The 4.2 s outage (115 frames/s: about 490 numbers) wrapped.
     let outage = told
         .iter()
         .find(|s| s["length_ns"].as_u64().unwrap() > 4_000_000_000)
         .unwrap();
-    assert_eq!((outage["seq_lost"].as_u64(), outage["lost_estimated"].as_u64()), (Some(234), Some(490)));
+    assert_eq!(
+        (
+            outage["seq_lost"].as_u64(),
+            outage["lost_estimated"].as_u64()
+        ),
+        (Some(234), Some(490))
+    );
 }
 
 #[test]
@@ -240,7 +254,10 @@ fn flight_logs_sitl_reboot_is_a_restart_not_a_loss() {
     assert!(lost < r.census("1/1", "lost"));
     assert!(lost <= 93, "{lost}");
     assert_eq!(r.source("250/250")["ground"], true);
-    assert_eq!(r.summary["totals"]["counts"]["received"], r.census("1/1", "good"));
+    assert_eq!(
+        r.summary["totals"]["counts"]["received"],
+        r.census("1/1", "good")
+    );
 }
 
 #[test]

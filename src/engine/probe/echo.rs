@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use std::io;
 use std::time::Duration;
 
-use super::passive::driver::tell_sources;
+use super::passive::driver::{self as passive_driver, tell_sources};
 use super::passive::ticks::Ticks;
 use super::passive::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{Classified, EchoProbe};
@@ -250,9 +250,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     fn on_received(&mut self, frame: &Frame, _path: PathId, at: Nanos) {
         // HEARTBEATs included: the auto probe chooses by them.
         self.probe.heard(frame, self.ours);
-        let len = usize::from(frame.len);
-        self.sequences
-            .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
+        passive_driver::take(&mut self.sequences, frame, at);
     }
 
     fn on_frame(&mut self, frame: &Frame, path: PathId, at: Nanos) {

@@ -690,6 +690,7 @@ fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
             records: RecordStats {
                 records: 119,
                 unknown_id: 1,
+                damaged: 2,
                 junk_bytes: 12,
                 junk_stretches: 1,
                 bad_crc: 1,

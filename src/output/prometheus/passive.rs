@@ -27,13 +27,20 @@ impl Metrics {
 /// A source's counter (counts below 2^53, exact as `f64`).
 type SourceCount = Figure<fn(&Figures) -> f64>;
 
-const SOURCE_COUNTS: [SourceCount; 9] = [
+const SOURCE_COUNTS: [SourceCount; 10] = [
     Figure {
         family: Family::counter(
             "mavping_source_received_total",
             "Frames received from the source, duplicates included (--passive: its own packet sequence).",
         ),
         value: |f| f.seq.received as f64,
+    },
+    Figure {
+        family: Family::counter(
+            "mavping_source_damaged_total",
+            "Whole frames from the source whose CRC failed (damaged on the way, or a dialect whose CRC differs): they arrived, so their numbers are not lost; not in mavping_source_received_total.",
+        ),
+        value: |f| f.seq.damaged as f64,
     },
     Figure {
         family: Family::counter(

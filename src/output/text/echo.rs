@@ -519,11 +519,13 @@ pub(super) fn write_summary(
         writeln!(out)?;
     }
     let f = &s.frames;
-    if f.bad_crc + f.skipped_bytes + f.unknown_id + f.truncated + s.foreign_replies > 0 {
+    if f.bad_crc + f.damaged + f.skipped_bytes + f.unknown_id + f.truncated + s.foreign_replies > 0
+    {
         writeln!(
             out,
-            "link: {} bad CRC, {} bytes skipped, {} unknown messages, {} truncated, {} replies to others",
-            f.bad_crc, f.skipped_bytes, f.unknown_id, f.truncated, s.foreign_replies
+            "link: {} bad CRC, {} damaged frames, {} bytes skipped, {} unknown messages, {} \
+             truncated, {} replies to others",
+            f.bad_crc, f.damaged, f.skipped_bytes, f.unknown_id, f.truncated, s.foreign_replies
         )?;
     }
     if s.wrong_path_replies > 0 {

@@ -140,6 +140,36 @@ fn write_messages(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
     writeln!(out, "messages: {} {}{tail}", r.source, each.join(", "))
 }
 
+/// `damaged: 1/194 1949 frames whose CRC failed (DISTANCE_SENSOR ×1949)
+/// ...`: frames that arrived with their header whole but failed their
+/// CRC, by id, where a source had any.
+fn write_damaged(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
+    if r.counts.damaged == 0 {
+        return Ok(());
+    }
+    let mut each: Vec<String> = r
+        .damaged_ids
+        .iter()
+        .take(TOP_MSG_IDS)
+        .map(|m| {
+            let name = message_name(m.id).map_or_else(|| format!("id {}", m.id), String::from);
+            format!("{name} ×{}", m.count)
+        })
+        .collect();
+    let more = r.damaged_ids.len().saturating_sub(TOP_MSG_IDS);
+    if more > 0 {
+        each.push(format!("{more} more ids"));
+    }
+    writeln!(
+        out,
+        "damaged: {} {} frames whose CRC failed ({}): they arrived, so their numbers are not \
+         lost (damage on the way, or a dialect whose CRC differs)",
+        r.source,
+        r.counts.damaged,
+        each.join(", ")
+    )
+}
+
 fn write_silence(out: &mut impl Write, r: &SourceSummary, silence: &Silence) -> io::Result<()> {
     writeln!(
         out,
@@ -222,11 +252,19 @@ fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
             r.truncated_bytes
         )?;
     }
+    if r.damaged > 0 {
+        writeln!(
+            out,
+            "log: {} records whose frame failed its CRC, whole between records: damaged frames, \
+             their headers read (pymavlink calls them BAD_DATA)",
+            r.damaged
+        )?;
+    }
     if r.unknown_id > 0 {
         writeln!(
             out,
-            "log: {} records of message ids this build does not know, skipped (pymavlink counts \
-             them in no loss either)",
+            "log: {} records of message ids this build does not know, lined up between records: \
+             their headers read (pymavlink calls them BAD_DATA)",
             r.unknown_id
         )?;
     }
@@ -394,23 +432,6 @@ fn write_ground(out: &mut impl Write, s: &PassiveSummary) -> io::Result<()> {
         row(out, s, r)?;
     }
     Ok(())
-}
-
-/// `damaged: 1/194 1949 frames ...`: frames that arrived with a failed
-/// CRC and a whole header, by message id.
-fn write_damaged(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
-    if r.counts.damaged == 0 {
-        return Ok(());
-    }
-    writeln!(
-        out,
-        "damaged: {} {} frames failed their CRC with their header whole ({}): they arrived \
-         (interference, or a dialect whose CRC differs), so they fill their numbers and are not \
-         lost",
-        r.source,
-        r.counts.damaged,
-        name_counts(&r.damaged_ids)
-    )
 }
 
 /// `two senders behind 255/190: ...`: a second counter under one id.

@@ -261,12 +261,12 @@ impl TlogLink {
     fn parse(&mut self) -> Parsed {
         let (found, used) = self.splitter.next(&self.buf[self.pos..], self.input.eof);
         let parsed = match found {
-            Found::Record { stamp, frame } => {
+            Found::Record { stamp, frame, kind } => {
                 let (t, link) = self.clock.date(stamp);
                 Parsed::Record(Record {
                     t,
                     path: PathId::from(link),
-                    frame: frame::decode(frame),
+                    frame: frame::decode_as(frame, kind),
                     signature: SignedBytes::of(frame),
                 })
             }

@@ -6,11 +6,19 @@
 //! - **Aligned.** Where a record is due (the file's start, or where the
 //!   last one ended), a stamp followed by a whole frame the scanner
 //!   accepts is a record, whatever its stamp says (the clock deals with
-//!   stamps that jump: [`super::stamps`]). A frame of a message id this
-//!   build does not know cannot be checked: it is believed and skipped
-//!   whole (`unknown_id`; pymavlink counts such a frame in no loss figure
-//!   either) only if its stamp is within 3 days of the last good one and
-//!   a good record follows it (or the log ends there).
+//!   stamps that jump: [`super::stamps`]).
+//! - **Unchecked.** A frame nothing can check out is a record only where
+//!   the log says it is one: its stamp within 3 days of the last good one,
+//!   and the next record place holding a good record stamped near it, or
+//!   another unchecked one (checked the same way in its turn), or the log's
+//!   end. Two kinds: an id this build does not know (`unknown_id`), and a
+//!   known id whose CRC fails with its header whole (`damaged`: the frame
+//!   arrived, damaged or in a dialect whose CRC differs, as the 1,949
+//!   DISTANCE_SENSOR frames of pymavlink issue 807's log). Both are
+//!   delivered with their kind: their headers fill their source's
+//!   sequence. (That log has 6 damaged records right after another one,
+//!   3 of them 1/194's: "followed by a good record" alone would call them
+//!   junk.)
 //! - **Junk.** Anything else starts a stretch of junk. The scan moves one
 //!   byte at a time until a record that the scanner accepts *and* whose
 //!   stamp is within 3 days of the last good stamp (pymavlink's bound,
@@ -29,7 +37,7 @@
 use serde::Serialize;
 
 use crate::frame::scanner::{IFLAG_SIGNED, MAX_FRAME_LEN, STX_V1, STX_V2};
-use crate::frame::{scan_datagram, ScanStats};
+use crate::frame::{scan_datagram_all, Kind, ScanStats};
 
 /// The stamp before each frame.
 pub const STAMP_LEN: usize = 8;
@@ -48,15 +56,19 @@ const SIGNATURE_LEN: usize = 13;
 pub struct RecordStats {
     /// Records whose frame the scanner accepted (delivered).
     pub records: u64,
-    /// Records whose frame's message id this build does not know: skipped
-    /// whole, not delivered.
+    /// Records whose frame's message id this build does not know: lined
+    /// up, delivered with their header only.
     pub unknown_id: u64,
+    /// Records whose frame failed its CRC with its header whole, lined up:
+    /// delivered as damaged frames. Never also in `bad_crc`.
+    pub damaged: u64,
     /// Bytes between records that were not a record.
     pub junk_bytes: u64,
     /// Stretches of junk (each a re-synchronisation).
     pub junk_stretches: u64,
     /// Candidate frames at a record's place that failed their CRC (or a
-    /// MAVLink 1 length), each the start of a stretch of junk.
+    /// MAVLink 1 length) and did not line up, each the start of a stretch
+    /// of junk.
     pub bad_crc: u64,
     /// Bytes of a last record cut short (0: the log ends on a record).
     pub truncated_bytes: u64,
@@ -65,8 +77,12 @@ pub struct RecordStats {
 /// The next thing in the bytes.
 #[derive(Debug, PartialEq, Eq)]
 pub enum Found<'a> {
-    /// A record: its raw stamp and its frame's bytes.
-    Record { stamp: u64, frame: &'a [u8] },
+    /// A record: its raw stamp, its frame's bytes and what the frame is.
+    Record {
+        stamp: u64,
+        frame: &'a [u8],
+        kind: Kind,
+    },
     /// More bytes are needed to decide.
     NeedMore,
     /// Nothing more will come and nothing more is there.
@@ -79,8 +95,9 @@ enum Candidate {
     Need,
     /// A stamp and a frame the scanner accepts, `len` bytes long.
     Good(usize),
-    /// A stamp and an aligned frame of an id the scanner does not know.
-    Unknown(usize),
+    /// A stamp and a whole frame nothing checks: an id the scanner does not
+    /// know, or a known one whose CRC fails.
+    Unchecked(usize, Kind),
     /// Not a record.
     Bad { bad_crc: bool },
 }
@@ -123,17 +140,21 @@ fn candidate(buf: &[u8], at: usize, scan: &mut ScanStats) -> Candidate {
         return Candidate::Need;
     }
     let mut one = ScanStats::default();
-    let mut whole = false;
-    scan_datagram(&frame[..len], &mut one, &mut |raw| whole = raw.len() == len);
-    if whole && one.frames == 1 && one.skipped_bytes == 0 {
-        scan.add(&one);
-        Candidate::Good(len)
-    } else if one.unknown_id == 1 && one.frames == 0 && one.skipped_bytes == 0 {
-        Candidate::Unknown(len)
-    } else {
-        Candidate::Bad {
-            bad_crc: one.bad_crc > 0,
+    let mut whole = None;
+    // Taken whole, the frame is the only thing in its extent.
+    scan_datagram_all(&frame[..len], &mut one, &mut |raw, kind| {
+        whole = (raw.len() == len).then_some(kind);
+    });
+    match whole {
+        Some(Kind::Good) => {
+            scan.add(&one);
+            Candidate::Good(len)
         }
+        Some(kind) => Candidate::Unchecked(len, kind),
+        // A failed CRC is junk when a good frame starts inside the extent.
+        None => Candidate::Bad {
+            bad_crc: one.bad_crc > 0,
+        },
     }
 }
 
@@ -165,14 +186,15 @@ impl Splitter {
         ScanStats {
             unknown_id: self.stats.unknown_id,
             bad_crc: self.stats.bad_crc,
+            damaged: self.stats.damaged,
             skipped_bytes: self.stats.junk_bytes + self.stats.truncated_bytes,
             truncated: u64::from(self.stats.truncated_bytes > 0),
             ..self.scan
         }
     }
 
-    /// Whether a record place after junk (or holding a frame of an
-    /// unknown id: `unchecked`), stamped `stamp`, is a record. `None`: more
+    /// Whether a record place after junk (or holding a frame nothing
+    /// checks: `unchecked`), stamped `stamp`, is a record. `None`: more
     /// bytes are needed to tell.
     fn plausible(
         &self,
@@ -190,12 +212,15 @@ impl Splitter {
         }
         // No good stamp yet, or a frame nothing checks: the next record
         // must line up (a lone frame after junk is more likely a frame the
-        // junk holds). The log may end after an unknown one.
+        // junk holds). The log may end after an unchecked one, and an
+        // unchecked one may follow it (its own next decides whether it is
+        // a record in its turn).
         match candidate(buf, next, &mut ScanStats::default()) {
             Candidate::Need if at_end => Some(unchecked && next == buf.len()),
             Candidate::Need => None,
             Candidate::Good(_) => Some(near(stamp_at(buf, next), stamp)),
-            Candidate::Unknown(_) | Candidate::Bad { .. } => Some(false),
+            Candidate::Unchecked(..) if unchecked => Some(near(stamp_at(buf, next), stamp)),
+            Candidate::Unchecked(..) | Candidate::Bad { .. } => Some(false),
         }
     }
 
@@ -206,51 +231,66 @@ impl Splitter {
         let mut at = 0;
         loop {
             let mut scan = ScanStats::default();
-            let verdict = match candidate(buf, at, &mut scan) {
+            let (len, kind) = match candidate(buf, at, &mut scan) {
                 Candidate::Need if at_end => return (self.end(buf.len() - at), buf.len()),
                 Candidate::Need => return (Found::NeedMore, at),
-                Candidate::Good(len) if !self.in_junk => Some(len),
-                // An id that cannot be checked is believed only where it
-                // lines up, as after junk.
-                Candidate::Good(len) | Candidate::Unknown(len) => {
-                    let stamp = stamp_at(buf, at);
-                    let unchecked = scan.frames == 0;
-                    match self.plausible(stamp, unchecked, buf, at + STAMP_LEN + len, at_end) {
-                        None => return (Found::NeedMore, at),
-                        Some(true) => Some(len),
-                        Some(false) => None,
-                    }
-                }
+                Candidate::Good(len) => (len, Kind::Good),
+                Candidate::Unchecked(len, kind) => (len, kind),
                 Candidate::Bad { bad_crc } => {
-                    if !self.in_junk {
-                        self.stats.bad_crc += u64::from(bad_crc);
-                    }
-                    None
+                    self.count_bad_crc(bad_crc);
+                    self.junk_byte();
+                    at += 1;
+                    continue;
                 }
             };
-            let Some(len) = verdict else {
-                if !self.in_junk {
-                    self.in_junk = true;
-                    self.stats.junk_stretches += 1;
+            // A frame that cannot be checked is believed only where it
+            // lines up, as a good one after junk.
+            let record = (kind == Kind::Good && !self.in_junk) || {
+                let stamp = stamp_at(buf, at);
+                let next = at + STAMP_LEN + len;
+                match self.plausible(stamp, kind != Kind::Good, buf, next, at_end) {
+                    None => return (Found::NeedMore, at),
+                    Some(record) => record,
                 }
-                self.stats.junk_bytes += 1;
+            };
+            if !record {
+                self.count_bad_crc(kind == Kind::Damaged);
+                self.junk_byte();
                 at += 1;
                 continue;
-            };
+            }
             self.in_junk = false;
             let stamp = stamp_at(buf, at);
             let end = at + STAMP_LEN + len;
-            if scan.frames == 0 {
-                self.stats.unknown_id += 1;
-                at = end;
-                continue;
+            match kind {
+                Kind::Unknown => self.stats.unknown_id += 1,
+                Kind::Damaged => self.stats.damaged += 1,
+                Kind::Good => {
+                    // Only a checked frame vouches for its stamp.
+                    self.last_stamp = Some(stamp);
+                    self.scan.add(&scan);
+                    self.stats.records += 1;
+                }
             }
-            // Only a checked frame vouches for its stamp.
-            self.last_stamp = Some(stamp);
-            self.scan.add(&scan);
-            self.stats.records += 1;
             let frame = &buf[at + STAMP_LEN..end];
-            return (Found::Record { stamp, frame }, end);
+            return (Found::Record { stamp, frame, kind }, end);
+        }
+    }
+
+    /// One byte of junk, and a stretch begun if it is the first.
+    fn junk_byte(&mut self) {
+        if !self.in_junk {
+            self.in_junk = true;
+            self.stats.junk_stretches += 1;
+        }
+        self.stats.junk_bytes += 1;
+    }
+
+    /// A candidate at a record's place failed its CRC and is junk: counted
+    /// once, where its stretch begins.
+    fn count_bad_crc(&mut self, bad_crc: bool) {
+        if !self.in_junk {
+            self.stats.bad_crc += u64::from(bad_crc);
         }
     }
 
@@ -298,9 +338,21 @@ mod tests {
         out
     }
 
-    /// Every record of `data`, fed `chunk` bytes at a time, as (stamp,
-    /// packet seq), and the figures.
+    /// Every good record of `data`, fed `chunk` bytes at a time, as
+    /// (stamp, packet seq), and the figures.
     fn split(data: &[u8], chunk: usize) -> (Vec<(u64, u8)>, RecordStats) {
+        let (records, stats) = split_all(data, chunk);
+        let good = records
+            .into_iter()
+            .filter(|r| r.2 == Kind::Good)
+            .map(|r| (r.0, r.1))
+            .collect();
+        (good, stats)
+    }
+
+    /// Every record of `data`, fed `chunk` bytes at a time, as (stamp,
+    /// packet seq, kind), and the figures.
+    fn split_all(data: &[u8], chunk: usize) -> (Vec<(u64, u8, Kind)>, RecordStats) {
         let mut s = Splitter::default();
         let mut buf = Vec::new();
         let mut fed = 0;
@@ -309,13 +361,15 @@ mod tests {
             let at_end = fed == data.len();
             let (found, used) = s.next(&buf, at_end);
             let got = match found {
-                Found::Record { stamp, frame } => Some((stamp, crate::frame::decode(frame))),
+                Found::Record { stamp, frame, kind } => {
+                    Some((stamp, crate::frame::decode_as(frame, kind), kind))
+                }
                 Found::NeedMore => None,
                 Found::End => break,
             };
             buf.drain(..used);
             match got {
-                Some((stamp, f)) => out.push((stamp, f.packet_seq)),
+                Some((stamp, f, kind)) => out.push((stamp, f.packet_seq, kind)),
                 None => {
                     let take = chunk.min(data.len() - fed);
                     buf.extend_from_slice(&data[fed..fed + take]);
@@ -353,23 +407,89 @@ mod tests {
         }
     }
 
+    /// A record of 1/1's ATTITUDE numbered `seq` whose CRC is broken.
+    fn damaged(stamp: u64, version: Version, seq: u8) -> Vec<u8> {
+        let mut out = record(stamp, version, seq);
+        *out.last_mut().unwrap() ^= 0xFF;
+        out
+    }
+
     #[test]
     fn junk_between_records_is_counted_and_skipped() {
         let mut data = log(3);
-        // Junk with start bytes in it, and a frame whose CRC is broken.
+        // Junk with start bytes in it, then a frame whose CRC is broken and
+        // that lines up with nothing: junk too.
         data.extend([0xFD, 0x09, 0x00, 0xFE, 1, 2, 3]);
-        let mut broken = record(T0 + 60_000, Version::V2, 3);
-        *broken.last_mut().unwrap() ^= 0xFF;
+        let broken = damaged(T0 + 60_000, Version::V2, 3);
         data.extend(&broken);
+        data.extend([0x42; 3]);
         data.extend(record(T0 + 80_000, Version::V2, 4));
         for chunk in [1, 5, 4096] {
-            let (records, stats) = split(&data, chunk);
+            let (records, stats) = split_all(&data, chunk);
             let seqs: Vec<u8> = records.iter().map(|r| r.1).collect();
             assert_eq!(seqs, [0, 1, 2, 4], "chunk {chunk}");
             assert_eq!(stats.junk_stretches, 1);
-            assert_eq!(stats.junk_bytes as usize, 7 + broken.len());
+            assert_eq!(stats.junk_bytes as usize, 7 + broken.len() + 3);
+            assert_eq!((stats.damaged, stats.bad_crc), (0, 0));
             assert_eq!(stats.truncated_bytes, 0);
         }
+    }
+
+    #[test]
+    fn damaged_records_between_good_ones_are_delivered_as_damaged() {
+        // Good, damaged, good, two damaged in a row, good, then a damaged
+        // one lined up with nothing (junk after it), and the log's end.
+        let mut data = log(2);
+        data.extend(damaged(T0 + 40_000, Version::V2, 2));
+        data.extend(record(T0 + 60_000, Version::V1, 3));
+        data.extend(damaged(T0 + 80_000, Version::V1, 4));
+        data.extend(damaged(T0 + 80_000, Version::V2, 5));
+        data.extend(record(T0 + 100_000, Version::V2, 6));
+        let lone = damaged(T0 + 120_000, Version::V2, 7);
+        data.extend(&lone);
+        data.extend([0x42; 5]);
+        data.extend(record(T0 + 140_000, Version::V2, 8));
+        data.extend(damaged(T0 + 160_000, Version::V2, 9));
+        for chunk in [1, 9, 4096] {
+            let (records, stats) = split_all(&data, chunk);
+            let (good, bad) = (Kind::Good, Kind::Damaged);
+            let expected = [
+                (0, good),
+                (1, good),
+                (2, bad),
+                (3, good),
+                (4, bad),
+                (5, bad),
+                (6, good),
+                (8, good),
+                (9, bad),
+            ];
+            let got: Vec<(u8, Kind)> = records.iter().map(|r| (r.1, r.2)).collect();
+            assert_eq!(got, expected, "chunk {chunk}");
+            assert_eq!(records[2].0, T0 + 40_000, "at its stamp");
+            assert_eq!(
+                (stats.records, stats.damaged, stats.bad_crc),
+                (5, 4, 1),
+                "chunk {chunk}"
+            );
+            assert_eq!(
+                (stats.junk_stretches, stats.junk_bytes as usize),
+                (1, lone.len() + 5)
+            );
+        }
+    }
+
+    #[test]
+    fn a_damaged_record_far_from_the_last_good_stamp_is_junk() {
+        let mut data = log(2);
+        let far = damaged(T0 + 4 * 24 * 3600 * 1_000_000, Version::V2, 2);
+        data.extend(&far);
+        data.extend(record(T0 + 60_000, Version::V2, 3));
+        let (records, stats) = split_all(&data, 64);
+        let seqs: Vec<u8> = records.iter().map(|r| r.1).collect();
+        assert_eq!(seqs, [0, 1, 3]);
+        assert_eq!((stats.damaged, stats.bad_crc), (0, 1));
+        assert_eq!(stats.junk_bytes as usize, far.len());
     }
 
     #[test]
@@ -440,7 +560,7 @@ mod tests {
     }
 
     #[test]
-    fn unknown_ids_at_a_records_place_are_skipped_whole() {
+    fn unknown_ids_at_a_records_place_are_delivered_whole() {
         let mut data = log(2);
         // MAVLink 2, id 0xABCDEF (unknown), 4 payload bytes.
         let mut unknown = (T0 + 40_000).to_be_bytes().to_vec();
@@ -449,9 +569,16 @@ mod tests {
         ]);
         data.extend(&unknown);
         data.extend(record(T0 + 60_000, Version::V2, 3));
-        let (records, stats) = split(&data, 64);
-        assert_eq!(records.len(), 3);
-        assert_eq!(stats.unknown_id, 1);
+        let (records, stats) = split_all(&data, 64);
+        let got: Vec<(u8, Kind)> = records.iter().map(|r| (r.1, r.2)).collect();
+        let expected = [
+            (0, Kind::Good),
+            (1, Kind::Good),
+            (2, Kind::Unknown),
+            (3, Kind::Good),
+        ];
+        assert_eq!(got, expected);
+        assert_eq!((stats.records, stats.unknown_id), (3, 1));
         assert_eq!(stats.junk_bytes, 0);
     }
 

@@ -162,9 +162,18 @@ impl PassiveDriver {
         }
         let Paths::Split(tables) = paths else { return };
         if let Some(t) = tables.get_mut(path as usize) {
-            let len = usize::from(frame.len);
-            t.on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
+            take(t, frame, at);
         }
+    }
+}
+
+/// Takes a frame into `table`: a damaged one fills its number only.
+pub(crate) fn take(table: &mut SourceTable, frame: &Frame, at: Nanos) {
+    let (seq, id, len) = (frame.packet_seq, frame.msgid, usize::from(frame.len));
+    if matches!(frame.msg, Msg::Damaged) {
+        table.on_damaged(frame.source, seq, id, len, at);
+    } else {
+        table.on_frame(frame.source, seq, id, len, at);
     }
 }
 
@@ -278,9 +287,7 @@ impl Driver for PassiveDriver {
         if let Some(f) = self.flight.as_mut().filter(|_| !ground) {
             f.on_frame(frame.source, &frame.msg, at);
         }
-        let len = usize::from(frame.len);
-        self.table
-            .on_frame(frame.source, frame.packet_seq, frame.msgid, len, at);
+        take(&mut self.table, frame, at);
     }
 
     fn on_frame(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
