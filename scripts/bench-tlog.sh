@@ -6,16 +6,21 @@
 #   bash scripts/bench-tlog.sh           # 2 h at 50 frames/s, 20 MB and 200 MB (about 6 minutes)
 #   bash scripts/bench-tlog.sh --quick   # 2 h at 50 frames/s and 20 MB only
 #   bash scripts/bench-tlog.sh --binary PATH   # another mavping build
+#   bash scripts/bench-tlog.sh --quick --baseline PATH   # and a table of
+#       this build against an earlier one (PATH) on the same logs, the two
+#       read in turn five times each, medians of their CPU
 # Times are wall clock and CPU (user + system) of each whole process; the
 # ratio is mavloss.py's CPU time over mavping's.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 quick=0
 bin=target/release/mavping
+baseline=
 while [ $# -gt 0 ]; do
   case "$1" in
     --quick) quick=1 ;;
     --binary) bin="$2"; shift ;;
+    --baseline) baseline="$2"; shift ;;
     *) echo "bench-tlog: unknown argument $1" >&2; exit 2 ;;
   esac
   shift
@@ -55,5 +60,25 @@ for log in flight-2h.tlog log-20mb.tlog log-200mb.tlog log-200mb-ms.tlog; do
     ratio = (lc == "-") ? "-" : sprintf("%.0fx", lc / cpu)
     printf "| %s | %.1f MB | %d | %s / %s | %.2fM | %.0f | %.1f MB | %s / %s | %s |\n",
       name, size / 1e6, n, mw, mc, n / cpu / 1e6, size / 1e6 / cpu, mr / 1024, lw, lc, ratio
+  }'
+done
+
+[ -n "$baseline" ] || exit 0
+# This build against the baseline, read in turn so that a busy moment falls
+# on both: the generated logs and the real ones in ../shared/tlogs.
+median() { sort -n | awk '{v[NR] = $1} END {print v[int((NR + 1) / 2)]}'; }
+cpu_of() { /usr/bin/time -f "%U %S" -o "$dir/time" "$1" -q "tlog:$2" >/dev/null 2>&1; awk '{printf "%.3f\n", $1 + $2}' "$dir/time"; }
+printf "\n| log | frames | baseline CPU s (median of 5) | this build CPU s (median of 5) | change |\n|---|---|---|---|---|\n"
+for log in "$dir"/flight-2h.tlog "$dir"/log-20mb.tlog ../shared/tlogs/*.tlog; do
+  [ -f "$log" ] || continue
+  n=$(frames "$log")
+  : >"$dir/base"; : >"$dir/this"
+  for _ in 1 2 3 4 5; do
+    cpu_of "$baseline" "$log" >>"$dir/base"
+    cpu_of "$bin" "$log" >>"$dir/this"
+  done
+  b=$(median <"$dir/base"); t=$(median <"$dir/this")
+  awk -v name="$(basename "$log")" -v n="$n" -v b="$b" -v t="$t" 'BEGIN {
+    printf "| %s | %d | %.3f | %.3f | %+.0f%% |\n", name, n, b, t, (b > 0) ? 100 * (t - b) / b : 0
   }'
 done

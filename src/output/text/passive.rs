@@ -200,9 +200,8 @@ fn silence_figures(silence: &Silence) -> String {
             "no number missing across it: delayed (or not sent), none lost".into()
         }
         (Some(lost), Some(likely), _) if likely > lost => format!(
-            "{lost} frames lost by the sequence, ~{likely} likely at its rate (the 8-bit counter \
-             wrapped {} times more, likely: the {} more are not counted)",
-            (likely - lost) / 256,
+            "{lost} frames lost by the sequence, ~{likely} likely at its rate (its 8-bit counter \
+             wrapped in it, as the rate says: the {} more are not counted)",
             likely - lost
         ),
         (Some(lost), _, _) => format!("{lost} frames lost, counted by the sequence"),
@@ -357,7 +356,8 @@ pub(super) fn write_summary(
         write_damaged(out, r)?;
         write_second_counter(out, r)?;
     }
-    for r in &s.table.sources {
+    // A ground station's pauses in what it sent say nothing of the link.
+    for r in s.table.sources.iter().filter(|r| !r.ground) {
         for silence in &r.silences {
             write_silence(out, r, silence)?;
         }
