@@ -13,6 +13,7 @@ pub mod echo;
 pub mod passive;
 pub mod ping;
 pub mod timesync;
+pub mod uplink_check;
 
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::link_io::WallAtZero;
