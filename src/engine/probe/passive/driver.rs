@@ -89,7 +89,11 @@ impl PassiveDriver {
             round_trips: Some(RoundTrips::new(
                 Nanos::try_from(cfg.timeout.as_nanos()).unwrap_or(Nanos::MAX),
             )),
-            flight: Some(Flight::new(flight::DEFAULT_WINDOW_NS, silence)),
+            flight: Some(Flight::new(
+                flight::DEFAULT_WINDOW_NS,
+                silence,
+                cfg.radio_type,
+            )),
             ..Self::new(cfg, gap)
         }
     }
@@ -227,7 +231,7 @@ impl Driver for PassiveDriver {
         self.by_path(frame, path, at);
         self.close_windows(at);
         if let Some(f) = &mut self.flight {
-            f.on_frame(frame.source, &frame.msg, at);
+            f.on_received(frame, at);
         }
         let len = usize::from(frame.len);
         self.table
