@@ -231,26 +231,33 @@ fn sim_baud_queues_and_loses_where_the_arithmetic_says() {
     );
 }
 
-/// `mavping --passive` over udpout to a radio_peer of `kind` sending
+/// `mavping --passive -q` over udpout to a radio_peer of `kind` sending
 /// `count` reports: the summary (JSON with `--json`) and the peer's truth.
 fn radio_run(kind: &str, count: usize, extra: &[&str]) -> (String, serde_json::Value) {
+    let mut args = vec!["-q"];
+    args.extend_from_slice(extra);
+    run_radio(kind, count, &[], &args)
+}
+
+/// `mavping --passive ARGS` over udpout to a radio_peer of `kind` (with
+/// `peer_args`) sending `count` reports: its output and the peer's truth.
+fn run_radio(
+    kind: &str,
+    count: usize,
+    peer_args: &[&str],
+    args: &[&str],
+) -> (String, serde_json::Value) {
     let port = free_udp_port();
     let count = count.to_string();
-    let peer = Peer::start(
-        "radio_peer.py",
-        &[
-            &format!("udpin:127.0.0.1:{port}"),
-            "--kind",
-            kind,
-            "--count",
-            &count,
-        ],
-    );
+    let listen = format!("udpin:127.0.0.1:{port}");
+    let mut peer = vec![listen.as_str(), "--kind", kind, "--count", &count];
+    peer.extend_from_slice(peer_args);
+    let peer = Peer::start("radio_peer.py", &peer);
     let link = format!("udpout:127.0.0.1:{port}");
-    let mut args = vec!["--passive", "-w", "3.5s", "-q"];
-    args.extend_from_slice(extra);
-    args.push(&link);
-    let (code, out, err) = run_mavping(&args);
+    let mut all = vec!["--passive", "-w", "3.5s"];
+    all.extend_from_slice(args);
+    all.push(&link);
+    let (code, out, err) = run_mavping(&all);
     assert!(code == 0 || code == 1, "{out}\n{err}");
     (out, peer.finish())
 }
@@ -444,4 +451,29 @@ fn radio_type_overrides_what_the_radio_sends() {
     assert_eq!(r["kind"], "unknown");
     assert_eq!(r["converted"], serde_json::json!({}));
     assert!(r["fade_margin"].is_null() && r["rssi"].is_object(), "{r}");
+}
+
+/// mLRS's HEARTBEAT after its first report: read as a SiK until it comes,
+/// then as mLRS, and the JSON says so as it happens.
+#[test]
+fn a_late_heartbeat_changes_the_kind_as_the_run_goes() {
+    let (out, _) = run_radio("mlrs", 3, &["--late-heartbeat"], &["--json"]);
+    let events: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|v| v["type"] == "radio")
+        .collect();
+    let told: Vec<(&str, bool)> = events
+        .iter()
+        .map(|e| (e["kind"].as_str().unwrap(), e["first"].as_bool().unwrap()))
+        .collect();
+    assert_eq!(told, [("sik", true), ("mlrs", false)], "{out}");
+    assert_eq!(
+        events[1]["evidence"][0],
+        "HEARTBEAT type GENERIC, autopilot INVALID from 51/68"
+    );
+    // Every report in the summary, read as mLRS.
+    let summary: serde_json::Value = serde_json::from_str(out.lines().last().unwrap()).unwrap();
+    assert_eq!(summary["radios"][0]["kind"], "mlrs");
+    assert_eq!(summary["radios"][0]["reports"], 3);
 }

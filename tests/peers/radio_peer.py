@@ -90,6 +90,8 @@ def main():
     ap.add_argument("connection", help="pymavlink connection string, e.g. udpin:127.0.0.1:14550")
     ap.add_argument("--kind", required=True, choices=sorted(RATE))
     ap.add_argument("--count", type=int, default=5, help="reports to send")
+    ap.add_argument("--late-heartbeat", action="store_true",
+                    help="mlrs: its first HEARTBEAT only after its first report")
     args = ap.parse_args()
 
     os.environ["MAVLINK20"] = "1"
@@ -116,7 +118,8 @@ def main():
         pass
     period = 1.0 / RATE[args.kind]
     next_at = time.monotonic()
-    next_heartbeat = next_at
+    # A late HEARTBEAT: after the first report (sent at once, below).
+    next_heartbeat = next_at + (period / 2 if args.late_heartbeat else 0)
     sent = 0
     while running:
         now = time.monotonic()
