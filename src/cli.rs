@@ -264,6 +264,37 @@ pub enum Format {
     Json,
 }
 
+/// `--radio-type`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum RadioTypeArg {
+    /// Tell them apart by their ids, HEARTBEAT, report rate and constant fields
+    Auto,
+    /// SiK / RFD900: dBm ~ raw / 1.9 - 127, noise a noise floor (fade margin)
+    Sik,
+    /// mLRS: -120..-50 dBm as 0..254, noise = 10 - SNR
+    Mlrs,
+    /// ExpressLRS: rssi = link quality x 2.55, remrssi = -dBm, noise = SNR
+    Elrs,
+    /// mavesp8266 WiFi bridge: remnoise and rxerrors are % lost
+    Esp,
+    /// Raw figures only: no dBm, no fade margin
+    Raw,
+}
+
+impl From<RadioTypeArg> for crate::engine::radio::RadioType {
+    fn from(a: RadioTypeArg) -> Self {
+        use crate::engine::radio::RadioType as T;
+        match a {
+            RadioTypeArg::Auto => T::Auto,
+            RadioTypeArg::Sik => T::Sik,
+            RadioTypeArg::Mlrs => T::Mlrs,
+            RadioTypeArg::Elrs => T::Elrs,
+            RadioTypeArg::Esp => T::Esp,
+            RadioTypeArg::Raw => T::Raw,
+        }
+    }
+}
+
 /// What `--generate` writes to stdout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Generate {
@@ -690,6 +721,16 @@ pub struct PingArgs {
     #[arg(help_heading = "Serial", allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
           env = "MAVPING_BAUD")]
     pub baud: u32,
+
+    /// How to read radios' RADIO_STATUS: auto tells SiK, mLRS, ExpressLRS and ESP8266 bridges
+    /// apart by what they send; the others read every radio as that kind (raw: figures as sent)
+    ///
+    /// Each kind's fields mean different things: SiK's rssi is ~1.9 steps per dB, mLRS's
+    /// -120..-50 dBm as 0..254, ExpressLRS's the link quality. Reports name the kind and the
+    /// evidence for it; dBm, SNR and fade margins are given only on a known scale
+    #[arg(help_heading = "Serial", long, value_enum, value_name = "KIND", default_value_t = RadioTypeArg::Auto,
+          env = "MAVPING_RADIO_TYPE")]
+    pub radio_type: RadioTypeArg,
 
     #[command(flatten, next_help_heading = "Signing")]
     pub signing: SigningArgs,

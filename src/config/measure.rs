@@ -563,6 +563,7 @@ fn session(
         sweep: None,
         // Each link has its own.
         wire: None,
+        radio_type: cli.radio_type.into(),
     })
 }
 

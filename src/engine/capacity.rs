@@ -273,6 +273,7 @@ mod tests {
                 signing,
                 sweep: None,
                 wire: None,
+                radio_type: crate::engine::radio::RadioType::Auto,
             };
             let link: LinkSpec = "serial:/dev/ttyUSB0:57600".parse().unwrap();
             for_link(

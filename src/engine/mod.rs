@@ -14,6 +14,7 @@ pub mod matcher;
 pub mod observe;
 pub mod probe;
 pub mod radio;
+pub mod radio_kind;
 pub mod roster;
 pub mod schedule;
 pub mod session;
@@ -75,6 +76,8 @@ pub struct SessionConfig {
     /// once by the configuration, reported by the echo probes' summary
     /// whatever the front end.
     pub wire: Option<capacity::WireBudget>,
+    /// `--radio-type`: how radios' RADIO_STATUS figures are read.
+    pub radio_type: radio::RadioType,
 }
 
 /// The command probe's request and retry policy.

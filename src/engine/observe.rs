@@ -9,7 +9,7 @@ use super::clock_offset::ClockSummary;
 use super::link_node::LinkNodeReport;
 use super::matcher::MatchEvent;
 use super::probe::passive::flight::FlightEvent;
-use super::radio::RadioReport;
+use super::radio::{Judgement, RadioReport};
 use super::roster::Identity;
 use super::summary::passive::TableSummary;
 use super::summary::{Interim, ProbeName};
@@ -74,12 +74,17 @@ pub enum Event<'a> {
     Command(CommandEvent),
     /// A system's first HEARTBEAT.
     Heard { id: SysComp, identity: &'a Identity },
-    /// A RADIO_STATUS; `first` for each radio's first report.
+    /// A RADIO_STATUS (or RADIO) counted: `first` for each radio's first
+    /// report, `kind_changed` when the evidence changed what it is (a
+    /// HEARTBEAT can tell it without a report: the latest one then).
     Radio {
         id: SysComp,
         at: Nanos,
         report: RadioReport,
+        /// What the radio is and why, as things stand.
+        judgement: &'a Judgement,
         first: bool,
+        kind_changed: bool,
     },
     /// A LINK_NODE_STATUS: a node's own count of the link; `first` for
     /// each node's first report.

@@ -1,29 +1,35 @@
-//! The radios' own figures: RADIO_STATUS (message 109), which telemetry
-//! radios inject into the stream. Per radio: min/mean/max of each figure
-//! and how much the since-boot error counters grew during the run.
+//! The radios' own figures: RADIO_STATUS (message 109), or its forerunner
+//! RADIO (166), which telemetry radios inject into the stream. Per radio:
+//! what kind it is and why ([`super::radio_kind`]), min/mean/max of each
+//! figure as sent and in the kind's own units, and how much the since-boot
+//! error counters grew during the run. A report sent twice, as RADIO and
+//! as RADIO_STATUS (SiK 2013-2016), counts once.
 //!
-//! Pure: the session feeds reports with their times; nothing here reads a
-//! clock. Memory is bounded by [`MAX_RADIOS`].
+//! Pure: the session feeds reports and HEARTBEATs with their times;
+//! nothing here reads a clock. Memory is bounded by [`MAX_RADIOS`].
 
 use std::collections::{BTreeMap, VecDeque};
 
-use serde::Serialize;
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
 
 use super::hint::{Hint, HintCode};
+pub use super::radio_kind::{
+    sik_dbm, Evidence, Field, Judgement, PairFilter, RadioKind, RadioType, COMP_TELEMETRY_RADIO,
+    COMP_UDP_BRIDGE, UNKNOWN,
+};
 use super::Nanos;
-use crate::frame::SysComp;
+use crate::frame::{ids, SysComp};
 
-/// RADIO_STATUS's "unknown" for its 8-bit figures.
-pub const UNKNOWN: u8 = 255;
 /// A spoofing flood cannot grow memory beyond this many radios.
 pub const MAX_RADIOS: usize = 16;
-/// The component id telemetry radios (SiK and others) use.
-pub const COMP_TELEMETRY_RADIO: u8 = 68;
 /// SiK's default system id.
 pub const SIK_SYSID: u8 = 51;
-/// SiK reports RSSI in units of about 1/1.9 dB; a fade margin under this
-/// many dB leaves little room before the link drops.
+/// A SiK fade margin under this many dB leaves little room before the
+/// link drops.
 pub const WEAK_FADE_MARGIN_DB: f64 = 10.0;
+/// SiK's RSSI steps per dB.
+pub const SIK_STEPS_PER_DB: f64 = 1.9;
 /// Below this much of its transmit buffer free, a radio is overloaded.
 pub const LOW_TXBUF_PERCENT: u8 = 20;
 /// Losses needed while the buffer is low before the hint speaks.
@@ -36,21 +42,15 @@ const MAX_BUFFER_CHANGES: usize = 256;
 /// the engine and the reports know it by.
 pub use crate::frame::RadioStatus as RadioReport;
 
-/// SiK's RSSI scale to dBm. Approximate: the chip's curve, not a
-/// calibrated measurement.
-pub fn sik_dbm(raw: f64) -> f64 {
-    raw / 1.9 - 127.0
-}
-
 /// SiK's default ids, 51/68: a radio even before its first RADIO_STATUS.
 pub fn is_sik_default(id: SysComp) -> bool {
     id.sysid == SIK_SYSID && id.compid == COMP_TELEMETRY_RADIO
 }
 
-/// Whether a source looks like a SiK radio, whose raw figures the dBm
-/// formula applies to.
-pub fn is_sik(id: SysComp) -> bool {
-    id.compid == COMP_TELEMETRY_RADIO
+/// The ids radios send as (compid 68, or mavesp8266's 240): a source
+/// whose frames are the radio's own, not the link's traffic.
+pub fn is_radio_ids(id: SysComp) -> bool {
+    id.compid == COMP_TELEMETRY_RADIO || id.compid == COMP_UDP_BRIDGE
 }
 
 /// Min / mean / max of one figure over the reports that knew it.
@@ -100,6 +100,71 @@ impl Figure {
     }
 }
 
+/// How often each value of one 8-bit figure came: whatever kind a radio
+/// turns out to be, its figures convert exactly from this.
+#[derive(Clone, PartialEq, Eq)]
+pub struct RawHistogram(Box<[u64; 256]>);
+
+impl Default for RawHistogram {
+    fn default() -> Self {
+        RawHistogram(Box::new([0; 256]))
+    }
+}
+
+impl std::fmt::Debug for RawHistogram {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "RawHistogram({} values)", self.count())
+    }
+}
+
+impl RawHistogram {
+    pub fn record(&mut self, v: u8) {
+        self.0[usize::from(v)] += 1;
+    }
+
+    pub fn count(&self) -> u64 {
+        self.0.iter().sum()
+    }
+
+    pub fn clear(&mut self) {
+        self.0.fill(0);
+    }
+
+    /// What `self` holds beyond `part` (a part of it).
+    pub fn minus(&self, part: &RawHistogram) -> RawHistogram {
+        let mut out = self.clone();
+        for (o, p) in out.0.iter_mut().zip(part.0.iter()) {
+            *o = o.saturating_sub(*p);
+        }
+        out
+    }
+
+    /// Min / mean / max of the values `convert` knows.
+    pub fn range(&self, convert: impl Fn(u8) -> Option<f64>) -> Option<Range> {
+        let (mut min, mut max, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0u64);
+        for (v, &c) in self.0.iter().enumerate() {
+            let Some(x) = (c > 0).then(|| convert(v as u8)).flatten() else {
+                continue;
+            };
+            min = min.min(x);
+            max = max.max(x);
+            sum += x * c as f64;
+            n += c;
+        }
+        (n > 0).then(|| Range {
+            min,
+            mean: sum / n as f64,
+            max,
+            samples: n,
+        })
+    }
+
+    /// The raw values, 255 (unknown) left out.
+    pub fn raw_range(&self) -> Option<Range> {
+        self.range(|v| (v != UNKNOWN).then_some(f64::from(v)))
+    }
+}
+
 /// A since-boot u16 counter: what it grew by since it was first seen.
 /// Each step is taken modulo 2^16, so a wrap (65 530 → 5) counts as 11,
 /// not −65 525; but a fall from well below the top is the radio counting
@@ -135,15 +200,64 @@ struct Radio {
     reports: u64,
     first_at: Nanos,
     latest: RadioReport,
-    rssi: Figure,
-    remrssi: Figure,
-    noise: Figure,
-    remnoise: Figure,
+    evidence: Evidence,
+    judgement: Judgement,
+    pair: PairFilter,
+    /// rssi, remrssi, noise, remnoise, by [`Field::index`].
+    raw: [RawHistogram; 4],
     fade: Figure,
     remfade: Figure,
     txbuf: Figure,
+    /// `rxerrors` as sent (mavesp8266's is a percentage).
+    rxerrors_values: Figure,
     rxerrors: SinceBootCounter,
     fixed: SinceBootCounter,
+}
+
+/// One figure in the units its radio's kind gives it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KindFigure {
+    /// Its name in JSON (`rssi_dbm`).
+    pub key: &'static str,
+    /// Its name in text (`remote rssi`).
+    pub label: &'static str,
+    pub unit: &'static str,
+    /// How exact the conversion is.
+    pub note: &'static str,
+    pub range: Range,
+}
+
+/// A radio's figures in its kind's units, in the order text shows them;
+/// JSON has them as an object by key.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Converted(pub Vec<KindFigure>);
+
+impl Converted {
+    pub fn get(&self, key: &str) -> Option<&KindFigure> {
+        self.0.iter().find(|f| f.key == key)
+    }
+}
+
+impl Serialize for Converted {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        #[derive(Serialize)]
+        struct Value<'a> {
+            #[serde(flatten)]
+            range: &'a Range,
+            unit: &'static str,
+        }
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for f in &self.0 {
+            map.serialize_entry(
+                f.key,
+                &Value {
+                    range: &f.range,
+                    unit: f.unit,
+                },
+            )?;
+        }
+        map.end()
+    }
 }
 
 /// The end-of-run figures of one radio.
@@ -151,12 +265,16 @@ struct Radio {
 pub struct RadioSummary {
     pub id: SysComp,
     pub reports: u64,
+    /// What it is and why.
+    #[serde(flatten)]
+    pub judgement: Judgement,
     /// Raw values as the radio reports them (255 = unknown, skipped).
     pub rssi: Option<Range>,
     pub remrssi: Option<Range>,
     pub noise: Option<Range>,
     pub remnoise: Option<Range>,
-    /// RSSI − noise, raw units, per report where both are known.
+    /// RSSI − noise, raw units, per report where both are known: SiK only
+    /// (elsewhere `noise` is no noise floor).
     pub fade_margin: Option<Range>,
     pub remote_fade_margin: Option<Range>,
     /// Percent of the radio's transmit buffer free.
@@ -164,6 +282,8 @@ pub struct RadioSummary {
     /// What the since-boot counters grew by during the run (wrap-safe).
     pub rxerrors_delta: u64,
     pub fixed_delta: u64,
+    /// The figures in the units the kind defines: dBm, SNR, link quality.
+    pub converted: Converted,
     /// SiK only: approximate dBm of RSSI and fade margin in dB.
     pub approx_dbm: Option<ApproxDbm>,
     pub latest: RadioReport,
@@ -190,13 +310,27 @@ fn map_range(r: Option<Range>, f: impl Fn(f64) -> f64) -> Option<Range> {
 /// All radios heard, keyed by their MAVLink source.
 #[derive(Debug, Default)]
 pub struct Radios {
+    /// `--radio-type`.
+    setting: RadioType,
     radios: BTreeMap<SysComp, Radio>,
+    /// HEARTBEATs from radio ids (compid 68 or 240) not yet heard as a
+    /// radio: mLRS's may come before its first RADIO_STATUS.
+    heartbeats: BTreeMap<SysComp, (u8, u8)>,
     /// Replies and losses decided while the latest report said the buffer
     /// was low, and while it did not: (lost, decided).
     low: (u64, u64),
     normal: (u64, u64),
     /// (since, low): when the buffer turned low or not, oldest first.
     buffer: VecDeque<(Nanos, bool)>,
+}
+
+/// What taking a report did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Recorded {
+    /// The radio's first report.
+    pub first: bool,
+    /// Its kind is not what it was before this report.
+    pub kind_changed: bool,
 }
 
 /// How losses split between a low and a normal radio buffer.
@@ -209,33 +343,73 @@ pub struct LossByTxbuf {
 }
 
 impl Radios {
-    /// Records a report; returns true for a radio's first one. Reports
-    /// from radios beyond [`MAX_RADIOS`] are ignored.
+    /// Radios read as `setting` says (`--radio-type`).
+    pub fn new(setting: RadioType) -> Self {
+        Radios {
+            setting,
+            ..Radios::default()
+        }
+    }
+
+    /// Records a RADIO_STATUS; returns true for a radio's first one.
+    /// Reports from radios beyond [`MAX_RADIOS`] are ignored.
     pub fn record(&mut self, id: SysComp, r: RadioReport, at: Nanos) -> bool {
+        self.take(id, ids::RADIO_STATUS, 0, r, at)
+            .is_some_and(|t| t.first)
+    }
+
+    /// Takes a report that came as message `msgid` (RADIO_STATUS or RADIO)
+    /// with packet sequence number `seq`. `None`: not counted, as the
+    /// second of a RADIO + RADIO_STATUS pair, or from a radio beyond
+    /// [`MAX_RADIOS`].
+    pub fn take(
+        &mut self,
+        id: SysComp,
+        msgid: u32,
+        seq: u8,
+        r: RadioReport,
+        at: Nanos,
+    ) -> Option<Recorded> {
         let first = !self.radios.contains_key(&id);
         if first && self.radios.len() >= MAX_RADIOS {
-            return false;
+            return None;
         }
-        let radio = self.radios.entry(id).or_insert_with(|| Radio {
-            reports: 0,
-            first_at: at,
-            latest: r,
-            rssi: Figure::default(),
-            remrssi: Figure::default(),
-            noise: Figure::default(),
-            remnoise: Figure::default(),
-            fade: Figure::default(),
-            remfade: Figure::default(),
-            txbuf: Figure::default(),
-            rxerrors: SinceBootCounter::default(),
-            fixed: SinceBootCounter::default(),
+        let setting = self.setting;
+        let heartbeat = self.heartbeats.remove(&id);
+        let radio = self.radios.entry(id).or_insert_with(|| {
+            let mut evidence = Evidence::default();
+            if let Some((mav_type, autopilot)) = heartbeat {
+                evidence.heartbeat(mav_type, autopilot);
+            }
+            Radio {
+                reports: 0,
+                first_at: at,
+                latest: r,
+                judgement: evidence.judge(id, setting),
+                evidence,
+                pair: PairFilter::default(),
+                raw: Default::default(),
+                fade: Figure::default(),
+                remfade: Figure::default(),
+                txbuf: Figure::default(),
+                rxerrors_values: Figure::default(),
+                rxerrors: SinceBootCounter::default(),
+                fixed: SinceBootCounter::default(),
+            }
         });
+        if radio.pair.repeats(msgid, seq, &r) {
+            radio.evidence.report(msgid, &r, at, true);
+            return None;
+        }
+        radio.evidence.report(msgid, &r, at, false);
+        let was = radio.judgement.kind;
+        radio.judgement = radio.evidence.judge(id, setting);
+        let kind = radio.judgement.kind;
         radio.reports += 1;
         radio.latest = r;
-        radio.rssi.known(r.rssi);
-        radio.remrssi.known(r.remrssi);
-        radio.noise.known(r.noise);
-        radio.remnoise.known(r.remnoise);
+        for field in Field::ALL {
+            radio.raw[field.index()].record(field.of(&r));
+        }
         if r.rssi != UNKNOWN && r.noise != UNKNOWN {
             radio.fade.record(i32::from(r.rssi) - i32::from(r.noise));
         }
@@ -245,7 +419,11 @@ impl Radios {
                 .record(i32::from(r.remrssi) - i32::from(r.remnoise));
         }
         radio.txbuf.known(r.txbuf);
-        if r.txbuf != UNKNOWN {
+        radio.rxerrors_values.record(i32::from(r.rxerrors));
+        radio.rxerrors.record(r.rxerrors);
+        radio.fixed.record(r.fixed);
+        // Only a buffer a sender can overrun says the radio is overloaded.
+        if r.txbuf != UNKNOWN && kind.txbuf_is_free_buffer() {
             let low = r.txbuf < LOW_TXBUF_PERCENT;
             if self.buffer.back().is_none_or(|&(_, was)| was != low) {
                 if self.buffer.len() == MAX_BUFFER_CHANGES {
@@ -254,9 +432,36 @@ impl Radios {
                 self.buffer.push_back((at, low));
             }
         }
-        radio.rxerrors.record(r.rxerrors);
-        radio.fixed.record(r.fixed);
-        first
+        Some(Recorded {
+            first,
+            kind_changed: !first && kind != was,
+        })
+    }
+
+    /// A HEARTBEAT from `id`: evidence of its kind if it is (or may yet
+    /// be) a radio. Returns true when a radio's kind changed with it.
+    pub fn heartbeat(&mut self, id: SysComp, mav_type: u8, autopilot: u8) -> bool {
+        if let Some(radio) = self.radios.get_mut(&id) {
+            radio.evidence.heartbeat(mav_type, autopilot);
+            let was = radio.judgement.kind;
+            radio.judgement = radio.evidence.judge(id, self.setting);
+            return radio.judgement.kind != was;
+        }
+        let room = self.heartbeats.len() < MAX_RADIOS || self.heartbeats.contains_key(&id);
+        if is_radio_ids(id) && room {
+            self.heartbeats.insert(id, (mav_type, autopilot));
+        }
+        false
+    }
+
+    /// What a radio is and why, as things stand.
+    pub fn judgement(&self, id: SysComp) -> Option<&Judgement> {
+        self.radios.get(&id).map(|r| &r.judgement)
+    }
+
+    /// A radio's latest report.
+    pub fn latest(&self, id: SysComp) -> Option<RadioReport> {
+        self.radios.get(&id).map(|r| r.latest)
     }
 
     /// A reply or a loss was decided for a request sent at `sent_at`;
@@ -294,38 +499,103 @@ impl Radios {
     }
 
     pub fn summaries(&self) -> Vec<RadioSummary> {
-        self.radios
-            .iter()
-            .map(|(&id, r)| {
-                let fade_margin = r.fade.range();
-                let remote_fade_margin = r.remfade.range();
-                let approx_dbm = is_sik(id).then(|| ApproxDbm {
-                    rssi: map_range(r.rssi.range(), sik_dbm),
-                    remrssi: map_range(r.remrssi.range(), sik_dbm),
-                    fade_margin_db: map_range(fade_margin, |v| v / 1.9),
-                    remote_fade_margin_db: map_range(remote_fade_margin, |v| v / 1.9),
-                });
-                RadioSummary {
-                    id,
-                    reports: r.reports,
-                    rssi: r.rssi.range(),
-                    remrssi: r.remrssi.range(),
-                    noise: r.noise.range(),
-                    remnoise: r.remnoise.range(),
-                    fade_margin,
-                    remote_fade_margin,
-                    txbuf: r.txbuf.range(),
-                    rxerrors_delta: r.rxerrors.grown(),
-                    fixed_delta: r.fixed.grown(),
-                    approx_dbm,
-                    latest: r.latest,
-                }
-            })
-            .collect()
+        self.radios.iter().map(|(&id, r)| summary(id, r)).collect()
     }
 }
 
-/// Hints the radio figures support; none when the data is silent.
+/// The figures of `kind` in its units, in text's order: the four signal
+/// fields, then (SiK) the fade margins, then (mavesp8266) the ground's
+/// loss.
+fn converted(
+    kind: RadioKind,
+    raw: &[RawHistogram; 4],
+    fades: [Option<Range>; 2],
+    rxerrors: Option<Range>,
+) -> Converted {
+    let mut out: Vec<KindFigure> = Field::ALL
+        .into_iter()
+        .filter_map(|field| {
+            let m = kind.meaning(field)?;
+            Some(KindFigure {
+                key: m.key,
+                label: m.label,
+                unit: m.unit,
+                note: m.note,
+                range: raw[field.index()].range(m.convert)?,
+            })
+        })
+        .collect();
+    if kind.has_fade_margin() {
+        for ((key, label), fade) in [
+            ("fade_margin_db", "fade margin"),
+            ("remote_fade_margin_db", "remote fade margin"),
+        ]
+        .into_iter()
+        .zip(fades)
+        {
+            if let Some(range) = map_range(fade, |v| v / SIK_STEPS_PER_DB) {
+                out.push(KindFigure {
+                    key,
+                    label,
+                    unit: "dB",
+                    note: "approximate, SiK scale",
+                    range,
+                });
+            }
+        }
+    }
+    if kind.rxerrors_is_gcs_lost_pct() {
+        if let Some(range) = rxerrors {
+            out.push(KindFigure {
+                key: "gcs_lost_pct",
+                label: "ground msgs lost",
+                unit: "%",
+                note: "mavesp8266: rxerrors = % of the ground's lost",
+                range,
+            });
+        }
+    }
+    Converted(out)
+}
+
+fn summary(id: SysComp, r: &Radio) -> RadioSummary {
+    let kind = r.judgement.kind;
+    let sik = kind.has_fade_margin();
+    let fade_margin = r.fade.range().filter(|_| sik);
+    let remote_fade_margin = r.remfade.range().filter(|_| sik);
+    let raw = |f: Field| r.raw[f.index()].raw_range();
+    let approx_dbm = sik.then(|| ApproxDbm {
+        rssi: map_range(raw(Field::Rssi), sik_dbm),
+        remrssi: map_range(raw(Field::Remrssi), sik_dbm),
+        fade_margin_db: map_range(fade_margin, |v| v / SIK_STEPS_PER_DB),
+        remote_fade_margin_db: map_range(remote_fade_margin, |v| v / SIK_STEPS_PER_DB),
+    });
+    RadioSummary {
+        id,
+        reports: r.reports,
+        judgement: r.judgement.clone(),
+        rssi: raw(Field::Rssi),
+        remrssi: raw(Field::Remrssi),
+        noise: raw(Field::Noise),
+        remnoise: raw(Field::Remnoise),
+        fade_margin,
+        remote_fade_margin,
+        txbuf: r.txbuf.range(),
+        rxerrors_delta: r.rxerrors.grown(),
+        fixed_delta: r.fixed.grown(),
+        converted: converted(
+            kind,
+            &r.raw,
+            [r.fade.range(), r.remfade.range()],
+            r.rxerrors_values.range(),
+        ),
+        approx_dbm,
+        latest: r.latest,
+    }
+}
+
+/// Hints the radio figures support; none when the data is silent, and
+/// none a radio's kind does not give its fields the meaning of.
 pub fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<Hint> {
     let mut hints = Vec::new();
     let ratio = |lost: u64, of: u64| {
@@ -361,7 +631,7 @@ pub fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<Hint> {
                 }
             }
         }
-        if r.rxerrors_delta > 0 {
+        if r.rxerrors_delta > 0 && r.judgement.kind.counts_errors() {
             hints.push(Hint::new(
                 HintCode::RadioErrors,
                 format!(
@@ -382,6 +652,7 @@ mod tests {
         sysid: 51,
         compid: 68,
     };
+    const S: Nanos = 1_000_000_000;
 
     fn report(rssi: u8, noise: u8, txbuf: u8, rxerrors: u16, fixed: u16) -> RadioReport {
         RadioReport {
@@ -525,6 +796,156 @@ mod tests {
         let s = &radios.summaries()[0];
         assert!(s.approx_dbm.is_none());
         // Raw units unknown: no fade-margin hint from a guess.
+        assert!(radio_hints(&radios.summaries(), radios.loss_by_txbuf()).is_empty());
+    }
+
+    fn dbm(r: &RadioSummary, key: &str) -> (f64, f64, f64) {
+        let f = r
+            .converted
+            .get(key)
+            .unwrap_or_else(|| panic!("{key}: {r:?}"));
+        (f.range.min, f.range.mean, f.range.max)
+    }
+
+    /// mLRS's RSSI for `dbm`, as its rssi_i8_to_ap encodes it.
+    fn mlrs_raw(dbm: i32) -> u8 {
+        (((dbm + 120) * 254 + 35) / 70) as u8
+    }
+
+    #[test]
+    fn mlrs_is_read_on_its_scale_with_no_fade_margin() {
+        let weak = |rxerrors| RadioReport {
+            rssi: mlrs_raw(-85),
+            remrssi: mlrs_raw(-90),
+            txbuf: 100,
+            // SNR 7 dB; read as a SiK noise floor, a fade margin of ~65 dB.
+            noise: 3,
+            remnoise: UNKNOWN,
+            rxerrors,
+            fixed: 0,
+        };
+        let mut radios = Radios::default();
+        // Its HEARTBEAT may come before its first report.
+        assert!(!radios.heartbeat(SIK, 0, 8));
+        for i in 0..3 {
+            radios.record(SIK, weak(0), i * S);
+        }
+        let s = &radios.summaries()[0];
+        assert_eq!(s.judgement.kind, RadioKind::Mlrs);
+        assert_eq!(dbm(s, "rssi_dbm"), (-85.0, -85.0, -85.0));
+        assert_eq!(dbm(s, "remrssi_dbm"), (-90.0, -90.0, -90.0));
+        assert_eq!(dbm(s, "snr_db"), (7.0, 7.0, 7.0));
+        assert!(s.fade_margin.is_none() && s.approx_dbm.is_none(), "{s:?}");
+        assert!(s.converted.get("noise_dbm").is_none());
+        // The same bytes read as a SiK's (--radio-type sik): dBm on its
+        // scale, a fade margin, and rxerrors as errors.
+        let mut as_sik = Radios::new(RadioType::Sik);
+        as_sik.record(SIK, weak(0), 0);
+        as_sik.record(SIK, weak(5), S);
+        let s = &as_sik.summaries()[0];
+        assert_eq!(s.judgement.describe(), "SiK (--radio-type sik)");
+        let rssi = dbm(s, "rssi_dbm").0;
+        assert!((rssi - (f64::from(mlrs_raw(-85)) / 1.9 - 127.0)).abs() < 1e-9);
+        assert!(s.fade_margin.is_some());
+        let hints = radio_hints(&as_sik.summaries(), as_sik.loss_by_txbuf());
+        assert!(
+            hints.iter().any(|h| h.text.contains("rxerrors grew by 5")),
+            "{hints:?}"
+        );
+    }
+
+    #[test]
+    fn a_heartbeat_after_the_first_report_changes_the_kind() {
+        let mut radios = Radios::default();
+        assert!(radios.record(SIK, report(100, 20, 100, 0, 0), 0));
+        assert_eq!(radios.judgement(SIK).unwrap().kind, RadioKind::Sik);
+        assert!(radios.heartbeat(SIK, 0, 8));
+        assert_eq!(radios.judgement(SIK).unwrap().kind, RadioKind::Mlrs);
+        // Again: no change.
+        assert!(!radios.heartbeat(SIK, 0, 8));
+        // A vehicle's HEARTBEAT is kept nowhere.
+        assert!(!radios.heartbeat(SysComp::new(1, 1), 2, 3));
+        assert!(radios.heartbeats.is_empty());
+    }
+
+    #[test]
+    fn a_report_sent_as_radio_and_radio_status_counts_once() {
+        let mut radios = Radios::default();
+        let r = report(150, 50, 90, 7, 0);
+        let first = radios.take(SIK, ids::RADIO, 4, r, 0).unwrap();
+        assert!(first.first);
+        assert_eq!(radios.take(SIK, ids::RADIO_STATUS, 4, r, 1), None);
+        let next = report(160, 50, 90, 7, 0);
+        assert!(radios.take(SIK, ids::RADIO, 5, next, S).is_some());
+        assert_eq!(radios.take(SIK, ids::RADIO_STATUS, 5, next, S + 1), None);
+        let s = &radios.summaries()[0];
+        assert_eq!(s.reports, 2);
+        // The mean is of two reports, not four.
+        assert_eq!(s.rssi.unwrap().samples, 2);
+        assert_eq!(s.rssi.unwrap().mean, 155.0);
+        assert!(
+            s.judgement
+                .describe()
+                .contains("RADIO (166) beside each RADIO_STATUS"),
+            "{s:?}"
+        );
+    }
+
+    #[test]
+    fn elrs_gives_link_quality_uplink_rssi_and_snr() {
+        let elrs = SysComp::new(255, 68);
+        let mut radios = Radios::default();
+        for (i, (lq, snr)) in [(98u32, -3i8), (100, 5)].into_iter().enumerate() {
+            radios.record(
+                elrs,
+                RadioReport {
+                    rssi: (f64::from(lq) * 2.55) as u8,
+                    remrssi: 67,
+                    txbuf: 90,
+                    noise: snr as u8,
+                    remnoise: 0,
+                    rxerrors: 0,
+                    fixed: 0,
+                },
+                i as Nanos * S / 100,
+            );
+        }
+        let s = &radios.summaries()[0];
+        assert_eq!(s.judgement.kind, RadioKind::Elrs);
+        assert_eq!(dbm(s, "link_quality_pct"), (98.0, 99.0, 100.0));
+        assert_eq!(dbm(s, "remrssi_dbm"), (-67.0, -67.0, -67.0));
+        assert_eq!(dbm(s, "snr_db"), (-3.0, 1.0, 5.0));
+        assert!(s.converted.get("rssi_dbm").is_none());
+    }
+
+    #[test]
+    fn an_esp_bridge_reports_losses_not_errors() {
+        let esp = SysComp::new(1, 240);
+        let mut radios = Radios::default();
+        for (i, lost) in [2u16, 6].into_iter().enumerate() {
+            radios.record(
+                esp,
+                RadioReport {
+                    rssi: (-61i8) as u8,
+                    remrssi: 0,
+                    txbuf: 10,
+                    noise: 0,
+                    remnoise: 4,
+                    rxerrors: lost,
+                    fixed: 0,
+                },
+                i as Nanos * S,
+            );
+        }
+        let s = &radios.summaries()[0];
+        assert_eq!(s.judgement.kind, RadioKind::Esp);
+        assert_eq!(dbm(s, "rssi_dbm"), (-61.0, -61.0, -61.0));
+        assert_eq!(dbm(s, "vehicle_lost_pct"), (4.0, 4.0, 4.0));
+        assert_eq!(dbm(s, "gcs_lost_pct"), (2.0, 4.0, 6.0));
+        // rxerrors "grew", but it is a percentage: no errors hint; and a
+        // low txbuf (its queue) is no overloaded radio.
+        radios.outcome(true, 5 * S);
+        assert!(radios.buffer.is_empty());
         assert!(radio_hints(&radios.summaries(), radios.loss_by_txbuf()).is_empty());
     }
 }

@@ -192,6 +192,10 @@ impl Heard {
                     mav_type,
                     autopilot,
                 } => {
+                    // mLRS says what it is by its HEARTBEAT.
+                    if self.radios.heartbeat(frame.source, mav_type, autopilot) {
+                        output = output.and(self.tell_radio(frame.source, at, false, observer));
+                    }
                     if self.roster.heard(frame.source, mav_type, autopilot, at) {
                         let identity = self.roster.get(frame.source).expect("just added");
                         output = output.and(observer.event(&Event::Heard {
@@ -200,16 +204,22 @@ impl Heard {
                         }));
                     }
                 }
-                // Radios inject this from their own ids on any link.
+                // Radios inject this (or RADIO) from their own ids on any
+                // link; a report sent as both counts once.
                 Msg::RadioStatus(report) => {
-                    let first = self.radios.record(frame.source, report, at);
-                    driver.on_radio(frame.source, &report, at);
-                    output = output.and(observer.event(&Event::Radio {
-                        id: frame.source,
-                        at,
-                        report,
-                        first,
-                    }));
+                    let id = frame.source;
+                    let Some(taken) =
+                        self.radios
+                            .take(id, frame.msgid, frame.packet_seq, report, at)
+                    else {
+                        continue;
+                    };
+                    driver.on_radio(id, &report, at);
+                    if taken.first || taken.kind_changed {
+                        output = output.and(self.tell_radio(id, at, taken.first, observer));
+                    } else {
+                        output = output.and(self.tell_report(id, at, report, observer));
+                    }
                 }
                 // A node's own count of the link it sends this on (PX4's,
                 // at 1 Hz): every kind of run keeps it.
@@ -226,6 +236,50 @@ impl Heard {
             }
         }
         output.and(driver.report(&mut self.radios, observer))
+    }
+
+    /// A radio's latest report, with what it is and why: at its first
+    /// report and when its kind changes.
+    fn tell_radio(
+        &self,
+        id: SysComp,
+        at: Nanos,
+        first: bool,
+        observer: &mut dyn Observer,
+    ) -> io::Result<()> {
+        let (Some(report), Some(judgement)) = (self.radios.latest(id), self.radios.judgement(id))
+        else {
+            return Ok(());
+        };
+        observer.event(&Event::Radio {
+            id,
+            at,
+            report,
+            judgement,
+            first,
+            kind_changed: !first,
+        })
+    }
+
+    /// Any other report.
+    fn tell_report(
+        &self,
+        id: SysComp,
+        at: Nanos,
+        report: RadioReport,
+        observer: &mut dyn Observer,
+    ) -> io::Result<()> {
+        let Some(judgement) = self.radios.judgement(id) else {
+            return Ok(());
+        };
+        observer.event(&Event::Radio {
+            id,
+            at,
+            report,
+            judgement,
+            first: false,
+            kind_changed: false,
+        })
     }
 }
 
@@ -362,7 +416,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             heartbeat: Heartbeat::ground_station(cfg.heartbeat),
             heard: Heard {
                 roster: Roster::default(),
-                radios: Radios::default(),
+                radios: Radios::new(cfg.radio_type),
                 link_nodes: LinkNodes::default(),
                 gate: Gate::new(cfg.signing),
             },

@@ -45,6 +45,22 @@ impl From<RadioStatus> for dialect::RADIO_STATUS_DATA {
     }
 }
 
+// RADIO (166) has RADIO_STATUS's fields under the older name.
+#[allow(deprecated)]
+impl From<dialect::RADIO_DATA> for RadioStatus {
+    fn from(d: dialect::RADIO_DATA) -> Self {
+        RadioStatus {
+            rssi: d.rssi,
+            remrssi: d.remrssi,
+            txbuf: d.txbuf,
+            noise: d.noise,
+            remnoise: d.remnoise,
+            rxerrors: d.rxerrors,
+            fixed: d.fixed,
+        }
+    }
+}
+
 impl From<dialect::RADIO_STATUS_DATA> for RadioStatus {
     fn from(d: dialect::RADIO_STATUS_DATA) -> Self {
         RadioStatus {
@@ -330,6 +346,7 @@ fn decode_payload(version: Version, msgid: u32, payload: &[u8]) -> Msg {
             | ids::COMMAND_ACK
             | ids::RADIO_STATUS
             | ids::LINK_NODE_STATUS
+            | ids::RADIO
             | ids::GLOBAL_POSITION_INT
             | ids::GPS_RAW_INT
             | ids::HOME_POSITION
@@ -380,6 +397,7 @@ fn decode_payload(version: Version, msgid: u32, payload: &[u8]) -> Msg {
         },
         Ok(M::RADIO_STATUS(r)) => Msg::RadioStatus(r.into()),
         Ok(M::LINK_NODE_STATUS(l)) => Msg::LinkNodeStatus(l.into()),
+        Ok(M::RADIO(r)) => Msg::RadioStatus(r.into()),
         Ok(M::GLOBAL_POSITION_INT(p)) => Msg::Fix(Fix {
             kind: FixKind::Estimate,
             lat: p.lat,
@@ -538,6 +556,48 @@ mod tests {
                 assert_eq!(frame.version, version);
             }
         }
+    }
+
+    /// RADIO (166), as SiK sent it beside RADIO_STATUS until 2016 and
+    /// openLRSng still does: read as the same figures, its id kept.
+    #[test]
+    #[allow(deprecated)]
+    fn radio_166_reads_as_radio_status() {
+        let data = dialect::RADIO_DATA {
+            rxerrors: 513,
+            fixed: 2,
+            rssi: 190,
+            remrssi: 170,
+            txbuf: 88,
+            noise: 41,
+            remnoise: 39,
+        };
+        let header = MavHeader {
+            system_id: 51,
+            component_id: 68,
+            sequence: 9,
+        };
+        let mut raw = MAVLinkV1MessageRaw::new();
+        raw.serialize_message(header, &dialect::MavMessage::RADIO(data));
+        let mut frames = Vec::new();
+        let mut stats = super::super::ScanStats::default();
+        super::super::scan_datagram(raw.raw_bytes(), &mut stats, &mut |f| frames.push(decode(f)));
+        assert_eq!(frames.len(), 1);
+        let f = frames[0];
+        assert_eq!((f.msgid, f.packet_seq), (ids::RADIO, 9));
+        assert_eq!(
+            f.msg,
+            Msg::RadioStatus(RadioStatus {
+                rssi: 190,
+                remrssi: 170,
+                txbuf: 88,
+                noise: 41,
+                remnoise: 39,
+                rxerrors: 513,
+                fixed: 2,
+            })
+        );
+        assert_eq!(message_name(166), Some("RADIO"));
     }
 
     #[test]

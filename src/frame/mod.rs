@@ -102,7 +102,8 @@ pub enum Msg {
     Damaged,
 }
 
-/// A radio's RADIO_STATUS (message 109): its link figures, as received and
+/// A radio's RADIO_STATUS (message 109, or its forerunner RADIO, 166: the
+/// frame's `msgid` tells which): its link figures, as received and
 /// as the engine and the reports keep them (`engine::radio::RadioReport`).
 /// 255 in the 8-bit figures means unknown; `rxerrors` and `fixed` count
 /// since the radio booted and wrap.
@@ -204,6 +205,9 @@ pub mod ids {
     pub const COMMAND_LONG: u32 = 76;
     pub const COMMAND_ACK: u32 = 77;
     pub const RADIO_STATUS: u32 = 109;
+    /// RADIO_STATUS's forerunner (ardupilotmega), the same fields: SiK
+    /// before 2016 and openLRSng send it.
+    pub const RADIO: u32 = 166;
     pub const TIMESYNC: u32 = 111;
     pub const HOME_POSITION: u32 = 242;
 }

@@ -227,6 +227,11 @@ mod tests {
             })
         };
         log.event(&lost(0)).unwrap();
+        let sik = radio::Judgement {
+            kind: radio::RadioKind::Sik,
+            radio_type: radio::RadioType::Auto,
+            evidence: vec![],
+        };
         log.event(&Event::Radio {
             id: SysComp::new(51, 68),
             at: 1,
@@ -239,7 +244,9 @@ mod tests {
                 rxerrors: 0,
                 fixed: 0,
             },
+            judgement: &sik,
             first: true,
+            kind_changed: false,
         })
         .unwrap();
         log.event(&lost(1)).unwrap();

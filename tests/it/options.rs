@@ -58,6 +58,8 @@ fn ids_out_of_range() {
         (&["respond", "--sysid", "0", "sim:"], "--sysid 0"),
         (&["respond", "--sysid", "-3", "sim:"], "-3"),
         (&["respond", "--compid", "999", "sim:"], "999"),
+        // A radio kind mavping does not know: named, never guessed.
+        (&["--radio-type", "rfd", "sim:"], "'rfd'"),
     ] {
         rejects(args, needle);
     }

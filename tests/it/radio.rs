@@ -1,5 +1,9 @@
 //! RADIO_STATUS from a radio injecting into the stream (pymavlink, 51/68)
-//! beside a PING responder: the figures and counter deltas are exact.
+//! beside a PING responder: the figures and counter deltas are exact. And
+//! each kind of radio as it sends (tests/peers/radio_peer.py: SiK, mLRS
+//! with its HEARTBEAT, ExpressLRS from 255/68 at 100 Hz, an ESP8266
+//! bridge from compid 240, RADIO (166)): mavping names the kind and gives
+//! back exactly the figures the peer encoded, on that kind's scale.
 
 use crate::common::*;
 
@@ -127,8 +131,12 @@ fn text_output_has_the_radio_block_and_annotated_replies() {
             && l.ends_with("[radio 51/68 rssi=200 remrssi=150 txbuf=90%]")),
         "{out}"
     );
+    // The block names the radio's kind and why (the counts moved under it).
     assert!(
-        out.contains("radio 51/68: 2 reports, rxerrors +2, fixed +0 during the run"),
+        out.contains(
+            "radio 51/68: SiK (compid 68 and no HEARTBEAT from 51/68)\n  \
+             2 reports, rxerrors +2, fixed +0 during the run"
+        ),
         "{out}"
     );
     assert!(
@@ -221,4 +229,251 @@ fn sim_baud_queues_and_loses_where_the_arithmetic_says() {
         hints.contains("200/s will queue and then lose: this run did"),
         "{hints}"
     );
+}
+
+/// `mavping --passive -q` over udpout to a radio_peer of `kind` sending
+/// `count` reports: the summary (JSON with `--json`) and the peer's truth.
+fn radio_run(kind: &str, count: usize, extra: &[&str]) -> (String, serde_json::Value) {
+    let mut args = vec!["-q"];
+    args.extend_from_slice(extra);
+    run_radio(kind, count, &[], &args)
+}
+
+/// `mavping --passive ARGS` over udpout to a radio_peer of `kind` (with
+/// `peer_args`) sending `count` reports: its output and the peer's truth.
+fn run_radio(
+    kind: &str,
+    count: usize,
+    peer_args: &[&str],
+    args: &[&str],
+) -> (String, serde_json::Value) {
+    let port = free_udp_port();
+    let count = count.to_string();
+    let listen = format!("udpin:127.0.0.1:{port}");
+    let mut peer = vec![listen.as_str(), "--kind", kind, "--count", &count];
+    peer.extend_from_slice(peer_args);
+    let peer = Peer::start("radio_peer.py", &peer);
+    let link = format!("udpout:127.0.0.1:{port}");
+    let mut all = vec!["--passive", "-w", "3.5s"];
+    all.extend_from_slice(args);
+    all.push(&link);
+    let (code, out, err) = run_mavping(&all);
+    assert!(code == 0 || code == 1, "{out}\n{err}");
+    (out, peer.finish())
+}
+
+/// The one radio of a `--json` run's summary, and the peer's truth.
+fn radio_summary(
+    kind: &str,
+    count: usize,
+    extra: &[&str],
+) -> (serde_json::Value, serde_json::Value) {
+    let mut args = vec!["--json"];
+    args.extend_from_slice(extra);
+    let (out, truth) = radio_run(kind, count, &args);
+    let s: serde_json::Value = serde_json::from_str(out.trim()).expect(&out);
+    let radios = s["radios"].as_array().expect(&out);
+    assert_eq!(radios.len(), 1, "{out}");
+    (radios[0].clone(), truth)
+}
+
+/// min/mean/max of what the peer encoded under `key`.
+fn encoded(truth: &serde_json::Value, key: &str) -> (f64, f64, f64) {
+    let v: Vec<f64> = truth["encoded"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e[key].as_f64().unwrap())
+        .collect();
+    let min = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let max = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (min, v.iter().sum::<f64>() / v.len() as f64, max)
+}
+
+/// The radio is `kind`, counted every report, and its `converted` figures
+/// are exactly (to float rounding) what the peer encoded: those keys and
+/// no others.
+fn converts_exactly(r: &serde_json::Value, truth: &serde_json::Value, kind: &str) {
+    assert_eq!(r["kind"], kind, "{r}");
+    assert_eq!(r["radio_type"], "auto", "{r}");
+    assert_eq!(r["reports"], truth["reports"], "{r}");
+    assert_eq!(
+        (r["id"]["sysid"].clone(), r["id"]["compid"].clone()),
+        (truth["id"][0].clone(), truth["id"][1].clone())
+    );
+    let converted = r["converted"].as_object().unwrap();
+    let mut keys: Vec<&String> = converted.keys().collect();
+    keys.sort();
+    let mut want: Vec<&String> = truth["encoded"][0].as_object().unwrap().keys().collect();
+    want.sort();
+    assert_eq!(keys, want, "{r}");
+    for key in want {
+        let got = &converted[key];
+        let (min, mean, max) = encoded(truth, key);
+        for (name, w) in [("min", min), ("mean", mean), ("max", max)] {
+            let g = got[name].as_f64().unwrap();
+            assert!(
+                (g - w).abs() < 1e-9,
+                "{key} {name}: {g} vs {w} encoded\n{r}"
+            );
+        }
+    }
+}
+
+#[test]
+fn a_sik_radio_in_dbm_with_fade_margins() {
+    let (r, truth) = radio_summary("sik", 5, &[]);
+    converts_exactly(&r, &truth, "sik");
+    assert_eq!(r["evidence"][0], "compid 68 and no HEARTBEAT from 51/68");
+    // Its noise is a noise floor: a fade margin, raw and in dB.
+    assert!(
+        r["fade_margin"].is_object() && r["approx_dbm"].is_object(),
+        "{r}"
+    );
+    // rxerrors +3 a report, fixed +1: counters.
+    assert_eq!(r["rxerrors_delta"], 12);
+    assert_eq!(r["fixed_delta"], 4);
+}
+
+#[test]
+fn mlrs_by_its_heartbeat_on_its_own_scale_without_fade_margin() {
+    let (r, truth) = radio_summary("mlrs", 5, &[]);
+    converts_exactly(&r, &truth, "mlrs");
+    assert_eq!(
+        r["evidence"],
+        serde_json::json!([
+            "HEARTBEAT type GENERIC, autopilot INVALID from 51/68",
+            "remnoise always 255",
+            "rxerrors and fixed always 0"
+        ])
+    );
+    // Its noise is 10 - SNR, no noise floor: no fade margin anywhere.
+    assert!(
+        r["fade_margin"].is_null() && r["remote_fade_margin"].is_null(),
+        "{r}"
+    );
+    assert!(r["approx_dbm"].is_null(), "{r}");
+}
+
+#[test]
+fn mlrs_text_names_the_kind_and_why() {
+    let (out, _) = radio_run("mlrs", 3, &[]);
+    assert!(
+        out.contains(
+            "radio 51/68: mLRS (HEARTBEAT type GENERIC, autopilot INVALID from 51/68; \
+             remnoise always 255; rxerrors and fixed always 0)\n  3 reports\n"
+        ),
+        "{out}"
+    );
+    assert!(
+        out.contains("  rssi               -101.0/-82.0/-60.0 dBm (mLRS scale"),
+        "{out}"
+    );
+    assert!(!out.contains("fade margin"), "{out}");
+}
+
+#[test]
+fn elrs_from_255_68_at_100_hz_in_link_quality_uplink_dbm_and_snr() {
+    let (r, truth) = radio_summary("elrs", 100, &[]);
+    converts_exactly(&r, &truth, "elrs");
+    let evidence: Vec<&str> = r["evidence"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e.as_str().unwrap())
+        .collect();
+    // The rate is the evidence: ~100 reports/s, not a SiK's 1.
+    let rate: f64 = evidence[0]
+        .trim_start_matches('~')
+        .trim_end_matches(" reports/s")
+        .parse()
+        .unwrap_or_else(|_| panic!("{evidence:?}"));
+    assert!(rate >= 20.0, "{evidence:?}");
+    assert_eq!(evidence[1], "255/68, an ExpressLRS receiver's default ids");
+    assert!(r["fade_margin"].is_null(), "{r}");
+}
+
+#[test]
+fn an_esp8266_bridge_from_compid_240_reports_losses() {
+    let (r, truth) = radio_summary("esp", 5, &[]);
+    converts_exactly(&r, &truth, "esp");
+    assert!(
+        r["evidence"][0].as_str().unwrap().starts_with("compid 240"),
+        "{r}"
+    );
+    assert!(r["fade_margin"].is_null(), "{r}");
+}
+
+#[test]
+fn radio_166_beside_radio_status_counts_once() {
+    let (r, truth) = radio_summary("sik-pairs", 5, &[]);
+    // Ten messages, five reports: the means are of five.
+    assert_eq!(truth["messages"], 10);
+    converts_exactly(&r, &truth, "sik");
+    assert_eq!(r["rssi"]["samples"], 5);
+    assert!(
+        r["evidence"]
+            .to_string()
+            .contains("RADIO (166) beside each RADIO_STATUS"),
+        "{r}"
+    );
+    // RADIO alone (SiK before 2013, openLRSng) reads the same.
+    let (r, truth) = radio_summary("radio-only", 5, &[]);
+    converts_exactly(&r, &truth, "sik");
+    assert!(
+        r["evidence"].to_string().contains("RADIO (166) only"),
+        "{r}"
+    );
+}
+
+#[test]
+fn radio_type_overrides_what_the_radio_sends() {
+    // An mLRS read as a SiK: SiK's dBm formula on mLRS's bytes, a fade
+    // margin from its SNR field; the evidence is the option.
+    let (r, truth) = radio_summary("mlrs", 3, &["--radio-type", "sik"]);
+    assert_eq!(
+        (r["kind"].as_str(), r["radio_type"].as_str()),
+        (Some("sik"), Some("sik"))
+    );
+    assert_eq!(r["evidence"], serde_json::json!(["--radio-type sik"]));
+    let raw: Vec<f64> = truth["raw"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x["rssi"].as_f64().unwrap())
+        .collect();
+    let want = raw.iter().sum::<f64>() / raw.len() as f64 / 1.9 - 127.0;
+    let got = r["converted"]["rssi_dbm"]["mean"].as_f64().unwrap();
+    assert!((got - want).abs() < 1e-9, "{got} vs {want}");
+    assert!(r["fade_margin"].is_object(), "{r}");
+    // raw: the figures as sent, nothing converted.
+    let (r, _) = radio_summary("sik", 3, &["--radio-type", "raw"]);
+    assert_eq!(r["kind"], "unknown");
+    assert_eq!(r["converted"], serde_json::json!({}));
+    assert!(r["fade_margin"].is_null() && r["rssi"].is_object(), "{r}");
+}
+
+/// mLRS's HEARTBEAT after its first report: read as a SiK until it comes,
+/// then as mLRS, and the JSON says so as it happens.
+#[test]
+fn a_late_heartbeat_changes_the_kind_as_the_run_goes() {
+    let (out, _) = run_radio("mlrs", 3, &["--late-heartbeat"], &["--json"]);
+    let events: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap())
+        .filter(|v| v["type"] == "radio")
+        .collect();
+    let told: Vec<(&str, bool)> = events
+        .iter()
+        .map(|e| (e["kind"].as_str().unwrap(), e["first"].as_bool().unwrap()))
+        .collect();
+    assert_eq!(told, [("sik", true), ("mlrs", false)], "{out}");
+    assert_eq!(
+        events[1]["evidence"][0],
+        "HEARTBEAT type GENERIC, autopilot INVALID from 51/68"
+    );
+    // Every report in the summary, read as mLRS.
+    let summary: serde_json::Value = serde_json::from_str(out.lines().last().unwrap()).unwrap();
+    assert_eq!(summary["radios"][0]["kind"], "mlrs");
+    assert_eq!(summary["radios"][0]["reports"], 3);
 }

@@ -953,6 +953,123 @@ fn a_flight_is_told_window_by_window_with_its_losses_radio_and_distance() {
     }
 }
 
+/// A vehicle at 10 Hz that goes silent three times while its SiK radio
+/// (51/68, 1 Hz) goes on reporting: once with the remote figures cleared
+/// to 0 (SiK lost the link: it zeroes them after ~3 s without a packet),
+/// once with the signal as before and the noise 30 raw (~16 dB) up, once
+/// with nothing wrong with the radio.
+fn silent_flight_plan() -> Value {
+    json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "window_us": 10_000_000,
+        "sources": [
+            // Silent after frames 199 (19.9 s), 599 and 799, for 280, 100
+            // and 100 frames: 19.9-48.0 s, 59.9-70.0 s, 79.9-90.0 s.
+            {"sysid": 1, "compid": 1, "rate": 10, "frames": 1000,
+             "silence": [[199, 280], [599, 100], [799, 100]]},
+            {"sysid": 51, "compid": 68, "rate": 1, "frames": 100, "phase_us": 500_000,
+             "radio": {
+                 "figures": {"rssi": 150, "remrssi": 145, "noise": 40, "remnoise": 38},
+                 "spans": [
+                     {"from_us": 20_000_000, "to_us": 48_000_000,
+                      "rssi": 45, "remrssi": 0, "noise": 40, "remnoise": 0},
+                     {"from_us": 60_000_000, "to_us": 70_000_000,
+                      "noise": 70, "remnoise": 68}
+                 ]
+             }}
+        ]
+    })
+}
+
+#[test]
+fn a_silence_carries_the_radios_figures_and_what_they_say() {
+    let dir = Scratch::new("flight-silence-radio");
+    let path = dir.path("silent.tlog");
+    let t = write_log(&path, &silent_flight_plan());
+    let lines = json_lines_of(&[], &tlog(&path));
+    let silences: Vec<&Value> = lines
+        .iter()
+        .filter(|l| l["type"] == "flight_silence")
+        .collect();
+    let spans: Vec<(f64, f64)> = silences
+        .iter()
+        .map(|s| (s["t_s"].as_f64().unwrap(), s["end_t_s"].as_f64().unwrap()))
+        .collect();
+    assert_eq!(spans, [(19.9, 48.0), (59.9, 70.0), (79.9, 90.0)]);
+    // The radio's reports the writer put in each silence, as mavping
+    // should give them: min and mean, raw and on SiK's dBm scale.
+    let reports = t["sources"]["51/68"]["reports"].as_array().unwrap();
+    for (s, (from, to)) in silences.iter().zip(&spans) {
+        let during: Vec<&Value> = reports
+            .iter()
+            .filter(|r| {
+                let at = r[0].as_f64().unwrap() / 1e6;
+                at > *from && at < *to
+            })
+            .collect();
+        let radio = &s["radio"];
+        assert_eq!(radio["id"], json!({"sysid": 51, "compid": 68}));
+        assert_eq!(radio["kind"], "sik");
+        assert_eq!(radio["reports"].as_u64(), Some(during.len() as u64), "{s}");
+        for (key, col) in [("rssi", 1), ("remrssi", 2), ("noise", 3), ("remnoise", 4)] {
+            let raw: Vec<f64> = during.iter().map(|r| r[col].as_f64().unwrap()).collect();
+            let min = raw.iter().copied().fold(f64::INFINITY, f64::min);
+            let mean = raw.iter().sum::<f64>() / raw.len() as f64;
+            let f = &radio[key];
+            assert_eq!(f["raw_min"].as_f64(), Some(min), "{key}: {s}");
+            assert!(
+                (f["raw_mean"].as_f64().unwrap() - mean).abs() < 1e-9,
+                "{key}: {s}"
+            );
+            assert_eq!(f["unit"], "dBm");
+            let dbm = f["mean"].as_f64().unwrap();
+            assert!((dbm - (mean / 1.9 - 127.0)).abs() < 1e-9, "{key}: {s}");
+        }
+    }
+    // 28 reports with the remote figures 0: SiK lost the link.
+    assert_eq!(silences[0]["radio"]["reports"], 28);
+    assert_eq!(silences[0]["radio"]["remrssi"]["raw_mean"], 0.0);
+    assert_eq!(silences[0]["radio"]["diagnosis"], "remote_cleared");
+    let text = silences[0]["radio"]["diagnosis_text"].as_str().unwrap();
+    assert!(
+        text.starts_with(
+            "remote RSSI 0 for 28 s: the ground radio heard nothing from the vehicle's"
+        ),
+        "{text}"
+    );
+    assert_eq!(silences[1]["radio"]["diagnosis"], "interference");
+    assert_eq!(silences[2]["radio"]["diagnosis"], "radio_fine");
+    let summary = lines.last().unwrap();
+    assert_eq!(summary["flight"]["radio_kind"], "sik");
+    assert_eq!(summary["flight"]["silence_count"], 3);
+    assert_eq!(
+        summary["flight"]["silences"][0]["radio"],
+        silences[0]["radio"]
+    );
+    // The text tells the same under each silence.
+    let (code, text, err) = run_mavping(&[&tlog(&path)]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.contains(
+            "  radio 51/68 (SiK), 28 reports, min/mean: rssi -103.3/-103.3 dBm (raw 45/45.0), \
+             remote rssi -127.0/-127.0 dBm (raw 0/0.0)"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("  diagnosis: remote RSSI 0 for 28 s: the ground radio heard nothing"),
+        "{text}"
+    );
+    assert!(
+        text.contains("  diagnosis: RSSI held (-48 dBm) and the noise floor up 16 dB (to -90 dBm)"),
+        "{text}"
+    );
+    assert!(
+        text.contains("  diagnosis: the radio link's figures stayed good throughout"),
+        "{text}"
+    );
+}
+
 /// A HOME_POSITION before the first fix: distances are from home (the
 /// start of the flight), not from the first position 4 m north of it.
 #[test]

@@ -56,7 +56,13 @@ The plan:
                  and the last written (after a reboot its new value counts)
                radio: {"rxerrors0": e, "rxerrors_step": d}: the source is a
                  radio: every frame a RADIO_STATUS, rssi 200 less
-                 rssi_drop_per_s (default 1) a second, rxerrors e + d per report (mod 65536), no HEARTBEAT
+                 rssi_drop_per_s (default 1) a second, rxerrors e + d per report (mod 65536), no HEARTBEAT;
+                 or with "figures": {rssi, remrssi, noise, remnoise[, txbuf]}
+                 those figures, and "spans": [{from_us, to_us, figures...}]
+                 others from from_us to to_us (a radio losing its link, or
+                 hearing interference, while the vehicle is silent); every
+                 report written is in the truth's "reports" as
+                 [t_us, rssi, remrssi, noise, remnoise]
   window_us    per window of this many µs of the frames' time (the first
                frame at 0): numbered and written frames, the last written
                position's true distance, the radio's reports and rxerrors
@@ -104,9 +110,18 @@ def position_msg(mav, pos, t):
 
 
 def radio_msg(mav, radio, t, n):
+    """A report at t µs, its rxerrors, and (planned figures) the figures."""
     rxerrors = (radio.get("rxerrors0", 0) + n * radio.get("rxerrors_step", 0)) % 65536
+    if "figures" in radio:
+        f = dict(radio["figures"])
+        for span in radio.get("spans", []):
+            if span["from_us"] <= t < span["to_us"]:
+                f.update({k: v for k, v in span.items() if k not in ("from_us", "to_us")})
+        msg = mav.radio_status_encode(f["rssi"], f["remrssi"], f.get("txbuf", 80), f["noise"],
+                                      f["remnoise"], rxerrors, 0)
+        return msg, rxerrors, [int(t), f["rssi"], f["remrssi"], f["noise"], f["remnoise"]]
     rssi = max(0, 200 - int(radio.get("rssi_drop_per_s", 1) * t / 1e6))
-    return mav.radio_status_encode(rssi, 190, 80, 40, 41, rxerrors, 0), rxerrors
+    return mav.radio_status_encode(rssi, 190, 80, 40, 41, rxerrors, 0), rxerrors, None
 
 
 def link_node_msg(mav, spec, m):
@@ -161,8 +176,8 @@ def frames_of(src, mav):
     while n < src["frames"]:
         facts = None
         if radio is not None:
-            msg, rxerrors = radio_msg(mav, radio, t, n)
-            facts = {"rxerrors": rxerrors}
+            msg, rxerrors, figures = radio_msg(mav, radio, t, n)
+            facts = {"rxerrors": rxerrors, "figures": figures}
         elif node is not None and n % node["every"] == 0:
             msg = link_node_msg(mav, node, reports)
             facts = {"link_node": reports}
@@ -236,6 +251,8 @@ def plan_source(src, out, truth_of, window_us=None):
             continue
         if facts and "link_node" in facts:
             truth.setdefault("link_node_written", []).append(facts["link_node"])
+        if facts and facts.get("figures") is not None:
+            truth.setdefault("reports", []).append(facts["figures"])
         if window_us:
             win["written"] += 1
             if facts and "home" in facts:

@@ -206,6 +206,8 @@ fn session(
         signing: c.signing,
         sweep: None,
         wire: None,
+        // A probe reads radios by what they send.
+        radio_type: crate::engine::radio::RadioType::Auto,
     };
     session.wire = super::wire_budget(spec, c.baud, &c.probe, &session);
     Ok(session)

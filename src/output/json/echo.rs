@@ -8,7 +8,7 @@ use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::Hint;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::radio::{RadioReport, RadioSummary};
+use crate::engine::radio::{Judgement, RadioReport, RadioSummary};
 use crate::engine::roster::Identity;
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::engine::summary::ProbeName;
@@ -83,12 +83,16 @@ pub(super) struct Again {
     rtt_us: f64,
 }
 
-/// `radio`: a radio's first RADIO_STATUS.
+/// `radio`: a radio's first RADIO_STATUS, and any report after which
+/// its kind changed, with what it is and why.
 #[derive(Serialize)]
-pub(super) struct Radio {
+pub(super) struct Radio<'a> {
     #[serde(flatten)]
     stamp: Stamp,
     status: RadioReport,
+    #[serde(flatten)]
+    judgement: &'a Judgement,
+    first: bool,
 }
 
 /// `interim`: each responder's figures so far.
@@ -242,14 +246,18 @@ impl Lines {
                 id,
                 at,
                 report,
+                judgement,
                 first,
+                kind_changed,
             } => {
-                if !first {
+                if !first && !kind_changed {
                     return None;
                 }
                 Line::Radio(Radio {
                     stamp: self.stamp("radio", at, id),
                     status: report,
+                    judgement,
+                    first,
                 })
             }
         };

@@ -9,8 +9,10 @@ use serde::Serialize;
 
 use super::{seconds, Lines};
 use crate::engine::probe::passive::flight::{
-    FlightEvent, FlightSummary, FlightWindow, Origin, RadioWindow, Range, Span,
+    diagnosis_text, FlightEvent, FlightSummary, FlightWindow, Origin, RadioWindow, Range,
+    SilenceRadio, Span,
 };
+use crate::engine::radio::RadioKind;
 use crate::frame::SysComp;
 
 #[derive(Serialize)]
@@ -41,6 +43,16 @@ pub(super) struct Timed {
     lost: i64,
     loss_pct: Option<f64>,
     ongoing: bool,
+    /// A silence: the followed radio's figures during it.
+    radio: Option<SpanRadio>,
+}
+
+/// The radio during a silence, and its diagnosis in words.
+#[derive(Serialize)]
+pub(super) struct SpanRadio {
+    #[serde(flatten)]
+    radio: SilenceRadio,
+    diagnosis_text: Option<String>,
 }
 
 /// The summary's `flight` object.
@@ -54,6 +66,8 @@ pub(super) struct Summary<'a> {
     positions: u64,
     origin: Option<&'a Origin>,
     radio: Option<SysComp>,
+    radio_kind: Option<RadioKind>,
+    radio_evidence: &'a [String],
     farthest: Option<Window>,
     worst: Vec<Window>,
     silence_count: u64,
@@ -92,6 +106,10 @@ impl Lines {
             lost: s.lost,
             loss_pct: s.loss_pct(),
             ongoing: s.ongoing,
+            radio: s.radio.as_deref().map(|&radio| SpanRadio {
+                radio,
+                diagnosis_text: diagnosis_text(s),
+            }),
         }
     }
 
@@ -116,6 +134,8 @@ impl Lines {
             positions: f.positions,
             origin: f.origin.as_ref(),
             radio: f.radio,
+            radio_kind: f.radio_kind,
+            radio_evidence: &f.radio_evidence,
             farthest: f.farthest.as_ref().map(|w| self.flight_window(w)),
             worst: f.worst.iter().map(|w| self.flight_window(w)).collect(),
             silence_count: f.silence_count,

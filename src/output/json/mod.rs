@@ -43,7 +43,7 @@ enum Line<'a> {
     Late(echo::Again),
     Duplicate(echo::Again),
     Stale(Stamp),
-    Radio(echo::Radio),
+    Radio(echo::Radio<'a>),
     Interim(echo::Interim),
     PassiveInterim(Box<passive::Interim<'a>>),
     Step(sweep::Step),

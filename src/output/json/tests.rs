@@ -17,7 +17,7 @@ use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::observe::{CommandEvent, RunKind};
 use crate::engine::probe::passive::flight::{Flight, FlightEvent, FlightSummary, Totals};
 use crate::engine::probe::passive::tracker::RADIO_SOURCE;
-use crate::engine::radio::{RadioReport, Radios, UNKNOWN};
+use crate::engine::radio::{Judgement, RadioKind, RadioReport, RadioType, Radios, UNKNOWN};
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
 use crate::engine::summary::ProbeName;
@@ -254,6 +254,9 @@ enum Told<'a> {
 /// What the events of the runs borrow.
 struct Borrowed {
     identity: Identity,
+    /// A radio read as SiK, then as mLRS once its HEARTBEAT came.
+    sik: Judgement,
+    mlrs: Judgement,
     steps: Vec<StepFigures>,
     flight: (Vec<FlightEvent>, FlightSummary),
 }
@@ -262,6 +265,16 @@ impl Borrowed {
     fn new() -> Self {
         Borrowed {
             identity: identity(),
+            sik: Judgement {
+                kind: RadioKind::Sik,
+                radio_type: RadioType::Auto,
+                evidence: vec!["compid 68 and no HEARTBEAT from 51/68".into()],
+            },
+            mlrs: Judgement {
+                kind: RadioKind::Mlrs,
+                radio_type: RadioType::Auto,
+                evidence: vec!["HEARTBEAT type GENERIC, autopilot INVALID from 51/68".into()],
+            },
             steps: steps(),
             flight: flight(),
         }
@@ -273,7 +286,7 @@ impl Borrowed {
 fn flight() -> (Vec<FlightEvent>, FlightSummary) {
     use crate::frame::{Fix, FixKind, Msg, RadioStatus};
     let s = 1_000_000_000;
-    let mut f = Flight::new(10 * s, 2 * s);
+    let mut f = Flight::new(10 * s, 2 * s, RadioType::Auto);
     let mut totals = Totals::default();
     let mut events = Vec::new();
     for k in 0..4u64 {
@@ -358,14 +371,27 @@ fn echo_run<'a>(probe: &'static str, borrowed: &'a Borrowed) -> Vec<Told<'a>> {
                 id: RADIO,
                 at: 1_000_000_000,
                 report: radio_report(120),
+                judgement: &borrowed.sik,
                 first: true,
+                kind_changed: false,
             },
-            // Not written: only each radio's first report is.
+            // Not written: only each radio's first report is, and those
+            // its kind changed with.
             Event::Radio {
                 id: RADIO,
                 at: 2_000_000_000,
                 report: radio_report(110),
+                judgement: &borrowed.sik,
                 first: false,
+                kind_changed: false,
+            },
+            Event::Radio {
+                id: RADIO,
+                at: 2_100_000_000,
+                report: radio_report(110),
+                judgement: &borrowed.mlrs,
+                first: false,
+                kind_changed: true,
             },
             // Not written: the summary has the clock and the link's error.
             Event::Clock {

@@ -30,7 +30,7 @@ use super::{Event, Observer, Reporter, StartInfo};
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::CommandEvent;
-use crate::engine::radio::{RadioReport, SinceBootCounter, MAX_RADIOS};
+use crate::engine::radio::{RadioKind, RadioReport, SinceBootCounter, MAX_RADIOS};
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::{Direction, LinkSummary, ProbeName, Summary};
 use crate::engine::Nanos;
@@ -129,15 +129,28 @@ impl Series {
 /// One radio: its latest RADIO_STATUS, and its error counters turned into
 /// counters that only grow (the radio's own are 16 bits and wrap, and
 /// start again from 0 when it restarts).
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy)]
 struct RadioSeries {
     latest: RadioReport,
+    /// What the radio is, as the run judges it so far: what its fields
+    /// mean.
+    kind: RadioKind,
     rxerrors: SinceBootCounter,
     fixed: SinceBootCounter,
 }
 
 impl RadioSeries {
-    fn record(&mut self, report: RadioReport) {
+    fn new(kind: RadioKind) -> Self {
+        RadioSeries {
+            latest: RadioReport::default(),
+            kind,
+            rxerrors: SinceBootCounter::default(),
+            fixed: SinceBootCounter::default(),
+        }
+    }
+
+    fn record(&mut self, report: RadioReport, kind: RadioKind) {
+        self.kind = kind;
         self.latest = report;
         self.rxerrors.record(report.rxerrors);
         self.fixed.record(report.fixed);
@@ -314,10 +327,14 @@ impl Metrics {
         }
     }
 
-    /// A RADIO_STATUS: its figures replace the radio's last ones.
-    pub fn on_radio(&mut self, id: SysComp, report: RadioReport) {
+    /// A RADIO_STATUS from a radio of `kind`: its figures replace the
+    /// radio's last ones.
+    pub fn on_radio(&mut self, id: SysComp, report: RadioReport, kind: RadioKind) {
         if self.radios.len() < MAX_RADIOS || self.radios.contains_key(&id) {
-            self.radios.entry(id).or_default().record(report);
+            self.radios
+                .entry(id)
+                .or_insert_with(|| RadioSeries::new(kind))
+                .record(report, kind);
         }
     }
 
@@ -371,7 +388,12 @@ impl Observer for Metrics {
         match event {
             Event::Match(e) => self.on_event(e),
             Event::Command(e) => self.on_command(e),
-            Event::Radio { id, report, .. } => self.on_radio(*id, *report),
+            Event::Radio {
+                id,
+                report,
+                judgement,
+                ..
+            } => self.on_radio(*id, *report, judgement.kind),
             Event::LinkNode { id, report, .. } => self.link_nodes.record(*id, *report),
             Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
             Event::LinkFailed { .. } => self.set_up(false),

@@ -9,8 +9,7 @@ use super::exposition::{escape, Exposition, Family, Figure};
 use super::link_node::write_link_nodes;
 use super::passive::{write_directions, write_sources};
 use super::{Metrics, RadioSeries, Scope, Series, BUCKETS_S};
-use crate::engine::radio::{is_sik, sik_dbm, UNKNOWN};
-use crate::frame::SysComp;
+use crate::engine::radio::{Field, RadioKind, UNKNOWN};
 
 /// A per-responder count: a counter in a run, a gauge of one probe under
 /// a name of its own (see [`Scope`]).
@@ -120,85 +119,114 @@ const GAUGES: [Gauge; 5] = [
 ];
 
 /// A radio's figure (`None`: left out).
-type RadioFigure = Figure<fn(SysComp, &RadioSeries) -> Option<f64>>;
+type RadioFigure = Figure<fn(&RadioSeries) -> Option<f64>>;
 
-const RADIO: [RadioFigure; 11] = [
+const RADIO: [RadioFigure; 15] = [
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_info",
+            "1 for each radio, its kind (sik, mlrs, elrs, esp, unknown) in a label: from what it sends, or --radio-type.",
+        ),
+        // Written apart, with its extra label.
+        value: |_| None,
+    },
     Figure {
         family: Family::gauge(
             "mavping_radio_rssi",
             "Local signal strength, raw RADIO_STATUS units (255, unknown, left out).",
         ),
-        value: |_, r| known(r.latest.rssi),
+        value: |r| known(r.latest.rssi),
     },
     Figure {
         family: Family::gauge(
             "mavping_radio_remote_rssi",
             "Remote signal strength, raw RADIO_STATUS units.",
         ),
-        value: |_, r| known(r.latest.remrssi),
+        value: |r| known(r.latest.remrssi),
     },
     Figure {
         family: Family::gauge(
             "mavping_radio_noise",
             "Local background noise, raw RADIO_STATUS units.",
         ),
-        value: |_, r| known(r.latest.noise),
+        value: |r| known(r.latest.noise),
     },
     Figure {
         family: Family::gauge(
             "mavping_radio_remote_noise",
             "Remote background noise, raw RADIO_STATUS units.",
         ),
-        value: |_, r| known(r.latest.remnoise),
+        value: |r| known(r.latest.remnoise),
     },
     Figure {
         family: Family::gauge(
             "mavping_radio_rssi_dbm",
-            "Local signal strength in dBm (SiK radios: raw / 1.9 - 127, the chip's curve, approximate).",
+            "Local signal strength in dBm, on a known scale only: SiK raw / 1.9 - 127 (approximate), mLRS -120..-50 dBm as 0..254, an ESP8266 bridge's WiFi RSSI.",
         ),
-        value: |id, r| sik_dbm_of(id, r.latest.rssi),
+        value: |r| in_kind_units(r, "rssi_dbm"),
     },
     Figure {
         family: Family::gauge(
             "mavping_radio_remote_rssi_dbm",
-            "Remote signal strength in dBm (SiK radios, approximate).",
+            "Remote signal strength in dBm: SiK (approximate), mLRS; ExpressLRS's uplink RSSI (-remrssi).",
         ),
-        value: |id, r| sik_dbm_of(id, r.latest.remrssi),
+        value: |r| in_kind_units(r, "remrssi_dbm"),
     },
     Figure {
         family: Family::gauge(
             "mavping_radio_noise_dbm",
-            "Local background noise in dBm (SiK radios, approximate).",
+            "Local noise floor in dBm (SiK radios, approximate; other radios' noise is no noise floor).",
         ),
-        value: |id, r| sik_dbm_of(id, r.latest.noise),
+        value: |r| in_kind_units(r, "noise_dbm"),
     },
     Figure {
         family: Family::gauge(
             "mavping_radio_remote_noise_dbm",
-            "Remote background noise in dBm (SiK radios, approximate).",
+            "Remote noise floor in dBm (SiK radios, approximate).",
         ),
-        value: |id, r| sik_dbm_of(id, r.latest.remnoise),
+        value: |r| in_kind_units(r, "remnoise_dbm"),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_snr_db",
+            "Signal-to-noise ratio in dB: mLRS (10 - noise), ExpressLRS (noise).",
+        ),
+        value: |r| in_kind_units(r, "snr_db"),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_link_quality_percent",
+            "ExpressLRS's uplink link quality, percent (rssi / 2.55).",
+        ),
+        value: |r| in_kind_units(r, "link_quality_pct"),
+    },
+    Figure {
+        family: Family::gauge(
+            "mavping_radio_vehicle_lost_percent",
+            "An ESP8266 WiFi bridge's share of the vehicle's (serial) messages lost, percent (its remnoise).",
+        ),
+        value: |r| in_kind_units(r, "vehicle_lost_pct"),
     },
     Figure {
         family: Family::gauge(
             "mavping_radio_txbuf_percent",
             "Free space in the radio's transmit buffer, percent.",
         ),
-        value: |_, r| known(r.latest.txbuf),
+        value: |r| known(r.latest.txbuf),
     },
     Figure {
         family: Family::counter(
             "mavping_radio_rxerrors_total",
-            "Receive errors the radio counted since mavping first heard it (its 16-bit counter's wraps and restarts followed).",
+            "Receive errors the radio counted since mavping first heard it (its 16-bit counter's wraps and restarts followed; not an ESP8266 bridge's, whose rxerrors is a percentage).",
         ),
-        value: |_, r| Some(r.rxerrors.grown() as f64),
+        value: |r| (!r.kind.rxerrors_is_gcs_lost_pct()).then_some(r.rxerrors.grown() as f64),
     },
     Figure {
         family: Family::counter(
             "mavping_radio_fixed_total",
             "Packets the radio's error correction repaired since mavping first heard it.",
         ),
-        value: |_, r| Some(r.fixed.grown() as f64),
+        value: |r| Some(r.fixed.grown() as f64),
     },
 ];
 
@@ -206,9 +234,23 @@ fn known(raw: u8) -> Option<f64> {
     (raw != UNKNOWN).then_some(f64::from(raw))
 }
 
-/// dBm only where the scale is known: a SiK radio's.
-fn sik_dbm_of(id: SysComp, raw: u8) -> Option<f64> {
-    is_sik(id).then(|| known(raw).map(sik_dbm))?
+/// The latest report's figure `key` (`rssi_dbm`, `snr_db`) where the
+/// radio's kind defines one: a scale is never guessed.
+fn in_kind_units(r: &RadioSeries, key: &str) -> Option<f64> {
+    Field::ALL.into_iter().find_map(|f| {
+        let m = r.kind.meaning(f).filter(|m| m.key == key)?;
+        (m.convert)(f.of(&r.latest))
+    })
+}
+
+fn kind_label(kind: RadioKind) -> &'static str {
+    match kind {
+        RadioKind::Sik => "sik",
+        RadioKind::Mlrs => "mlrs",
+        RadioKind::Elrs => "elrs",
+        RadioKind::Esp => "esp",
+        RadioKind::Unknown => "unknown",
+    }
 }
 
 /// A link's requests, whoever answered them (a run's and a continuous
@@ -287,11 +329,19 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
     for Figure { family, value } in &GAUGES {
         out.family(family, series().filter_map(|(l, s)| Some((l, value(s)?))));
     }
-    for Figure { family, value } in &RADIO {
+    let (info, figures) = RADIO.split_first().expect("the info family");
+    let infos = links.iter().flat_map(|m| {
+        m.radios.iter().map(move |(id, r)| {
+            let labels = format!("{},kind=\"{}\"", m.radio_labels(*id), kind_label(r.kind));
+            (labels, 1)
+        })
+    });
+    out.family(&info.family, infos);
+    for Figure { family, value } in figures {
         let radios = links.iter().flat_map(|m| {
             m.radios
                 .iter()
-                .filter_map(move |(id, r)| Some((m.radio_labels(*id), value(*id, r)?)))
+                .filter_map(move |(id, r)| Some((m.radio_labels(*id), value(r)?)))
         });
         out.family(family, radios);
     }
@@ -498,6 +548,7 @@ mod tests {
     use crate::engine::matcher::MatchEvent;
     use crate::engine::radio::RadioReport;
     use crate::engine::summary::ProbeName;
+    use crate::frame::SysComp;
     use crate::output::{Event, Observer, StartInfo};
 
     /// Two links with every kind of figure: responders with replies,
@@ -548,14 +599,15 @@ mod tests {
                 sent_at: 0,
                 at: 0,
             });
-            m.on_radio(SysComp::new(51, 68), radio(120, 80));
-            m.on_radio(SysComp::new(3, 100), radio(UNKNOWN, 70));
+            m.on_radio(SysComp::new(51, 68), radio(120, 80), RadioKind::Sik);
+            m.on_radio(SysComp::new(3, 100), radio(UNKNOWN, 70), RadioKind::Unknown);
             m.on_radio(
                 SysComp::new(52, 68),
                 RadioReport {
                     remnoise: 60,
                     ..radio(110, 95)
                 },
+                RadioKind::Sik,
             );
         }
         a.on_clock(
@@ -677,8 +729,8 @@ mod tests {
         let mut m = Metrics::default();
         m.on_start(&info("sim:"));
         let id = SysComp::new(51, 68);
-        m.on_radio(id, radio(100, 90));
-        m.on_radio(id, radio(120, 80));
+        m.on_radio(id, radio(100, 90), RadioKind::Sik);
+        m.on_radio(id, radio(120, 80), RadioKind::Sik);
         let text = render(&[&m]);
         let l = r#"link="sim:",sysid="51",compid="68""#;
         has(&text, &format!("mavping_radio_rssi{{{l}}} 120"));
@@ -706,7 +758,7 @@ mod tests {
         };
         // Grows 30, wraps (+11), grows 15, then the radio restarts (+4).
         for (rx, fixed) in [(65_500, 7), (65_530, 7), (5, 9), (20, 9), (4, 1)] {
-            m.on_radio(id, with_errors(rx, fixed));
+            m.on_radio(id, with_errors(rx, fixed), RadioKind::Sik);
         }
         let text = render(&[&m]);
         let l = r#"link="sim:",sysid="51",compid="68""#;
@@ -720,10 +772,65 @@ mod tests {
         let mut m = Metrics::default();
         m.on_start(&info("sim:"));
         // Another maker's radio: its scale is not known.
-        m.on_radio(SysComp::new(1, 100), radio(100, 90));
+        m.on_radio(SysComp::new(1, 100), radio(100, 90), RadioKind::Unknown);
         let text = render(&[&m]);
         assert!(text.contains("mavping_radio_rssi{"), "{text}");
         assert!(!text.contains("_dbm"), "{text}");
+    }
+
+    #[test]
+    fn each_kind_in_its_own_units() {
+        let mut m = Metrics::default();
+        m.on_start(&info("sim:"));
+        // mLRS: -85 and -90 dBm, SNR 7 dB (noise = 10 - SNR).
+        let mlrs = RadioReport {
+            rssi: 127,
+            remrssi: 109,
+            txbuf: 100,
+            noise: 3,
+            remnoise: UNKNOWN,
+            rxerrors: 0,
+            fixed: 0,
+        };
+        m.on_radio(SysComp::new(51, 68), mlrs, RadioKind::Mlrs);
+        // ExpressLRS: LQ 98 %, uplink -67 dBm, SNR -3 dB.
+        let elrs = RadioReport {
+            rssi: 249,
+            remrssi: 67,
+            txbuf: 90,
+            noise: (-3i8) as u8,
+            remnoise: 0,
+            rxerrors: 0,
+            fixed: 0,
+        };
+        m.on_radio(SysComp::new(255, 68), elrs, RadioKind::Elrs);
+        let text = render(&[&m]);
+        let l = |s: u8| format!(r#"link="sim:",sysid="{s}",compid="68""#);
+        has(
+            &text,
+            &format!("mavping_radio_info{{{},kind=\"mlrs\"}} 1", l(51)),
+        );
+        has(&text, &format!("mavping_radio_rssi_dbm{{{}}} -85", l(51)));
+        has(
+            &text,
+            &format!("mavping_radio_remote_rssi_dbm{{{}}} -90", l(51)),
+        );
+        has(&text, &format!("mavping_radio_snr_db{{{}}} 7", l(51)));
+        has(
+            &text,
+            &format!("mavping_radio_link_quality_percent{{{}}} 98", l(255)),
+        );
+        has(
+            &text,
+            &format!("mavping_radio_remote_rssi_dbm{{{}}} -67", l(255)),
+        );
+        has(&text, &format!("mavping_radio_snr_db{{{}}} -3", l(255)));
+        // Neither's noise is a noise floor; ExpressLRS's rssi is no dBm.
+        assert!(!text.contains("mavping_radio_noise_dbm"), "{text}");
+        assert!(
+            !text.contains(&format!("mavping_radio_rssi_dbm{{{}}}", l(255))),
+            "{text}"
+        );
     }
 
     #[test]

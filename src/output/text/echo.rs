@@ -5,9 +5,10 @@ use std::io::{self, Write};
 use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, Lines, TextReporter};
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::radio::{self, RadioReport, RadioSummary};
+use crate::engine::radio::{self, Field, RadioKind, RadioReport, RadioSummary};
 use crate::engine::summary::{Direction, EchoInterim, ProbeName, ResponderSummary, Summary};
 use crate::engine::Nanos;
+use crate::frame::SysComp;
 use crate::output::{Event, StartInfo};
 use crate::verdict::{Check, Verdict};
 
@@ -54,26 +55,49 @@ impl<W: Write> TextReporter<W> {
         )
     }
 
+    /// A radio's report: remembered for the reply lines; told at its first
+    /// and when its kind changed, with what it is and why.
+    fn radio_event(
+        &mut self,
+        id: SysComp,
+        report: RadioReport,
+        judgement: &radio::Judgement,
+        (first, kind_changed): (bool, bool),
+        at: Nanos,
+    ) -> io::Result<()> {
+        let kind = judgement.kind;
+        self.radio = Some((id, report, kind));
+        if !first && !kind_changed {
+            return Ok(());
+        }
+        self.stamp(at)?;
+        if kind_changed {
+            return writeln!(
+                self.out,
+                "radio {id} is {}: {}",
+                judgement.describe(),
+                radio_heard(kind, &report)
+            );
+        }
+        writeln!(
+            self.out,
+            "heard radio {id}: {} — {}",
+            radio_heard(kind, &report),
+            judgement.describe()
+        )
+    }
+
     pub(super) fn echo_event(&mut self, event: &Event<'_>) -> io::Result<()> {
         if let Event::Radio {
             id,
             report,
+            judgement,
             first,
+            kind_changed,
             at,
         } = *event
         {
-            self.radio = Some((id, report));
-            if !first {
-                return Ok(());
-            }
-            self.stamp(at)?;
-            return writeln!(
-                self.out,
-                "heard radio {id}: {}, noise={} remnoise={}",
-                radio_figures(&report),
-                raw(report.noise),
-                raw(report.remnoise)
-            );
+            return self.radio_event(id, report, judgement, (first, kind_changed), at);
         }
         match event {
             Event::Step(step) => return self.step_row(step),
@@ -245,7 +269,7 @@ impl<W: Write> TextReporter<W> {
     /// " [radio 51:68 rssi=… remrssi=… txbuf=…%]" when one is heard and
     /// the last note is at least a second old, so fast runs stay readable.
     fn radio_note(&mut self, at: Nanos) -> String {
-        let Some((id, r)) = self.radio else {
+        let Some((id, r, kind)) = self.radio else {
             return String::new();
         };
         if self
@@ -255,7 +279,7 @@ impl<W: Write> TextReporter<W> {
             return String::new();
         }
         self.radio_shown = Some(at);
-        format!(" [radio {id} {}]", radio_figures(&r))
+        format!(" [radio {id} {}]", radio_figures(kind, &r))
     }
 }
 
@@ -275,21 +299,74 @@ fn raw(v: u8) -> String {
     }
 }
 
-fn radio_figures(r: &RadioReport) -> String {
-    format!(
-        "rssi={} remrssi={} txbuf={}%",
-        raw(r.rssi),
-        raw(r.remrssi),
-        raw(r.txbuf)
-    )
+/// A figure in its kind's unit: whole numbers as such (mLRS's and
+/// ExpressLRS's are whole dB), others to a tenth.
+fn in_unit(v: f64, unit: &str) -> String {
+    let sep = if unit == "%" { "" } else { " " };
+    if v.fract() == 0.0 {
+        format!("{v:.0}{sep}{unit}")
+    } else {
+        format!("{v:.1}{sep}{unit}")
+    }
 }
 
-fn write_radio(out: &mut impl Write, r: &RadioSummary) -> io::Result<()> {
-    writeln!(
-        out,
-        "radio {}: {} reports, rxerrors +{}, fixed +{} during the run",
-        r.id, r.reports, r.rxerrors_delta, r.fixed_delta
-    )?;
+/// The figures a kind gives a meaning to, in its units: `rssi -85 dBm,
+/// remote rssi -90 dBm, snr 7 dB`; a SiK's and an unknown radio's raw,
+/// as SiK users know them.
+fn radio_figures(kind: RadioKind, r: &RadioReport) -> String {
+    if matches!(kind, RadioKind::Sik | RadioKind::Unknown) {
+        return format!(
+            "rssi={} remrssi={} txbuf={}%",
+            raw(r.rssi),
+            raw(r.remrssi),
+            raw(r.txbuf)
+        );
+    }
+    Field::ALL
+        .into_iter()
+        .filter_map(|f| {
+            let m = kind.meaning(f)?;
+            let v = (m.convert)(f.of(r)).map_or_else(|| "?".into(), |v| in_unit(v, m.unit));
+            Some(format!("{} {v}", m.label))
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// A radio's first report (or the one its kind changed with) in full.
+fn radio_heard(kind: RadioKind, r: &RadioReport) -> String {
+    match kind {
+        RadioKind::Sik | RadioKind::Unknown => format!(
+            "{}, noise={} remnoise={}",
+            radio_figures(kind, r),
+            raw(r.noise),
+            raw(r.remnoise)
+        ),
+        RadioKind::Esp => format!(
+            "{}, ground msgs lost {}%",
+            radio_figures(kind, r),
+            r.rxerrors
+        ),
+        RadioKind::Mlrs | RadioKind::Elrs => {
+            format!("{}, txbuf {}%", radio_figures(kind, r), raw(r.txbuf))
+        }
+    }
+}
+
+/// A radio's block in a summary: what it is and why, its figures as
+/// sent, then in its kind's units.
+pub(super) fn write_radio(out: &mut impl Write, r: &RadioSummary) -> io::Result<()> {
+    let kind = r.judgement.kind;
+    writeln!(out, "radio {}: {}", r.id, r.judgement.describe())?;
+    if kind.counts_errors() {
+        writeln!(
+            out,
+            "  {} reports, rxerrors +{}, fixed +{} during the run",
+            r.reports, r.rxerrors_delta, r.fixed_delta
+        )?;
+    } else {
+        writeln!(out, "  {} reports", r.reports)?;
+    }
     let rows = [
         ("rssi", r.rssi, ""),
         ("remote rssi", r.remrssi, ""),
@@ -303,27 +380,19 @@ fn write_radio(out: &mut impl Write, r: &RadioSummary) -> io::Result<()> {
         if let Some(v) = range {
             writeln!(
                 out,
-                "  {name:<18} min/mean/max = {:.0}/{:.1}/{:.0}{unit}",
+                "  {name:<18} min/mean/max = {:.0}/{:.1}/{:.0}{unit} (raw)",
                 v.min, v.mean, v.max
             )?;
         }
     }
-    if let Some(a) = &r.approx_dbm {
-        let rows = [
-            ("rssi", a.rssi, "dBm"),
-            ("remote rssi", a.remrssi, "dBm"),
-            ("fade margin", a.fade_margin_db, "dB"),
-            ("remote fade margin", a.remote_fade_margin_db, "dB"),
-        ];
-        for (name, range, unit) in rows {
-            if let Some(v) = range {
-                writeln!(
-                    out,
-                    "  {name:<18} ~{:.1}/{:.1}/{:.1} {unit} (approximate, SiK scale)",
-                    v.min, v.mean, v.max
-                )?;
-            }
-        }
+    for f in &r.converted.0 {
+        let v = f.range;
+        let approximate = if kind == RadioKind::Sik { "~" } else { "" };
+        writeln!(
+            out,
+            "  {:<18} {approximate}{:.1}/{:.1}/{:.1} {} ({})",
+            f.label, v.min, v.mean, v.max, f.unit, f.note
+        )?;
     }
     Ok(())
 }
@@ -608,11 +677,18 @@ mod tests {
             fixed: 0,
         };
         t.event(&reply(0, 10_000_000)).unwrap();
+        let sik = radio::Judgement {
+            kind: RadioKind::Sik,
+            radio_type: radio::RadioType::Auto,
+            evidence: vec!["compid 68 and no HEARTBEAT from 51/68".into()],
+        };
         t.event(&Event::Radio {
             id: SysComp::new(51, 68),
             at: 20_000_000,
             report: status,
+            judgement: &sik,
             first: true,
+            kind_changed: false,
         })
         .unwrap();
         for (seq, at) in [(1, 30_000_000), (2, 500_000_000), (3, 1_030_000_000)] {

@@ -6,7 +6,9 @@
 use std::io::{self, Write};
 use std::time::{Duration, SystemTime};
 
-use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, OriginKind, Span};
+use crate::engine::probe::passive::flight::{
+    diagnosis_text, FlightSummary, FlightWindow, OriginKind, SilenceFigure, Span,
+};
 use crate::engine::Nanos;
 
 /// The log's clock: its first record's stamp, µs since the Unix epoch.
@@ -54,12 +56,21 @@ pub(super) fn write_flight(
         counted(f.burst_count, "loss burst"),
         f.burst_loss_pct,
     )?;
+    if let (Some(id), Some(kind)) = (f.radio, f.radio_kind) {
+        writeln!(
+            out,
+            "flight radio {id}: {} ({})",
+            kind.name(),
+            f.radio_evidence.join("; ")
+        )?;
+    }
     write_range(out, f, clock)?;
     for w in &f.worst {
         writeln!(out, "flight worst: {}", window(w, clock))?;
     }
     for s in &f.silences {
         writeln!(out, "flight silence: {}", span(s, clock, false))?;
+        write_silence_radio(out, s)?;
     }
     for b in &f.bursts {
         writeln!(out, "flight burst: {}", span(b, clock, true))?;
@@ -158,4 +169,42 @@ fn span(s: &Span, clock: LogClock, burst: bool) -> String {
         line += ", still on at the end of the log";
     }
     line
+}
+
+/// `rssi -98.4/-97.9 dBm (raw 54/56)`: min/mean in the kind's unit, and
+/// as sent.
+fn silence_figure(f: &SilenceFigure) -> String {
+    if f.unit == "raw" {
+        return format!("{} {:.0}/{:.1}", f.label, f.raw_min, f.raw_mean);
+    }
+    let sep = if f.unit == "%" { "" } else { " " };
+    format!(
+        "{} {:.1}/{:.1}{sep}{} (raw {:.0}/{:.1})",
+        f.label, f.min, f.mean, f.unit, f.raw_min, f.raw_mean
+    )
+}
+
+/// A silence's radio figures, min/mean, and what they say.
+fn write_silence_radio(out: &mut impl Write, s: &Span) -> io::Result<()> {
+    let Some(r) = &s.radio else { return Ok(()) };
+    if r.reports == 0 {
+        return writeln!(out, "  radio {}: no report during it", r.id);
+    }
+    let figures: Vec<String> = [&r.rssi, &r.remrssi, &r.noise, &r.remnoise]
+        .into_iter()
+        .flatten()
+        .map(silence_figure)
+        .collect();
+    writeln!(
+        out,
+        "  radio {} ({}), {} reports, min/mean: {}",
+        r.id,
+        r.kind.name(),
+        r.reports,
+        figures.join(", ")
+    )?;
+    if let Some(text) = diagnosis_text(s) {
+        writeln!(out, "  diagnosis: {text}")?;
+    }
+    Ok(())
 }

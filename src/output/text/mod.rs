@@ -14,7 +14,7 @@ mod sweep;
 use std::io::{self, Write};
 
 use super::{Event, Observer, Prefixed, Reporter, RunKind, StartInfo, WallClock};
-use crate::engine::radio::RadioReport;
+use crate::engine::radio::{RadioKind, RadioReport};
 use crate::engine::stats::Bucket;
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
@@ -49,8 +49,9 @@ pub struct TextReporter<W: Write> {
     /// second instead of a line per event, so printing never paces the
     /// engine.
     progress: Option<echo::Progress>,
-    /// The latest RADIO_STATUS, and when a reply line last showed one.
-    radio: Option<(SysComp, RadioReport)>,
+    /// The latest RADIO_STATUS and its radio's kind, and when a reply
+    /// line last showed one.
+    radio: Option<(SysComp, RadioReport, RadioKind)>,
     radio_shown: Option<Nanos>,
     /// `-D`: each event line starts with its Unix time, as `ping -D`.
     timestamps: Option<WallClock>,

@@ -365,6 +365,9 @@ pub(super) fn write_summary(
             writeln!(out, "silence: {} and {} more", r.source, r.silences_omitted)?;
         }
     }
+    for r in &s.radios {
+        super::echo::write_radio(out, r)?;
+    }
     if let (Some(f), Some(log)) = (&s.flight, &s.log) {
         super::flight::write_flight(out, f, super::flight::LogClock(log.stamps.first_us))?;
     }

@@ -131,7 +131,11 @@ impl PassiveDriver {
             round_trips: Some(RoundTrips::new(
                 Nanos::try_from(cfg.timeout.as_nanos()).unwrap_or(Nanos::MAX),
             )),
-            flight: Some(Flight::new(flight::DEFAULT_WINDOW_NS, silence)),
+            flight: Some(Flight::new(
+                flight::DEFAULT_WINDOW_NS,
+                silence,
+                cfg.radio_type,
+            )),
             ground: Some(GroundIds::default()),
             ..Self::new(cfg, gap)
         }
@@ -285,7 +289,7 @@ impl Driver for PassiveDriver {
         // What the ground station sent is not what it heard: never
         // "heard" for the flight's silences.
         if let Some(f) = self.flight.as_mut().filter(|_| !ground) {
-            f.on_frame(frame.source, &frame.msg, at);
+            f.on_received(frame, at);
         }
         take(&mut self.table, frame, at);
     }

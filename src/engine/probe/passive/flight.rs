@@ -19,7 +19,14 @@
 //!   comes: the ground distance by haversine, and the slant range with
 //!   the altitude difference. A window gives its last position's.
 //! - **Silences** are gaps of at least the silence threshold between two
-//!   frames of any source but the radio's own: nothing came over the link.
+//!   frames of any source but a radio's own (compid 68 or 240): nothing
+//!   came over the link. A silence carries the followed radio's figures
+//!   during it, min/mean/max in its kind's units ([`RadioKind`]: told
+//!   from what it sends, or `--radio-type`), and a diagnosis where the
+//!   figures support one ([`Diagnosis`]): the remote figures cleared
+//!   (SiK lost the link), the vehicle's radio no longer hearing the
+//!   ground, both signals at the floor (range), the signal fine and the
+//!   noise up (interference), or the radio link fine throughout.
 //! - **A loss burst** is a run of consecutive windows each losing at least
 //!   [`BURST_LOSS_PCT`] of their frames.
 
@@ -27,9 +34,12 @@ use std::collections::VecDeque;
 
 use serde::Serialize;
 
-use crate::engine::radio::SinceBootCounter;
+use crate::engine::radio::{
+    is_radio_ids, Evidence, Field, PairFilter, RadioKind, RadioType, RawHistogram,
+    SinceBootCounter, SIK_STEPS_PER_DB, WEAK_FADE_MARGIN_DB,
+};
 use crate::engine::Nanos;
-use crate::frame::{Fix, FixKind, Msg, RadioStatus, SysComp};
+use crate::frame::{ids, Fix, FixKind, Frame, Msg, RadioStatus, SysComp};
 
 /// The windows' length unless told otherwise: a few hundred frames of a
 /// usual telemetry stream, short beside a flight.
@@ -49,6 +59,19 @@ pub const PENDING: usize = 64;
 pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
 /// 255 in RADIO_STATUS's 8-bit figures means unknown.
 const UNKNOWN: u8 = 255;
+/// A SiK fade margin under this is a radio hearing only noise.
+const AT_THE_FLOOR_DB: f64 = 3.0;
+/// Noise this much above its level before the silence is interference.
+const NOISE_RISE_DB: f64 = 6.0;
+/// mLRS: an RSSI at or under this is weak (its modes' sensitivity is
+/// about -105 to -112 dBm)...
+const MLRS_WEAK_DBM: f64 = -105.0;
+/// ...and one at or above this is fine.
+const MLRS_FINE_DBM: f64 = -100.0;
+/// An SNR this low (dB) is a link near its limit.
+const LOW_SNR_DB: f64 = 3.0;
+/// ExpressLRS: a link quality at or above this (%) is fine.
+const ELRS_FINE_LQ: f64 = 90.0;
 
 /// Where the vehicle was, against the origin.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
@@ -95,7 +118,7 @@ pub struct FlightWindow {
 }
 
 /// A silence or a loss burst, `start` to `end`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Span {
     pub start: Nanos,
     pub end: Nanos,
@@ -104,6 +127,64 @@ pub struct Span {
     pub lost: i64,
     /// Still on at the end of the log.
     pub ongoing: bool,
+    /// A silence: the followed radio's figures during it.
+    pub radio: Option<Box<SilenceRadio>>,
+}
+
+/// One radio figure over a silence: as sent, and in its kind's unit.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SilenceFigure {
+    /// As text names it (`remote rssi`, `link quality`, `snr`).
+    pub label: &'static str,
+    /// `dBm`, `dB`, `%`; `raw` where the kind gives the field no unit.
+    pub unit: &'static str,
+    pub min: f64,
+    pub mean: f64,
+    pub max: f64,
+    /// The bytes as sent (255, unknown, left out).
+    pub raw_min: f64,
+    pub raw_mean: f64,
+    pub raw_max: f64,
+}
+
+/// What the radio's figures say about a silence; given only where they
+/// support it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Diagnosis {
+    /// SiK: its remote figures were 0 throughout: it clears them once it
+    /// has heard nothing from the other radio for ~3 s.
+    RemoteCleared,
+    /// mLRS: no remote figures (255) throughout.
+    RemoteUnknown,
+    /// The vehicle's radio no longer heard the ground: its figures (the
+    /// remote ones; ExpressLRS's link quality) at the floor while the
+    /// ground side heard it.
+    UplinkLost,
+    /// Both sides' signals weak: range (or an antenna).
+    Range,
+    /// The signal fine and the noise up (or the SNR down): interference.
+    Interference,
+    /// The radio link's figures stayed good: the silence is not the radio.
+    RadioFine,
+}
+
+/// The followed radio during a silence.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SilenceRadio {
+    pub id: SysComp,
+    pub kind: RadioKind,
+    /// Its reports during the silence (none: its figures are `None`).
+    pub reports: u64,
+    pub rssi: Option<SilenceFigure>,
+    pub remrssi: Option<SilenceFigure>,
+    pub noise: Option<SilenceFigure>,
+    pub remnoise: Option<SilenceFigure>,
+    /// The `noise` field's mean in the silence less its mean over the
+    /// rest of the log, in dB where the kind gives it one (SiK: the noise
+    /// floor's rise; mLRS, ExpressLRS: the SNR's change).
+    pub noise_change_db: Option<f64>,
+    pub diagnosis: Option<Diagnosis>,
 }
 
 impl Span {
@@ -117,7 +198,7 @@ impl Span {
 }
 
 /// What the timeline tells, in order.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum FlightEvent {
     Window(FlightWindow),
     Silence(Span),
@@ -173,6 +254,9 @@ pub struct FlightSummary {
     pub farthest: Option<FlightWindow>,
     pub positions: u64,
     pub radio: Option<SysComp>,
+    /// What the followed radio is, as the whole log shows it.
+    pub radio_kind: Option<RadioKind>,
+    pub radio_evidence: Vec<String>,
 }
 
 /// The window under way.
@@ -213,10 +297,20 @@ pub struct Flight {
     farthest: Option<FlightWindow>,
     radio: Option<SysComp>,
     rxerrors: SinceBootCounter,
+    /// `--radio-type`, and what the followed radio sent that tells its kind.
+    radio_type: RadioType,
+    evidence: Evidence,
+    pair: PairFilter,
+    /// Its reports since the last frame over the link (a silence's, when
+    /// the next frame ends one), and all of them: rssi, remrssi, noise,
+    /// remnoise by [`Field::index`].
+    quiet: [RawHistogram; 4],
+    quiet_reports: u64,
+    all: [RawHistogram; 4],
 }
 
 impl Flight {
-    pub fn new(window_ns: Nanos, silence_ns: Nanos) -> Self {
+    pub fn new(window_ns: Nanos, silence_ns: Nanos, radio_type: RadioType) -> Self {
         Flight {
             window_ns: window_ns.max(1),
             silence_ns,
@@ -238,6 +332,12 @@ impl Flight {
             farthest: None,
             radio: None,
             rxerrors: SinceBootCounter::default(),
+            radio_type,
+            evidence: Evidence::default(),
+            pair: PairFilter::default(),
+            quiet: Default::default(),
+            quiet_reports: 0,
+            all: Default::default(),
         }
     }
 
@@ -261,14 +361,28 @@ impl Flight {
         self.push(FlightEvent::Window(window));
     }
 
-    /// Takes one frame in: its time for the silences, a RADIO_STATUS or a
-    /// position for the window under way.
+    /// Takes one frame in: its time for the silences, a RADIO_STATUS (or
+    /// RADIO: a report sent as both counts once), a radio's HEARTBEAT or
+    /// a position.
+    pub fn on_received(&mut self, frame: &Frame, at: Nanos) {
+        self.take(frame.source, frame.msgid, frame.packet_seq, &frame.msg, at);
+    }
+
+    /// [`Flight::on_received`] of a frame from `source` carrying `msg`.
     pub fn on_frame(&mut self, source: SysComp, msg: &Msg, at: Nanos) {
-        if !crate::engine::radio::is_sik_default(source) {
+        self.take(source, ids::RADIO_STATUS, 0, msg, at);
+    }
+
+    fn take(&mut self, source: SysComp, msgid: u32, seq: u8, msg: &Msg, at: Nanos) {
+        if !is_radio_ids(source) && self.radio != Some(source) {
             self.heard(at);
         }
         match msg {
-            Msg::RadioStatus(r) => self.radio_status(source, r),
+            Msg::RadioStatus(r) => self.radio_status(source, msgid, seq, r, at),
+            Msg::Heartbeat {
+                mav_type,
+                autopilot,
+            } if self.radio == Some(source) => self.evidence.heartbeat(*mav_type, *autopilot),
             Msg::Fix(f) => self.fix(source, f),
             _ => {}
         }
@@ -296,14 +410,17 @@ impl Flight {
             .last_frame
             .filter(|&f| at.saturating_sub(f) >= s.silence_ns)
         {
+            let radio = s.silence_radio();
             s.keep_silence(Span {
                 start: from,
                 end: at,
                 received: 0,
                 lost: 0,
                 ongoing: true,
+                radio,
             });
         }
+        let judgement = s.radio.map(|id| s.evidence.judge(id, s.radio_type));
         FlightSummary {
             window_ns: s.window_ns,
             silence_ns: s.silence_ns,
@@ -320,6 +437,8 @@ impl Flight {
             farthest: s.farthest,
             positions: s.positions,
             radio: s.radio,
+            radio_kind: judgement.as_ref().map(|j| j.kind),
+            radio_evidence: judgement.map(|j| j.evidence).unwrap_or_default(),
         }
     }
 
@@ -386,11 +505,12 @@ impl Flight {
                     received: w.received,
                     lost: w.lost,
                     ongoing: false,
+                    radio: None,
                 });
             }
             (Some(_), false) => {
                 let b = self.burst.take().expect("a burst under way");
-                self.keep_burst(b);
+                self.keep_burst(b.clone());
                 self.push(FlightEvent::Burst(b));
             }
             (None, false) => {}
@@ -406,19 +526,81 @@ impl Flight {
                     received: 0,
                     lost: 0,
                     ongoing: false,
+                    radio: self.silence_radio(),
                 };
-                self.keep_silence(s);
+                self.keep_silence(s.clone());
                 self.push(FlightEvent::Silence(s));
             }
         }
         self.last_frame = Some(at);
+        if self.quiet_reports > 0 {
+            self.quiet_reports = 0;
+            self.quiet.iter_mut().for_each(RawHistogram::clear);
+        }
+    }
+
+    /// The followed radio's figures since the last frame over the link:
+    /// a silence's, as it ends (or at the end of the log).
+    fn silence_radio(&self) -> Option<Box<SilenceRadio>> {
+        let id = self.radio?;
+        let kind = self.evidence.judge(id, self.radio_type).kind;
+        let figure = |field: Field| {
+            let h = &self.quiet[field.index()];
+            let raw = h.raw_range()?;
+            let meaning = kind.meaning(field);
+            let (label, unit, converted) = match meaning {
+                Some(m) => (m.label, m.unit, h.range(m.convert)?),
+                None => (raw_label(field), "raw", raw),
+            };
+            Some(SilenceFigure {
+                label,
+                unit,
+                min: converted.min,
+                mean: converted.mean,
+                max: converted.max,
+                raw_min: raw.min,
+                raw_mean: raw.mean,
+                raw_max: raw.max,
+            })
+        };
+        let before: [RawHistogram; 4] = std::array::from_fn(|i| self.all[i].minus(&self.quiet[i]));
+        Some(Box::new(SilenceRadio {
+            id,
+            kind,
+            reports: self.quiet_reports,
+            rssi: figure(Field::Rssi),
+            remrssi: figure(Field::Remrssi),
+            noise: figure(Field::Noise),
+            remnoise: figure(Field::Remnoise),
+            noise_change_db: kind
+                .meaning(Field::Noise)
+                .filter(|m| m.unit == "dBm" || m.unit == "dB")
+                .and_then(|m| {
+                    let during = self.quiet[Field::Noise.index()].range(m.convert)?;
+                    let was = before[Field::Noise.index()].range(m.convert)?;
+                    Some(during.mean - was.mean)
+                }),
+            diagnosis: (self.quiet_reports > 0)
+                .then(|| diagnose(kind, &self.quiet, &before))
+                .flatten(),
+        }))
     }
 
     /// The first radio heard is the one followed.
-    fn radio_status(&mut self, source: SysComp, r: &RadioStatus) {
+    fn radio_status(&mut self, source: SysComp, msgid: u32, seq: u8, r: &RadioStatus, at: Nanos) {
         if *self.radio.get_or_insert(source) != source {
             return;
         }
+        if self.pair.repeats(msgid, seq, r) {
+            self.evidence.report(msgid, r, at, true);
+            return;
+        }
+        self.evidence.report(msgid, r, at, false);
+        for field in Field::ALL {
+            self.quiet[field.index()].record(field.of(r));
+            self.all[field.index()].record(field.of(r));
+        }
+        self.quiet_reports += 1;
         self.rxerrors.record(r.rxerrors);
         let c = &mut self.current;
         c.reports += 1;
@@ -511,6 +693,192 @@ impl Flight {
     }
 }
 
+fn raw_label(field: Field) -> &'static str {
+    match field {
+        Field::Rssi => "rssi",
+        Field::Remrssi => "remote rssi",
+        Field::Noise => "noise",
+        Field::Remnoise => "remote noise",
+    }
+}
+
+/// The mean of one field, converted, over `h`.
+fn mean(h: &RawHistogram, convert: impl Fn(u8) -> Option<f64>) -> Option<f64> {
+    h.range(convert).map(|r| r.mean)
+}
+
+/// What the radio's figures during a silence (`quiet`) say, against the
+/// rest of the log (`before`): only what they support.
+fn diagnose(
+    kind: RadioKind,
+    quiet: &[RawHistogram; 4],
+    before: &[RawHistogram; 4],
+) -> Option<Diagnosis> {
+    let h = |f: Field| &quiet[f.index()];
+    let b = |f: Field| &before[f.index()];
+    let raw = |v: u8| (v != UNKNOWN).then_some(f64::from(v));
+    match kind {
+        RadioKind::Sik => {
+            let (rssi, remrssi) = (h(Field::Rssi).raw_range()?, h(Field::Remrssi).raw_range());
+            let remnoise = h(Field::Remnoise).raw_range();
+            if remrssi.is_some_and(|r| r.max == 0.0) && remnoise.is_some_and(|r| r.max == 0.0) {
+                return Some(Diagnosis::RemoteCleared);
+            }
+            let noise = mean(h(Field::Noise), raw)?;
+            let local_fade = (rssi.mean - noise) / SIK_STEPS_PER_DB;
+            let remote_fade = remrssi
+                .zip(remnoise)
+                .map(|(r, n)| (r.mean - n.mean) / SIK_STEPS_PER_DB);
+            let rise = |f: Field| {
+                let was = mean(b(f), raw)?;
+                Some((mean(h(f), raw)? - was) / SIK_STEPS_PER_DB)
+            };
+            let noise_rise = rise(Field::Noise)
+                .into_iter()
+                .chain(rise(Field::Remnoise))
+                .fold(f64::NEG_INFINITY, f64::max);
+            let rssi_held = rise(Field::Rssi).is_none_or(|d| d > -AT_THE_FLOOR_DB);
+            if remote_fade.is_some_and(|f| f < AT_THE_FLOOR_DB) && local_fade >= WEAK_FADE_MARGIN_DB
+            {
+                Some(Diagnosis::UplinkLost)
+            } else if noise_rise >= NOISE_RISE_DB && rssi_held {
+                Some(Diagnosis::Interference)
+            } else if local_fade < WEAK_FADE_MARGIN_DB
+                && remote_fade.is_some_and(|f| f < WEAK_FADE_MARGIN_DB)
+            {
+                Some(Diagnosis::Range)
+            } else if local_fade >= WEAK_FADE_MARGIN_DB
+                && remote_fade.is_some_and(|f| f >= WEAK_FADE_MARGIN_DB)
+            {
+                Some(Diagnosis::RadioFine)
+            } else {
+                None
+            }
+        }
+        RadioKind::Mlrs => {
+            let dbm = |f: Field| {
+                let m = kind.meaning(f)?;
+                h(f).range(m.convert)
+            };
+            let remrssi_raw = h(Field::Remrssi);
+            if remrssi_raw.count() > 0 && remrssi_raw.raw_range().is_none() {
+                return Some(Diagnosis::RemoteUnknown);
+            }
+            let (rssi, remrssi) = (dbm(Field::Rssi)?, dbm(Field::Remrssi)?);
+            let snr = dbm(Field::Noise);
+            let snr_before = kind
+                .meaning(Field::Noise)
+                .and_then(|m| b(Field::Noise).range(m.convert));
+            if remrssi_raw.raw_range().is_some_and(|r| r.max == 0.0) && rssi.mean >= MLRS_FINE_DBM {
+                Some(Diagnosis::UplinkLost)
+            } else if rssi.mean <= MLRS_WEAK_DBM && remrssi.mean <= MLRS_WEAK_DBM {
+                Some(Diagnosis::Range)
+            } else if rssi.mean >= MLRS_FINE_DBM
+                && remrssi.mean >= MLRS_FINE_DBM
+                && snr.zip(snr_before).is_some_and(|(s, was)| {
+                    s.mean < LOW_SNR_DB && was.mean - s.mean >= NOISE_RISE_DB
+                })
+            {
+                Some(Diagnosis::Interference)
+            } else if rssi.mean >= MLRS_FINE_DBM
+                && remrssi.mean >= MLRS_FINE_DBM
+                && snr.is_none_or(|s| s.mean >= LOW_SNR_DB)
+            {
+                Some(Diagnosis::RadioFine)
+            } else {
+                None
+            }
+        }
+        RadioKind::Elrs => {
+            let m = kind.meaning(Field::Rssi)?;
+            let lq = h(Field::Rssi).range(m.convert)?;
+            if lq.max == 0.0 {
+                Some(Diagnosis::UplinkLost)
+            } else if lq.min >= ELRS_FINE_LQ {
+                Some(Diagnosis::RadioFine)
+            } else {
+                None
+            }
+        }
+        RadioKind::Esp | RadioKind::Unknown => None,
+    }
+}
+
+/// A silence's diagnosis in words, with the figures it rests on.
+pub fn diagnosis_text(span: &Span) -> Option<String> {
+    let r = span.radio.as_ref()?;
+    let d = r.diagnosis?;
+    let secs = span.length_ns() as f64 / 1e9;
+    let mean = |f: &Option<SilenceFigure>| {
+        f.map_or_else(String::new, |f| match f.unit {
+            "raw" => format!("{:.0}", f.mean),
+            "%" => format!("{:.0}%", f.mean),
+            unit => format!("{:.0} {unit}", f.mean),
+        })
+    };
+    let local = match r.kind {
+        RadioKind::Sik => format!(
+            "local rssi {}, noise floor {}",
+            mean(&r.rssi),
+            mean(&r.noise)
+        ),
+        _ => format!("local rssi {}", mean(&r.rssi)),
+    };
+    let text = match d {
+        Diagnosis::RemoteCleared => {
+            let deaf = r.rssi.zip(r.noise).is_some_and(|(rssi, noise)| {
+                (rssi.raw_mean - noise.raw_mean) / SIK_STEPS_PER_DB < AT_THE_FLOOR_DB
+            });
+            format!(
+                "remote RSSI 0 for {secs:.0} s: the ground radio heard nothing from the \
+                 vehicle's (SiK clears the remote figures after ~3 s without a packet); \
+                 {} ({local})",
+                if deaf {
+                    "it heard only noise itself"
+                } else {
+                    "its own figures"
+                }
+            )
+        }
+        Diagnosis::RemoteUnknown => format!(
+            "remote RSSI unknown (255) for {secs:.0} s: no figures came back from the \
+             vehicle's radio ({local})"
+        ),
+        Diagnosis::UplinkLost if r.kind == RadioKind::Elrs => format!(
+            "link quality 0% for {secs:.0} s: the vehicle's receiver stopped hearing the ground"
+        ),
+        Diagnosis::UplinkLost => format!(
+            "remote RSSI {} for {secs:.0} s while the ground heard the vehicle's radio \
+             ({local}): the vehicle's radio stopped hearing the ground",
+            mean(&r.remrssi)
+        ),
+        Diagnosis::Range => format!(
+            "local RSSI {} and remote RSSI {} both weak, the noise as before: range (or an antenna)",
+            mean(&r.rssi),
+            mean(&r.remrssi)
+        ),
+        Diagnosis::Interference => {
+            let change = r.noise_change_db.unwrap_or(0.0);
+            let (what, way) = if r.kind == RadioKind::Sik {
+                ("noise floor", "up")
+            } else {
+                ("SNR", "down")
+            };
+            format!(
+                "RSSI held ({}) and the {what} {way} {:.0} dB (to {}) against the rest of \
+                 the log: interference",
+                mean(&r.rssi),
+                change.abs(),
+                mean(&r.noise)
+            )
+        }
+        Diagnosis::RadioFine => "the radio link's figures stayed good throughout: not the \
+                                 radio; the vehicle, its serial port or the ground side stopped"
+            .to_string(),
+    };
+    Some(text)
+}
+
 /// Keeps the [`KEPT`] longest of `spans`, in time order.
 fn keep_longest(spans: &mut Vec<Span>, s: Span) {
     spans.push(s);
@@ -550,6 +918,10 @@ mod tests {
     const S: Nanos = 1_000_000_000;
     const VEHICLE: SysComp = SysComp::new(1, 1);
 
+    fn flight(window_ns: Nanos, silence_ns: Nanos) -> Flight {
+        Flight::new(window_ns, silence_ns, RadioType::Auto)
+    }
+
     fn windows(f: &mut Flight) -> Vec<FlightWindow> {
         f.drain()
             .filter_map(|e| match e {
@@ -583,7 +955,7 @@ mod tests {
 
     #[test]
     fn windows_count_what_the_totals_grew_by_and_add_up() {
-        let mut f = Flight::new(10 * S, DEFAULT_SILENCE_NS);
+        let mut f = flight(10 * S, DEFAULT_SILENCE_NS);
         // Seconds 20 to 29 lose 5 of 50 each: window 2 loses 50 of 500.
         let t = stream(&mut f, 35, |s| if (20..30).contains(&s) { 5 } else { 0 });
         let w = windows(&mut f);
@@ -609,7 +981,7 @@ mod tests {
 
     #[test]
     fn consecutive_lossy_windows_are_one_burst_and_its_end_is_told() {
-        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        let mut f = flight(S, DEFAULT_SILENCE_NS);
         let t = stream(&mut f, 12, |s| match s {
             3..=5 => 10,
             7 => 2,
@@ -635,7 +1007,7 @@ mod tests {
 
     #[test]
     fn a_silence_is_told_with_its_start_and_end_and_windows_go_on_empty() {
-        let mut f = Flight::new(10 * S, 2 * S);
+        let mut f = flight(10 * S, 2 * S);
         let mut t = Totals::default();
         let mut feed = |f: &mut Flight, at: Nanos| {
             while f.due(at) {
@@ -655,7 +1027,7 @@ mod tests {
         assert!(
             matches!(events[1], FlightEvent::Window(w) if w.received == 0 && w.loss_pct.is_none())
         );
-        let FlightEvent::Silence(s) = events[2] else {
+        let FlightEvent::Silence(s) = &events[2] else {
             panic!("{events:?}")
         };
         assert_eq!((s.start, s.end), (S, 25 * S + 500_000_000));
@@ -668,7 +1040,7 @@ mod tests {
 
     #[test]
     fn rxerrors_grow_across_a_wrap_per_window_and_rssi_is_the_mean() {
-        let mut f = Flight::new(10 * S, DEFAULT_SILENCE_NS);
+        let mut f = flight(10 * S, DEFAULT_SILENCE_NS);
         let radio = |rssi: u8, rxerrors: u16| {
             Msg::RadioStatus(RadioStatus {
                 rssi,
@@ -718,7 +1090,7 @@ mod tests {
 
     #[test]
     fn distance_is_from_the_first_fix_then_from_home() {
-        let mut f = Flight::new(10 * S, DEFAULT_SILENCE_NS);
+        let mut f = flight(10 * S, DEFAULT_SILENCE_NS);
         // No position yet, then a 2D-less GPS: neither is a fix.
         let none = Msg::Fix(Fix {
             kind: FixKind::Estimate,
@@ -762,7 +1134,7 @@ mod tests {
 
     #[test]
     fn memory_is_bounded_over_a_day_of_windows() {
-        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        let mut f = flight(S, DEFAULT_SILENCE_NS);
         let mut t = Totals::default();
         for n in 0..86_400u64 {
             // Every window loses something, every other one a burst.
@@ -782,12 +1154,188 @@ mod tests {
 
     #[test]
     fn events_past_the_pending_bound_are_counted_not_kept() {
-        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        let mut f = flight(S, DEFAULT_SILENCE_NS);
         for _ in 0..PENDING + 10 {
             f.close(Totals::default());
         }
         assert_eq!(f.pending.len(), PENDING);
         let s = f.summary(f.current.start, Totals::default());
         assert_eq!((s.windows, s.untold), (PENDING as u64 + 10, 10));
+    }
+
+    fn sik(rssi: u8, noise: u8, remrssi: u8, remnoise: u8) -> RadioStatus {
+        RadioStatus {
+            rssi,
+            remrssi,
+            txbuf: 95,
+            noise,
+            remnoise,
+            rxerrors: 0,
+            fixed: 0,
+        }
+    }
+
+    /// 30 s of a 10 Hz vehicle with `radio` reporting `before` once a
+    /// second, then 28 s of nothing from the vehicle while it reports
+    /// `during`, then the vehicle again: the silence.
+    fn silence_with(radio: SysComp, before: RadioStatus, during: RadioStatus) -> Span {
+        silence_at(radio, 1, before, during)
+    }
+
+    /// [`silence_with`], the radio reporting `hz` times a second.
+    fn silence_at(radio: SysComp, hz: u64, before: RadioStatus, during: RadioStatus) -> Span {
+        let mut f = flight(10 * S, DEFAULT_SILENCE_NS);
+        let mut t = Totals::default();
+        for tick in 0..=6000u64 {
+            let at = tick * S / 100;
+            while f.due(at) {
+                f.close(t);
+            }
+            let quiet = (3001..5800).contains(&tick);
+            if tick % (100 / hz) == 5 % (100 / hz) {
+                // Up to the vehicle's first frame after the silence.
+                let r = if (3001..=5800).contains(&tick) {
+                    during
+                } else {
+                    before
+                };
+                f.on_frame(radio, &Msg::RadioStatus(r), at);
+            }
+            if !quiet && tick % 10 == 0 {
+                t.received += 1;
+                f.on_frame(VEHICLE, &Msg::Other, at);
+            }
+        }
+        let mut silences: Vec<Span> = f
+            .drain()
+            .filter_map(|e| match e {
+                FlightEvent::Silence(s) => Some(s),
+                _ => None,
+            })
+            .collect();
+        assert_eq!(silences.len(), 1, "{silences:?}");
+        silences.swap_remove(0)
+    }
+
+    const GOOD: RadioStatus = RadioStatus {
+        rssi: 150,
+        remrssi: 145,
+        txbuf: 95,
+        noise: 40,
+        remnoise: 38,
+        rxerrors: 0,
+        fixed: 0,
+    };
+
+    #[test]
+    fn a_sik_that_lost_the_link_clears_its_remote_figures() {
+        let s = silence_with(RADIO_SOURCE, GOOD, sik(45, 40, 0, 0));
+        assert_eq!((s.start, s.end), (30 * S, 58 * S));
+        let r = s.radio.as_deref().unwrap();
+        assert_eq!((r.kind, r.reports), (RadioKind::Sik, 28));
+        let remrssi = r.remrssi.unwrap();
+        assert_eq!((remrssi.raw_min, remrssi.raw_mean), (0.0, 0.0));
+        let rssi = r.rssi.unwrap();
+        assert_eq!((rssi.unit, rssi.raw_mean), ("dBm", 45.0));
+        assert!((rssi.mean - (45.0 / 1.9 - 127.0)).abs() < 1e-9);
+        assert_eq!(r.diagnosis, Some(Diagnosis::RemoteCleared));
+        let text = diagnosis_text(&s).unwrap();
+        assert!(
+            text.starts_with("remote RSSI 0 for 28 s: the ground radio heard nothing"),
+            "{text}"
+        );
+    }
+
+    #[test]
+    fn sik_silences_diagnosed_from_the_figures() {
+        let cases = [
+            // The remote radio hears only noise; the ground hears it fine.
+            (sik(150, 40, 40, 39), Some(Diagnosis::UplinkLost)),
+            // Noise up ~16 dB, signal held.
+            (sik(150, 70, 145, 70), Some(Diagnosis::Interference)),
+            // Both fade margins under 10 dB, noise as before.
+            (sik(55, 40, 50, 38), Some(Diagnosis::Range)),
+            // Nothing wrong with the radio link.
+            (GOOD, Some(Diagnosis::RadioFine)),
+            // Local fine, remote marginal but above the floor: no claim.
+            (sik(150, 40, 50, 38), None),
+        ];
+        for (during, want) in cases {
+            let s = silence_with(RADIO_SOURCE, GOOD, during);
+            assert_eq!(s.radio.as_ref().unwrap().diagnosis, want, "{during:?}");
+            assert_eq!(diagnosis_text(&s).is_some(), want.is_some());
+        }
+    }
+
+    #[test]
+    fn mlrs_and_elrs_silences_in_their_units() {
+        // mLRS (told by its constants: remnoise 255, no errors): the
+        // vehicle's module hears nothing (remote RSSI 0: -120 dBm or less)
+        // while the ground hears it at -80 dBm.
+        let mlrs = |rssi: u8, remrssi: u8| RadioStatus {
+            rssi,
+            remrssi,
+            txbuf: 100,
+            noise: 2,
+            remnoise: 255,
+            rxerrors: 0,
+            fixed: 0,
+        };
+        // -80 dBm is 145, -85 dBm 127.
+        let s = silence_with(RADIO_SOURCE, mlrs(145, 127), mlrs(145, 0));
+        let r = s.radio.as_deref().unwrap();
+        assert_eq!(r.kind, RadioKind::Mlrs);
+        let remrssi = r.remrssi.unwrap();
+        assert_eq!((remrssi.mean, remrssi.unit), (-120.0, "dBm"));
+        assert_eq!(r.rssi.unwrap().mean, -80.0);
+        assert_eq!(r.noise.unwrap().label, "snr");
+        assert_eq!(r.diagnosis, Some(Diagnosis::UplinkLost));
+        // ExpressLRS at 255/68: link quality 0 % throughout.
+        let elrs = |lq: u8| RadioStatus {
+            rssi: lq,
+            remrssi: 70,
+            txbuf: 90,
+            noise: 8,
+            remnoise: 0,
+            rxerrors: 0,
+            fixed: 0,
+        };
+        let s = silence_at(SysComp::new(255, 68), 100, elrs(254), elrs(0));
+        let r = s.radio.as_deref().unwrap();
+        assert_eq!(r.kind, RadioKind::Elrs);
+        assert_eq!(
+            (r.rssi.unwrap().label, r.rssi.unwrap().max),
+            ("link quality", 0.0)
+        );
+        assert_eq!(r.diagnosis, Some(Diagnosis::UplinkLost));
+        assert!(diagnosis_text(&s)
+            .unwrap()
+            .starts_with("link quality 0% for 28 s"));
+    }
+
+    #[test]
+    fn radio_and_radio_status_pairs_count_once_in_a_window() {
+        let mut f = flight(10 * S, DEFAULT_SILENCE_NS);
+        let mut frame = |msgid, seq, rssi: u8, at| {
+            let mut fr =
+                crate::frame::test_frame(RADIO_SOURCE, Msg::RadioStatus(sik(rssi, 40, 140, 38)));
+            fr.msgid = msgid;
+            fr.packet_seq = seq;
+            f.on_received(&fr, at);
+        };
+        for (seq, rssi) in [(1u8, 100u8), (2, 200)] {
+            frame(ids::RADIO, seq, rssi, u64::from(seq) * S);
+            frame(ids::RADIO_STATUS, seq, rssi, u64::from(seq) * S + 1);
+        }
+        f.close(Totals::default());
+        let w = windows(&mut f);
+        let r = w[0].radio.unwrap();
+        assert_eq!((r.reports, r.rssi), (2, Some(150.0)));
+        let s = f.summary(20 * S, Totals::default());
+        assert_eq!(s.radio_kind, Some(RadioKind::Sik));
+        assert!(s
+            .radio_evidence
+            .join(" ")
+            .contains("RADIO (166) beside each RADIO_STATUS"));
     }
 }
