@@ -172,6 +172,7 @@ impl PassiveDriver {
 }
 
 /// Takes a frame into `table`: a damaged one fills its number only.
+#[inline]
 pub(crate) fn take(table: &mut SourceTable, frame: &Frame, at: Nanos) {
     let (seq, id, len) = (frame.packet_seq, frame.msgid, usize::from(frame.len));
     if matches!(frame.msg, Msg::Damaged) {

@@ -58,6 +58,13 @@ pub(super) struct Rate {
     /// The interval before the count restarted: shown (and used for a
     /// silence's frames) until a step is seen again, never to settle.
     before: Option<Nanos>,
+    /// The routine pause and the interval of the full buckets, worked out
+    /// when a bucket fills: every frame asks for them.
+    routine: Option<Nanos>,
+    settled_interval: Option<Nanos>,
+    /// Moves whenever the interval or the routine pause may have: what
+    /// depends on them can be kept until it does.
+    epoch: u64,
 }
 
 impl Rate {
@@ -68,6 +75,9 @@ impl Rate {
             filling: Bucket::at(at),
             head_at: at,
             before: None,
+            routine: None,
+            settled_interval: None,
+            epoch: 0,
         }
     }
 
@@ -78,6 +88,9 @@ impl Rate {
 
     /// The sequence moved `k` steps ahead with a frame arriving at `at`.
     pub(super) fn step(&mut self, k: u64, at: Nanos) {
+        if !self.settled() {
+            self.epoch += 1;
+        }
         self.filling.steps += k;
         self.head_at = self.head_at.max(at);
         let span = self.head_at.saturating_sub(self.filling.start);
@@ -88,6 +101,11 @@ impl Rate {
                 ..self.filling
             });
             self.filling = Bucket::at(self.head_at);
+            self.routine = self.median_longest_pause();
+            self.epoch += 1;
+            let span = self.full().map(|b| b.span).sum::<Nanos>();
+            let steps = self.full().map(|b| b.steps).sum::<u64>();
+            self.settled_interval = (steps > 0).then(|| (span / steps).max(1));
         }
     }
 
@@ -97,6 +115,12 @@ impl Rate {
     pub(super) fn skip(&mut self, at: Nanos) {
         self.filling = Bucket::at(at);
         self.head_at = at;
+        self.epoch += 1;
+    }
+
+    /// See the field.
+    pub(super) fn epoch(&self) -> u64 {
+        self.epoch
     }
 
     fn full(&self) -> impl Iterator<Item = &Bucket> {
@@ -104,41 +128,42 @@ impl Rate {
     }
 
     /// Time and steps in the window.
+    /// The usual time per step (at least 1 ns), once a step was seen.
     /// Whole buckets only, once there is one: each starts and ends on a
     /// frame, so with a logger's batches each holds whole periods, where
     /// the bucket filling may end inside a batch, at its densest.
-    fn window(&self) -> (Nanos, u64) {
-        if self.settled() {
-            let span = self.full().map(|b| b.span).sum::<Nanos>();
-            return (span, self.full().map(|b| b.steps).sum());
-        }
-        (
-            self.head_at.saturating_sub(self.filling.start),
-            self.filling.steps,
-        )
-    }
-
-    /// The usual time per step (at least 1 ns), once a step was seen.
     pub(super) fn interval(&self) -> Option<Nanos> {
-        let (span, steps) = self.window();
-        if steps == 0 {
-            return self.before;
+        if self.settled() {
+            return self.settled_interval.or(self.before);
         }
-        Some((span / steps).max(1))
+        let span = self.head_at.saturating_sub(self.filling.start);
+        match self.filling.steps {
+            0 => self.before,
+            steps => Some((span / steps).max(1)),
+        }
     }
 
     /// The routine pause: the median of the full buckets' longest pauses
     /// (the upper one of an even count), once a bucket is full.
     pub(super) fn routine_pause(&self) -> Option<Nanos> {
-        let mut pauses: Vec<Nanos> = self.full().map(|b| b.longest_pause).collect();
-        pauses.sort_unstable();
-        pauses.get(pauses.len() / 2).copied()
+        self.routine
+    }
+
+    fn median_longest_pause(&self) -> Option<Nanos> {
+        let mut pauses = [0; FULL_BUCKETS];
+        let mut n = 0;
+        for b in self.full() {
+            pauses[n] = b.longest_pause;
+            n += 1;
+        }
+        pauses[..n].sort_unstable();
+        pauses[..n].get(n / 2).copied()
     }
 
     /// A full bucket is behind the estimate: enough to judge a pause by
     /// it alone.
     pub(super) fn settled(&self) -> bool {
-        self.full().next().is_some()
+        self.full[FULL_BUCKETS - 1].is_some()
     }
 
     /// The count restarted at `at` (a frame it could not place, or a
@@ -146,9 +171,10 @@ impl Rate {
     /// Kept instead, an estimate gone wrong (a batch of frames stamped
     /// alike makes a window of no time) would keep judging pauses by it.
     pub(super) fn rebase(&mut self, at: Nanos) {
-        let before = self.interval();
+        let (before, epoch) = (self.interval(), self.epoch);
         *self = Rate::new(at);
         self.before = before;
+        self.epoch = epoch + 1;
     }
 }
 

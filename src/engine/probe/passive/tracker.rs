@@ -64,8 +64,6 @@
 //! and flagged as a radio, but out of the link's totals, as pymavlink
 //! leaves it out of its own.
 
-use std::collections::BTreeMap;
-
 use super::rate::Rate;
 use crate::engine::summary::passive::{
     percent, LinkTotals, MsgCount, PymavFigure, SecondCounter, SeqCounts, Silence, SourceSummary,
@@ -310,6 +308,8 @@ pub struct SeqTracker {
     first_seen: Nanos,
     last_seen: Nanos,
     rate: Rate,
+    /// The silence threshold and the rate's epoch it was worked out at.
+    threshold: (u64, Nanos),
     silences: SilenceLog,
     msg_ids: MsgIds,
     damaged_ids: MsgIds,
@@ -392,6 +392,7 @@ impl SeqTracker {
             first_seen: 0,
             last_seen: 0,
             rate: Rate::new(0),
+            threshold: (u64::MAX, 0),
             silences: SilenceLog::default(),
             msg_ids: MsgIds::default(),
             damaged_ids: MsgIds::default(),
@@ -418,7 +419,7 @@ impl SeqTracker {
     fn take(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos, damaged: bool) {
         let len = u64::try_from(len_bytes).unwrap_or(u64::MAX);
         self.bytes = self.bytes.saturating_add(len);
-        let threshold = self.threshold();
+        let threshold = self.cached_threshold();
         if self.state.is_none() {
             self.state = Some(SeqState::new(seq, at));
             tally(&mut self.counts, damaged);
@@ -439,6 +440,17 @@ impl SeqTracker {
         self.rate.pause(elapsed);
         if let Some(d) = self.deferred.take() {
             self.resolve(d, seq);
+        } else if self.second.is_none() {
+            // Most frames: the next number, or near it, of the one counter.
+            let state = self.state.as_ref().expect("a frame was taken");
+            if near(state, seq) {
+                return self.main_takes(Deferred {
+                    seq,
+                    msg_id,
+                    at,
+                    damaged,
+                });
+            }
         }
         self.route(Deferred {
             seq,
@@ -623,6 +635,16 @@ impl SeqTracker {
         self.pymav_last = Some(seq);
     }
 
+    /// [`Self::threshold`], worked out again only when the rate moved: it
+    /// is asked for at every frame.
+    fn cached_threshold(&mut self) -> Nanos {
+        let epoch = self.rate.epoch();
+        if self.threshold.0 != epoch {
+            self.threshold = (epoch, self.threshold());
+        }
+        self.threshold.1
+    }
+
     /// How long a pause must last to be a silence: see [`threshold`]; the
     /// cap waits for the usual interval to be settled, and without a
     /// `gap` given, a pause the source makes routinely is never one.
@@ -797,7 +819,11 @@ fn per_second(amount: u64, span_ns: Nanos) -> Option<f64> {
 pub struct SourceTable {
     gap: Option<Nanos>,
     max_sources: usize,
-    sources: BTreeMap<SysComp, SeqTracker>,
+    /// In the order first heard; at most `max_sources`, so a scan is
+    /// short, and the last one found is tried first (most frames come in
+    /// runs from one source).
+    sources: Vec<(SysComp, SeqTracker)>,
+    last: usize,
     /// The SiK radio's source, apart (not against the cap).
     radio: Option<SeqTracker>,
     /// Sources that are the ground station's own frames (a log's).
@@ -814,7 +840,8 @@ impl SourceTable {
         SourceTable {
             gap,
             max_sources,
-            sources: BTreeMap::new(),
+            sources: Vec::new(),
+            last: 0,
             radio: None,
             ground: Vec::new(),
             untracked: Untracked::default(),
@@ -828,6 +855,7 @@ impl SourceTable {
     }
 
     /// Takes one received frame.
+    #[inline]
     pub fn on_frame(&mut self, source: SysComp, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
         if let Some(t) = self.tracker(source, len_bytes) {
             t.on_frame(seq, msg_id, len_bytes, at);
@@ -864,12 +892,18 @@ impl SourceTable {
         if source == RADIO_SOURCE {
             return Some(self.radio.get_or_insert_with(|| SeqTracker::new(gap)));
         }
-        if self.sources.len() < self.max_sources || self.sources.contains_key(&source) {
-            return Some(
-                self.sources
-                    .entry(source)
-                    .or_insert_with(|| SeqTracker::new(gap)),
-            );
+        let found = match self.sources.get(self.last) {
+            Some((id, _)) if *id == source => Some(self.last),
+            _ => self.sources.iter().position(|(id, _)| *id == source),
+        };
+        if let Some(i) = found.or_else(|| {
+            (self.sources.len() < self.max_sources).then(|| {
+                self.sources.push((source, SeqTracker::new(gap)));
+                self.sources.len() - 1
+            })
+        }) {
+            self.last = i;
+            return Some(&mut self.sources[i].1);
         }
         let i = usize::from(source.sysid) << 8 | usize::from(source.compid);
         let (word, bit) = (i / 64, i % 64);
@@ -890,7 +924,7 @@ impl SourceTable {
         if id == RADIO_SOURCE {
             self.radio.as_ref()
         } else {
-            self.sources.get(&id)
+            self.sources.iter().find(|(s, _)| *s == id).map(|(_, t)| t)
         }
     }
 
@@ -906,8 +940,8 @@ impl SourceTable {
             .collect();
         if let Some(r) = &self.radio {
             sources.push(r.summary(RADIO_SOURCE, at));
-            sources.sort_by_key(|s| s.source);
         }
+        sources.sort_by_key(|s| s.source);
         let totals = LinkTotals::of(&sources);
         TableSummary {
             sources,
