@@ -87,7 +87,10 @@ fn a_silence_longer_than_the_sequence_counts_its_gap_and_estimates_its_wraps() {
     assert!(likely.abs_diff(dropped) <= 1, "{dropped}: {r}");
     // Only the wraps are "estimated": the proven gap is in `lost` alone.
     assert_eq!(likely % 256, proven, "{r}");
-    assert_eq!(r["silence_frames_estimated"].as_u64(), Some(likely - proven));
+    assert_eq!(
+        r["silence_frames_estimated"].as_u64(),
+        Some(likely - proven)
+    );
     let ms = silence["length_ns"].as_u64().unwrap() / 1_000_000;
     assert!((7_990..=8_050).contains(&ms), "{r}");
     // pymavlink's figure is the alias too.

@@ -652,7 +652,10 @@ mod tests {
         assert!(!f.drain().any(|e| matches!(e, FlightEvent::Burst(_))));
         let s = f.summary(10 * S + S / 2, t);
         let b = s.last_burst.expect("the burst the last window ended");
-        assert_eq!((b.start, b.end, b.lost, b.ongoing), (8 * S, 10 * S, 20, false));
+        assert_eq!(
+            (b.start, b.end, b.lost, b.ongoing),
+            (8 * S, 10 * S, 20, false)
+        );
         assert_eq!(s.burst_count, 1);
         // A burst still on at the end is ongoing, not ended.
         let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
