@@ -63,9 +63,10 @@ fn sim_losses_duplicates_and_reorders_per_source_equal_the_links_truth() {
 }
 
 #[test]
-fn a_silence_longer_than_the_sequence_is_a_silence_not_a_small_loss() {
+fn a_silence_longer_than_the_sequence_counts_its_gap_and_estimates_its_wraps() {
     // 8 s without a frame at 50/s: 400 frames, which a wrapping 8-bit
-    // counter would alias to 144.
+    // counter aliases to 144. The sequence proves those 144; the rate
+    // says 256 more are likely, said apart and not counted.
     let link = "sim:?clock=virtual&heartbeat=off&stream=ATTITUDE@50&outage=2s+8s&seed=4";
     let (code, out, err) = run_mavping(&["--passive", "-w", "12", "--json", "-v", link]);
     assert_eq!(code, 0, "{out}{err}");
@@ -73,22 +74,34 @@ fn a_silence_longer_than_the_sequence_is_a_silence_not_a_small_loss() {
     let r = source(&s, 1, 1);
     let dropped = sim_truth(&err, "1/1", "down_dropped");
     assert!((395..=405).contains(&dropped), "{err}");
-    assert_eq!(count(r, "lost"), 0, "{r}");
+    let proven = dropped % 256;
+    assert_eq!(count(r, "lost"), proven, "{r}");
     assert_eq!(r["silence_count"], 1, "{r}");
     let silence = &r["silences"][0];
-    assert_eq!(silence["seq_lost"], Value::Null, "{r}");
-    // An estimate from the source's rate: within a frame of the truth.
+    assert_eq!(silence["seq_lost"].as_u64(), Some(proven), "{r}");
+    assert_eq!(silence["restart"], false, "{r}");
+    // Estimates from the source's rate: within a frame of the truth.
     let estimated = silence["frames_estimated"].as_u64().unwrap();
     assert!(estimated.abs_diff(dropped) <= 1, "{dropped}: {r}");
-    assert_eq!(r["silence_frames_estimated"].as_u64(), Some(estimated));
+    let likely = silence["lost_estimated"].as_u64().unwrap();
+    assert!(likely.abs_diff(dropped) <= 1, "{dropped}: {r}");
+    // Only the wraps are "estimated": the proven gap is in `lost` alone.
+    assert_eq!(likely % 256, proven, "{r}");
+    assert_eq!(
+        r["silence_frames_estimated"].as_u64(),
+        Some(likely - proven)
+    );
     let ms = silence["length_ns"].as_u64().unwrap() / 1_000_000;
     assert!((7_990..=8_050).contains(&ms), "{r}");
-    // pymavlink's figure is the alias.
-    assert_eq!(r["pymav"]["loss"].as_u64(), Some(dropped % 256), "{r}");
+    // pymavlink's figure is the alias too.
+    assert_eq!(r["pymav"]["loss"].as_u64(), Some(proven), "{r}");
     let (_, text, _) = run_mavping(&["--passive", "-w", "12", link]);
+    let wraps = (likely - proven) / 256;
     assert!(
         text.contains(&format!(
-            "~{estimated} frames at its rate, not counted lost (the sequence cannot span it)"
+            "{proven} frames lost by the sequence, ~{likely} likely at its rate \
+             (the 8-bit counter wrapped {wraps} times more, likely: the {} more are not counted)",
+            likely - proven
         )),
         "{text}"
     );
@@ -122,7 +135,10 @@ fn a_pymavlink_vehicle_is_counted_exactly_over_udp() {
     let s = summary(&out);
     let r = source(&s, 1, 1);
     assert_eq!(truth["dropped"], 4, "{truth}");
-    assert_eq!(count(r, "lost"), 4, "{r}");
+    assert_eq!(truth["silenced"], 300, "{truth}");
+    // The drops, and the silence's 300 numbers as the sequence proves
+    // them: 300 modulo 256.
+    assert_eq!(count(r, "lost"), 4 + 300 % 256, "{r}");
     assert_eq!(count(r, "duplicate"), 2, "{r}");
     assert_eq!(count(r, "reordered"), 2, "{r}");
     assert_eq!(count(r, "received"), truth["sent"].as_u64().unwrap(), "{r}");
@@ -134,9 +150,21 @@ fn a_pymavlink_vehicle_is_counted_exactly_over_udp() {
         (&kept["ongoing"], &after["ongoing"]),
         (&Value::Bool(false), &Value::Bool(true))
     );
-    assert_eq!(kept["seq_lost"], Value::Null, "{r}");
+    assert_eq!(kept["seq_lost"].as_u64(), Some(300 % 256), "{r}");
     let estimated = kept["frames_estimated"].as_u64().unwrap();
     assert!((270..=330).contains(&estimated), "{r}");
+    // At its rate the silence likely held one more wrap: the 256 beyond
+    // the proven 44 are said, not counted.
+    let likely = kept["lost_estimated"].as_u64().unwrap();
+    assert!((270..=330).contains(&likely), "{r}");
+    assert_eq!(likely % 256, 300 % 256, "{r}");
+    // Only the wraps are estimated; the silence still on at the end has
+    // no gap yet, so it adds nothing.
+    assert_eq!(
+        r["silence_frames_estimated"].as_u64(),
+        Some(likely - 300 % 256),
+        "{r}"
+    );
     // pymavlink's arithmetic on the same frames: each duplicate 255, each
     // swap 256, the drops as they are, the silence modulo 256.
     assert_eq!(

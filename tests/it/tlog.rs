@@ -200,6 +200,8 @@ fn faulty_plan(stamps: &str) -> Value {
 
 /// The short silence of 1/1 is spanned by its sequence: counted lost.
 const SHORT_SILENCE: u64 = 20;
+/// The long one is not: the sequence proves 300 modulo 256 of it (counted
+/// lost), and the rate says one wrap more is likely (said, not counted).
 const LONG_SILENCE: u64 = 300;
 
 fn assert_faulty_plan_counts(summary: &Value, t: &Value) {
@@ -213,10 +215,14 @@ fn assert_faulty_plan_counts(summary: &Value, t: &Value) {
             "{id}: {r}"
         );
         assert_eq!(counts(r, "reordered"), truth(t, id, "swapped"), "{id}: {r}");
-        let spanned = if id == "1/1" { SHORT_SILENCE } else { 0 };
+        let silenced = if id == "1/1" {
+            SHORT_SILENCE + LONG_SILENCE % 256
+        } else {
+            0
+        };
         assert_eq!(
             counts(r, "lost"),
-            truth(t, id, "dropped") + spanned,
+            truth(t, id, "dropped") + silenced,
             "{id}: {r}"
         );
     }
@@ -224,9 +230,17 @@ fn assert_faulty_plan_counts(summary: &Value, t: &Value) {
     assert_eq!(truth(t, "1/1", "silenced"), SHORT_SILENCE + LONG_SILENCE);
     assert_eq!(one["silence_count"], 1, "{one}");
     let silence = &one["silences"][0];
-    assert_eq!(silence["seq_lost"], Value::Null);
+    assert_eq!(silence["seq_lost"].as_u64(), Some(LONG_SILENCE % 256));
     let estimated = silence["frames_estimated"].as_u64().unwrap();
     assert!(estimated.abs_diff(LONG_SILENCE) <= 1, "{silence}");
+    let likely = silence["lost_estimated"].as_u64().unwrap();
+    assert!(likely.abs_diff(LONG_SILENCE) <= 1, "{silence}");
+    assert_eq!(likely % 256, LONG_SILENCE % 256, "{silence}");
+    assert_eq!(
+        one["silence_frames_estimated"].as_u64(),
+        Some(likely - LONG_SILENCE % 256),
+        "{one}"
+    );
     // Time 0 is the first record; the log is 60 s long.
     let span = summary["duration_s"].as_f64().unwrap();
     assert!((59.9..60.0).contains(&span), "{span}");
@@ -689,10 +703,14 @@ fn pymavlinks_own_logger_records_a_vehicle_counted_exactly() {
     let t = |k: &str| truth[k].as_u64().unwrap();
     assert_eq!(recorded["recorded"].as_u64(), Some(t("sent")));
     assert_eq!(counts(one, "received"), t("sent"), "{one}");
-    assert_eq!(counts(one, "lost"), t("dropped"), "{one}");
+    // The drops, and what the sequence proves of the 300 numbers silenced
+    // (more than it spans): 300 modulo 256.
+    assert_eq!(t("silenced"), 300);
+    assert_eq!(counts(one, "lost"), t("dropped") + 300 % 256, "{one}");
     assert_eq!(counts(one, "duplicate"), t("duplicated"), "{one}");
     assert_eq!(counts(one, "reordered"), t("swapped"), "{one}");
     assert_eq!(one["silence_count"], 1, "{one}");
+    assert_eq!(one["silences"][0]["seq_lost"].as_u64(), Some(300 % 256));
     // pymavlink's logger stamps usec & ~3: no link numbers.
     assert!(summary.get("per_link").is_none());
     assert_pymavlink_figures(&summary, &path);
@@ -875,11 +893,14 @@ fn a_flight_is_told_window_by_window_with_its_losses_radio_and_distance() {
             let written = truth["written"].as_u64().unwrap();
             assert_eq!(w["received"].as_u64(), Some(written), "window {k}: {w}");
             // Window 5 holds the silence: its 400 frames are past what the
-            // sequence can span (resynchronised, not counted lost).
-            if k != 5 {
-                let lost = truth["numbered"].as_u64().unwrap() - written;
-                assert_eq!(w["lost"].as_u64(), Some(lost), "window {k}: {w}");
+            // sequence can span, which proves 400 modulo 256 of them, lost
+            // in the window where the frame after the silence came.
+            let mut lost = truth["numbered"].as_u64().unwrap() - written;
+            if k == 5 {
+                assert_eq!(lost, 400, "window {k}: {truth}");
+                lost %= 256;
             }
+            assert_eq!(w["lost"].as_u64(), Some(lost), "window {k}: {w}");
             // Within a metre of the truth (positions are 1e-7 degree).
             let range = &w["range"];
             let near = |key: &str| {
@@ -903,7 +924,8 @@ fn a_flight_is_told_window_by_window_with_its_losses_radio_and_distance() {
             assert_eq!(w["radio"]["rxerrors"].as_u64(), Some(grown), "{w}");
             last_rxerrors = rx;
         }
-        // Windows 3 and 4 lose 20 % and 15 %: one burst, 30 s to 50 s.
+        // Windows 3, 4 and 5 lose 20 %, 15 % and (by the sequence) 59 %:
+        // one burst, 30 s to 60 s.
         let bursts: Vec<&Value> = lines
             .iter()
             .filter(|l| l["type"] == "flight_burst")
@@ -911,9 +933,9 @@ fn a_flight_is_told_window_by_window_with_its_losses_radio_and_distance() {
         assert_eq!(bursts.len(), 1, "{bursts:?}");
         assert_eq!(
             (bursts[0]["t_s"].as_f64(), bursts[0]["end_t_s"].as_f64()),
-            (Some(30.0), Some(50.0))
+            (Some(30.0), Some(60.0))
         );
-        assert_eq!(bursts[0]["lost"], 175);
+        assert_eq!(bursts[0]["lost"], 100 + 75 + 400 % 256);
         assert_eq!(bursts[0]["time"], "2025-11-30T10:53:50.000000Z");
         // Silences (the radio still talking): the 100 frames dropped in a
         // row, from frame 1599 (31.98 s) to frame 1700 (34 s); the planned
@@ -939,7 +961,10 @@ fn a_flight_is_told_window_by_window_with_its_losses_radio_and_distance() {
         assert_eq!(f["windows"], 7);
         assert_eq!(f["origin"]["kind"], "first_fix");
         assert_eq!(f["farthest"]["index"], 6, "{f}");
-        assert_eq!(f["worst"][0]["index"], 3, "{f}");
+        // The silence's window is the worst: 144 proven lost of 244
+        // numbers (truly 400 of 500), then the fourth (20 %).
+        assert_eq!(f["worst"][0]["index"], 5, "{f}");
+        assert_eq!(f["worst"][1]["index"], 3, "{f}");
         // The windows add up to the summary's counts.
         let sum = |key: &str| {
             windows
@@ -1110,12 +1135,14 @@ fn the_flight_report_is_drawn_from_the_logs_windows() {
     let svg_path = dir.path("flight.svg");
     let (code, text, err) = run_mavping(&["--plot", svg_path.to_str().unwrap(), &tlog(&path)]);
     assert_eq!(code, 0, "{err}");
-    // The text's summary: the worst window first (the fourth, 20 %), the
-    // burst, the planned silence.
+    // The text's summary: the worst window first (the sixth, where the 8 s
+    // silence's 400 numbers show as 400 mod 256 = 144 lost beside 100
+    // received), then the fourth (20 %), the burst, the planned silence.
     for line in [
         "flight: 7 windows of 10 s; 2 silences",
+        "flight worst: 50.0-60.0 s (2025-11-30T10:54:10Z to 10:54:20Z): 100 received, 144 lost (59.02%)",
         "flight worst: 30.0-40.0 s (2025-11-30T10:53:50Z to 10:54:00Z): 400 received, 100 lost (20.00%)",
-        "flight burst: 30.0-50.0 s (2025-11-30T10:53:50Z to 10:54:10Z), 20.0 s: 825 received, 175 lost (17.50%)",
+        "flight burst: 30.0-60.0 s (2025-11-30T10:53:50Z to 10:54:20Z), 30.0 s: 925 received, 319 lost (25.64%)",
         "flight silence: 50.0-58.0 s (2025-11-30T10:54:10Z to 10:54:18Z), 8.0 s",
     ] {
         assert!(text.contains(line), "{line:?} not in\n{text}");
@@ -1126,9 +1153,10 @@ fn the_flight_report_is_drawn_from_the_logs_windows() {
         "sequence loss over time",
         "radio RSSI over time",
         "sequence loss against distance",
-        // 200 lost of 3 100 (25 + 100 + 75); the worst window 20 %.
-        "\n6.45\n",
-        "\n20.00\n",
+        // 344 lost of 3 244 (25 + 100 + 75 dropped, 400 mod 256 across
+        // the silence); the worst window 144 of 244.
+        "\n10.60\n",
+        "\n59.02\n",
     ] {
         assert!(svg.contains(part), "{part:?} is not in the plot");
     }

@@ -94,7 +94,7 @@ impl Lines {
         }
     }
 
-    fn flight_span(&self, kind: &'static str, s: &Span) -> Timed {
+    pub(super) fn flight_span(&self, kind: &'static str, s: &Span) -> Timed {
         Timed {
             r#type: kind,
             t_s: seconds(s.start),

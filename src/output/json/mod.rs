@@ -304,9 +304,15 @@ impl<W: Write> Reporter for JsonReporter<W> {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
         // A log's last, partial, window ends with the log: told here.
         if let (LinkSummary::Passive(s), false) = (summary, self.quiet) {
-            if let Some(last) = s.flight.as_ref().and_then(|f| f.last.as_ref()) {
-                let line = Line::FlightWindow(self.lines.flight_window(last));
-                self.lines.write(&mut self.out, &line)?;
+            if let Some(f) = s.flight.as_ref() {
+                if let Some(last) = f.last.as_ref() {
+                    let line = Line::FlightWindow(self.lines.flight_window(last));
+                    self.lines.write(&mut self.out, &line)?;
+                }
+                if let Some(b) = f.last_burst.as_ref() {
+                    let line = Line::FlightBurst(self.lines.flight_span("flight_burst", b));
+                    self.lines.write(&mut self.out, &line)?;
+                }
             }
         }
         self.lines

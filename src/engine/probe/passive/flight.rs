@@ -243,6 +243,9 @@ pub struct FlightSummary {
     pub untold: u64,
     /// The last window, up to the end of the log (told with the summary).
     pub last: Option<FlightWindow>,
+    /// A burst the last window ended: told with it, as every other burst
+    /// is told with the window that ends it.
+    pub last_burst: Option<Span>,
     /// The most lossy windows, worst first.
     pub worst: Vec<FlightWindow>,
     pub silence_count: u64,
@@ -397,9 +400,14 @@ impl Flight {
     /// the last, an open burst or a silence still on is listed as ongoing.
     pub fn summary(&self, at: Nanos, totals: Totals) -> FlightSummary {
         let mut s = self.clone();
+        let mut last_burst = None;
         let last = (at > s.current.start || s.told == 0).then(|| {
             let w = s.window(at.max(s.current.start), totals);
+            let open = s.burst;
             s.after_window(&w);
+            if s.burst.is_none() {
+                last_burst = open;
+            }
             w
         });
         if let Some(mut b) = s.burst.take() {
@@ -428,6 +436,7 @@ impl Flight {
             windows: s.told + s.untold + u64::from(last.is_some()),
             untold: s.untold,
             last,
+            last_burst,
             worst: s.worst,
             silence_count: s.silence_count,
             silences: s.silences,
@@ -1000,9 +1009,32 @@ mod tests {
         assert_eq!((bursts[0].received, bursts[0].lost), (120, 30));
         assert_eq!(bursts[0].loss_pct(), Some(20.0));
         let s = f.summary(12 * S, t);
+        assert!(s.last_burst.is_none());
         // Worst first; the three 20 % windows, then second 7's.
         let worst: Vec<u64> = s.worst.iter().map(|w| w.index).collect();
         assert_eq!(worst, [3, 4, 5, 7]);
+    }
+
+    #[test]
+    fn a_burst_the_last_window_ends_is_handed_over_with_it() {
+        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        // Seconds 8 and 9 lose 20 %; the last, partial, window (from 10 s)
+        // loses nothing: it ends the burst, and only the summary sees it.
+        let t = stream(&mut f, 11, |s| if (8..10).contains(&s) { 10 } else { 0 });
+        assert!(!f.drain().any(|e| matches!(e, FlightEvent::Burst(_))));
+        let s = f.summary(10 * S + S / 2, t);
+        let b = s.last_burst.expect("the burst the last window ended");
+        assert_eq!(
+            (b.start, b.end, b.lost, b.ongoing),
+            (8 * S, 10 * S, 20, false)
+        );
+        assert_eq!(s.burst_count, 1);
+        // A burst still on at the end is ongoing, not ended.
+        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        let t = stream(&mut f, 11, |s| if s >= 8 { 10 } else { 0 });
+        let s = f.summary(11 * S, t);
+        assert!(s.last_burst.is_none());
+        assert!(s.bursts[0].ongoing);
     }
 
     #[test]
