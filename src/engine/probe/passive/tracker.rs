@@ -20,38 +20,41 @@
 //!   counted lost, `resyncs` counts it). Every other distance falls in the
 //!   window, so a source restarting without a pause shows as a gap or as
 //!   duplicates: the sequence alone cannot tell.
-//! - **Usual interval.** The time per sequence step over the source's last
-//!   256 to 512 steps or one to two seconds ([`super::rate`]): steps `k`
-//!   ahead count `k`, so lost frames do not inflate it; a silence the
-//!   sequence spans counts too (a pause the source made itself raises it
-//!   for a while); after one it cannot span, the rate is measured afresh,
-//!   as the count is. A mean over a window, as
-//!   frames often come in bursts (an autopilot's scheduler, a batch from a
-//!   sender or a router, a radio's TDM round): an average per step fell to
-//!   the spacing inside a burst, which made every pause between bursts a
-//!   silence, each then resynchronising, and no loss was counted again.
+//! - **Far frames wait.** A frame more than 32 (`REACH`) from the head either
+//!   way waits for the next frame: back within reach of the head, the far
+//!   one was another sender's (below); anything else, the counter moved
+//!   there (a burst of losses, or a restart).
+//! - **A second counter.** Frames another sender numbered under the same
+//!   ids (QGroundControl's REQUEST_DATA_STREAM, numbered 1 to 7 over and
+//!   over between its MANUAL_CONTROL frames) are read on their own
+//!   counter: steps ahead count as anywhere, a step back restarts it. Its
+//!   figures join the source's once it has numbered 3 frames;
+//!   fewer are stray frames, received and nothing else.
+//! - **Usual interval and routine pause** ([`super::rate`]): the time per
+//!   sequence step over the source's last one to five seconds, in whole
+//!   seconds of its own time (a logger's batches a second apart, whole-ms
+//!   stamps and start-up bursts cannot bend it), and the longest pause it
+//!   makes in a second, as a rule.
 //! - **Silence.** No frame from the source for longer than the threshold:
 //!   the `gap` given, or else 5 usual intervals but at least 1 s (5 s while
-//!   no interval is known: 5 heartbeats). Whatever the base, once a full
-//!   bucket (256 steps or a second) sets the usual interval, a gap of 64
-//!   of them is always a silence, so a fast source's long outage cannot
-//!   hide in the window. A silence is listed with its start (the
-//!   last frame before it), its length (to the frame after it) and the
-//!   frames the source would have sent in it: length / usual interval,
-//!   rounded, less the frame that ends it.
-//! - **Across a silence** the sequence may have wrapped any number of
-//!   times, or restarted with a reboot. It is trusted only if the silence
-//!   is shorter than 128 frames at the source's usual rate (half the
-//!   sequence space, so a rate off by up to 2x still cannot hide a wrap)
-//!   and the frame after it is ahead within the window: then its gap is
-//!   counted lost, as anywhere else, and the silence records it
-//!   (`seq_lost`). Otherwise (longer, rate unknown, or a frame behind the
-//!   head, which after a pause means a restart) the tracker resynchronises:
-//!   `lost` stays what the sequence proves, and the silence's estimated
-//!   frames go to `silence_frames_estimated` instead. The two never count
-//!   the same frame.
-//! - A silence still on when the summary is taken is listed as `ongoing`;
-//!   its estimated frames count as unspanned.
+//!   no interval is known: 5 heartbeats), and never under 1.5 routine
+//!   pauses. Once a second sets the usual interval, a gap of 64 of them is
+//!   a silence (routine pauses aside), so a fast source's outage cannot
+//!   hide in the window. A silence is listed with its start (the last
+//!   frame before it), its length (to the frame after it) and the frames
+//!   the source would have sent in it at its settled rate.
+//! - **Across a silence** the sequence proves at least its gap, modulo
+//!   256: always counted lost (`seq_lost`). Where the silence holds 128
+//!   frames or more at the settled rate, wraps may hide in it: the likely
+//!   number (`lost_estimated`, the gap plus the wraps nearest the rate) is
+//!   said, and the wraps go to `silence_frames_estimated`, never to
+//!   `lost`. No number missing: delayed, nothing lost. A counter starting
+//!   again at 0 after a silence it cannot span: a restart, nothing lost.
+//!   No frame from before a silence fills a gap after it.
+//! - A silence still on when the summary is taken is listed as `ongoing`,
+//!   with nothing lost in it yet.
+//! - **Damaged frames** ([`SeqTracker::on_damaged`]) take their number as
+//!   a frame does and are counted apart, never as lost.
 //! - **pymavlink's figure**, beside ours and labelled: as
 //!   `mavutil.post_message` computes it, `expected = (last + 1) % 256`, on
 //!   a mismatch `loss += (seq - expected) % 256`, every frame counted, loss
@@ -62,7 +65,8 @@
 //! (frames of sources beyond it are counted, not tracked), with the SiK
 //! radio's injected RADIO_STATUS (source 51/68, "3D") kept apart: tracked
 //! and flagged as a radio, but out of the link's totals, as pymavlink
-//! leaves it out of its own.
+//! leaves it out of its own. In a log, sources marked as the ground
+//! station's own ([`SourceTable::set_ground`]) are out of the totals too.
 
 use super::rate::Rate;
 use crate::engine::summary::passive::{
