@@ -403,7 +403,7 @@ impl Flight {
         let mut last_burst = None;
         let last = (at > s.current.start || s.told == 0).then(|| {
             let w = s.window(at.max(s.current.start), totals);
-            let open = s.burst;
+            let open = s.burst.clone();
             s.after_window(&w);
             if s.burst.is_none() {
                 last_burst = open;
@@ -1017,7 +1017,7 @@ mod tests {
 
     #[test]
     fn a_burst_the_last_window_ends_is_handed_over_with_it() {
-        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        let mut f = Flight::new(S, DEFAULT_SILENCE_NS, RadioType::Auto);
         // Seconds 8 and 9 lose 20 %; the last, partial, window (from 10 s)
         // loses nothing: it ends the burst, and only the summary sees it.
         let t = stream(&mut f, 11, |s| if (8..10).contains(&s) { 10 } else { 0 });
@@ -1030,7 +1030,7 @@ mod tests {
         );
         assert_eq!(s.burst_count, 1);
         // A burst still on at the end is ongoing, not ended.
-        let mut f = Flight::new(S, DEFAULT_SILENCE_NS);
+        let mut f = Flight::new(S, DEFAULT_SILENCE_NS, RadioType::Auto);
         let t = stream(&mut f, 11, |s| if s >= 8 { 10 } else { 0 });
         let s = f.summary(11 * S, t);
         assert!(s.last_burst.is_none());
