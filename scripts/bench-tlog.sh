@@ -67,7 +67,14 @@ done
 # This build against the baseline, read in turn so that a busy moment falls
 # on both: the generated logs and the real ones in ../shared/tlogs.
 median() { sort -n | awk '{v[NR] = $1} END {print v[int((NR + 1) / 2)]}'; }
-cpu_of() { /usr/bin/time -f "%U %S" -o "$dir/time" "$1" -q "tlog:$2" >/dev/null 2>&1; awk '{printf "%.3f\n", $1 + $2}' "$dir/time"; }
+# CPU of one read to the microsecond (getrusage of the child; time(1)
+# rounds to 10 ms, as long as a small log's whole read).
+cpu_of() {
+  "$py" -c 'import resource, subprocess, sys
+subprocess.run(sys.argv[1:], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+r = resource.getrusage(resource.RUSAGE_CHILDREN)
+print(f"{r.ru_utime + r.ru_stime:.4f}")' "$1" -q "tlog:$2"
+}
 printf "\n| log | frames | baseline CPU s (median of 5) | this build CPU s (median of 5) | change |\n|---|---|---|---|---|\n"
 for log in "$dir"/flight-2h.tlog "$dir"/log-20mb.tlog ../shared/tlogs/*.tlog; do
   [ -f "$log" ] || continue
@@ -79,6 +86,6 @@ for log in "$dir"/flight-2h.tlog "$dir"/log-20mb.tlog ../shared/tlogs/*.tlog; do
   done
   b=$(median <"$dir/base"); t=$(median <"$dir/this")
   awk -v name="$(basename "$log")" -v n="$n" -v b="$b" -v t="$t" 'BEGIN {
-    printf "| %s | %d | %.3f | %.3f | %+.0f%% |\n", name, n, b, t, (b > 0) ? 100 * (t - b) / b : 0
+    printf "| %s | %d | %.4f | %.4f | %+.1f%% |\n", name, n, b, t, (b > 0) ? 100 * (t - b) / b : 0
   }'
 done

@@ -239,15 +239,16 @@ impl LinkNodes {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    const VEHICLE: SysComp = SysComp {
+    pub(crate) const VEHICLE: SysComp = SysComp {
         sysid: 1,
         compid: 1,
     };
 
-    fn report(t_ms: u64, received: u32, lost: u32, parse: u16) -> LinkNodeReport {
+    /// A report at `t_ms` of the vehicle's boot clock.
+    pub(crate) fn report(t_ms: u64, received: u32, lost: u32, parse: u16) -> LinkNodeReport {
         LinkNodeReport {
             timestamp: t_ms,
             messages_received: received,

@@ -108,24 +108,9 @@ fn disagreement(id: SysComp, c: &UplinkComparison) -> Hint {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::link_node::{LinkNodeReport, LinkNodes};
+    use crate::engine::link_node::tests::{report, VEHICLE};
+    use crate::engine::link_node::LinkNodes;
     use crate::engine::matcher::Counts;
-
-    const VEHICLE: SysComp = SysComp {
-        sysid: 1,
-        compid: 1,
-    };
-
-    fn report(t_ms: u64, received: u32, lost: u32, parse: u16) -> LinkNodeReport {
-        LinkNodeReport {
-            timestamp: t_ms,
-            messages_received: received,
-            messages_lost: lost,
-            messages_sent: received.wrapping_mul(3),
-            rx_parse_err: parse,
-            ..LinkNodeReport::default()
-        }
-    }
 
     fn responder(
         id: SysComp,
