@@ -69,6 +69,7 @@
 //! station's own ([`SourceTable::set_ground`]) are out of the totals too.
 
 use super::rate::Rate;
+use crate::engine::radio::is_radio_ids;
 use crate::engine::summary::passive::{
     percent, LinkTotals, MsgCount, PymavFigure, SecondCounter, SeqCounts, Silence, SourceSummary,
     TableSummary, Untracked,
@@ -762,7 +763,7 @@ impl SeqTracker {
         let arrived = c.received + c.damaged;
         SourceSummary {
             source,
-            radio: source == RADIO_SOURCE,
+            radio: is_radio_ids(source),
             ground: false,
             counts: c,
             loss_pct: percent(c.lost, c.numbered()),
@@ -1560,6 +1561,27 @@ mod tests {
         assert_eq!((s.counts.duplicate, s.counts.reordered), (0, 0));
         assert_eq!(s.counts.lost, other - taken_by_main + second.counts.lost);
         assert!(s.counts.lost <= other);
+    }
+
+    #[test]
+    fn every_radios_own_source_is_out_of_the_totals() {
+        // ExpressLRS's receiver sends RADIO_STATUS as 255/68, a WiFi
+        // bridge as x/240: radios' own frames, not the link's traffic.
+        let mut table = SourceTable::new(None, DEFAULT_MAX_SOURCES);
+        let (v, elrs, esp) = (
+            SysComp::new(1, 1),
+            SysComp::new(255, 68),
+            SysComp::new(1, 240),
+        );
+        for p in 0..50u64 {
+            table.on_frame(v, p as u8, 0, 20, p * 20 * MS);
+            table.on_frame(elrs, (p * 3) as u8, 109, 20, p * 20 * MS);
+            table.on_frame(esp, p as u8, 109, 20, p * 20 * MS);
+        }
+        let s = table.summary(50 * 20 * MS);
+        assert_eq!(s.totals.counts, counts(50, 0, 0, 0, 0));
+        assert_eq!(s.totals.radio_received, 100);
+        assert!(s.sources.iter().filter(|x| x.radio).count() == 2);
     }
 
     #[test]
