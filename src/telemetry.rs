@@ -13,8 +13,140 @@ use std::str::FromStr;
 use serde::Serialize;
 use thiserror::Error;
 
-use crate::engine::load::{LoadKind, LoadSpec, LoadSpecError};
-use crate::frame::Msg;
+use crate::frame::{self, Header, Msg, Version};
+
+/// Filler payload per frame: 117-byte frames in MAVLink 2, about a
+/// telemetry burst's size, so a byte rate is many frames, not a few.
+pub const FILLER_PAYLOAD: u8 = 100;
+/// The highest rate a stream takes (frames/s, or bytes/s for filler).
+pub const MAX_LOAD_RATE: f64 = 1_000_000.0;
+
+/// What a stream sends.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "SCREAMING_SNAKE_CASE")]
+pub enum LoadKind {
+    Attitude,
+    GlobalPositionInt,
+    /// Filler at a rate in bytes per second.
+    Bytes,
+}
+
+impl LoadKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            LoadKind::Attitude => "ATTITUDE",
+            LoadKind::GlobalPositionInt => "GLOBAL_POSITION_INT",
+            LoadKind::Bytes => "BYTES",
+        }
+    }
+
+    /// The message a frame of this stream carries (filler for `BYTES`).
+    pub fn msg(self, time_boot_ms: u32) -> Msg {
+        match self {
+            LoadKind::Attitude => Msg::Attitude { time_boot_ms },
+            LoadKind::GlobalPositionInt => Msg::GlobalPositionInt { time_boot_ms },
+            LoadKind::Bytes => Msg::Filler {
+                len: FILLER_PAYLOAD,
+            },
+        }
+    }
+}
+
+/// One `--load` stream: a message at a rate (frames per second), or
+/// `BYTES` at a rate in bytes per second.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LoadSpec {
+    pub kind: LoadKind,
+    pub rate: f64,
+}
+
+/// What a `--load` stream looks like, for its errors.
+const EXPECTED_LOAD: &str =
+    "expected MSG@RATE: ATTITUDE@HZ, GLOBAL_POSITION_INT@HZ or BYTES@BYTES_PER_S, e.g. ATTITUDE@50";
+
+/// What is wrong with a `--load` stream; the text given is quoted.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+pub enum LoadSpecError {
+    #[error("'{0}': {EXPECTED_LOAD}", EXPECTED_LOAD = EXPECTED_LOAD)]
+    NotMsgAtRate(String),
+    #[error("'{text}': unknown message {name}; {EXPECTED_LOAD}", EXPECTED_LOAD = EXPECTED_LOAD)]
+    UnknownMessage { text: String, name: String },
+    /// The rate is not a number in (0, [`MAX_LOAD_RATE`]]; `BYTES`' is in
+    /// bytes per second, the messages' in messages per second.
+    #[error(
+        "'{text}': the rate must be a number above 0 and at most {MAX_LOAD_RATE} ({})",
+        if *bytes { "bytes per second" } else { "messages per second" },
+        MAX_LOAD_RATE = MAX_LOAD_RATE
+    )]
+    Rate { text: String, bytes: bool },
+}
+
+impl FromStr for LoadSpec {
+    type Err = LoadSpecError;
+
+    fn from_str(s: &str) -> Result<Self, LoadSpecError> {
+        let (name, rate) = s
+            .split_once('@')
+            .ok_or_else(|| LoadSpecError::NotMsgAtRate(s.to_string()))?;
+        let kind = match name.trim().to_ascii_uppercase().as_str() {
+            "ATTITUDE" => LoadKind::Attitude,
+            "GLOBAL_POSITION_INT" => LoadKind::GlobalPositionInt,
+            "BYTES" => LoadKind::Bytes,
+            other => {
+                return Err(LoadSpecError::UnknownMessage {
+                    text: s.to_string(),
+                    name: other.to_string(),
+                })
+            }
+        };
+        let rate: f64 = rate
+            .trim()
+            .parse()
+            .ok()
+            .filter(|r: &f64| r.is_finite() && *r > 0.0 && *r <= MAX_LOAD_RATE)
+            .ok_or_else(|| LoadSpecError::Rate {
+                text: s.to_string(),
+                bytes: kind == LoadKind::Bytes,
+            })?;
+        Ok(LoadSpec { kind, rate })
+    }
+}
+
+impl fmt::Display for LoadSpec {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}@{}", self.kind.name(), self.rate)
+    }
+}
+
+impl LoadSpec {
+    /// Bytes of one of this stream's frames as `version` (and signed)
+    /// puts it on the wire.
+    pub fn frame_bytes(&self, version: Version, signed: bool) -> u64 {
+        let mut bytes = Vec::new();
+        let header = Header {
+            sysid: 1,
+            compid: 1,
+            seq: 0,
+        };
+        // Signed frames are MAVLink 2, 13 bytes longer.
+        let version = if signed { Version::V2 } else { version };
+        frame::encode(&mut bytes, version, header, &self.kind.msg(1));
+        bytes.len() as u64 + if signed { 13 } else { 0 }
+    }
+
+    /// Frames per second.
+    pub fn frame_rate(&self, version: Version, signed: bool) -> f64 {
+        match self.kind {
+            LoadKind::Bytes => self.rate / self.frame_bytes(version, signed) as f64,
+            _ => self.rate,
+        }
+    }
+
+    /// Bytes per second on the wire.
+    pub fn bytes_per_s(&self, version: Version, signed: bool) -> f64 {
+        self.frame_rate(version, signed) * self.frame_bytes(version, signed) as f64
+    }
+}
 
 /// The highest rate a stream takes, in messages per second.
 pub const MAX_STREAM_RATE: f64 = 10_000.0;
