@@ -52,10 +52,19 @@ impl<W: Write> TextReporter<W> {
             self.stamp(figures.at)?;
             writeln!(
                 self.out,
-                "[{at:.1} s] {}{}: {} received, {} lost ({}), {} duplicate, {} reordered, {} silences, {} frames/s",
+                "[{at:.1} s] {}{}: {} received, {}{} lost ({}), {} duplicate, {} reordered, {} silences, {} frames/s",
                 r.source,
-                if r.radio { " (radio)" } else { "" },
+                match (r.radio, r.ground) {
+                    (true, _) => " (radio)",
+                    (_, true) => " (the ground station's own)",
+                    _ => "",
+                },
                 r.counts.received,
+                if r.counts.damaged > 0 {
+                    format!("{} damaged, ", r.counts.damaged)
+                } else {
+                    String::new()
+                },
                 r.counts.lost,
                 loss_column(r.loss_pct),
                 r.counts.duplicate,

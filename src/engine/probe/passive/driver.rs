@@ -23,7 +23,7 @@ use crate::engine::roster::{Identity, Roster};
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
-use crate::engine::summary::passive::{PassiveSummary, SeqCounts, TableSummary};
+use crate::engine::summary::passive::{PassiveSummary, PerLink, SeqCounts, TableSummary};
 use crate::engine::summary::{Interim, LinkSummary, PassiveInterim, ProbeName};
 use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{mav_type, Frame, Msg, SysComp};
@@ -108,6 +108,18 @@ impl PassiveDriver {
             round_trips: None,
             flight: None,
             ground: None,
+        }
+    }
+
+    /// A log's figures per MAVProxy link, when its stamps carry them.
+    fn per_link(&self, table: &TableSummary, at: Nanos) -> Option<PerLink> {
+        match &self.paths {
+            Some(Paths::Split(paths)) => {
+                let by_path: Vec<_> = paths.iter().map(|t| t.summary(at)).collect();
+                links::per_link(table, &by_path)
+            }
+            // All by path 0, or not a log: no links to tell apart.
+            Some(Paths::AllZero) | None => None,
         }
     }
 
@@ -314,21 +326,15 @@ impl Driver for PassiveDriver {
     fn finish(mut self, end: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let at = (end.duration_s * 1e9) as Nanos;
         let mut table = self.table.summary(at);
-        let per_link = match &self.paths {
-            Some(Paths::Split(paths)) => {
-                let by_path: Vec<_> = paths.iter().map(|t| t.summary(at)).collect();
-                links::per_link(&table, &by_path)
-            }
-            // All by path 0, or not a log: no links to tell apart.
-            Some(Paths::AllZero) | None => None,
-        };
+        let mut per_link = self.per_link(&table, at);
         // With links shown, what only MAVProxy's link 3 carried is what it
-        // sent itself.
+        // sent itself: marked, and the tables told again with it.
         if let Some(own) = per_link.as_ref().map(links::sent_by_mavproxy) {
             for source in own {
-                self.table.set_ground(source);
+                self.mark_ground(source);
             }
             table = self.table.summary(at);
+            per_link = self.per_link(&table, at);
         }
         let identities = identities(&table, &end.roster);
         let flight = self
