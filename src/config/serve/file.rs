@@ -2,6 +2,7 @@
 //! and continuous links. One table type serves both, so each key is parsed
 //! once; keys that belong to the other kind are refused by name.
 
+use crate::engine::radio::RadioType;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
@@ -96,6 +97,7 @@ pub(super) struct Table {
     signing_link_id: Option<u8>,
     require_signed: Option<bool>,
     baud: Option<u32>,
+    radio_type: Option<String>,
 }
 
 impl Table {
@@ -182,6 +184,7 @@ impl Table {
             heartbeat: self.heartbeat.unwrap_or(true),
             signing,
             baud: validate_baud(self.baud.unwrap_or(serial::DEFAULT_BAUD))?,
+            radio_type: radio_type(self.radio_type.as_deref())?,
             timeout,
             retry_interval,
         })
@@ -245,6 +248,7 @@ impl Table {
             heartbeat: c.heartbeat,
             signing: c.signing,
             baud: c.baud,
+            radio_type: c.radio_type,
         })
     }
 
@@ -376,4 +380,24 @@ pub(super) fn file_error(path: &Path, text: &str, e: &toml::de::Error) -> Config
 /// Names the file and the table an error is about.
 pub(super) fn within(path: &Path, table: &str, e: ConfigError) -> ConfigError {
     invalid(format!("{}: {table}: {e}", path.display()))
+}
+
+/// `radio_type = "..."`: as `--radio-type`.
+fn radio_type(value: Option<&str>) -> Result<RadioType, ConfigError> {
+    let all = [
+        RadioType::Auto,
+        RadioType::Sik,
+        RadioType::Mlrs,
+        RadioType::Elrs,
+        RadioType::Esp,
+        RadioType::Raw,
+    ];
+    match value {
+        None => Ok(RadioType::Auto),
+        Some(v) => all.into_iter().find(|t| t.as_str() == v).ok_or_else(|| {
+            invalid(format!(
+                "radio_type '{v}': expected auto, sik, mlrs, elrs, esp or raw"
+            ))
+        }),
+    }
 }

@@ -11,6 +11,7 @@ mod file;
 mod request;
 mod web;
 
+use crate::engine::radio::RadioType;
 use std::collections::BTreeMap;
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -116,6 +117,8 @@ pub struct Module {
     pub heartbeat: bool,
     pub signing: Option<SigningConfig>,
     pub baud: u32,
+    /// How radios are read (`radio_type`, as `--radio-type`).
+    pub radio_type: RadioType,
 }
 
 /// A link probed all the time, shown at `/metrics` as `link="NAME"`.
@@ -144,6 +147,7 @@ struct Common {
     heartbeat: bool,
     signing: Option<SigningConfig>,
     baud: u32,
+    radio_type: RadioType,
     timeout: Duration,
     retry_interval: Duration,
 }
@@ -206,8 +210,7 @@ fn session(
         signing: c.signing,
         sweep: None,
         wire: None,
-        // A probe reads radios by what they send.
-        radio_type: crate::engine::radio::RadioType::Auto,
+        radio_type: c.radio_type,
     };
     session.wire = super::wire_budget(spec, c.baud, &c.probe, &session);
     Ok(session)
@@ -442,6 +445,20 @@ mod tests {
     }
 
     #[test]
+    fn radio_type_reaches_a_modules_probes_and_a_links_session() {
+        let c = with_file(
+            "allow = [\"sim:*\"]\n[module.radio]\nradio_type = \"mlrs\"\n[[link]]\nlink = \"sim:\"\nradio_type = \"elrs\"",
+        )
+        .unwrap();
+        let plan = c.settings.plan("module=radio&target=sim:").unwrap();
+        assert_eq!(plan.link.session.radio_type, RadioType::Mlrs);
+        let link = &c.settings.links[0].link.session;
+        assert_eq!(link.radio_type, RadioType::Elrs);
+        let plain = c.settings.plan("target=sim:").unwrap();
+        assert_eq!(plain.link.session.radio_type, RadioType::Auto);
+    }
+
+    #[test]
     fn the_command_line_alone_needs_no_file() {
         let c = ServeConfig::try_from(&args("")).unwrap();
         assert_eq!(c.listen, "127.0.0.1:9465".parse().unwrap());
@@ -669,6 +686,10 @@ rate = 2
                 "[module.a]: target: PING requests are always broadcast",
             ),
             ("[module.a]\nsysid = 0", "sysid 0"),
+            (
+                "[module.a]\nradio_type = \"sik2\"",
+                "radio_type 'sik2': expected auto, sik, mlrs, elrs, esp or raw",
+            ),
             ("[module.a]\ninterval = \"soon\"", "interval: 'soon'"),
             (
                 "[module.a]\nsigning_key_file = \"/nonexistent/k\"",

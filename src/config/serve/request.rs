@@ -109,6 +109,7 @@ impl ServeSettings {
             heartbeat: module.heartbeat,
             signing: module.signing,
             baud: module.baud,
+            radio_type: module.radio_type,
             timeout,
             retry_interval: module.retry_interval,
         };
