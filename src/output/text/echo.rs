@@ -3,10 +3,13 @@
 use std::io::{self, Write};
 
 use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, Lines, TextReporter};
+use crate::engine::capacity::WireBudget;
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{self, Field, RadioKind, RadioReport, RadioSummary};
-use crate::engine::summary::{Direction, EchoInterim, ProbeName, ResponderSummary, Summary};
+use crate::engine::summary::{
+    Direction, EchoInterim, ProbeName, ResponderSummary, ScheduleSummary, Summary,
+};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::output::{Event, StartInfo};
@@ -532,19 +535,7 @@ pub(super) fn write_summary(
     verdict: &Verdict,
     steps_shown: usize,
 ) -> io::Result<()> {
-    write!(out, "{} requests sent in {:.3} s", s.requests, s.duration_s)?;
-    if s.in_flight > 0 {
-        write!(out, ", {} still in flight (not counted)", s.in_flight)?;
-    }
-    writeln!(out)?;
-    // A listening link that gave up says so in its own words (the hint);
-    // "no replies" would hide that nothing was ever heard.
-    let no_peer = s.hints.iter().find(|h| h.code == HintCode::NoPeerHeard);
-    match no_peer {
-        Some(hint) => writeln!(out, "{}", hint.text)?,
-        None if s.responders.is_empty() => writeln!(out, "no replies")?,
-        None => {}
-    }
+    write_requests(out, s)?;
     for r in &s.responders {
         write_responder(out, r)?;
     }
@@ -557,36 +548,76 @@ pub(super) fn write_summary(
         super::sweep::write_summary(out, sweep, &probe, s.wire.as_ref(), steps_shown)?;
     }
     if let Some(w) = &s.wire {
-        let unproven = w
-            .ignorer
-            .map(|device| format!(" (unproven on {device})"))
-            .unwrap_or_default();
+        write_wire(out, s, w)?;
+    }
+    write_link_faults(out, s)?;
+    write_signing(out, &s.signing)?;
+    if let Some(p) = &s.schedule {
+        write_schedule(out, s, p)?;
+    }
+    for hint in s.hints.iter().filter(|h| h.code != HintCode::NoPeerHeard) {
+        writeln!(out, "hint: {}", hint.text)?;
+    }
+    // Threshold failures; "no reply at all" is already plain above.
+    for f in verdict.failures.iter().filter(|f| f.check != Check::Reply) {
+        writeln!(out, "FAILED {}: {}", f.check, f.message)?;
+    }
+    Ok(())
+}
+
+/// `30 requests sent in 0.640 s`, and when nothing answered, why.
+fn write_requests(out: &mut impl Write, s: &Summary) -> io::Result<()> {
+    write!(out, "{} requests sent in {:.3} s", s.requests, s.duration_s)?;
+    if s.in_flight > 0 {
+        write!(out, ", {} still in flight (not counted)", s.in_flight)?;
+    }
+    writeln!(out)?;
+    // A listening link that gave up says so in its own words (the hint);
+    // "no replies" would hide that nothing was ever heard.
+    let no_peer = s.hints.iter().find(|h| h.code == HintCode::NoPeerHeard);
+    match no_peer {
+        Some(hint) => writeln!(out, "{}", hint.text),
+        None if s.responders.is_empty() => writeln!(out, "no replies"),
+        None => Ok(()),
+    }
+}
+
+/// `wire: 57600 baud carries ...`: what the baud rate allows.
+fn write_wire(out: &mut impl Write, s: &Summary, w: &WireBudget) -> io::Result<()> {
+    let unproven = w
+        .ignorer
+        .map(|device| format!(" (unproven on {device})"))
+        .unwrap_or_default();
+    write!(
+        out,
+        "wire{unproven}: {} baud carries ~{:.0} {}s/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
+        w.baud,
+        w.max_rate_hz.floor(),
+        w.message,
+        ms_us(w.floor_us),
+        w.request_bytes,
+        w.reply_bytes
+    )?;
+    // The rest of the RTT is the radio's and the autopilot's.
+    if let Some(p50) = s
+        .responders
+        .iter()
+        .filter_map(|r| r.rtt)
+        .map(|t| t.p50_us)
+        .reduce(f64::min)
+    {
         write!(
             out,
-            "wire{unproven}: {} baud carries ~{:.0} {}s/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
-            w.baud,
-            w.max_rate_hz.floor(),
-            w.message,
-            ms_us(w.floor_us),
-            w.request_bytes,
-            w.reply_bytes
+            ", {} ms of the rtt p50 is beyond the wire",
+            ms_us((p50 - w.floor_us).max(0.0))
         )?;
-        // The rest of the RTT is the radio's and the autopilot's.
-        if let Some(p50) = s
-            .responders
-            .iter()
-            .filter_map(|r| r.rtt)
-            .map(|t| t.p50_us)
-            .reduce(f64::min)
-        {
-            write!(
-                out,
-                ", {} ms of the rtt p50 is beyond the wire",
-                ms_us((p50 - w.floor_us).max(0.0))
-            )?;
-        }
-        writeln!(out)?;
     }
+    writeln!(out)
+}
+
+/// What the link did besides carrying replies: junk, replies from the
+/// wrong peer, time down.
+fn write_link_faults(out: &mut impl Write, s: &Summary) -> io::Result<()> {
     let f = &s.frames;
     if f.bad_crc + f.damaged + f.skipped_bytes + f.unknown_id + f.truncated + s.foreign_replies > 0
     {
@@ -604,7 +635,6 @@ pub(super) fn write_summary(
             s.wrong_path_replies
         )?;
     }
-    write_signing(out, &s.signing)?;
     if s.downtime_s > 0.0 {
         writeln!(
             out,
@@ -612,38 +642,33 @@ pub(super) fn write_summary(
             s.downtime_s
         )?;
     }
-    if let Some(p) = &s.schedule {
-        let rate = if p.not_sent > 0 {
-            format!(
-                "the link took {}/s of {}/s ({} requests not sent: it is not reading)",
-                per_second(p.achieved_rate_hz),
-                per_second(p.requested_rate_hz),
-                p.not_sent
-            )
-        } else {
-            format!(
-                "{}/s achieved of {}/s",
-                per_second(p.achieved_rate_hz),
-                per_second(p.requested_rate_hz)
-            )
-        };
-        writeln!(
-            out,
-            "schedule: {rate}, send lateness p50/p99/max = {}/{}/{} ms; {}",
-            ms_us(p.lateness_p50_us),
-            ms_us(p.lateness_p99_us),
-            ms_us(p.lateness_max_us),
-            s.rx_clock
-        )?;
-    }
-    for hint in s.hints.iter().filter(|h| h.code != HintCode::NoPeerHeard) {
-        writeln!(out, "hint: {}", hint.text)?;
-    }
-    // Threshold failures; "no reply at all" is already plain above.
-    for f in verdict.failures.iter().filter(|f| f.check != Check::Reply) {
-        writeln!(out, "FAILED {}: {}", f.check, f.message)?;
-    }
     Ok(())
+}
+
+/// `schedule: 50/s achieved of 50/s, send lateness ...`.
+fn write_schedule(out: &mut impl Write, s: &Summary, p: &ScheduleSummary) -> io::Result<()> {
+    let rate = if p.not_sent > 0 {
+        format!(
+            "the link took {}/s of {}/s ({} requests not sent: it is not reading)",
+            per_second(p.achieved_rate_hz),
+            per_second(p.requested_rate_hz),
+            p.not_sent
+        )
+    } else {
+        format!(
+            "{}/s achieved of {}/s",
+            per_second(p.achieved_rate_hz),
+            per_second(p.requested_rate_hz)
+        )
+    };
+    writeln!(
+        out,
+        "schedule: {rate}, send lateness p50/p99/max = {}/{}/{} ms; {}",
+        ms_us(p.lateness_p50_us),
+        ms_us(p.lateness_p99_us),
+        ms_us(p.lateness_max_us),
+        s.rx_clock
+    )
 }
 
 #[cfg(test)]
