@@ -3,7 +3,7 @@
 //! write them all with one system call (UDP: `sendmmsg`) does; the others
 //! write them one by one ([`super::Transport::send_all`]).
 
-use super::PathId;
+use super::link::PathId;
 
 /// Where a queued frame goes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

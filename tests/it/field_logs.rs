@@ -216,7 +216,7 @@ fn shape(path: &Path) -> Value {
 }
 
 /// A real log in shared/tlogs (beside the repository, as CI lays it).
-fn shared_tlog(name: &str) -> PathBuf {
+pub(crate) fn shared_tlog(name: &str) -> PathBuf {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../shared/tlogs")
         .join(name);

@@ -12,16 +12,8 @@ use std::process::Command;
 use serde_json::Value;
 
 use crate::common::*;
+use crate::field_logs::shared_tlog;
 use crate::tlog::{mavloss_env, read, tlog};
-
-/// A shared real log (beside the repository, as CI lays it out).
-fn shared(name: &str) -> PathBuf {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/tlogs")
-        .join(name);
-    assert!(path.exists(), "{} is not there", path.display());
-    path
-}
 
 /// One real log: mavping's summary and the census of its records.
 struct Real {
@@ -32,7 +24,7 @@ struct Real {
 
 impl Real {
     fn read(name: &str) -> Real {
-        let path = shared(name);
+        let path = shared_tlog(name);
         let out = Command::new(python())
             .arg(peer_script("tlog_crc_census.py"))
             .arg(&path)

@@ -122,7 +122,7 @@ fn write_messages(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
         .iter()
         .take(TOP_MSG_IDS)
         .map(|m| {
-            let name = message_name(m.id).map_or_else(|| format!("id {}", m.id), String::from);
+            let name = id_name(m.id);
             match r.frames_per_s {
                 Some(rate) if r.counts.received > 0 => {
                     let share = rate * m.count as f64 / r.counts.received as f64;
@@ -156,26 +156,13 @@ fn write_damaged(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
     if r.counts.damaged == 0 {
         return Ok(());
     }
-    let mut each: Vec<String> = r
-        .damaged_ids
-        .iter()
-        .take(TOP_MSG_IDS)
-        .map(|m| {
-            let name = message_name(m.id).map_or_else(|| format!("id {}", m.id), String::from);
-            format!("{name} ×{}", m.count)
-        })
-        .collect();
-    let more = r.damaged_ids.len().saturating_sub(TOP_MSG_IDS);
-    if more > 0 {
-        each.push(format!("{more} more ids"));
-    }
     writeln!(
         out,
         "damaged: {} {} frames whose CRC failed ({}): they arrived, so their numbers are not \
          lost (damage on the way, or a dialect whose CRC differs)",
         r.source,
         r.counts.damaged,
-        each.join(", ")
+        name_counts(&r.damaged_ids)
     )
 }
 
@@ -465,15 +452,21 @@ fn write_second_counter(out: &mut impl Write, r: &SourceSummary) -> io::Result<(
 
 /// `DISTANCE_SENSOR ×1949, id 60045 ×3`.
 fn name_counts(ids: &[MsgCount]) -> String {
-    let each: Vec<String> = ids
+    let mut each: Vec<String> = ids
         .iter()
         .take(TOP_MSG_IDS)
-        .map(|m| {
-            let name = message_name(m.id).map_or_else(|| format!("id {}", m.id), String::from);
-            format!("{name} ×{}", m.count)
-        })
+        .map(|m| format!("{} ×{}", id_name(m.id), m.count))
         .collect();
+    let more = ids.len().saturating_sub(TOP_MSG_IDS);
+    if more > 0 {
+        each.push(format!("{more} more ids"));
+    }
     each.join(", ")
+}
+
+/// A message id by the dialect's name, `id N` where it has none.
+fn id_name(id: u32) -> String {
+    message_name(id).map_or_else(|| format!("id {id}"), String::from)
 }
 
 /// The source table's column names, after `lead` (the per-link table's

@@ -23,7 +23,7 @@ use rand::rngs::SmallRng;
 use rand::{Rng, SeedableRng};
 use tokio::time::{sleep_until, Instant};
 
-use super::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
+use super::link::{push_datagram, Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::answering::ResponderCore;
 use crate::frame::{self, Header, Msg, RadioStatus, ScanStats, SysComp, Version};
 use crate::telemetry::{Schedule, StreamKind};

@@ -36,7 +36,7 @@ use serde::Serialize;
 use tokio::task::JoinHandle;
 use tokio::time::{sleep_until, Instant};
 
-use super::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
+use super::link::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use crate::frame::signing::SignedBytes;
 use crate::frame::{self, Frame, ScanStats};
 use records::{Found, RecordStats, Splitter};
