@@ -21,6 +21,7 @@ pub mod session;
 pub mod stats;
 pub mod summary;
 pub mod sweep;
+pub mod sweep_report;
 #[cfg(not(mavping_portable))]
 pub mod wait;
 // The portable path's waits (build.rs): same interface, no Linux timers.
@@ -71,7 +72,7 @@ pub struct SessionConfig {
     /// we receive.
     pub signing: Option<SigningConfig>,
     /// `--sweep` or `--load`: the run goes in steps (echo probes only).
-    pub sweep: Option<sweep::SweepConfig>,
+    pub sweep: Option<sweep_report::SweepConfig>,
     /// What the baud rate allows a serial (or simulated radio) link: set
     /// once by the configuration, reported by the echo probes' summary
     /// whatever the front end.

@@ -15,7 +15,7 @@ use super::matcher::{Counts, Matcher};
 use super::radio::RadioSummary;
 use super::roster::{Identity, Roster};
 use super::stats::{Bucket, RttSummary};
-use super::sweep::verdict::SweepSummary;
+use super::sweep_report::SweepSummary;
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
 use crate::transport::RxClock;

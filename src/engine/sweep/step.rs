@@ -4,27 +4,12 @@
 
 use std::time::Duration;
 
-use serde::Serialize;
-
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{RadioReport, SinceBootCounter, UNKNOWN};
 use crate::engine::stats::RttStats;
+pub use crate::engine::sweep_report::{Phase, StepFigures, StepRadio, StepRtt};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
-
-/// What a step is for.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Phase {
-    /// With `--load`: the first rate without the load, for comparison.
-    Baseline,
-    /// Climbing the 1-2-5 series.
-    Ramp,
-    /// Bisecting around the knee.
-    Refine,
-    /// `--load` without a sweep: the same rate as the baseline, loaded.
-    Loaded,
-}
 
 impl Phase {
     pub fn name(self) -> &'static str {
@@ -93,72 +78,6 @@ pub const KNEE_MIN_P99_RISE_US: f64 = 30_000.0;
 /// The p99 a step must stay under against the first sweep step's.
 pub fn p99_limit_us(reference_p99_us: f64) -> f64 {
     (KNEE_MAX_P99_RATIO * reference_p99_us).max(reference_p99_us + KNEE_MIN_P99_RISE_US)
-}
-
-/// A step's RTT figures over every responder's in-time replies, in µs.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct StepRtt {
-    pub p50_us: f64,
-    pub p99_us: f64,
-    pub max_us: f64,
-}
-
-/// The radio's own figures during a step (the first radio heard).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct StepRadio {
-    pub id: SysComp,
-    pub reports: u64,
-    /// Least and mean % of its transmit buffer free.
-    pub txbuf_min: Option<u8>,
-    pub txbuf_mean: Option<f64>,
-    pub rssi_mean: Option<f64>,
-    pub remrssi_mean: Option<f64>,
-    /// What its since-boot receive-error counter grew by during the step.
-    pub rxerrors_delta: u64,
-}
-
-/// One step as reported.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct StepFigures {
-    /// 1 for the first step.
-    pub index: u32,
-    pub phase: Phase,
-    /// The `--load` streams were on.
-    pub load: bool,
-    pub offered_hz: f64,
-    /// Requests sent over the time from the first to the last.
-    pub achieved_hz: f64,
-    /// When its first request went out, in seconds since the run started.
-    pub start_s: f64,
-    /// From its first request to its last.
-    pub duration_s: f64,
-    pub requests: u64,
-    /// In-time replies, summed over responders.
-    pub received: u64,
-    pub lost: u64,
-    pub late: u64,
-    /// lost / (received + lost).
-    pub loss_ratio: f64,
-    pub rtt: Option<StepRtt>,
-    /// Bytes per second we sent (probes, load, HEARTBEAT) while the step
-    /// sent, and received (every valid frame) from its start until it
-    /// ended, over the time it sent or until its last reply came, whichever
-    /// is longer (a queue delivers after the sending ends): the step's own
-    /// traffic each way.
-    pub tx_bytes_per_s: f64,
-    pub rx_bytes_per_s: f64,
-    pub radio: Option<StepRadio>,
-    /// False when the run ended (Ctrl-C, deadline, link failure) before the
-    /// step did: it is shown, never judged.
-    pub complete: bool,
-    /// The knee test (sweep steps only): loss under 1 % and p99 under
-    /// twice the first sweep step's or less than 30 ms over it.
-    pub passed: Option<bool>,
-    /// The rate of the step before, run again because that one failed the
-    /// knee test on latency alone: one burst behind a scheduling hiccup
-    /// queues as a link does, so a rate fails on latency only twice in a
-    /// row, and this step decides.
-    pub retry: bool,
 }
 
 impl StepFigures {

@@ -2,42 +2,9 @@
 //! knee (the measured capacity), whether the link queues before it drops
 //! (bufferbloat), and how much the background load raised the RTT.
 
-use serde::Serialize;
-
-use super::step::{Phase, StepFigures, KNEE_MAX_LOSS};
-use crate::engine::load::LoadSummary;
-
-/// The highest rate the link carried cleanly: the step with the highest
-/// offered rate that passed the knee test.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Knee {
-    pub step: u32,
-    pub rate_hz: f64,
-    pub achieved_hz: f64,
-    /// Bytes per second on the wire, both ways and each way.
-    pub bytes_per_s: f64,
-    pub tx_bytes_per_s: f64,
-    pub rx_bytes_per_s: f64,
-    pub p99_us: f64,
-    pub loss_ratio: f64,
-    /// The lowest rate above it that failed; none when every rate tried
-    /// above passed or none was tried (then the capacity is higher still).
-    pub failed_above_hz: Option<f64>,
-}
-
-/// The latency a queue adds under load, on the scale bufferbloat tests
-/// grade it (Waveform's, DSLReports'): A+ under 5 ms, A under 30, B under
-/// 60, C under 200, D under 400, F beyond.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
-pub enum Grade {
-    #[serde(rename = "A+")]
-    APlus,
-    A,
-    B,
-    C,
-    D,
-    F,
-}
+use super::step::KNEE_MAX_LOSS;
+pub use crate::engine::sweep_report::{Grade, Knee, LoadEffect, Queueing, SweepEnd, SweepSummary};
+use crate::engine::sweep_report::{Phase, StepFigures};
 
 impl Grade {
     /// Upper bounds of each grade but F, in µs of added latency.
@@ -72,67 +39,6 @@ impl Grade {
     pub fn is_bufferbloat(self) -> bool {
         self >= Grade::C
     }
-}
-
-/// Whether the link queues before it drops: the highest p99 of a step
-/// that still lost under 1 %, against the first sweep step's.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Queueing {
-    /// The latency added under load graded C or worse (60 ms or more).
-    pub bufferbloat: bool,
-    /// `added_us` on the bufferbloat tests' scale.
-    pub grade: Grade,
-    pub reference_p99_us: f64,
-    pub worst_p99_us: f64,
-    pub worst_at_hz: f64,
-    /// `worst_p99_us - reference_p99_us`: the delay the queue added
-    /// before the link dropped anything.
-    pub added_us: f64,
-    /// The lowest rate at which a step lost 1 % or more, if any did.
-    pub lost_at_hz: Option<f64>,
-}
-
-/// The RTT with the `--load` streams on against without, at one rate.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct LoadEffect {
-    pub rate_hz: f64,
-    pub unloaded_p50_us: f64,
-    pub unloaded_p99_us: f64,
-    pub loaded_p50_us: f64,
-    pub loaded_p99_us: f64,
-    pub p99_rise_us: f64,
-    pub p99_ratio: f64,
-}
-
-/// Why the steps ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum SweepEnd {
-    /// Every step planned was run.
-    Planned,
-    /// A ramp step lost more than the limit; the steps after it refined
-    /// below it.
-    LossLimit,
-    /// Nothing answered a step: the sweep went no further.
-    NoReplies,
-    Interrupted,
-    Deadline,
-    LinkFailed,
-}
-
-/// A sweep's (or a `--load` run's) steps and what they say.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SweepSummary {
-    /// `sweep`, or `load` for `--load` without `--sweep`.
-    pub kind: &'static str,
-    pub steps: Vec<StepFigures>,
-    /// The first sweep step's p99, which the knee test compares against.
-    pub reference_p99_us: Option<f64>,
-    pub knee: Option<Knee>,
-    pub queueing: Option<Queueing>,
-    pub load: Vec<LoadSummary>,
-    pub load_effect: Option<LoadEffect>,
-    pub ending: SweepEnd,
 }
 
 /// The first sweep step's p99: the knee test's reference.
