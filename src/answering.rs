@@ -9,7 +9,7 @@ use crate::frame::{Frame, Msg, SysComp};
 const RESULT_ACCEPTED: u8 = 0;
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct ResponderCounts {
+pub(crate) struct ResponderCounts {
     pub ping_requests: u64,
     pub timesync_requests: u64,
     pub commands: u64,
@@ -19,13 +19,13 @@ pub struct ResponderCounts {
 }
 
 impl ResponderCounts {
-    pub fn requests(&self) -> u64 {
+    pub(crate) fn requests(&self) -> u64 {
         self.ping_requests + self.timesync_requests + self.commands
     }
 }
 
 #[derive(Debug, Clone)]
-pub struct ResponderCore {
+pub(crate) struct ResponderCore {
     pub id: SysComp,
     /// False to behave like ArduPilot: TIMESYNC only.
     pub answer_ping: bool,
@@ -35,7 +35,7 @@ pub struct ResponderCore {
 }
 
 impl ResponderCore {
-    pub fn new(id: SysComp) -> Self {
+    pub(crate) fn new(id: SysComp) -> Self {
         ResponderCore {
             id,
             answer_ping: true,
@@ -47,7 +47,7 @@ impl ResponderCore {
 
     /// The reply to `frame`, if it is a request this responder answers.
     /// `clock_ns` is the responder's own clock, for TIMESYNC.
-    pub fn answer(&mut self, frame: &Frame, clock_ns: i64) -> Option<Msg> {
+    pub(crate) fn answer(&mut self, frame: &Frame, clock_ns: i64) -> Option<Msg> {
         if frame.source == self.id {
             return None; // our own frame echoed back by a broadcast link
         }

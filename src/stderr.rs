@@ -6,11 +6,11 @@ use std::fmt::Display;
 use std::io::{self, Write};
 
 /// An error: `mavping: WHAT`.
-pub fn error(what: &dyn Display) {
+pub(crate) fn error(what: &dyn Display) {
     let _ = writeln!(io::stderr(), "mavping: {what}");
 }
 
 /// A warning: `mavping: warning: WHAT`.
-pub fn warning(what: &dyn Display) {
+pub(crate) fn warning(what: &dyn Display) {
     let _ = writeln!(io::stderr(), "mavping: warning: {what}");
 }

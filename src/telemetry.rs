@@ -17,9 +17,9 @@ use crate::frame::{self, Header, Msg, Version};
 
 /// Filler payload per frame: 117-byte frames in MAVLink 2, about a
 /// telemetry burst's size, so a byte rate is many frames, not a few.
-pub const FILLER_PAYLOAD: u8 = 100;
+pub(crate) const FILLER_PAYLOAD: u8 = 100;
 /// The highest rate a stream takes (frames/s, or bytes/s for filler).
-pub const MAX_LOAD_RATE: f64 = 1_000_000.0;
+pub(crate) const MAX_LOAD_RATE: f64 = 1_000_000.0;
 
 /// What a stream sends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -149,7 +149,7 @@ impl LoadSpec {
 }
 
 /// The highest rate a stream takes, in messages per second.
-pub const MAX_STREAM_RATE: f64 = 10_000.0;
+pub(crate) const MAX_STREAM_RATE: f64 = 10_000.0;
 
 /// What a stream sends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -262,7 +262,7 @@ impl fmt::Display for StreamSpec {
 }
 
 /// `ATTITUDE@50,GLOBAL_POSITION_INT@5`: a comma-separated list.
-pub fn parse_list(text: &str) -> Result<Vec<StreamSpec>, StreamSpecError> {
+pub(crate) fn parse_list(text: &str) -> Result<Vec<StreamSpec>, StreamSpecError> {
     let specs = text
         .split(',')
         .map(str::parse)
@@ -272,7 +272,7 @@ pub fn parse_list(text: &str) -> Result<Vec<StreamSpec>, StreamSpecError> {
 }
 
 /// Each message streamed once: two rates for one message mean nothing.
-pub fn check_distinct(specs: &[StreamSpec]) -> Result<(), StreamSpecError> {
+pub(crate) fn check_distinct(specs: &[StreamSpec]) -> Result<(), StreamSpecError> {
     for (i, s) in specs.iter().enumerate() {
         if specs[..i].iter().any(|t| t.kind == s.kind) {
             return Err(StreamSpecError::Twice(s.kind.name()));
@@ -282,7 +282,7 @@ pub fn check_distinct(specs: &[StreamSpec]) -> Result<(), StreamSpecError> {
 }
 
 /// The rate of HEARTBEAT among `specs`, if it is streamed.
-pub fn heartbeat_rate(specs: &[StreamSpec]) -> Option<f64> {
+pub(crate) fn heartbeat_rate(specs: &[StreamSpec]) -> Option<f64> {
     specs
         .iter()
         .find(|s| s.kind == StreamKind::Heartbeat)
@@ -293,7 +293,7 @@ pub fn heartbeat_rate(specs: &[StreamSpec]) -> Option<f64> {
 /// at `phase + n × period` (nanoseconds since the sender started), with
 /// `phase` a share of the period, so the rate is exact.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Schedule {
+pub(crate) struct Schedule {
     period_ns: f64,
     phase_ns: f64,
     issued: u64,
@@ -301,7 +301,7 @@ pub struct Schedule {
 
 impl Schedule {
     /// `rate` frames a second, the first `phase` (0 to 1) of a period in.
-    pub fn new(rate: f64, phase: f64) -> Self {
+    pub(crate) fn new(rate: f64, phase: f64) -> Self {
         let period_ns = 1e9 / rate;
         Schedule {
             period_ns,
@@ -311,12 +311,12 @@ impl Schedule {
     }
 
     /// When the next frame is due.
-    pub fn due_ns(&self) -> u64 {
+    pub(crate) fn due_ns(&self) -> u64 {
         (self.phase_ns + self.issued as f64 * self.period_ns).round() as u64
     }
 
     /// The next frame was sent: on to the one after.
-    pub fn advance(&mut self) {
+    pub(crate) fn advance(&mut self) {
         self.issued += 1;
     }
 }

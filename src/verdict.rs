@@ -287,7 +287,7 @@ fn judge_who(ids: &[SysComp], t: &Thresholds, who: Who, out: &mut Vec<Failure>) 
 }
 
 /// Judges a finished run. A link failure is exit 2 whatever else held.
-pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
+pub(crate) fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
     let mut failures = Vec::new();
     let answering: Vec<&ResponderSummary> = summary
         .responders
@@ -310,7 +310,7 @@ pub fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
 }
 
 /// Judges a command run: something must have been acknowledged.
-pub fn judge_command(summary: &CommandSummary) -> Verdict {
+pub(crate) fn judge_command(summary: &CommandSummary) -> Verdict {
     let mut failures = Vec::new();
     if !summary.any_ack() {
         failures.push(Failure {
@@ -325,7 +325,7 @@ pub fn judge_command(summary: &CommandSummary) -> Verdict {
 /// Judges a passive run: some source must have been heard, and
 /// `--max-loss`, `--expect` and `--min-responders` hold for the sources'
 /// sequence loss (the radio's own frames aside).
-pub fn judge_passive(summary: &PassiveSummary, t: &Thresholds) -> Verdict {
+pub(crate) fn judge_passive(summary: &PassiveSummary, t: &Thresholds) -> Verdict {
     let mut failures = Vec::new();
     let heard: Vec<_> = summary.heard().collect();
     if heard.is_empty() {
@@ -358,7 +358,7 @@ pub fn judge_passive(summary: &PassiveSummary, t: &Thresholds) -> Verdict {
 }
 
 /// Judges any link's run; thresholds apply to echo probes and passive runs.
-pub fn judge_link(summary: &LinkSummary, t: &Thresholds) -> Verdict {
+pub(crate) fn judge_link(summary: &LinkSummary, t: &Thresholds) -> Verdict {
     match summary {
         LinkSummary::Echo(s) => judge(s, t),
         LinkSummary::Command(s) => judge_command(s),

@@ -23,7 +23,7 @@ use crate::verdict::{Expected, Thresholds};
 
 /// More requests than this in flight at once would need an unreasonably
 /// large pending table: lower the rate or the timeout.
-pub const MAX_IN_FLIGHT: u64 = 1 << 21;
+pub(super) const MAX_IN_FLIGHT: u64 = 1 << 21;
 /// The longest interval between requests (the lowest rate).
 const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
 

@@ -11,7 +11,7 @@ use crate::engine::SessionConfig;
 
 /// The highest rate a sweep offers on a link without a baud rate, unless
 /// `--sweep-max` says otherwise.
-pub const DEFAULT_SWEEP_MAX_HZ: f64 = 1000.0;
+pub(super) const DEFAULT_SWEEP_MAX_HZ: f64 = 1000.0;
 /// The first step of a sweep when neither `--rate` nor `-i` is given.
 const DEFAULT_FIRST_HZ: f64 = 2.0;
 /// The rate of a `--load` run without `--sweep`, `--rate` or `-i`.

@@ -12,13 +12,13 @@ use crate::frame::Version;
 use crate::transport::LinkSpec;
 
 /// Start bit, 8 data bits, stop bit.
-pub const BITS_PER_BYTE: u64 = 10;
+pub(crate) const BITS_PER_BYTE: u64 = 10;
 /// PING's payload: time_usec u64, seq u32, target system and component.
 const PING_PAYLOAD: u64 = 14;
 const V1_OVERHEAD: u64 = 6 + 2;
 const V2_OVERHEAD: u64 = 10 + 2;
 /// A MAVLink 2 signature (link id, timestamp, signature).
-pub const SIGNATURE: u64 = 13;
+pub(crate) const SIGNATURE: u64 = 13;
 /// TIMESYNC's payload: tc1 and ts1 (i64 each); MAVLink 2 adds the
 /// target system and component as extensions.
 const TIMESYNC_PAYLOAD: u64 = 16;
@@ -26,7 +26,7 @@ const TIMESYNC_TARGETS: u64 = 2;
 
 /// The request and reply a probe's exchange is made of.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Exchange {
+pub(crate) enum Exchange {
     Ping,
     /// Our request names `target` (0/0: any).
     Timesync {
@@ -36,7 +36,7 @@ pub enum Exchange {
 
 impl Exchange {
     /// The message, as the text names it ("PINGs/s").
-    pub fn message(self) -> &'static str {
+    pub(crate) fn message(self) -> &'static str {
         match self {
             Exchange::Ping => "PING",
             Exchange::Timesync { .. } => "TIMESYNC",
@@ -45,7 +45,7 @@ impl Exchange {
 
     /// Bytes of a request (with sequence numbers up to `max_seq`) and of
     /// a reply, unsigned.
-    pub fn bytes(self, version: Version, max_seq: u32) -> (u64, u64) {
+    pub(crate) fn bytes(self, version: Version, max_seq: u32) -> (u64, u64) {
         match self {
             Exchange::Ping => (request_bytes(version, max_seq), reply_bytes(version, false)),
             Exchange::Timesync { target } => timesync_bytes(version, target),
@@ -78,7 +78,7 @@ fn timesync_bytes(version: Version, target: crate::frame::SysComp) -> (u64, u64)
 }
 
 /// Bytes of a PING reply: its targets are set, so nothing is trimmed.
-pub fn reply_bytes(version: Version, signed: bool) -> u64 {
+pub(crate) fn reply_bytes(version: Version, signed: bool) -> u64 {
     let base = match version {
         Version::V1 => V1_OVERHEAD + PING_PAYLOAD,
         Version::V2 => V2_OVERHEAD + PING_PAYLOAD,
@@ -89,7 +89,7 @@ pub fn reply_bytes(version: Version, signed: bool) -> u64 {
 /// Bytes of our PING request with sequence numbers up to `max_seq`.
 /// MAVLink 2 trims trailing zero bytes of the payload: the targets (0/0)
 /// and the seq's unused high bytes go. time_usec is never zero.
-pub fn request_bytes(version: Version, max_seq: u32) -> u64 {
+pub(crate) fn request_bytes(version: Version, max_seq: u32) -> u64 {
     match version {
         Version::V1 => V1_OVERHEAD + PING_PAYLOAD,
         Version::V2 => {
@@ -125,12 +125,13 @@ pub struct WireBudget {
     pub may_ignore_baud: bool,
 }
 
+#[cfg(test)]
 /// A PING exchange's budget.
-pub fn budget(baud: u32, version: Version, max_seq: u32, replies: u64) -> WireBudget {
+pub(crate) fn budget(baud: u32, version: Version, max_seq: u32, replies: u64) -> WireBudget {
     exchange_budget(Exchange::Ping, baud, version, max_seq, replies)
 }
 
-pub fn exchange_budget(
+pub(crate) fn exchange_budget(
     exchange: Exchange,
     baud: u32,
     version: Version,
@@ -159,7 +160,7 @@ fn sized(message: &'static str, baud: u32, request: u64, reply: u64, replies: u6
 
 /// The budget of `exchange` on a link that has a baud rate; None for the
 /// others.
-pub fn for_link(
+pub(crate) fn for_link(
     link: &LinkSpec,
     default_baud: u32,
     session: &SessionConfig,

@@ -34,13 +34,13 @@ use serde::Serialize;
 use super::Nanos;
 
 /// Lowest-RTT samples kept for the offset estimate.
-pub const BEST: usize = 8;
+pub(crate) const BEST: usize = 8;
 /// Samples up to twice the lowest RTT plus this much enter the drift fit:
 /// on loopback, RTTs of a few hundred µs vary by more than 2x without any
 /// meaningful queue.
 const FIT_SLACK_NS: Nanos = 1_000_000;
 /// Drift is reported once the fitted exchanges span this long.
-pub const MIN_DRIFT_SPAN_S: f64 = 10.0;
+pub(crate) const MIN_DRIFT_SPAN_S: f64 = 10.0;
 /// Points the drift fit needs, and the most it keeps: when full, pairs
 /// of neighbours merge and each point stands for twice the exchanges.
 const MIN_DRIFT_POINTS: usize = 10;
@@ -245,7 +245,7 @@ impl Default for Bounds {
 }
 
 #[derive(Debug, Clone, Default)]
-pub struct ClockOffset {
+pub(crate) struct ClockOffset {
     best: Vec<Sample>,
     /// First sample's offset: the regression runs on offsets relative to it,
     /// so f64 keeps ns precision even for clocks counting from 1970.
@@ -274,7 +274,7 @@ impl ClockOffset {
     /// with their clock `theirs`, and the reply arrived at `at`. `base` is
     /// what our clock read at time 0 (the value our timestamps count from),
     /// known to within `base_within` ns either way.
-    pub fn record(
+    pub(crate) fn record(
         &mut self,
         sent_at: Nanos,
         at: Nanos,
@@ -333,10 +333,6 @@ impl ClockOffset {
         }
     }
 
-    pub fn samples(&self) -> u64 {
-        self.seen
-    }
-
     /// Slope of offset against our time, ns of offset per ns of our time.
     fn slope(&self) -> f64 {
         if self.n < 2 || self.c_xx <= 0.0 {
@@ -346,7 +342,7 @@ impl ClockOffset {
         }
     }
 
-    pub fn summary(&self) -> Option<ClockSummary> {
+    pub(crate) fn summary(&self) -> Option<ClockSummary> {
         let min_rtt = self.best.iter().map(|s| s.rtt).min()?;
         let origin = self.origin.unwrap_or(0);
         let fitted = self.n >= 3 && self.c_xx > 0.0;

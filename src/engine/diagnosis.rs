@@ -17,10 +17,10 @@ use crate::transport::LinkKind;
 
 /// QGroundControl's and Mission Planner's ids, which MAVSDK ground
 /// stations drop on receipt (`MavsdkImpl::receive_message`).
-pub const QGC_IDS: SysComp = SysComp::new(255, 190);
+pub(crate) const QGC_IDS: SysComp = SysComp::new(255, 190);
 
 /// What a run saw, for its diagnosis.
-pub struct Observed<'a> {
+pub(crate) struct Observed<'a> {
     pub link: &'a str,
     pub kind: LinkKind,
     pub probe: ProbeName,
@@ -50,7 +50,7 @@ pub struct Observed<'a> {
 }
 
 /// Seconds as a person writes them: "2.5 s", "20 s".
-pub fn seconds(d: Duration) -> String {
+pub(crate) fn seconds(d: Duration) -> String {
     let s = format!("{:.3}", d.as_secs_f64());
     let s = s.trim_end_matches('0').trim_end_matches('.');
     format!("{s} s")
@@ -278,7 +278,7 @@ fn own_frames_echoed(o: &Observed<'_>) -> Option<Hint> {
 
 /// Why a command run's targets never acknowledged, from what the link
 /// heard: nothing at all or no MAVLink, or other systems than the target.
-pub fn command_hints(o: &Observed<'_>, unacknowledged: &[SysComp]) -> Vec<Hint> {
+pub(crate) fn command_hints(o: &Observed<'_>, unacknowledged: &[SysComp]) -> Vec<Hint> {
     let f = &o.frames;
     if unacknowledged.is_empty() || o.no_peer_within.is_some() || o.link_failed {
         return Vec::new();
@@ -323,7 +323,7 @@ pub fn command_hints(o: &Observed<'_>, unacknowledged: &[SysComp]) -> Vec<Hint> 
 }
 
 /// The hints that explain missing replies, most likely first.
-pub fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
+pub(crate) fn diagnose(o: &Observed<'_>) -> Vec<Hint> {
     let mut hints = signing(&o.signing);
     if let Some(waited) = o.no_peer_within {
         let mut hint = nothing_heard(o);

@@ -103,7 +103,7 @@ fn read_together() -> (Instant, WallAtZero) {
 
 /// A HEARTBEAT a second: routers and MAVSDK learn who is on the link from
 /// it. `None` due time means it is off (`--no-heartbeat`).
-pub struct Heartbeat {
+pub(crate) struct Heartbeat {
     msg: Msg,
     next: Option<Nanos>,
 }
@@ -112,7 +112,7 @@ const HEARTBEAT_PERIOD_NS: Nanos = 1_000_000_000;
 
 impl Heartbeat {
     /// We are a ground station (MAV_TYPE_GCS); the first is due at once.
-    pub fn ground_station(on: bool) -> Self {
+    pub(crate) fn ground_station(on: bool) -> Self {
         Heartbeat {
             msg: Msg::Heartbeat {
                 mav_type: frame::mav_type::GCS,
@@ -124,7 +124,7 @@ impl Heartbeat {
 
     /// A companion-computer-like system, not a vehicle (`mavping respond`):
     /// it answers probes but flies nothing.
-    pub fn onboard_controller() -> Self {
+    pub(crate) fn onboard_controller() -> Self {
         Heartbeat {
             msg: Msg::Heartbeat {
                 mav_type: frame::mav_type::ONBOARD_CONTROLLER,
@@ -135,17 +135,17 @@ impl Heartbeat {
     }
 
     /// When the next one is due.
-    pub fn next(&self) -> Option<Nanos> {
+    pub(crate) fn next(&self) -> Option<Nanos> {
         self.next
     }
 
-    pub fn msg(&self) -> &Msg {
+    pub(crate) fn msg(&self) -> &Msg {
         &self.msg
     }
 
     /// Sends the HEARTBEAT to every peer when it is due, and schedules the
     /// next one a period after the one due (no drift).
-    pub async fn send_if_due<T: Transport>(
+    pub(crate) async fn send_if_due<T: Transport>(
         &mut self,
         link: &mut T,
         sender: &mut Sender,
@@ -222,7 +222,7 @@ impl Sender {
 
 /// Whether the signing gate (if any) lets `frame` through; what it refuses
 /// reaches nothing else, and is counted by the gate.
-pub fn admitted(gate: &mut Gate, frame: &Frame, signature: Option<&SignedBytes>) -> bool {
+pub(crate) fn admitted(gate: &mut Gate, frame: &Frame, signature: Option<&SignedBytes>) -> bool {
     let radio = matches!(frame.msg, Msg::RadioStatus(_));
     let verdict = gate.judge(frame.source, signature, radio);
     if !verdict.accepted() {

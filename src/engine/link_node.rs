@@ -21,17 +21,17 @@ use crate::frame::SysComp;
 
 /// One LINK_NODE_STATUS as received: the frame's own struct, under the
 /// name the engine and the reports know it by.
-pub use crate::frame::LinkNodeStatus as LinkNodeReport;
+pub(crate) use crate::frame::LinkNodeStatus as LinkNodeReport;
 
 /// A spoofing flood cannot grow memory beyond this many nodes.
-pub const MAX_NODES: usize = 16;
+pub(crate) const MAX_NODES: usize = 16;
 /// The vehicle's figure and mavping's estimate disagree when they are
 /// more than this many (combined) standard errors apart.
-pub const DISAGREE_SIGMAS: f64 = 3.0;
+pub(crate) const DISAGREE_SIGMAS: f64 = 3.0;
 
 /// The widths of the since-boot counters: LINK_NODE_STATUS has 32-bit
 /// message counts and 16-bit error counts.
-pub trait Width: Copy + Ord + Into<u64> {
+pub(crate) trait Width: Copy + Ord + Into<u64> {
     /// A fall from at or above this is a wrap (the top sixteenth of the
     /// range); from below, the node counting again from 0.
     const WRAP_ZONE: Self;
@@ -58,7 +58,7 @@ impl Width for u32 {
 /// fell from well below the top) the node counts from 0 again, and the
 /// step is the new value. As `radio::SinceBootCounter`, for either width.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct SinceBoot<T> {
+pub(crate) struct SinceBoot<T> {
     last: Option<T>,
     grown: u64,
 }
@@ -66,7 +66,7 @@ pub struct SinceBoot<T> {
 impl<T: Width> SinceBoot<T> {
     /// The counter reads `v`; `rebooted`: the node restarted since the
     /// last reading, whatever the counter shows.
-    pub fn record(&mut self, v: T, rebooted: bool) {
+    pub(crate) fn record(&mut self, v: T, rebooted: bool) {
         if let Some(last) = self.last {
             let restarted = rebooted || (v < last && last < T::WRAP_ZONE);
             self.grown += if restarted {
@@ -78,14 +78,14 @@ impl<T: Width> SinceBoot<T> {
         self.last = Some(v);
     }
 
-    pub fn grown(&self) -> u64 {
+    pub(crate) fn grown(&self) -> u64 {
         self.grown
     }
 }
 
 /// Every counter of one node, followed across wraps and reboots.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct NodeCounters {
+pub(crate) struct NodeCounters {
     /// The boot clock of the last report (ms): a fall is a reboot.
     last_timestamp: Option<u64>,
     pub reboots: u64,
@@ -98,7 +98,7 @@ pub struct NodeCounters {
 }
 
 impl NodeCounters {
-    pub fn record(&mut self, r: &LinkNodeReport) {
+    pub(crate) fn record(&mut self, r: &LinkNodeReport) {
         let rebooted = self.last_timestamp.is_some_and(|t| r.timestamp < t);
         self.reboots += u64::from(rebooted);
         self.last_timestamp = Some(r.timestamp);
@@ -112,7 +112,7 @@ impl NodeCounters {
 
     /// Lost over what the node saw of the link (received + lost), once it
     /// saw anything.
-    pub fn loss(&self) -> Option<f64> {
+    pub(crate) fn loss(&self) -> Option<f64> {
         let seen = self.received.grown() + self.lost.grown();
         (seen > 0).then(|| self.lost.grown() as f64 / seen as f64)
     }

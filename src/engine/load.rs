@@ -21,7 +21,7 @@ use super::Nanos;
 use crate::frame::Version;
 // The `MSG@RATE` stream spec is telemetry's (it parses `sim:?stream=` and
 // `respond --stream` too); the load sends it.
-pub use crate::telemetry::{LoadKind, LoadSpec, LoadSpecError, FILLER_PAYLOAD, MAX_LOAD_RATE};
+pub(crate) use crate::telemetry::{LoadKind, LoadSpec};
 use crate::transport::{LinkError, Transport};
 
 /// Most frames one stream sends back to back before the session reads
@@ -61,12 +61,12 @@ impl Stream {
 }
 
 /// Every `--load` stream of a session, on or off.
-pub struct Load {
+pub(crate) struct Load {
     streams: Vec<Stream>,
 }
 
 impl Load {
-    pub fn new(specs: &[LoadSpec], version: Version, signed: bool) -> Self {
+    pub(crate) fn new(specs: &[LoadSpec], version: Version, signed: bool) -> Self {
         Load {
             streams: specs
                 .iter()
@@ -89,12 +89,12 @@ impl Load {
         }
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.streams.is_empty()
     }
 
     /// Starts every stream at `now` (no-op for those already on).
-    pub fn start(&mut self, now: Nanos) {
+    pub(crate) fn start(&mut self, now: Nanos) {
         for s in &mut self.streams {
             if s.start.is_none() {
                 s.start = Some(now);
@@ -103,19 +103,19 @@ impl Load {
         }
     }
 
-    pub fn stop(&mut self) {
+    pub(crate) fn stop(&mut self) {
         for s in &mut self.streams {
             s.start = None;
         }
     }
 
     /// When the next frame is due, if any stream is on.
-    pub fn next_due(&self) -> Option<Nanos> {
+    pub(crate) fn next_due(&self) -> Option<Nanos> {
         self.streams.iter().filter_map(Stream::next_due).min()
     }
 
     /// Sends every frame due now (at most a burst per stream).
-    pub async fn send_due<T: Transport>(
+    pub(crate) async fn send_due<T: Transport>(
         &mut self,
         link: &mut T,
         sender: &mut Sender,
@@ -140,7 +140,7 @@ impl Load {
         Ok(())
     }
 
-    pub fn summary(&self) -> Vec<LoadSummary> {
+    pub(crate) fn summary(&self) -> Vec<LoadSummary> {
         self.streams
             .iter()
             .map(|s| LoadSummary {

@@ -3,31 +3,31 @@
 //! what it tells the world ([`observe`]) and depends on nothing above it:
 //! not on the command line, the configuration, the reports or the verdict.
 
-pub mod capacity;
-pub mod clock_offset;
-pub mod diagnosis;
-pub mod hint;
-pub mod link_io;
-pub mod link_node;
-pub mod load;
+pub(crate) mod capacity;
+pub(crate) mod clock_offset;
+pub(crate) mod diagnosis;
+pub(crate) mod hint;
+pub(crate) mod link_io;
+pub(crate) mod link_node;
+pub(crate) mod load;
 pub mod matcher;
 pub mod observe;
 pub mod probe;
 pub mod radio;
-pub mod radio_kind;
-pub mod roster;
-pub mod schedule;
+pub(crate) mod radio_kind;
+pub(crate) mod roster;
+pub(crate) mod schedule;
 pub mod session;
 pub mod stats;
 pub mod summary;
-pub mod sweep;
-pub mod sweep_report;
+pub(crate) mod sweep;
+pub(crate) mod sweep_report;
 #[cfg(not(mavping_portable))]
-pub mod wait;
+pub(crate) mod wait;
 // The portable path's waits (build.rs): same interface, no Linux timers.
 #[cfg(mavping_portable)]
 #[path = "wait_portable.rs"]
-pub mod wait;
+pub(crate) mod wait;
 
 use std::time::Duration;
 

@@ -45,14 +45,14 @@ pub const COMP_TELEMETRY_RADIO: u8 = 68;
 /// MAV_COMP_ID_UDP_BRIDGE: mavesp8266's RADIO_STATUS.
 pub const COMP_UDP_BRIDGE: u8 = 240;
 /// ExpressLRS's receiver sends as 255/68 unless told otherwise.
-pub const ELRS_SYSID: u8 = 255;
+pub(crate) const ELRS_SYSID: u8 = 255;
 /// Reports per second at or above which a compid-68 radio is ExpressLRS
 /// (it sends 100 a second; SiK and mLRS one).
-pub const ELRS_MIN_RATE: f64 = 20.0;
+pub(crate) const ELRS_MIN_RATE: f64 = 20.0;
 /// Reports before a field's constancy counts as evidence.
-pub const MIN_REPORTS: u64 = 3;
+pub(crate) const MIN_REPORTS: u64 = 3;
 /// Reports before their rate does.
-pub const MIN_RATE_REPORTS: u64 = 5;
+pub(crate) const MIN_RATE_REPORTS: u64 = 5;
 const MAV_TYPE_GENERIC: u8 = 0;
 
 /// `--radio-type`: how radios are read. `Auto` tells them apart by what
@@ -156,7 +156,7 @@ fn sik(v: u8) -> Option<f64> {
 
 /// mLRS's `rssi_i8_to_ap`: (dBm + 120) × 254 / 70 rounded, so whole dBm
 /// come back exactly by rounding (0 is −120 dBm or less, 254 −50 or more).
-pub fn mlrs_dbm(v: u8) -> Option<f64> {
+pub(crate) fn mlrs_dbm(v: u8) -> Option<f64> {
     (v != UNKNOWN).then(|| (f64::from(v) * 70.0 / 254.0).round() - 120.0)
 }
 
@@ -168,7 +168,7 @@ fn mlrs_snr(v: u8) -> Option<f64> {
 /// ExpressLRS's rssi: `(uint8_t)(LQ * 2.55)`, the product in double (so
 /// 100 % is sent as 254, 60 % as 153). Its whole percent comes back exactly
 /// as the one that encodes to `v`; a byte no LQ gives, as `v / 2.55`.
-pub fn elrs_lq(v: u8) -> Option<f64> {
+pub(crate) fn elrs_lq(v: u8) -> Option<f64> {
     if v == UNKNOWN {
         return None;
     }

@@ -10,7 +10,7 @@ use serde::Serialize;
 use super::Nanos;
 use crate::frame::{self, SysComp, Version};
 
-pub use crate::frame::AUTOPILOT_ARDUPILOT;
+pub(crate) use crate::frame::AUTOPILOT_ARDUPILOT;
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Identity {

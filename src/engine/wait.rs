@@ -45,7 +45,7 @@ fn monotonic(clock: &Clock, at: Nanos) -> io::Result<TimeSpec> {
 /// Blocks the thread until session time `at`, or a signal. Only for
 /// real-time sessions, and only briefly: nothing else on the thread runs
 /// meanwhile.
-pub fn block_until(clock: &Clock, at: Nanos) {
+pub(crate) fn block_until(clock: &Clock, at: Nanos) {
     if let Ok(deadline) = monotonic(clock, at) {
         // EINTR (a signal) ends the sleep early; the caller looks again.
         let _ = clock_nanosleep(
@@ -58,7 +58,7 @@ pub fn block_until(clock: &Clock, at: Nanos) {
 
 /// Lets the OS wake us within a few µs of a requested time instead of the
 /// default 50 µs slack (Linux); harmless where it is not supported.
-pub fn tighten_timer_slack() {
+pub(crate) fn tighten_timer_slack() {
     #[cfg(target_os = "linux")]
     let _ = nix::sys::prctl::set_timerslack(1_000);
 }
@@ -74,7 +74,7 @@ impl AsRawFd for Timer {
 
 /// Waits for a session time in a `select!`: precisely on a timerfd, or on
 /// tokio's timer where the clock is virtual or no timerfd can be had.
-pub struct Waiter(How);
+pub(crate) struct Waiter(How);
 
 enum How {
     Tokio,
@@ -88,7 +88,7 @@ enum How {
 
 impl Waiter {
     /// A precise waiter when `precise` and the system has timerfd.
-    pub fn new(precise: bool) -> Self {
+    pub(crate) fn new(precise: bool) -> Self {
         if !precise {
             return Waiter(How::Tokio);
         }
@@ -114,7 +114,7 @@ impl Waiter {
     /// Waits until session time `wake`, or forever when there is none.
     /// Cancel-safe: dropped before it fires, the timer stays set, and
     /// waiting again for the same time costs nothing more.
-    pub async fn until(&mut self, clock: &Clock, wake: Option<Nanos>) {
+    pub(crate) async fn until(&mut self, clock: &Clock, wake: Option<Nanos>) {
         let Some(at) = wake else {
             return std::future::pending().await;
         };

@@ -25,7 +25,7 @@ pub struct Header {
 
 /// V2_EXTENSION's message types from 32768 up are for local experiments
 /// and never registered: a system that meets one ignores the message.
-pub const FILLER_MESSAGE_TYPE: u16 = 0xFFFF;
+pub(crate) const FILLER_MESSAGE_TYPE: u16 = 0xFFFF;
 /// Non-zero, so MAVLink 2 trims none of the filler.
 const FILLER_BYTE: u8 = 0x55;
 
@@ -436,7 +436,7 @@ pub(crate) fn enum_name<E: FromPrimitive + std::fmt::Debug>(value: u32, prefix: 
 }
 
 /// MAV_CMD id for a name like "MAV_CMD_REQUEST_MESSAGE" or "request_message".
-pub fn command_id_from_name(name: &str) -> Option<u16> {
+pub(crate) fn command_id_from_name(name: &str) -> Option<u16> {
     let upper = name.to_ascii_uppercase();
     let full = if upper.starts_with("MAV_CMD_") {
         upper
@@ -448,17 +448,17 @@ pub fn command_id_from_name(name: &str) -> Option<u16> {
 }
 
 /// Name of a MAV_CMD id ("request_message"), or the number when unknown.
-pub fn command_name(id: u16) -> String {
+pub(crate) fn command_name(id: u16) -> String {
     enum_name::<dialect::MavCmd>(u32::from(id), "MAV_CMD_")
 }
 
 /// Name of a message id ("ATTITUDE"), if the dialect knows it.
-pub fn message_name(id: u32) -> Option<&'static str> {
+pub(crate) fn message_name(id: u32) -> Option<&'static str> {
     dialect::MavMessage::default_message_from_id(id).map(|m| m.message_name())
 }
 
 /// Name of a MAV_RESULT value ("accepted").
-pub fn result_name(value: u8) -> String {
+pub(crate) fn result_name(value: u8) -> String {
     enum_name::<dialect::MavResult>(u32::from(value), "MAV_RESULT_")
 }
 

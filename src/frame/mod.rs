@@ -4,9 +4,9 @@
 //! engine a [`Frame`] with the few messages a latency tool cares about
 //! decoded into [`Msg`], and everything else reduced to its id.
 
-pub mod codec;
+pub(crate) mod codec;
 pub mod scanner;
-pub mod signing;
+pub(crate) mod signing;
 
 pub use codec::{decode, decode_as, encode, Header, Version};
 pub use scanner::{scan_datagram, scan_datagram_all, Kind, ScanStats, StreamScanner};
@@ -196,26 +196,26 @@ pub fn test_frame(source: SysComp, msg: Msg) -> Frame {
 }
 
 /// MAVLink message ids mavping names.
-pub mod ids {
-    pub const HEARTBEAT: u32 = 0;
-    pub const LINK_NODE_STATUS: u32 = 8;
-    pub const GPS_RAW_INT: u32 = 24;
-    pub const GLOBAL_POSITION_INT: u32 = 33;
-    pub const PING: u32 = 4;
-    pub const COMMAND_LONG: u32 = 76;
-    pub const COMMAND_ACK: u32 = 77;
-    pub const RADIO_STATUS: u32 = 109;
+pub(crate) mod ids {
+    pub(crate) const HEARTBEAT: u32 = 0;
+    pub(crate) const LINK_NODE_STATUS: u32 = 8;
+    pub(crate) const GPS_RAW_INT: u32 = 24;
+    pub(crate) const GLOBAL_POSITION_INT: u32 = 33;
+    pub(crate) const PING: u32 = 4;
+    pub(crate) const COMMAND_LONG: u32 = 76;
+    pub(crate) const COMMAND_ACK: u32 = 77;
+    pub(crate) const RADIO_STATUS: u32 = 109;
     /// RADIO_STATUS's forerunner (ardupilotmega), the same fields: SiK
     /// before 2016 and openLRSng send it.
-    pub const RADIO: u32 = 166;
-    pub const TIMESYNC: u32 = 111;
-    pub const HOME_POSITION: u32 = 242;
+    pub(crate) const RADIO: u32 = 166;
+    pub(crate) const TIMESYNC: u32 = 111;
+    pub(crate) const HOME_POSITION: u32 = 242;
 }
 
 /// MAV_TYPE values mavping treats specially.
-pub mod mav_type {
-    pub const GCS: u8 = 6;
-    pub const ONBOARD_CONTROLLER: u8 = 18;
+pub(crate) mod mav_type {
+    pub(crate) const GCS: u8 = 6;
+    pub(crate) const ONBOARD_CONTROLLER: u8 = 18;
 }
 
 /// MAV_AUTOPILOT_INVALID: what a GCS puts in its HEARTBEAT.

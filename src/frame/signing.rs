@@ -22,16 +22,16 @@ use super::scanner::{IFLAG_SIGNED, STX_V2};
 use super::SysComp;
 
 /// Link id, timestamp and the 6-byte signature.
-pub const SIGNATURE_LEN: usize = 13;
+pub(crate) const SIGNATURE_LEN: usize = 13;
 const TAG_LEN: usize = 6;
 const V2_HEADER: usize = 10;
 /// Seconds from the Unix epoch to 2015-01-01 00:00:00 UTC.
-pub const EPOCH_2015_UNIX_S: u64 = 1_420_070_400;
+pub(crate) const EPOCH_2015_UNIX_S: u64 = 1_420_070_400;
 /// pymavlink's rule for a stream seen for the first time: its timestamp may
 /// be at most one minute behind the newest timestamp accepted so far.
 const NEW_STREAM_WINDOW: u64 = 60 * 100_000;
 /// Streams (sysid, compid, link id) whose last timestamp is remembered.
-pub const MAX_STREAMS: usize = 1024;
+pub(crate) const MAX_STREAMS: usize = 1024;
 
 /// The 32-byte signing secret. Its `Debug` never shows the key.
 #[derive(Clone, Copy, PartialEq, Eq)]
@@ -85,13 +85,13 @@ impl SecretKey {
 
 /// A signing timestamp (10 µs units since 2015-01-01) for a wall-clock
 /// time given as the time since the Unix epoch.
-pub fn timestamp_at(since_unix_epoch: Duration) -> u64 {
+pub(crate) fn timestamp_at(since_unix_epoch: Duration) -> u64 {
     let since_2015 = since_unix_epoch.saturating_sub(Duration::from_secs(EPOCH_2015_UNIX_S));
     (since_2015.as_micros() / 10) as u64 & 0xFFFF_FFFF_FFFF
 }
 
 /// The wall clock's signing timestamp now.
-pub fn timestamp_now() -> u64 {
+pub(crate) fn timestamp_now() -> u64 {
     timestamp_at(
         std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)

@@ -17,14 +17,14 @@ use crate::config::WebConfig;
 const CACHE: usize = 256;
 
 #[derive(Default)]
-pub struct Checker {
+pub(crate) struct Checker {
     known: RefCell<HashMap<[u8; 32], bool>>,
 }
 
 impl Checker {
     /// True when `web` asks for no users, or the request's `Authorization:
     /// Basic` names one with the right password.
-    pub async fn allows(&self, web: &WebConfig, headers: &HeaderMap) -> bool {
+    pub(crate) async fn allows(&self, web: &WebConfig, headers: &HeaderMap) -> bool {
         if web.users.is_empty() {
             return true;
         }
@@ -59,11 +59,6 @@ impl Checker {
         }
         known.insert(key, ok);
         ok && known_user
-    }
-
-    /// A reload may change the users: forget every answer.
-    pub fn forget(&self) {
-        self.known.borrow_mut().clear();
     }
 }
 

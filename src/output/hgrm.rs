@@ -19,7 +19,7 @@ fn sub_bucket_count(sigfig: u8) -> u64 {
     (2 * 10u64.pow(u32::from(sigfig))).next_power_of_two()
 }
 
-pub fn write_section(
+pub(crate) fn write_section(
     out: &mut impl Write,
     link: &str,
     responder: SysComp,

@@ -1,17 +1,17 @@
 //! Reports: each output format follows a session as an engine
 //! [`Observer`] and renders the judged summary at the end ([`Reporter`]).
 
-pub mod basic_auth;
-pub mod hgrm;
+pub(crate) mod basic_auth;
+pub(crate) mod hgrm;
 pub mod http;
-pub mod json;
-pub mod live;
-pub mod plot;
+pub(crate) mod json;
+pub(crate) mod live;
+pub(crate) mod plot;
 pub mod prometheus;
-pub mod samples;
-pub mod text;
-pub mod textfile;
-pub mod windows;
+pub(crate) mod samples;
+pub(crate) mod text;
+pub(crate) mod textfile;
+pub(crate) mod windows;
 
 use std::io;
 use std::time::{Duration, SystemTime};

@@ -17,7 +17,8 @@ use crate::verdict::Verdict;
 /// The radio columns come last, so readers of the first six keep working.
 /// They hold the latest RADIO_STATUS (any radio) when the row was written,
 /// so loss can be plotted against RSSI; empty before one or when unknown.
-pub const HEADER: &str = "sysid,compid,seq,sent_s,rtt_us,status,rssi,remrssi,txbuf,noise,remnoise";
+pub(crate) const HEADER: &str =
+    "sysid,compid,seq,sent_s,rtt_us,status,rssi,remrssi,txbuf,noise,remnoise";
 
 /// A passive run's rows: per source and window (from the previous row's
 /// time, or the start, to `t_s`, session seconds), what its sequence said
@@ -25,14 +26,14 @@ pub const HEADER: &str = "sysid,compid,seq,sent_s,rtt_us,status,rssi,remrssi,txb
 /// in a window whose late frames filled more of earlier windows' gaps than
 /// it skipped (they count as reordered). The radio (51/68) has rows too,
 /// as it is outside the summary's totals.
-pub const PASSIVE_HEADER: &str =
+pub(crate) const PASSIVE_HEADER: &str =
     "t_s,window_s,sysid,compid,received,lost,duplicate,reordered,bytes,frames_per_s";
 
 /// With several links, one file holds them all and each row ends with its
 /// link's connection string.
-pub const LINK_COLUMN: &str = ",link";
+pub(crate) const LINK_COLUMN: &str = ",link";
 
-pub struct SampleLog<W: Write> {
+pub(crate) struct SampleLog<W: Write> {
     out: W,
     radio: Option<RadioReport>,
     /// `,LINK` (CSV-quoted when needed) after each row, with several links.
@@ -43,7 +44,7 @@ pub struct SampleLog<W: Write> {
 }
 
 impl<W: Write> SampleLog<W> {
-    pub fn new(out: W) -> Self {
+    pub(crate) fn new(out: W) -> Self {
         SampleLog {
             out,
             radio: None,
@@ -55,7 +56,7 @@ impl<W: Write> SampleLog<W> {
 
     /// Rows end with a `link` column; only the first link's log writes
     /// the header (`header`), as they share one file.
-    pub fn for_link(mut self, link: &str, header: bool) -> Self {
+    pub(crate) fn for_link(mut self, link: &str, header: bool) -> Self {
         self.link = Some(format!(",{}", csv_field(link)));
         self.header = header;
         self

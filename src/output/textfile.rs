@@ -11,14 +11,14 @@ use std::path::{Path, PathBuf};
 
 /// The temporary file, created when the run starts (so an unwritable
 /// directory fails before anything is sent) and renamed at its end.
-pub struct Textfile {
+pub(crate) struct Textfile {
     path: PathBuf,
     temp: PathBuf,
     file: Option<File>,
 }
 
 impl Textfile {
-    pub fn create(path: &Path) -> io::Result<Self> {
+    pub(crate) fn create(path: &Path) -> io::Result<Self> {
         let dir = match path.parent() {
             Some(d) if !d.as_os_str().is_empty() => d,
             _ => Path::new("."),
@@ -39,12 +39,12 @@ impl Textfile {
         })
     }
 
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 
     /// Writes `text` and puts it in place at once.
-    pub fn commit(mut self, text: &str) -> io::Result<()> {
+    pub(crate) fn commit(mut self, text: &str) -> io::Result<()> {
         let mut file = self.file.take().expect("committed once");
         file.write_all(text.as_bytes())?;
         file.sync_all()?;

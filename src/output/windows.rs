@@ -13,7 +13,7 @@ use crate::frame::SysComp;
 
 /// What one source did between two tellings of the table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Window {
+pub(crate) struct Window {
     pub source: SysComp,
     /// The SiK radio's own RADIO_STATUS source.
     pub radio: bool,
@@ -33,21 +33,22 @@ pub struct Window {
 
 impl Window {
     /// Frames a second over the window; `None` for an empty window.
-    pub fn frames_per_s(&self) -> Option<f64> {
+    pub(crate) fn frames_per_s(&self) -> Option<f64> {
         let ns = self.end.saturating_sub(self.start);
         (ns > 0).then(|| self.received as f64 * 1e9 / ns as f64)
     }
 
+    #[cfg(test)]
     /// `100 * lost / (lost + distinct frames)` over the window, never below
     /// 0; `None` with nothing to compare.
-    pub fn loss_pct(&self) -> Option<f64> {
+    pub(crate) fn loss_pct(&self) -> Option<f64> {
         let lost = self.lost.max(0) as f64;
         let whole = lost + self.received.saturating_sub(self.duplicate) as f64;
         (whole > 0.0).then(|| 100.0 * lost / whole)
     }
 
     /// Nothing happened in it.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.received == 0 && self.lost == 0 && self.reordered == 0 && self.bytes == 0
     }
 }
@@ -62,7 +63,7 @@ struct Seen {
 /// Turns successive tables into windows. Bounded as the table is (its
 /// tracked sources and the radio).
 #[derive(Debug, Clone, Default)]
-pub struct Windows {
+pub(crate) struct Windows {
     last_at: Nanos,
     last: BTreeMap<SysComp, Seen>,
 }
@@ -70,7 +71,7 @@ pub struct Windows {
 impl Windows {
     /// The window ending at `at` of every source in `table` (sources first
     /// heard in it start from nothing), in the table's order.
-    pub fn next(&mut self, at: Nanos, table: &TableSummary) -> Vec<Window> {
+    pub(crate) fn next(&mut self, at: Nanos, table: &TableSummary) -> Vec<Window> {
         let start = self.last_at.min(at);
         let windows = table
             .sources

@@ -58,7 +58,7 @@ pub struct ResponderSettings {
 
 /// What one `--stream` sent.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct StreamCount {
+pub(crate) struct StreamCount {
     pub message: &'static str,
     /// Frames written to the link.
     pub sent: u64,
@@ -68,7 +68,7 @@ pub struct StreamCount {
 
 /// Ground truth printed on exit, to hold a pinger's figures against.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
-pub struct RespondCounts {
+pub(crate) struct RespondCounts {
     pub requests: ResponderCounts,
     pub replies_sent: u64,
     pub dropped: u64,
@@ -301,7 +301,7 @@ impl Responder {
 
 /// Answers until `stop` (Ctrl-C, SIGTERM) or a link failure; returns the
 /// counts either way.
-pub async fn run<T: Transport>(
+pub(crate) async fn run<T: Transport>(
     settings: &ResponderSettings,
     link: &mut T,
     stop: &Notify,
@@ -393,7 +393,7 @@ pub async fn run<T: Transport>(
 }
 
 /// Who we are, for the first line.
-pub fn describe(settings: &ResponderSettings, link_name: &str) -> String {
+pub(crate) fn describe(settings: &ResponderSettings, link_name: &str) -> String {
     let SysComp { sysid, compid } = settings.id;
     let what = if settings.answer_ping {
         "PING, TIMESYNC and COMMAND_LONG"

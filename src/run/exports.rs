@@ -23,7 +23,7 @@ use crate::output::{Reporter, Shared};
 use crate::stderr;
 use crate::transport::recording::{Recording, Tap};
 
-pub struct Exports {
+pub(super) struct Exports {
     samples: Option<Shared<BufWriter<File>>>,
     plot: Option<(Plot, BufWriter<File>, PathBuf)>,
     prometheus: Option<PrometheusExporter>,
@@ -38,7 +38,7 @@ pub struct Exports {
 /// An export that could not be opened or written, and which file or
 /// address it was.
 #[derive(Debug, Error)]
-pub enum ExportError {
+pub(super) enum ExportError {
     /// `what` is the option (`--samples`, `--plot`, `--hgrm`).
     #[error("cannot write {what} {}: {source}", path.display())]
     Create {
@@ -73,7 +73,7 @@ fn create(path: &Path, what: &'static str) -> Result<BufWriter<File>, ExportErro
 
 impl Exports {
     /// Opens every export the configuration asks for, in a fixed order.
-    pub fn open(config: &Config) -> Result<Self, ExportError> {
+    pub(super) fn open(config: &Config) -> Result<Self, ExportError> {
         let out = &config.output;
         let samples = out
             .samples
@@ -137,7 +137,7 @@ impl Exports {
     }
 
     /// The reporters of the `index`-th link, named `name`.
-    pub fn reporters(&self, index: usize, name: &str) -> Vec<Box<dyn Reporter>> {
+    pub(super) fn reporters(&self, index: usize, name: &str) -> Vec<Box<dyn Reporter>> {
         let mut reporters: Vec<Box<dyn Reporter>> = Vec::new();
         if let Some(file) = &self.samples {
             let log = SampleLog::new(file.clone());
@@ -160,13 +160,13 @@ impl Exports {
     }
 
     /// What the `index`-th link records through (`--tlog`).
-    pub fn tap(&self, index: usize) -> Option<Tap> {
+    pub(super) fn tap(&self, index: usize) -> Option<Tap> {
         self.tlog.as_ref().map(|r| r.tap(index))
     }
 
     /// A link that could not be opened, given the `index` after every
     /// opened one's: the exporter shows it down.
-    pub fn unopened(&self, index: usize, name: &str) {
+    pub(super) fn unopened(&self, index: usize, name: &str) {
         for p in self
             .prometheus
             .iter()
@@ -180,7 +180,7 @@ impl Exports {
     /// link; an error says which file could not be written. A recording
     /// that failed does not keep the plot and histograms from being
     /// written: its error is told after theirs.
-    pub fn finish<'a>(
+    pub(super) fn finish<'a>(
         self,
         outcomes: impl IntoIterator<Item = &'a Measurement>,
     ) -> Result<(), ExportError> {

@@ -13,9 +13,9 @@ use roff::{bold, italic, roman, Roff};
 use crate::cli::{self, Generate};
 
 /// The environment variable the completion scripts set.
-pub const COMPLETE_VAR: &str = "COMPLETE";
+pub(crate) const COMPLETE_VAR: &str = "COMPLETE";
 
-pub fn generate(kind: Generate, out: &mut dyn Write) -> io::Result<()> {
+pub(crate) fn generate(kind: Generate, out: &mut dyn Write) -> io::Result<()> {
     let shell: &dyn EnvCompleter = match kind {
         Generate::CompleteBash => &Bash,
         Generate::CompleteZsh => &Zsh,

@@ -302,7 +302,7 @@ fn judge(
 }
 
 /// Runs every link of `config` side by side; how it ended.
-pub async fn run(config: &Config, controls: Controls) -> Ending {
+pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
     let exports = match Exports::open(config) {
         Ok(exports) => exports,
         Err(e) => {

@@ -4,7 +4,7 @@
 //! [`Ending`] into the exit code.
 
 mod exports;
-pub mod generate;
+pub(crate) mod generate;
 mod measure;
 mod one_link;
 mod respond;

@@ -32,7 +32,7 @@ async fn echo_or_steps<P: EchoProbe>(
 }
 
 /// Runs `probe` on the opened `link` until the session ends; its outcome.
-pub async fn measure(
+pub(super) async fn measure(
     config: &LinkConfig,
     link: Link,
     probe: &Probe,
@@ -45,7 +45,7 @@ pub async fn measure(
 
 /// [`measure`], recording what the link receives and sends through `tap`
 /// (`--tlog`) when there is one.
-pub async fn measure_recorded(
+pub(super) async fn measure_recorded(
     config: &LinkConfig,
     link: Link,
     tap: Option<Tap>,

@@ -9,7 +9,7 @@ use crate::stderr;
 use crate::transport::Link;
 use std::io::{self, Write};
 
-pub async fn run(config: &RespondConfig, controls: Controls) -> Ending {
+pub(super) async fn run(config: &RespondConfig, controls: Controls) -> Ending {
     let mut link = match Link::open(&config.link, &config.link_options).await {
         Ok(link) => link,
         Err(e) => {

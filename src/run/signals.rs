@@ -16,7 +16,7 @@ use crate::engine::session::Controls;
 /// SIGTERM. Raced against the run, so the run is dropped (and the terminal
 /// given back) when it wins.
 #[cfg(unix)]
-pub async fn watch(controls: Controls) {
+pub(super) async fn watch(controls: Controls) {
     let (Ok(mut int), Ok(mut term)) = (
         signal(SignalKind::interrupt()),
         signal(SignalKind::terminate()),
@@ -73,13 +73,13 @@ pub async fn watch(controls: Controls) {
 
 /// Each SIGHUP, as it comes (none where the system has no such signal,
 /// or its handler could not be set).
-pub struct Hangups {
+pub(super) struct Hangups {
     #[cfg(unix)]
     signal: Option<tokio::signal::unix::Signal>,
 }
 
 impl Hangups {
-    pub fn new() -> Self {
+    pub(super) fn new() -> Self {
         Hangups {
             #[cfg(unix)]
             signal: tokio::signal::unix::signal(tokio::signal::unix::SignalKind::hangup()).ok(),
@@ -87,7 +87,7 @@ impl Hangups {
     }
 
     /// Resolves at the next SIGHUP.
-    pub async fn next(&mut self) {
+    pub(super) async fn next(&mut self) {
         #[cfg(unix)]
         if let Some(s) = self.signal.as_mut() {
             if s.recv().await.is_some() {

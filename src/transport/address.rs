@@ -101,7 +101,7 @@ impl fmt::Display for LinkSpec {
 }
 
 /// Accepted forms, listed in every parse error.
-pub const ACCEPTED_FORMS: &str = "udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, \
+pub(crate) const ACCEPTED_FORMS: &str = "udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, \
 udpbcast:ADDR:PORT, tcp:HOST:PORT, tcpout:HOST:PORT, tcpin:HOST:PORT, serial:DEVICE[:BAUD], \
 /dev/DEVICE, COMn[:BAUD], sim:[?key=value&...], tlog:FILE or FILE.tlog (a telemetry log; tlog:- reads standard \
 input) (IPv6 hosts in brackets: udpout:[::1]:14550)";

@@ -11,7 +11,12 @@ use super::address::HostPort;
 
 /// `e`, from binding a listening socket of `scheme` (`udp`, `tcpin`) to
 /// `local`, with advice where the cause is a mistaken form.
-pub fn listening(scheme: &str, addr: &HostPort, local: SocketAddr, e: io::Error) -> io::Error {
+pub(super) fn listening(
+    scheme: &str,
+    addr: &HostPort,
+    local: SocketAddr,
+    e: io::Error,
+) -> io::Error {
     let (send, bare) = if scheme == "udp" {
         ("udpout", " (and a bare HOST:PORT)")
     } else {
@@ -36,7 +41,7 @@ pub fn listening(scheme: &str, addr: &HostPort, local: SocketAddr, e: io::Error)
 /// Why `target` is not a broadcast address this machine can send to, if it
 /// is not: the limited broadcast 255.255.255.255, or the broadcast address
 /// of one of this machine's IPv4 networks.
-pub fn not_broadcast(target: Ipv4Addr) -> Option<String> {
+pub(super) fn not_broadcast(target: Ipv4Addr) -> Option<String> {
     if target == Ipv4Addr::BROADCAST {
         return None;
     }

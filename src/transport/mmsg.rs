@@ -27,15 +27,15 @@ use super::rx_time::WallNs;
 
 /// What the calls below take a socket as (the portable path's
 /// `single.rs` takes the socket itself).
-pub type Fd<'a> = RawFd;
+pub(super) type Fd<'a> = RawFd;
 /// A datagram's address as the calls below carry it.
-pub type Addr = SockaddrStorage;
+pub(super) type Addr = SockaddrStorage;
 
-pub fn fd(socket: &UdpSocket) -> Fd<'_> {
+pub(super) fn fd(socket: &UdpSocket) -> Fd<'_> {
     socket.as_raw_fd()
 }
 
-pub fn socket_addr(addr: &Addr) -> Option<SocketAddr> {
+pub(super) fn socket_addr(addr: &Addr) -> Option<SocketAddr> {
     if let Some(v4) = addr.as_sockaddr_in() {
         Some(SocketAddr::from((v4.ip(), v4.port())))
     } else {
@@ -46,7 +46,7 @@ pub fn socket_addr(addr: &Addr) -> Option<SocketAddr> {
 
 /// Asks the kernel to stamp each datagram as it reaches the socket
 /// (SO_TIMESTAMPNS): whether it will.
-pub fn kernel_stamps(socket: &UdpSocket) -> bool {
+pub(super) fn kernel_stamps(socket: &UdpSocket) -> bool {
     nixsock::setsockopt(socket, nixsock::sockopt::ReceiveTimestampns, &true).is_ok()
 }
 
@@ -54,20 +54,20 @@ pub fn kernel_stamps(socket: &UdpSocket) -> bool {
 /// or what a NIC coalesces) come up as one message (UDP_GRO), cut apart
 /// again by the reader: one read for a whole burst. They share one
 /// receive timestamp, as they arrived together.
-pub fn join_arrivals(socket: &UdpSocket) {
+pub(super) fn join_arrivals(socket: &UdpSocket) {
     let _ = nixsock::setsockopt(socket, nixsock::sockopt::UdpGroSegment, &true);
 }
 
 /// Linux names an ICMP "port unreachable" ECONNREFUSED already (the
 /// portable path's has Windows' name to translate).
-pub fn as_refused(e: std::io::Error) -> std::io::Error {
+pub(super) fn as_refused(e: std::io::Error) -> std::io::Error {
     e
 }
 
 /// Messages per `recvmmsg`.
-pub const RECV_BATCH: usize = 16;
+pub(super) const RECV_BATCH: usize = 16;
 /// Datagrams per `sendmmsg`.
-pub const SEND_BATCH: usize = 32;
+pub(super) const SEND_BATCH: usize = 32;
 /// Segments in one GSO send: Linux took 64 at most until 6.x.
 const MAX_SEGMENTS: usize = 64;
 /// Bytes in one GSO send (a UDP datagram's payload limit, with room for
@@ -80,7 +80,7 @@ const SLOT: usize = 65_536;
 
 /// One message read.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Received {
+pub(super) struct Received {
     pub len: usize,
     pub from: Option<SockaddrStorage>,
     /// When the kernel queued it (SO_TIMESTAMPNS), on the wall clock.
@@ -91,14 +91,14 @@ pub struct Received {
 }
 
 /// Buffers for `recvmmsg`, reused for every read.
-pub struct RecvBatch {
+pub(super) struct RecvBatch {
     slab: Box<[u8]>,
     /// What the last read returned, one entry per slot.
     received: Box<[Received]>,
 }
 
 impl RecvBatch {
-    pub fn new() -> Self {
+    pub(super) fn new() -> Self {
         RecvBatch {
             slab: vec![0; SLOT * RECV_BATCH].into_boxed_slice(),
             received: vec![Received::default(); RECV_BATCH].into_boxed_slice(),
@@ -107,7 +107,7 @@ impl RecvBatch {
 
     /// Reads what is waiting, up to [`RECV_BATCH`] messages, with one
     /// non-blocking system call: how many (`WouldBlock` when none).
-    pub fn recv(&mut self, fd: RawFd) -> io::Result<usize> {
+    pub(super) fn recv(&mut self, fd: RawFd) -> io::Result<usize> {
         let RecvBatch { slab, received } = self;
         // New headers for every call: the kernel shrinks each header's
         // control length to what it wrote, and nix does not restore it, so
@@ -158,7 +158,7 @@ impl RecvBatch {
     }
 
     /// The `i`-th message of the last read, and what it was.
-    pub fn message(&self, i: usize) -> (&[u8], &Received) {
+    pub(super) fn message(&self, i: usize) -> (&[u8], &Received) {
         let r = &self.received[i];
         let slot = &self.slab[i * SLOT..(i + 1) * SLOT];
         (&slot[..r.len.min(SLOT)], r)
@@ -166,12 +166,12 @@ impl RecvBatch {
 }
 
 /// A datagram to send, and to whom (`None` on a connected socket).
-pub type Datagram<'a> = (&'a [u8], Option<SockaddrStorage>);
+pub(super) type Datagram<'a> = (&'a [u8], Option<SockaddrStorage>);
 
 /// How the datagrams at the head of a queue go out: how many, and whether
 /// as one GSO send. A GSO group is datagrams to one address, all of the
 /// first one's size but the last, which may be shorter.
-pub fn next_send(datagrams: &[Datagram<'_>], gso: bool) -> (usize, bool) {
+pub(super) fn next_send(datagrams: &[Datagram<'_>], gso: bool) -> (usize, bool) {
     let group = if gso { gso_group(datagrams) } else { 1 };
     if group >= 2 {
         return (group, true);
@@ -209,14 +209,14 @@ fn gso_group(datagrams: &[Datagram<'_>]) -> usize {
 }
 
 /// Headers for `sendmmsg`, reused for every write.
-pub struct SendBatch {
+pub(super) struct SendBatch {
     plain: MultiHeaders<SockaddrStorage>,
     /// One message carrying the GSO segment size.
     segmented: MultiHeaders<SockaddrStorage>,
 }
 
 impl SendBatch {
-    pub fn new() -> Self {
+    pub(super) fn new() -> Self {
         SendBatch {
             plain: MultiHeaders::preallocate(SEND_BATCH, None),
             segmented: MultiHeaders::preallocate(1, Some(nix::cmsg_space!(u16))),
@@ -225,7 +225,7 @@ impl SendBatch {
 
     /// Sends datagrams with one system call, each to its own address: how
     /// many the kernel took, at least one, or the first one's error.
-    pub fn send(&mut self, fd: RawFd, datagrams: &[Datagram<'_>]) -> io::Result<usize> {
+    pub(super) fn send(&mut self, fd: RawFd, datagrams: &[Datagram<'_>]) -> io::Result<usize> {
         let n = datagrams.len().min(SEND_BATCH);
         let iovs: [[IoSlice<'_>; 1]; SEND_BATCH] =
             std::array::from_fn(|i| [IoSlice::new(datagrams.get(i).map_or(&[], |d| d.0))]);
@@ -246,7 +246,7 @@ impl SendBatch {
 
     /// Sends a GSO group (see [`next_send`]) as one packet the kernel cuts
     /// into its datagrams: all of them, or the error.
-    pub fn send_group(&mut self, fd: RawFd, group: &[Datagram<'_>]) -> io::Result<usize> {
+    pub(super) fn send_group(&mut self, fd: RawFd, group: &[Datagram<'_>]) -> io::Result<usize> {
         let n = group.len().min(MAX_SEGMENTS);
         let iovs: [IoSlice<'_>; MAX_SEGMENTS] =
             std::array::from_fn(|i| IoSlice::new(group.get(i).map_or(&[], |d| d.0)));
@@ -269,7 +269,7 @@ impl SendBatch {
 
 /// Errors that say the socket or the route cannot do GSO: send the
 /// datagrams one by one instead.
-pub fn gso_unsupported(e: &io::Error) -> bool {
+pub(super) fn gso_unsupported(e: &io::Error) -> bool {
     matches!(
         e.raw_os_error(),
         Some(nix::libc::EINVAL | nix::libc::EIO | nix::libc::ENOPROTOOPT | nix::libc::EOPNOTSUPP)

@@ -5,23 +5,23 @@
 //! only the last UDP peer, take one TCP client, drop v1 frames by default
 //! and hide CRC errors — each fatal to a ping tool.
 
-pub mod address;
+pub(crate) mod address;
 mod advice;
 mod link;
 #[cfg(not(mavping_portable))]
 mod mmsg;
 mod out_queue;
-pub mod outbox;
-pub mod recording;
-pub mod route;
-pub mod rx_time;
-pub mod serial;
+pub(crate) mod outbox;
+pub(crate) mod recording;
+pub(crate) mod route;
+pub(crate) mod rx_time;
+pub(crate) mod serial;
 pub mod sim;
 #[cfg(mavping_portable)]
 mod single;
-pub mod stream;
-pub mod tcp;
-pub mod tlog;
+pub(crate) mod stream;
+pub(crate) mod tcp;
+pub(crate) mod tlog;
 pub mod udp;
 
 use std::time::Duration;

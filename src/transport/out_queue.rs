@@ -6,10 +6,10 @@
 /// Bytes the queue holds at most, beyond the kernel's own buffer: a few
 /// hundred ms of a 57600-baud radio, so the requests waiting here add
 /// little to a round trip before the link refuses more.
-pub const MAX_QUEUED: usize = 4096;
+pub(super) const MAX_QUEUED: usize = 4096;
 
 #[derive(Debug, Default)]
-pub struct OutQueue {
+pub(super) struct OutQueue {
     buf: Vec<u8>,
     /// Bytes of `buf` already written.
     start: usize,
@@ -20,7 +20,7 @@ pub struct OutQueue {
 impl OutQueue {
     /// Takes `frame` whole if it fits, else refuses it (counted): a frame
     /// is never split between the wire and the floor.
-    pub fn offer(&mut self, frame: &[u8]) -> bool {
+    pub(super) fn offer(&mut self, frame: &[u8]) -> bool {
         if self.len() + frame.len() > MAX_QUEUED {
             self.refused += 1;
             return false;
@@ -35,17 +35,17 @@ impl OutQueue {
 
     /// Refuses a frame without offering it (the rest of a burst after the
     /// first refusal, so what was sent is always a prefix of it).
-    pub fn refuse(&mut self) {
+    pub(super) fn refuse(&mut self) {
         self.refused += 1;
     }
 
     /// What is waiting to be written.
-    pub fn waiting(&self) -> &[u8] {
+    pub(super) fn waiting(&self) -> &[u8] {
         &self.buf[self.start..]
     }
 
     /// `n` bytes of [`waiting`](Self::waiting) were written.
-    pub fn written(&mut self, n: usize) {
+    pub(super) fn written(&mut self, n: usize) {
         self.start = (self.start + n).min(self.buf.len());
         if self.start == self.buf.len() {
             self.buf.clear();
@@ -53,21 +53,21 @@ impl OutQueue {
         }
     }
 
-    pub fn len(&self) -> usize {
+    pub(super) fn len(&self) -> usize {
         self.buf.len() - self.start
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(super) fn is_empty(&self) -> bool {
         self.len() == 0
     }
 
     /// The connection broke: what waited was for it.
-    pub fn clear(&mut self) {
+    pub(super) fn clear(&mut self) {
         self.buf.clear();
         self.start = 0;
     }
 
-    pub fn refused(&self) -> u64 {
+    pub(super) fn refused(&self) -> u64 {
         self.refused
     }
 }

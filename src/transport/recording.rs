@@ -37,7 +37,7 @@ const BUFFER: usize = 64 * 1024;
 type Log = Rc<RefCell<TlogWriter<BufWriter<File>>>>;
 
 /// The file a run records to; each link records through its [`Tap`].
-pub struct Recording {
+pub(crate) struct Recording {
     log: Log,
     path: PathBuf,
     /// The monotonic and the wall clock at the recording's start.
@@ -46,7 +46,7 @@ pub struct Recording {
 
 impl Recording {
     /// Creates (or truncates) `path`, as `--samples` and `--plot` do.
-    pub fn create(path: &Path) -> io::Result<Self> {
+    pub(crate) fn create(path: &Path) -> io::Result<Self> {
         let file = File::create(path)?;
         let wall_us = SystemTime::now()
             .duration_since(SystemTime::UNIX_EPOCH)
@@ -61,12 +61,12 @@ impl Recording {
         })
     }
 
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 
     /// What the `index`-th link of the run records through.
-    pub fn tap(&self, index: usize) -> Tap {
+    pub(crate) fn tap(&self, index: usize) -> Tap {
         Tap {
             log: self.log.clone(),
             origin: self.origin,
@@ -76,13 +76,13 @@ impl Recording {
 
     /// Flushes the log; how many records it holds, or the first write
     /// error of the run.
-    pub fn finish(&self) -> io::Result<u64> {
+    pub(crate) fn finish(&self) -> io::Result<u64> {
         self.log.borrow_mut().finish()
     }
 }
 
 /// One link's way into the run's log.
-pub struct Tap {
+pub(crate) struct Tap {
     log: Log,
     origin: (Instant, u64),
     /// The link bits of what this link receives.
@@ -118,14 +118,14 @@ fn as_micros(d: Duration) -> u64 {
 }
 
 /// A link, recorded when it has a tap.
-pub struct Recorded<T> {
+pub(crate) struct Recorded<T> {
     link: T,
     tap: Option<Tap>,
 }
 
 impl<T: Transport> Recorded<T> {
     /// `link`, recorded through `tap` if there is one.
-    pub fn new(mut link: T, tap: Option<Tap>) -> Self {
+    pub(crate) fn new(mut link: T, tap: Option<Tap>) -> Self {
         if tap.is_some() {
             link.keep_raw();
         }
@@ -133,7 +133,7 @@ impl<T: Transport> Recorded<T> {
     }
 
     /// The link itself.
-    pub fn inner(&self) -> &T {
+    pub(crate) fn inner(&self) -> &T {
         &self.link
     }
 

@@ -50,7 +50,7 @@ pub(crate) async fn resolve(
 }
 
 /// `-I` on the portable path, in one line.
-pub fn interface_needs_linux(iface: &str) -> String {
+pub(crate) fn interface_needs_linux(iface: &str) -> String {
     format!(
         "-I {iface}: tying a socket to a network interface needs Linux (SO_BINDTODEVICE); \
          this build has the portable path only: choose the route by address (--bind ADDR, udpin:ADDR:PORT)"

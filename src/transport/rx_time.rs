@@ -40,16 +40,16 @@ const MAX_QUEUE_AGE: Duration = Duration::from_secs(10);
 const STEP_TOLERANCE_NS: i128 = 1_000_000;
 
 /// A kernel receive stamp: the wall clock, ns since the epoch.
-pub type WallNs = i128;
+pub(crate) type WallNs = i128;
 
 /// Reads the monotonic and the wall clock together.
-pub trait Clocks {
+pub(crate) trait Clocks {
     fn now(&self) -> (Instant, SystemTime);
 }
 
 /// The system's clocks.
 #[derive(Debug, Default, Clone, Copy)]
-pub struct SystemClocks;
+pub(crate) struct SystemClocks;
 
 impl Clocks for SystemClocks {
     fn now(&self) -> (Instant, SystemTime) {
@@ -65,7 +65,7 @@ impl Clocks for SystemClocks {
 
 /// Both clocks read together, once for a batch of datagrams.
 #[derive(Debug, Clone, Copy)]
-pub struct Reading {
+pub(crate) struct Reading {
     now: Instant,
     /// The wall clock, ns since the epoch.
     wall: i128,
@@ -73,7 +73,7 @@ pub struct Reading {
 
 /// Converts one socket's kernel receive stamps to the monotonic clock.
 #[derive(Debug)]
-pub struct RxTime<C = SystemClocks> {
+pub(crate) struct RxTime<C = SystemClocks> {
     clocks: C,
     /// The last reading: the wall clock (ns since the epoch) and the
     /// monotonic clock.
@@ -94,7 +94,7 @@ fn wall_ns(t: SystemTime) -> i128 {
 
 impl RxTime {
     /// For a socket just opened: nothing can have reached it before now.
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         RxTime::with_clocks(SystemClocks)
     }
 }
@@ -107,7 +107,7 @@ impl Default for RxTime {
 
 impl<C: Clocks> RxTime<C> {
     /// For a socket just opened, on `clocks`.
-    pub fn with_clocks(clocks: C) -> Self {
+    pub(crate) fn with_clocks(clocks: C) -> Self {
         let mut rx = RxTime {
             clocks,
             last: None,
@@ -119,14 +119,14 @@ impl<C: Clocks> RxTime<C> {
     }
 
     /// The socket was just found empty (a read would block).
-    pub fn drained(&mut self) {
+    pub(crate) fn drained(&mut self) {
         let reading = self.read();
         self.empty_at(reading);
     }
 
     /// The socket was found empty just before `reading` (a batch read
     /// came back short): what is read later arrived after it.
-    pub fn empty_at(&mut self, reading: Reading) {
+    pub(crate) fn empty_at(&mut self, reading: Reading) {
         self.empty_at = Some(reading.now);
     }
 
@@ -140,7 +140,7 @@ impl<C: Clocks> RxTime<C> {
     }
 
     /// Reads the clocks once for a batch of datagrams just read.
-    pub fn read(&mut self) -> Reading {
+    pub(crate) fn read(&mut self) -> Reading {
         let (now, wall) = self.reading();
         Reading { now, wall }
     }
@@ -148,7 +148,7 @@ impl<C: Clocks> RxTime<C> {
     /// When a datagram of the batch read just before `reading` was taken,
     /// stamped `kernel` by the kernel (if it was), reached the socket, on
     /// the monotonic clock.
-    pub fn arrival_at(&self, reading: Reading, kernel: Option<WallNs>) -> Instant {
+    pub(crate) fn arrival_at(&self, reading: Reading, kernel: Option<WallNs>) -> Instant {
         let Reading { now, wall } = reading;
         let Some(stamp) = kernel else {
             return now;

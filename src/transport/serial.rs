@@ -11,7 +11,7 @@ use super::stream::Connect;
 use super::LinkKind;
 
 /// pymavlink's and MAVProxy's default when no baud rate is given.
-pub const DEFAULT_BAUD: u32 = 115_200;
+pub(crate) const DEFAULT_BAUD: u32 = 115_200;
 
 pub struct SerialConnector {
     path: String,

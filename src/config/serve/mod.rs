@@ -33,12 +33,12 @@ pub use request::BadProbeRequest;
 pub use web::{ClientAuth, WebConfig};
 
 /// `mavping serve` listens here unless told otherwise: this machine only.
-pub const DEFAULT_LISTEN: &str = "127.0.0.1:9465";
+pub(super) const DEFAULT_LISTEN: &str = "127.0.0.1:9465";
 /// Probes at once unless told otherwise.
-pub const DEFAULT_MAX_CONCURRENT: usize = 16;
+pub(super) const DEFAULT_MAX_CONCURRENT: usize = 16;
 const MAX_CONCURRENT: usize = 1024;
 /// The module `/probe` uses when none is named, unless the file defines one.
-pub const DEFAULT_MODULE: &str = "default";
+pub(super) const DEFAULT_MODULE: &str = "default";
 /// Bounds on what a `/probe` request may ask: a remote caller must not
 /// turn the exporter into a flood or tie it up for long.
 const MAX_PROBE_COUNT: u64 = 10_000;

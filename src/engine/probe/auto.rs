@@ -28,7 +28,7 @@ use crate::frame::{mav_type, Frame, Msg, SysComp};
 /// first of them for a whole timeout) before it is asked by TIMESYNC:
 /// enough that one lost PING or reply does not switch a PX4, few enough
 /// that a run of `-c 10` still measures an ArduPilot that hides its kind.
-pub const SWITCH_AFTER: u64 = 3;
+pub(crate) const SWITCH_AFTER: u64 = 3;
 
 /// What a responder heard by its HEARTBEAT is asked with.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -45,7 +45,7 @@ enum Choice {
     Timesync,
 }
 
-pub struct AutoProbe {
+pub(crate) struct AutoProbe {
     ping: PingProbe,
     timesync: TimesyncProbe,
     timeout: Nanos,
@@ -65,7 +65,7 @@ pub struct AutoProbe {
 impl AutoProbe {
     /// `wall_start_us` as for [`PingProbe`]; `wall` as for [`TimesyncProbe`];
     /// `timeout` is the session's.
-    pub fn new(wall_start_us: u64, wall: bool, timeout: Nanos) -> Self {
+    pub(crate) fn new(wall_start_us: u64, wall: bool, timeout: Nanos) -> Self {
         AutoProbe {
             ping: PingProbe::new(wall_start_us),
             timesync: TimesyncProbe::new(SysComp::new(0, 0), wall),

@@ -7,13 +7,13 @@
 //! Probes build on the engine's pure parts and its session; nothing else
 //! in the engine names a probe.
 
-pub mod auto;
-pub mod command;
+pub(crate) mod auto;
+pub(crate) mod command;
 pub mod echo;
 pub mod passive;
 pub mod ping;
-pub mod timesync;
-pub mod uplink_check;
+pub(crate) mod timesync;
+pub(crate) mod uplink_check;
 
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::link_io::WallAtZero;

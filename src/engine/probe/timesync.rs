@@ -11,7 +11,7 @@ use crate::engine::matcher::{Lookup, MAX_RESPONDERS};
 use crate::engine::Nanos;
 use crate::frame::{Frame, Msg, SysComp};
 
-pub struct TimesyncProbe {
+pub(crate) struct TimesyncProbe {
     /// What our clock reads at session time 0, in ns: wall time on real
     /// links (so offsets against a responder's wall clock mean something),
     /// advanced by the monotonic session clock so a clock step cannot
@@ -30,7 +30,7 @@ pub struct TimesyncProbe {
 impl TimesyncProbe {
     /// Requests to `target`; our clock is the wall clock when `wall`, else
     /// session time.
-    pub fn new(target: SysComp, wall: bool) -> Self {
+    pub(crate) fn new(target: SysComp, wall: bool) -> Self {
         TimesyncProbe {
             base_ns: 0,
             base_within_ns: 0,
@@ -45,7 +45,7 @@ impl TimesyncProbe {
 impl TimesyncProbe {
     /// Our clock at session time 0, in ns (0 until `begin`, and on the
     /// simulated link).
-    pub fn base_ns(&self) -> u64 {
+    pub(crate) fn base_ns(&self) -> u64 {
         self.base_ns as u64
     }
 }

@@ -47,7 +47,10 @@ fn responder_of(id: SysComp, responders: &[ResponderSummary]) -> Option<&Respond
 
 /// Puts each node's uplink figure beside mavping's estimate for its
 /// system, and a hint for each that disagrees.
-pub fn compare_uplink(nodes: &mut [LinkNodeSummary], responders: &[ResponderSummary]) -> Vec<Hint> {
+pub(crate) fn compare_uplink(
+    nodes: &mut [LinkNodeSummary],
+    responders: &[ResponderSummary],
+) -> Vec<Hint> {
     let mut hints = Vec::new();
     for node in nodes {
         let Some(vehicle) = node.uplink_loss else {

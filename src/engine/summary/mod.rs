@@ -1,7 +1,7 @@
 //! The end-of-run figures, built from the matcher and the roster. Every
 //! report format renders this one structure.
 
-pub mod passive;
+pub(crate) mod passive;
 
 use std::fmt;
 

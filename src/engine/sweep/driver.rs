@@ -34,7 +34,7 @@ use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{Frame, ScanStats, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
 
-pub struct SweepDriver<P> {
+pub(crate) struct SweepDriver<P> {
     inner: EchoDriver<P>,
     config: SweepConfig,
     planner: Planner,
@@ -64,7 +64,7 @@ pub struct SweepDriver<P> {
 }
 
 impl<P: EchoProbe> SweepDriver<P> {
-    pub fn new(cfg: &SessionConfig, sweep: &SweepConfig, inner: EchoDriver<P>) -> Self {
+    pub(crate) fn new(cfg: &SessionConfig, sweep: &SweepConfig, inner: EchoDriver<P>) -> Self {
         SweepDriver {
             inner,
             config: sweep.clone(),
@@ -354,7 +354,7 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
 }
 
 /// Runs an echo probe in steps on `link` until the steps or the run end.
-pub async fn run<T: Transport, P: EchoProbe>(
+pub(crate) async fn run<T: Transport, P: EchoProbe>(
     cfg: &SessionConfig,
     sweep: &SweepConfig,
     link: &mut T,

@@ -11,9 +11,9 @@
 //! This file and the pure parts name nothing of the session, so the
 //! session's events and summary can carry a sweep's figures.
 
-pub mod driver;
-pub mod plan;
-pub mod step;
-pub mod verdict;
+pub(crate) mod driver;
+pub(crate) mod plan;
+pub(crate) mod step;
+pub(crate) mod verdict;
 
-pub use crate::engine::sweep_report::{MaxFrom, PlanKind, SweepConfig};
+pub(crate) use crate::engine::sweep_report::{MaxFrom, PlanKind, SweepConfig};

@@ -14,7 +14,7 @@ use super::{PlanKind, SweepConfig};
 
 /// The refine stops when the bracket around the knee is this narrow (a
 /// ratio of 1.1): the knee is then within 10 % below the true capacity.
-pub const RESOLUTION: f64 = 0.1;
+pub(crate) const RESOLUTION: f64 = 0.1;
 /// At most this many refining steps (a bracket of 2.5 takes four).
 const MAX_REFINES: usize = 6;
 /// A 1-2-5 value this close above the first rate is skipped: it would
@@ -22,7 +22,7 @@ const MAX_REFINES: usize = 6;
 const MIN_RAMP_RATIO: f64 = 1.2;
 
 /// The rates of the ramp: `first`, the 1-2-5 values above it, and `max`.
-pub fn ramp(first: f64, max: f64) -> Vec<f64> {
+pub(crate) fn ramp(first: f64, max: f64) -> Vec<f64> {
     let mut rates = vec![first];
     let mut decade = 10f64.powf(first.log10().floor() - 1.0);
     'series: loop {
@@ -45,13 +45,13 @@ pub fn ramp(first: f64, max: f64) -> Vec<f64> {
 
 /// Decides the steps of one run.
 #[derive(Debug, Clone)]
-pub struct Planner {
+pub(crate) struct Planner {
     config: SweepConfig,
     ramp: Vec<f64>,
 }
 
 impl Planner {
-    pub fn new(config: &SweepConfig) -> Self {
+    pub(crate) fn new(config: &SweepConfig) -> Self {
         let ramp = match config.plan {
             PlanKind::Sweep {
                 first_hz, max_hz, ..
@@ -74,7 +74,7 @@ impl Planner {
 
     /// The next step after `done` (every step closed so far, in order), or
     /// `None` when the run has measured what it set out to.
-    pub fn next(&self, done: &[StepFigures]) -> Option<PlannedStep> {
+    pub(crate) fn next(&self, done: &[StepFigures]) -> Option<PlannedStep> {
         let loaded = !self.config.load.is_empty();
         // Every step so far ran to its end: an interrupted one ends the run.
         if done.iter().any(|s| !s.complete) {

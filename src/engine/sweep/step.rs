@@ -7,7 +7,7 @@ use std::time::Duration;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::radio::{RadioReport, SinceBootCounter, UNKNOWN};
 use crate::engine::stats::RttStats;
-pub use crate::engine::sweep_report::{Phase, StepFigures, StepRadio, StepRtt};
+pub(crate) use crate::engine::sweep_report::{Phase, StepFigures, StepRadio, StepRtt};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 
@@ -29,7 +29,7 @@ impl Phase {
 
 /// One step to run.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlannedStep {
+pub(crate) struct PlannedStep {
     pub phase: Phase,
     pub rate_hz: f64,
     /// The `--load` streams are on during it.
@@ -41,7 +41,7 @@ pub struct PlannedStep {
 }
 
 impl PlannedStep {
-    pub fn new(phase: Phase, rate_hz: f64, load: bool, duration: Duration) -> Self {
+    pub(crate) fn new(phase: Phase, rate_hz: f64, load: bool, duration: Duration) -> Self {
         PlannedStep {
             phase,
             rate_hz,
@@ -52,31 +52,31 @@ impl PlannedStep {
     }
 
     /// The same step once more.
-    pub fn retried(self) -> Self {
+    pub(crate) fn retried(self) -> Self {
         PlannedStep {
             retry: true,
             ..self
         }
     }
 
-    pub fn interval_ns(&self) -> u64 {
+    pub(crate) fn interval_ns(&self) -> u64 {
         (1e9 / self.rate_hz).round().max(1.0) as u64
     }
 }
 
 /// A step passes the knee test when it loses less than this share...
-pub const KNEE_MAX_LOSS: f64 = 0.01;
+pub(crate) const KNEE_MAX_LOSS: f64 = 0.01;
 /// ...and its p99 stays under this many times the first step's...
-pub const KNEE_MAX_P99_RATIO: f64 = 2.0;
+pub(crate) const KNEE_MAX_P99_RATIO: f64 = 2.0;
 /// ...or rose by less than this over it, in µs: what a bufferbloat test
 /// grades A (under 30 ms). On a link whose first p99 is 0.1 ms (a fast
 /// queue, loopback), twice that is one scheduling hiccup of a busy
 /// machine; a queue that grows within a step rises past this in a second
 /// at a tenth over its capacity.
-pub const KNEE_MIN_P99_RISE_US: f64 = 30_000.0;
+pub(crate) const KNEE_MIN_P99_RISE_US: f64 = 30_000.0;
 
 /// The p99 a step must stay under against the first sweep step's.
-pub fn p99_limit_us(reference_p99_us: f64) -> f64 {
+pub(crate) fn p99_limit_us(reference_p99_us: f64) -> f64 {
     (KNEE_MAX_P99_RATIO * reference_p99_us).max(reference_p99_us + KNEE_MIN_P99_RISE_US)
 }
 
@@ -181,7 +181,7 @@ fn mean(sum: (u64, u64)) -> Option<f64> {
 
 /// A step being measured.
 #[derive(Clone)]
-pub struct StepTally {
+pub(crate) struct StepTally {
     pub plan: PlannedStep,
     /// When the step began (its requests are those sent from then on).
     pub start: Nanos,
@@ -203,7 +203,7 @@ pub struct StepTally {
 impl StepTally {
     /// A step beginning at `start`, with the link's byte counters then
     /// (sent, received) and the latest rxerrors of the radio followed.
-    pub fn new(
+    pub(crate) fn new(
         plan: PlannedStep,
         start: Nanos,
         bytes: (u64, u64),
@@ -227,7 +227,7 @@ impl StepTally {
     }
 
     /// `n` requests went out at `at`.
-    pub fn sent(&mut self, n: u64, at: Nanos) {
+    pub(crate) fn sent(&mut self, n: u64, at: Nanos) {
         if n == 0 {
             return;
         }
@@ -237,34 +237,34 @@ impl StepTally {
     }
 
     /// The last request went out at `at`, with `tx_bytes` sent by then.
-    pub fn sending_done(&mut self, at: Nanos, tx_bytes: u64) {
+    pub(crate) fn sending_done(&mut self, at: Nanos, tx_bytes: u64) {
         if self.sending_end.is_none() {
             self.sending_end = Some((at, tx_bytes));
         }
     }
 
-    pub fn sending_finished(&self) -> bool {
+    pub(crate) fn sending_finished(&self) -> bool {
         self.sending_end.is_some()
     }
 
     /// When the step's time is up: its requests at its rate take that long
     /// (the load, if any, runs until then).
-    pub fn nominal_end(&self) -> Nanos {
+    pub(crate) fn nominal_end(&self) -> Nanos {
         self.start + self.plan.count * self.plan.interval_ns()
     }
 
     /// Some request of it was lost (or answered late): its replies may
     /// still be queued somewhere on the link.
-    pub fn lost_any(&self) -> bool {
+    pub(crate) fn lost_any(&self) -> bool {
         self.lost + self.late > 0
     }
 
     /// Whether an event about a request sent at `sent_at` is this step's.
-    pub fn owns(&self, sent_at: Nanos) -> bool {
+    pub(crate) fn owns(&self, sent_at: Nanos) -> bool {
         sent_at >= self.start
     }
 
-    pub fn on_event(&mut self, e: &MatchEvent) {
+    pub(crate) fn on_event(&mut self, e: &MatchEvent) {
         match *e {
             MatchEvent::Reply { rtt, .. } => {
                 self.received += 1;
@@ -284,7 +284,7 @@ impl StepTally {
     }
 
     /// A RADIO_STATUS from `id`; only the radio the step follows counts.
-    pub fn on_radio(&mut self, id: SysComp, r: &RadioReport) {
+    pub(crate) fn on_radio(&mut self, id: SysComp, r: &RadioReport) {
         let tally = self.radio.get_or_insert_with(|| RadioTally::new(id, None));
         if tally.id != id {
             return;
@@ -301,7 +301,7 @@ impl StepTally {
 
     /// The figures as of `now` (the step's end), with the link's byte
     /// counters then.
-    pub fn figures(
+    pub(crate) fn figures(
         &self,
         index: u32,
         complete: bool,

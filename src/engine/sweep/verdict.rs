@@ -3,7 +3,9 @@
 //! (bufferbloat), and how much the background load raised the RTT.
 
 use super::step::KNEE_MAX_LOSS;
-pub use crate::engine::sweep_report::{Grade, Knee, LoadEffect, Queueing, SweepEnd, SweepSummary};
+pub(crate) use crate::engine::sweep_report::{
+    Grade, Knee, LoadEffect, Queueing, SweepEnd, SweepSummary,
+};
 use crate::engine::sweep_report::{Phase, StepFigures};
 
 impl Grade {
@@ -42,7 +44,7 @@ impl Grade {
 }
 
 /// The first sweep step's p99: the knee test's reference.
-pub fn reference_p99(steps: &[StepFigures]) -> Option<f64> {
+pub(crate) fn reference_p99(steps: &[StepFigures]) -> Option<f64> {
     steps
         .iter()
         .find(|s| s.phase.sweeps() && s.complete)
@@ -50,7 +52,7 @@ pub fn reference_p99(steps: &[StepFigures]) -> Option<f64> {
         .map(|r| r.p99_us)
 }
 
-pub fn knee(steps: &[StepFigures]) -> Option<Knee> {
+pub(crate) fn knee(steps: &[StepFigures]) -> Option<Knee> {
     let best = steps
         .iter()
         .filter(|s| s.phase.sweeps() && s.passed == Some(true))
@@ -73,7 +75,7 @@ pub fn knee(steps: &[StepFigures]) -> Option<Knee> {
     })
 }
 
-pub fn queueing(steps: &[StepFigures]) -> Option<Queueing> {
+pub(crate) fn queueing(steps: &[StepFigures]) -> Option<Queueing> {
     let reference = reference_p99(steps)?;
     let (worst_p99_us, worst_at_hz) = steps
         .iter()
@@ -99,7 +101,7 @@ pub fn queueing(steps: &[StepFigures]) -> Option<Queueing> {
 }
 
 /// The unloaded baseline against the first loaded step (the same rate).
-pub fn load_effect(steps: &[StepFigures]) -> Option<LoadEffect> {
+pub(crate) fn load_effect(steps: &[StepFigures]) -> Option<LoadEffect> {
     let base = steps
         .iter()
         .find(|s| s.phase == Phase::Baseline && s.complete)?;

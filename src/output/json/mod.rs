@@ -28,7 +28,7 @@ use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
-pub const SCHEMA_VERSION: u32 = 2;
+pub(crate) const SCHEMA_VERSION: u32 = 2;
 
 /// One line of the output, by its `type`.
 #[derive(Serialize)]
@@ -131,7 +131,7 @@ struct Stamp {
     responder: SysComp,
 }
 
-pub struct JsonReporter<W: Write> {
+pub(crate) struct JsonReporter<W: Write> {
     out: W,
     /// Only the summary object (`--json -q`).
     quiet: bool,
@@ -148,7 +148,7 @@ struct Lines {
 }
 
 impl<W: Write> JsonReporter<W> {
-    pub fn new(out: W, quiet: bool, wall: WallClock) -> Self {
+    pub(crate) fn new(out: W, quiet: bool, wall: WallClock) -> Self {
         JsonReporter {
             out,
             quiet,
@@ -162,7 +162,7 @@ impl<W: Write> JsonReporter<W> {
 
     /// Adds `"link": LINK` to every event (the start and summary objects
     /// always carry it), for runs over several links.
-    pub fn with_link(mut self, link: Option<String>) -> Self {
+    pub(crate) fn with_link(mut self, link: Option<String>) -> Self {
         self.lines.link = link;
         self
     }

@@ -35,13 +35,13 @@ use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
 /// Outcomes kept per responder for the strip: more than a wide terminal shows.
-pub const RECENT: usize = 240;
+pub(crate) const RECENT: usize = 240;
 /// Redraw period: a few times a second is enough to watch a link.
 const REFRESH: Duration = Duration::from_millis(200);
 
 /// One request's outcome for one responder, as the strip shows it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Mark {
+pub(crate) enum Mark {
     Rtt(Nanos),
     Lost,
     Late,
@@ -83,7 +83,7 @@ impl Track {
 
 /// What the view shows, updated from events; bounded per responder.
 #[derive(Clone, Default)]
-pub struct LiveState {
+pub(crate) struct LiveState {
     link: String,
     /// `None` before the session starts.
     probe: Option<ProbeName>,
@@ -100,7 +100,7 @@ pub struct LiveState {
 }
 
 impl LiveState {
-    pub fn on_start(&mut self, info: &StartInfo) {
+    pub(crate) fn on_start(&mut self, info: &StartInfo) {
         self.link = info.link.clone();
         self.probe = Some(info.probe);
         if matches!(info.run, RunKind::Passive { .. }) {
@@ -108,7 +108,7 @@ impl LiveState {
         }
     }
 
-    pub fn on_event(&mut self, event: &Event<'_>) {
+    pub(crate) fn on_event(&mut self, event: &Event<'_>) {
         match (event, self.sources.as_mut()) {
             (Event::WaitingForPeer, _) => self.waiting = true,
             (Event::Heard { id, identity }, Some(sources)) => sources.heard(*id, identity),
@@ -174,7 +174,7 @@ impl LiveState {
 
     /// The figures to draw, computed while the state is locked so the
     /// drawing itself runs without the lock.
-    pub fn screen(&self) -> Screen {
+    pub(crate) fn screen(&self) -> Screen {
         Screen {
             link: self.link.clone(),
             probe: self.probe,
@@ -214,7 +214,7 @@ impl LiveState {
 
 /// A section's rows, by the kind of run.
 #[derive(Debug, Clone)]
-pub enum Rows {
+pub(crate) enum Rows {
     /// A responder's each (PING, TIMESYNC, commands).
     Echo(Vec<RowView>),
     /// A source's each (`--passive`).
@@ -222,21 +222,21 @@ pub enum Rows {
 }
 
 impl Rows {
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         match self {
             Rows::Echo(r) => r.len(),
             Rows::Passive(r) => r.len(),
         }
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.len() == 0
     }
 }
 
 /// One responder's row.
 #[derive(Debug, Clone)]
-pub struct RowView {
+pub(crate) struct RowView {
     pub id: String,
     pub heard_as: Option<String>,
     pub sent: u64,
@@ -253,7 +253,7 @@ pub struct RowView {
 
 /// Everything one frame shows.
 #[derive(Debug, Clone)]
-pub struct Screen {
+pub(crate) struct Screen {
     pub link: String,
     pub probe: Option<ProbeName>,
     /// Session time of the latest event.
@@ -309,14 +309,14 @@ fn ui_loop(
 /// The live view: one terminal, a section per link (one link fills it).
 /// Each link's session feeds its [`LiveLink`]; the caller closes the view
 /// once every session ended, then prints the summaries.
-pub struct LiveView {
+pub(crate) struct LiveView {
     states: Arc<Mutex<Vec<LiveState>>>,
     ui: Option<Ui>,
 }
 
 impl LiveView {
     /// Takes the terminal and starts drawing; `stop` is raised by `q`.
-    pub fn start(stop: Arc<Notify>) -> io::Result<Self> {
+    pub(crate) fn start(stop: Arc<Notify>) -> io::Result<Self> {
         let states: Arc<Mutex<Vec<LiveState>>> = Arc::default();
         // Also sets a panic hook that restores the terminal first.
         let terminal = ratatui::try_init()?;
@@ -338,7 +338,7 @@ impl LiveView {
     }
 
     /// The reporter of the next link, shown below the previous ones.
-    pub fn link(&self) -> LiveLink {
+    pub(crate) fn link(&self) -> LiveLink {
         let mut states = lock(&self.states);
         states.push(LiveState::default());
         LiveLink {
@@ -350,7 +350,7 @@ impl LiveView {
     /// A link that could not be opened: a section that says so, among
     /// the links that run (its error line printed before the view took
     /// the screen is hidden while it shows).
-    pub fn unopened(&self, link: &str, error: &str) {
+    pub(crate) fn unopened(&self, link: &str, error: &str) {
         lock(&self.states).push(LiveState {
             link: link.to_string(),
             failed: Some(error.to_string()),
@@ -359,7 +359,7 @@ impl LiveView {
     }
 
     /// Gives the terminal back.
-    pub fn close(&mut self) -> io::Result<()> {
+    pub(crate) fn close(&mut self) -> io::Result<()> {
         let Some(ui) = self.ui.take() else {
             return Ok(());
         };
@@ -379,7 +379,7 @@ impl Drop for LiveView {
 
 /// One link's part of the [`LiveView`]; its summary is printed as text
 /// once the view is closed.
-pub struct LiveLink {
+pub(crate) struct LiveLink {
     states: Arc<Mutex<Vec<LiveState>>>,
     index: usize,
 }

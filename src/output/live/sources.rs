@@ -20,7 +20,7 @@ const MAX_HEARD: usize = 64;
 
 /// One second of a source, as the strip shows it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Second {
+pub(crate) struct Second {
     pub frames: u64,
     /// Its sequence skipped numbers in it.
     pub lost: bool,
@@ -39,7 +39,7 @@ struct Source {
 
 /// A passive run's sources, as the view follows them.
 #[derive(Debug, Clone, Default)]
-pub struct Sources {
+pub(super) struct Sources {
     windows: Windows,
     sources: BTreeMap<SysComp, Source>,
     /// `vehicle autopilot` from each system's first HEARTBEAT.
@@ -47,7 +47,7 @@ pub struct Sources {
 }
 
 impl Sources {
-    pub fn heard(&mut self, id: SysComp, identity: &Identity) {
+    pub(super) fn heard(&mut self, id: SysComp, identity: &Identity) {
         if self.heard.len() < MAX_HEARD || self.heard.contains_key(&id) {
             self.heard.insert(
                 id,
@@ -57,7 +57,7 @@ impl Sources {
     }
 
     /// The table as of `at`: each source's figures, and its latest second.
-    pub fn table(&mut self, at: Nanos, table: &TableSummary) {
+    pub(super) fn table(&mut self, at: Nanos, table: &TableSummary) {
         for (w, s) in self.windows.next(at, table).iter().zip(&table.sources) {
             let t = self.sources.entry(s.source).or_insert_with(|| Source {
                 radio: s.radio,
@@ -82,7 +82,7 @@ impl Sources {
     }
 
     /// The rows to draw, by source.
-    pub fn rows(&self) -> Vec<SourceRow> {
+    pub(super) fn rows(&self) -> Vec<SourceRow> {
         self.sources
             .iter()
             .map(|(id, s)| SourceRow {
@@ -108,7 +108,7 @@ impl Sources {
 
 /// One source's row.
 #[derive(Debug, Clone)]
-pub struct SourceRow {
+pub(crate) struct SourceRow {
     pub id: String,
     /// What its HEARTBEAT said it is; `radio` for the SiK radio's own.
     pub identity: Option<String>,

@@ -21,9 +21,10 @@ use crate::engine::summary::ProbeName;
 
 const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
 /// The key line: the keys, then what the figures and marks mean.
-pub const KEYS: &str = "q or Ctrl-C: stop and print the summary · RTT in ms · × lost · ! late";
+pub(super) const KEYS: &str =
+    "q or Ctrl-C: stop and print the summary · RTT in ms · × lost · ! late";
 /// The key line of a passive run.
-pub const PASSIVE_KEYS: &str =
+pub(super) const PASSIVE_KEYS: &str =
     "q or Ctrl-C: stop and print the summary · a bar a second: frames, red: lost";
 /// The strip is dropped last, and kept at least this wide.
 const STRIP_MIN: u16 = 8;
@@ -105,7 +106,7 @@ fn cells(rows: &Rows) -> Vec<Cells> {
 }
 
 /// Draws every link's section under one title line, with the keys below.
-pub fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
+pub(super) fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
     let [head, body, foot] = Layout::vertical([
         Constraint::Length(1),
         Constraint::Min(0),

@@ -139,7 +139,7 @@ impl Default for FlightTrack {
 }
 
 impl FlightTrack {
-    pub fn window(&mut self, w: &FlightWindow) {
+    pub(super) fn window(&mut self, w: &FlightWindow) {
         self.windows += 1;
         self.time.at(w.start as f64 / 1e9).add(w);
         if let Some(r) = &w.range {
@@ -148,14 +148,14 @@ impl FlightTrack {
     }
 
     /// The summary's figures, and its last window.
-    pub fn on_summary(&mut self, f: &FlightSummary) {
+    pub(super) fn on_summary(&mut self, f: &FlightSummary) {
         if let Some(last) = &f.last {
             self.window(last);
         }
         self.summary = Some(f.clone());
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(super) fn is_empty(&self) -> bool {
         self.windows == 0
     }
 }

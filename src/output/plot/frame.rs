@@ -60,7 +60,7 @@ pub(super) struct Layout {
 impl Layout {
     /// For `title` over a legend whose first column (headed `first`) holds
     /// `labels`, then `columns` columns of figures `number_w` wide.
-    pub fn new<'a>(
+    pub(super) fn new<'a>(
         title: &str,
         first: &'a str,
         labels: impl Iterator<Item = &'a str>,

@@ -40,9 +40,9 @@ use crate::verdict::Verdict;
 /// The SVG could not be drawn: the drawing library's message.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("{0}")]
-pub struct PlotError(String);
+pub(crate) struct PlotError(String);
 
-pub const SPANS: usize = 1024;
+pub(crate) const SPANS: usize = 1024;
 /// Width of a span at the start: fine enough for 1 kHz pinging.
 const FIRST_SPAN_NS: Nanos = 1_000_000;
 /// Distribution bins per decade (4% wide), from 10 µs to 100 s.
@@ -135,7 +135,7 @@ fn bin_low_ms(i: usize) -> f64 {
 
 /// The samples a plot is drawn from: every link's responders.
 #[derive(Debug, Default)]
-pub struct PlotData {
+pub(crate) struct PlotData {
     /// Each link's name, by its place on the command line.
     links: Vec<String>,
     tracks: BTreeMap<(usize, SysComp), Track>,
@@ -148,7 +148,7 @@ pub struct PlotData {
 }
 
 impl PlotData {
-    pub fn on_event(&mut self, link: usize, e: &MatchEvent) {
+    pub(crate) fn on_event(&mut self, link: usize, e: &MatchEvent) {
         match *e {
             MatchEvent::Reply {
                 responder,
@@ -180,7 +180,7 @@ impl PlotData {
     }
 
     /// The windows of a passive link's sources.
-    pub fn on_windows(&mut self, link: usize, windows: &[super::windows::Window]) {
+    pub(crate) fn on_windows(&mut self, link: usize, windows: &[super::windows::Window]) {
         for w in windows {
             self.sources
                 .entry((link, w.source))
@@ -190,7 +190,7 @@ impl PlotData {
     }
 
     /// The run's own figures for each source of a passive `link`.
-    pub fn on_sources(&mut self, link: usize, table: &TableSummary) {
+    pub(crate) fn on_sources(&mut self, link: usize, table: &TableSummary) {
         for s in &table.sources {
             if let Some(t) = self.sources.get_mut(&(link, s.source)) {
                 t.on_summary(s);
@@ -209,7 +209,7 @@ impl PlotData {
 
     /// Draws the SVG document: RTT and loss against the offered rate for
     /// a sweep, else RTT over time and its distribution.
-    pub fn svg(&self) -> Result<String, PlotError> {
+    pub(crate) fn svg(&self) -> Result<String, PlotError> {
         // A log's flight report (the first log's, if there are several).
         if let Some((&link, track)) = self.flights.iter().find(|(_, t)| !t.is_empty()) {
             let name = self.links.get(link).map_or("?", String::as_str);
@@ -261,14 +261,14 @@ impl PlotData {
     }
 
     /// A link's sweep, drawn instead of its RTT over time.
-    pub fn on_sweep(&mut self, link: usize, sweep: &SweepSummary) {
+    pub(crate) fn on_sweep(&mut self, link: usize, sweep: &SweepSummary) {
         if sweep.kind == "sweep" {
             self.sweeps.insert(link, sweep.clone());
         }
     }
 
     /// The run's own figures for each responder of `link`, for the legend.
-    pub fn on_summary(&mut self, link: usize, responders: &[ResponderSummary]) {
+    pub(crate) fn on_summary(&mut self, link: usize, responders: &[ResponderSummary]) {
         for r in responders {
             if let Some(t) = self.tracks.get_mut(&(link, r.id)) {
                 t.figures = Some(Figures {
@@ -285,13 +285,13 @@ impl PlotData {
 /// `--plot`: collects every link's samples during the run; the run draws
 /// it once every link has ended.
 #[derive(Default)]
-pub struct Plot {
+pub(crate) struct Plot {
     data: Rc<RefCell<PlotData>>,
 }
 
 impl Plot {
     /// The reporter of the next link.
-    pub fn link(&self) -> PlotLink {
+    pub(crate) fn link(&self) -> PlotLink {
         let mut data = self.data.borrow_mut();
         data.links.push(String::new());
         PlotLink {
@@ -302,13 +302,13 @@ impl Plot {
     }
 
     /// Draws the SVG document.
-    pub fn svg(&self) -> Result<String, PlotError> {
+    pub(crate) fn svg(&self) -> Result<String, PlotError> {
         self.data.borrow().svg()
     }
 }
 
 /// One link's samples into the [`Plot`].
-pub struct PlotLink {
+pub(crate) struct PlotLink {
     data: Rc<RefCell<PlotData>>,
     index: usize,
     /// A passive run's sources, window by window (set at its start).

@@ -83,7 +83,7 @@ pub(super) struct SourceTrack {
 }
 
 impl SourceTrack {
-    pub fn new(radio: bool) -> Self {
+    pub(super) fn new(radio: bool) -> Self {
         SourceTrack {
             span_ns: FIRST_SPAN_NS,
             spans: Vec::new(),
@@ -93,7 +93,7 @@ impl SourceTrack {
     }
 
     /// Adds a window, in the span where it starts.
-    pub fn window(&mut self, w: &Window) {
+    pub(super) fn window(&mut self, w: &Window) {
         // A run that ended on a telling has nothing after it.
         if w.start == w.end && w.is_empty() {
             return;
@@ -117,7 +117,7 @@ impl SourceTrack {
         s.covered_ns += w.end.saturating_sub(w.start);
     }
 
-    pub fn on_summary(&mut self, s: &SourceSummary) {
+    pub(super) fn on_summary(&mut self, s: &SourceSummary) {
         self.figures = Some(Figures {
             received: s.counts.received,
             lost: s.counts.lost,
@@ -128,7 +128,7 @@ impl SourceTrack {
         });
     }
 
-    pub fn is_radio(&self) -> bool {
+    pub(super) fn is_radio(&self) -> bool {
         self.radio
     }
 

@@ -21,7 +21,7 @@ const PALETTE: [RGBColor; 7] = [
 /// Marker shapes; 8 of them against 7 colours, so the first 56 responders
 /// each get a pair of their own.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Shape {
+pub(super) enum Shape {
     Cross,
     TriangleUp,
     Circle,
@@ -45,13 +45,13 @@ const SHAPES: [Shape; 8] = [
 
 /// The `n`-th responder's colour and marker.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Look {
+pub(super) struct Look {
     pub color: RGBColor,
     pub shape: Shape,
 }
 
 impl Look {
-    pub fn nth(n: usize) -> Look {
+    pub(super) fn nth(n: usize) -> Look {
         Look {
             color: PALETTE[n % PALETTE.len()],
             shape: SHAPES[n % SHAPES.len()],
@@ -59,7 +59,7 @@ impl Look {
     }
 
     /// The marker centred on `at`, about `r` pixels from centre to edge.
-    pub fn marker<'a, DB, C>(&self, at: C, r: i32) -> DynElement<'a, DB, C>
+    pub(super) fn marker<'a, DB, C>(&self, at: C, r: i32) -> DynElement<'a, DB, C>
     where
         DB: DrawingBackend + 'a,
         C: Clone + 'a,

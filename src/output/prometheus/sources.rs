@@ -14,11 +14,11 @@ use crate::engine::Nanos;
 use crate::frame::SysComp;
 
 /// Sources kept per link: the engine's table cap, and the radio.
-pub const MAX_SOURCES: usize = DEFAULT_MAX_SOURCES + 1;
+pub(super) const MAX_SOURCES: usize = DEFAULT_MAX_SOURCES + 1;
 
 /// What only grows for one source.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Figures {
+pub(super) struct Figures {
     /// The sequence's counts as the table said them (`lost` may still
     /// move to `reordered`).
     pub seq: SeqCounts,
@@ -106,7 +106,7 @@ struct Latest {
 
 /// One source on one link.
 #[derive(Debug, Clone, Default)]
-pub struct SourceSeries {
+pub(super) struct SourceSeries {
     /// The SiK radio's own RADIO_STATUS source (51/68).
     pub radio: bool,
     /// Earlier sessions of a continuous link, summed.
@@ -139,13 +139,13 @@ impl SourceSeries {
     }
 
     /// The counters, earlier sessions included.
-    pub fn counters(&self) -> Figures {
+    pub(super) fn counters(&self) -> Figures {
         self.carried.plus(self.shown)
     }
 
     /// The sequence as last told, earlier sessions included (a ratio's
     /// or the direction split's input: `lost` is not settled).
-    pub fn seq(&self) -> SeqCounts {
+    pub(super) fn seq(&self) -> SeqCounts {
         let latest = self.latest.map_or(SeqCounts::default(), |l| l.figures.seq);
         add_seq(self.carried.seq, latest)
     }
@@ -162,40 +162,40 @@ impl SourceSeries {
     }
 
     /// Lost over the numbers the sequence accounts for.
-    pub fn loss_ratio(&self) -> Option<f64> {
+    pub(super) fn loss_ratio(&self) -> Option<f64> {
         let seq = self.seq();
         let numbered = seq.numbered();
         (numbered > 0).then(|| seq.lost as f64 / numbered as f64)
     }
 
     /// pymavlink's `packet_loss()`, as a ratio: loss over count + loss.
-    pub fn pymav_loss_ratio(&self) -> Option<f64> {
+    pub(super) fn pymav_loss_ratio(&self) -> Option<f64> {
         let (count, loss) = self.pymav();
         (count + loss > 0).then(|| loss as f64 / (count + loss) as f64)
     }
 
-    pub fn pending(&self) -> Option<u64> {
+    pub(super) fn pending(&self) -> Option<u64> {
         self.latest.map(|l| l.pending)
     }
 
-    pub fn frames_per_s(&self) -> Option<f64> {
+    pub(super) fn frames_per_s(&self) -> Option<f64> {
         self.latest?.frames_per_s
     }
 
     /// Whether a silence is on now; `None` when not heard this session.
-    pub fn silent(&self) -> Option<bool> {
+    pub(super) fn silent(&self) -> Option<bool> {
         self.latest.map(|l| l.silent)
     }
 }
 
 /// Every source of one link.
 #[derive(Debug, Clone, Default)]
-pub struct Sources(BTreeMap<SysComp, SourceSeries>);
+pub(super) struct Sources(BTreeMap<SysComp, SourceSeries>);
 
 impl Sources {
     /// The table as told at a tick (`ended` false) or at the end of the
     /// session. Sources beyond [`MAX_SOURCES`] are left out.
-    pub fn update(&mut self, table: &TableSummary, ended: bool) {
+    pub(super) fn update(&mut self, table: &TableSummary, ended: bool) {
         for s in &table.sources {
             if self.0.len() < MAX_SOURCES || self.0.contains_key(&s.source) {
                 self.0.entry(s.source).or_default().update(s, ended);
@@ -204,15 +204,15 @@ impl Sources {
     }
 
     /// A new session of the same link begins.
-    pub fn carry(&mut self) {
+    pub(super) fn carry(&mut self) {
         self.0.values_mut().for_each(SourceSeries::carry);
     }
 
-    pub fn get(&self, id: SysComp) -> Option<&SourceSeries> {
+    pub(super) fn get(&self, id: SysComp) -> Option<&SourceSeries> {
         self.0.get(&id)
     }
 
-    pub fn iter(&self) -> impl Iterator<Item = (&SysComp, &SourceSeries)> {
+    pub(super) fn iter(&self) -> impl Iterator<Item = (&SysComp, &SourceSeries)> {
         self.0.iter()
     }
 }

@@ -34,7 +34,7 @@ enum Lines {
     Commands,
 }
 
-pub struct TextReporter<W: Write> {
+pub(crate) struct TextReporter<W: Write> {
     /// Event lines go through the link's prefix (with several links);
     /// the summary is written unprefixed, under its own header.
     out: Prefixed<W>,
@@ -60,7 +60,7 @@ pub struct TextReporter<W: Write> {
 }
 
 impl<W: Write> TextReporter<W> {
-    pub fn new(out: W, quiet: bool) -> Self {
+    pub(crate) fn new(out: W, quiet: bool) -> Self {
         TextReporter {
             out: Prefixed::new(out, None),
             quiet,
@@ -76,7 +76,7 @@ impl<W: Write> TextReporter<W> {
     }
 
     /// Event lines start with `[UNIX.MICROS] ` on `wall` (`-D`).
-    pub fn timestamps(mut self, wall: Option<WallClock>) -> Self {
+    pub(crate) fn timestamps(mut self, wall: Option<WallClock>) -> Self {
         self.timestamps = wall;
         self
     }
@@ -99,18 +99,19 @@ impl<W: Write> TextReporter<W> {
     }
 
     /// A line per reply whatever the rate.
-    pub fn every_reply(mut self, every: bool) -> Self {
+    pub(crate) fn every_reply(mut self, every: bool) -> Self {
         self.every_reply = every;
         self
     }
 
     /// Event lines start with `[LINK] ` (one of several links).
-    pub fn prefixed(mut self, prefix: Option<String>) -> Self {
+    pub(crate) fn prefixed(mut self, prefix: Option<String>) -> Self {
         self.out = Prefixed::new(self.out.into_inner(), prefix);
         self
     }
 
-    pub fn into_inner(self) -> W {
+    #[cfg(test)]
+    pub(crate) fn into_inner(self) -> W {
         self.out.into_inner()
     }
 }

@@ -35,7 +35,7 @@ struct Running {
 
 /// Every continuous link, in configuration order.
 #[derive(Default)]
-pub struct Links {
+pub(super) struct Links {
     running: Vec<Running>,
 }
 
@@ -43,7 +43,7 @@ impl Links {
     /// Runs exactly `wanted`: links that did not change go on untouched,
     /// changed ones are restarted (keeping their history when their name
     /// and probe stay), new ones start, the others stop.
-    pub fn reconcile(&mut self, wanted: &[ContinuousLink]) {
+    pub(super) fn reconcile(&mut self, wanted: &[ContinuousLink]) {
         let mut old = std::mem::take(&mut self.running);
         for config in wanted {
             let same_name = old
@@ -70,7 +70,7 @@ impl Links {
     }
 
     /// Every link's metrics, in configuration order.
-    pub fn metrics(&self) -> Vec<SharedMetrics> {
+    pub(super) fn metrics(&self) -> Vec<SharedMetrics> {
         self.running.iter().map(|r| r.metrics.clone()).collect()
     }
 }

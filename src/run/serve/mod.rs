@@ -29,7 +29,7 @@ use crate::stderr;
 use links::Links;
 
 /// What the handlers and the reload share.
-pub struct Server {
+pub(super) struct Server {
     settings: RefCell<Rc<ServeSettings>>,
     /// `max_concurrent` probe slots; a reload that changes the number
     /// starts a new set (running probes keep theirs).
@@ -67,15 +67,15 @@ impl Server {
         server
     }
 
-    pub fn settings(&self) -> Rc<ServeSettings> {
+    pub(super) fn settings(&self) -> Rc<ServeSettings> {
         self.settings.borrow().clone()
     }
 
-    pub fn slots(&self) -> Arc<Semaphore> {
+    pub(super) fn slots(&self) -> Arc<Semaphore> {
         self.slots.borrow().clone()
     }
 
-    pub fn health(&self, f: impl FnOnce(&mut Health)) {
+    pub(super) fn health(&self, f: impl FnOnce(&mut Health)) {
         f(&mut self.health.borrow_mut());
     }
 
@@ -193,13 +193,13 @@ pub fn handler_for(settings: ServeSettings) -> impl Fn(Head) -> Replying + 'stat
 }
 
 /// `--config.check`: both files were read and checked on the way here.
-pub fn check(config: &ServeConfig) -> Ending {
+pub(super) fn check(config: &ServeConfig) -> Ending {
     println!("{}", config.describe());
     Ending::Done
 }
 
 /// Serves until Ctrl-C or SIGTERM.
-pub async fn run(config: Rc<ServeConfig>, controls: Controls) -> Ending {
+pub(super) async fn run(config: Rc<ServeConfig>, controls: Controls) -> Ending {
     let stop = controls.stop;
     raise_descriptor_limit();
     let listener = match std::net::TcpListener::bind(config.listen).and_then(http::listener) {

@@ -37,7 +37,7 @@ const MARGIN_S: f64 = 0.5;
 /// How long a probe may take: the scrape's timeout
 /// (`X-Prometheus-Scrape-Timeout-Seconds`) less a margin (at most a
 /// quarter of it).
-pub fn budget(headers: &HeaderMap) -> Duration {
+pub(super) fn budget(headers: &HeaderMap) -> Duration {
     let timeout = headers
         .get("x-prometheus-scrape-timeout-seconds")
         .and_then(|v| v.to_str().ok())
@@ -85,7 +85,7 @@ fn debug_flag(query: &str) -> (String, Result<bool, String>) {
 }
 
 /// Answers one `/probe` request.
-pub async fn answer(server: &Server, query: &str, headers: &HeaderMap) -> Reply {
+pub(super) async fn answer(server: &Server, query: &str, headers: &HeaderMap) -> Reply {
     let started = Instant::now();
     let settings = server.settings();
     let (query, debug) = debug_flag(query);

@@ -31,7 +31,7 @@ use radio::RadioPair;
 
 mod exchange;
 mod params;
-pub mod radio;
+pub(crate) mod radio;
 pub use params::{SimParams, DEFAULT_BUFFER_BYTES, SIM_KEYS};
 
 struct SimResponder {

@@ -26,7 +26,7 @@ use std::time::Duration;
 
 /// What the host's serial driver holds on each side before it drops (a
 /// Linux tty buffer).
-pub const UART_BUFFER_BYTES: u64 = 4096;
+pub(crate) const UART_BUFFER_BYTES: u64 = 4096;
 const BITS_PER_UART_BYTE: u64 = 10;
 
 /// The air side of a simulated radio pair.
@@ -42,7 +42,7 @@ pub struct AirParams {
     pub tdm_round: Duration,
 }
 
-pub const DEFAULT_TDM_ROUND: Duration = Duration::from_millis(20);
+pub(crate) const DEFAULT_TDM_ROUND: Duration = Duration::from_millis(20);
 
 impl AirParams {
     /// Bytes of data per second one radio puts on the air when busy.
@@ -52,10 +52,11 @@ impl AirParams {
     }
 }
 
+#[cfg(test)]
 /// PING exchanges per second a radio pair carries when each request of
 /// `request_bytes` draws `responders` replies of `reply_bytes`: the least
 /// of what each UART direction and each radio's share of the air allow.
-pub fn capacity_hz(
+pub(crate) fn capacity_hz(
     baud: u32,
     air: &AirParams,
     request_bytes: u64,
@@ -156,7 +157,7 @@ impl Stage {
 
 /// Where a frame was dropped.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Dropped {
+pub(crate) enum Dropped {
     /// A host or radio serial buffer was full.
     Uart,
     /// A radio's transmit buffer was full.
@@ -165,7 +166,7 @@ pub enum Dropped {
 
 /// Both radios and the four UART directions around them.
 #[derive(Debug, Clone)]
-pub struct RadioPair {
+pub(crate) struct RadioPair {
     ground_uart_in: Stage,
     ground: Stage,
     remote_uart_out: Stage,
@@ -176,7 +177,7 @@ pub struct RadioPair {
 }
 
 impl RadioPair {
-    pub fn new(baud: u32, air: &AirParams, buffer: u64) -> Self {
+    pub(crate) fn new(baud: u32, air: &AirParams, buffer: u64) -> Self {
         let uart = f64::from(baud) / BITS_PER_UART_BYTE as f64;
         let round_ns = air.tdm_round.as_nanos().max(2) as u64;
         let len_ns = ((round_ns / 2) as f64 * air.duty).round().max(1.0) as u64;
@@ -201,14 +202,14 @@ impl RadioPair {
     }
 
     /// A frame mavping writes at `at`: when the responder has read it.
-    pub fn uplink(&mut self, at: u64, bytes: u64) -> Result<u64, Dropped> {
+    pub(crate) fn uplink(&mut self, at: u64, bytes: u64) -> Result<u64, Dropped> {
         let t = self.ground_uart_in.pass(at, bytes).ok_or(Dropped::Uart)?;
         let t = self.ground.pass(t, bytes).ok_or(Dropped::Radio)?;
         self.remote_uart_out.pass(t, bytes).ok_or(Dropped::Uart)
     }
 
     /// A frame a responder writes at `at`: when mavping can read it.
-    pub fn downlink(&mut self, at: u64, bytes: u64) -> Result<u64, Dropped> {
+    pub(crate) fn downlink(&mut self, at: u64, bytes: u64) -> Result<u64, Dropped> {
         let t = self.remote_uart_in.pass(at, bytes).ok_or(Dropped::Uart)?;
         let t = self.remote.pass(t, bytes).ok_or(Dropped::Radio)?;
         self.ground_uart_out.pass(t, bytes).ok_or(Dropped::Uart)
@@ -216,7 +217,7 @@ impl RadioPair {
 
     /// Share of the ground radio's buffer free at `at`, in percent (its
     /// RADIO_STATUS `txbuf`).
-    pub fn ground_free_percent(&mut self, at: u64) -> u8 {
+    pub(crate) fn ground_free_percent(&mut self, at: u64) -> u8 {
         let held = self.ground.backlog(at).min(self.buffer);
         ((self.buffer - held) * 100 / self.buffer.max(1)) as u8
     }

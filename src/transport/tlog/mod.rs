@@ -23,9 +23,9 @@
 //! - The stamps' two lowest bits (MAVProxy's link number) are each
 //!   frame's path, for per-link figures.
 
-pub mod records;
-pub mod stamps;
-pub mod writer;
+pub(crate) mod records;
+pub(crate) mod stamps;
+pub(crate) mod writer;
 
 use std::fmt;
 use std::io::{self, Read};
@@ -43,9 +43,9 @@ use records::{Found, RecordStats, Splitter};
 use stamps::{LogClock, StampFacts};
 
 /// Bytes read at a time.
-pub const READ_CHUNK: usize = 256 * 1024;
+pub(crate) const READ_CHUNK: usize = 256 * 1024;
 /// The most records one `recv` hands over.
-pub const MAX_BATCH: usize = 4096;
+pub(crate) const MAX_BATCH: usize = 4096;
 /// How much of the log's start is kept, to say what a file that holds no
 /// record is instead.
 const SNIFF_LEN: usize = 4096;

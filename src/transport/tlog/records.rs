@@ -36,16 +36,17 @@
 
 use serde::Serialize;
 
-use crate::frame::scanner::{IFLAG_SIGNED, MAX_FRAME_LEN, STX_V1, STX_V2};
+use crate::frame::scanner::{IFLAG_SIGNED, STX_V1, STX_V2};
 use crate::frame::{scan_datagram_all, Kind, ScanStats};
 
 /// The stamp before each frame.
-pub const STAMP_LEN: usize = 8;
+pub(crate) const STAMP_LEN: usize = 8;
+#[cfg(test)]
 /// The longest record: a stamp and the longest frame.
-pub const MAX_RECORD: usize = STAMP_LEN + MAX_FRAME_LEN;
+pub(crate) const MAX_RECORD: usize = STAMP_LEN + crate::frame::scanner::MAX_FRAME_LEN;
 /// A stamp this far from the last good one cannot be a record's after
 /// junk: pymavlink's bound (3 days, in µs).
-pub const PLAUSIBLE_US: u64 = 3 * 24 * 3600 * 1_000_000;
+pub(crate) const PLAUSIBLE_US: u64 = 3 * 24 * 3600 * 1_000_000;
 /// MAVLink 2: header, CRC, signature.
 const V2_OVERHEAD: usize = 12;
 const V1_OVERHEAD: usize = 8;
@@ -76,7 +77,7 @@ pub struct RecordStats {
 
 /// The next thing in the bytes.
 #[derive(Debug, PartialEq, Eq)]
-pub enum Found<'a> {
+pub(crate) enum Found<'a> {
     /// A record: its raw stamp, its frame's bytes and what the frame is.
     Record {
         stamp: u64,
@@ -165,7 +166,7 @@ fn near(a: u64, b: u64) -> bool {
 
 /// Splits a log into records; see the module's rules.
 #[derive(Debug, Default)]
-pub struct Splitter {
+pub(crate) struct Splitter {
     /// The last good record's stamp.
     last_stamp: Option<u64>,
     /// Inside a stretch of junk (the next record must be plausible).
@@ -176,13 +177,13 @@ pub struct Splitter {
 }
 
 impl Splitter {
-    pub fn stats(&self) -> RecordStats {
+    pub(crate) fn stats(&self) -> RecordStats {
         self.stats
     }
 
     /// The scanner's figures over the frames delivered, with the junk as
     /// its skipped bytes and a cut last record as truncated.
-    pub fn scan_stats(&self) -> ScanStats {
+    pub(crate) fn scan_stats(&self) -> ScanStats {
         ScanStats {
             unknown_id: self.stats.unknown_id,
             bad_crc: self.stats.bad_crc,
@@ -227,7 +228,7 @@ impl Splitter {
     /// The next record in `buf`, and how many leading bytes are finished
     /// with (the caller drops them before the next call). `at_end`: no
     /// bytes will follow `buf`.
-    pub fn next<'a>(&mut self, buf: &'a [u8], at_end: bool) -> (Found<'a>, usize) {
+    pub(crate) fn next<'a>(&mut self, buf: &'a [u8], at_end: bool) -> (Found<'a>, usize) {
         let mut at = 0;
         loop {
             let mut scan = ScanStats::default();

@@ -26,7 +26,7 @@ use super::records::PLAUSIBLE_US;
 
 /// A stamp up to this far behind the latest is frames logged out of
 /// order, not a clock step.
-pub const JITTER_NS: u64 = 1_000_000_000;
+pub(crate) const JITTER_NS: u64 = 1_000_000_000;
 /// MAVProxy's link number.
 const LINK_BITS: u64 = 3;
 
@@ -50,7 +50,7 @@ pub struct StampFacts {
 
 /// Dates records by their stamps: see the module's rules.
 #[derive(Debug, Clone, Default)]
-pub struct LogClock {
+pub(crate) struct LogClock {
     /// The latest stamp and the session time it was dated at.
     latest: Option<(u64, u64)>,
     facts: Option<StampFacts>,
@@ -59,7 +59,7 @@ pub struct LogClock {
 impl LogClock {
     /// The session time (ns) of a record stamped `stamp`, and its link
     /// bits.
-    pub fn date(&mut self, stamp: u64) -> (u64, u8) {
+    pub(crate) fn date(&mut self, stamp: u64) -> (u64, u8) {
         let us = stamp & !LINK_BITS;
         let link = (stamp & LINK_BITS) as u8;
         let facts = self.facts.get_or_insert(StampFacts {
@@ -101,12 +101,12 @@ impl LogClock {
     }
 
     /// The stamps so far; `None` before the first record.
-    pub fn facts(&self) -> Option<StampFacts> {
+    pub(crate) fn facts(&self) -> Option<StampFacts> {
         self.facts
     }
 
     /// The session time of the latest record.
-    pub fn latest(&self) -> u64 {
+    pub(crate) fn latest(&self) -> u64 {
         self.latest.map_or(0, |(_, t)| t)
     }
 }

@@ -18,9 +18,9 @@
 use std::io::{self, Write};
 
 /// The link bits of what mavping sent (MAVProxy's own-frames mark).
-pub const SENT: u8 = 3;
+pub(crate) const SENT: u8 = 3;
 /// The most links one log can tell apart by their bits (0, 1, 2).
-pub const MAX_LINKS: usize = 3;
+pub(crate) const MAX_LINKS: usize = 3;
 /// Buffered output reaches the file at least this often (µs of stamps),
 /// so a long run's log can be read while it grows.
 const FLUSH_EVERY_US: u64 = 1_000_000;
@@ -28,7 +28,7 @@ const FLUSH_EVERY_US: u64 = 1_000_000;
 const LINK_BITS: u64 = 3;
 
 /// A telemetry log being written.
-pub struct TlogWriter<W: Write> {
+pub(crate) struct TlogWriter<W: Write> {
     out: W,
     /// The latest record's stamp, link bits cleared.
     latest_us: u64,
@@ -40,7 +40,7 @@ pub struct TlogWriter<W: Write> {
 
 impl<W: Write> TlogWriter<W> {
     /// A log written to `out`, which should be buffered.
-    pub fn new(out: W) -> Self {
+    pub(crate) fn new(out: W) -> Self {
         TlogWriter {
             out,
             latest_us: 0,
@@ -52,7 +52,7 @@ impl<W: Write> TlogWriter<W> {
 
     /// Writes one record: `frame` (one whole frame's bytes) at `us`
     /// microseconds since the Unix epoch, on `link` (0 to 3).
-    pub fn record(&mut self, us: u64, link: u8, frame: &[u8]) {
+    pub(crate) fn record(&mut self, us: u64, link: u8, frame: &[u8]) {
         if self.failed.is_some() {
             return;
         }
@@ -73,14 +73,15 @@ impl<W: Write> TlogWriter<W> {
         }
     }
 
+    #[cfg(test)]
     /// Records written whole so far.
-    pub fn records(&self) -> u64 {
+    pub(crate) fn records(&self) -> u64 {
         self.records
     }
 
     /// Flushes what is buffered; the first error of the whole log if
     /// there was one.
-    pub fn finish(&mut self) -> io::Result<u64> {
+    pub(crate) fn finish(&mut self) -> io::Result<u64> {
         if let Some(e) = self.failed.take() {
             // Reported once; later calls see the same log as failed.
             self.failed = Some(io::Error::new(e.kind(), e.to_string()));

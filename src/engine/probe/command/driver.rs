@@ -27,7 +27,7 @@ use crate::frame::{codec, Frame, Msg, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
 
 /// Runs the command probe on `link` until the run ends.
-pub async fn run<T: Transport>(
+pub(crate) async fn run<T: Transport>(
     cfg: &SessionConfig,
     spec: &CommandSpec,
     link: &mut T,
@@ -37,7 +37,7 @@ pub async fn run<T: Transport>(
     session::run(cfg, link, CommandDriver::new(cfg, spec), observer, controls).await
 }
 
-pub struct CommandDriver {
+pub(crate) struct CommandDriver {
     spec: CommandSpec,
     ours: SysComp,
     tracker: CommandTracker,
@@ -48,7 +48,7 @@ pub struct CommandDriver {
 }
 
 impl CommandDriver {
-    pub fn new(cfg: &SessionConfig, spec: &CommandSpec) -> Self {
+    pub(crate) fn new(cfg: &SessionConfig, spec: &CommandSpec) -> Self {
         CommandDriver {
             spec: spec.clone(),
             ours: cfg.ours,

@@ -2,5 +2,5 @@
 //! is the pure bookkeeping (what is pending, re-sent, failed); [`driver`]
 //! joins it to the session.
 
-pub mod driver;
-pub mod tracker;
+pub(crate) mod driver;
+pub(crate) mod tracker;

@@ -44,7 +44,7 @@ enum Fate {
 
 /// Exact figures for one target.
 #[derive(Clone)]
-pub struct TargetStats {
+pub(crate) struct TargetStats {
     pub id: SysComp,
     /// Commands put on the wire (skipped ones are not).
     pub commands: u64,
@@ -61,7 +61,7 @@ pub struct TargetStats {
     pub results: BTreeMap<u8, u64>,
 }
 
-pub struct CommandTracker {
+pub(crate) struct CommandTracker {
     retry_interval: Nanos,
     max_attempts: u32,
     next_n: u64,
@@ -80,7 +80,7 @@ fn answers(target: SysComp, from: SysComp) -> bool {
 
 impl CommandTracker {
     /// `retries`: re-sends after the first transmission.
-    pub fn new(retry_interval: Nanos, retries: u8) -> Self {
+    pub(crate) fn new(retry_interval: Nanos, retries: u8) -> Self {
         CommandTracker {
             retry_interval,
             max_attempts: u32::from(retries) + 1,
@@ -117,7 +117,7 @@ impl CommandTracker {
 
     /// A new command is due at `now`: sends it, or skips it while the
     /// previous one with its key is pending.
-    pub fn start(
+    pub(crate) fn start(
         &mut self,
         target: SysComp,
         command: u16,
@@ -155,7 +155,7 @@ impl CommandTracker {
     }
 
     /// Re-sends and fails whatever is due at `now`.
-    pub fn poll(&mut self, now: Nanos, out: &mut impl FnMut(CommandEvent)) {
+    pub(crate) fn poll(&mut self, now: Nanos, out: &mut impl FnMut(CommandEvent)) {
         let mut failed: Vec<Key> = Vec::new();
         for (&(target, command), p) in &mut self.pending {
             // Fixed plan: a late wake-up sends every attempt that is due.
@@ -187,7 +187,7 @@ impl CommandTracker {
     }
 
     /// A COMMAND_ACK (already checked to be addressed to us) from `from`.
-    pub fn on_ack(
+    pub(crate) fn on_ack(
         &mut self,
         from: SysComp,
         command: u16,
@@ -252,34 +252,34 @@ impl CommandTracker {
     }
 
     /// When the next re-send or failure is due.
-    pub fn next_deadline(&self) -> Option<Nanos> {
+    pub(crate) fn next_deadline(&self) -> Option<Nanos> {
         self.pending
             .values()
             .map(|p| p.first + u64::from(p.attempts) * self.retry_interval)
             .min()
     }
 
-    pub fn idle(&self) -> bool {
+    pub(crate) fn idle(&self) -> bool {
         self.pending.is_empty()
     }
 
     /// Commands still pending (neither acknowledged nor failed).
-    pub fn in_flight(&self) -> u64 {
+    pub(crate) fn in_flight(&self) -> u64 {
         self.pending.len() as u64
     }
 
-    pub fn targets(&self) -> &[TargetStats] {
+    pub(crate) fn targets(&self) -> &[TargetStats] {
         &self.targets
     }
 
-    pub fn unmatched_acks(&self) -> u64 {
+    pub(crate) fn unmatched_acks(&self) -> u64 {
         self.unmatched_acks
     }
 }
 
 impl CommandTracker {
     /// Each target's figures, for the summary.
-    pub fn summaries(&self, roster: &Roster) -> Vec<CommandTargetSummary> {
+    pub(crate) fn summaries(&self, roster: &Roster) -> Vec<CommandTargetSummary> {
         self.targets()
             .iter()
             .map(|t| CommandTargetSummary {

@@ -30,7 +30,7 @@ use crate::frame::{mav_type, Frame, Msg, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
 
 /// Listens on `link` until the run ends.
-pub async fn run<T: Transport>(
+pub(crate) async fn run<T: Transport>(
     cfg: &SessionConfig,
     gap: Option<Duration>,
     link: &mut T,
@@ -40,7 +40,7 @@ pub async fn run<T: Transport>(
     session::run(cfg, link, PassiveDriver::new(cfg, gap), observer, controls).await
 }
 
-pub struct PassiveDriver {
+pub(crate) struct PassiveDriver {
     ours: SysComp,
     table: SourceTable,
     /// Frames with our own ids (a router echoing ours back): not a source.
@@ -97,7 +97,7 @@ enum Paths {
 }
 
 impl PassiveDriver {
-    pub fn new(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
+    pub(crate) fn new(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
         let gap = gap.map(|g| Nanos::try_from(g.as_nanos()).unwrap_or(Nanos::MAX));
         PassiveDriver {
             ours: cfg.ours,
@@ -134,7 +134,7 @@ impl PassiveDriver {
     }
 
     /// The driver of a telemetry log: also a table per MAVProxy link.
-    pub fn for_log(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
+    pub(crate) fn for_log(cfg: &SessionConfig, gap: Option<Duration>) -> Self {
         let silence = gap.map_or(flight::DEFAULT_SILENCE_NS, |g| {
             Nanos::try_from(g.as_nanos()).unwrap_or(Nanos::MAX)
         });

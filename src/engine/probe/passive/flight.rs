@@ -39,24 +39,24 @@ use crate::engine::radio::{
     SinceBootCounter, SIK_STEPS_PER_DB, WEAK_FADE_MARGIN_DB,
 };
 use crate::engine::Nanos;
-use crate::frame::{ids, Fix, FixKind, Frame, Msg, RadioStatus, SysComp};
+use crate::frame::{Fix, FixKind, Frame, Msg, RadioStatus, SysComp};
 
 /// The windows' length unless told otherwise: a few hundred frames of a
 /// usual telemetry stream, short beside a flight.
-pub const DEFAULT_WINDOW_NS: Nanos = 10_000_000_000;
+pub(crate) const DEFAULT_WINDOW_NS: Nanos = 10_000_000_000;
 /// A gap this long with nothing over the link is a silence (unless `--gap`).
-pub const DEFAULT_SILENCE_NS: Nanos = 2_000_000_000;
+pub(crate) const DEFAULT_SILENCE_NS: Nanos = 2_000_000_000;
 /// A window losing at least this share of its frames is part of a burst.
-pub const BURST_LOSS_PCT: f64 = 10.0;
+pub(crate) const BURST_LOSS_PCT: f64 = 10.0;
 /// Windows kept for the summary: the most lossy.
-pub const WORST: usize = 5;
+pub(crate) const WORST: usize = 5;
 /// Silences and bursts kept for the summary: the longest.
-pub const KEPT: usize = 5;
+pub(crate) const KEPT: usize = 5;
 /// Events closed and not yet told: the driver tells them after each batch
 /// of frames, which covers at most a second of log time.
-pub const PENDING: usize = 64;
+pub(crate) const PENDING: usize = 64;
 /// The mean Earth radius (IUGG), metres.
-pub const EARTH_RADIUS_M: f64 = 6_371_008.8;
+pub(crate) const EARTH_RADIUS_M: f64 = 6_371_008.8;
 /// 255 in RADIO_STATUS's 8-bit figures means unknown.
 const UNKNOWN: u8 = 255;
 /// A SiK fade margin under this is a radio hearing only noise.
@@ -207,7 +207,7 @@ pub enum FlightEvent {
 
 /// The link's totals as the source table has them (the radio left out).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
-pub struct Totals {
+pub(crate) struct Totals {
     pub received: u64,
     pub duplicate: u64,
     pub lost: u64,
@@ -278,7 +278,7 @@ struct Current {
 }
 
 #[derive(Debug, Clone)]
-pub struct Flight {
+pub(crate) struct Flight {
     window_ns: Nanos,
     silence_ns: Nanos,
     current: Current,
@@ -313,7 +313,7 @@ pub struct Flight {
 }
 
 impl Flight {
-    pub fn new(window_ns: Nanos, silence_ns: Nanos, radio_type: RadioType) -> Self {
+    pub(crate) fn new(window_ns: Nanos, silence_ns: Nanos, radio_type: RadioType) -> Self {
         Flight {
             window_ns: window_ns.max(1),
             silence_ns,
@@ -346,7 +346,7 @@ impl Flight {
 
     /// The window under way ends at or before `at`: the driver closes it
     /// (with [`Flight::close`]) before it takes anything at `at`.
-    pub fn due(&self, at: Nanos) -> bool {
+    pub(crate) fn due(&self, at: Nanos) -> bool {
         at >= self.end()
     }
 
@@ -356,7 +356,7 @@ impl Flight {
 
     /// Closes the window under way, the table's totals being `totals`, and
     /// begins the next.
-    pub fn close(&mut self, totals: Totals) {
+    pub(crate) fn close(&mut self, totals: Totals) {
         let end = self.end();
         let window = self.window(end, totals);
         self.next_window(end, totals);
@@ -367,13 +367,14 @@ impl Flight {
     /// Takes one frame in: its time for the silences, a RADIO_STATUS (or
     /// RADIO: a report sent as both counts once), a radio's HEARTBEAT or
     /// a position.
-    pub fn on_received(&mut self, frame: &Frame, at: Nanos) {
+    pub(crate) fn on_received(&mut self, frame: &Frame, at: Nanos) {
         self.take(frame.source, frame.msgid, frame.packet_seq, &frame.msg, at);
     }
 
+    #[cfg(test)]
     /// [`Flight::on_received`] of a frame from `source` carrying `msg`.
-    pub fn on_frame(&mut self, source: SysComp, msg: &Msg, at: Nanos) {
-        self.take(source, ids::RADIO_STATUS, 0, msg, at);
+    pub(crate) fn on_frame(&mut self, source: SysComp, msg: &Msg, at: Nanos) {
+        self.take(source, crate::frame::ids::RADIO_STATUS, 0, msg, at);
     }
 
     fn take(&mut self, source: SysComp, msgid: u32, seq: u8, msg: &Msg, at: Nanos) {
@@ -392,13 +393,13 @@ impl Flight {
     }
 
     /// The events closed since the last call, in order.
-    pub fn drain(&mut self) -> impl Iterator<Item = FlightEvent> + '_ {
+    pub(crate) fn drain(&mut self) -> impl Iterator<Item = FlightEvent> + '_ {
         self.pending.drain(..)
     }
 
     /// The summary at `at`, the end of the log: the window under way is
     /// the last, an open burst or a silence still on is listed as ongoing.
-    pub fn summary(&self, at: Nanos, totals: Totals) -> FlightSummary {
+    pub(crate) fn summary(&self, at: Nanos, totals: Totals) -> FlightSummary {
         let mut s = self.clone();
         let mut last_burst = None;
         let last = (at > s.current.start || s.told == 0).then(|| {
@@ -814,7 +815,7 @@ fn diagnose(
 }
 
 /// A silence's diagnosis in words, with the figures it rests on.
-pub fn diagnosis_text(span: &Span) -> Option<String> {
+pub(crate) fn diagnosis_text(span: &Span) -> Option<String> {
     let r = span.radio.as_ref()?;
     let d = r.diagnosis?;
     let secs = span.length_ns() as f64 / 1e9;
@@ -910,7 +911,7 @@ fn loss_pct(distinct: u64, lost: i64) -> Option<f64> {
 }
 
 /// The great-circle distance between two (lat, lon) in degrees, metres.
-pub fn haversine_m(a: (f64, f64), b: (f64, f64)) -> f64 {
+pub(crate) fn haversine_m(a: (f64, f64), b: (f64, f64)) -> f64 {
     let (la1, lo1) = (a.0.to_radians(), a.1.to_radians());
     let (la2, lo2) = (b.0.to_radians(), b.1.to_radians());
     let h = ((la2 - la1) / 2.0).sin().powi(2)
@@ -1356,8 +1357,13 @@ mod tests {
             f.on_received(&fr, at);
         };
         for (seq, rssi) in [(1u8, 100u8), (2, 200)] {
-            frame(ids::RADIO, seq, rssi, u64::from(seq) * S);
-            frame(ids::RADIO_STATUS, seq, rssi, u64::from(seq) * S + 1);
+            frame(crate::frame::ids::RADIO, seq, rssi, u64::from(seq) * S);
+            frame(
+                crate::frame::ids::RADIO_STATUS,
+                seq,
+                rssi,
+                u64::from(seq) * S + 1,
+            );
         }
         f.close(Totals::default());
         let w = windows(&mut f);

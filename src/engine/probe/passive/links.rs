@@ -27,14 +27,14 @@ use crate::engine::summary::passive::{
 use crate::frame::SysComp;
 
 /// Frames on one non-zero link value that make a source evidence.
-pub const EVIDENCE_FRAMES: u64 = 16;
+pub(crate) const EVIDENCE_FRAMES: u64 = 16;
 
 fn disorder(c: &SeqCounts) -> u64 {
     c.lost + c.duplicate + c.reordered + c.resyncs
 }
 
 /// The sources only MAVProxy's link 3 carried: what it sent itself.
-pub fn sent_by_mavproxy(per: &PerLink) -> Vec<SysComp> {
+pub(crate) fn sent_by_mavproxy(per: &PerLink) -> Vec<SysComp> {
     let on = |link: u8| {
         per.links
             .iter()
@@ -49,7 +49,7 @@ pub fn sent_by_mavproxy(per: &PerLink) -> Vec<SysComp> {
 /// The figures per link, from the table of all frames (`merged`) and one
 /// table per value of the stamps' low bits (`paths[link]`), when the
 /// stamps carry links; see the module's rules.
-pub fn per_link(merged: &TableSummary, paths: &[TableSummary]) -> Option<PerLink> {
+pub(crate) fn per_link(merged: &TableSummary, paths: &[TableSummary]) -> Option<PerLink> {
     let mut evidence = false;
     let mut unlinked = Vec::new();
     for m in &merged.sources {

@@ -1,10 +1,10 @@
 //! Passive measurement: what a link's own traffic says about its losses,
 //! without sending anything on it.
 
-pub mod driver;
-pub mod flight;
-pub mod links;
+pub(crate) mod driver;
+pub(crate) mod flight;
+pub(crate) mod links;
 mod rate;
-pub mod round_trips;
-pub mod ticks;
+pub(crate) mod round_trips;
+pub(crate) mod ticks;
 pub mod tracker;

@@ -32,13 +32,13 @@ use crate::engine::Nanos;
 use crate::frame::{Frame, Msg, SysComp};
 
 /// Requests in flight kept per requester and kind.
-pub const MAX_IN_FLIGHT: usize = 256;
+pub(crate) const MAX_IN_FLIGHT: usize = 256;
 /// Timed-out requests kept per requester and kind, for late replies.
-pub const MAX_EXPIRED: usize = 64;
+pub(crate) const MAX_EXPIRED: usize = 64;
 /// (requester, kind) tables kept.
-pub const MAX_QUEUES: usize = 32;
+pub(crate) const MAX_QUEUES: usize = 32;
 /// (requester, responder, kind) figures kept.
-pub const MAX_PAIRS: usize = 64;
+pub(crate) const MAX_PAIRS: usize = 64;
 /// Responders remembered per request (a broadcast PING answered by each
 /// component of a vehicle).
 const MAX_ANSWERS: usize = 8;
@@ -286,7 +286,7 @@ pub struct RoundTripSummary {
 
 /// The matcher: see the module's rules.
 #[derive(Debug, Clone)]
-pub struct RoundTrips {
+pub(crate) struct RoundTrips {
     timeout: Nanos,
     queues: Vec<Queue>,
     pairs: Vec<((Kind, SysComp, SysComp), Pair)>,
@@ -302,7 +302,7 @@ impl std::fmt::Debug for Pair {
 }
 
 impl RoundTrips {
-    pub fn new(timeout: Nanos) -> Self {
+    pub(crate) fn new(timeout: Nanos) -> Self {
         RoundTrips {
             timeout,
             queues: Vec::new(),
@@ -312,7 +312,7 @@ impl RoundTrips {
     }
 
     /// Takes one logged frame at its time.
-    pub fn on_frame(&mut self, frame: &Frame, at: Nanos) {
+    pub(crate) fn on_frame(&mut self, frame: &Frame, at: Nanos) {
         let Some((kind, role)) = role(&frame.msg) else {
             return;
         };
@@ -559,7 +559,7 @@ impl RoundTrips {
 
     /// The figures at the end of the log, `end` its last time: requests
     /// whose timeout passed by then are unanswered, the others in flight.
-    pub fn summary(&mut self, end: Nanos) -> RoundTripSummary {
+    pub(crate) fn summary(&mut self, end: Nanos) -> RoundTripSummary {
         self.expire(end);
         let mut requesters: Vec<RequesterSummary> = self
             .queues

@@ -6,11 +6,11 @@
 use crate::engine::Nanos;
 
 /// Session time between two tellings of the table.
-pub const SOURCES_EVERY_NS: Nanos = 1_000_000_000;
+pub(crate) const SOURCES_EVERY_NS: Nanos = 1_000_000_000;
 
 /// A once-a-second timer a driver keeps beside its table.
 #[derive(Debug, Clone)]
-pub struct Ticks {
+pub(crate) struct Ticks {
     next: Nanos,
     due: Option<Nanos>,
 }
@@ -26,13 +26,13 @@ impl Default for Ticks {
 
 impl Ticks {
     /// When the session should wake for the next telling.
-    pub fn next_deadline(&self) -> Nanos {
+    pub(crate) fn next_deadline(&self) -> Nanos {
         self.next
     }
 
     /// Notes a telling due at `now`; tellings missed while the session was
     /// busy become one (the table is cumulative, so nothing is lost).
-    pub fn expire(&mut self, now: Nanos) {
+    pub(crate) fn expire(&mut self, now: Nanos) {
         if now < self.next {
             return;
         }
@@ -42,7 +42,7 @@ impl Ticks {
     }
 
     /// The time of the telling due, once.
-    pub fn take(&mut self) -> Option<Nanos> {
+    pub(crate) fn take(&mut self) -> Option<Nanos> {
         self.due.take()
     }
 }
