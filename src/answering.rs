@@ -10,12 +10,12 @@ const RESULT_ACCEPTED: u8 = 0;
 
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub(crate) struct ResponderCounts {
-    pub ping_requests: u64,
-    pub timesync_requests: u64,
-    pub commands: u64,
+    pub(crate) ping_requests: u64,
+    pub(crate) timesync_requests: u64,
+    pub(crate) commands: u64,
     /// COMMAND_LONGs with `confirmation > 0`: re-sent because our ACK was
     /// lost or late. Each is acknowledged again.
-    pub retransmissions: u64,
+    pub(crate) retransmissions: u64,
 }
 
 impl ResponderCounts {
@@ -26,12 +26,12 @@ impl ResponderCounts {
 
 #[derive(Debug, Clone)]
 pub(crate) struct ResponderCore {
-    pub id: SysComp,
+    pub(crate) id: SysComp,
     /// False to behave like ArduPilot: TIMESYNC only.
-    pub answer_ping: bool,
-    pub answer_timesync: bool,
-    pub answer_commands: bool,
-    pub counts: ResponderCounts,
+    pub(crate) answer_ping: bool,
+    pub(crate) answer_timesync: bool,
+    pub(crate) answer_commands: bool,
+    pub(crate) counts: ResponderCounts,
 }
 
 impl ResponderCore {

@@ -21,7 +21,7 @@ fn boolish() -> clap::builder::BoolishValueParser {
 
 /// `mavping --help` ends with examples, the connection strings and the
 /// exit codes (the man page has the same).
-pub const EXAMPLES: &[(&str, &str)] = &[
+pub(crate) const EXAMPLES: &[(&str, &str)] = &[
     (
         "mavping udp:127.0.0.1:14550",
         "listen where a SITL, vehicle or router sends; ping every system heard",
@@ -104,7 +104,7 @@ pub fn command() -> clap::Command {
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct Cli {
     #[command(flatten)]
-    pub ping: PingArgs,
+    pub(crate) ping: PingArgs,
 
     /// Print shell completions or the man page (for packagers)
     #[arg(
@@ -114,7 +114,7 @@ pub struct Cli {
         hide = true,
         value_name = "KIND"
     )]
-    pub generate: Option<Generate>,
+    pub(crate) generate: Option<Generate>,
 
     #[command(subcommand)]
     pub mode: Option<Mode>,
@@ -137,7 +137,9 @@ const SCHEMES: [&str; 10] = [
 /// Shell completion of a connection string: the schemes, serial devices
 /// (`/dev/tty*`, `/dev/serial/...`, `/dev/pts/...`) after `serial:` or for
 /// a bare path, and files after `tlog:`.
-pub fn complete_link(current: &std::ffi::OsStr) -> Vec<clap_complete::engine::CompletionCandidate> {
+pub(crate) fn complete_link(
+    current: &std::ffi::OsStr,
+) -> Vec<clap_complete::engine::CompletionCandidate> {
     use clap_complete::engine::CompletionCandidate;
     let current = current.to_string_lossy();
     // A log's file is looked for from the current directory, a serial
@@ -179,7 +181,7 @@ pub fn complete_link(current: &std::ffi::OsStr) -> Vec<clap_complete::engine::Co
 
 /// What is wrong with a `[FIGURE=]DURATION` RTT limit.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-pub enum RttLimitError {
+pub(crate) enum RttLimitError {
     /// Not an RTT figure (the message lists them).
     #[error("{0}")]
     Figure(String),
@@ -188,7 +190,7 @@ pub enum RttLimitError {
 }
 
 /// `[FIGURE=]DURATION`, e.g. `p99=50ms` or `200ms` (the maximum).
-pub fn parse_rtt_limit(s: &str) -> Result<RttLimit, RttLimitError> {
+pub(crate) fn parse_rtt_limit(s: &str) -> Result<RttLimit, RttLimitError> {
     let (figure, limit) = match s.split_once('=') {
         Some((figure, limit)) => (figure.parse().map_err(RttLimitError::Figure)?, limit),
         None => (crate::verdict::RttFigure::Max, s),
@@ -201,15 +203,15 @@ pub fn parse_rtt_limit(s: &str) -> Result<RttLimit, RttLimitError> {
 
 /// `--expect`: a responder, on every link or on one (`LINK=ID`).
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct ExpectArg {
+pub(crate) struct ExpectArg {
     /// The connection string it is scoped to, as given.
-    pub link: Option<String>,
-    pub id: Expected,
+    pub(crate) link: Option<String>,
+    pub(crate) id: Expected,
 }
 
 /// What is wrong with an `--expect` value; the text given is quoted.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-pub enum ExpectArgError {
+pub(crate) enum ExpectArgError {
     #[error("'{0}' is not LINK=SYSID or LINK=SYSID/COMPID (1-255)")]
     Scoped(String),
     #[error(transparent)]
@@ -219,11 +221,11 @@ pub enum ExpectArgError {
 /// Not `SYSID` or `SYSID/COMPID` (1-255); the text given is quoted.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("'{0}' is not SYSID or SYSID/COMPID (1-255)")]
-pub struct ExpectedError(pub String);
+pub(crate) struct ExpectedError(pub String);
 
 /// `SYSID[/COMPID]`, or `LINK=SYSID[/COMPID]` for one of several links
 /// (split at the last `=`, since connection strings may hold one).
-pub fn parse_expect_arg(s: &str) -> Result<ExpectArg, ExpectArgError> {
+pub(crate) fn parse_expect_arg(s: &str) -> Result<ExpectArg, ExpectArgError> {
     match s.rsplit_once('=') {
         Some((link, id)) if !link.is_empty() => Ok(ExpectArg {
             link: Some(link.to_string()),
@@ -237,7 +239,7 @@ pub fn parse_expect_arg(s: &str) -> Result<ExpectArg, ExpectArgError> {
 }
 
 /// `SYSID` or `SYSID/COMPID`, each 1-255.
-pub fn parse_expected(s: &str) -> Result<Expected, ExpectedError> {
+pub(crate) fn parse_expected(s: &str) -> Result<Expected, ExpectedError> {
     let id = |part: &str| -> Result<u8, ExpectedError> {
         part.parse::<u8>()
             .ok()
@@ -257,7 +259,7 @@ pub fn parse_expected(s: &str) -> Result<Expected, ExpectedError> {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Format {
+pub(crate) enum Format {
     /// Ping-like lines and a summary
     Text,
     /// Newline-delimited JSON events
@@ -266,7 +268,7 @@ pub enum Format {
 
 /// `--radio-type`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum RadioTypeArg {
+pub(crate) enum RadioTypeArg {
     /// Tell them apart by their ids, HEARTBEAT, report rate and constant fields
     Auto,
     /// SiK / RFD900: dBm ~ raw / 1.9 - 127, noise a noise floor (fade margin)
@@ -297,7 +299,7 @@ impl From<RadioTypeArg> for crate::engine::radio::RadioType {
 
 /// What `--generate` writes to stdout.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum Generate {
+pub(crate) enum Generate {
     CompleteBash,
     CompleteZsh,
     CompleteFish,
@@ -333,7 +335,7 @@ pub enum Mode {
 
 /// What to send.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ProbeKind {
+pub(crate) enum ProbeKind {
     /// PING, and TIMESYNC to each responder that shows it does not answer PING (ArduPilot)
     Auto,
     /// MAVLink PING (PX4, QGroundControl, MAVSDK answer it)
@@ -346,7 +348,7 @@ pub enum ProbeKind {
 
 /// Options of a measurement run (the default command).
 #[derive(Debug, clap::Args)]
-pub struct PingArgs {
+pub(crate) struct PingArgs {
     /// Where to ping (several: side by side, each reported on its own)
     ///
     /// udp:HOST:PORT (listen), udpout:HOST:PORT, udpbcast:ADDR:PORT, tcp:HOST:PORT,
@@ -358,7 +360,7 @@ pub struct PingArgs {
         num_args = 1..,
         add = clap_complete::engine::ArgValueCompleter::new(complete_link)
     )]
-    pub links: Vec<String>,
+    pub(crate) links: Vec<String>,
 
     /// Our MAVLink system id
     ///
@@ -373,7 +375,7 @@ pub struct PingArgs {
         default_value_t = SysComp::OURS.sysid,
         env = "MAVPING_SYSID"
     )]
-    pub sysid: u8,
+    pub(crate) sysid: u8,
 
     /// Our MAVLink component id
     #[arg(
@@ -384,16 +386,16 @@ pub struct PingArgs {
         default_value_t = SysComp::OURS.compid,
         env = "MAVPING_COMPID"
     )]
-    pub compid: u8,
+    pub(crate) compid: u8,
 
     /// MAVLink version of our requests (replies of either version are accepted)
     #[arg(help_heading = "What to send", allow_negative_numbers = true, long = "mavlink", value_name = "1|2", default_value_t = 2,
           value_parser = clap::value_parser!(u8).range(1..=2))]
-    pub mavlink_version: u8,
+    pub(crate) mavlink_version: u8,
 
     /// Do not send our 1 Hz GCS HEARTBEAT (MAVSDK ignores PINGs from systems it has not heard)
     #[arg(help_heading = "What to send", long)]
-    pub no_heartbeat: bool,
+    pub(crate) no_heartbeat: bool,
 
     /// Sequence number of the first request (to test wrap-around)
     #[arg(
@@ -404,21 +406,21 @@ pub struct PingArgs {
         default_value_t = 0,
         hide = true
     )]
-    pub first_seq: u32,
+    pub(crate) first_seq: u32,
     /// Send no probes: count each source's frames, losses, duplicates and silences from their
     /// packet sequence numbers (our HEARTBEAT stays on unless --no-heartbeat; implied, with
     /// nothing sent, on a tlog: link)
     #[arg(help_heading = "What to send", long, conflicts_with_all = ["probe", "count", "sweep", "load"])]
-    pub passive: bool,
+    pub(crate) passive: bool,
 
     /// --passive: a source silent this long is in a silence (default: 5 of its usual intervals, at least 1s)
     #[arg(help_heading = "What to send", long, value_name = "DURATION", value_parser = parse_duration)]
-    pub gap: Option<Duration>,
+    pub(crate) gap: Option<Duration>,
 
     /// What to send: ping, timesync (also ArduPilot; measures clock offset), command
     #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Auto,
           env = "MAVPING_PROBE")]
-    pub probe: ProbeKind,
+    pub(crate) probe: ProbeKind,
 
     /// Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)
     #[arg(
@@ -428,7 +430,7 @@ pub struct PingArgs {
         value_name = "SYS/COMP",
         env = "MAVPING_TARGET"
     )]
-    pub target: Option<String>,
+    pub(crate) target: Option<String>,
 
     /// --probe command: MAV_CMD name or id, then up to 7 params, comma-separated
     #[arg(
@@ -438,11 +440,11 @@ pub struct PingArgs {
         value_name = "CMD[,P1,...]",
         default_value = "REQUEST_MESSAGE,0"
     )]
-    pub command: String,
+    pub(crate) command: String,
 
     /// --probe command: re-send an unacknowledged command this often
     #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "100ms")]
-    pub retry_interval: Duration,
+    pub(crate) retry_interval: Duration,
 
     /// --probe command: re-sends after the first before a command counts as failed
     #[arg(
@@ -452,7 +454,7 @@ pub struct PingArgs {
         value_name = "N",
         default_value_t = 3
     )]
-    pub retries: u8,
+    pub(crate) retries: u8,
 
     /// Stop after sending COUNT requests (and waiting for their replies)
     #[arg(
@@ -463,12 +465,12 @@ pub struct PingArgs {
         value_name = "COUNT",
         env = "MAVPING_COUNT"
     )]
-    pub count: Option<u64>,
+    pub(crate) count: Option<u64>,
 
     /// Time between requests, e.g. 1s, 100ms, 0.01
     #[arg(help_heading = "Timing", allow_negative_numbers = true, short = 'i', long, value_name = "DURATION", value_parser = parse_duration,
           conflicts_with = "rate", env = "MAVPING_INTERVAL")]
-    pub interval: Option<Duration>,
+    pub(crate) interval: Option<Duration>,
 
     /// Requests per second (instead of --interval)
     #[arg(
@@ -478,24 +480,24 @@ pub struct PingArgs {
         value_name = "HZ",
         env = "MAVPING_RATE"
     )]
-    pub rate: Option<f64>,
+    pub(crate) rate: Option<f64>,
 
     /// Stop after this long, whatever is still in flight
     #[arg(help_heading = "Timing", allow_negative_numbers = true, short = 'w', long, value_name = "DURATION", value_parser = parse_duration,
           env = "MAVPING_DEADLINE")]
-    pub deadline: Option<Duration>,
+    pub(crate) deadline: Option<Duration>,
 
     /// On a listening link, give up when no system is heard in DURATION
     ///
     /// On udp:, udpin: and tcpin: links. Default with -c: the time the count
     /// takes plus the timeout; without -c: wait for ever
     #[arg(help_heading = "Timing", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, env = "MAVPING_WAIT")]
-    pub wait: Option<Duration>,
+    pub(crate) wait: Option<Duration>,
 
     /// How long to wait for each reply before counting it lost
     #[arg(help_heading = "Timing", allow_negative_numbers = true, short = 'W', long, value_name = "DURATION", value_parser = parse_duration,
           default_value = "2s", env = "MAVPING_TIMEOUT")]
-    pub timeout: Duration,
+    pub(crate) timeout: Duration,
 
     /// Find the link's capacity: ramp the rate in steps until it loses, and name the knee
     ///
@@ -506,7 +508,7 @@ pub struct PingArgs {
     /// adds under load, A+ to F as bufferbloat tests do. Ctrl-C stops at once with the steps
     /// so far
     #[arg(help_heading = "Capacity", long)]
-    pub sweep: bool,
+    pub(crate) sweep: bool,
 
     /// --sweep: the highest rate to offer [default: twice what a serial link's baud rate
     /// carries, else 1000]
@@ -516,15 +518,15 @@ pub struct PingArgs {
         long,
         value_name = "HZ"
     )]
-    pub sweep_max: Option<f64>,
+    pub(crate) sweep_max: Option<f64>,
 
     /// --sweep: stop ramping once a step loses more than PCT [default: 20%]
     #[arg(help_heading = "Capacity", allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent)]
-    pub sweep_loss: Option<f64>,
+    pub(crate) sweep_loss: Option<f64>,
 
     /// How long each step of --sweep or --load sends [default: 5s]
     #[arg(help_heading = "Capacity", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
-    pub step: Option<Duration>,
+    pub(crate) step: Option<Duration>,
 
     /// Background load beside the probes: MSG@RATE, repeatable
     ///
@@ -534,37 +536,37 @@ pub struct PingArgs {
     /// raised the RTT
     #[arg(help_heading = "Capacity", allow_negative_numbers = true, long, value_name = "MSG@RATE",
           value_parser = clap::value_parser!(LoadSpec))]
-    pub load: Vec<LoadSpec>,
+    pub(crate) load: Vec<LoadSpec>,
 
     /// Print only the summary
     #[arg(help_heading = "Output", short = 'q', long)]
-    pub quiet: bool,
+    pub(crate) quiet: bool,
 
     /// Quiet, and an interim summary every DURATION (also on Ctrl-\ / SIGQUIT)
     #[arg(help_heading = "Output", allow_negative_numbers = true, short = 'Q', long = "interim", value_name = "DURATION",
           value_parser = parse_duration)]
-    pub interim: Option<Duration>,
+    pub(crate) interim: Option<Duration>,
 
     /// Start each reply and loss line with its Unix time, as ping -D
     ///
     /// [1764510000.123456] reply from 1/1: ...
     #[arg(help_heading = "Output", short = 'D', long = "timestamps")]
-    pub timestamps: bool,
+    pub(crate) timestamps: bool,
 
     /// Accepted for ping users: overdue replies are always reported
     ///
     /// A "no reply from ..." line is printed when a request's timeout passes
     #[arg(help_heading = "Output", short = 'O')]
-    pub report_outstanding: bool,
+    pub(crate) report_outstanding: bool,
 
     /// Print a line for every reply even above 100 requests/s (where one
     /// status line per second is printed instead)
     #[arg(help_heading = "Output", long)]
-    pub every_reply: bool,
+    pub(crate) every_reply: bool,
 
     /// More logs on stderr (-v info, -vv debug, -vvv trace); or set MAVPING_LOG
     #[arg(help_heading = "Output", short = 'v', long, action = ArgAction::Count)]
-    pub verbose: u8,
+    pub(crate) verbose: u8,
 
     /// Output format
     #[arg(
@@ -574,11 +576,11 @@ pub struct PingArgs {
         default_value = "text",
         env = "MAVPING_FORMAT"
     )]
-    pub format: Format,
+    pub(crate) format: Format,
 
     /// Same as --format json: newline-delimited JSON events on stdout
     #[arg(help_heading = "Output", long)]
-    pub json: bool,
+    pub(crate) json: bool,
 
     /// Write each responder's RTT distribution in HdrHistogram's .hgrm format
     #[arg(
@@ -587,7 +589,7 @@ pub struct PingArgs {
         long,
         value_name = "FILE"
     )]
-    pub hgrm: Option<PathBuf>,
+    pub(crate) hgrm: Option<PathBuf>,
 
     /// Write one CSV row per reply or loss (sysid,compid,seq,sent_s,rtt_us,status, then the latest RADIO_STATUS figures)
     #[arg(
@@ -596,11 +598,11 @@ pub struct PingArgs {
         long,
         value_name = "FILE"
     )]
-    pub samples: Option<PathBuf>,
+    pub(crate) samples: Option<PathBuf>,
 
     /// Full-screen live view (q or Ctrl-C to stop); plain text when stdout is not a terminal
     #[arg(help_heading = "Output", long, env = "MAVPING_LIVE", value_parser = boolish())]
-    pub live: bool,
+    pub(crate) live: bool,
 
     /// Serve Prometheus metrics at http://ADDR:PORT/metrics while the run goes on
     #[arg(
@@ -610,7 +612,7 @@ pub struct PingArgs {
         value_name = "ADDR:PORT",
         env = "MAVPING_PROMETHEUS"
     )]
-    pub prometheus: Option<String>,
+    pub(crate) prometheus: Option<String>,
 
     /// At the end, write the run's metrics to FILE.prom for node_exporter's textfile collector
     /// (written to a temporary file, then renamed: never seen half-written)
@@ -620,7 +622,7 @@ pub struct PingArgs {
         long,
         value_name = "FILE.prom"
     )]
-    pub prometheus_textfile: Option<PathBuf>,
+    pub(crate) prometheus_textfile: Option<PathBuf>,
 
     /// At the end, draw RTT over time and the RTT distribution to FILE.svg
     #[arg(
@@ -629,7 +631,7 @@ pub struct PingArgs {
         long,
         value_name = "FILE.svg"
     )]
-    pub plot: Option<PathBuf>,
+    pub(crate) plot: Option<PathBuf>,
 
     /// Record every frame received and sent to FILE, a telemetry log that
     /// mavping (tlog:FILE), pymavlink and MAVProxy read
@@ -639,25 +641,25 @@ pub struct PingArgs {
         long,
         value_name = "FILE"
     )]
-    pub tlog: Option<PathBuf>,
+    pub(crate) tlog: Option<PathBuf>,
 
     /// Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent, env = "MAVPING_MAX_LOSS")]
-    pub max_loss: Option<f64>,
+    pub(crate) max_loss: Option<f64>,
 
     /// Fail when an RTT figure is above a limit: [p50|p90|p99|p99.9|mean|max=]DURATION
     /// (default figure: max); repeatable, e.g. --max-rtt p99=50ms
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "[FIGURE=]DURATION", value_parser = parse_rtt_limit)]
-    pub max_rtt: Vec<RttLimit>,
+    pub(crate) max_rtt: Vec<RttLimit>,
 
     /// Fail when a responder's jitter is above DURATION
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
-    pub max_jitter: Option<Duration>,
+    pub(crate) max_jitter: Option<Duration>,
 
     /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
     /// LINK=SYSID[/COMPID] (on that one of several links); repeatable
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "[LINK=]SYSID[/COMPID]", value_parser = parse_expect_arg)]
-    pub expect: Vec<ExpectArg>,
+    pub(crate) expect: Vec<ExpectArg>,
 
     /// Fail unless at least N responders answer
     #[arg(
@@ -666,7 +668,7 @@ pub struct PingArgs {
         long,
         value_name = "N"
     )]
-    pub min_responders: Option<usize>,
+    pub(crate) min_responders: Option<usize>,
 
     /// Read links from FILE too (- is standard input), as fping -f
     ///
@@ -678,15 +680,15 @@ pub struct PingArgs {
         long = "file",
         value_name = "FILE"
     )]
-    pub file: Option<PathBuf>,
+    pub(crate) file: Option<PathBuf>,
 
     /// Resolve host names to IPv4 addresses only
     #[arg(help_heading = "Links", short = '4', conflicts_with = "ipv6")]
-    pub ipv4: bool,
+    pub(crate) ipv4: bool,
 
     /// Resolve host names to IPv6 addresses only
     #[arg(help_heading = "Links", short = '6')]
-    pub ipv6: bool,
+    pub(crate) ipv6: bool,
 
     /// Send from this local address (udpout:, udpbcast:, tcp:): ADDR or ADDR:PORT
     #[arg(
@@ -696,7 +698,7 @@ pub struct PingArgs {
         value_name = "ADDR[:PORT]",
         env = "MAVPING_BIND"
     )]
-    pub bind: Option<String>,
+    pub(crate) bind: Option<String>,
 
     /// Send and receive through this network interface only
     ///
@@ -710,17 +712,17 @@ pub struct PingArgs {
         value_name = "IFACE",
         env = "MAVPING_INTERFACE"
     )]
-    pub interface: Option<String>,
+    pub(crate) interface: Option<String>,
 
     /// When a tcp or serial link breaks, reconnect with backoff instead of
     /// ending the run; on udpout an ICMP "port unreachable" does not end it
     /// (pings sent while down count as lost)
     #[arg(help_heading = "Links", long, env = "MAVPING_RECONNECT", value_parser = boolish())]
-    pub reconnect: bool,
+    pub(crate) reconnect: bool,
     /// Baud rate of a serial device whose connection string names none
     #[arg(help_heading = "Serial", allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
           env = "MAVPING_BAUD")]
-    pub baud: u32,
+    pub(crate) baud: u32,
 
     /// How to read radios' RADIO_STATUS: auto tells SiK, mLRS, ExpressLRS and ESP8266 bridges
     /// apart by what they send; the others read every radio as that kind (raw: figures as sent)
@@ -730,21 +732,21 @@ pub struct PingArgs {
     /// evidence for it; dBm, SNR and fade margins are given only on a known scale
     #[arg(help_heading = "Serial", long, value_enum, value_name = "KIND", default_value_t = RadioTypeArg::Auto,
           env = "MAVPING_RADIO_TYPE")]
-    pub radio_type: RadioTypeArg,
+    pub(crate) radio_type: RadioTypeArg,
 
     #[command(flatten, next_help_heading = "Signing")]
-    pub signing: SigningArgs,
+    pub(crate) signing: SigningArgs,
 
     /// With a signing key: refuse unsigned replies too (wrongly signed and
     /// replayed ones are always refused); refused frames are counted, never
     /// measured
     #[arg(help_heading = "Signing", long, env = "MAVPING_REQUIRE_SIGNED", value_parser = boolish())]
-    pub require_signed: bool,
+    pub(crate) require_signed: bool,
 }
 
 /// MAVLink 2 signing, for `mavping` and `mavping respond`.
 #[derive(Debug, clap::Args)]
-pub struct SigningArgs {
+pub(crate) struct SigningArgs {
     /// MAVLink 2 signing key: 64 hex characters (the 32-byte secret) or a
     /// passphrase, hashed with SHA-256 as MAVProxy does. Signs what we send
     /// and checks what we receive. Prefer MAVPING_SIGNING_KEY or
@@ -756,7 +758,7 @@ pub struct SigningArgs {
         env = "MAVPING_SIGNING_KEY",
         hide_env_values = true
     )]
-    pub signing_key: Option<String>,
+    pub(crate) signing_key: Option<String>,
 
     /// Read the signing key from FILE (its content, trimmed)
     #[arg(
@@ -765,7 +767,7 @@ pub struct SigningArgs {
         value_name = "FILE",
         env = "MAVPING_SIGNING_KEY_FILE"
     )]
-    pub signing_key_file: Option<PathBuf>,
+    pub(crate) signing_key_file: Option<PathBuf>,
 
     /// Link id in the signature of our frames (0-255)
     #[arg(
@@ -775,7 +777,7 @@ pub struct SigningArgs {
         default_value_t = 0,
         env = "MAVPING_SIGNING_LINK_ID"
     )]
-    pub signing_link_id: u8,
+    pub(crate) signing_link_id: u8,
 }
 
 /// Options of `mavping respond`.
@@ -783,7 +785,7 @@ pub struct SigningArgs {
 pub struct RespondArgs {
     /// Where to answer: udpin:HOST:PORT (every peer), udpout:HOST:PORT, sim:...
     #[arg(value_name = "CONNECTION")]
-    pub link: String,
+    pub(crate) link: String,
 
     /// Our MAVLink system id
     #[arg(
@@ -792,7 +794,7 @@ pub struct RespondArgs {
         value_name = "ID",
         default_value_t = 1
     )]
-    pub sysid: u8,
+    pub(crate) sysid: u8,
 
     /// Our MAVLink component id
     #[arg(
@@ -801,15 +803,15 @@ pub struct RespondArgs {
         value_name = "ID",
         default_value_t = 1
     )]
-    pub compid: u8,
+    pub(crate) compid: u8,
 
     /// Hold every reply this long (one-way link emulation)
     #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
-    pub delay: Duration,
+    pub(crate) delay: Duration,
 
     /// Extra delay per reply, uniform in [0, jitter]
     #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
-    pub jitter: Duration,
+    pub(crate) jitter: Duration,
 
     /// Drop this share of replies, e.g. 10 or 10% (replies only: streamed frames have
     /// --stream-drop)
@@ -820,7 +822,7 @@ pub struct RespondArgs {
         value_parser = parse_percent,
         default_value = "0"
     )]
-    pub drop: f64,
+    pub(crate) drop: f64,
 
     /// Send this share of replies twice (replies only, not streamed frames)
     #[arg(
@@ -830,7 +832,7 @@ pub struct RespondArgs {
         value_parser = parse_percent,
         default_value = "0"
     )]
-    pub dup: f64,
+    pub(crate) dup: f64,
 
     /// Random seed for --jitter, --drop and --dup (and the streams' phases and --stream-drop)
     #[arg(
@@ -839,7 +841,7 @@ pub struct RespondArgs {
         value_name = "N",
         default_value_t = 1
     )]
-    pub seed: u64,
+    pub(crate) seed: u64,
 
     /// Stream telemetry to every peer, as a vehicle: MSG@HZ, repeatable or a comma list
     ///
@@ -855,7 +857,7 @@ pub struct RespondArgs {
         action = ArgAction::Append,
         value_parser = clap::value_parser!(StreamSpec)
     )]
-    pub stream: Vec<StreamSpec>,
+    pub(crate) stream: Vec<StreamSpec>,
 
     /// Drop this share of streamed frames: each is numbered, then not sent (the gap a lost
     /// frame leaves in the sequence numbers), and counted
@@ -866,24 +868,24 @@ pub struct RespondArgs {
         value_parser = parse_percent,
         default_value = "0"
     )]
-    pub stream_drop: f64,
+    pub(crate) stream_drop: f64,
 
     /// Answer only TIMESYNC and commands, not PING (like ArduPilot)
     #[arg(long)]
-    pub no_ping: bool,
+    pub(crate) no_ping: bool,
 
     /// Baud rate of a serial device whose connection string names none
     #[arg(allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD)]
-    pub baud: u32,
+    pub(crate) baud: u32,
 
     /// With a key (below), sign our replies and answer only correctly
     /// signed, not replayed requests
     #[command(flatten)]
-    pub signing: SigningArgs,
+    pub(crate) signing: SigningArgs,
 
     /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]
-    pub verbose: u8,
+    pub(crate) verbose: u8,
 }
 
 /// Options of `mavping serve`.
@@ -892,26 +894,26 @@ pub struct ServeArgs {
     /// Where to serve /probe and /metrics: a numeric ADDR:PORT [default: 127.0.0.1:9465, or
     /// listen in --config]
     #[arg(long, value_name = "ADDR:PORT", env = "MAVPING_LISTEN")]
-    pub listen: Option<String>,
+    pub(crate) listen: Option<String>,
 
     /// TOML file with allowed targets, modules, continuous links and max_concurrent; reread
     /// on SIGHUP
     #[arg(long, value_name = "FILE", env = "MAVPING_SERVE_CONFIG")]
-    pub config: Option<PathBuf>,
+    pub(crate) config: Option<PathBuf>,
 
     /// Let /probe open targets matching PATTERN, e.g. 'udpout:127.0.0.1:*' ('*' stands for
     /// one part of an address: a port, an octet, a name; '**' for anything); repeatable
     #[arg(long, value_name = "PATTERN")]
-    pub allow: Vec<String>,
+    pub(crate) allow: Vec<String>,
 
     /// Probe LINK all the time (PING every second) and show it at /metrics; repeatable
     #[arg(long = "link", value_name = "LINK")]
-    pub links: Vec<String>,
+    pub(crate) links: Vec<String>,
 
     /// Most /probe requests running at once; more are answered 503 [default: 16, or
     /// max_concurrent in --config]
     #[arg(long, value_name = "N")]
-    pub max_concurrent: Option<usize>,
+    pub(crate) max_concurrent: Option<usize>,
 
     /// YAML file in the exporter-toolkit format (tls_server_config, basic_auth_users,
     /// http_server_config.headers): TLS, client certificates, basic auth; reread on reload
@@ -920,17 +922,17 @@ pub struct ServeArgs {
         value_name = "FILE",
         env = "MAVPING_WEB_CONFIG"
     )]
-    pub web_config_file: Option<PathBuf>,
+    pub(crate) web_config_file: Option<PathBuf>,
 
     /// Let POST /-/reload reread the configuration and web configuration, as SIGHUP does
     #[arg(long = "web.enable-lifecycle")]
-    pub enable_lifecycle: bool,
+    pub(crate) enable_lifecycle: bool,
 
     /// Check --config and --web.config.file, say what they hold, and exit (0 good, 2 bad)
     #[arg(long = "config.check")]
-    pub config_check: bool,
+    pub(crate) config_check: bool,
 
     /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]
-    pub verbose: u8,
+    pub(crate) verbose: u8,
 }

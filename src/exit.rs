@@ -3,22 +3,22 @@
 //! nothing else chooses a code or calls `exit`.
 
 /// Every expectation held.
-pub const OK: u8 = 0;
+pub(crate) const OK: u8 = 0;
 /// No reply at all, an expected responder missing, or a threshold broken.
-pub const FAILED: u8 = 1;
+pub(crate) const FAILED: u8 = 1;
 /// Usage error, or a link could not be opened or failed.
-pub const ERROR: u8 = 2;
+pub(crate) const ERROR: u8 = 2;
 /// A second Ctrl-C (or SIGTERM): the run was abandoned (128 + SIGINT, as
 /// shells report a process killed by it).
-pub const INTERRUPTED_TWICE: u8 = 130;
+pub(crate) const INTERRUPTED_TWICE: u8 = 130;
 
 /// How one link's measurement ended, as far as its code cares.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct LinkEnd {
     /// The link could not be opened, or failed during the run.
-    pub link_failed: bool,
+    pub(crate) link_failed: bool,
     /// Every check held: a reply (or ACK) came, thresholds and `--expect`.
-    pub checks_held: bool,
+    pub(crate) checks_held: bool,
 }
 
 /// How a whole run ended.
@@ -48,7 +48,7 @@ pub enum Ending {
 }
 
 /// The code of one link: a failed link is an error whatever else held.
-pub fn of_link(end: LinkEnd) -> u8 {
+pub(crate) fn of_link(end: LinkEnd) -> u8 {
     if end.link_failed {
         ERROR
     } else if end.checks_held {

@@ -24,7 +24,7 @@ pub(crate) const MAX_LOAD_RATE: f64 = 1_000_000.0;
 /// What a stream sends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
-pub enum LoadKind {
+pub(crate) enum LoadKind {
     Attitude,
     GlobalPositionInt,
     /// Filler at a rate in bytes per second.
@@ -32,7 +32,7 @@ pub enum LoadKind {
 }
 
 impl LoadKind {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             LoadKind::Attitude => "ATTITUDE",
             LoadKind::GlobalPositionInt => "GLOBAL_POSITION_INT",
@@ -41,7 +41,7 @@ impl LoadKind {
     }
 
     /// The message a frame of this stream carries (filler for `BYTES`).
-    pub fn msg(self, time_boot_ms: u32) -> Msg {
+    pub(crate) fn msg(self, time_boot_ms: u32) -> Msg {
         match self {
             LoadKind::Attitude => Msg::Attitude { time_boot_ms },
             LoadKind::GlobalPositionInt => Msg::GlobalPositionInt { time_boot_ms },
@@ -55,9 +55,9 @@ impl LoadKind {
 /// One `--load` stream: a message at a rate (frames per second), or
 /// `BYTES` at a rate in bytes per second.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LoadSpec {
-    pub kind: LoadKind,
-    pub rate: f64,
+pub(crate) struct LoadSpec {
+    pub(crate) kind: LoadKind,
+    pub(crate) rate: f64,
 }
 
 /// What a `--load` stream looks like, for its errors.
@@ -66,7 +66,7 @@ const EXPECTED_LOAD: &str =
 
 /// What is wrong with a `--load` stream; the text given is quoted.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-pub enum LoadSpecError {
+pub(crate) enum LoadSpecError {
     #[error("'{0}': {EXPECTED_LOAD}", EXPECTED_LOAD = EXPECTED_LOAD)]
     NotMsgAtRate(String),
     #[error("'{text}': unknown message {name}; {EXPECTED_LOAD}", EXPECTED_LOAD = EXPECTED_LOAD)]
@@ -121,7 +121,7 @@ impl fmt::Display for LoadSpec {
 impl LoadSpec {
     /// Bytes of one of this stream's frames as `version` (and signed)
     /// puts it on the wire.
-    pub fn frame_bytes(&self, version: Version, signed: bool) -> u64 {
+    pub(crate) fn frame_bytes(&self, version: Version, signed: bool) -> u64 {
         let mut bytes = Vec::new();
         let header = Header {
             sysid: 1,
@@ -135,7 +135,7 @@ impl LoadSpec {
     }
 
     /// Frames per second.
-    pub fn frame_rate(&self, version: Version, signed: bool) -> f64 {
+    pub(crate) fn frame_rate(&self, version: Version, signed: bool) -> f64 {
         match self.kind {
             LoadKind::Bytes => self.rate / self.frame_bytes(version, signed) as f64,
             _ => self.rate,
@@ -143,7 +143,7 @@ impl LoadSpec {
     }
 
     /// Bytes per second on the wire.
-    pub fn bytes_per_s(&self, version: Version, signed: bool) -> f64 {
+    pub(crate) fn bytes_per_s(&self, version: Version, signed: bool) -> f64 {
         self.frame_rate(version, signed) * self.frame_bytes(version, signed) as f64
     }
 }
@@ -154,7 +154,7 @@ pub(crate) const MAX_STREAM_RATE: f64 = 10_000.0;
 /// What a stream sends.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "SCREAMING_SNAKE_CASE")]
-pub enum StreamKind {
+pub(crate) enum StreamKind {
     Attitude,
     GlobalPositionInt,
     /// The sender's own HEARTBEAT, at this rate instead of 1 Hz.
@@ -162,7 +162,7 @@ pub enum StreamKind {
 }
 
 impl StreamKind {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             StreamKind::Attitude => LoadKind::Attitude.name(),
             StreamKind::GlobalPositionInt => LoadKind::GlobalPositionInt.name(),
@@ -172,7 +172,7 @@ impl StreamKind {
 
     /// The message at `time_boot_ms` on the sender's clock; a HEARTBEAT
     /// is the sender's own, `heartbeat`.
-    pub fn msg(self, time_boot_ms: u32, heartbeat: &Msg) -> Msg {
+    pub(crate) fn msg(self, time_boot_ms: u32, heartbeat: &Msg) -> Msg {
         match self {
             StreamKind::Attitude => LoadKind::Attitude.msg(time_boot_ms),
             StreamKind::GlobalPositionInt => LoadKind::GlobalPositionInt.msg(time_boot_ms),
@@ -183,9 +183,9 @@ impl StreamKind {
 
 /// One stream: a message at a rate in messages per second.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StreamSpec {
-    pub kind: StreamKind,
-    pub rate: f64,
+pub(crate) struct StreamSpec {
+    pub(crate) kind: StreamKind,
+    pub(crate) rate: f64,
 }
 
 const EXPECTED_STREAM: &str =
@@ -193,7 +193,7 @@ const EXPECTED_STREAM: &str =
 
 /// What is wrong with a stream; the text given is quoted.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-pub enum StreamSpecError {
+pub(crate) enum StreamSpecError {
     #[error("'{0}': {EXPECTED_STREAM}", EXPECTED_STREAM = EXPECTED_STREAM)]
     NotMsgAtHz(String),
     #[error("'{text}': unknown message {name}; {EXPECTED_STREAM}", EXPECTED_STREAM = EXPECTED_STREAM)]

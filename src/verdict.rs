@@ -14,7 +14,7 @@ use crate::frame::SysComp;
 
 /// Which RTT figure a `--max-rtt` limit applies to.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum RttFigure {
+pub(crate) enum RttFigure {
     Mean,
     Max,
     P50,
@@ -24,7 +24,7 @@ pub enum RttFigure {
 }
 
 impl RttFigure {
-    pub const NAMES: &'static str = "p50, p90, p99, p99.9, mean, max";
+    pub(crate) const NAMES: &'static str = "p50, p90, p99, p99.9, mean, max";
 
     fn of(self, rtt: &RttSummary) -> f64 {
         match self {
@@ -71,16 +71,16 @@ impl fmt::Display for RttFigure {
 
 /// `--max-rtt [FIGURE=]DURATION`
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RttLimit {
-    pub figure: RttFigure,
-    pub limit: Duration,
+pub(crate) struct RttLimit {
+    pub(crate) figure: RttFigure,
+    pub(crate) limit: Duration,
 }
 
 /// `--expect SYSID[/COMPID]`
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Expected {
-    pub sysid: u8,
-    pub compid: Option<u8>,
+pub(crate) struct Expected {
+    pub(crate) sysid: u8,
+    pub(crate) compid: Option<u8>,
 }
 
 impl Expected {
@@ -99,13 +99,13 @@ impl fmt::Display for Expected {
 }
 
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct Thresholds {
+pub(crate) struct Thresholds {
     /// Largest allowed loss ratio (0..=1) per responder.
-    pub max_loss: Option<f64>,
-    pub max_rtt: Vec<RttLimit>,
-    pub max_jitter: Option<Duration>,
-    pub expect: Vec<Expected>,
-    pub min_responders: Option<usize>,
+    pub(crate) max_loss: Option<f64>,
+    pub(crate) max_rtt: Vec<RttLimit>,
+    pub(crate) max_jitter: Option<Duration>,
+    pub(crate) expect: Vec<Expected>,
+    pub(crate) min_responders: Option<usize>,
 }
 
 /// What a run was judged by: an option (`--max-loss`, ...) or what every
@@ -113,7 +113,7 @@ pub struct Thresholds {
 /// name (`max-loss`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "kebab-case")]
-pub enum Check {
+pub(crate) enum Check {
     /// Something answered at all.
     Reply,
     /// A command was acknowledged.
@@ -128,7 +128,7 @@ pub enum Check {
 }
 
 impl Check {
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             Check::Reply => "reply",
             Check::Ack => "ack",
@@ -149,30 +149,30 @@ impl fmt::Display for Check {
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Failure {
+pub(crate) struct Failure {
     /// The responder it concerns, when it concerns one.
-    pub responder: Option<SysComp>,
+    pub(crate) responder: Option<SysComp>,
     /// The check that was broken.
-    pub check: Check,
-    pub message: String,
+    pub(crate) check: Check,
+    pub(crate) message: String,
 }
 
 /// A link's judgement: how it ended, for the exit policy, and the checks
 /// that failed. Reports show the code the policy gives it
 /// (`{"ok", "exit_code", "failures"}` in JSON).
 #[derive(Debug, Clone, PartialEq)]
-pub struct Verdict {
-    pub end: LinkEnd,
-    pub failures: Vec<Failure>,
+pub(crate) struct Verdict {
+    pub(crate) end: LinkEnd,
+    pub(crate) failures: Vec<Failure>,
 }
 
 impl Verdict {
     /// The link's own exit code.
-    pub fn exit_code(&self) -> u8 {
+    pub(crate) fn exit_code(&self) -> u8 {
         exit::of_link(self.end)
     }
 
-    pub fn ok(&self) -> bool {
+    pub(crate) fn ok(&self) -> bool {
         self.exit_code() == exit::OK
     }
 }

@@ -387,11 +387,11 @@ fn parse_command(key: Keys, text: &str) -> Result<(u16, [f32; 7]), ConfigError> 
 /// What a probe is given: its kind and, for TIMESYNC and commands, whom
 /// it addresses and how a command is re-sent.
 pub(super) struct ProbeChoice<'a> {
-    pub kind: ProbeKind,
-    pub target: Option<&'a str>,
-    pub command: &'a str,
-    pub retry_interval: Duration,
-    pub retries: u8,
+    pub(crate) kind: ProbeKind,
+    pub(crate) target: Option<&'a str>,
+    pub(crate) command: &'a str,
+    pub(crate) retry_interval: Duration,
+    pub(crate) retries: u8,
 }
 
 /// The probe a choice names; `key` names options or configuration keys in errors.

@@ -13,10 +13,8 @@ use std::time::Duration;
 
 use thiserror::Error;
 
-pub use serve::{
-    BadProbeRequest, ClientAuth, ContinuousLink, Module, Pattern, ProbePlan, ServeConfig,
-    ServeSettings, WebConfig,
-};
+pub(crate) use serve::{ContinuousLink, ProbePlan, WebConfig};
+pub use serve::{Pattern, ServeConfig, ServeSettings};
 
 use crate::cli::{Format, SigningArgs};
 use crate::engine::capacity::{self, WireBudget};
@@ -44,52 +42,52 @@ fn invalid(msg: impl Into<String>) -> ConfigError {
 
 /// A measurement run over one or more links.
 #[derive(Debug, Clone)]
-pub struct Config {
+pub(crate) struct Config {
     /// In command-line order; each gets its own session.
-    pub links: Vec<LinkConfig>,
-    pub link_options: LinkOptions,
-    pub probe: Probe,
-    pub output: OutputConfig,
-    pub verbose: u8,
+    pub(crate) links: Vec<LinkConfig>,
+    pub(crate) link_options: LinkOptions,
+    pub(crate) probe: Probe,
+    pub(crate) output: OutputConfig,
+    pub(crate) verbose: u8,
 }
 
 /// One link of a run.
 #[derive(Debug, Clone, PartialEq)]
-pub struct LinkConfig {
-    pub spec: LinkSpec,
+pub(crate) struct LinkConfig {
+    pub(crate) spec: LinkSpec,
     /// The connection string as typed: with several links, reply lines,
     /// error lines and exports are labelled with it.
-    pub name: String,
+    pub(crate) name: String,
     /// Its session; `link_name` is the form reports head the run with
     /// (the link's full form alone, or the name beside others).
-    pub session: SessionConfig,
+    pub(crate) session: SessionConfig,
     /// Every link's thresholds, and the responders `--expect` wants here.
-    pub thresholds: Thresholds,
+    pub(crate) thresholds: Thresholds,
 }
 
 /// Where results go.
 #[derive(Debug, Clone)]
-pub struct OutputConfig {
-    pub format: Format,
-    pub quiet: bool,
+pub(crate) struct OutputConfig {
+    pub(crate) format: Format,
+    pub(crate) quiet: bool,
     /// `-D`: event lines start with their Unix time.
-    pub timestamps: bool,
-    pub every_reply: bool,
+    pub(crate) timestamps: bool,
+    pub(crate) every_reply: bool,
     /// `--live`; the run falls back to text when stdout is not a terminal.
-    pub live: bool,
-    pub hgrm: Option<PathBuf>,
-    pub samples: Option<PathBuf>,
-    pub plot: Option<PathBuf>,
-    pub prometheus: Option<SocketAddr>,
+    pub(crate) live: bool,
+    pub(crate) hgrm: Option<PathBuf>,
+    pub(crate) samples: Option<PathBuf>,
+    pub(crate) plot: Option<PathBuf>,
+    pub(crate) prometheus: Option<SocketAddr>,
     /// `--prometheus-textfile`: the run's metrics, written at its end.
-    pub prometheus_textfile: Option<PathBuf>,
+    pub(crate) prometheus_textfile: Option<PathBuf>,
     /// `--tlog`: record what every link received and sent.
-    pub tlog: Option<PathBuf>,
+    pub(crate) tlog: Option<PathBuf>,
 }
 
 /// Which probe, with what it needs.
 #[derive(Debug, Clone, PartialEq)]
-pub enum Probe {
+pub(crate) enum Probe {
     /// PING, and TIMESYNC for responders that do not answer it.
     Auto,
     Ping,
@@ -106,7 +104,7 @@ pub enum Probe {
 
 impl Probe {
     /// The name reports give the probe (`probe="ping"`).
-    pub fn name(&self) -> ProbeName {
+    pub(crate) fn name(&self) -> ProbeName {
         match self {
             Probe::Auto => ProbeName::Auto,
             Probe::Ping => ProbeName::Ping,
@@ -144,17 +142,17 @@ fn wire_budget(
 
 /// `mavping respond`, validated.
 #[derive(Debug, Clone)]
-pub struct RespondConfig {
-    pub link: LinkSpec,
-    pub link_options: LinkOptions,
-    pub settings: ResponderSettings,
-    pub verbose: u8,
+pub(crate) struct RespondConfig {
+    pub(crate) link: LinkSpec,
+    pub(crate) link_options: LinkOptions,
+    pub(crate) settings: ResponderSettings,
+    pub(crate) verbose: u8,
 }
 
 impl Config {
     /// True when the run should use tokio's paused, virtual clock (only
     /// simulated links with `clock=virtual`; validation rejects a mix).
-    pub fn virtual_clock(&self) -> bool {
+    pub(crate) fn virtual_clock(&self) -> bool {
         self.links.iter().all(|l| l.spec.is_virtual())
     }
 }

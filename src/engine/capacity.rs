@@ -102,27 +102,27 @@ pub(crate) fn request_bytes(version: Version, max_seq: u32) -> u64 {
 /// A serial link's budget for one request and its replies.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct WireBudget {
-    pub baud: u32,
+    pub(crate) baud: u32,
     /// The request's message, as the text names it ("PINGs/s"); the
     /// start line names the probe in JSON.
     #[serde(skip)]
-    pub message: &'static str,
-    pub request_bytes: u64,
-    pub reply_bytes: u64,
+    pub(crate) message: &'static str,
+    pub(crate) request_bytes: u64,
+    pub(crate) reply_bytes: u64,
     /// Replies each request is expected to draw.
-    pub replies: u64,
+    pub(crate) replies: u64,
     /// Request and replies share the radio's air time (SiK is half duplex),
     /// so the bound is the baud's bytes over all of them.
-    pub max_rate_hz: f64,
+    pub(crate) max_rate_hz: f64,
     /// Request plus one reply at the baud: the part of every RTT the wire
     /// itself costs, before any radio or autopilot processing.
-    pub floor_us: f64,
+    pub(crate) floor_us: f64,
     /// The device may pass data faster than the baud (a pty, USB CDC):
     /// then the figures are a bound the run may not be under, and the
     /// summary says whether the replies could tell.
     #[serde(skip)]
-    pub ignorer: Option<&'static str>,
-    pub may_ignore_baud: bool,
+    pub(crate) ignorer: Option<&'static str>,
+    pub(crate) may_ignore_baud: bool,
 }
 
 #[cfg(test)]
@@ -202,7 +202,7 @@ pub(crate) fn for_link(
 
 impl WireBudget {
     /// The same link with `replies` replies per request.
-    pub fn with_replies(self, replies: u64) -> WireBudget {
+    pub(crate) fn with_replies(self, replies: u64) -> WireBudget {
         let replies = replies.max(1);
         let bytes_per_s = u64::from(self.baud) as f64 / BITS_PER_BYTE as f64;
         WireBudget {
@@ -213,7 +213,7 @@ impl WireBudget {
     }
 
     /// The one-line warning before a run whose rate the link cannot carry.
-    pub fn warning(&self, rate_hz: f64) -> Option<String> {
+    pub(crate) fn warning(&self, rate_hz: f64) -> Option<String> {
         (rate_hz > self.max_rate_hz).then(|| {
             format!(
                 "at {} baud this link carries at most ~{:.0} {}s/s each way; {}/s will queue and then lose",

@@ -209,22 +209,22 @@ struct Drift {
 pub struct ClockSummary {
     /// Their clock minus ours at the start of the run (our time 0), ns;
     /// inside the bounds when they intersect.
-    pub offset_ns: i128,
+    pub(crate) offset_ns: i128,
     /// Half the width of the bounds, or half the lowest RTT without them.
-    pub uncertainty_ns: u64,
+    pub(crate) uncertainty_ns: u64,
     /// The causal bounds of the offset at the start of the run; `None`
     /// when the exchanges' bounds do not intersect.
-    pub bounds_ns: Option<(i128, i128)>,
+    pub(crate) bounds_ns: Option<(i128, i128)>,
     /// The limit on the clocks' relative rate the bounds assume, ppm.
-    pub bounds_drift_limit_ppm: u32,
+    pub(crate) bounds_drift_limit_ppm: u32,
     /// Standard deviation of the samples about the drift line, ns.
-    pub spread_ns: f64,
+    pub(crate) spread_ns: f64,
     /// Their clock's rate relative to ours, parts per million (positive:
     /// theirs runs fast), and its standard error; `None` until the
     /// exchanges span [`MIN_DRIFT_SPAN_S`].
-    pub drift_ppm: Option<f64>,
-    pub drift_stderr_ppm: Option<f64>,
-    pub samples: u64,
+    pub(crate) drift_ppm: Option<f64>,
+    pub(crate) drift_stderr_ppm: Option<f64>,
+    pub(crate) samples: u64,
 }
 
 /// The running intersection of every exchange's bounds, referred to time

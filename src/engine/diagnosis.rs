@@ -21,32 +21,32 @@ pub(crate) const QGC_IDS: SysComp = SysComp::new(255, 190);
 
 /// What a run saw, for its diagnosis.
 pub(crate) struct Observed<'a> {
-    pub link: &'a str,
-    pub kind: LinkKind,
-    pub probe: ProbeName,
-    pub ours: SysComp,
-    pub version: Version,
+    pub(crate) link: &'a str,
+    pub(crate) kind: LinkKind,
+    pub(crate) probe: ProbeName,
+    pub(crate) ours: SysComp,
+    pub(crate) version: Version,
     /// A signing key was given.
-    pub key: bool,
+    pub(crate) key: bool,
     /// What the signing gate accepted and refused.
-    pub signing: SigningCounts,
-    pub frames: ScanStats,
+    pub(crate) signing: SigningCounts,
+    pub(crate) frames: ScanStats,
     /// ICMP "port unreachable" reports the link shrugged off (`udpout:`
     /// with `--reconnect`).
-    pub unreachable: u64,
-    pub roster: &'a Roster,
-    pub responders: &'a [ResponderSummary],
+    pub(crate) unreachable: u64,
+    pub(crate) roster: &'a Roster,
+    pub(crate) responders: &'a [ResponderSummary],
     /// Radios heard by their RADIO_STATUS: no answer is expected of them.
-    pub radios: &'a [SysComp],
-    pub requests: u64,
+    pub(crate) radios: &'a [SysComp],
+    pub(crate) requests: u64,
     /// Requests still within their timeout when the run ended.
-    pub undecided: u64,
+    pub(crate) undecided: u64,
     /// How long a request waits for its reply (`-W`).
-    pub timeout: Duration,
+    pub(crate) timeout: Duration,
     /// A listening link gave up after this long without a peer.
-    pub no_peer_within: Option<Duration>,
+    pub(crate) no_peer_within: Option<Duration>,
     /// The link failed: its error says what happened.
-    pub link_failed: bool,
+    pub(crate) link_failed: bool,
 }
 
 /// Seconds as a person writes them: "2.5 s", "20 s".

@@ -7,7 +7,7 @@ use serde::Serialize;
 /// The stable, machine-readable kinds of hint (listed in the JSON schema).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum HintCode {
+pub(crate) enum HintCode {
     /// A listening link heard no MAVLink system before it gave up.
     NoPeerHeard,
     /// Nothing at all came back on the link.
@@ -70,13 +70,13 @@ pub enum HintCode {
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Hint {
-    pub code: HintCode,
-    pub text: String,
+pub(crate) struct Hint {
+    pub(crate) code: HintCode,
+    pub(crate) text: String,
 }
 
 impl Hint {
-    pub fn new(code: HintCode, text: impl Into<String>) -> Self {
+    pub(crate) fn new(code: HintCode, text: impl Into<String>) -> Self {
         Hint {
             code,
             text: text.into(),

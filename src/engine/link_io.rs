@@ -18,13 +18,14 @@ use crate::transport::{LinkError, Transport};
 /// TIMESYNC's causal bounds widen by `within` so they stay true anyway.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct WallAtZero {
-    pub wall: std::time::SystemTime,
-    pub within: Duration,
+    pub(crate) wall: std::time::SystemTime,
+    pub(crate) within: Duration,
 }
 
 impl WallAtZero {
+    #[cfg(test)]
     /// Exactly `wall` (tests, and clocks that are not read).
-    pub fn exactly(wall: std::time::SystemTime) -> Self {
+    pub(crate) fn exactly(wall: std::time::SystemTime) -> Self {
         WallAtZero {
             wall,
             within: Duration::ZERO,
@@ -39,13 +40,13 @@ const PAIR_TRIES: usize = 8;
 
 /// Session time: nanoseconds since the session started, from the
 /// monotonic clock (tokio's, so a paused runtime's virtual time too).
-pub struct Clock {
+pub(crate) struct Clock {
     epoch: Instant,
     wall_at_zero: WallAtZero,
 }
 
 impl Clock {
-    pub fn start() -> Self {
+    pub(crate) fn start() -> Self {
         let (epoch, wall_at_zero) = read_together();
         Clock {
             epoch,
@@ -54,24 +55,24 @@ impl Clock {
     }
 
     /// The wall clock at session time 0.
-    pub fn wall_at_zero(&self) -> WallAtZero {
+    pub(crate) fn wall_at_zero(&self) -> WallAtZero {
         self.wall_at_zero
     }
 
-    pub fn ns(&self, t: Instant) -> Nanos {
+    pub(crate) fn ns(&self, t: Instant) -> Nanos {
         t.saturating_duration_since(self.epoch).as_nanos() as Nanos
     }
 
-    pub fn now(&self) -> Nanos {
+    pub(crate) fn now(&self) -> Nanos {
         self.ns(Instant::now())
     }
 
-    pub fn at(&self, ns: Nanos) -> Instant {
+    pub(crate) fn at(&self, ns: Nanos) -> Instant {
         self.epoch + Duration::from_nanos(ns)
     }
 
     /// Sleeps until session time `wake`, or forever when there is none.
-    pub async fn sleep_until(&self, wake: Option<Nanos>) {
+    pub(crate) async fn sleep_until(&self, wake: Option<Nanos>) {
         match wake {
             Some(ns) => sleep_until(self.at(ns)).await,
             None => std::future::pending().await,
@@ -161,7 +162,7 @@ impl Heartbeat {
 
 /// Serialises our frames into one reused buffer: our ids, the running
 /// packet sequence, and a signature when signing is on.
-pub struct Sender {
+pub(crate) struct Sender {
     buf: Vec<u8>,
     packet_seq: u8,
     ours: SysComp,
@@ -172,7 +173,7 @@ pub struct Sender {
 }
 
 impl Sender {
-    pub fn new(ours: SysComp, version: Version, signer: Option<Signer>) -> Self {
+    pub(crate) fn new(ours: SysComp, version: Version, signer: Option<Signer>) -> Self {
         Sender {
             buf: Vec::with_capacity(frame::scanner::MAX_FRAME_LEN),
             packet_seq: 0,
@@ -184,18 +185,18 @@ impl Sender {
     }
 
     /// Bytes of every frame built so far (each is sent once built).
-    pub fn bytes(&self) -> u64 {
+    pub(crate) fn bytes(&self) -> u64 {
         self.bytes
     }
 
     /// `msg` as our next frame (no allocation per frame).
-    pub fn frame(&mut self, msg: &Msg) -> &[u8] {
+    pub(crate) fn frame(&mut self, msg: &Msg) -> &[u8] {
         self.frame_as(self.version, msg)
     }
 
     /// `msg` in MAVLink `version`; signed frames are MAVLink 2 whatever is
     /// asked (only MAVLink 2 can carry a signature).
-    pub fn frame_as(&mut self, version: Version, msg: &Msg) -> &[u8] {
+    pub(crate) fn frame_as(&mut self, version: Version, msg: &Msg) -> &[u8] {
         self.buf.clear();
         let header = Header {
             sysid: self.ours.sysid,
@@ -215,7 +216,7 @@ impl Sender {
     }
 
     /// The last frame built, to send again or keep.
-    pub fn last(&self) -> &[u8] {
+    pub(crate) fn last(&self) -> &[u8] {
         &self.buf
     }
 }

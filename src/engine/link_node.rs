@@ -88,13 +88,13 @@ impl<T: Width> SinceBoot<T> {
 pub(crate) struct NodeCounters {
     /// The boot clock of the last report (ms): a fall is a reboot.
     last_timestamp: Option<u64>,
-    pub reboots: u64,
-    pub received: SinceBoot<u32>,
-    pub lost: SinceBoot<u32>,
-    pub sent: SinceBoot<u32>,
-    pub rx_parse_err: SinceBoot<u16>,
-    pub rx_overflows: SinceBoot<u16>,
-    pub tx_overflows: SinceBoot<u16>,
+    pub(crate) reboots: u64,
+    pub(crate) received: SinceBoot<u32>,
+    pub(crate) lost: SinceBoot<u32>,
+    pub(crate) sent: SinceBoot<u32>,
+    pub(crate) rx_parse_err: SinceBoot<u16>,
+    pub(crate) rx_overflows: SinceBoot<u16>,
+    pub(crate) tx_overflows: SinceBoot<u16>,
 }
 
 impl NodeCounters {
@@ -130,68 +130,68 @@ struct Node {
 
 /// The end-of-run figures of one node.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct LinkNodeSummary {
-    pub id: SysComp,
-    pub reports: u64,
+pub(crate) struct LinkNodeSummary {
+    pub(crate) id: SysComp,
+    pub(crate) reports: u64,
     /// Session time of its first and last report, s.
-    pub first_t_s: f64,
-    pub last_t_s: f64,
-    pub first: LinkNodeReport,
-    pub last: LinkNodeReport,
+    pub(crate) first_t_s: f64,
+    pub(crate) last_t_s: f64,
+    pub(crate) first: LinkNodeReport,
+    pub(crate) last: LinkNodeReport,
     /// Times its boot clock went back between reports.
-    pub reboots: u64,
+    pub(crate) reboots: u64,
     /// What each since-boot counter grew by between the first report and
     /// the last (wrap- and reboot-safe).
-    pub received_delta: u64,
-    pub lost_delta: u64,
-    pub sent_delta: u64,
-    pub rx_parse_err_delta: u64,
-    pub rx_overflows_delta: u64,
-    pub tx_overflows_delta: u64,
+    pub(crate) received_delta: u64,
+    pub(crate) lost_delta: u64,
+    pub(crate) sent_delta: u64,
+    pub(crate) rx_parse_err_delta: u64,
+    pub(crate) rx_overflows_delta: u64,
+    pub(crate) tx_overflows_delta: u64,
     /// lost / (received + lost) of the growth: the loss on the way to it,
     /// of everything sent to it on that link. `None` before it counted any.
-    pub uplink_loss: Option<f64>,
+    pub(crate) uplink_loss: Option<f64>,
     /// A probe run: the figure beside mavping's uplink estimate for the
     /// same system.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub compared: Option<UplinkComparison>,
+    pub(crate) compared: Option<UplinkComparison>,
 }
 
 impl LinkNodeSummary {
     /// What the node saw of the link: received + lost.
-    pub fn seen(&self) -> u64 {
+    pub(crate) fn seen(&self) -> u64 {
         self.received_delta + self.lost_delta
     }
 }
 
 /// The vehicle's uplink loss against mavping's estimate for one responder.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct UplinkComparison {
+pub(crate) struct UplinkComparison {
     /// The responder whose requests the estimate is of.
-    pub responder: SysComp,
+    pub(crate) responder: SysComp,
     /// mavping's uplink loss estimate and its standard error (the
     /// direction split; 0 when no request was lost).
-    pub estimate: f64,
-    pub estimate_stderr: f64,
+    pub(crate) estimate: f64,
+    pub(crate) estimate_stderr: f64,
     /// The vehicle's figure and its own binomial standard error.
-    pub vehicle: f64,
-    pub vehicle_stderr: f64,
+    pub(crate) vehicle: f64,
+    pub(crate) vehicle_stderr: f64,
     /// |vehicle − estimate| in their combined standard errors.
-    pub sigmas: f64,
+    pub(crate) sigmas: f64,
     /// Within [`DISAGREE_SIGMAS`].
-    pub agrees: bool,
+    pub(crate) agrees: bool,
 }
 
 /// All nodes heard, keyed by their MAVLink source.
 #[derive(Debug, Default)]
-pub struct LinkNodes {
+pub(crate) struct LinkNodes {
     nodes: BTreeMap<SysComp, Node>,
 }
 
 impl LinkNodes {
     /// Records a report; returns true for a node's first one. Reports
     /// from nodes beyond [`MAX_NODES`] are ignored.
-    pub fn record(&mut self, id: SysComp, r: LinkNodeReport, at: Nanos) -> bool {
+    pub(crate) fn record(&mut self, id: SysComp, r: LinkNodeReport, at: Nanos) -> bool {
         let first = !self.nodes.contains_key(&id);
         if first && self.nodes.len() >= MAX_NODES {
             return false;
@@ -211,7 +211,7 @@ impl LinkNodes {
         first
     }
 
-    pub fn summaries(&self) -> Vec<LinkNodeSummary> {
+    pub(crate) fn summaries(&self) -> Vec<LinkNodeSummary> {
         self.nodes
             .iter()
             .map(|(&id, n)| {

@@ -30,13 +30,13 @@ const MAX_BURST: usize = 64;
 
 /// What a stream sent, for the summary.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct LoadSummary {
-    pub message: &'static str,
+pub(crate) struct LoadSummary {
+    pub(crate) message: &'static str,
     /// As given: frames/s, or bytes/s for `BYTES`.
-    pub rate: f64,
-    pub frame_bytes: u64,
-    pub frames: u64,
-    pub bytes: u64,
+    pub(crate) rate: f64,
+    pub(crate) frame_bytes: u64,
+    pub(crate) frames: u64,
+    pub(crate) bytes: u64,
 }
 
 struct Stream {

@@ -90,7 +90,7 @@ pub enum MatchEvent {
 
 impl MatchEvent {
     /// When it was decided (session time).
-    pub fn at(&self) -> Nanos {
+    pub(crate) fn at(&self) -> Nanos {
         match *self {
             MatchEvent::Reply { at, .. }
             | MatchEvent::Late { at, .. }
@@ -139,7 +139,7 @@ pub struct Counts {
 
 impl Counts {
     /// Lost share of sent, 0 when nothing was sent.
-    pub fn loss_ratio(&self) -> f64 {
+    pub(crate) fn loss_ratio(&self) -> f64 {
         if self.sent == 0 {
             0.0
         } else {
@@ -225,13 +225,13 @@ struct Slot {
 /// A request as the matcher issued it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Issued {
-    pub n: u64,
+    pub(crate) n: u64,
     pub seq: u32,
 }
 
 /// At most this many distinct responders are tracked; replies from more
 /// (a spoofing flood) are counted in `untracked` instead of growing memory.
-pub const MAX_RESPONDERS: usize = 4096;
+pub(crate) const MAX_RESPONDERS: usize = 4096;
 
 pub struct Matcher {
     timeout: Nanos,
@@ -269,13 +269,9 @@ impl Matcher {
 
     /// Where each responder's window opens (by default, at its first
     /// answer).
-    pub fn with_window(mut self, window: Window) -> Self {
+    pub(crate) fn with_window(mut self, window: Window) -> Self {
         self.window = window;
         self
-    }
-
-    pub fn capacity(&self) -> usize {
-        self.slots.len()
     }
 
     fn idx(&self, n: u64) -> usize {
@@ -532,7 +528,7 @@ impl Matcher {
     /// True when at least one responder is known and every undecided
     /// request has been answered by every responder whose window covers it:
     /// after the last request, there is nothing left to wait for.
-    pub fn all_answered(&self) -> bool {
+    pub(crate) fn all_answered(&self) -> bool {
         let active: Vec<&Responder> = self
             .responders
             .iter()
@@ -551,7 +547,7 @@ impl Matcher {
     /// undecided requests it already answered count as sent (as
     /// [`Matcher::finish`] counts them), the others in flight; and the
     /// requests before its window, not charged.
-    pub fn counts_now(&self, r: &Responder) -> Counts {
+    pub(crate) fn counts_now(&self, r: &Responder) -> Counts {
         let mut counts = r.counts;
         for n in (self.next_expiry..self.next_n).filter(|&n| r.in_window(n)) {
             if r.has_answered(self.idx(n)) {
@@ -565,12 +561,12 @@ impl Matcher {
     }
 
     /// Requests still within their timeout, whoever answered them.
-    pub fn undecided(&self) -> u64 {
+    pub(crate) fn undecided(&self) -> u64 {
         self.next_n - self.next_expiry
     }
 
     /// Requests issued so far.
-    pub fn issued(&self) -> u64 {
+    pub(crate) fn issued(&self) -> u64 {
         self.next_n
     }
 
@@ -579,16 +575,17 @@ impl Matcher {
     }
 
     /// The responders, for a summary that keeps them once the run is over.
-    pub fn into_responders(self) -> Vec<Responder> {
+    pub(crate) fn into_responders(self) -> Vec<Responder> {
         self.responders
     }
 
-    pub fn responder(&self, id: SysComp) -> Option<&Responder> {
+    #[cfg(test)]
+    pub(crate) fn responder(&self, id: SysComp) -> Option<&Responder> {
         self.index.get(&id).map(|&i| &self.responders[i])
     }
 
     /// Replies from responders beyond [`MAX_RESPONDERS`].
-    pub fn untracked(&self) -> u64 {
+    pub(crate) fn untracked(&self) -> u64 {
         self.untracked
     }
 }

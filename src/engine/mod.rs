@@ -36,7 +36,7 @@ use crate::frame::{SysComp, Version};
 
 /// Time in nanoseconds since the session started, from a monotonic clock.
 /// The pure parts take time as a value; only the session reads a clock.
-pub type Nanos = u64;
+pub(crate) type Nanos = u64;
 
 /// What a session needs to know, already validated.
 #[derive(Debug, Clone, PartialEq)]
@@ -84,10 +84,10 @@ pub struct SessionConfig {
 /// The command probe's request and retry policy.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CommandSpec {
-    pub target: SysComp,
-    pub command: u16,
-    pub params: [f32; 7],
-    pub retry_interval: Duration,
+    pub(crate) target: SysComp,
+    pub(crate) command: u16,
+    pub(crate) params: [f32; 7],
+    pub(crate) retry_interval: Duration,
     /// Re-sends after the first transmission.
-    pub retries: u8,
+    pub(crate) retries: u8,
 }

@@ -50,7 +50,7 @@ pub enum RunKind {
 
 impl RunKind {
     /// The command a command run sends.
-    pub fn command(&self) -> Option<&CommandSpec> {
+    pub(crate) fn command(&self) -> Option<&CommandSpec> {
         match self {
             RunKind::Command(spec) => Some(spec),
             _ => None,
@@ -58,7 +58,7 @@ impl RunKind {
     }
 
     /// The steps of a run in steps.
-    pub fn steps(&self) -> Option<&SweepConfig> {
+    pub(crate) fn steps(&self) -> Option<&SweepConfig> {
         match self {
             RunKind::Steps(plan) => Some(plan),
             _ => None,
@@ -127,7 +127,7 @@ pub enum Event<'a> {
 /// goes on to its end and its code. Any other write error (a full disk,
 /// an I/O error) is: the figures did not reach where they were sent.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub enum OutputFate {
+pub(crate) enum OutputFate {
     #[default]
     Written,
     Closed,
@@ -136,7 +136,7 @@ pub enum OutputFate {
 
 impl OutputFate {
     /// Notes the outcome of a write; a failure outranks a closed pipe.
-    pub fn note(&mut self, written: &io::Result<()>) {
+    pub(crate) fn note(&mut self, written: &io::Result<()>) {
         let Err(e) = written else {
             return;
         };
@@ -149,7 +149,7 @@ impl OutputFate {
     }
 
     /// The worse of the two.
-    pub fn merge(&mut self, other: OutputFate) {
+    pub(crate) fn merge(&mut self, other: OutputFate) {
         let rank = |f: &OutputFate| match f {
             OutputFate::Written => 0,
             OutputFate::Closed => 1,
@@ -180,7 +180,7 @@ pub trait Observer {
 /// Tells `observer` each event in order. After a write error the rest are
 /// still taken (their side effects happen) but not written; the first
 /// error is returned.
-pub fn tell_each<'a>(
+pub(crate) fn tell_each<'a>(
     observer: &mut dyn Observer,
     events: impl Iterator<Item = Event<'a>>,
 ) -> io::Result<()> {

@@ -14,24 +14,25 @@ use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
 use super::hint::{Hint, HintCode};
-pub use super::radio_kind::{
-    sik_dbm, Evidence, Field, Judgement, PairFilter, RadioKind, RadioType, COMP_TELEMETRY_RADIO,
+pub use super::radio_kind::RadioType;
+pub(crate) use super::radio_kind::{
+    sik_dbm, Evidence, Field, Judgement, PairFilter, RadioKind, COMP_TELEMETRY_RADIO,
     COMP_UDP_BRIDGE, UNKNOWN,
 };
 use super::Nanos;
-use crate::frame::{ids, SysComp};
+use crate::frame::SysComp;
 
 /// A spoofing flood cannot grow memory beyond this many radios.
-pub const MAX_RADIOS: usize = 16;
+pub(crate) const MAX_RADIOS: usize = 16;
 /// SiK's default system id.
-pub const SIK_SYSID: u8 = 51;
+pub(crate) const SIK_SYSID: u8 = 51;
 /// A SiK fade margin under this many dB leaves little room before the
 /// link drops.
-pub const WEAK_FADE_MARGIN_DB: f64 = 10.0;
+pub(crate) const WEAK_FADE_MARGIN_DB: f64 = 10.0;
 /// SiK's RSSI steps per dB.
-pub const SIK_STEPS_PER_DB: f64 = 1.9;
+pub(crate) const SIK_STEPS_PER_DB: f64 = 1.9;
 /// Below this much of its transmit buffer free, a radio is overloaded.
-pub const LOW_TXBUF_PERCENT: u8 = 20;
+pub(crate) const LOW_TXBUF_PERCENT: u8 = 20;
 /// Losses needed while the buffer is low before the hint speaks.
 const MIN_LOSSES_FOR_HINT: u64 = 3;
 /// Buffer state changes remembered, to judge each request by the state
@@ -40,27 +41,27 @@ const MAX_BUFFER_CHANGES: usize = 256;
 
 /// One RADIO_STATUS as received: the frame's own struct, under the name
 /// the engine and the reports know it by.
-pub use crate::frame::RadioStatus as RadioReport;
+pub(crate) use crate::frame::RadioStatus as RadioReport;
 
 /// SiK's default ids, 51/68: a radio even before its first RADIO_STATUS.
-pub fn is_sik_default(id: SysComp) -> bool {
+pub(crate) fn is_sik_default(id: SysComp) -> bool {
     id.sysid == SIK_SYSID && id.compid == COMP_TELEMETRY_RADIO
 }
 
 /// The ids radios send as (compid 68, or mavesp8266's 240): a source
 /// whose frames are the radio's own, not the link's traffic.
-pub fn is_radio_ids(id: SysComp) -> bool {
+pub(crate) fn is_radio_ids(id: SysComp) -> bool {
     id.compid == COMP_TELEMETRY_RADIO || id.compid == COMP_UDP_BRIDGE
 }
 
 /// Min / mean / max of one figure over the reports that knew it.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Range {
-    pub min: f64,
-    pub mean: f64,
-    pub max: f64,
+pub(crate) struct Range {
+    pub(crate) min: f64,
+    pub(crate) mean: f64,
+    pub(crate) max: f64,
     /// Reports that carried a known value.
-    pub samples: u64,
+    pub(crate) samples: u64,
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -103,7 +104,7 @@ impl Figure {
 /// How often each value of one 8-bit figure came: whatever kind a radio
 /// turns out to be, its figures convert exactly from this.
 #[derive(Clone, PartialEq, Eq)]
-pub struct RawHistogram(Box<[u64; 256]>);
+pub(crate) struct RawHistogram(Box<[u64; 256]>);
 
 impl Default for RawHistogram {
     fn default() -> Self {
@@ -118,20 +119,20 @@ impl std::fmt::Debug for RawHistogram {
 }
 
 impl RawHistogram {
-    pub fn record(&mut self, v: u8) {
+    pub(crate) fn record(&mut self, v: u8) {
         self.0[usize::from(v)] += 1;
     }
 
-    pub fn count(&self) -> u64 {
+    pub(crate) fn count(&self) -> u64 {
         self.0.iter().sum()
     }
 
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.0.fill(0);
     }
 
     /// What `self` holds beyond `part` (a part of it).
-    pub fn minus(&self, part: &RawHistogram) -> RawHistogram {
+    pub(crate) fn minus(&self, part: &RawHistogram) -> RawHistogram {
         let mut out = self.clone();
         for (o, p) in out.0.iter_mut().zip(part.0.iter()) {
             *o = o.saturating_sub(*p);
@@ -140,7 +141,7 @@ impl RawHistogram {
     }
 
     /// Min / mean / max of the values `convert` knows.
-    pub fn range(&self, convert: impl Fn(u8) -> Option<f64>) -> Option<Range> {
+    pub(crate) fn range(&self, convert: impl Fn(u8) -> Option<f64>) -> Option<Range> {
         let (mut min, mut max, mut sum, mut n) = (f64::INFINITY, f64::NEG_INFINITY, 0.0, 0u64);
         for (v, &c) in self.0.iter().enumerate() {
             let Some(x) = (c > 0).then(|| convert(v as u8)).flatten() else {
@@ -160,7 +161,7 @@ impl RawHistogram {
     }
 
     /// The raw values, 255 (unknown) left out.
-    pub fn raw_range(&self) -> Option<Range> {
+    pub(crate) fn raw_range(&self) -> Option<Range> {
         self.range(|v| (v != UNKNOWN).then_some(f64::from(v)))
     }
 }
@@ -170,7 +171,7 @@ impl RawHistogram {
 /// not −65 525; but a fall from well below the top is the radio counting
 /// again from 0 after a restart, and counts as the new value.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct SinceBootCounter {
+pub(crate) struct SinceBootCounter {
     last: Option<u16>,
     grown: u64,
 }
@@ -179,7 +180,7 @@ pub struct SinceBootCounter {
 const WRAP_ZONE: u16 = 0xF000;
 
 impl SinceBootCounter {
-    pub fn record(&mut self, v: u16) {
+    pub(crate) fn record(&mut self, v: u16) {
         if let Some(last) = self.last {
             self.grown += u64::from(if v < last && last < WRAP_ZONE {
                 v
@@ -190,7 +191,7 @@ impl SinceBootCounter {
         self.last = Some(v);
     }
 
-    pub fn grown(&self) -> u64 {
+    pub(crate) fn grown(&self) -> u64 {
         self.grown
     }
 }
@@ -198,7 +199,6 @@ impl SinceBootCounter {
 #[derive(Debug, Clone)]
 struct Radio {
     reports: u64,
-    first_at: Nanos,
     latest: RadioReport,
     evidence: Evidence,
     judgement: Judgement,
@@ -216,24 +216,25 @@ struct Radio {
 
 /// One figure in the units its radio's kind gives it.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct KindFigure {
+pub(crate) struct KindFigure {
     /// Its name in JSON (`rssi_dbm`).
-    pub key: &'static str,
+    pub(crate) key: &'static str,
     /// Its name in text (`remote rssi`).
-    pub label: &'static str,
-    pub unit: &'static str,
+    pub(crate) label: &'static str,
+    pub(crate) unit: &'static str,
     /// How exact the conversion is.
-    pub note: &'static str,
-    pub range: Range,
+    pub(crate) note: &'static str,
+    pub(crate) range: Range,
 }
 
 /// A radio's figures in its kind's units, in the order text shows them;
 /// JSON has them as an object by key.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct Converted(pub Vec<KindFigure>);
+pub(crate) struct Converted(pub Vec<KindFigure>);
 
 impl Converted {
-    pub fn get(&self, key: &str) -> Option<&KindFigure> {
+    #[cfg(test)]
+    pub(crate) fn get(&self, key: &str) -> Option<&KindFigure> {
         self.0.iter().find(|f| f.key == key)
     }
 }
@@ -262,40 +263,40 @@ impl Serialize for Converted {
 
 /// The end-of-run figures of one radio.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RadioSummary {
-    pub id: SysComp,
-    pub reports: u64,
+pub(crate) struct RadioSummary {
+    pub(crate) id: SysComp,
+    pub(crate) reports: u64,
     /// What it is and why.
     #[serde(flatten)]
-    pub judgement: Judgement,
+    pub(crate) judgement: Judgement,
     /// Raw values as the radio reports them (255 = unknown, skipped).
-    pub rssi: Option<Range>,
-    pub remrssi: Option<Range>,
-    pub noise: Option<Range>,
-    pub remnoise: Option<Range>,
+    pub(crate) rssi: Option<Range>,
+    pub(crate) remrssi: Option<Range>,
+    pub(crate) noise: Option<Range>,
+    pub(crate) remnoise: Option<Range>,
     /// RSSI − noise, raw units, per report where both are known: SiK only
     /// (elsewhere `noise` is no noise floor).
-    pub fade_margin: Option<Range>,
-    pub remote_fade_margin: Option<Range>,
+    pub(crate) fade_margin: Option<Range>,
+    pub(crate) remote_fade_margin: Option<Range>,
     /// Percent of the radio's transmit buffer free.
-    pub txbuf: Option<Range>,
+    pub(crate) txbuf: Option<Range>,
     /// What the since-boot counters grew by during the run (wrap-safe).
-    pub rxerrors_delta: u64,
-    pub fixed_delta: u64,
+    pub(crate) rxerrors_delta: u64,
+    pub(crate) fixed_delta: u64,
     /// The figures in the units the kind defines: dBm, SNR, link quality.
-    pub converted: Converted,
+    pub(crate) converted: Converted,
     /// SiK only: approximate dBm of RSSI and fade margin in dB.
-    pub approx_dbm: Option<ApproxDbm>,
-    pub latest: RadioReport,
+    pub(crate) approx_dbm: Option<ApproxDbm>,
+    pub(crate) latest: RadioReport,
 }
 
 /// SiK's figures converted with [`sik_dbm`]; approximate by nature.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ApproxDbm {
-    pub rssi: Option<Range>,
-    pub remrssi: Option<Range>,
-    pub fade_margin_db: Option<Range>,
-    pub remote_fade_margin_db: Option<Range>,
+pub(crate) struct ApproxDbm {
+    pub(crate) rssi: Option<Range>,
+    pub(crate) remrssi: Option<Range>,
+    pub(crate) fade_margin_db: Option<Range>,
+    pub(crate) remote_fade_margin_db: Option<Range>,
 }
 
 fn map_range(r: Option<Range>, f: impl Fn(f64) -> f64) -> Option<Range> {
@@ -309,7 +310,7 @@ fn map_range(r: Option<Range>, f: impl Fn(f64) -> f64) -> Option<Range> {
 
 /// All radios heard, keyed by their MAVLink source.
 #[derive(Debug, Default)]
-pub struct Radios {
+pub(crate) struct Radios {
     /// `--radio-type`.
     setting: RadioType,
     radios: BTreeMap<SysComp, Radio>,
@@ -326,35 +327,36 @@ pub struct Radios {
 
 /// What taking a report did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Recorded {
+pub(crate) struct Recorded {
     /// The radio's first report.
-    pub first: bool,
+    pub(crate) first: bool,
     /// Its kind is not what it was before this report.
-    pub kind_changed: bool,
+    pub(crate) kind_changed: bool,
 }
 
 /// How losses split between a low and a normal radio buffer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct LossByTxbuf {
-    pub lost_while_low: u64,
-    pub decided_while_low: u64,
-    pub lost_otherwise: u64,
-    pub decided_otherwise: u64,
+pub(crate) struct LossByTxbuf {
+    pub(crate) lost_while_low: u64,
+    pub(crate) decided_while_low: u64,
+    pub(crate) lost_otherwise: u64,
+    pub(crate) decided_otherwise: u64,
 }
 
 impl Radios {
     /// Radios read as `setting` says (`--radio-type`).
-    pub fn new(setting: RadioType) -> Self {
+    pub(crate) fn new(setting: RadioType) -> Self {
         Radios {
             setting,
             ..Radios::default()
         }
     }
 
+    #[cfg(test)]
     /// Records a RADIO_STATUS; returns true for a radio's first one.
     /// Reports from radios beyond [`MAX_RADIOS`] are ignored.
-    pub fn record(&mut self, id: SysComp, r: RadioReport, at: Nanos) -> bool {
-        self.take(id, ids::RADIO_STATUS, 0, r, at)
+    pub(crate) fn record(&mut self, id: SysComp, r: RadioReport, at: Nanos) -> bool {
+        self.take(id, crate::frame::ids::RADIO_STATUS, 0, r, at)
             .is_some_and(|t| t.first)
     }
 
@@ -362,7 +364,7 @@ impl Radios {
     /// with packet sequence number `seq`. `None`: not counted, as the
     /// second of a RADIO + RADIO_STATUS pair, or from a radio beyond
     /// [`MAX_RADIOS`].
-    pub fn take(
+    pub(crate) fn take(
         &mut self,
         id: SysComp,
         msgid: u32,
@@ -383,7 +385,6 @@ impl Radios {
             }
             Radio {
                 reports: 0,
-                first_at: at,
                 latest: r,
                 judgement: evidence.judge(id, setting),
                 evidence,
@@ -440,7 +441,7 @@ impl Radios {
 
     /// A HEARTBEAT from `id`: evidence of its kind if it is (or may yet
     /// be) a radio. Returns true when a radio's kind changed with it.
-    pub fn heartbeat(&mut self, id: SysComp, mav_type: u8, autopilot: u8) -> bool {
+    pub(crate) fn heartbeat(&mut self, id: SysComp, mav_type: u8, autopilot: u8) -> bool {
         if let Some(radio) = self.radios.get_mut(&id) {
             radio.evidence.heartbeat(mav_type, autopilot);
             let was = radio.judgement.kind;
@@ -455,19 +456,19 @@ impl Radios {
     }
 
     /// What a radio is and why, as things stand.
-    pub fn judgement(&self, id: SysComp) -> Option<&Judgement> {
+    pub(crate) fn judgement(&self, id: SysComp) -> Option<&Judgement> {
         self.radios.get(&id).map(|r| &r.judgement)
     }
 
     /// A radio's latest report.
-    pub fn latest(&self, id: SysComp) -> Option<RadioReport> {
+    pub(crate) fn latest(&self, id: SysComp) -> Option<RadioReport> {
         self.radios.get(&id).map(|r| r.latest)
     }
 
     /// A reply or a loss was decided for a request sent at `sent_at`;
     /// counted against the buffer's state then. Requests sent before the
     /// first report (or the oldest one remembered) are not counted.
-    pub fn outcome(&mut self, lost: bool, sent_at: Nanos) {
+    pub(crate) fn outcome(&mut self, lost: bool, sent_at: Nanos) {
         let Some(&(_, low)) = self
             .buffer
             .iter()
@@ -481,7 +482,7 @@ impl Radios {
         bucket.1 += 1;
     }
 
-    pub fn loss_by_txbuf(&self) -> LossByTxbuf {
+    pub(crate) fn loss_by_txbuf(&self) -> LossByTxbuf {
         LossByTxbuf {
             lost_while_low: self.low.0,
             decided_while_low: self.low.1,
@@ -490,15 +491,7 @@ impl Radios {
         }
     }
 
-    pub fn contains(&self, id: SysComp) -> bool {
-        self.radios.contains_key(&id)
-    }
-
-    pub fn first_at(&self, id: SysComp) -> Option<Nanos> {
-        self.radios.get(&id).map(|r| r.first_at)
-    }
-
-    pub fn summaries(&self) -> Vec<RadioSummary> {
+    pub(crate) fn summaries(&self) -> Vec<RadioSummary> {
         self.radios.iter().map(|(&id, r)| summary(id, r)).collect()
     }
 }
@@ -596,7 +589,7 @@ fn summary(id: SysComp, r: &Radio) -> RadioSummary {
 
 /// Hints the radio figures support; none when the data is silent, and
 /// none a radio's kind does not give its fields the meaning of.
-pub fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<Hint> {
+pub(crate) fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<Hint> {
     let mut hints = Vec::new();
     let ratio = |lost: u64, of: u64| {
         if of == 0 {
@@ -647,6 +640,7 @@ pub fn radio_hints(radios: &[RadioSummary], loss: LossByTxbuf) -> Vec<Hint> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frame::ids;
 
     const SIK: SysComp = SysComp {
         sysid: 51,
@@ -689,7 +683,6 @@ mod tests {
         );
         let dbm = s.approx_dbm.unwrap().rssi.unwrap();
         assert!((dbm.max - (200.0 / 1.9 - 127.0)).abs() < 1e-9);
-        assert_eq!(radios.first_at(SIK), Some(1));
     }
 
     #[test]

@@ -39,11 +39,11 @@ use crate::frame::{self, SysComp};
 
 /// 255 in RADIO_STATUS's 8-bit figures means unknown (where the kind
 /// does not use it as a value).
-pub const UNKNOWN: u8 = 255;
+pub(crate) const UNKNOWN: u8 = 255;
 /// MAV_COMP_ID_TELEMETRY_RADIO: SiK, mLRS and ExpressLRS send as it.
-pub const COMP_TELEMETRY_RADIO: u8 = 68;
+pub(crate) const COMP_TELEMETRY_RADIO: u8 = 68;
 /// MAV_COMP_ID_UDP_BRIDGE: mavesp8266's RADIO_STATUS.
-pub const COMP_UDP_BRIDGE: u8 = 240;
+pub(crate) const COMP_UDP_BRIDGE: u8 = 240;
 /// ExpressLRS's receiver sends as 255/68 unless told otherwise.
 pub(crate) const ELRS_SYSID: u8 = 255;
 /// Reports per second at or above which a compid-68 radio is ExpressLRS
@@ -70,7 +70,7 @@ pub enum RadioType {
 }
 
 impl RadioType {
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             RadioType::Auto => "auto",
             RadioType::Sik => "sik",
@@ -97,7 +97,7 @@ impl RadioType {
 /// What a radio is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum RadioKind {
+pub(crate) enum RadioKind {
     Sik,
     Mlrs,
     Elrs,
@@ -107,7 +107,7 @@ pub enum RadioKind {
 
 /// RADIO_STATUS's four 8-bit signal fields.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Field {
+pub(crate) enum Field {
     Rssi,
     Remrssi,
     Noise,
@@ -115,9 +115,9 @@ pub enum Field {
 }
 
 impl Field {
-    pub const ALL: [Field; 4] = [Field::Rssi, Field::Remrssi, Field::Noise, Field::Remnoise];
+    pub(crate) const ALL: [Field; 4] = [Field::Rssi, Field::Remrssi, Field::Noise, Field::Remnoise];
 
-    pub fn of(self, r: &frame::RadioStatus) -> u8 {
+    pub(crate) fn of(self, r: &frame::RadioStatus) -> u8 {
         match self {
             Field::Rssi => r.rssi,
             Field::Remrssi => r.remrssi,
@@ -126,27 +126,27 @@ impl Field {
         }
     }
 
-    pub fn index(self) -> usize {
+    pub(crate) fn index(self) -> usize {
         self as usize
     }
 }
 
 /// What one field means for one kind of radio.
 #[derive(Debug, Clone, Copy)]
-pub struct Meaning {
+pub(crate) struct Meaning {
     /// Its name in JSON (`rssi_dbm`, `snr_db`, `link_quality_pct`).
-    pub key: &'static str,
+    pub(crate) key: &'static str,
     /// Its name in text (`rssi`, `uplink rssi`, `snr`).
-    pub label: &'static str,
-    pub unit: &'static str,
+    pub(crate) label: &'static str,
+    pub(crate) unit: &'static str,
     /// The raw byte to the unit; `None` where the byte says "unknown".
-    pub convert: fn(u8) -> Option<f64>,
+    pub(crate) convert: fn(u8) -> Option<f64>,
     /// How exact the conversion is, as text says it.
-    pub note: &'static str,
+    pub(crate) note: &'static str,
 }
 
 /// SiK's RSSI scale to dBm: the Si1000's curve, approximate.
-pub fn sik_dbm(raw: f64) -> f64 {
+pub(crate) fn sik_dbm(raw: f64) -> f64 {
     raw / 1.9 - 127.0
 }
 
@@ -203,7 +203,7 @@ const SIK_NOTE: &str = "approximate, SiK scale";
 
 impl RadioKind {
     /// As reports name it.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             RadioKind::Sik => "SiK",
             RadioKind::Mlrs => "mLRS",
@@ -215,7 +215,7 @@ impl RadioKind {
 
     /// What `field` means for this kind; `None`: nothing known (a
     /// constant, or unknown units).
-    pub fn meaning(self, field: Field) -> Option<Meaning> {
+    pub(crate) fn meaning(self, field: Field) -> Option<Meaning> {
         let m = |key, label, unit, convert: fn(u8) -> Option<f64>, note| {
             Some(Meaning {
                 key,
@@ -296,23 +296,23 @@ impl RadioKind {
 
     /// Whether `noise`/`remnoise` are noise floors on the RSSI's scale,
     /// so that RSSI − noise is a fade margin.
-    pub fn has_fade_margin(self) -> bool {
+    pub(crate) fn has_fade_margin(self) -> bool {
         self == RadioKind::Sik
     }
 
     /// Whether `txbuf` is the radio's free buffer, which a sender can
     /// overrun.
-    pub fn txbuf_is_free_buffer(self) -> bool {
+    pub(crate) fn txbuf_is_free_buffer(self) -> bool {
         matches!(self, RadioKind::Sik | RadioKind::Mlrs | RadioKind::Elrs)
     }
 
     /// Whether `rxerrors`/`fixed` count the radio's receive errors.
-    pub fn counts_errors(self) -> bool {
+    pub(crate) fn counts_errors(self) -> bool {
         self == RadioKind::Sik
     }
 
     /// mavesp8266's `rxerrors` is the % of the ground's messages lost.
-    pub fn rxerrors_is_gcs_lost_pct(self) -> bool {
+    pub(crate) fn rxerrors_is_gcs_lost_pct(self) -> bool {
         self == RadioKind::Esp
     }
 }
@@ -341,7 +341,7 @@ impl<T: Copy + PartialEq> Constant<T> {
 /// What a radio sent that tells its kind: its reports' rate, the fields
 /// that never changed, the messages they came as, a HEARTBEAT from its ids.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct Evidence {
+pub(crate) struct Evidence {
     reports: u64,
     first_at: Nanos,
     last_at: Nanos,
@@ -360,18 +360,18 @@ pub struct Evidence {
 /// What a radio is, and why.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Judgement {
-    pub kind: RadioKind,
+    pub(crate) kind: RadioKind,
     /// `auto`, or the `--radio-type` that set it.
-    pub radio_type: RadioType,
+    pub(crate) radio_type: RadioType,
     /// The evidence, each a clause: "HEARTBEAT type GENERIC, autopilot
     /// INVALID from 51/68".
-    pub evidence: Vec<String>,
+    pub(crate) evidence: Vec<String>,
 }
 
 impl Judgement {
     /// `mLRS (HEARTBEAT type GENERIC, autopilot INVALID from 51/68;
     /// remnoise always 255)`.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         format!("{} ({})", self.kind.name(), self.evidence.join("; "))
     }
 }
@@ -380,7 +380,7 @@ impl Evidence {
     /// A report, as message `msgid` (109 or 166), at `at`; `paired` when it
     /// was the second of a RADIO + RADIO_STATUS pair (then only counted
     /// as such).
-    pub fn report(&mut self, msgid: u32, r: &frame::RadioStatus, at: Nanos, paired: bool) {
+    pub(crate) fn report(&mut self, msgid: u32, r: &frame::RadioStatus, at: Nanos, paired: bool) {
         if paired {
             self.pairs += 1;
             return;
@@ -402,16 +402,12 @@ impl Evidence {
     }
 
     /// A HEARTBEAT from the radio's own ids.
-    pub fn heartbeat(&mut self, mav_type: u8, autopilot: u8) {
+    pub(crate) fn heartbeat(&mut self, mav_type: u8, autopilot: u8) {
         self.heartbeat = Some((mav_type, autopilot));
     }
 
-    pub fn has_heartbeat(&self) -> bool {
-        self.heartbeat.is_some()
-    }
-
     /// Reports per second, once there are enough to say.
-    pub fn rate(&self) -> Option<f64> {
+    pub(crate) fn rate(&self) -> Option<f64> {
         let span = self.last_at.saturating_sub(self.first_at);
         (self.reports >= MIN_RATE_REPORTS && span > 0)
             .then(|| (self.reports - 1) as f64 / (span as f64 / 1e9))
@@ -464,7 +460,7 @@ impl Evidence {
     }
 
     /// The radio `id`'s kind under `setting`.
-    pub fn judge(&self, id: SysComp, setting: RadioType) -> Judgement {
+    pub(crate) fn judge(&self, id: SysComp, setting: RadioType) -> Judgement {
         let (kind, evidence) = match setting.forced() {
             Some(kind) => (kind, vec![format!("--radio-type {}", setting.as_str())]),
             None => self.auto(id),
@@ -550,14 +546,14 @@ impl Evidence {
 /// 2016 sent each report as both, one right after the other under one
 /// packet sequence number, with the same figures. It is one report.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct PairFilter {
+pub(crate) struct PairFilter {
     last: Option<(u32, u8, frame::RadioStatus)>,
 }
 
 impl PairFilter {
     /// Whether this message repeats the one before it (the other message
     /// id, the same sequence number and figures).
-    pub fn repeats(&mut self, msgid: u32, seq: u8, r: &frame::RadioStatus) -> bool {
+    pub(crate) fn repeats(&mut self, msgid: u32, seq: u8, r: &frame::RadioStatus) -> bool {
         let repeat = self
             .last
             .is_some_and(|(m, s, last)| m != msgid && s == seq && last == *r);

@@ -14,29 +14,29 @@ pub(crate) use crate::frame::AUTOPILOT_ARDUPILOT;
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Identity {
-    pub mav_type: u8,
-    pub autopilot: u8,
-    pub vehicle: String,
-    pub autopilot_name: String,
+    pub(crate) mav_type: u8,
+    pub(crate) autopilot: u8,
+    pub(crate) vehicle: String,
+    pub(crate) autopilot_name: String,
     #[serde(skip)]
-    pub first_heard: Nanos,
+    pub(crate) first_heard: Nanos,
 }
 
 impl Identity {
     /// GCS software, radios and other non-vehicles: they are not expected to
     /// answer probes, so they get no "never answered" hint.
-    pub fn is_vehicle_like(&self) -> bool {
+    pub(crate) fn is_vehicle_like(&self) -> bool {
         self.mav_type != frame::mav_type::GCS && self.autopilot != frame::AUTOPILOT_INVALID
     }
 
-    pub fn is_ardupilot(&self) -> bool {
+    pub(crate) fn is_ardupilot(&self) -> bool {
         self.autopilot == AUTOPILOT_ARDUPILOT
     }
 
     /// The autopilot as text reports say it: MAV_AUTOPILOT_INVALID is what
     /// ground stations, companion programs and `mavping respond` send to
     /// say they are none, not a fault ("gcs, no autopilot").
-    pub fn autopilot_said(&self) -> &str {
+    pub(crate) fn autopilot_said(&self) -> &str {
         if self.autopilot == frame::AUTOPILOT_INVALID {
             "no autopilot"
         } else {
@@ -47,18 +47,18 @@ impl Identity {
 
 /// One system's traffic.
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct Source {
+pub(crate) struct Source {
     /// From its first HEARTBEAT.
-    pub identity: Option<Identity>,
+    pub(crate) identity: Option<Identity>,
     /// Frames of every kind, of which signed and MAVLink 1.
-    pub frames: u64,
-    pub signed: u64,
-    pub v1: u64,
+    pub(crate) frames: u64,
+    pub(crate) signed: u64,
+    pub(crate) v1: u64,
 }
 
 /// Systems heard, bounded so a spoofing flood cannot grow memory.
 #[derive(Default)]
-pub struct Roster {
+pub(crate) struct Roster {
     sources: BTreeMap<SysComp, Source>,
 }
 
@@ -73,7 +73,7 @@ impl Roster {
     }
 
     /// Counts one frame from `source`.
-    pub fn frame(&mut self, source: SysComp, version: Version, signed: bool) {
+    pub(crate) fn frame(&mut self, source: SysComp, version: Version, signed: bool) {
         if let Some(s) = self.source(source) {
             s.frames += 1;
             s.signed += u64::from(signed);
@@ -82,7 +82,13 @@ impl Roster {
     }
 
     /// Records a HEARTBEAT; returns true the first time a system is heard.
-    pub fn heard(&mut self, source: SysComp, mav_type: u8, autopilot: u8, at: Nanos) -> bool {
+    pub(crate) fn heard(
+        &mut self,
+        source: SysComp,
+        mav_type: u8,
+        autopilot: u8,
+        at: Nanos,
+    ) -> bool {
         let Some(s) = self.source(source) else {
             return false;
         };
@@ -99,19 +105,19 @@ impl Roster {
         true
     }
 
-    pub fn get(&self, id: SysComp) -> Option<&Identity> {
+    pub(crate) fn get(&self, id: SysComp) -> Option<&Identity> {
         self.sources.get(&id).and_then(|s| s.identity.as_ref())
     }
 
     /// Systems heard by their HEARTBEAT.
-    pub fn iter(&self) -> impl Iterator<Item = (&SysComp, &Identity)> {
+    pub(crate) fn iter(&self) -> impl Iterator<Item = (&SysComp, &Identity)> {
         self.sources
             .iter()
             .filter_map(|(id, s)| s.identity.as_ref().map(|i| (id, i)))
     }
 
     /// Every system heard, by HEARTBEAT or any other frame.
-    pub fn sources(&self) -> impl Iterator<Item = (&SysComp, &Source)> {
+    pub(crate) fn sources(&self) -> impl Iterator<Item = (&SysComp, &Source)> {
         self.sources.iter()
     }
 }

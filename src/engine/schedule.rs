@@ -7,7 +7,7 @@
 use super::Nanos;
 
 #[derive(Debug, Clone)]
-pub struct Schedule {
+pub(crate) struct Schedule {
     start: Nanos,
     interval: Nanos,
     limit: Option<u64>,
@@ -15,7 +15,7 @@ pub struct Schedule {
 }
 
 impl Schedule {
-    pub fn new(start: Nanos, interval: Nanos, limit: Option<u64>) -> Self {
+    pub(crate) fn new(start: Nanos, interval: Nanos, limit: Option<u64>) -> Self {
         Schedule {
             start,
             interval,
@@ -25,12 +25,12 @@ impl Schedule {
     }
 
     /// Planned send time of request `n`.
-    pub fn planned(&self, n: u64) -> Nanos {
+    pub(crate) fn planned(&self, n: u64) -> Nanos {
         self.start.saturating_add(n.saturating_mul(self.interval))
     }
 
     /// Planned time of the next request, or `None` when all are issued.
-    pub fn next_due(&self) -> Option<Nanos> {
+    pub(crate) fn next_due(&self) -> Option<Nanos> {
         if self.finished() {
             None
         } else {
@@ -41,7 +41,7 @@ impl Schedule {
     /// Takes the next request if it is due at `now`, returning its number and
     /// planned time. Call in a loop: at rates above the timer's resolution
     /// several requests are due at one wake-up.
-    pub fn take_due(&mut self, now: Nanos) -> Option<(u64, Nanos)> {
+    pub(crate) fn take_due(&mut self, now: Nanos) -> Option<(u64, Nanos)> {
         let planned = self.next_due()?;
         if planned > now {
             return None;
@@ -51,16 +51,16 @@ impl Schedule {
         Some((n, planned))
     }
 
-    pub fn issued(&self) -> u64 {
+    pub(crate) fn issued(&self) -> u64 {
         self.issued
     }
 
-    pub fn finished(&self) -> bool {
+    pub(crate) fn finished(&self) -> bool {
         self.limit.is_some_and(|limit| self.issued >= limit)
     }
 
     /// Stops issuing (deadline or Ctrl-C).
-    pub fn stop(&mut self) {
+    pub(crate) fn stop(&mut self) {
         self.limit = Some(self.issued);
     }
 }

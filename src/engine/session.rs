@@ -34,8 +34,8 @@ use crate::transport::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport}
 /// (SIGQUIT, as Linux `ping`).
 #[derive(Clone, Default)]
 pub struct Controls {
-    pub stop: Arc<Notify>,
-    pub interim: Arc<Notify>,
+    pub(crate) stop: Arc<Notify>,
+    pub(crate) interim: Arc<Notify>,
 }
 
 /// How the run ended. The caller judges it and reports the summary.
@@ -43,35 +43,35 @@ pub struct Measurement {
     pub summary: LinkSummary,
     /// Each responder's RTT (or time-to-ACK) statistics, whose histograms
     /// (µs) the exports write.
-    pub histograms: Vec<(SysComp, RttStats)>,
+    pub(crate) histograms: Vec<(SysComp, RttStats)>,
     /// What became of the observer's output.
-    pub output: OutputFate,
+    pub(crate) output: OutputFate,
 }
 
 /// What the loop knows at the end, for a driver's summary.
-pub struct SessionEnd<'a> {
-    pub cfg: &'a SessionConfig,
-    pub duration_s: f64,
-    pub interrupted: bool,
-    pub link_error: Option<String>,
-    pub frames: ScanStats,
+pub(crate) struct SessionEnd<'a> {
+    pub(crate) cfg: &'a SessionConfig,
+    pub(crate) duration_s: f64,
+    pub(crate) interrupted: bool,
+    pub(crate) link_error: Option<String>,
+    pub(crate) frames: ScanStats,
     /// ICMP "port unreachable" reports the link shrugged off.
-    pub unreachable: u64,
-    pub downtime_s: f64,
-    pub rx_clock: RxClock,
-    pub kind: LinkKind,
+    pub(crate) unreachable: u64,
+    pub(crate) downtime_s: f64,
+    pub(crate) rx_clock: RxClock,
+    pub(crate) kind: LinkKind,
     /// A listening link heard no peer within `SessionConfig::wait`.
-    pub no_peer_within: Option<Duration>,
-    pub roster: Roster,
-    pub radios: Radios,
+    pub(crate) no_peer_within: Option<Duration>,
+    pub(crate) roster: Roster,
+    pub(crate) radios: Radios,
     /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view).
-    pub link_nodes: LinkNodes,
-    pub gate: Gate,
+    pub(crate) link_nodes: LinkNodes,
+    pub(crate) gate: Gate,
 }
 
 /// What one probe kind does inside the session loop.
 #[allow(async_fn_in_trait)] // used with concrete types only, never boxed
-pub trait Driver {
+pub(crate) trait Driver {
     /// What the run announces first.
     fn start_info(&self, cfg: &SessionConfig) -> StartInfo;
     /// Whether it sends requests on a schedule (the passive probe does not:
@@ -703,7 +703,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
 }
 
 /// Runs one session until it ends and returns what it measured.
-pub async fn run<T: Transport, D: Driver>(
+pub(crate) async fn run<T: Transport, D: Driver>(
     cfg: &SessionConfig,
     link: &mut T,
     driver: D,

@@ -59,24 +59,24 @@ impl Default for RttStats {
 
 /// One row of the RTT distribution: `count` samples in `[low_us, high_us)`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Bucket {
-    pub low_us: f64,
-    pub high_us: f64,
-    pub count: u64,
+pub(crate) struct Bucket {
+    pub(crate) low_us: f64,
+    pub(crate) high_us: f64,
+    pub(crate) count: u64,
 }
 
 /// The figures a report shows, in µs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct RttSummary {
-    pub min_us: f64,
-    pub mean_us: f64,
-    pub max_us: f64,
-    pub stddev_us: f64,
-    pub p50_us: f64,
-    pub p90_us: f64,
-    pub p99_us: f64,
-    pub p999_us: f64,
-    pub jitter_us: f64,
+pub(crate) struct RttSummary {
+    pub(crate) min_us: f64,
+    pub(crate) mean_us: f64,
+    pub(crate) max_us: f64,
+    pub(crate) stddev_us: f64,
+    pub(crate) p50_us: f64,
+    pub(crate) p90_us: f64,
+    pub(crate) p99_us: f64,
+    pub(crate) p999_us: f64,
+    pub(crate) jitter_us: f64,
 }
 
 impl RttStats {
@@ -127,12 +127,12 @@ impl RttStats {
         self.count
     }
 
-    pub fn last(&self) -> Option<Nanos> {
+    pub(crate) fn last(&self) -> Option<Nanos> {
         self.last
     }
 
     /// The histogram (µs), with 8-byte counts: a copy, for exports.
-    pub fn histogram(&self) -> Histogram<u64> {
+    pub(crate) fn histogram(&self) -> Histogram<u64> {
         match &self.hist {
             Counts::Narrow(h) => widened(h),
             Counts::Wide(h) => h.clone(),
@@ -148,7 +148,7 @@ impl RttStats {
     }
 
     /// Value at a quantile in µs, kept inside the exact [min, max].
-    pub fn quantile_us(&self, q: f64) -> f64 {
+    pub(crate) fn quantile_us(&self, q: f64) -> f64 {
         let v = match &self.hist {
             Counts::Narrow(h) => h.value_at_quantile(q),
             Counts::Wide(h) => h.value_at_quantile(q),
@@ -156,7 +156,7 @@ impl RttStats {
         v.clamp(self.min as f64 / 1e3, self.max as f64 / 1e3)
     }
 
-    pub fn summary(&self) -> Option<RttSummary> {
+    pub(crate) fn summary(&self) -> Option<RttSummary> {
         if self.count == 0 {
             return None;
         }
@@ -186,7 +186,7 @@ impl RttStats {
     /// log-spaced when the range spans more than a factor of 4, else linear
     /// with buckets at least 1 µs wide (the resolution reports show), so
     /// equal RTTs make one row, not eight with the same label.
-    pub fn distribution(&self, rows: usize) -> Vec<Bucket> {
+    pub(crate) fn distribution(&self, rows: usize) -> Vec<Bucket> {
         if self.count == 0 || rows == 0 {
             return Vec::new();
         }

@@ -14,7 +14,7 @@ use crate::frame::SysComp;
 /// Where a sweep's highest rate came from.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 #[serde(tag = "from", rename_all = "snake_case")]
-pub enum MaxFrom {
+pub(crate) enum MaxFrom {
     /// `--sweep-max`.
     Given,
     /// Twice what the link's baud rate carries: the safe default on a
@@ -26,7 +26,7 @@ pub enum MaxFrom {
 
 /// What the steps are.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum PlanKind {
+pub(crate) enum PlanKind {
     /// `--sweep`: ramp the rate from `first_hz` to `max_hz` and find the
     /// knee; stop ramping past `loss_limit` (a share, 0..=1).
     Sweep {
@@ -42,20 +42,20 @@ pub enum PlanKind {
 /// A run in steps, validated.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SweepConfig {
-    pub plan: PlanKind,
+    pub(crate) plan: PlanKind,
     /// How long each step sends.
-    pub step: Duration,
+    pub(crate) step: Duration,
     /// Background load, on in every step but the unloaded baseline.
-    pub load: Vec<LoadSpec>,
+    pub(crate) load: Vec<LoadSpec>,
     /// What the load puts on the wire, in this session's MAVLink version
     /// and signing.
-    pub load_bytes_per_s: f64,
+    pub(crate) load_bytes_per_s: f64,
 }
 
 /// What a step is for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Phase {
+pub(crate) enum Phase {
     /// With `--load`: the first rate without the load, for comparison.
     Baseline,
     /// Climbing the 1-2-5 series.
@@ -68,93 +68,93 @@ pub enum Phase {
 
 /// A step's RTT figures over every responder's in-time replies, in µs.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct StepRtt {
-    pub p50_us: f64,
-    pub p99_us: f64,
-    pub max_us: f64,
+pub(crate) struct StepRtt {
+    pub(crate) p50_us: f64,
+    pub(crate) p99_us: f64,
+    pub(crate) max_us: f64,
 }
 
 /// The radio's own figures during a step (the first radio heard).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct StepRadio {
-    pub id: SysComp,
-    pub reports: u64,
+pub(crate) struct StepRadio {
+    pub(crate) id: SysComp,
+    pub(crate) reports: u64,
     /// Least and mean % of its transmit buffer free.
-    pub txbuf_min: Option<u8>,
-    pub txbuf_mean: Option<f64>,
-    pub rssi_mean: Option<f64>,
-    pub remrssi_mean: Option<f64>,
+    pub(crate) txbuf_min: Option<u8>,
+    pub(crate) txbuf_mean: Option<f64>,
+    pub(crate) rssi_mean: Option<f64>,
+    pub(crate) remrssi_mean: Option<f64>,
     /// What its since-boot receive-error counter grew by during the step.
-    pub rxerrors_delta: u64,
+    pub(crate) rxerrors_delta: u64,
 }
 
 /// One step as reported.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct StepFigures {
     /// 1 for the first step.
-    pub index: u32,
-    pub phase: Phase,
+    pub(crate) index: u32,
+    pub(crate) phase: Phase,
     /// The `--load` streams were on.
-    pub load: bool,
-    pub offered_hz: f64,
+    pub(crate) load: bool,
+    pub(crate) offered_hz: f64,
     /// Requests sent over the time from the first to the last.
-    pub achieved_hz: f64,
+    pub(crate) achieved_hz: f64,
     /// When its first request went out, in seconds since the run started.
-    pub start_s: f64,
+    pub(crate) start_s: f64,
     /// From its first request to its last.
-    pub duration_s: f64,
-    pub requests: u64,
+    pub(crate) duration_s: f64,
+    pub(crate) requests: u64,
     /// In-time replies, summed over responders.
-    pub received: u64,
-    pub lost: u64,
-    pub late: u64,
+    pub(crate) received: u64,
+    pub(crate) lost: u64,
+    pub(crate) late: u64,
     /// lost / (received + lost).
-    pub loss_ratio: f64,
-    pub rtt: Option<StepRtt>,
+    pub(crate) loss_ratio: f64,
+    pub(crate) rtt: Option<StepRtt>,
     /// Bytes per second we sent (probes, load, HEARTBEAT) while the step
     /// sent, and received (every valid frame) from its start until it
     /// ended, over the time it sent or until its last reply came, whichever
     /// is longer (a queue delivers after the sending ends): the step's own
     /// traffic each way.
-    pub tx_bytes_per_s: f64,
-    pub rx_bytes_per_s: f64,
-    pub radio: Option<StepRadio>,
+    pub(crate) tx_bytes_per_s: f64,
+    pub(crate) rx_bytes_per_s: f64,
+    pub(crate) radio: Option<StepRadio>,
     /// False when the run ended (Ctrl-C, deadline, link failure) before the
     /// step did: it is shown, never judged.
-    pub complete: bool,
+    pub(crate) complete: bool,
     /// The knee test (sweep steps only): loss under 1 % and p99 under
     /// twice the first sweep step's or less than 30 ms over it.
-    pub passed: Option<bool>,
+    pub(crate) passed: Option<bool>,
     /// The rate of the step before, run again because that one failed the
     /// knee test on latency alone: one burst behind a scheduling hiccup
     /// queues as a link does, so a rate fails on latency only twice in a
     /// row, and this step decides.
-    pub retry: bool,
+    pub(crate) retry: bool,
 }
 
 /// The highest rate the link carried cleanly: the step with the highest
 /// offered rate that passed the knee test.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Knee {
-    pub step: u32,
-    pub rate_hz: f64,
-    pub achieved_hz: f64,
+pub(crate) struct Knee {
+    pub(crate) step: u32,
+    pub(crate) rate_hz: f64,
+    pub(crate) achieved_hz: f64,
     /// Bytes per second on the wire, both ways and each way.
-    pub bytes_per_s: f64,
-    pub tx_bytes_per_s: f64,
-    pub rx_bytes_per_s: f64,
-    pub p99_us: f64,
-    pub loss_ratio: f64,
+    pub(crate) bytes_per_s: f64,
+    pub(crate) tx_bytes_per_s: f64,
+    pub(crate) rx_bytes_per_s: f64,
+    pub(crate) p99_us: f64,
+    pub(crate) loss_ratio: f64,
     /// The lowest rate above it that failed; none when every rate tried
     /// above passed or none was tried (then the capacity is higher still).
-    pub failed_above_hz: Option<f64>,
+    pub(crate) failed_above_hz: Option<f64>,
 }
 
 /// The latency a queue adds under load, on the scale bufferbloat tests
 /// grade it (Waveform's, DSLReports'): A+ under 5 ms, A under 30, B under
 /// 60, C under 200, D under 400, F beyond.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Serialize)]
-pub enum Grade {
+pub(crate) enum Grade {
     #[serde(rename = "A+")]
     APlus,
     A,
@@ -167,37 +167,37 @@ pub enum Grade {
 /// Whether the link queues before it drops: the highest p99 of a step
 /// that still lost under 1 %, against the first sweep step's.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Queueing {
+pub(crate) struct Queueing {
     /// The latency added under load graded C or worse (60 ms or more).
-    pub bufferbloat: bool,
+    pub(crate) bufferbloat: bool,
     /// `added_us` on the bufferbloat tests' scale.
-    pub grade: Grade,
-    pub reference_p99_us: f64,
-    pub worst_p99_us: f64,
-    pub worst_at_hz: f64,
+    pub(crate) grade: Grade,
+    pub(crate) reference_p99_us: f64,
+    pub(crate) worst_p99_us: f64,
+    pub(crate) worst_at_hz: f64,
     /// `worst_p99_us - reference_p99_us`: the delay the queue added
     /// before the link dropped anything.
-    pub added_us: f64,
+    pub(crate) added_us: f64,
     /// The lowest rate at which a step lost 1 % or more, if any did.
-    pub lost_at_hz: Option<f64>,
+    pub(crate) lost_at_hz: Option<f64>,
 }
 
 /// The RTT with the `--load` streams on against without, at one rate.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct LoadEffect {
-    pub rate_hz: f64,
-    pub unloaded_p50_us: f64,
-    pub unloaded_p99_us: f64,
-    pub loaded_p50_us: f64,
-    pub loaded_p99_us: f64,
-    pub p99_rise_us: f64,
-    pub p99_ratio: f64,
+pub(crate) struct LoadEffect {
+    pub(crate) rate_hz: f64,
+    pub(crate) unloaded_p50_us: f64,
+    pub(crate) unloaded_p99_us: f64,
+    pub(crate) loaded_p50_us: f64,
+    pub(crate) loaded_p99_us: f64,
+    pub(crate) p99_rise_us: f64,
+    pub(crate) p99_ratio: f64,
 }
 
 /// Why the steps ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum SweepEnd {
+pub(crate) enum SweepEnd {
     /// Every step planned was run.
     Planned,
     /// A ramp step lost more than the limit; the steps after it refined
@@ -212,15 +212,15 @@ pub enum SweepEnd {
 
 /// A sweep's (or a `--load` run's) steps and what they say.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct SweepSummary {
+pub(crate) struct SweepSummary {
     /// `sweep`, or `load` for `--load` without `--sweep`.
-    pub kind: &'static str,
-    pub steps: Vec<StepFigures>,
+    pub(crate) kind: &'static str,
+    pub(crate) steps: Vec<StepFigures>,
     /// The first sweep step's p99, which the knee test compares against.
-    pub reference_p99_us: Option<f64>,
-    pub knee: Option<Knee>,
-    pub queueing: Option<Queueing>,
-    pub load: Vec<LoadSummary>,
-    pub load_effect: Option<LoadEffect>,
-    pub ending: SweepEnd,
+    pub(crate) reference_p99_us: Option<f64>,
+    pub(crate) knee: Option<Knee>,
+    pub(crate) queueing: Option<Queueing>,
+    pub(crate) load: Vec<LoadSummary>,
+    pub(crate) load_effect: Option<LoadEffect>,
+    pub(crate) ending: SweepEnd,
 }

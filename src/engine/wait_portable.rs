@@ -22,7 +22,7 @@ const SPIN_NS: Nanos = 1_500_000;
 /// last [`SPIN_NS`], then a spin. (The session calls it only on links the
 /// kernel dates, which the portable path has none of; kept for the one
 /// interface both paths share.)
-pub fn block_until(clock: &Clock, at: Nanos) {
+pub(crate) fn block_until(clock: &Clock, at: Nanos) {
     let ahead = at.saturating_sub(clock.now());
     if ahead > SPIN_NS {
         std::thread::sleep(Duration::from_nanos(ahead - SPIN_NS));
@@ -33,22 +33,22 @@ pub fn block_until(clock: &Clock, at: Nanos) {
 }
 
 /// Timer slack is a Linux knob; nothing to tighten here.
-pub fn tighten_timer_slack() {}
+pub(crate) fn tighten_timer_slack() {}
 
 /// Waits for a session time in a `select!`: tokio's timer, then a spin
 /// for the sub-millisecond remainder when `precise`.
-pub struct Waiter {
+pub(crate) struct Waiter {
     precise: bool,
 }
 
 impl Waiter {
-    pub fn new(precise: bool) -> Self {
+    pub(crate) fn new(precise: bool) -> Self {
         Waiter { precise }
     }
 
     /// Waits until session time `wake`, or forever when there is none.
     /// Cancel-safe: it holds no state between polls but the deadline.
-    pub async fn until(&mut self, clock: &Clock, wake: Option<Nanos>) {
+    pub(crate) async fn until(&mut self, clock: &Clock, wake: Option<Nanos>) {
         let Some(at) = wake else {
             return std::future::pending().await;
         };

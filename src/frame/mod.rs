@@ -23,7 +23,7 @@ impl SysComp {
     /// `mavping serve` alike. Not 255/190: that is QGroundControl's and
     /// Mission Planner's, whose frames MAVSDK-based stacks drop and whose
     /// loss ArduPilot's GCS failsafe watches.
-    pub const OURS: SysComp = SysComp::new(250, 190);
+    pub(crate) const OURS: SysComp = SysComp::new(250, 190);
 
     pub const fn new(sysid: u8, compid: u8) -> Self {
         SysComp { sysid, compid }
@@ -126,37 +126,37 @@ pub struct RadioStatus {
 /// `timestamp` is milliseconds since boot.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
 pub struct LinkNodeStatus {
-    pub timestamp: u64,
+    pub(crate) timestamp: u64,
     /// Percent of the transmit and receive buffers free.
-    pub tx_buf: u8,
-    pub rx_buf: u8,
+    pub(crate) tx_buf: u8,
+    pub(crate) rx_buf: u8,
     /// Bytes per second.
-    pub tx_rate: u32,
-    pub rx_rate: u32,
+    pub(crate) tx_rate: u32,
+    pub(crate) rx_rate: u32,
     /// Bytes it could not parse.
-    pub rx_parse_err: u16,
-    pub tx_overflows: u16,
-    pub rx_overflows: u16,
-    pub messages_sent: u32,
-    pub messages_received: u32,
-    pub messages_lost: u32,
+    pub(crate) rx_parse_err: u16,
+    pub(crate) tx_overflows: u16,
+    pub(crate) rx_overflows: u16,
+    pub(crate) messages_sent: u32,
+    pub(crate) messages_received: u32,
+    pub(crate) messages_lost: u32,
 }
 
 /// Where a vehicle says it is, or its home. Only the figures a range
 /// needs: the rest of each message stays in the frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Fix {
-    pub kind: FixKind,
+    pub(crate) kind: FixKind,
     /// Degrees × 10^7, as on the wire.
-    pub lat: i32,
-    pub lon: i32,
+    pub(crate) lat: i32,
+    pub(crate) lon: i32,
     /// Millimetres above mean sea level.
-    pub alt_mm: i32,
+    pub(crate) alt_mm: i32,
 }
 
 /// Which message a [`Fix`] came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FixKind {
+pub(crate) enum FixKind {
     /// GLOBAL_POSITION_INT: the autopilot's estimate (0/0 before it has one).
     Estimate,
     /// GPS_RAW_INT, with its GPS_FIX_TYPE (2 and up: a position).
@@ -172,18 +172,18 @@ pub struct Frame {
     /// The sender, from the frame header.
     pub source: SysComp,
     /// The header's 8-bit packet sequence (not the PING seq).
-    pub packet_seq: u8,
-    pub msgid: u32,
-    pub signed: bool,
+    pub(crate) packet_seq: u8,
+    pub(crate) msgid: u32,
+    pub(crate) signed: bool,
     /// Bytes on the wire, header to signature.
-    pub len: u16,
+    pub(crate) len: u16,
     pub msg: Msg,
 }
 
 /// A MAVLink 2 frame from `source` carrying `msg`, its header figures 0:
 /// what unit tests of the engine hand it.
 #[cfg(test)]
-pub fn test_frame(source: SysComp, msg: Msg) -> Frame {
+pub(crate) fn test_frame(source: SysComp, msg: Msg) -> Frame {
     Frame {
         version: Version::V2,
         source,
@@ -219,18 +219,18 @@ pub(crate) mod mav_type {
 }
 
 /// MAV_AUTOPILOT_INVALID: what a GCS puts in its HEARTBEAT.
-pub const AUTOPILOT_INVALID: u8 = 8;
+pub(crate) const AUTOPILOT_INVALID: u8 = 8;
 
 /// MAV_AUTOPILOT_ARDUPILOTMEGA: every ArduPilot vehicle.
-pub const AUTOPILOT_ARDUPILOT: u8 = 3;
+pub(crate) const AUTOPILOT_ARDUPILOT: u8 = 3;
 
 /// Human name of a MAV_TYPE value ("quadrotor"), from the dialect.
-pub fn vehicle_type_name(value: u8) -> String {
+pub(crate) fn vehicle_type_name(value: u8) -> String {
     codec::enum_name::<mavlink::dialects::ardupilotmega::MavType>(u32::from(value), "MAV_TYPE_")
 }
 
 /// Human name of a MAV_AUTOPILOT value ("px4", "ardupilotmega").
-pub fn autopilot_name(value: u8) -> String {
+pub(crate) fn autopilot_name(value: u8) -> String {
     codec::enum_name::<mavlink::dialects::ardupilotmega::MavAutopilot>(
         u32::from(value),
         "MAV_AUTOPILOT_",

@@ -34,11 +34,11 @@ use mavlink::dialects::ardupilotmega::MavMessage;
 use mavlink::{MavlinkVersion, Message};
 
 /// MAVLink 1 start-of-frame marker.
-pub const STX_V1: u8 = 0xFE;
+pub(crate) const STX_V1: u8 = 0xFE;
 /// MAVLink 2 start-of-frame marker.
-pub const STX_V2: u8 = 0xFD;
+pub(crate) const STX_V2: u8 = 0xFD;
 /// MAVLink 2 incompatibility flag: the frame carries a 13-byte signature.
-pub const IFLAG_SIGNED: u8 = 0x01;
+pub(crate) const IFLAG_SIGNED: u8 = 0x01;
 const SIGNATURE_LEN: usize = 13;
 const V1_HEADER: usize = 6; // STX, len, seq, sys, comp, msgid
 const V2_HEADER: usize = 10; // STX, len, incompat, compat, seq, sys, comp, msgid x3
@@ -95,11 +95,11 @@ pub struct ScanStats {
     /// Bytes of the frames with a valid CRC: what the link delivered, for
     /// throughput figures (a sweep's bytes/s per step).
     #[serde(skip)]
-    pub frame_bytes: u64,
+    pub(crate) frame_bytes: u64,
 }
 
 impl ScanStats {
-    pub fn add(&mut self, other: &ScanStats) {
+    pub(crate) fn add(&mut self, other: &ScanStats) {
         self.frames += other.frames;
         self.bad_crc += other.bad_crc;
         self.damaged += other.damaged;

@@ -35,7 +35,7 @@ pub(crate) const MAX_STREAMS: usize = 1024;
 
 /// The 32-byte signing secret. Its `Debug` never shows the key.
 #[derive(Clone, Copy, PartialEq, Eq)]
-pub struct SecretKey([u8; 32]);
+pub(crate) struct SecretKey([u8; 32]);
 
 impl std::fmt::Debug for SecretKey {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -44,19 +44,20 @@ impl std::fmt::Debug for SecretKey {
 }
 
 #[derive(Debug, Error, PartialEq, Eq)]
-pub enum KeyError {
+pub(crate) enum KeyError {
     #[error("the signing key is empty")]
     Empty,
 }
 
 impl SecretKey {
-    pub const fn from_bytes(bytes: [u8; 32]) -> Self {
+    #[cfg(test)]
+    pub(crate) const fn from_bytes(bytes: [u8; 32]) -> Self {
         SecretKey(bytes)
     }
 
     /// 64 hex characters are the key itself; anything else is a passphrase
     /// hashed with SHA-256, as MAVProxy's `signing setup` does.
-    pub fn parse(text: &str) -> Result<Self, KeyError> {
+    pub(crate) fn parse(text: &str) -> Result<Self, KeyError> {
         if text.is_empty() {
             return Err(KeyError::Empty);
         }
@@ -102,11 +103,11 @@ pub(crate) fn timestamp_now() -> u64 {
 /// The whole bytes of a received signed MAVLink 2 frame, kept so its
 /// signature can be checked once a key is known.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SignedBytes(Box<[u8]>);
+pub(crate) struct SignedBytes(Box<[u8]>);
 
 impl SignedBytes {
     /// `Some` when `raw` (one whole, CRC-checked frame) is signed.
-    pub fn of(raw: &[u8]) -> Option<Self> {
+    pub(crate) fn of(raw: &[u8]) -> Option<Self> {
         let signed = raw.len() >= V2_HEADER + SIGNATURE_LEN
             && raw[0] == STX_V2
             && raw[2] & IFLAG_SIGNED != 0;
@@ -117,17 +118,17 @@ impl SignedBytes {
         &self.0[self.0.len() - SIGNATURE_LEN..]
     }
 
-    pub fn link_id(&self) -> u8 {
+    pub(crate) fn link_id(&self) -> u8 {
         self.block()[0]
     }
 
-    pub fn timestamp(&self) -> u64 {
+    pub(crate) fn timestamp(&self) -> u64 {
         let b = self.block();
         u64::from_le_bytes([b[1], b[2], b[3], b[4], b[5], b[6], 0, 0])
     }
 
     /// Whether `key` made this signature.
-    pub fn verify(&self, key: &SecretKey) -> bool {
+    pub(crate) fn verify(&self, key: &SecretKey) -> bool {
         let (signed, tag) = self.0.split_at(self.0.len() - TAG_LEN);
         key.tag(signed) == tag
     }
@@ -136,14 +137,14 @@ impl SignedBytes {
 /// Signs our outgoing frames. The timestamp never goes backwards and never
 /// repeats: each frame gets max(now, last + 1).
 #[derive(Debug, Clone)]
-pub struct Signer {
+pub(crate) struct Signer {
     key: SecretKey,
     link_id: u8,
     last: u64,
 }
 
 impl Signer {
-    pub fn new(key: SecretKey, link_id: u8) -> Self {
+    pub(crate) fn new(key: SecretKey, link_id: u8) -> Self {
         Signer {
             key,
             link_id,
@@ -155,7 +156,7 @@ impl Signer {
     /// `start`) into a signed one: sets the flag, recomputes the CRC (the
     /// flag is under it) and appends the signature. `now` is a signing
     /// timestamp, e.g. from [`timestamp_now`]. Returns the timestamp used.
-    pub fn sign(&mut self, buf: &mut Vec<u8>, start: usize, now: u64) -> u64 {
+    pub(crate) fn sign(&mut self, buf: &mut Vec<u8>, start: usize, now: u64) -> u64 {
         let frame = &mut buf[start..];
         assert!(
             frame[0] == STX_V2 && frame[2] & IFLAG_SIGNED == 0,
@@ -180,7 +181,7 @@ impl Signer {
 
 /// What the gate decided about one received frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Verdict {
+pub(crate) enum Verdict {
     /// Signed with our key, timestamp newer than its stream's last one.
     Signed,
     /// Not signed, and unsigned frames are allowed.
@@ -193,7 +194,7 @@ pub enum Verdict {
 }
 
 impl Verdict {
-    pub fn accepted(self) -> bool {
+    pub(crate) fn accepted(self) -> bool {
         matches!(
             self,
             Verdict::Signed | Verdict::Unsigned | Verdict::SignedUnchecked
@@ -203,27 +204,23 @@ impl Verdict {
 
 /// Frames the gate let through and refused, exact.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct SigningCounts {
+pub(crate) struct SigningCounts {
     /// Accepted: correctly signed, not replayed.
-    pub signed: u64,
+    pub(crate) signed: u64,
     /// Accepted without a check: signed, but we have no key.
-    pub signed_unchecked: u64,
+    pub(crate) signed_unchecked: u64,
     /// Accepted unsigned (no `--require-signed`; or a radio's RADIO_STATUS).
-    pub unsigned: u64,
+    pub(crate) unsigned: u64,
     /// Refused: not signed while signatures are required.
-    pub rejected_unsigned: u64,
+    pub(crate) rejected_unsigned: u64,
     /// Refused: signed, but not with our key (or altered on the way).
-    pub rejected_bad_signature: u64,
+    pub(crate) rejected_bad_signature: u64,
     /// Refused: correctly signed, but its timestamp was not newer than the
     /// last one accepted on its stream (or too old for a new stream).
-    pub rejected_replay: u64,
+    pub(crate) rejected_replay: u64,
 }
 
 impl SigningCounts {
-    pub fn rejected(&self) -> u64 {
-        self.rejected_unsigned + self.rejected_bad_signature + self.rejected_replay
-    }
-
     fn record(&mut self, v: Verdict) {
         match v {
             Verdict::Signed => self.signed += 1,
@@ -261,15 +258,15 @@ impl std::fmt::Display for SigningCounts {
 /// Signing in a run's summary: what the gate checked with a key, or,
 /// without one, the signed frames it let through unchecked.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-pub struct SigningSummary {
+pub(crate) struct SigningSummary {
     /// A key was given: our frames are signed, signatures checked.
-    pub key: bool,
+    pub(crate) key: bool,
     /// `--require-signed`
-    pub required: bool,
+    pub(crate) required: bool,
     /// Our outgoing link id (with a key).
-    pub link_id: Option<u8>,
+    pub(crate) link_id: Option<u8>,
     #[serde(flatten)]
-    pub counts: SigningCounts,
+    pub(crate) counts: SigningCounts,
 }
 
 /// The last timestamp accepted per stream (sysid, compid, link id), for at
@@ -322,13 +319,13 @@ impl ReplayTable {
 /// refuses unsigned ones.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SigningConfig {
-    pub key: SecretKey,
-    pub link_id: u8,
-    pub require_signed: bool,
+    pub(crate) key: SecretKey,
+    pub(crate) link_id: u8,
+    pub(crate) require_signed: bool,
 }
 
 impl SigningConfig {
-    pub fn signer(&self) -> Signer {
+    pub(crate) fn signer(&self) -> Signer {
         Signer::new(self.key, self.link_id)
     }
 }
@@ -337,14 +334,14 @@ impl SigningConfig {
 /// looks at it, and counts what it refused. Without a key it checks
 /// nothing and counts what came signed.
 #[derive(Debug)]
-pub struct Gate {
+pub(crate) struct Gate {
     policy: Option<SigningConfig>,
     replay: ReplayTable,
     counts: SigningCounts,
 }
 
 impl Gate {
-    pub fn new(policy: Option<SigningConfig>) -> Self {
+    pub(crate) fn new(policy: Option<SigningConfig>) -> Self {
         Gate {
             policy,
             replay: ReplayTable::default(),
@@ -356,7 +353,7 @@ impl Gate {
     /// bytes when it carries a signature. `radio_status` frames may come
     /// unsigned even when signatures are required: a SiK radio injects
     /// them and cannot sign (ArduPilot accepts them the same way).
-    pub fn judge(
+    pub(crate) fn judge(
         &mut self,
         source: SysComp,
         signed: Option<&SignedBytes>,
@@ -387,12 +384,12 @@ impl Gate {
         verdict
     }
 
-    pub fn counts(&self) -> SigningCounts {
+    pub(crate) fn counts(&self) -> SigningCounts {
         self.counts
     }
 
     /// What a run's summary reports.
-    pub fn summary(&self) -> SigningSummary {
+    pub(crate) fn summary(&self) -> SigningSummary {
         SigningSummary {
             key: self.policy.is_some(),
             required: self.policy.is_some_and(|p| p.require_signed),

@@ -40,25 +40,25 @@ use tokio::sync::oneshot;
 use super::basic_auth::Checker;
 use crate::config::WebConfig;
 
-pub use hyper::http::request::Parts as Head;
+pub(crate) use hyper::http::request::Parts as Head;
 
 /// The web config now in force; a reload swaps it.
-pub type SharedWeb = Rc<RefCell<Rc<WebConfig>>>;
+pub(crate) type SharedWeb = Rc<RefCell<Rc<WebConfig>>>;
 
 /// How much a client may ask of the server.
 #[derive(Debug, Clone, Copy)]
 pub struct Limits {
     /// Connections open at once; beyond it the oldest idle one is closed.
-    pub max_connections: usize,
+    pub(crate) max_connections: usize,
     /// Time to send a whole request head.
-    pub header_read_timeout: Duration,
+    pub(crate) header_read_timeout: Duration,
     /// Largest request head (hyper's floor is 8 KiB).
-    pub max_header_bytes: usize,
+    pub(crate) max_header_bytes: usize,
     /// Longest a connection lives, serving included: a client that never
     /// reads its response does not hold a slot for ever.
-    pub max_connection_time: Duration,
+    pub(crate) max_connection_time: Duration,
     /// Paths a `POST` may reach the handler at (`/-/reload`).
-    pub posts: &'static [&'static str],
+    pub(crate) posts: &'static [&'static str],
 }
 
 impl Default for Limits {
@@ -74,19 +74,19 @@ impl Default for Limits {
 }
 
 /// Content type of the Prometheus text format.
-pub const PROMETHEUS_TEXT: &str = "text/plain; version=0.0.4; charset=utf-8";
+pub(crate) const PROMETHEUS_TEXT: &str = "text/plain; version=0.0.4; charset=utf-8";
 
 /// A handler's answer.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Reply {
-    pub status: StatusCode,
-    pub content_type: &'static str,
-    pub body: String,
+    pub(crate) status: StatusCode,
+    pub(crate) content_type: &'static str,
+    pub(crate) body: String,
 }
 
 impl Reply {
     /// Plain text (errors, pointers).
-    pub fn text(status: StatusCode, body: impl Into<String>) -> Self {
+    pub(crate) fn text(status: StatusCode, body: impl Into<String>) -> Self {
         Reply {
             status,
             content_type: "text/plain; charset=utf-8",
@@ -95,7 +95,7 @@ impl Reply {
     }
 
     /// An exposition in the Prometheus text format.
-    pub fn metrics(body: String) -> Self {
+    pub(crate) fn metrics(body: String) -> Self {
         Reply {
             status: StatusCode::OK,
             content_type: PROMETHEUS_TEXT,
@@ -105,7 +105,7 @@ impl Reply {
 }
 
 /// What a handler returns: its reply, later.
-pub type Replying = Pin<Box<dyn Future<Output = Reply>>>;
+pub(crate) type Replying = Pin<Box<dyn Future<Output = Reply>>>;
 
 /// Open connections in accept order, each waiting for its head or serving.
 #[derive(Default)]
@@ -160,7 +160,7 @@ impl Connections {
 
 /// Serves `listener` on the current `LocalSet` until the runtime ends,
 /// answering each `GET`/`HEAD` with `handler`, in plain HTTP open to all.
-pub fn serve<H>(listener: TcpListener, limits: Limits, handler: H)
+pub(crate) fn serve<H>(listener: TcpListener, limits: Limits, handler: H)
 where
     H: Fn(Head) -> Replying + 'static,
 {
@@ -168,7 +168,7 @@ where
 }
 
 /// [`serve`] under the web config `web` holds at each accept.
-pub fn serve_with<H>(listener: TcpListener, limits: Limits, web: SharedWeb, handler: H)
+pub(crate) fn serve_with<H>(listener: TcpListener, limits: Limits, web: SharedWeb, handler: H)
 where
     H: Fn(Head) -> Replying + 'static,
 {
@@ -359,7 +359,7 @@ fn response(reply: Reply, web: &WebConfig) -> Response<Full<Bytes>> {
 }
 
 /// A bound std listener, handed to the runtime (non-blocking).
-pub fn listener(std: std::net::TcpListener) -> io::Result<TcpListener> {
+pub(crate) fn listener(std: std::net::TcpListener) -> io::Result<TcpListener> {
     std.set_nonblocking(true)?;
     TcpListener::from_std(std)
 }

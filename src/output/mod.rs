@@ -16,13 +16,13 @@ pub(crate) mod windows;
 use std::io;
 use std::time::{Duration, SystemTime};
 
-pub use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
+pub(crate) use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::verdict::Verdict;
 
 /// An output format: it follows the run, then renders its summary.
-pub trait Reporter: Observer {
+pub(crate) trait Reporter: Observer {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()>;
 }
 
@@ -30,13 +30,13 @@ pub trait Reporter: Observer {
 /// start (the UNIX epoch under the virtual clock, so output is reproducible)
 /// and advanced by the monotonic session clock.
 #[derive(Debug, Clone, Copy)]
-pub struct WallClock {
-    pub start: SystemTime,
+pub(crate) struct WallClock {
+    pub(crate) start: SystemTime,
 }
 
 impl WallClock {
     /// Now, or the UNIX epoch when the run is on a virtual clock.
-    pub fn starting(virtual_clock: bool) -> Self {
+    pub(crate) fn starting(virtual_clock: bool) -> Self {
         WallClock {
             start: if virtual_clock {
                 SystemTime::UNIX_EPOCH
@@ -46,15 +46,15 @@ impl WallClock {
         }
     }
 
-    pub fn at(&self, t: Nanos) -> SystemTime {
+    pub(crate) fn at(&self, t: Nanos) -> SystemTime {
         self.start + Duration::from_nanos(t)
     }
 
-    pub fn rfc3339(&self, t: Nanos) -> String {
+    pub(crate) fn rfc3339(&self, t: Nanos) -> String {
         humantime::format_rfc3339_micros(self.at(t)).to_string()
     }
 
-    pub fn micros_since_epoch(&self) -> u64 {
+    pub(crate) fn micros_since_epoch(&self) -> u64 {
         self.start
             .duration_since(SystemTime::UNIX_EPOCH)
             .map_or(0, |d| d.as_micros() as u64)
@@ -66,12 +66,12 @@ impl WallClock {
 /// the others go on: a closed stdout (`| head`) must not cost the plot,
 /// the sample log or the exporter anything.
 #[derive(Default)]
-pub struct Fanout<'a> {
+pub(crate) struct Fanout<'a> {
     reporters: Vec<(Box<dyn Reporter + 'a>, bool)>,
 }
 
 impl<'a> Fanout<'a> {
-    pub fn new(reporters: Vec<Box<dyn Reporter + 'a>>) -> Self {
+    pub(crate) fn new(reporters: Vec<Box<dyn Reporter + 'a>>) -> Self {
         Fanout {
             reporters: reporters.into_iter().map(|r| (r, true)).collect(),
         }
@@ -118,10 +118,10 @@ impl Reporter for Fanout<'_> {
 /// one thread (one tokio task joins them, so a `RefCell` suffices). A line
 /// is written by one `writeln!` without an await in between, so lines of
 /// different links never interleave.
-pub struct Shared<W: io::Write>(pub std::rc::Rc<std::cell::RefCell<W>>);
+pub(crate) struct Shared<W: io::Write>(pub std::rc::Rc<std::cell::RefCell<W>>);
 
 impl<W: io::Write> Shared<W> {
-    pub fn new(out: W) -> Self {
+    pub(crate) fn new(out: W) -> Self {
         Shared(std::rc::Rc::new(std::cell::RefCell::new(out)))
     }
 }
@@ -146,14 +146,14 @@ impl<W: io::Write> io::Write for Shared<W> {
 
 /// Starts every line with a fixed prefix (`[LINK] `), so per-reply lines
 /// of several links can be told apart; without one, writes through.
-pub struct Prefixed<W: io::Write> {
+pub(crate) struct Prefixed<W: io::Write> {
     out: W,
     prefix: Option<String>,
     at_line_start: bool,
 }
 
 impl<W: io::Write> Prefixed<W> {
-    pub fn new(out: W, prefix: Option<String>) -> Self {
+    pub(crate) fn new(out: W, prefix: Option<String>) -> Self {
         Prefixed {
             out,
             prefix,
@@ -164,11 +164,11 @@ impl<W: io::Write> Prefixed<W> {
 
 impl<W: io::Write> Prefixed<W> {
     /// The writer itself, bypassing the prefix.
-    pub fn inner(&mut self) -> &mut W {
+    pub(crate) fn inner(&mut self) -> &mut W {
         &mut self.out
     }
 
-    pub fn into_inner(self) -> W {
+    pub(crate) fn into_inner(self) -> W {
         self.out
     }
 }

@@ -14,21 +14,21 @@ use crate::frame::SysComp;
 /// What one source did between two tellings of the table.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Window {
-    pub source: SysComp,
+    pub(crate) source: SysComp,
     /// The SiK radio's own RADIO_STATUS source.
-    pub radio: bool,
+    pub(crate) radio: bool,
     /// Session time, ns: from the previous telling (0 at first) to this one.
-    pub start: Nanos,
-    pub end: Nanos,
+    pub(crate) start: Nanos,
+    pub(crate) end: Nanos,
     /// Frames, duplicates included.
-    pub received: u64,
+    pub(crate) received: u64,
     /// Numbers skipped in this window, less the earlier windows' gaps its
     /// late frames filled: negative when more were filled than skipped,
     /// so that the windows add up to the run's count.
-    pub lost: i64,
-    pub duplicate: u64,
-    pub reordered: u64,
-    pub bytes: u64,
+    pub(crate) lost: i64,
+    pub(crate) duplicate: u64,
+    pub(crate) reordered: u64,
+    pub(crate) bytes: u64,
 }
 
 impl Window {

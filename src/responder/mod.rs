@@ -36,49 +36,49 @@ const STREAM_SEED: u64 = 0x7e1e_3e7e_5eed_0002;
 
 /// How the responder behaves, already validated.
 #[derive(Debug, Clone)]
-pub struct ResponderSettings {
-    pub id: SysComp,
+pub(crate) struct ResponderSettings {
+    pub(crate) id: SysComp,
     /// Every reply is held this long, plus up to `jitter`.
-    pub delay: Duration,
-    pub jitter: Duration,
+    pub(crate) delay: Duration,
+    pub(crate) jitter: Duration,
     /// Shares of replies dropped and duplicated, 0..=1.
-    pub drop: f64,
-    pub dup: f64,
-    pub seed: u64,
-    pub answer_ping: bool,
+    pub(crate) drop: f64,
+    pub(crate) dup: f64,
+    pub(crate) seed: u64,
+    pub(crate) answer_ping: bool,
     /// With a key: replies signed, requests checked (all must be signed).
-    pub signing: Option<SigningConfig>,
+    pub(crate) signing: Option<SigningConfig>,
     /// Telemetry sent to every peer unasked; a HEARTBEAT stream sets the
     /// rate of our HEARTBEAT (1 Hz without).
-    pub streams: Vec<StreamSpec>,
+    pub(crate) streams: Vec<StreamSpec>,
     /// Share of streamed frames numbered, then not sent: the gap a lost
     /// frame leaves in our sequence numbers.
-    pub stream_drop: f64,
+    pub(crate) stream_drop: f64,
 }
 
 /// What one `--stream` sent.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 pub(crate) struct StreamCount {
-    pub message: &'static str,
+    pub(crate) message: &'static str,
     /// Frames written to the link.
-    pub sent: u64,
+    pub(crate) sent: u64,
     /// Frames numbered but dropped by `--stream-drop`.
-    pub dropped: u64,
+    pub(crate) dropped: u64,
 }
 
 /// Ground truth printed on exit, to hold a pinger's figures against.
 #[derive(Debug, Clone, Default, PartialEq, Eq, Serialize)]
 pub(crate) struct RespondCounts {
-    pub requests: ResponderCounts,
-    pub replies_sent: u64,
-    pub dropped: u64,
-    pub duplicated: u64,
+    pub(crate) requests: ResponderCounts,
+    pub(crate) replies_sent: u64,
+    pub(crate) dropped: u64,
+    pub(crate) duplicated: u64,
     /// Replies dropped because too many were held by `--delay`.
-    pub overflow: u64,
+    pub(crate) overflow: u64,
     /// With a signing key: frames accepted and refused by signature.
-    pub signing: Option<SigningCounts>,
+    pub(crate) signing: Option<SigningCounts>,
     /// With `--stream`: each stream's frames, in the order given.
-    pub streamed: Vec<StreamCount>,
+    pub(crate) streamed: Vec<StreamCount>,
 }
 
 impl std::fmt::Display for RespondCounts {

@@ -52,7 +52,7 @@ pub(super) async fn watch(controls: Controls) {
 /// Windows: the first Ctrl-C (or Ctrl-Break) stops the run, a second
 /// leaves; there is no interim-summary signal.
 #[cfg(not(unix))]
-pub async fn watch(controls: Controls) {
+pub(crate) async fn watch(controls: Controls) {
     use tokio::signal::windows::{ctrl_break, ctrl_c};
     let (Ok(mut int), Ok(mut brk)) = (ctrl_c(), ctrl_break()) else {
         return pending().await;

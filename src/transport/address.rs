@@ -31,8 +31,8 @@ pub enum LinkSpec {
 /// A host (name, IPv4, or IPv6 without brackets) and a port.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct HostPort {
-    pub host: String,
-    pub port: u16,
+    pub(crate) host: String,
+    pub(crate) port: u16,
 }
 
 impl fmt::Display for HostPort {
@@ -49,12 +49,12 @@ impl LinkSpec {
     /// A serial device that may ignore its baud rate: a USB CDC ACM port
     /// (a flight controller's own USB) or a pseudo-terminal pass data as
     /// fast as they can, whatever the baud rate says.
-    pub fn may_ignore_baud(&self) -> bool {
+    pub(crate) fn may_ignore_baud(&self) -> bool {
         self.baud_ignorer().is_some()
     }
 
     /// What kind of device may ignore the baud rate, as a summary names it.
-    pub fn baud_ignorer(&self) -> Option<&'static str> {
+    pub(crate) fn baud_ignorer(&self) -> Option<&'static str> {
         const KINDS: [(&str, &str); 4] = [
             ("/dev/ttyACM", "a USB CDC port"),
             ("/dev/pts/", "a pty"),
@@ -72,12 +72,12 @@ impl LinkSpec {
 
     /// A link on tokio's paused, virtual clock: a simulated link with
     /// `clock=virtual`, or a telemetry log (on the log's own clock).
-    pub fn is_virtual(&self) -> bool {
+    pub(crate) fn is_virtual(&self) -> bool {
         matches!(self, LinkSpec::Sim(p) if p.virtual_clock) || self.is_log()
     }
 
     /// A telemetry log: passive, nothing sent, ends with the log.
-    pub fn is_log(&self) -> bool {
+    pub(crate) fn is_log(&self) -> bool {
         matches!(self, LinkSpec::Tlog(_))
     }
 }
@@ -109,8 +109,8 @@ input) (IPv6 hosts in brackets: udpout:[::1]:14550)";
 #[derive(Debug, Error, PartialEq)]
 #[error("bad connection string '{input}': {reason}; accepted forms: {ACCEPTED_FORMS}")]
 pub struct AddressError {
-    pub input: String,
-    pub reason: String,
+    pub(crate) input: String,
+    pub(crate) reason: String,
 }
 
 fn error(input: &str, reason: impl Into<String>) -> AddressError {

@@ -18,28 +18,28 @@ use crate::frame::{self, Frame, Kind, ScanStats};
 
 /// Which peer of a link a frame came from (a UDP peer address, a TCP
 /// client), so an answer can go back the same way. Links with one peer use 0.
-pub type PathId = u32;
+pub(crate) type PathId = u32;
 
 /// One received frame, when it arrived, and from which path.
 #[derive(Debug, Clone)]
 pub struct Inbound {
-    pub frame: Frame,
-    pub at: Instant,
-    pub path: PathId,
+    pub(crate) frame: Frame,
+    pub(crate) at: Instant,
+    pub(crate) path: PathId,
     /// The frame's bytes when it is signed, for the signature check
     /// ([`crate::frame::signing::Gate`]); `None` for unsigned frames.
-    pub signature: Option<SignedBytes>,
+    pub(crate) signature: Option<SignedBytes>,
     /// The frame's bytes as received, kept only on a link told to
     /// ([`Transport::keep_raw`]) for a recording (`--tlog`), which takes
     /// them.
-    pub raw: Option<Box<[u8]>>,
+    pub(crate) raw: Option<Box<[u8]>>,
 }
 
 impl Inbound {
     /// The inbound form of one whole frame the scanner handed over as
     /// `kind`, with its bytes when `keep_raw` (a damaged frame too: a
     /// recording keeps what arrived, as QGroundControl's logs do).
-    pub fn of(raw: &[u8], kind: Kind, at: Instant, path: PathId, keep_raw: bool) -> Self {
+    pub(crate) fn of(raw: &[u8], kind: Kind, at: Instant, path: PathId, keep_raw: bool) -> Self {
         Inbound {
             frame: frame::decode_as(raw, kind),
             at,
@@ -67,7 +67,7 @@ pub enum LinkError {
 }
 
 impl LinkError {
-    pub fn io(context: impl Into<String>, source: io::Error) -> Self {
+    pub(crate) fn io(context: impl Into<String>, source: io::Error) -> Self {
         LinkError::Io {
             context: context.into(),
             source,
@@ -75,7 +75,7 @@ impl LinkError {
     }
 
     /// The same error with its OS error replaced by `f`'s (advice added).
-    pub fn map_io(self, f: impl FnOnce(io::Error) -> io::Error) -> Self {
+    pub(crate) fn map_io(self, f: impl FnOnce(io::Error) -> io::Error) -> Self {
         match self {
             LinkError::Io { context, source } => LinkError::Io {
                 context,
@@ -106,7 +106,7 @@ pub enum RxClock {
 }
 
 impl RxClock {
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             RxClock::Kernel => "kernel receive timestamps (SO_TIMESTAMPNS)",
             RxClock::UserSpace => "user-space receive timestamps",

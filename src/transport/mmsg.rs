@@ -81,13 +81,13 @@ const SLOT: usize = 65_536;
 /// One message read.
 #[derive(Debug, Clone, Copy, Default)]
 pub(super) struct Received {
-    pub len: usize,
-    pub from: Option<SockaddrStorage>,
+    pub(crate) len: usize,
+    pub(crate) from: Option<SockaddrStorage>,
     /// When the kernel queued it (SO_TIMESTAMPNS), on the wall clock.
-    pub kernel: Option<WallNs>,
+    pub(crate) kernel: Option<WallNs>,
     /// UDP GRO joined several datagrams of this size (the last may be
     /// shorter) into this message.
-    pub segment: Option<usize>,
+    pub(crate) segment: Option<usize>,
 }
 
 /// Buffers for `recvmmsg`, reused for every read.

@@ -31,30 +31,30 @@ use tokio::time::Instant;
 use crate::frame::ScanStats;
 pub use address::LinkSpec;
 pub(crate) use link::push_datagram;
-pub use link::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
-pub use outbox::{Outbox, To};
+pub(crate) use link::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
+pub(crate) use outbox::{Outbox, To};
 
 /// An IP address family, for `-4` and `-6`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Family {
+pub(crate) enum Family {
     V4,
     V6,
 }
 
 /// How to open a link, beyond its connection string.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct LinkOptions {
+pub(crate) struct LinkOptions {
     /// Baud rate of a serial port whose connection string names none.
-    pub baud: u32,
+    pub(crate) baud: u32,
     /// Reopen a tcp client or serial link that breaks, instead of ending;
     /// on `udpout:` an ICMP "port unreachable" does not end the link.
-    pub reconnect: bool,
+    pub(crate) reconnect: bool,
     /// With `reconnect`: a tcp client whose peer is not up yet ("connection
     /// refused") starts down and keeps trying, as after a loss (`mavping
     /// respond`, which may start before the pinger it answers).
-    pub wait_for_peer: bool,
+    pub(crate) wait_for_peer: bool,
     /// Address family, local address and interface of IP links.
-    pub route: route::Route,
+    pub(crate) route: route::Route,
 }
 
 impl Default for LinkOptions {
@@ -69,7 +69,7 @@ impl Default for LinkOptions {
 }
 
 /// Any of mavping's links, so the engine is written once.
-pub enum Link {
+pub(crate) enum Link {
     Udp(udp::UdpLink),
     Tcp(stream::StreamLink<tcp::TcpConnector>),
     TcpIn(tcp::TcpServer),
@@ -80,7 +80,7 @@ pub enum Link {
 
 impl Link {
     /// Opens the link a connection string names.
-    pub async fn open(spec: &LinkSpec, options: &LinkOptions) -> Result<Link, LinkError> {
+    pub(crate) async fn open(spec: &LinkSpec, options: &LinkOptions) -> Result<Link, LinkError> {
         Ok(match spec {
             LinkSpec::UdpIn(a) => Link::Udp(udp::UdpLink::listen(a, &options.route).await?),
             LinkSpec::UdpOut(a) => {

@@ -25,16 +25,16 @@ pub struct Outbox {
 
 impl Outbox {
     /// Queues a copy of `frame` for `to`.
-    pub fn push(&mut self, frame: &[u8], to: To) {
+    pub(crate) fn push(&mut self, frame: &[u8], to: To) {
         self.bytes.extend_from_slice(frame);
         self.frames.push((self.bytes.len(), to));
     }
 
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.frames.len()
     }
 
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.frames.is_empty()
     }
 
@@ -49,7 +49,7 @@ impl Outbox {
     }
 
     /// Empties the box, keeping its memory.
-    pub fn clear(&mut self) {
+    pub(crate) fn clear(&mut self) {
         self.bytes.clear();
         self.frames.clear();
     }

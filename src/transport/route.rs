@@ -15,12 +15,12 @@ use super::{Family, LinkError};
 
 /// The route options a link is opened with.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub struct Route {
-    pub family: Option<Family>,
+pub(crate) struct Route {
+    pub(crate) family: Option<Family>,
     /// Outgoing links send from here (`--bind ADDR[:PORT]`).
-    pub bind: Option<SocketAddr>,
+    pub(crate) bind: Option<SocketAddr>,
     /// Every socket is tied to this interface (`-I IFACE`).
-    pub interface: Option<String>,
+    pub(crate) interface: Option<String>,
 }
 
 /// The first address `addr` resolves to, of the family asked for.
@@ -60,7 +60,7 @@ pub(crate) fn interface_needs_linux(iface: &str) -> String {
 impl Route {
     /// The local address an outgoing link towards `peer` sends from:
     /// `--bind`, else any address of the peer's family.
-    pub fn local_for(&self, peer: SocketAddr) -> Result<SocketAddr, LinkError> {
+    pub(crate) fn local_for(&self, peer: SocketAddr) -> Result<SocketAddr, LinkError> {
         match self.bind {
             Some(bind) if bind.is_ipv4() != peer.is_ipv4() => Err(LinkError::Closed(format!(
                 "--bind {bind} and {peer} are of different address families"
@@ -109,7 +109,7 @@ impl Route {
     }
 
     /// A UDP socket bound to `local`, tied to the interface if one is set.
-    pub fn udp(&self, local: SocketAddr, what: &str) -> Result<UdpSocket, LinkError> {
+    pub(crate) fn udp(&self, local: SocketAddr, what: &str) -> Result<UdpSocket, LinkError> {
         let domain = Domain::for_address(local);
         let socket = Socket::new(domain, Type::DGRAM, Some(Protocol::UDP))
             .map_err(|e| LinkError::io("cannot open a udp socket", e))?;
@@ -124,7 +124,7 @@ impl Route {
     }
 
     /// A TCP socket for `addr`'s family, tied to the interface if one is set.
-    pub fn tcp(&self, addr: SocketAddr) -> Result<TcpSocket, LinkError> {
+    pub(crate) fn tcp(&self, addr: SocketAddr) -> Result<TcpSocket, LinkError> {
         let domain = Domain::for_address(addr);
         let socket = Socket::new(domain, Type::STREAM, Some(Protocol::TCP))
             .map_err(|e| LinkError::io("cannot open a tcp socket", e))?;

@@ -13,14 +13,14 @@ use super::LinkKind;
 /// pymavlink's and MAVProxy's default when no baud rate is given.
 pub(crate) const DEFAULT_BAUD: u32 = 115_200;
 
-pub struct SerialConnector {
+pub(crate) struct SerialConnector {
     path: String,
     baud: u32,
     name: String,
 }
 
 impl SerialConnector {
-    pub fn new(path: &str, baud: u32) -> Self {
+    pub(crate) fn new(path: &str, baud: u32) -> Self {
         SerialConnector {
             path: path.to_string(),
             baud,

@@ -12,37 +12,37 @@ use tokio::net::UdpSocket;
 use super::rx_time::WallNs;
 
 /// Messages read per [`RecvBatch::recv`].
-pub const RECV_BATCH: usize = 16;
+pub(crate) const RECV_BATCH: usize = 16;
 /// Datagrams per [`SendBatch::send`].
-pub const SEND_BATCH: usize = 32;
+pub(crate) const SEND_BATCH: usize = 32;
 /// Room for each message read: what UDP allows.
 const SLOT: usize = 65_536;
 
-pub type Fd<'a> = &'a UdpSocket;
-pub type Addr = SocketAddr;
+pub(crate) type Fd<'a> = &'a UdpSocket;
+pub(crate) type Addr = SocketAddr;
 
-pub fn fd(socket: &UdpSocket) -> Fd<'_> {
+pub(crate) fn fd(socket: &UdpSocket) -> Fd<'_> {
     socket
 }
 
 // The same signature as mmsg.rs's, whose addresses may be of any family.
 #[allow(clippy::unnecessary_wraps)]
-pub fn socket_addr(addr: &Addr) -> Option<SocketAddr> {
+pub(crate) fn socket_addr(addr: &Addr) -> Option<SocketAddr> {
     Some(*addr)
 }
 
 /// No kernel receive stamps here: replies are timed when read, and the
 /// summary says so (`RxClock::UserSpace`).
-pub fn kernel_stamps(_socket: &UdpSocket) -> bool {
+pub(crate) fn kernel_stamps(_socket: &UdpSocket) -> bool {
     false
 }
 
 /// No UDP GRO here: each datagram is its own read.
-pub fn join_arrivals(_socket: &UdpSocket) {}
+pub(crate) fn join_arrivals(_socket: &UdpSocket) {}
 
 /// Windows reports an ICMP "port unreachable" to a UDP socket as a reset
 /// connection (WSAECONNRESET); the link's policy knows it as refused.
-pub fn as_refused(e: io::Error) -> io::Error {
+pub(crate) fn as_refused(e: io::Error) -> io::Error {
     if e.kind() == io::ErrorKind::ConnectionReset {
         io::Error::new(io::ErrorKind::ConnectionRefused, e)
     } else {
@@ -52,23 +52,23 @@ pub fn as_refused(e: io::Error) -> io::Error {
 
 /// One message read.
 #[derive(Debug, Clone, Copy, Default)]
-pub struct Received {
-    pub len: usize,
-    pub from: Option<SocketAddr>,
+pub(crate) struct Received {
+    pub(crate) len: usize,
+    pub(crate) from: Option<SocketAddr>,
     /// Always `None`: no kernel stamps on this path.
-    pub kernel: Option<WallNs>,
+    pub(crate) kernel: Option<WallNs>,
     /// Always `None`: no GRO on this path.
-    pub segment: Option<usize>,
+    pub(crate) segment: Option<usize>,
 }
 
 /// Buffers for the reads, reused for every read.
-pub struct RecvBatch {
+pub(crate) struct RecvBatch {
     slab: Box<[u8]>,
     received: Box<[Received]>,
 }
 
 impl RecvBatch {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         RecvBatch {
             slab: vec![0; SLOT * RECV_BATCH].into_boxed_slice(),
             received: vec![Received::default(); RECV_BATCH].into_boxed_slice(),
@@ -78,7 +78,7 @@ impl RecvBatch {
     /// Reads what is waiting, up to [`RECV_BATCH`] datagrams, without
     /// blocking: how many (`WouldBlock` when none). An error after the
     /// first datagram ends the batch; the next call returns it.
-    pub fn recv(&mut self, socket: Fd<'_>) -> io::Result<usize> {
+    pub(crate) fn recv(&mut self, socket: Fd<'_>) -> io::Result<usize> {
         let RecvBatch { slab, received } = self;
         let mut count = 0;
         for (slot, r) in slab.chunks_mut(SLOT).zip(received.iter_mut()) {
@@ -99,7 +99,7 @@ impl RecvBatch {
     }
 
     /// The `i`-th message of the last read, and what it was.
-    pub fn message(&self, i: usize) -> (&[u8], &Received) {
+    pub(crate) fn message(&self, i: usize) -> (&[u8], &Received) {
         let r = &self.received[i];
         let slot = &self.slab[i * SLOT..(i + 1) * SLOT];
         (&slot[..r.len.min(SLOT)], r)
@@ -107,26 +107,26 @@ impl RecvBatch {
 }
 
 /// A datagram to send, and to whom (`None` on a connected socket).
-pub type Datagram<'a> = (&'a [u8], Option<Addr>);
+pub(crate) type Datagram<'a> = (&'a [u8], Option<Addr>);
 
 /// How the datagrams at the head of a queue go out: up to a batch, never
 /// as a group (no GSO here).
-pub fn next_send(datagrams: &[Datagram<'_>], _gso: bool) -> (usize, bool) {
+pub(crate) fn next_send(datagrams: &[Datagram<'_>], _gso: bool) -> (usize, bool) {
     (datagrams.len().clamp(1, SEND_BATCH), false)
 }
 
 /// Nothing to keep between writes; the type mirrors `mmsg.rs`'s.
-pub struct SendBatch;
+pub(crate) struct SendBatch;
 
 impl SendBatch {
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         SendBatch
     }
 
     /// Sends datagrams one call each, each to its own address: how many
     /// went, at least one, or the first one's error (as `sendmmsg`).
     #[allow(clippy::unused_self)] // mmsg.rs's reuses its headers
-    pub fn send(&mut self, socket: Fd<'_>, datagrams: &[Datagram<'_>]) -> io::Result<usize> {
+    pub(crate) fn send(&mut self, socket: Fd<'_>, datagrams: &[Datagram<'_>]) -> io::Result<usize> {
         let n = datagrams.len().min(SEND_BATCH);
         for (i, &(frame, to)) in datagrams[..n].iter().enumerate() {
             let sent = match to {
@@ -143,13 +143,17 @@ impl SendBatch {
     }
 
     /// [`next_send`] makes no groups here; a group would go one by one.
-    pub fn send_group(&mut self, socket: Fd<'_>, group: &[Datagram<'_>]) -> io::Result<usize> {
+    pub(crate) fn send_group(
+        &mut self,
+        socket: Fd<'_>,
+        group: &[Datagram<'_>],
+    ) -> io::Result<usize> {
         self.send(socket, group)
     }
 }
 
 /// No GSO is ever tried, so no error says it is missing.
-pub fn gso_unsupported(_e: &io::Error) -> bool {
+pub(crate) fn gso_unsupported(_e: &io::Error) -> bool {
     false
 }
 

@@ -34,7 +34,7 @@ const READ_BUF: usize = 16 * 1024;
 
 /// Opens the underlying stream; called again for each reconnection.
 #[allow(async_fn_in_trait)] // used with concrete types only
-pub trait Connect {
+pub(crate) trait Connect {
     type Stream: AsyncRead + AsyncWrite + Unpin;
     /// How this kind of link meets its peer.
     const KIND: LinkKind;
@@ -56,7 +56,7 @@ enum State<S> {
     },
 }
 
-pub struct StreamLink<C: Connect> {
+pub(crate) struct StreamLink<C: Connect> {
     connector: C,
     reconnect: bool,
     state: State<C::Stream>,
@@ -85,7 +85,7 @@ fn notice(msg: std::fmt::Arguments<'_>) {
 impl<C: Connect> StreamLink<C> {
     /// Connects once; a failure here ends the run even with `reconnect`,
     /// since a wrong device or address is a usage error, not a lost link.
-    pub async fn open(connector: C, reconnect: bool) -> Result<Self, LinkError> {
+    pub(crate) async fn open(connector: C, reconnect: bool) -> Result<Self, LinkError> {
         let stream = connector
             .connect()
             .await
@@ -110,7 +110,7 @@ impl<C: Connect> StreamLink<C> {
     /// Connects, or when nothing listens there yet, starts down and tries
     /// again with backoff as after a loss; any other failure (a name that
     /// does not resolve, an unreachable network) ends the run as `open`'s.
-    pub async fn open_or_wait(connector: C) -> Result<Self, LinkError> {
+    pub(crate) async fn open_or_wait(connector: C) -> Result<Self, LinkError> {
         let first = connector.connect().await;
         let stream = match first {
             Err(e) if e.kind() == io::ErrorKind::ConnectionRefused => None,

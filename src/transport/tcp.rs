@@ -29,14 +29,14 @@ const WRITE_STALL: Duration = Duration::from_secs(1);
 const READ_BUF: usize = 16 * 1024;
 
 /// `tcp:HOST:PORT`: the connector behind a reconnecting [`super::stream::StreamLink`].
-pub struct TcpConnector {
+pub(crate) struct TcpConnector {
     addr: HostPort,
     route: Route,
     name: String,
 }
 
 impl TcpConnector {
-    pub fn new(addr: &HostPort, route: Route) -> Self {
+    pub(crate) fn new(addr: &HostPort, route: Route) -> Self {
         TcpConnector {
             addr: addr.clone(),
             route,
@@ -80,7 +80,7 @@ struct Client {
 }
 
 /// `tcpin:HOST:PORT`: a listening socket and the clients it accepted.
-pub struct TcpServer {
+pub(crate) struct TcpServer {
     listener: TcpListener,
     clients: Vec<Client>,
     next_path: PathId,
@@ -92,7 +92,7 @@ pub struct TcpServer {
 }
 
 impl TcpServer {
-    pub async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
+    pub(crate) async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
         let local = resolve(addr, route.family).await?;
         let socket = route.tcp(local)?;
         // As std's TcpListener::bind: a restarted server must not wait for
@@ -113,10 +113,6 @@ impl TcpServer {
             buf: vec![0; READ_BUF].into_boxed_slice(),
             keep_raw: false,
         })
-    }
-
-    pub fn local_addr(&self) -> io::Result<SocketAddr> {
-        self.listener.local_addr()
     }
 
     fn accept(&mut self, stream: TcpStream, peer: SocketAddr) {

@@ -53,7 +53,7 @@ enum Mode {
     },
 }
 
-pub struct UdpLink {
+pub(crate) struct UdpLink {
     socket: UdpSocket,
     mode: Mode,
     rx: Receiver,
@@ -92,7 +92,7 @@ impl UdpLink {
     }
 
     /// `udpin:HOST:PORT`
-    pub async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
+    pub(crate) async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
         let local = resolve(addr, route.family).await?;
         let socket = route
             .udp(local, &format!("cannot listen on udp {addr}"))
@@ -101,7 +101,7 @@ impl UdpLink {
     }
 
     /// `udpout:HOST:PORT`
-    pub async fn connect(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
+    pub(crate) async fn connect(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
         let peer = resolve(addr, route.family).await?;
         let local = route.local_for(peer)?;
         let socket = route.udp(local, &format!("cannot send from udp {local}"))?;
@@ -122,7 +122,7 @@ impl UdpLink {
     /// ICMP "port unreachable" from a `udpout:` peer no longer ends the
     /// link: the peer may not be up yet or may come back (`--reconnect`,
     /// and always for `mavping respond`, which may start before its pinger).
-    pub fn keep_going_when_refused(mut self) -> Self {
+    pub(crate) fn keep_going_when_refused(mut self) -> Self {
         if let Mode::Connected {
             refused_is_transient,
             ..
@@ -134,7 +134,7 @@ impl UdpLink {
     }
 
     /// `udpbcast:ADDR:PORT`
-    pub async fn broadcast(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
+    pub(crate) async fn broadcast(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
         let target = resolve(addr, route.family).await?;
         if target.is_ipv6() {
             return Err(LinkError::io(
@@ -167,10 +167,6 @@ impl UdpLink {
                 peers: Vec::new(),
             },
         ))
-    }
-
-    pub fn local_addr(&self) -> io::Result<SocketAddr> {
-        self.socket.local_addr()
     }
 
     /// Whether `e` is an ICMP "port unreachable" that this link shrugs off

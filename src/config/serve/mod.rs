@@ -29,8 +29,8 @@ use crate::transport::LinkOptions;
 use crate::verdict::Thresholds;
 pub use allow::Pattern;
 use file::{continuous_link, default_module, file_error, within, File, Table};
-pub use request::BadProbeRequest;
-pub use web::{ClientAuth, WebConfig};
+
+pub(crate) use web::WebConfig;
 
 /// `mavping serve` listens here unless told otherwise: this machine only.
 pub(super) const DEFAULT_LISTEN: &str = "127.0.0.1:9465";
@@ -51,18 +51,18 @@ const MAX_LINKS: usize = 10_000;
 /// `mavping serve`, validated.
 #[derive(Debug)]
 pub struct ServeConfig {
-    pub listen: SocketAddr,
+    pub(crate) listen: SocketAddr,
     /// Reread on SIGHUP.
-    pub file: Option<PathBuf>,
+    pub(crate) file: Option<PathBuf>,
     pub settings: ServeSettings,
     /// `--web.config.file`, reread on reload with the configuration.
-    pub web_file: Option<PathBuf>,
-    pub web: WebConfig,
+    pub(crate) web_file: Option<PathBuf>,
+    pub(crate) web: WebConfig,
     /// `--web.enable-lifecycle`: `POST /-/reload` reloads.
-    pub lifecycle: bool,
+    pub(crate) lifecycle: bool,
     /// `--config.check`: validate, say what was found, and exit.
-    pub check: bool,
-    pub verbose: u8,
+    pub(crate) check: bool,
+    pub(crate) verbose: u8,
     /// The command line, whose `--allow` and `--link` a reload keeps.
     args: ServeArgs,
 }
@@ -70,13 +70,13 @@ pub struct ServeConfig {
 impl ServeConfig {
     /// The settings as they are now: the file read again, beside the
     /// command line's. The address stays what it was at the start.
-    pub fn reload(&self) -> Result<(ServeSettings, WebConfig), ConfigError> {
+    pub(crate) fn reload(&self) -> Result<(ServeSettings, WebConfig), ConfigError> {
         let (settings, _) = ServeSettings::load(&self.args, self.file.as_deref())?;
         Ok((settings, WebConfig::load(self.web_file.as_deref())?))
     }
 
     /// What `--config.check` prints: one line on what was found.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let s = &self.settings;
         let plural =
             |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
@@ -94,48 +94,48 @@ impl ServeConfig {
 /// What a reload may change (everything but the address).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ServeSettings {
-    pub allow: Vec<Pattern>,
-    pub modules: BTreeMap<String, Module>,
-    pub links: Vec<ContinuousLink>,
-    pub max_concurrent: usize,
+    pub(crate) allow: Vec<Pattern>,
+    pub(crate) modules: BTreeMap<String, Module>,
+    pub(crate) links: Vec<ContinuousLink>,
+    pub(crate) max_concurrent: usize,
 }
 
 /// How a `/probe` measures, unless its request says otherwise.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Module {
-    pub kind: ProbeKind,
-    pub target: Option<String>,
-    pub command: String,
-    pub retry_interval: Duration,
-    pub retries: u8,
-    pub count: u64,
-    pub interval: Duration,
-    pub timeout: Duration,
-    pub thresholds: Thresholds,
-    pub ours: SysComp,
-    pub version: Version,
-    pub heartbeat: bool,
-    pub signing: Option<SigningConfig>,
-    pub baud: u32,
+pub(crate) struct Module {
+    pub(crate) kind: ProbeKind,
+    pub(crate) target: Option<String>,
+    pub(crate) command: String,
+    pub(crate) retry_interval: Duration,
+    pub(crate) retries: u8,
+    pub(crate) count: u64,
+    pub(crate) interval: Duration,
+    pub(crate) timeout: Duration,
+    pub(crate) thresholds: Thresholds,
+    pub(crate) ours: SysComp,
+    pub(crate) version: Version,
+    pub(crate) heartbeat: bool,
+    pub(crate) signing: Option<SigningConfig>,
+    pub(crate) baud: u32,
     /// How radios are read (`radio_type`, as `--radio-type`).
-    pub radio_type: RadioType,
+    pub(crate) radio_type: RadioType,
 }
 
 /// A link probed all the time, shown at `/metrics` as `link="NAME"`.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ContinuousLink {
-    pub link: LinkConfig,
-    pub probe: Probe,
-    pub options: LinkOptions,
+pub(crate) struct ContinuousLink {
+    pub(crate) link: LinkConfig,
+    pub(crate) probe: Probe,
+    pub(crate) options: LinkOptions,
 }
 
 /// One `/probe` request, validated: what to open and how to measure it.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ProbePlan {
-    pub module: String,
-    pub link: LinkConfig,
-    pub probe: Probe,
-    pub options: LinkOptions,
+pub(crate) struct ProbePlan {
+    pub(crate) module: String,
+    pub(crate) link: LinkConfig,
+    pub(crate) probe: Probe,
+    pub(crate) options: LinkOptions,
 }
 
 /// What both a module and a link set: how requests are made.
@@ -249,7 +249,7 @@ fn validate_timeout(key: &str, d: Duration, max: Duration) -> Result<Duration, C
 impl ServeSettings {
     /// The settings from the command line and, when given, the file (read
     /// again at each reload); also the file's `listen`.
-    pub fn load(
+    pub(crate) fn load(
         args: &ServeArgs,
         path: Option<&Path>,
     ) -> Result<(Self, Option<String>), ConfigError> {

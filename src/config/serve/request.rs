@@ -22,12 +22,12 @@ use crate::units::parse_duration;
 /// Why a `/probe` request is refused: one line, the HTTP 400 body.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("{0}")]
-pub struct BadProbeRequest(String);
+pub(crate) struct BadProbeRequest(String);
 
 impl ServeSettings {
     /// A `/probe` request's query string into what to run, or the one line
     /// that says why not (the HTTP 400 body).
-    pub fn plan(&self, query: &str) -> Result<ProbePlan, BadProbeRequest> {
+    pub(crate) fn plan(&self, query: &str) -> Result<ProbePlan, BadProbeRequest> {
         self.plan_query(query).map_err(BadProbeRequest)
     }
 

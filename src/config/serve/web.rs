@@ -74,7 +74,7 @@ struct HttpFile {
 /// Which client certificates the server asks for (the exporter-toolkit's
 /// names; those that accept unverified certificates are not offered).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ClientAuth {
+pub(crate) enum ClientAuth {
     NoClientCert,
     VerifyClientCertIfGiven,
     RequireAndVerifyClientCert,
@@ -92,12 +92,12 @@ impl fmt::Display for ClientAuth {
 
 /// What the HTTP server enforces; the default is plain HTTP, open to all.
 #[derive(Clone, Default)]
-pub struct WebConfig {
-    pub tls: Option<Arc<rustls::ServerConfig>>,
-    pub client_auth: Option<ClientAuth>,
+pub(crate) struct WebConfig {
+    pub(crate) tls: Option<Arc<rustls::ServerConfig>>,
+    pub(crate) client_auth: Option<ClientAuth>,
     /// User name to bcrypt hash.
-    pub users: BTreeMap<String, String>,
-    pub headers: Vec<(HeaderName, HeaderValue)>,
+    pub(crate) users: BTreeMap<String, String>,
+    pub(crate) headers: Vec<(HeaderName, HeaderValue)>,
 }
 
 impl fmt::Debug for WebConfig {
@@ -108,7 +108,7 @@ impl fmt::Debug for WebConfig {
 
 impl WebConfig {
     /// Reads and checks `path` (`--web.config.file`), or the open default.
-    pub fn load(path: Option<&Path>) -> Result<Self, ConfigError> {
+    pub(crate) fn load(path: Option<&Path>) -> Result<Self, ConfigError> {
         let Some(path) = path else {
             return Ok(WebConfig::default());
         };
@@ -140,7 +140,7 @@ impl WebConfig {
     }
 
     /// One line on what is enforced (`--config.check`, the start line).
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let mut parts = vec![match self.client_auth {
             None => "plain HTTP".to_string(),
             Some(ClientAuth::NoClientCert) => "TLS".to_string(),
@@ -159,7 +159,7 @@ impl WebConfig {
         parts.join(", ")
     }
 
-    pub fn scheme(&self) -> &'static str {
+    pub(crate) fn scheme(&self) -> &'static str {
         if self.tls.is_some() {
             "https"
         } else {

@@ -44,7 +44,7 @@ pub async fn run<T: Transport, P: EchoProbe>(
 }
 
 /// An echo probe's state in a session.
-pub struct EchoDriver<P> {
+pub(crate) struct EchoDriver<P> {
     probe: P,
     ours: SysComp,
     first_seq: u32,
@@ -77,7 +77,7 @@ pub struct EchoDriver<P> {
 const CLOCK_TOLD_EVERY: Nanos = 1_000_000_000;
 
 impl<P: EchoProbe> EchoDriver<P> {
-    pub fn new(cfg: &SessionConfig, probe: P) -> Self {
+    pub(crate) fn new(cfg: &SessionConfig, probe: P) -> Self {
         let timeout = cfg.timeout.as_nanos() as Nanos;
         EchoDriver {
             sequences: SourceTable::new(None, DEFAULT_MAX_SOURCES),

@@ -35,7 +35,7 @@ pub enum ProbeName {
 }
 
 impl ProbeName {
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             ProbeName::Ping => "ping",
             ProbeName::Timesync => "timesync",
@@ -53,27 +53,27 @@ impl fmt::Display for ProbeName {
 }
 
 /// Rows in the ASCII/JSON RTT distribution.
-pub const HISTOGRAM_ROWS: usize = 8;
+pub(crate) const HISTOGRAM_ROWS: usize = 8;
 
 #[derive(Debug, Clone, Serialize)]
 pub struct ResponderSummary {
     pub id: SysComp,
     pub counts: Counts,
-    pub loss_ratio: f64,
-    pub rtt: Option<RttSummary>,
-    pub histogram: Vec<Bucket>,
-    pub identity: Option<Identity>,
+    pub(crate) loss_ratio: f64,
+    pub(crate) rtt: Option<RttSummary>,
+    pub(crate) histogram: Vec<Bucket>,
+    pub(crate) identity: Option<Identity>,
     /// The probe it was measured by (`--probe auto` only: PING or
     /// TIMESYNC, chosen per responder).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub probe: Option<ProbeName>,
+    pub(crate) probe: Option<ProbeName>,
     /// Clock offset and drift (TIMESYNC probe only).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub clock: Option<ClockSummary>,
+    pub(crate) clock: Option<ClockSummary>,
     /// Which way the losses were, when there were any: the responder's
     /// own sequence numbers give the downlink.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub direction: Option<Direction>,
+    pub(crate) direction: Option<Direction>,
 }
 
 /// Round-trip loss split by direction. The downlink loss is the sequence
@@ -82,33 +82,37 @@ pub struct ResponderSummary {
 /// up = 1 − (1 − round trip) / (1 − down). Its standard error is the
 /// binomial errors of both ratios carried through that formula.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Direction {
-    pub round_trip_loss: f64,
+pub(crate) struct Direction {
+    pub(crate) round_trip_loss: f64,
     /// Frames of the responder's the sequence counted, and of them lost.
-    pub downlink_frames: u64,
-    pub downlink_lost: u64,
-    pub downlink_loss: f64,
+    pub(crate) downlink_frames: u64,
+    pub(crate) downlink_lost: u64,
+    pub(crate) downlink_loss: f64,
     /// `None` when every downlink frame was lost.
-    pub uplink_loss: Option<f64>,
-    pub uplink_stderr: Option<f64>,
+    pub(crate) uplink_loss: Option<f64>,
+    pub(crate) uplink_stderr: Option<f64>,
     /// False when the downlink alone loses more than the round trip, by
     /// more than two standard errors: the responder's sequence does not
     /// number just what it sends us on this link (a router re-sequencing,
     /// or merging links), so the split would be wrong.
-    pub consistent: bool,
+    pub(crate) consistent: bool,
 }
 
 impl Direction {
     /// The split for a responder with `round_trip` loss over `requests`,
     /// whose own frames' sequence counted `seq`: every front end's one
     /// way in (the summary at the end, Prometheus while a run goes on).
-    pub fn of_sequence(round_trip: f64, requests: u64, seq: &passive::SeqCounts) -> Option<Self> {
+    pub(crate) fn of_sequence(
+        round_trip: f64,
+        requests: u64,
+        seq: &passive::SeqCounts,
+    ) -> Option<Self> {
         Direction::split(round_trip, requests, seq.numbered(), seq.lost)
     }
 
     /// The split for a responder `round_trip` of whose `requests` were
     /// lost, whose sequence counted `frames` and `lost` of them.
-    pub fn split(round_trip: f64, requests: u64, frames: u64, lost: u64) -> Option<Self> {
+    pub(crate) fn split(round_trip: f64, requests: u64, frames: u64, lost: u64) -> Option<Self> {
         if requests == 0 || frames == 0 || (round_trip == 0.0 && lost == 0) {
             return None;
         }
@@ -143,67 +147,67 @@ impl Direction {
 
 /// How well requests kept to their schedule (see the session's pacing).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct ScheduleSummary {
-    pub requested_rate_hz: f64,
-    pub achieved_rate_hz: f64,
+pub(crate) struct ScheduleSummary {
+    pub(crate) requested_rate_hz: f64,
+    pub(crate) achieved_rate_hz: f64,
     /// Actual send minus planned send, over all requests.
-    pub lateness_p50_us: f64,
-    pub lateness_p99_us: f64,
-    pub lateness_max_us: f64,
+    pub(crate) lateness_p50_us: f64,
+    pub(crate) lateness_p99_us: f64,
+    pub(crate) lateness_max_us: f64,
     /// Requests the link refused because its peer is not reading (a
     /// byte stream whose queue was full): never sent, so never lost.
-    pub not_sent: u64,
+    pub(crate) not_sent: u64,
 }
 
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
-    pub link: String,
-    pub probe: ProbeName,
-    pub ours: SysComp,
-    pub duration_s: f64,
+    pub(crate) link: String,
+    pub(crate) probe: ProbeName,
+    pub(crate) ours: SysComp,
+    pub(crate) duration_s: f64,
     /// Requests put on the wire.
     pub requests: u64,
     /// Requests still within their timeout when the run ended, unanswered
     /// by at least one responder: counted neither received nor lost.
-    pub in_flight: u64,
+    pub(crate) in_flight: u64,
     /// A listening link heard no MAVLink system in this many seconds, and
     /// the run ended.
-    pub no_peer_heard_s: Option<f64>,
+    pub(crate) no_peer_heard_s: Option<f64>,
     pub responders: Vec<ResponderSummary>,
     /// Replies addressed to another system.
-    pub foreign_replies: u64,
+    pub(crate) foreign_replies: u64,
     /// Replies naming a responder that answered from another link peer
     /// (spoofed ids): counted, never measured.
-    pub wrong_path_replies: u64,
+    pub(crate) wrong_path_replies: u64,
     /// Replies from responders beyond the tracking limit.
-    pub untracked_replies: u64,
-    pub frames: ScanStats,
-    pub hints: Vec<Hint>,
-    pub interrupted: bool,
-    pub link_error: Option<String>,
+    pub(crate) untracked_replies: u64,
+    pub(crate) frames: ScanStats,
+    pub(crate) hints: Vec<Hint>,
+    pub(crate) interrupted: bool,
+    pub(crate) link_error: Option<String>,
     /// Seconds the link was down while reconnecting (`--reconnect`).
-    pub downtime_s: f64,
+    pub(crate) downtime_s: f64,
     /// Send pacing figures, once a request was sent.
-    pub schedule: Option<ScheduleSummary>,
+    pub(crate) schedule: Option<ScheduleSummary>,
     /// How receive times were taken (kernel timestamps or user space).
-    pub rx_clock: RxClock,
+    pub(crate) rx_clock: RxClock,
     /// Radios heard by their RADIO_STATUS.
-    pub radios: Vec<RadioSummary>,
+    pub(crate) radios: Vec<RadioSummary>,
     /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view of
     /// the link), each beside mavping's uplink estimate for its system.
-    pub link_node: Vec<LinkNodeSummary>,
+    pub(crate) link_node: Vec<LinkNodeSummary>,
     /// What a serial link's baud rate carries (serial links only).
-    pub wire: Option<WireBudget>,
+    pub(crate) wire: Option<WireBudget>,
     /// What the signing gate accepted and refused, or, without a key, what
     /// came signed unchecked.
-    pub signing: SigningSummary,
+    pub(crate) signing: SigningSummary,
     /// `--sweep` or `--load`: the steps and what they say.
-    pub sweep: Option<Box<SweepSummary>>,
+    pub(crate) sweep: Option<Box<SweepSummary>>,
 }
 
 impl Summary {
     /// True when at least one responder answered in time.
-    pub fn any_reply(&self) -> bool {
+    pub(crate) fn any_reply(&self) -> bool {
         self.responders.iter().any(|r| r.counts.received > 0)
     }
 
@@ -212,7 +216,7 @@ impl Summary {
     /// time, which is a queue growing), says so. Replies faster than the
     /// baud rate allows show the device ignores it (USB CDC, a pty): then
     /// there is no budget to report.
-    pub fn apply_wire(&mut self, budget: WireBudget) {
+    pub(crate) fn apply_wire(&mut self, budget: WireBudget) {
         let fastest = self
             .responders
             .iter()
@@ -272,7 +276,7 @@ impl Summary {
     }
 }
 
-pub fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderSummary> {
+pub(crate) fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderSummary> {
     let mut out: Vec<ResponderSummary> = matcher
         .responders()
         .iter()
@@ -303,24 +307,16 @@ pub enum Interim {
     Passive(PassiveInterim),
 }
 
-impl Interim {
-    /// Session time of the figures, ns.
-    pub fn at(&self) -> super::Nanos {
-        match self {
-            Interim::Echo(e) => e.at,
-            Interim::Passive(p) => p.at,
-        }
-    }
-}
+impl Interim {}
 
 /// An echo run so far: each responder's counts of decided requests and
 /// its RTT figures.
 #[derive(Debug, Clone)]
 pub struct EchoInterim {
     /// Session time, ns.
-    pub at: super::Nanos,
-    pub requests: u64,
-    pub responders: Vec<ResponderSummary>,
+    pub(crate) at: super::Nanos,
+    pub(crate) requests: u64,
+    pub(crate) responders: Vec<ResponderSummary>,
 }
 
 /// A passive run so far: every source's sequence figures (cumulative), as
@@ -328,67 +324,67 @@ pub struct EchoInterim {
 #[derive(Debug, Clone)]
 pub struct PassiveInterim {
     /// Session time, ns.
-    pub at: super::Nanos,
-    pub table: passive::TableSummary,
+    pub(crate) at: super::Nanos,
+    pub(crate) table: passive::TableSummary,
     /// What each source said it is, from its HEARTBEAT.
-    pub identities: Vec<(SysComp, Identity)>,
+    pub(crate) identities: Vec<(SysComp, Identity)>,
 }
 
 /// `--probe command`: one target's figures.
 #[derive(Debug, Clone, Serialize)]
-pub struct CommandTargetSummary {
-    pub id: SysComp,
-    pub commands: u64,
-    pub acknowledged: u64,
-    pub failed: u64,
-    pub skipped: u64,
-    pub late_acks: u64,
-    pub duplicate_acks: u64,
+pub(crate) struct CommandTargetSummary {
+    pub(crate) id: SysComp,
+    pub(crate) commands: u64,
+    pub(crate) acknowledged: u64,
+    pub(crate) failed: u64,
+    pub(crate) skipped: u64,
+    pub(crate) late_acks: u64,
+    pub(crate) duplicate_acks: u64,
     /// `attempts[k - 1]`: commands acknowledged after k transmissions.
-    pub attempts: Vec<u64>,
-    pub time_to_ack: Option<RttSummary>,
-    pub histogram: Vec<Bucket>,
-    pub results: Vec<AckResult>,
-    pub identity: Option<Identity>,
+    pub(crate) attempts: Vec<u64>,
+    pub(crate) time_to_ack: Option<RttSummary>,
+    pub(crate) histogram: Vec<Bucket>,
+    pub(crate) results: Vec<AckResult>,
+    pub(crate) identity: Option<Identity>,
 }
 
 /// How many acknowledged commands got one MAV_RESULT.
 #[derive(Debug, Clone, Serialize)]
-pub struct AckResult {
-    pub result: u8,
-    pub name: String,
-    pub count: u64,
+pub(crate) struct AckResult {
+    pub(crate) result: u8,
+    pub(crate) name: String,
+    pub(crate) count: u64,
 }
 
 /// The end of a `--probe command` run.
 #[derive(Debug, Clone, Serialize)]
 pub struct CommandSummary {
-    pub link: String,
-    pub ours: SysComp,
-    pub command: u16,
-    pub command_name: String,
-    pub duration_s: f64,
+    pub(crate) link: String,
+    pub(crate) ours: SysComp,
+    pub(crate) command: u16,
+    pub(crate) command_name: String,
+    pub(crate) duration_s: f64,
     /// Commands still pending when the run ended: neither acknowledged
     /// nor failed.
-    pub in_flight: u64,
-    pub targets: Vec<CommandTargetSummary>,
+    pub(crate) in_flight: u64,
+    pub(crate) targets: Vec<CommandTargetSummary>,
     /// Why targets never acknowledged, from what the link heard.
-    pub hints: Vec<Hint>,
+    pub(crate) hints: Vec<Hint>,
     /// ACKs addressed to us for commands we never sent that system.
-    pub unmatched_acks: u64,
-    pub frames: ScanStats,
-    pub interrupted: bool,
-    pub link_error: Option<String>,
+    pub(crate) unmatched_acks: u64,
+    pub(crate) frames: ScanStats,
+    pub(crate) interrupted: bool,
+    pub(crate) link_error: Option<String>,
     /// What the signing gate accepted and refused, or, without a key, what
     /// came signed unchecked.
-    pub signing: SigningSummary,
+    pub(crate) signing: SigningSummary,
     /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view of
     /// the link).
-    pub link_node: Vec<LinkNodeSummary>,
+    pub(crate) link_node: Vec<LinkNodeSummary>,
 }
 
 impl CommandSummary {
-    pub fn any_ack(&self) -> bool {
+    pub(crate) fn any_ack(&self) -> bool {
         self.targets.iter().any(|t| t.acknowledged > 0)
     }
 }
@@ -405,7 +401,7 @@ pub enum LinkSummary {
 }
 
 impl LinkSummary {
-    pub fn link(&self) -> &str {
+    pub(crate) fn link(&self) -> &str {
         match self {
             LinkSummary::Echo(s) => &s.link,
             LinkSummary::Command(s) => &s.link,
@@ -413,7 +409,7 @@ impl LinkSummary {
         }
     }
 
-    pub fn link_error(&self) -> Option<&str> {
+    pub(crate) fn link_error(&self) -> Option<&str> {
         match self {
             LinkSummary::Echo(s) => s.link_error.as_deref(),
             LinkSummary::Command(s) => s.link_error.as_deref(),

@@ -17,39 +17,39 @@ use crate::transport::RxClock;
 /// A `--passive` run on one link.
 #[derive(Debug, Clone)]
 pub struct PassiveSummary {
-    pub link: String,
-    pub ours: SysComp,
+    pub(crate) link: String,
+    pub(crate) ours: SysComp,
     /// Our HEARTBEAT went out at 1 Hz (routers send only to what they hear).
-    pub heartbeat: bool,
-    pub duration_s: f64,
-    pub table: TableSummary,
+    pub(crate) heartbeat: bool,
+    pub(crate) duration_s: f64,
+    pub(crate) table: TableSummary,
     /// What each source said it is, from its HEARTBEAT.
-    pub identities: Vec<(SysComp, Identity)>,
+    pub(crate) identities: Vec<(SysComp, Identity)>,
     /// Frames with our own ids (echoed back by a router): not a source.
-    pub own_frames: u64,
-    pub radios: Vec<RadioSummary>,
+    pub(crate) own_frames: u64,
+    pub(crate) radios: Vec<RadioSummary>,
     /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view).
-    pub link_node: Vec<LinkNodeSummary>,
-    pub frames: ScanStats,
-    pub rx_clock: RxClock,
-    pub interrupted: bool,
-    pub link_error: Option<String>,
-    pub signing: SigningSummary,
+    pub(crate) link_node: Vec<LinkNodeSummary>,
+    pub(crate) frames: ScanStats,
+    pub(crate) rx_clock: RxClock,
+    pub(crate) interrupted: bool,
+    pub(crate) link_error: Option<String>,
+    pub(crate) signing: SigningSummary,
     /// Read from a telemetry log: what the log held (set by the run, from
     /// the link).
-    pub log: Option<LogFacts>,
+    pub(crate) log: Option<LogFacts>,
     /// A log's figures per MAVProxy link, when its stamps carry link
     /// numbers.
-    pub per_link: Option<PerLink>,
+    pub(crate) per_link: Option<PerLink>,
     /// A log's requests matched to their replies by the stamps.
-    pub round_trips: Option<RoundTripSummary>,
+    pub(crate) round_trips: Option<RoundTripSummary>,
     /// A log's flight: its windows' summary, silences and bursts.
-    pub flight: Option<FlightSummary>,
+    pub(crate) flight: Option<FlightSummary>,
 }
 
 impl PassiveSummary {
     /// A source's identity, if it sent a HEARTBEAT.
-    pub fn identity(&self, id: SysComp) -> Option<&Identity> {
+    pub(crate) fn identity(&self, id: SysComp) -> Option<&Identity> {
         self.identities
             .iter()
             .find(|(s, _)| *s == id)
@@ -57,39 +57,39 @@ impl PassiveSummary {
     }
 
     /// Sources heard, the radio aside.
-    pub fn heard(&self) -> impl Iterator<Item = &SourceSummary> {
+    pub(crate) fn heard(&self) -> impl Iterator<Item = &SourceSummary> {
         self.table.sources.iter().filter(|s| !s.radio)
     }
 }
 
 /// The sequence counts of one source.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct SeqCounts {
+pub(crate) struct SeqCounts {
     /// Every frame with a good CRC, duplicates included.
-    pub received: u64,
+    pub(crate) received: u64,
     /// Frames whose CRC failed with their header whole (damaged, or of a
     /// dialect whose CRC differs): they arrived, and filled their number.
-    pub damaged: u64,
+    pub(crate) damaged: u64,
     /// Sequence numbers skipped and not (yet) filled by a late frame.
-    pub lost: u64,
+    pub(crate) lost: u64,
     /// Frames whose number had been seen already.
-    pub duplicate: u64,
+    pub(crate) duplicate: u64,
     /// Frames that came after a later one and filled their gap.
-    pub reordered: u64,
+    pub(crate) reordered: u64,
     /// Times the accounting restarted on a frame the sequence could not
     /// place (after a long silence, or exactly 128 away).
-    pub resyncs: u64,
+    pub(crate) resyncs: u64,
 }
 
 impl SeqCounts {
     /// Sequence numbers the source used that the count accounts for: each
     /// received once or lost.
-    pub fn numbered(&self) -> u64 {
+    pub(crate) fn numbered(&self) -> u64 {
         self.received + self.damaged - self.duplicate + self.lost
     }
 
     /// Two counters' figures together.
-    pub fn plus(&self, o: &SeqCounts) -> SeqCounts {
+    pub(crate) fn plus(&self, o: &SeqCounts) -> SeqCounts {
         SeqCounts {
             received: self.received + o.received,
             damaged: self.damaged + o.damaged,
@@ -103,13 +103,13 @@ impl SeqCounts {
 
 /// pymavlink's loss figure for the same frames, as `mavutil` computes it.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
-pub struct PymavFigure {
+pub(crate) struct PymavFigure {
     /// `mav_count`: every frame.
-    pub count: u64,
+    pub(crate) count: u64,
     /// `mav_loss`: the sum of `(seq - expected) % 256` over mismatches.
-    pub loss: u64,
+    pub(crate) loss: u64,
     /// `packet_loss()`: `100 * loss / (count + loss)`, 0 with no frames.
-    pub loss_pct: f64,
+    pub(crate) loss_pct: f64,
 }
 
 impl PymavFigure {
@@ -124,139 +124,139 @@ impl PymavFigure {
 
 /// A time the source was not heard for longer than the threshold.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-pub struct Silence {
+pub(crate) struct Silence {
     /// The arrival of the last frame before it.
-    pub start: Nanos,
+    pub(crate) start: Nanos,
     /// From that frame to the one after it (to the summary, if ongoing).
-    pub length_ns: Nanos,
+    pub(crate) length_ns: Nanos,
     /// Frames the source would have sent in it at its usual rate; `None`
     /// while no rate was settled (a second of the source's frames).
-    pub frames_estimated: Option<u64>,
+    pub(crate) frames_estimated: Option<u64>,
     /// The frames the sequence proves lost across it (included in
     /// `lost`): its gap, modulo 256 where the pause may hide wraps of the
     /// counter; `None` after a restart of the counter, or while ongoing.
     /// `Some(0)`: no number missing: the frames were delayed, not lost.
-    pub seq_lost: Option<u64>,
+    pub(crate) seq_lost: Option<u64>,
     /// Where the pause is too long for the 8-bit counter to span at the
     /// source's rate: the likely number lost, `seq_lost` plus the wraps
     /// the rate suggests (the difference is not in `lost`); `None` when
     /// it could span it, nothing is missing, or no rate was settled.
-    pub lost_estimated: Option<u64>,
+    pub(crate) lost_estimated: Option<u64>,
     /// The counter started again at 0 after it: the source restarted.
-    pub restart: bool,
+    pub(crate) restart: bool,
     /// Still on when the summary was taken.
-    pub ongoing: bool,
+    pub(crate) ongoing: bool,
 }
 
 /// Frames of one message id.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-pub struct MsgCount {
-    pub id: u32,
-    pub count: u64,
+pub(crate) struct MsgCount {
+    pub(crate) id: u32,
+    pub(crate) count: u64,
 }
 
 /// Everything known about one source.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct SourceSummary {
-    pub source: SysComp,
+pub(crate) struct SourceSummary {
+    pub(crate) source: SysComp,
     /// The SiK radio's own RADIO_STATUS source (out of the link's totals).
-    pub radio: bool,
+    pub(crate) radio: bool,
     /// In a telemetry log, the ground station's own frames, logged as it
     /// sent them (out of the link's totals: not what the link delivered).
-    pub ground: bool,
-    pub counts: SeqCounts,
+    pub(crate) ground: bool,
+    pub(crate) counts: SeqCounts,
     /// `100 * lost / (lost + distinct frames received)`; `None` with
     /// nothing to compare.
-    pub loss_pct: Option<f64>,
+    pub(crate) loss_pct: Option<f64>,
     /// Of `lost`, the numbers a late frame may still fill (and move to
     /// `reordered`): within the window behind the latest frame, outside a
     /// silence. `lost - lost_pending` never decreases, which is what a
     /// counter of losses needs (Prometheus).
     #[serde(skip)]
-    pub lost_pending: u64,
-    pub pymav: PymavFigure,
+    pub(crate) lost_pending: u64,
+    pub(crate) pymav: PymavFigure,
     /// Frame bytes, duplicates included.
-    pub bytes: u64,
-    pub first_seen: Nanos,
-    pub last_seen: Nanos,
+    pub(crate) bytes: u64,
+    pub(crate) first_seen: Nanos,
+    pub(crate) last_seen: Nanos,
     /// Arrival rates from the first to the last frame (the first frame
     /// starts the span, so it is not counted); `None` on a zero span.
-    pub frames_per_s: Option<f64>,
-    pub bytes_per_s: Option<f64>,
+    pub(crate) frames_per_s: Option<f64>,
+    pub(crate) bytes_per_s: Option<f64>,
     /// The usual time per sequence step, once known.
-    pub interval_ns: Option<Nanos>,
+    pub(crate) interval_ns: Option<Nanos>,
     /// The longest pause the source makes in a second, as a rule (a
     /// logger's batches), once a second is in: no silence is shorter than
     /// 1.5 times it.
-    pub routine_pause_ns: Option<Nanos>,
+    pub(crate) routine_pause_ns: Option<Nanos>,
     /// The first silences and the longest later ones, by start, then the
     /// ongoing one if any.
-    pub silences: Vec<Silence>,
+    pub(crate) silences: Vec<Silence>,
     /// All silences, ongoing included.
-    pub silence_count: u64,
+    pub(crate) silence_count: u64,
     /// Silences not in the list.
-    pub silences_omitted: u64,
+    pub(crate) silences_omitted: u64,
     /// Total length of all silences.
-    pub silence_ns: Nanos,
+    pub(crate) silence_ns: Nanos,
     /// What the silences too long for the counter to span likely hid
     /// beyond the sequence's gap: the wraps the rate suggests (never also
     /// in `lost`).
-    pub silence_frames_estimated: u64,
+    pub(crate) silence_frames_estimated: u64,
     /// Frames by message id, most frequent first (the first
     /// `MAX_MSG_IDS` distinct ids seen).
-    pub msg_ids: Vec<MsgCount>,
+    pub(crate) msg_ids: Vec<MsgCount>,
     /// Frames of ids seen after that many distinct ones.
-    pub msg_ids_other: u64,
+    pub(crate) msg_ids_other: u64,
     /// Damaged frames by message id, most frequent first.
-    pub damaged_ids: Vec<MsgCount>,
+    pub(crate) damaged_ids: Vec<MsgCount>,
     /// A second sender numbering frames under the same ids with a counter
     /// of its own (two programs, or one on two channels), counted on its
     /// own; its figures are in `counts` too.
-    pub second_counter: Option<SecondCounter>,
+    pub(crate) second_counter: Option<SecondCounter>,
 }
 
 /// A second counter under one source's ids.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct SecondCounter {
-    pub counts: SeqCounts,
+pub(crate) struct SecondCounter {
+    pub(crate) counts: SeqCounts,
     /// Its frames by message id, most frequent first.
-    pub msg_ids: Vec<MsgCount>,
+    pub(crate) msg_ids: Vec<MsgCount>,
 }
 
 /// Frames from sources beyond the table's cap: counted, not tracked.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize)]
-pub struct Untracked {
+pub(crate) struct Untracked {
     /// Distinct sources.
-    pub sources: u64,
-    pub frames: u64,
-    pub bytes: u64,
+    pub(crate) sources: u64,
+    pub(crate) frames: u64,
+    pub(crate) bytes: u64,
 }
 
 /// The link as a whole: every tracked source but the radio.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct LinkTotals {
-    pub sources: u64,
-    pub counts: SeqCounts,
+pub(crate) struct LinkTotals {
+    pub(crate) sources: u64,
+    pub(crate) counts: SeqCounts,
     /// As [`SourceSummary::loss_pct`], over the sums.
-    pub loss_pct: Option<f64>,
+    pub(crate) loss_pct: Option<f64>,
     /// pymavlink's link-wide `mav_count`/`mav_loss` (it too leaves the
     /// radio out; untracked sources are not in it; the ground station's
     /// own frames in a log are, as `mavloss.py` counts them).
-    pub pymav: PymavFigure,
-    pub bytes: u64,
-    pub silence_count: u64,
-    pub silence_frames_estimated: u64,
+    pub(crate) pymav: PymavFigure,
+    pub(crate) bytes: u64,
+    pub(crate) silence_count: u64,
+    pub(crate) silence_frames_estimated: u64,
     /// Frames from the radio's own source (counted, not in the totals).
-    pub radio_received: u64,
+    pub(crate) radio_received: u64,
     /// Frames the ground station logged as it sent them (not in the
     /// totals).
-    pub ground_received: u64,
+    pub(crate) ground_received: u64,
 }
 
 impl LinkTotals {
     /// The totals of `sources`: the radio's own source (flagged) is left
     /// out and its frames counted apart.
-    pub fn of(sources: &[SourceSummary]) -> Self {
+    pub(crate) fn of(sources: &[SourceSummary]) -> Self {
         let mut c = SeqCounts::default();
         let (mut bytes, mut silence_count, mut unspanned, mut pymav_loss) = (0, 0, 0, 0);
         let mut pymav_count = 0;
@@ -298,29 +298,29 @@ impl LinkTotals {
 /// The sources heard through one MAVProxy link: the stamps' two lowest
 /// bits, 3 marking what MAVProxy itself sent.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct LinkTable {
-    pub link: u8,
-    pub table: TableSummary,
+pub(crate) struct LinkTable {
+    pub(crate) link: u8,
+    pub(crate) table: TableSummary,
 }
 
 /// A telemetry log's figures per MAVProxy link.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct PerLink {
+pub(crate) struct PerLink {
     /// By link number; only links that carried a source.
-    pub links: Vec<LinkTable>,
+    pub(crate) links: Vec<LinkTable>,
     /// Sources whose stamps' low bits vary as a clock's do, not as a link
     /// number's (MAVProxy logs what its outputs send with a plain stamp):
     /// in no link's table.
-    pub unlinked: Vec<SysComp>,
+    pub(crate) unlinked: Vec<SysComp>,
 }
 
 /// What a [`SourceTable`] reports.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct TableSummary {
     /// By source address; the radio, if heard, among them, flagged.
-    pub sources: Vec<SourceSummary>,
-    pub totals: LinkTotals,
-    pub untracked: Untracked,
+    pub(crate) sources: Vec<SourceSummary>,
+    pub(crate) totals: LinkTotals,
+    pub(crate) untracked: Untracked,
 }
 
 /// `100 * part / whole`; `None` for an empty whole. Counts stay far below

@@ -12,7 +12,7 @@ use crate::engine::Nanos;
 use crate::frame::SysComp;
 
 impl Phase {
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Phase::Baseline => "baseline",
             Phase::Ramp => "ramp",
@@ -22,7 +22,7 @@ impl Phase {
     }
 
     /// Steps that take part in finding the knee.
-    pub fn sweeps(self) -> bool {
+    pub(crate) fn sweeps(self) -> bool {
         matches!(self, Phase::Ramp | Phase::Refine)
     }
 }
@@ -30,14 +30,14 @@ impl Phase {
 /// One step to run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct PlannedStep {
-    pub phase: Phase,
-    pub rate_hz: f64,
+    pub(crate) phase: Phase,
+    pub(crate) rate_hz: f64,
     /// The `--load` streams are on during it.
-    pub load: bool,
+    pub(crate) load: bool,
     /// Requests it sends: the rate over the step's duration, at least one.
-    pub count: u64,
+    pub(crate) count: u64,
     /// The rate of the step before again, which failed on latency alone.
-    pub retry: bool,
+    pub(crate) retry: bool,
 }
 
 impl PlannedStep {
@@ -83,7 +83,7 @@ pub(crate) fn p99_limit_us(reference_p99_us: f64) -> f64 {
 impl StepFigures {
     /// Whether these figures pass the knee test against the first sweep
     /// step's p99.
-    pub fn passes(&self, reference_p99_us: f64) -> bool {
+    pub(crate) fn passes(&self, reference_p99_us: f64) -> bool {
         self.complete
             && self.received > 0
             && self.loss_ratio < KNEE_MAX_LOSS
@@ -94,7 +94,7 @@ impl StepFigures {
 
     /// It failed the knee test on its p99 alone (it lost under 1 %): the
     /// rate is tried once more before it counts as failed.
-    pub fn failed_on_latency_alone(&self) -> bool {
+    pub(crate) fn failed_on_latency_alone(&self) -> bool {
         self.passed == Some(false)
             && self.complete
             && self.received > 0
@@ -102,12 +102,12 @@ impl StepFigures {
     }
 
     /// Bytes per second both ways.
-    pub fn wire_bytes_per_s(&self) -> f64 {
+    pub(crate) fn wire_bytes_per_s(&self) -> f64 {
         self.tx_bytes_per_s + self.rx_bytes_per_s
     }
 
     #[cfg(test)]
-    pub fn test(phase: Phase, rate: f64, loss: f64) -> Self {
+    pub(crate) fn test(phase: Phase, rate: f64, loss: f64) -> Self {
         StepFigures {
             index: 0,
             phase,
@@ -182,9 +182,9 @@ fn mean(sum: (u64, u64)) -> Option<f64> {
 /// A step being measured.
 #[derive(Clone)]
 pub(crate) struct StepTally {
-    pub plan: PlannedStep,
+    pub(crate) plan: PlannedStep,
     /// When the step began (its requests are those sent from then on).
-    pub start: Nanos,
+    pub(crate) start: Nanos,
     requests: u64,
     first_sent: Option<Nanos>,
     last_sent: Nanos,

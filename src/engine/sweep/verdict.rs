@@ -18,14 +18,14 @@ impl Grade {
         (400_000.0, Grade::D),
     ];
 
-    pub fn of(added_us: f64) -> Grade {
+    pub(crate) fn of(added_us: f64) -> Grade {
         Self::BOUNDS
             .iter()
             .find(|(bound, _)| added_us < *bound)
             .map_or(Grade::F, |(_, g)| *g)
     }
 
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             Grade::APlus => "A+",
             Grade::A => "A",
@@ -38,7 +38,7 @@ impl Grade {
 
     /// C and below: the queue adds enough to be felt (a command 200 ms
     /// late, video stutter); what a bufferbloat test calls bloat.
-    pub fn is_bufferbloat(self) -> bool {
+    pub(crate) fn is_bufferbloat(self) -> bool {
         self >= Grade::C
     }
 }

@@ -237,31 +237,31 @@ impl Rows {
 /// One responder's row.
 #[derive(Debug, Clone)]
 pub(crate) struct RowView {
-    pub id: String,
-    pub heard_as: Option<String>,
-    pub sent: u64,
-    pub received: u64,
-    pub lost: u64,
-    pub late: u64,
-    pub duplicate: u64,
-    pub last_ms: Option<f64>,
-    pub p50_ms: Option<f64>,
-    pub p99_ms: Option<f64>,
-    pub jitter_ms: Option<f64>,
-    pub recent: Vec<Mark>,
+    pub(crate) id: String,
+    pub(crate) heard_as: Option<String>,
+    pub(crate) sent: u64,
+    pub(crate) received: u64,
+    pub(crate) lost: u64,
+    pub(crate) late: u64,
+    pub(crate) duplicate: u64,
+    pub(crate) last_ms: Option<f64>,
+    pub(crate) p50_ms: Option<f64>,
+    pub(crate) p99_ms: Option<f64>,
+    pub(crate) jitter_ms: Option<f64>,
+    pub(crate) recent: Vec<Mark>,
 }
 
 /// Everything one frame shows.
 #[derive(Debug, Clone)]
 pub(crate) struct Screen {
-    pub link: String,
-    pub probe: Option<ProbeName>,
+    pub(crate) link: String,
+    pub(crate) probe: Option<ProbeName>,
     /// Session time of the latest event.
-    pub now: Nanos,
-    pub waiting: bool,
+    pub(crate) now: Nanos,
+    pub(crate) waiting: bool,
     /// Why the link failed, if it did.
-    pub failed: Option<String>,
-    pub rows: Rows,
+    pub(crate) failed: Option<String>,
+    pub(crate) rows: Rows,
 }
 
 fn lock<T>(state: &Mutex<T>) -> MutexGuard<'_, T> {

@@ -21,9 +21,9 @@ const MAX_HEARD: usize = 64;
 /// One second of a source, as the strip shows it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct Second {
-    pub frames: u64,
+    pub(crate) frames: u64,
     /// Its sequence skipped numbers in it.
-    pub lost: bool,
+    pub(crate) lost: bool,
 }
 
 #[derive(Debug, Clone)]
@@ -109,17 +109,17 @@ impl Sources {
 /// One source's row.
 #[derive(Debug, Clone)]
 pub(crate) struct SourceRow {
-    pub id: String,
+    pub(crate) id: String,
     /// What its HEARTBEAT said it is; `radio` for the SiK radio's own.
-    pub identity: Option<String>,
-    pub radio: bool,
-    pub received: u64,
-    pub lost: u64,
-    pub loss_pct: Option<f64>,
-    pub duplicate: u64,
-    pub reordered: u64,
-    pub silences: u64,
+    pub(crate) identity: Option<String>,
+    pub(crate) radio: bool,
+    pub(crate) received: u64,
+    pub(crate) lost: u64,
+    pub(crate) loss_pct: Option<f64>,
+    pub(crate) duplicate: u64,
+    pub(crate) reordered: u64,
+    pub(crate) silences: u64,
     /// Frames a second in the latest second.
-    pub rate: Option<f64>,
-    pub recent: Vec<Second>,
+    pub(crate) rate: Option<f64>,
+    pub(crate) recent: Vec<Second>,
 }

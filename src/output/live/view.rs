@@ -36,20 +36,20 @@ const SECTION_FRAME: u16 = 3;
 /// What a kind of row shows: its figure columns in display order, then
 /// the strip.
 pub(super) struct Spec {
-    pub headers: &'static [&'static str],
+    pub(crate) headers: &'static [&'static str],
     /// Room for the usual figures, so columns do not shift as the figures
     /// change; wider figures widen them.
-    pub min_widths: &'static [u16],
+    pub(crate) min_widths: &'static [u16],
     /// When the terminal is too narrow, columns go in falling order of
     /// this; 0 is never given up.
-    pub give_up: &'static [u8],
+    pub(crate) give_up: &'static [u8],
     /// The first this many columns (who) are left-aligned, the figures
     /// after them right-aligned, so their digits line up.
-    pub left: usize,
-    pub strip: &'static str,
-    pub keys: &'static str,
+    pub(crate) left: usize,
+    pub(crate) strip: &'static str,
+    pub(crate) keys: &'static str,
     /// What a row is, to count those beyond the screen.
-    pub rows_are: &'static str,
+    pub(crate) rows_are: &'static str,
 }
 
 /// A responder's row: who, how much is lost and how long it takes stay.

@@ -51,10 +51,10 @@ pub(super) fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
 /// title's font size.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Layout {
-    pub width: u32,
-    pub numbers_x: i32,
-    pub number_w: i32,
-    pub title_size: f64,
+    pub(crate) width: u32,
+    pub(crate) numbers_x: i32,
+    pub(crate) number_w: i32,
+    pub(crate) title_size: f64,
 }
 
 impl Layout {
@@ -121,10 +121,10 @@ pub(super) fn svg(
 
 /// One row of the legend.
 pub(super) struct LegendRow<'a> {
-    pub look: Look,
-    pub label: &'a str,
+    pub(crate) look: Look,
+    pub(crate) label: &'a str,
     /// Its figures, in the columns' order; `-` where unknown.
-    pub cells: Vec<Option<String>>,
+    pub(crate) cells: Vec<Option<String>>,
 }
 
 /// The legend: a header (`first`, then `columns`), a rule, and a row per

@@ -145,9 +145,9 @@ impl SourceTrack {
 
 /// One source, in drawing order.
 pub(super) struct SourceEntry<'a> {
-    pub label: String,
-    pub look: Look,
-    pub track: &'a SourceTrack,
+    pub(crate) label: String,
+    pub(crate) look: Look,
+    pub(crate) track: &'a SourceTrack,
 }
 
 pub(super) fn svg(title: &str, entries: &[SourceEntry<'_>]) -> Result<String, PlotError> {

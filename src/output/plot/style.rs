@@ -46,8 +46,8 @@ const SHAPES: [Shape; 8] = [
 /// The `n`-th responder's colour and marker.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Look {
-    pub color: RGBColor,
-    pub shape: Shape,
+    pub(crate) color: RGBColor,
+    pub(crate) shape: Shape,
 }
 
 impl Look {

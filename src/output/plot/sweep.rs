@@ -19,9 +19,9 @@ const NUMBER_W: i32 = 130;
 
 /// One link's sweep, in drawing order.
 pub(super) struct SweepEntry<'a> {
-    pub label: String,
-    pub look: Look,
-    pub sweep: &'a SweepSummary,
+    pub(crate) label: String,
+    pub(crate) look: Look,
+    pub(crate) sweep: &'a SweepSummary,
 }
 
 impl SweepEntry<'_> {

@@ -36,17 +36,17 @@ use crate::engine::summary::{Direction, LinkSummary, ProbeName, Summary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
-pub use render::{render, render_probe, render_serve, Health, ProbeResult};
+pub(crate) use render::{render, render_probe, render_serve, Health, ProbeResult};
 
 /// Upper bounds of the RTT histogram, in seconds: from loopback (sub-ms)
 /// to a congested 57600-baud radio (seconds).
-pub const BUCKETS_S: [f64; 14] = [
+pub(crate) const BUCKETS_S: [f64; 14] = [
     0.000_5, 0.001, 0.002_5, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0,
 ];
 
 /// What a [`Metrics`] stands for, which decides how its counts are typed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Scope {
+pub(crate) enum Scope {
     /// A run or a continuous link: counters that only grow (`_total`).
     Run,
     /// One `/probe`: that probe's counts (as gauges) and histogram, under
@@ -159,7 +159,7 @@ impl RadioSeries {
 
 /// One link's metrics.
 #[derive(Debug, Default)]
-pub struct Metrics {
+pub(crate) struct Metrics {
     link: String,
     /// `None` before a session starts (an unopened link's metrics).
     probe: Option<ProbeName>,
@@ -200,7 +200,7 @@ struct LinkState {
 impl Metrics {
     /// A continuous link's metrics, named `link` before its first session
     /// (so a link that never opens still shows `mavping_link_up 0`).
-    pub fn continuous(link: &str, probe: ProbeName) -> Self {
+    pub(crate) fn continuous(link: &str, probe: ProbeName) -> Self {
         Metrics {
             link: link.to_string(),
             probe: Some(probe),
@@ -210,7 +210,7 @@ impl Metrics {
     }
 
     /// A run's link that could not be opened: down from the start.
-    pub fn unopened(link: &str) -> Self {
+    pub(crate) fn unopened(link: &str) -> Self {
         Metrics {
             link: link.to_string(),
             state: Some(LinkState::default()),
@@ -219,22 +219,22 @@ impl Metrics {
     }
 
     /// A link opened (`true`) or broke (`false`).
-    pub fn set_up(&mut self, up: bool) {
+    pub(crate) fn set_up(&mut self, up: bool) {
         let state = self.state.get_or_insert_with(LinkState::default);
         state.up = up;
     }
 
     /// Whether a continuous link is open now.
-    pub fn is_up(&self) -> bool {
+    pub(crate) fn is_up(&self) -> bool {
         self.state.is_some_and(|s| s.up)
     }
 
     /// A continuous link is being reopened after it broke.
-    pub fn restarted(&mut self) {
+    pub(crate) fn restarted(&mut self) {
         self.state.get_or_insert_with(LinkState::default).restarts += 1;
     }
 
-    pub fn on_start(&mut self, info: &StartInfo) {
+    pub(crate) fn on_start(&mut self, info: &StartInfo) {
         self.link = info.link.clone();
         self.probe = Some(info.probe);
         self.set_up(true);
@@ -261,11 +261,11 @@ impl Metrics {
 
     /// The table of sources, as told while the session goes on (`ended`
     /// false) or in its summary.
-    pub fn on_sources(&mut self, table: &TableSummary, ended: bool) {
+    pub(crate) fn on_sources(&mut self, table: &TableSummary, ended: bool) {
         self.sources.update(table, ended);
     }
 
-    pub fn on_event(&mut self, e: &MatchEvent) {
+    pub(crate) fn on_event(&mut self, e: &MatchEvent) {
         match *e {
             MatchEvent::Reply { responder, rtt, .. } => {
                 let auto = self.probe == Some(ProbeName::Auto);
@@ -299,7 +299,7 @@ impl Metrics {
     /// `--probe command`: a command target is a responder whose requests
     /// are commands; acknowledged is received, failed is lost, and the
     /// time to ACK its RTT.
-    pub fn on_command(&mut self, e: &CommandEvent) {
+    pub(crate) fn on_command(&mut self, e: &CommandEvent) {
         match *e {
             CommandEvent::Acked {
                 target,
@@ -329,7 +329,7 @@ impl Metrics {
 
     /// A RADIO_STATUS from a radio of `kind`: its figures replace the
     /// radio's last ones.
-    pub fn on_radio(&mut self, id: SysComp, report: RadioReport, kind: RadioKind) {
+    pub(crate) fn on_radio(&mut self, id: SysComp, report: RadioReport, kind: RadioKind) {
         if self.radios.len() < MAX_RADIOS || self.radios.contains_key(&id) {
             self.radios
                 .entry(id)
@@ -340,7 +340,7 @@ impl Metrics {
 
     /// A TIMESYNC responder's clock offset so far, carried from the run's
     /// start to `at` along the measured drift (none until it is measured).
-    pub fn on_clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) {
+    pub(crate) fn on_clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) {
         let auto = self.probe == Some(ProbeName::Auto);
         if let Some(s) = self.responders.get_mut(&id) {
             // Only TIMESYNC replies give a clock.
@@ -354,7 +354,7 @@ impl Metrics {
 
     /// The figures known only at the end (percentiles from the HDR
     /// histogram), so a last scrape or a `/probe` has them.
-    pub fn on_summary(&mut self, summary: &Summary) {
+    pub(crate) fn on_summary(&mut self, summary: &Summary) {
         for r in &summary.responders {
             let s = self.responders.entry(r.id).or_default();
             // The live figure, when there is one, is the later.
@@ -372,8 +372,9 @@ impl Metrics {
         }
     }
 
+    #[cfg(test)]
     /// The exposition of this link alone, as `--prometheus` serves it.
-    pub fn render(&self) -> String {
+    pub(crate) fn render(&self) -> String {
         render(&[self])
     }
 }
@@ -427,15 +428,15 @@ impl Reporter for Metrics {
 pub struct SharedMetrics(Rc<RefCell<Metrics>>);
 
 impl SharedMetrics {
-    pub fn new(metrics: Metrics) -> Self {
+    pub(crate) fn new(metrics: Metrics) -> Self {
         SharedMetrics(Rc::new(RefCell::new(metrics)))
     }
 
-    pub fn get(&self) -> Ref<'_, Metrics> {
+    pub(crate) fn get(&self) -> Ref<'_, Metrics> {
         self.0.borrow()
     }
 
-    pub fn update(&self, f: impl FnOnce(&mut Metrics)) {
+    pub(crate) fn update(&self, f: impl FnOnce(&mut Metrics)) {
         f(&mut self.0.borrow_mut());
     }
 }
@@ -457,7 +458,7 @@ impl Reporter for SharedMetrics {
 }
 
 /// Renders several shared links at once.
-pub fn borrow_all(links: &[SharedMetrics]) -> Vec<Ref<'_, Metrics>> {
+pub(crate) fn borrow_all(links: &[SharedMetrics]) -> Vec<Ref<'_, Metrics>> {
     links.iter().map(SharedMetrics::get).collect()
 }
 
@@ -469,7 +470,7 @@ pub struct PrometheusExporter {
 
 impl PrometheusExporter {
     /// Starts serving `listener` on the current `LocalSet`.
-    pub fn serve(listener: std::net::TcpListener) -> io::Result<(Self, SocketAddr)> {
+    pub(crate) fn serve(listener: std::net::TcpListener) -> io::Result<(Self, SocketAddr)> {
         let listener = http::listener(listener)?;
         let addr = listener.local_addr()?;
         let exporter = PrometheusExporter::default();
@@ -497,7 +498,7 @@ impl PrometheusExporter {
     }
 
     /// Every link as it is now, as `/metrics` would show it.
-    pub fn render_now(&self) -> String {
+    pub(crate) fn render_now(&self) -> String {
         let links = self.links.borrow();
         let all = borrow_all(&links);
         let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();

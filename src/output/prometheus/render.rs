@@ -368,7 +368,7 @@ const LINK_RESTARTS: Family = Family::counter(
 );
 
 /// The exposition of one or several links of a run (`--prometheus`).
-pub fn render(links: &[&Metrics]) -> String {
+pub(crate) fn render(links: &[&Metrics]) -> String {
     let mut out = Exposition::default();
     out.family(
         &RUN_LINK_UP,
@@ -395,19 +395,19 @@ fn write_link_states(out: &mut Exposition, links: &[&Metrics]) {
 
 /// What `mavping serve` says about itself at `/metrics`.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
-pub struct Health {
+pub(crate) struct Health {
     /// `/probe` requests that ran a probe...
-    pub probes: u64,
+    pub(crate) probes: u64,
     /// ...of which failed (`mavping_probe_success` 0).
-    pub probes_failed: u64,
+    pub(crate) probes_failed: u64,
     /// `/probe` requests refused (400: bad or forbidden; 503: too many).
-    pub probes_refused: u64,
-    pub probes_running: u64,
+    pub(crate) probes_refused: u64,
+    pub(crate) probes_running: u64,
     /// Links open now: continuous links up and probes' links.
-    pub open_links: u64,
-    pub reloads: u64,
-    pub reloads_failed: u64,
-    pub last_reload_ok: bool,
+    pub(crate) open_links: u64,
+    pub(crate) reloads: u64,
+    pub(crate) reloads_failed: u64,
+    pub(crate) last_reload_ok: bool,
 }
 
 /// One of the server's own figures.
@@ -470,7 +470,7 @@ const HEALTH: [HealthFigure; 8] = [
 ];
 
 /// `mavping serve`'s `/metrics`: its health, then its continuous links.
-pub fn render_serve(links: &[&Metrics], health: &Health) -> String {
+pub(crate) fn render_serve(links: &[&Metrics], health: &Health) -> String {
     let mut out = Exposition::default();
     for Figure { family, value } in &HEALTH {
         out.family(family, [(String::new(), value(health))]);
@@ -482,18 +482,18 @@ pub fn render_serve(links: &[&Metrics], health: &Health) -> String {
 
 /// How one `/probe` ended.
 #[derive(Debug, Clone, PartialEq)]
-pub struct ProbeResult {
-    pub success: bool,
-    pub duration_s: f64,
+pub(crate) struct ProbeResult {
+    pub(crate) success: bool,
+    pub(crate) duration_s: f64,
     /// Why it failed: `open_failed`, `link_failed`, or a broken check
     /// (`no_reply`, `max_loss`, ...), each once.
-    pub reasons: Vec<&'static str>,
+    pub(crate) reasons: Vec<&'static str>,
     /// Requests put on the wire, and those still undecided when the
     /// probe's time was up.
-    pub requests: u64,
-    pub in_flight: u64,
+    pub(crate) requests: u64,
+    pub(crate) in_flight: u64,
     /// The error, for a person reading the exposition (a comment line).
-    pub message: Option<String>,
+    pub(crate) message: Option<String>,
 }
 
 /// What one `/probe` says of itself.
@@ -519,7 +519,7 @@ const PROBE_IN_FLIGHT: Family = Family::gauge(
 );
 
 /// One `/probe`'s answer: its result, then its link's figures.
-pub fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
+pub(crate) fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
     let mut out = Exposition::default();
     if let Some(message) = &result.message {
         // A comment: ignored by Prometheus, read by whoever curls.

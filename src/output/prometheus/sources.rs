@@ -21,15 +21,15 @@ pub(super) const MAX_SOURCES: usize = DEFAULT_MAX_SOURCES + 1;
 pub(super) struct Figures {
     /// The sequence's counts as the table said them (`lost` may still
     /// move to `reordered`).
-    pub seq: SeqCounts,
+    pub(crate) seq: SeqCounts,
     /// What a counter of losses shows: `lost` less what may still be
     /// filled (all of it once the session has ended).
-    pub lost_settled: u64,
-    pub bytes: u64,
-    pub silences: u64,
-    pub silence_ns: Nanos,
-    pub pymav_count: u64,
-    pub pymav_loss: u64,
+    pub(crate) lost_settled: u64,
+    pub(crate) bytes: u64,
+    pub(crate) silences: u64,
+    pub(crate) silence_ns: Nanos,
+    pub(crate) pymav_count: u64,
+    pub(crate) pymav_loss: u64,
 }
 
 impl Figures {
@@ -108,7 +108,7 @@ struct Latest {
 #[derive(Debug, Clone, Default)]
 pub(super) struct SourceSeries {
     /// The SiK radio's own RADIO_STATUS source (51/68).
-    pub radio: bool,
+    pub(crate) radio: bool,
     /// Earlier sessions of a continuous link, summed.
     carried: Figures,
     /// This session's counters as last shown.

@@ -73,59 +73,59 @@ pub struct SimTruth {
     pub duplicates_arrived: u64,
     /// Exchanges the radio's full buffer dropped (`baud=`), also counted
     /// in `dropped`.
-    pub overflowed: u64,
+    pub(crate) overflowed: u64,
     /// Exchanges lost to the outage (`outage=`), also counted in `dropped`.
-    pub outage: u64,
+    pub(crate) outage: u64,
     /// Replies delayed by a spike (`spike=`); not in `delivered`: with a
     /// `spike_delay` past the timeout they arrive late.
-    pub spiked: u64,
+    pub(crate) spiked: u64,
     /// ...of which handed to the pinger before it stopped reading (the
     /// late replies it can have seen).
-    pub spiked_arrived: u64,
+    pub(crate) spiked_arrived: u64,
     /// Every frame the responder sent, by its sequence numbers.
-    pub down: DownTruth,
+    pub(crate) down: DownTruth,
     /// Every frame mavping sent towards it.
-    pub up: UpTruth,
+    pub(crate) up: UpTruth,
 }
 
 /// What became of the frames a responder sent (HEARTBEAT, telemetry,
 /// replies), each numbered: what a passive count of its packet sequence
 /// numbers is held against. `sent = dropped + delivered + in flight`.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
-pub struct DownTruth {
+pub(crate) struct DownTruth {
     /// Frames it numbered and sent.
-    pub sent: u64,
+    pub(crate) sent: u64,
     /// ...lost on the way to mavping: `loss_down=`, a full radio buffer
     /// (`baud=`), the outage (telemetry; `outage=`).
-    pub dropped: u64,
+    pub(crate) dropped: u64,
     /// Extra copies put on their way (`dup=` on replies, `dup_down=`).
-    pub duplicated: u64,
+    pub(crate) duplicated: u64,
     /// ...of which arrived.
-    pub duplicates_arrived: u64,
+    pub(crate) duplicates_arrived: u64,
     /// Frames that arrived (first copies), reordered ones included.
-    pub delivered: u64,
+    pub(crate) delivered: u64,
     /// ...of which after a frame it sent later had arrived (`hold=` by
     /// `reorder=` or `reorder_down=`, or a jitter wider than the gap).
-    pub reordered: u64,
+    pub(crate) reordered: u64,
 }
 
 /// What became of the frames mavping sent, as one responder hears them.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
-pub struct UpTruth {
+pub(crate) struct UpTruth {
     /// Frames mavping sent (requests, its HEARTBEAT, `--load`).
-    pub sent: u64,
+    pub(crate) sent: u64,
     /// ...lost on the way to this responder: `loss_up=`, a full buffer
     /// (`baud=`).
-    pub dropped: u64,
+    pub(crate) dropped: u64,
     /// ...of which requests it would have answered (also counted in
     /// `answered` and `dropped`: the exchange is lost).
-    pub requests_dropped: u64,
+    pub(crate) requests_dropped: u64,
     /// Frames it heard twice (`dup_up=`)...
-    pub duplicated: u64,
+    pub(crate) duplicated: u64,
     /// ...of which requests it answered twice: two replies, each numbered
     /// in its sequence; the second to arrive is a duplicate reply
     /// (`duplicated`), and the exchange is lost only if both are.
-    pub requests_duplicated: u64,
+    pub(crate) requests_duplicated: u64,
 }
 
 impl SimTruth {
@@ -274,7 +274,7 @@ const fn heartbeat(answers_ping: bool) -> Msg {
 /// seed where they were.
 const VEHICLE_SEED: u64 = 0x7e1e_3e7e_5eed_0001;
 
-pub const RADIO_ID: SysComp = SysComp::new(51, 68);
+pub(crate) const RADIO_ID: SysComp = SysComp::new(51, 68);
 
 /// `delay=` plus a draw of `jitter=`.
 fn one_way(params: &SimParams, rng: &mut SmallRng) -> Duration {

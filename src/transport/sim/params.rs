@@ -16,71 +16,71 @@ pub const DEFAULT_BUFFER_BYTES: u64 = 1024;
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct SimParams {
-    pub responders: u16,
+    pub(crate) responders: u16,
     /// sysid of the first responder; the others follow (1, 2, 3, ...).
-    pub first_sysid: u8,
-    pub compid: u8,
+    pub(crate) first_sysid: u8,
+    pub(crate) compid: u8,
     /// One-way delay.
-    pub delay: Duration,
+    pub(crate) delay: Duration,
     /// Extra one-way delay, uniform in [0, jitter], drawn per direction.
-    pub jitter: Duration,
+    pub(crate) jitter: Duration,
     /// Share of exchanges lost, 0..=1.
-    pub loss: f64,
+    pub(crate) loss: f64,
     /// Share of replies delivered twice.
-    pub dup: f64,
+    pub(crate) dup: f64,
     /// Share of replies held back by `hold` (arrive after later replies).
-    pub reorder: f64,
-    pub hold: Duration,
-    pub seed: u64,
+    pub(crate) reorder: f64,
+    pub(crate) hold: Duration,
+    pub(crate) seed: u64,
     /// Paused tokio clock: deterministic output, no waiting.
-    pub virtual_clock: bool,
+    pub(crate) virtual_clock: bool,
     /// False: responders are ArduPilot: their HEARTBEAT says so, and they
     /// answer TIMESYNC but never PING.
-    pub answer_ping: bool,
-    pub heartbeat: bool,
+    pub(crate) answer_ping: bool,
+    pub(crate) heartbeat: bool,
     /// Responders' clocks read `offset + (1 + drift·1e-6)·t`, t = ns since
     /// the link opened: the truth a TIMESYNC measurement is held against.
-    pub clock_offset_ns: i64,
-    pub drift_ppm: f64,
+    pub(crate) clock_offset_ns: i64,
+    pub(crate) drift_ppm: f64,
     /// A serial radio link at this baud: every frame takes its bytes x 10
     /// bits of wire time, requests and replies share it (half duplex, as
     /// SiK), and a bounded buffer drops what does not fit.
-    pub baud: Option<u32>,
+    pub(crate) baud: Option<u32>,
     /// Emit RADIO_STATUS as 51/68 once a second, following the link.
-    pub radio: bool,
+    pub(crate) radio: bool,
     /// The radio's transmit buffer: what waits for the wire (or the air)
     /// beyond it is dropped.
-    pub buffer: u64,
+    pub(crate) buffer: u64,
     /// A radio pair with its own air rate, TDM and ECC behind UARTs at
     /// `baud` ([`super::radio`]); without it, `baud` is one half-duplex
     /// wire.
-    pub air: Option<AirParams>,
+    pub(crate) air: Option<AirParams>,
     /// A link outage: from `start` after the link opened, for `length`,
     /// every request and reply is lost...
-    pub outage: Option<(Duration, Duration)>,
+    pub(crate) outage: Option<(Duration, Duration)>,
     /// ...and again every `outage_every` after that (weeks of simulated
     /// monitoring with an outage every few hours).
-    pub outage_every: Option<Duration>,
+    pub(crate) outage_every: Option<Duration>,
     /// Share of replies hit by a delay spike of `spike_delay` extra.
-    pub spike: f64,
-    pub spike_delay: Duration,
+    pub(crate) spike: f64,
+    pub(crate) spike_delay: Duration,
     /// Telemetry each responder sends unasked (`stream=`), as a vehicle
     /// does; a HEARTBEAT stream sets the rate of its HEARTBEAT.
-    pub streams: Vec<StreamSpec>,
+    pub(crate) streams: Vec<StreamSpec>,
     /// Shares of the frames a responder sends (telemetry, HEARTBEAT,
     /// replies) lost, delivered twice and held back by `hold` on their way
     /// to mavping, after they were numbered: what a passive loss count
     /// sees in the sequence numbers.
-    pub loss_down: f64,
-    pub dup_down: f64,
-    pub reorder_down: f64,
+    pub(crate) loss_down: f64,
+    pub(crate) dup_down: f64,
+    pub(crate) reorder_down: f64,
     /// Share of the frames mavping sends lost on the way to each
     /// responder (each responder draws its own).
-    pub loss_up: f64,
+    pub(crate) loss_up: f64,
     /// Share of the frames mavping sends that reach a responder twice (a
     /// request heard twice is answered twice; each responder draws its
     /// own).
-    pub dup_up: f64,
+    pub(crate) dup_up: f64,
 }
 
 impl Default for SimParams {
@@ -401,14 +401,14 @@ impl SimParams {
     }
 
     /// HEARTBEATs a second: 1, or what `stream=HEARTBEAT@HZ` says.
-    pub fn heartbeat_rate(&self) -> Option<f64> {
+    pub(crate) fn heartbeat_rate(&self) -> Option<f64> {
         self.heartbeat
             .then(|| telemetry::heartbeat_rate(&self.streams).unwrap_or(1.0))
     }
 
     /// The ids of responder `i`: sysids count up from `first_sysid`, and
     /// past 255 the component id counts up too, so 1,000 stay distinct.
-    pub fn responder_id(&self, i: u16) -> SysComp {
+    pub(crate) fn responder_id(&self, i: u16) -> SysComp {
         let slot = usize::from(self.first_sysid) - 1 + usize::from(i);
         SysComp::new(
             (slot % 255 + 1) as u8,

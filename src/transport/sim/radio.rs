@@ -31,22 +31,23 @@ const BITS_PER_UART_BYTE: u64 = 10;
 
 /// The air side of a simulated radio pair.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AirParams {
+pub(crate) struct AirParams {
     /// Bits per second over the air.
-    pub air_bps: u32,
+    pub(crate) air_bps: u32,
     /// Share of its half of each round a radio transmits, 0 < duty <= 1.
-    pub duty: f64,
+    pub(crate) duty: f64,
     /// Error correction: two bytes on the air for every byte of data.
-    pub ecc: bool,
+    pub(crate) ecc: bool,
     /// A TDM round: each radio's window is in its half of it.
-    pub tdm_round: Duration,
+    pub(crate) tdm_round: Duration,
 }
 
 pub(crate) const DEFAULT_TDM_ROUND: Duration = Duration::from_millis(20);
 
 impl AirParams {
+    #[cfg(test)]
     /// Bytes of data per second one radio puts on the air when busy.
-    pub fn bytes_per_s_each_way(&self) -> f64 {
+    pub(crate) fn bytes_per_s_each_way(&self) -> f64 {
         let ecc = if self.ecc { 2.0 } else { 1.0 };
         f64::from(self.air_bps) / 8.0 / ecc * self.duty / 2.0
     }

@@ -55,7 +55,7 @@ const SNIFF_LEN: usize = 4096;
 pub struct TlogPath(pub String);
 
 impl TlogPath {
-    pub fn is_stdin(&self) -> bool {
+    pub(crate) fn is_stdin(&self) -> bool {
         self.0 == "-"
     }
 }
@@ -68,11 +68,11 @@ impl fmt::Display for TlogPath {
 
 /// What a log held and how far it was read, for the summary.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct LogFacts {
-    pub records: RecordStats,
-    pub stamps: StampFacts,
+pub(crate) struct LogFacts {
+    pub(crate) records: RecordStats,
+    pub(crate) stamps: StampFacts,
     /// The run read the log to its end (not stopped by `-w` or Ctrl-C).
-    pub complete: bool,
+    pub(crate) complete: bool,
 }
 
 type Reader = Box<dyn Read + Send>;
@@ -149,7 +149,7 @@ enum Next {
     End,
 }
 
-pub struct TlogLink {
+pub(crate) struct TlogLink {
     name: String,
     input: Input,
     /// Bytes read and not yet finished with, from `pos`.
@@ -174,7 +174,7 @@ pub struct TlogLink {
 impl TlogLink {
     /// Opens the log and reads up to its first record: a file that holds
     /// none (not a log, empty, a directory) is refused before the run.
-    pub async fn open(path: &TlogPath) -> Result<TlogLink, LinkError> {
+    pub(crate) async fn open(path: &TlogPath) -> Result<TlogLink, LinkError> {
         let name = path.to_string();
         let reader: Reader = if path.is_stdin() {
             Box::new(io::stdin())
@@ -316,13 +316,13 @@ impl TlogLink {
     }
 
     /// The wall-clock time of session time 0: the first record's stamp.
-    pub fn started(&self) -> SystemTime {
+    pub(crate) fn started(&self) -> SystemTime {
         let first = self.clock.facts().map_or(0, |f| f.first_us);
         SystemTime::UNIX_EPOCH + Duration::from_micros(first)
     }
 
     /// What the log held so far.
-    pub fn facts(&self) -> Option<LogFacts> {
+    pub(crate) fn facts(&self) -> Option<LogFacts> {
         Some(LogFacts {
             records: self.splitter.stats(),
             stamps: self.clock.facts()?,

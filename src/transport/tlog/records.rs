@@ -54,25 +54,25 @@ const SIGNATURE_LEN: usize = 13;
 
 /// What the log held besides its records' frames.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct RecordStats {
+pub(crate) struct RecordStats {
     /// Records whose frame the scanner accepted (delivered).
-    pub records: u64,
+    pub(crate) records: u64,
     /// Records whose frame's message id this build does not know: lined
     /// up, delivered with their header only.
-    pub unknown_id: u64,
+    pub(crate) unknown_id: u64,
     /// Records whose frame failed its CRC with its header whole, lined up:
     /// delivered as damaged frames. Never also in `bad_crc`.
-    pub damaged: u64,
+    pub(crate) damaged: u64,
     /// Bytes between records that were not a record.
-    pub junk_bytes: u64,
+    pub(crate) junk_bytes: u64,
     /// Stretches of junk (each a re-synchronisation).
-    pub junk_stretches: u64,
+    pub(crate) junk_stretches: u64,
     /// Candidate frames at a record's place that failed their CRC (or a
     /// MAVLink 1 length) and did not line up, each the start of a stretch
     /// of junk.
-    pub bad_crc: u64,
+    pub(crate) bad_crc: u64,
     /// Bytes of a last record cut short (0: the log ends on a record).
-    pub truncated_bytes: u64,
+    pub(crate) truncated_bytes: u64,
 }
 
 /// The next thing in the bytes.

@@ -32,20 +32,20 @@ const LINK_BITS: u64 = 3;
 
 /// What the stamps were like.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-pub struct StampFacts {
+pub(crate) struct StampFacts {
     /// The first record's stamp (µs since the Unix epoch, link bits
     /// cleared): the session's time 0.
-    pub first_us: u64,
+    pub(crate) first_us: u64,
     /// The latest stamp seen (the same way).
-    pub latest_us: u64,
+    pub(crate) latest_us: u64,
     /// Records whose stamp was behind the latest (dated at the latest).
-    pub behind: u64,
+    pub(crate) behind: u64,
     /// Clock steps: a stamp more than 1 s behind or 3 days ahead.
-    pub steps: u64,
+    pub(crate) steps: u64,
     /// Every stamp was a whole millisecond (QGroundControl's ms × 1000).
-    pub whole_ms: bool,
+    pub(crate) whole_ms: bool,
     /// Records by the stamps' two lowest bits (MAVProxy's link number).
-    pub low_bits: [u64; 4],
+    pub(crate) low_bits: [u64; 4],
 }
 
 /// Dates records by their stamps: see the module's rules.

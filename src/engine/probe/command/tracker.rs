@@ -45,20 +45,20 @@ enum Fate {
 /// Exact figures for one target.
 #[derive(Clone)]
 pub(crate) struct TargetStats {
-    pub id: SysComp,
+    pub(crate) id: SysComp,
     /// Commands put on the wire (skipped ones are not).
-    pub commands: u64,
-    pub acknowledged: u64,
-    pub failed: u64,
-    pub skipped: u64,
-    pub late_acks: u64,
-    pub duplicate_acks: u64,
+    pub(crate) commands: u64,
+    pub(crate) acknowledged: u64,
+    pub(crate) failed: u64,
+    pub(crate) skipped: u64,
+    pub(crate) late_acks: u64,
+    pub(crate) duplicate_acks: u64,
     /// `by_attempts[k - 1]`: commands acknowledged after k transmissions.
-    pub by_attempts: Vec<u64>,
+    pub(crate) by_attempts: Vec<u64>,
     /// From the first transmission to the ACK.
-    pub time_to_ack: RttStats,
+    pub(crate) time_to_ack: RttStats,
     /// MAV_RESULT of each acknowledged command.
-    pub results: BTreeMap<u8, u64>,
+    pub(crate) results: BTreeMap<u8, u64>,
 }
 
 pub(crate) struct CommandTracker {

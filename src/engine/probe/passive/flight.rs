@@ -75,27 +75,27 @@ const ELRS_FINE_LQ: f64 = 90.0;
 
 /// Where the vehicle was, against the origin.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Range {
+pub(crate) struct Range {
     /// Along the ground (haversine), metres.
-    pub ground_m: f64,
+    pub(crate) ground_m: f64,
     /// In a straight line: ground and altitude difference, metres.
-    pub distance_m: f64,
+    pub(crate) distance_m: f64,
     /// Above mean sea level, metres.
-    pub alt_m: f64,
+    pub(crate) alt_m: f64,
 }
 
 /// The radio's figures in a window: the means of its reports (unknown
 /// values left out) and what its error counter grew by.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct RadioWindow {
-    pub reports: u64,
-    pub rssi: Option<f64>,
-    pub remrssi: Option<f64>,
-    pub noise: Option<f64>,
-    pub remnoise: Option<f64>,
+pub(crate) struct RadioWindow {
+    pub(crate) reports: u64,
+    pub(crate) rssi: Option<f64>,
+    pub(crate) remrssi: Option<f64>,
+    pub(crate) noise: Option<f64>,
+    pub(crate) remnoise: Option<f64>,
     /// Wrap-safe growth of `rxerrors` from the report before the window's
     /// first to its last.
-    pub rxerrors: u64,
+    pub(crate) rxerrors: u64,
 }
 
 /// One window of log time, `start` to `end` (ns since the log's first
@@ -103,55 +103,55 @@ pub struct RadioWindow {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct FlightWindow {
     /// Its place, from 0.
-    pub index: u64,
-    pub start: Nanos,
-    pub end: Nanos,
-    pub received: u64,
+    pub(crate) index: u64,
+    pub(crate) start: Nanos,
+    pub(crate) end: Nanos,
+    pub(crate) received: u64,
     /// Of `received`, frames whose number had been seen already.
-    pub duplicate: u64,
-    pub lost: i64,
+    pub(crate) duplicate: u64,
+    pub(crate) lost: i64,
     /// `100 * lost / (lost + distinct received)`; `None` with neither.
-    pub loss_pct: Option<f64>,
-    pub radio: Option<RadioWindow>,
+    pub(crate) loss_pct: Option<f64>,
+    pub(crate) radio: Option<RadioWindow>,
     /// At the window's last position.
-    pub range: Option<Range>,
+    pub(crate) range: Option<Range>,
 }
 
 /// A silence or a loss burst, `start` to `end`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Span {
-    pub start: Nanos,
-    pub end: Nanos,
+    pub(crate) start: Nanos,
+    pub(crate) end: Nanos,
     /// Frames received and lost in it (a burst's windows; 0 for a silence).
-    pub received: u64,
-    pub lost: i64,
+    pub(crate) received: u64,
+    pub(crate) lost: i64,
     /// Still on at the end of the log.
-    pub ongoing: bool,
+    pub(crate) ongoing: bool,
     /// A silence: the followed radio's figures during it.
-    pub radio: Option<Box<SilenceRadio>>,
+    pub(crate) radio: Option<Box<SilenceRadio>>,
 }
 
 /// One radio figure over a silence: as sent, and in its kind's unit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SilenceFigure {
+pub(crate) struct SilenceFigure {
     /// As text names it (`remote rssi`, `link quality`, `snr`).
-    pub label: &'static str,
+    pub(crate) label: &'static str,
     /// `dBm`, `dB`, `%`; `raw` where the kind gives the field no unit.
-    pub unit: &'static str,
-    pub min: f64,
-    pub mean: f64,
-    pub max: f64,
+    pub(crate) unit: &'static str,
+    pub(crate) min: f64,
+    pub(crate) mean: f64,
+    pub(crate) max: f64,
     /// The bytes as sent (255, unknown, left out).
-    pub raw_min: f64,
-    pub raw_mean: f64,
-    pub raw_max: f64,
+    pub(crate) raw_min: f64,
+    pub(crate) raw_mean: f64,
+    pub(crate) raw_max: f64,
 }
 
 /// What the radio's figures say about a silence; given only where they
 /// support it.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum Diagnosis {
+pub(crate) enum Diagnosis {
     /// SiK: its remote figures were 0 throughout: it clears them once it
     /// has heard nothing from the other radio for ~3 s.
     RemoteCleared,
@@ -171,28 +171,28 @@ pub enum Diagnosis {
 
 /// The followed radio during a silence.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SilenceRadio {
-    pub id: SysComp,
-    pub kind: RadioKind,
+pub(crate) struct SilenceRadio {
+    pub(crate) id: SysComp,
+    pub(crate) kind: RadioKind,
     /// Its reports during the silence (none: its figures are `None`).
-    pub reports: u64,
-    pub rssi: Option<SilenceFigure>,
-    pub remrssi: Option<SilenceFigure>,
-    pub noise: Option<SilenceFigure>,
-    pub remnoise: Option<SilenceFigure>,
+    pub(crate) reports: u64,
+    pub(crate) rssi: Option<SilenceFigure>,
+    pub(crate) remrssi: Option<SilenceFigure>,
+    pub(crate) noise: Option<SilenceFigure>,
+    pub(crate) remnoise: Option<SilenceFigure>,
     /// The `noise` field's mean in the silence less its mean over the
     /// rest of the log, in dB where the kind gives it one (SiK: the noise
     /// floor's rise; mLRS, ExpressLRS: the SNR's change).
-    pub noise_change_db: Option<f64>,
-    pub diagnosis: Option<Diagnosis>,
+    pub(crate) noise_change_db: Option<f64>,
+    pub(crate) diagnosis: Option<Diagnosis>,
 }
 
 impl Span {
-    pub fn length_ns(&self) -> Nanos {
+    pub(crate) fn length_ns(&self) -> Nanos {
         self.end.saturating_sub(self.start)
     }
 
-    pub fn loss_pct(&self) -> Option<f64> {
+    pub(crate) fn loss_pct(&self) -> Option<f64> {
         loss_pct(self.received, self.lost)
     }
 }
@@ -208,58 +208,58 @@ pub enum FlightEvent {
 /// The link's totals as the source table has them (the radio left out).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct Totals {
-    pub received: u64,
-    pub duplicate: u64,
-    pub lost: u64,
+    pub(crate) received: u64,
+    pub(crate) duplicate: u64,
+    pub(crate) lost: u64,
 }
 
 /// Where the distances are measured from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum OriginKind {
+pub(crate) enum OriginKind {
     FirstFix,
     Home,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Origin {
-    pub kind: OriginKind,
-    pub lat_deg: f64,
-    pub lon_deg: f64,
-    pub alt_m: f64,
+pub(crate) struct Origin {
+    pub(crate) kind: OriginKind,
+    pub(crate) lat_deg: f64,
+    pub(crate) lon_deg: f64,
+    pub(crate) alt_m: f64,
     /// The system whose positions are read.
-    pub vehicle: SysComp,
+    pub(crate) vehicle: SysComp,
 }
 
 /// The timeline's summary, at the end of the log.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct FlightSummary {
-    pub window_ns: Nanos,
-    pub silence_ns: Nanos,
-    pub burst_loss_pct: f64,
+pub(crate) struct FlightSummary {
+    pub(crate) window_ns: Nanos,
+    pub(crate) silence_ns: Nanos,
+    pub(crate) burst_loss_pct: f64,
     /// Windows told, the last (partial) one included.
-    pub windows: u64,
+    pub(crate) windows: u64,
     /// Windows closed while [`PENDING`] were waiting: counted, not told.
-    pub untold: u64,
+    pub(crate) untold: u64,
     /// The last window, up to the end of the log (told with the summary).
-    pub last: Option<FlightWindow>,
+    pub(crate) last: Option<FlightWindow>,
     /// A burst the last window ended: told with it, as every other burst
     /// is told with the window that ends it.
-    pub last_burst: Option<Span>,
+    pub(crate) last_burst: Option<Span>,
     /// The most lossy windows, worst first.
-    pub worst: Vec<FlightWindow>,
-    pub silence_count: u64,
-    pub silences: Vec<Span>,
-    pub burst_count: u64,
-    pub bursts: Vec<Span>,
-    pub origin: Option<Origin>,
+    pub(crate) worst: Vec<FlightWindow>,
+    pub(crate) silence_count: u64,
+    pub(crate) silences: Vec<Span>,
+    pub(crate) burst_count: u64,
+    pub(crate) bursts: Vec<Span>,
+    pub(crate) origin: Option<Origin>,
     /// The farthest window (by its last position), and its loss.
-    pub farthest: Option<FlightWindow>,
-    pub positions: u64,
-    pub radio: Option<SysComp>,
+    pub(crate) farthest: Option<FlightWindow>,
+    pub(crate) positions: u64,
+    pub(crate) radio: Option<SysComp>,
     /// What the followed radio is, as the whole log shows it.
-    pub radio_kind: Option<RadioKind>,
-    pub radio_evidence: Vec<String>,
+    pub(crate) radio_kind: Option<RadioKind>,
+    pub(crate) radio_evidence: Vec<String>,
 }
 
 /// The window under way.

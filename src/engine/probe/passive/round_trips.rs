@@ -48,14 +48,14 @@ const IN_PROGRESS: u8 = 5;
 /// Which exchange.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Kind {
+pub(crate) enum Kind {
     Timesync,
     Ping,
     Command,
 }
 
 impl Kind {
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             Kind::Timesync => "timesync",
             Kind::Ping => "ping",
@@ -212,17 +212,17 @@ struct Queue {
 
 /// The requests one system made of one kind.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct RequestCounts {
+pub(crate) struct RequestCounts {
     /// Distinct requests.
-    pub requests: u64,
+    pub(crate) requests: u64,
     /// The same request logged again before it timed out: a duplicated
     /// frame, or a command's retransmission.
-    pub repeats: u64,
+    pub(crate) repeats: u64,
     /// Pushed out of the table by newer ones while still in flight:
     /// neither matched nor unanswered.
-    pub evicted: u64,
+    pub(crate) evicted: u64,
     /// Still within their timeout when the log ended, unanswered.
-    pub in_flight_at_end: u64,
+    pub(crate) in_flight_at_end: u64,
 }
 
 /// The figures of one requester → responder exchange.
@@ -234,54 +234,54 @@ struct Pair {
 
 /// What came of the requests of one requester to one responder.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
-pub struct PairCounts {
+pub(crate) struct PairCounts {
     /// Requests answered within the timeout: the RTT samples.
-    pub matched: u64,
+    pub(crate) matched: u64,
     /// Of those, commands answered after a retransmission (measured from
     /// the last attempt).
-    pub after_retransmission: u64,
+    pub(crate) after_retransmission: u64,
     /// Requests the responder did not answer within the timeout.
-    pub unanswered: u64,
+    pub(crate) unanswered: u64,
     /// Replies after the timeout to a request counted unanswered.
-    pub late: u64,
+    pub(crate) late: u64,
     /// Replies to a request the responder had answered already.
-    pub duplicate: u64,
+    pub(crate) duplicate: u64,
     /// Replies that match no request in the log (made before it began,
     /// or not logged).
-    pub no_request: u64,
+    pub(crate) no_request: u64,
 }
 
 /// One row of figures.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PairSummary {
-    pub kind: Kind,
+pub(crate) struct PairSummary {
+    pub(crate) kind: Kind,
     /// 0/0 where a reply does not name its requester.
-    pub requester: SysComp,
+    pub(crate) requester: SysComp,
     /// 0/0 for requests to anyone no responder was heard answering.
-    pub responder: SysComp,
+    pub(crate) responder: SysComp,
     #[serde(flatten)]
-    pub counts: PairCounts,
-    pub rtt: Option<RttSummary>,
+    pub(crate) counts: PairCounts,
+    pub(crate) rtt: Option<RttSummary>,
 }
 
 /// One requester's requests of a kind.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RequesterSummary {
-    pub kind: Kind,
-    pub requester: SysComp,
+pub(crate) struct RequesterSummary {
+    pub(crate) kind: Kind,
+    pub(crate) requester: SysComp,
     #[serde(flatten)]
-    pub counts: RequestCounts,
+    pub(crate) counts: RequestCounts,
 }
 
 /// Every round trip recovered.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct RoundTripSummary {
+pub(crate) struct RoundTripSummary {
     /// A request not answered within this is unanswered (`-W`).
-    pub timeout_s: f64,
-    pub requesters: Vec<RequesterSummary>,
-    pub pairs: Vec<PairSummary>,
+    pub(crate) timeout_s: f64,
+    pub(crate) requesters: Vec<RequesterSummary>,
+    pub(crate) pairs: Vec<PairSummary>,
     /// Requests and replies beyond the tables' caps: counted, not matched.
-    pub untracked: u64,
+    pub(crate) untracked: u64,
 }
 
 /// The matcher: see the module's rules.

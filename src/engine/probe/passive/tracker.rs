@@ -116,7 +116,7 @@ const MAX_MSG_IDS: usize = 32;
 /// Sources tracked by a [`SourceTable`] unless told otherwise.
 pub const DEFAULT_MAX_SOURCES: usize = 32;
 /// The SiK radio's injected RADIO_STATUS comes from sysid '3', compid 'D'.
-pub const RADIO_SOURCE: SysComp = SysComp::new(b'3', b'D');
+pub(crate) const RADIO_SOURCE: SysComp = SysComp::new(b'3', b'D');
 
 /// Sequence state of the current stretch (since the start or the last
 /// resync).
@@ -383,7 +383,7 @@ fn count_step(counts: &mut SeqCounts, step: Step) -> Option<u64> {
 impl SeqTracker {
     /// A tracker whose silences are gaps longer than `gap`, or, with
     /// `None`, than the default threshold (module docs).
-    pub fn new(gap: Option<Nanos>) -> Self {
+    pub(crate) fn new(gap: Option<Nanos>) -> Self {
         SeqTracker {
             gap,
             state: None,
@@ -407,7 +407,7 @@ impl SeqTracker {
 
     /// Takes one frame: its header sequence, message id, length on the
     /// wire and arrival time (not earlier than the previous frame's).
-    pub fn on_frame(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
+    pub(crate) fn on_frame(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
         self.msg_ids.count(msg_id);
         self.pymav(seq);
         self.take(seq, msg_id, len_bytes, at, false);
@@ -416,7 +416,7 @@ impl SeqTracker {
     /// Takes a frame whose CRC failed but whose header is whole: it
     /// arrived, damaged (or in a dialect whose CRC differs), so it fills
     /// its number and is counted apart. pymavlink never sees it.
-    pub fn on_damaged(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
+    pub(crate) fn on_damaged(&mut self, seq: u8, msg_id: u32, len_bytes: usize, at: Nanos) {
         self.damaged_ids.count(msg_id);
         self.take(seq, msg_id, len_bytes, at, true);
     }
@@ -679,7 +679,7 @@ impl SeqTracker {
 
     /// The source's counts: every counter's, and the frames of a second
     /// counter too small to be one.
-    pub fn counts(&self) -> SeqCounts {
+    pub(crate) fn counts(&self) -> SeqCounts {
         let t = self.settled_now();
         match &t.second {
             Some(c) if c.counts.received + c.counts.damaged >= SECOND_COUNTER_FRAMES => {
@@ -705,12 +705,13 @@ impl SeqTracker {
     }
 
     /// pymavlink's figure for this source alone.
-    pub fn pymav_figure(&self) -> PymavFigure {
+    pub(crate) fn pymav_figure(&self) -> PymavFigure {
         PymavFigure::new(self.msg_ids.total(), self.pymav_loss)
     }
 
+    #[cfg(test)]
     /// The usual time per sequence step, once known.
-    pub fn interval(&self) -> Option<Nanos> {
+    pub(crate) fn interval(&self) -> Option<Nanos> {
         self.rate.interval()
     }
 
@@ -732,7 +733,7 @@ impl SeqTracker {
 
     /// The figures as of `at` (the end of the run, or now): a silence
     /// still on then is included.
-    pub fn summary(&self, source: SysComp, at: Nanos) -> SourceSummary {
+    pub(crate) fn summary(&self, source: SysComp, at: Nanos) -> SourceSummary {
         let t = self.settled_now();
         let mut silences: Vec<Silence> = t
             .silences
@@ -855,7 +856,7 @@ impl SourceTable {
     }
 
     /// The silence threshold it was made with.
-    pub fn gap(&self) -> Option<Nanos> {
+    pub(crate) fn gap(&self) -> Option<Nanos> {
         self.gap
     }
 
@@ -869,7 +870,7 @@ impl SourceTable {
 
     /// Takes a frame whose CRC failed with its header whole
     /// ([`SeqTracker::on_damaged`]).
-    pub fn on_damaged(
+    pub(crate) fn on_damaged(
         &mut self,
         source: SysComp,
         seq: u8,
@@ -884,7 +885,7 @@ impl SourceTable {
 
     /// Marks `source` as the ground station's own (in a log: frames it
     /// logged as it sent them), out of the link's totals from now on.
-    pub fn set_ground(&mut self, source: SysComp) {
+    pub(crate) fn set_ground(&mut self, source: SysComp) {
         if self.ground.len() < self.max_sources && !self.ground.contains(&source) {
             self.ground.push(source);
         }
@@ -934,7 +935,7 @@ impl SourceTable {
     }
 
     /// Everything, as of `at` (the end of the run, or now).
-    pub fn summary(&self, at: Nanos) -> TableSummary {
+    pub(crate) fn summary(&self, at: Nanos) -> TableSummary {
         let mut sources: Vec<SourceSummary> = self
             .sources
             .iter()
