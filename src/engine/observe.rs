@@ -74,18 +74,8 @@ pub enum Event<'a> {
     Command(CommandEvent),
     /// A system's first HEARTBEAT.
     Heard { id: SysComp, identity: &'a Identity },
-    /// A RADIO_STATUS (or RADIO) counted: `first` for each radio's first
-    /// report, `kind_changed` when the evidence changed what it is (a
-    /// HEARTBEAT can tell it without a report: the latest one then).
-    Radio {
-        id: SysComp,
-        at: Nanos,
-        report: RadioReport,
-        /// What the radio is and why, as things stand.
-        judgement: &'a Judgement,
-        first: bool,
-        kind_changed: bool,
-    },
+    /// A RADIO_STATUS (or RADIO) counted.
+    Radio(RadioHeard<'a>),
     /// A LINK_NODE_STATUS: a node's own count of the link; `first` for
     /// each node's first report.
     LinkNode {
@@ -120,6 +110,20 @@ pub enum Event<'a> {
     /// The link failed; the session ends (told before its summary, so an
     /// exporter shows it while a run's other links go on).
     LinkFailed { at: Nanos, error: &'a str },
+}
+
+/// A RADIO_STATUS (or RADIO) counted: `first` for each radio's first
+/// report, `kind_changed` when the evidence changed what it is (a
+/// HEARTBEAT can tell it without a report: the latest one then).
+#[derive(Debug, Clone, Copy)]
+pub struct RadioHeard<'a> {
+    pub(crate) id: SysComp,
+    pub(crate) at: Nanos,
+    pub(crate) report: RadioReport,
+    /// What the radio is and why, as things stand.
+    pub(crate) judgement: &'a Judgement,
+    pub(crate) first: bool,
+    pub(crate) kind_changed: bool,
 }
 
 /// What became of a run's output. The reader's choice to stop reading (a

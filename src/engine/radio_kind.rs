@@ -359,7 +359,7 @@ pub(crate) struct Evidence {
 
 /// What a radio is, and why.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Judgement {
+pub(crate) struct Judgement {
     pub(crate) kind: RadioKind,
     /// `auto`, or the `--radio-type` that set it.
     pub(crate) radio_type: RadioType,

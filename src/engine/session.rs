@@ -17,7 +17,7 @@ use tokio::sync::Notify;
 
 use super::link_io::{admitted, Clock, Heartbeat, Sender, WallAtZero};
 use super::link_node::LinkNodes;
-use super::observe::{Event, Observer, OutputFate, StartInfo};
+use super::observe::{Event, Observer, OutputFate, RadioHeard, StartInfo};
 use super::radio::{RadioReport, Radios};
 use super::roster::Roster;
 use super::schedule::Schedule;
@@ -251,14 +251,14 @@ impl Heard {
         else {
             return Ok(());
         };
-        observer.event(&Event::Radio {
+        observer.event(&Event::Radio(RadioHeard {
             id,
             at,
             report,
             judgement,
             first,
             kind_changed: !first,
-        })
+        }))
     }
 
     /// Any other report.
@@ -272,14 +272,14 @@ impl Heard {
         let Some(judgement) = self.radios.judgement(id) else {
             return Ok(());
         };
-        observer.event(&Event::Radio {
+        observer.event(&Event::Radio(RadioHeard {
             id,
             at,
             report,
             judgement,
             first: false,
             kind_changed: false,
-        })
+        }))
     }
 }
 

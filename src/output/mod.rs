@@ -8,6 +8,7 @@ pub(crate) mod json;
 pub(crate) mod live;
 pub(crate) mod plot;
 pub mod prometheus;
+mod reporter;
 pub(crate) mod samples;
 pub(crate) mod text;
 pub(crate) mod textfile;
@@ -16,15 +17,11 @@ pub(crate) mod windows;
 use std::io;
 use std::time::{Duration, SystemTime};
 
-pub(crate) use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
+pub(crate) use crate::engine::observe::{Event, RunKind, StartInfo};
 use crate::engine::summary::{Interim, LinkSummary};
 use crate::engine::Nanos;
 use crate::verdict::Verdict;
-
-/// An output format: it follows the run, then renders its summary.
-pub(crate) trait Reporter: Observer {
-    fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()>;
-}
+pub(crate) use reporter::Reporter;
 
 /// Session time to wall-clock time. The wall clock is read once at the
 /// start (the UNIX epoch under the virtual clock, so output is reproducible)
@@ -93,12 +90,12 @@ impl<'a> Fanout<'a> {
     }
 }
 
-impl Observer for Fanout<'_> {
+impl Reporter for Fanout<'_> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.each(|r| r.start(info))
     }
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        self.each(|r| r.event(event))
+    fn tell(&mut self, event: &Event<'_>) -> io::Result<()> {
+        self.each(|r| r.tell(event))
     }
     fn flush(&mut self) -> io::Result<()> {
         self.each(|r| r.flush())
@@ -106,9 +103,6 @@ impl Observer for Fanout<'_> {
     fn interim(&mut self, figures: &Interim) -> io::Result<()> {
         self.each(|r| r.interim(figures))
     }
-}
-
-impl Reporter for Fanout<'_> {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
         self.each(|r| r.summary(summary, verdict))
     }

@@ -7,11 +7,13 @@
 use std::io::{self, Write};
 
 use super::windows::{Window, Windows};
-use super::{Event, Observer, Reporter, RunKind, StartInfo};
+use super::{Reporter, RunKind, StartInfo};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::RadioHeard;
 use crate::engine::radio::{self, RadioReport};
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::LinkSummary;
+use crate::engine::Nanos;
 use crate::verdict::Verdict;
 
 /// The radio columns come last, so readers of the first six keep working.
@@ -130,7 +132,7 @@ impl<W: Write> SampleLog<W> {
     }
 }
 
-impl<W: Write> Observer for SampleLog<W> {
+impl<W: Write> Reporter for SampleLog<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         let passive = matches!(info.run, RunKind::Passive { .. });
         self.windows = passive.then(Windows::default);
@@ -142,16 +144,17 @@ impl<W: Write> Observer for SampleLog<W> {
         }
     }
 
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        if let Event::Radio { report, .. } = *event {
-            self.radio = Some(report);
-        }
-        if let Event::Sources { at, table } = *event {
-            return self.windows(at, table, false);
-        }
-        let Event::Match(e) = event else {
-            return Ok(());
-        };
+    /// The latest radio's figures go on each row.
+    fn radio(&mut self, radio: &RadioHeard<'_>) -> io::Result<()> {
+        self.radio = Some(radio.report);
+        Ok(())
+    }
+
+    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
+        self.windows(at, table, false)
+    }
+
+    fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
         let (who, seq, sent, rtt, status) = match *e {
             MatchEvent::Reply {
                 responder,
@@ -196,9 +199,7 @@ impl<W: Write> Observer for SampleLog<W> {
     fn flush(&mut self) -> io::Result<()> {
         self.out.flush()
     }
-}
 
-impl<W: Write> Reporter for SampleLog<W> {
     /// A passive run's last, partial, window comes from its summary.
     fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
         if let LinkSummary::Passive(s) = summary {
@@ -212,7 +213,7 @@ impl<W: Write> Reporter for SampleLog<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::observe::RunKind;
+    use crate::engine::observe::{Event, RunKind};
     use crate::engine::summary::ProbeName;
     use crate::frame::SysComp;
 
@@ -227,13 +228,13 @@ mod tests {
                 at: 1,
             })
         };
-        log.event(&lost(0)).unwrap();
+        log.tell(&lost(0)).unwrap();
         let sik = radio::Judgement {
             kind: radio::RadioKind::Sik,
             radio_type: radio::RadioType::Auto,
             evidence: vec![],
         };
-        log.event(&Event::Radio {
+        log.tell(&Event::Radio(RadioHeard {
             id: SysComp::new(51, 68),
             at: 1,
             report: RadioReport {
@@ -248,9 +249,9 @@ mod tests {
             judgement: &sik,
             first: true,
             kind_changed: false,
-        })
+        }))
         .unwrap();
-        log.event(&lost(1)).unwrap();
+        log.tell(&lost(1)).unwrap();
         let out = String::from_utf8(log.out).unwrap();
         assert_eq!(
             out,
@@ -314,7 +315,7 @@ mod tests {
             table.on_frame(a, seq, 30, 40, at * ms);
         }
         let first = table.summary(1_000 * ms);
-        log.event(&Event::Sources {
+        log.tell(&Event::Sources {
             at: 1_000 * ms,
             table: &first,
         })
@@ -352,7 +353,7 @@ mod tests {
         })
         .unwrap();
         for l in [&mut log, &mut echo] {
-            l.event(&Event::Sources {
+            l.tell(&Event::Sources {
                 at: 1_000_000_000,
                 table: &at_one,
             })
@@ -386,10 +387,10 @@ mod tests {
         });
         let mut first = SampleLog::new(Vec::new()).for_link("sim:?a=1,2", true);
         first.start(&info).unwrap();
-        first.event(&lost).unwrap();
+        first.tell(&lost).unwrap();
         let mut second = SampleLog::new(Vec::new()).for_link("sim:", false);
         second.start(&info).unwrap();
-        second.event(&lost).unwrap();
+        second.tell(&lost).unwrap();
         assert_eq!(
             String::from_utf8(first.out).unwrap(),
             format!("{HEADER},link\n1,1,3,0.000000,,lost,,,,,,\"sim:?a=1,2\"\n")

@@ -8,6 +8,7 @@ use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::Hint;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::RadioHeard;
 use crate::engine::radio::{Judgement, RadioReport, RadioSummary};
 use crate::engine::roster::Identity;
 use crate::engine::stats::{Bucket, RttSummary};
@@ -15,7 +16,6 @@ use crate::engine::summary::ProbeName;
 use crate::engine::summary::{self, Direction, ResponderSummary, ScheduleSummary};
 use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
-use crate::output::Event;
 use crate::transport::RxClock;
 use crate::verdict::Verdict;
 
@@ -172,96 +172,83 @@ impl Lines {
         })
     }
 
-    /// The line of an echo run's event, if it has one.
-    pub(super) fn echo<'a>(&self, event: &Event<'a>) -> Option<Line<'a>> {
-        let line = match *event {
-            Event::Match(MatchEvent::Reply {
+    /// A reply, loss, late, duplicate or stale reply.
+    pub(super) fn match_line(&self, e: &MatchEvent) -> Line<'static> {
+        match *e {
+            MatchEvent::Reply {
                 responder,
                 seq,
                 rtt,
                 at,
                 out_of_order,
                 ..
-            }) => Line::Reply(Reply {
+            } => Line::Reply(Reply {
                 stamp: self.stamp("reply", at, responder),
                 seq,
                 rtt_us: us(rtt),
                 out_of_order,
             }),
-            Event::Match(MatchEvent::Lost {
+            MatchEvent::Lost {
                 responder,
                 seq,
                 sent_at,
                 at,
-            }) => Line::Lost(Lost {
+            } => Line::Lost(Lost {
                 stamp: self.stamp("lost", at, responder),
                 seq,
                 sent_t_s: seconds(sent_at),
             }),
-            Event::Match(MatchEvent::Late {
+            MatchEvent::Late {
                 responder,
                 seq,
                 rtt,
                 at,
                 ..
-            }) => Line::Late(Again {
+            } => Line::Late(Again {
                 stamp: self.stamp("late", at, responder),
                 seq,
                 rtt_us: us(rtt),
             }),
-            Event::Match(MatchEvent::Duplicate {
+            MatchEvent::Duplicate {
                 responder,
                 seq,
                 rtt,
                 at,
                 ..
-            }) => Line::Duplicate(Again {
+            } => Line::Duplicate(Again {
                 stamp: self.stamp("duplicate", at, responder),
                 seq,
                 rtt_us: us(rtt),
             }),
-            Event::Match(MatchEvent::Stale { responder, at }) => {
-                Line::Stale(self.stamp("stale", at, responder))
-            }
-            Event::Heard { id, identity } => Line::Responder(Heard {
-                stamp: self.stamp("responder", identity.first_heard, id),
-                identity: Heartbeat::of(identity),
-            }),
-            Event::WaitingForPeer => Line::Waiting(Waiting {
-                r#type: "waiting",
-                reason: "no peer heard yet",
-            }),
-            Event::Step(step) => Line::Step(self.step(step)),
-            Event::Flight(e) => self.flight_event(e),
-            // The summary has each clock and the link's error; a stream
-            // of estimates is for the exporters.
-            Event::Command(_)
-            | Event::LinkNode { .. }
-            | Event::Clock { .. }
-            | Event::Sources { .. }
-            | Event::Progress { .. }
-            | Event::LinkFailed { .. } => return None,
-            // The first report of each radio; the summary has the rest.
-            Event::Radio {
-                id,
-                at,
-                report,
-                judgement,
-                first,
-                kind_changed,
-            } => {
-                if !first && !kind_changed {
-                    return None;
-                }
-                Line::Radio(Radio {
-                    stamp: self.stamp("radio", at, id),
-                    status: report,
-                    judgement,
-                    first,
-                })
-            }
-        };
-        Some(line)
+            MatchEvent::Stale { responder, at } => Line::Stale(self.stamp("stale", at, responder)),
+        }
+    }
+
+    pub(super) fn heard_line<'a>(&self, id: SysComp, identity: &'a Identity) -> Line<'a> {
+        Line::Responder(Heard {
+            stamp: self.stamp("responder", identity.first_heard, id),
+            identity: Heartbeat::of(identity),
+        })
+    }
+
+    pub(super) fn waiting_line() -> Line<'static> {
+        Line::Waiting(Waiting {
+            r#type: "waiting",
+            reason: "no peer heard yet",
+        })
+    }
+
+    /// The first report of each radio, and one whose kind changed; the
+    /// summary has the rest.
+    pub(super) fn radio_line<'a>(&self, heard: &RadioHeard<'a>) -> Option<Line<'a>> {
+        (heard.first || heard.kind_changed).then(|| {
+            Line::Radio(Radio {
+                stamp: self.stamp("radio", heard.at, heard.id),
+                status: heard.report,
+                judgement: heard.judgement,
+                first: heard.first,
+            })
+        })
     }
 }
 

@@ -21,9 +21,14 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 
-use super::{Event, Observer, Reporter, RunKind, StartInfo, WallClock};
+use super::{Reporter, RunKind, StartInfo, WallClock};
+use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::{CommandEvent, RadioHeard};
+use crate::engine::probe::passive::flight::FlightEvent;
+use crate::engine::roster::Identity;
 use crate::engine::summary::ProbeName;
 use crate::engine::summary::{Interim, LinkSummary};
+use crate::engine::sweep_report::StepFigures;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -210,16 +215,6 @@ impl Lines {
         }))
     }
 
-    /// The line of an event, if it has one in this run.
-    fn event<'a>(&self, event: &Event<'a>) -> Option<Line<'a>> {
-        match event {
-            Event::Command(e) => command::line(e),
-            // A command run writes its commands' fate only.
-            _ if self.command => None,
-            _ => self.echo(event),
-        }
-    }
-
     /// The summary line.
     fn summary<'a>(&'a self, summary: &'a LinkSummary, verdict: &'a Verdict) -> Line<'a> {
         match summary {
@@ -269,7 +264,20 @@ fn us(ns: Nanos) -> f64 {
     ns as f64 / 1e3
 }
 
-impl<W: Write> Observer for JsonReporter<W> {
+impl<W: Write> JsonReporter<W> {
+    /// Writes an event's line: not in quiet mode, and in a command run
+    /// only the command's own (`command`).
+    fn event_line(&mut self, line: Option<Line<'_>>, command: bool) -> io::Result<()> {
+        match line {
+            Some(line) if !self.quiet && command == self.lines.command => {
+                self.lines.write(&mut self.out, &line)
+            }
+            _ => Ok(()),
+        }
+    }
+}
+
+impl<W: Write> Reporter for JsonReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.lines.starts(info);
         if self.quiet {
@@ -278,14 +286,32 @@ impl<W: Write> Observer for JsonReporter<W> {
         self.lines.write(&mut self.out, &self.lines.start(info))
     }
 
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        if self.quiet {
-            return Ok(());
-        }
-        match self.lines.event(event) {
-            Some(line) => self.lines.write(&mut self.out, &line),
-            None => Ok(()),
-        }
+    fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
+        self.event_line(Some(self.lines.match_line(event)), false)
+    }
+
+    fn command(&mut self, event: &CommandEvent) -> io::Result<()> {
+        self.event_line(command::line(event), true)
+    }
+
+    fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
+        self.event_line(Some(self.lines.heard_line(id, identity)), false)
+    }
+
+    fn radio(&mut self, radio: &RadioHeard<'_>) -> io::Result<()> {
+        self.event_line(self.lines.radio_line(radio), false)
+    }
+
+    fn waiting_for_peer(&mut self) -> io::Result<()> {
+        self.event_line(Some(Lines::waiting_line()), false)
+    }
+
+    fn step(&mut self, step: &StepFigures) -> io::Result<()> {
+        self.event_line(Some(Line::Step(self.lines.step(step))), false)
+    }
+
+    fn flight(&mut self, event: &FlightEvent) -> io::Result<()> {
+        self.event_line(Some(self.lines.flight_event(event)), false)
     }
 
     fn flush(&mut self) -> io::Result<()> {
@@ -298,9 +324,7 @@ impl<W: Write> Observer for JsonReporter<W> {
             .write(&mut self.out, &self.lines.interim(figures))?;
         self.out.flush()
     }
-}
 
-impl<W: Write> Reporter for JsonReporter<W> {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
         // A log's last, partial, window ends with the log: told here.
         if let (LinkSummary::Passive(s), false) = (summary, self.quiet) {

@@ -14,6 +14,7 @@ use crate::engine::hint::{Hint, HintCode};
 use crate::engine::link_node::{LinkNodeReport, LinkNodeSummary, LinkNodes, UplinkComparison};
 use crate::engine::load::{Load, LoadKind, LoadSpec};
 use crate::engine::matcher::{Counts, MatchEvent};
+use crate::engine::observe::RadioHeard;
 use crate::engine::observe::{CommandEvent, RunKind};
 use crate::engine::probe::passive::flight::{Flight, FlightEvent, FlightSummary, Totals};
 use crate::engine::probe::passive::tracker::RADIO_SOURCE;
@@ -30,9 +31,26 @@ use crate::engine::sweep::verdict::{self as sweep_verdict, SweepEnd, SweepSummar
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
 use crate::engine::{capacity, CommandSpec};
 use crate::frame::{ScanStats, SysComp, Version};
-use crate::output::{Event, Observer, Reporter, StartInfo, WallClock};
+use crate::output::{Event, Reporter, StartInfo, WallClock};
 use crate::transport::RxClock;
 use crate::verdict::{self, Thresholds, Verdict};
+
+impl super::Lines {
+    /// The line the reporter writes for `event`, if any (the reporter's
+    /// own path is pinned by the snapshot of every line).
+    fn event<'a>(&self, event: &Event<'a>) -> Option<Line<'a>> {
+        match *event {
+            Event::Match(ref e) => Some(self.match_line(e)),
+            Event::Command(ref e) => super::command::line(e),
+            Event::Heard { id, identity } => Some(self.heard_line(id, identity)),
+            Event::Radio(ref radio) => self.radio_line(radio),
+            Event::WaitingForPeer => Some(Self::waiting_line()),
+            Event::Step(step) => Some(Line::Step(self.step(step))),
+            Event::Flight(e) => Some(self.flight_event(e)),
+            _ => None,
+        }
+    }
+}
 
 /// The probe a test names.
 fn probe_name(probe: &str) -> ProbeName {
@@ -367,32 +385,32 @@ fn echo_run<'a>(probe: &'static str, borrowed: &'a Borrowed) -> Vec<Told<'a>> {
                 responder: TWO,
                 at: 400_000_000,
             }),
-            Event::Radio {
+            Event::Radio(RadioHeard {
                 id: RADIO,
                 at: 1_000_000_000,
                 report: radio_report(120),
                 judgement: &borrowed.sik,
                 first: true,
                 kind_changed: false,
-            },
+            }),
             // Not written: only each radio's first report is, and those
             // its kind changed with.
-            Event::Radio {
+            Event::Radio(RadioHeard {
                 id: RADIO,
                 at: 2_000_000_000,
                 report: radio_report(110),
                 judgement: &borrowed.sik,
                 first: false,
                 kind_changed: false,
-            },
-            Event::Radio {
+            }),
+            Event::Radio(RadioHeard {
                 id: RADIO,
                 at: 2_100_000_000,
                 report: radio_report(110),
                 judgement: &borrowed.mlrs,
                 first: false,
                 kind_changed: true,
-            },
+            }),
             // Not written: the summary has the clock and the link's error.
             Event::Clock {
                 id: ONE,
@@ -816,7 +834,7 @@ impl Run {
 fn tell(out: &mut JsonReporter<Vec<u8>>, told: &Told<'_>) {
     match told {
         Told::Start(info) => out.start(info),
-        Told::Event(event) => out.event(event),
+        Told::Event(event) => out.tell(event),
         Told::Interim(figures) => out.interim(figures),
         Told::Summary(summary, verdict) => out.summary(summary, verdict),
     }

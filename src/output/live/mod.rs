@@ -25,14 +25,14 @@ use ratatui::Frame;
 use tokio::sync::Notify;
 
 use self::sources::{SourceRow, Sources};
-use super::{Event, Observer, Reporter, RunKind, StartInfo};
+use super::{Event, Reporter, RunKind, StartInfo};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::ProbeName;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
-use crate::verdict::Verdict;
 
 /// Outcomes kept per responder for the strip: more than a wide terminal shows.
 pub(crate) const RECENT: usize = 240;
@@ -99,55 +99,59 @@ pub(crate) struct LiveState {
     sources: Option<Sources>,
 }
 
-impl LiveState {
-    pub(crate) fn on_start(&mut self, info: &StartInfo) {
+/// The state follows the link's session: it takes what the view shows.
+impl Reporter for LiveState {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.link = info.link.clone();
         self.probe = Some(info.probe);
         if matches!(info.run, RunKind::Passive { .. }) {
             self.sources = Some(Sources::default());
         }
+        Ok(())
     }
 
-    pub(crate) fn on_event(&mut self, event: &Event<'_>) {
-        match (event, self.sources.as_mut()) {
-            (Event::WaitingForPeer, _) => self.waiting = true,
-            (Event::Heard { id, identity }, Some(sources)) => sources.heard(*id, identity),
-            (Event::Heard { id, identity }, None) => {
-                self.tracks.entry(*id).or_insert_with(Track::new).heard_as = Some(format!(
+    fn waiting_for_peer(&mut self) -> io::Result<()> {
+        self.waiting = true;
+        Ok(())
+    }
+
+    fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
+        match self.sources.as_mut() {
+            Some(sources) => sources.heard(id, identity),
+            None => {
+                self.tracks.entry(id).or_insert_with(Track::new).heard_as = Some(format!(
                     "{} {}",
                     identity.vehicle,
                     identity.autopilot_said()
                 ));
             }
-            (Event::Sources { at, table }, Some(sources)) => {
-                sources.table(*at, table);
-                self.now = self.now.max(*at);
-                self.waiting = false;
-            }
-            (Event::Match(e), _) => self.on_match(e),
-            (
-                Event::Radio { .. }
-                | Event::LinkNode { .. }
-                | Event::Command(_)
-                | Event::Clock { .. }
-                | Event::Step(_)
-                | Event::Sources { .. }
-                | Event::Progress { .. }
-                | Event::Flight(_),
-                _,
-            ) => {}
-            (Event::LinkFailed { error, .. }, _) => self.failed = Some(error.to_string()),
         }
+        Ok(())
     }
 
-    fn on_match(&mut self, e: &MatchEvent) {
+    /// A passive run's table (an echo run's is for its direction split).
+    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
+        if let Some(sources) = self.sources.as_mut() {
+            sources.table(at, table);
+            self.now = self.now.max(at);
+            self.waiting = false;
+        }
+        Ok(())
+    }
+
+    fn link_failed(&mut self, _: Nanos, error: &str) -> io::Result<()> {
+        self.failed = Some(error.to_string());
+        Ok(())
+    }
+
+    fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
         self.waiting = false;
         let (id, at) = match *e {
             MatchEvent::Reply { responder, at, .. }
             | MatchEvent::Late { responder, at, .. }
             | MatchEvent::Duplicate { responder, at, .. }
             | MatchEvent::Lost { responder, at, .. } => (responder, at),
-            MatchEvent::Stale { .. } => return,
+            MatchEvent::Stale { .. } => return Ok(()),
         };
         self.now = self.now.max(at);
         let t = self.tracks.entry(id).or_insert_with(Track::new);
@@ -170,8 +174,11 @@ impl LiveState {
             MatchEvent::Duplicate { .. } => t.duplicate += 1,
             MatchEvent::Stale { .. } => {}
         }
+        Ok(())
     }
+}
 
+impl LiveState {
     /// The figures to draw, computed while the state is locked so the
     /// drawing itself runs without the lock.
     pub(crate) fn screen(&self) -> Screen {
@@ -384,21 +391,14 @@ pub(crate) struct LiveLink {
     index: usize,
 }
 
-impl Observer for LiveLink {
-    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        lock(&self.states)[self.index].on_start(info);
-        Ok(())
-    }
-
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        lock(&self.states)[self.index].on_event(event);
-        Ok(())
-    }
-}
-
+/// Its summary is printed as text once the view is closed.
 impl Reporter for LiveLink {
-    fn summary(&mut self, _: &LinkSummary, _: &Verdict) -> io::Result<()> {
-        Ok(())
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        lock(&self.states)[self.index].start(info)
+    }
+
+    fn tell(&mut self, event: &Event<'_>) -> io::Result<()> {
+        lock(&self.states)[self.index].tell(event)
     }
 }
 
@@ -410,6 +410,16 @@ mod tests {
 
     use super::*;
     use crate::engine::observe::RunKind;
+
+    impl LiveState {
+        fn on_start(&mut self, info: &StartInfo) {
+            self.start(info).expect("the state takes every start");
+        }
+
+        fn on_event(&mut self, event: &Event<'_>) {
+            self.tell(event).expect("the state takes every event");
+        }
+    }
 
     fn reply(responder: SysComp, seq: u32, rtt_ms: u64) -> Event<'static> {
         Event::Match(MatchEvent::Reply {

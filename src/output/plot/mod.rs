@@ -26,11 +26,12 @@ use thiserror::Error;
 use self::flight::FlightTrack;
 use self::passive::SourceTrack;
 use super::windows::Windows;
-use super::{Event, Observer, Reporter, RunKind, StartInfo};
+use super::{Reporter, RunKind, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
+use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::passive::TableSummary;
-use crate::engine::summary::{LinkSummary, ResponderSummary};
+use crate::engine::summary::{ResponderSummary, Summary};
 use crate::engine::sweep::verdict::SweepSummary;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -325,7 +326,7 @@ impl PlotLink {
     }
 }
 
-impl Observer for PlotLink {
+impl Reporter for PlotLink {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.data.borrow_mut().links[self.index] = info.link.clone();
         if matches!(info.run, RunKind::Passive { .. }) {
@@ -334,44 +335,41 @@ impl Observer for PlotLink {
         Ok(())
     }
 
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        match *event {
-            Event::Match(ref e) => self.data.borrow_mut().on_event(self.index, e),
-            Event::Sources { at, table } => self.windows(at, table),
-            Event::Flight(FlightEvent::Window(w)) => self
-                .data
-                .borrow_mut()
-                .flights
-                .entry(self.index)
-                .or_default()
-                .window(w),
-            _ => {}
+    fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
+        self.data.borrow_mut().on_event(self.index, e);
+        Ok(())
+    }
+
+    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
+        self.windows(at, table);
+        Ok(())
+    }
+
+    fn flight(&mut self, event: &FlightEvent) -> io::Result<()> {
+        if let FlightEvent::Window(w) = event {
+            let mut data = self.data.borrow_mut();
+            data.flights.entry(self.index).or_default().window(w);
         }
         Ok(())
     }
-}
 
-impl Reporter for PlotLink {
-    fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
-        match summary {
-            LinkSummary::Echo(s) => {
-                let mut data = self.data.borrow_mut();
-                data.on_summary(self.index, &s.responders);
-                if let Some(sweep) = &s.sweep {
-                    data.on_sweep(self.index, sweep);
-                }
-            }
-            // The last, partial, window, and the figures for the legend.
-            LinkSummary::Passive(s) => {
-                self.windows((s.duration_s * 1e9) as Nanos, &s.table);
-                let mut data = self.data.borrow_mut();
-                data.on_sources(self.index, &s.table);
-                if let Some(f) = &s.flight {
-                    data.flights.entry(self.index).or_default().on_summary(f);
-                }
-            }
-            // The command probe sends no echo requests, so it has no lines.
-            LinkSummary::Command(_) => {}
+    fn echo_summary(&mut self, s: &Summary, _: &Verdict) -> io::Result<()> {
+        let mut data = self.data.borrow_mut();
+        data.on_summary(self.index, &s.responders);
+        if let Some(sweep) = &s.sweep {
+            data.on_sweep(self.index, sweep);
+        }
+        Ok(())
+    }
+
+    /// The last, partial, window, and the figures for the legend. (The
+    /// command probe sends no echo requests, so it has no lines.)
+    fn passive_summary(&mut self, s: &PassiveSummary, _: &Verdict) -> io::Result<()> {
+        self.windows((s.duration_s * 1e9) as Nanos, &s.table);
+        let mut data = self.data.borrow_mut();
+        data.on_sources(self.index, &s.table);
+        if let Some(f) = &s.flight {
+            data.flights.entry(self.index).or_default().on_summary(f);
         }
         Ok(())
     }

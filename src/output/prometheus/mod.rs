@@ -26,13 +26,14 @@ use std::rc::Rc;
 use hyper::StatusCode;
 
 use super::http::{self, Head, Limits, Reply, Replying};
-use super::{Event, Observer, Reporter, StartInfo};
+use super::{Event, Reporter, StartInfo};
 use crate::engine::clock_offset::ClockSummary;
+use crate::engine::link_node::LinkNodeReport;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::CommandEvent;
+use crate::engine::observe::{CommandEvent, RadioHeard};
 use crate::engine::radio::{RadioKind, RadioReport, SinceBootCounter, MAX_RADIOS};
-use crate::engine::summary::passive::TableSummary;
-use crate::engine::summary::{Direction, LinkSummary, ProbeName, Summary};
+use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::summary::{CommandSummary, Direction, LinkSummary, ProbeName, Summary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -379,45 +380,71 @@ impl Metrics {
     }
 }
 
-impl Observer for Metrics {
+impl Reporter for Metrics {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.on_start(info);
         Ok(())
     }
 
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        match event {
-            Event::Match(e) => self.on_event(e),
-            Event::Command(e) => self.on_command(e),
-            Event::Radio {
-                id,
-                report,
-                judgement,
-                ..
-            } => self.on_radio(*id, *report, judgement.kind),
-            Event::LinkNode { id, report, .. } => self.link_nodes.record(*id, *report),
-            Event::Clock { id, at, clock } => self.on_clock(*id, *at, clock),
-            Event::LinkFailed { .. } => self.set_up(false),
-            Event::Sources { table, .. } => self.on_sources(table, false),
-            Event::Progress { requests, .. } => self.requests.session = *requests,
-            Event::Heard { .. } | Event::WaitingForPeer | Event::Step(_) | Event::Flight(_) => {}
-        }
+    fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
+        self.on_event(e);
         Ok(())
     }
-}
 
-impl Reporter for Metrics {
-    fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
-        match summary {
-            LinkSummary::Echo(summary) => {
-                self.requests.session = summary.requests;
-                self.on_summary(summary);
-            }
-            LinkSummary::Passive(summary) => self.on_sources(&summary.table, true),
-            LinkSummary::Command(summary) => {
-                self.requests.session = summary.targets.iter().map(|t| t.commands).sum();
-            }
-        }
+    fn command(&mut self, e: &CommandEvent) -> io::Result<()> {
+        self.on_command(e);
+        Ok(())
+    }
+
+    fn radio(&mut self, radio: &RadioHeard<'_>) -> io::Result<()> {
+        self.on_radio(radio.id, radio.report, radio.judgement.kind);
+        Ok(())
+    }
+
+    fn link_node(
+        &mut self,
+        id: SysComp,
+        _: Nanos,
+        report: &LinkNodeReport,
+        _: bool,
+    ) -> io::Result<()> {
+        self.link_nodes.record(id, *report);
+        Ok(())
+    }
+
+    fn clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) -> io::Result<()> {
+        self.on_clock(id, at, clock);
+        Ok(())
+    }
+
+    fn link_failed(&mut self, _: Nanos, _: &str) -> io::Result<()> {
+        self.set_up(false);
+        Ok(())
+    }
+
+    fn sources(&mut self, _: Nanos, table: &TableSummary) -> io::Result<()> {
+        self.on_sources(table, false);
+        Ok(())
+    }
+
+    fn progress(&mut self, _: Nanos, requests: u64) -> io::Result<()> {
+        self.requests.session = requests;
+        Ok(())
+    }
+
+    fn echo_summary(&mut self, summary: &Summary, _: &Verdict) -> io::Result<()> {
+        self.requests.session = summary.requests;
+        self.on_summary(summary);
+        Ok(())
+    }
+
+    fn passive_summary(&mut self, summary: &PassiveSummary, _: &Verdict) -> io::Result<()> {
+        self.on_sources(&summary.table, true);
+        Ok(())
+    }
+
+    fn command_summary(&mut self, summary: &CommandSummary, _: &Verdict) -> io::Result<()> {
+        self.requests.session = summary.targets.iter().map(|t| t.commands).sum();
         Ok(())
     }
 }
@@ -441,17 +468,15 @@ impl SharedMetrics {
     }
 }
 
-impl Observer for SharedMetrics {
+impl Reporter for SharedMetrics {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.0.borrow_mut().start(info)
     }
 
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        self.0.borrow_mut().event(event)
+    fn tell(&mut self, event: &Event<'_>) -> io::Result<()> {
+        self.0.borrow_mut().tell(event)
     }
-}
 
-impl Reporter for SharedMetrics {
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
         self.0.borrow_mut().summary(summary, verdict)
     }
@@ -612,7 +637,7 @@ mod tests {
         has(&m, format!("mavping_requests_total{{{link}}} 0"));
         has(&m, format!("mavping_responders{{{link}}} 0"));
         let _ = m.start(&test_start("udpout:h:1"));
-        let _ = m.event(&Event::Progress { at: 0, requests: 3 });
+        let _ = m.tell(&Event::Progress { at: 0, requests: 3 });
         m.on_event(&MatchEvent::Reply {
             responder: SysComp::new(1, 1),
             seq: 0,
@@ -626,7 +651,7 @@ mod tests {
         has(&m, format!("mavping_responders{{{link}}} 1"));
         // Reopened: nobody has answered the new session yet.
         let _ = m.start(&test_start("udpout:h:1"));
-        let _ = m.event(&Event::Progress { at: 0, requests: 2 });
+        let _ = m.tell(&Event::Progress { at: 0, requests: 2 });
         has(&m, format!("mavping_requests_total{{{link}}} 5"));
         has(&m, format!("mavping_responders{{{link}}} 0"));
         // A passive link sends nothing: neither family.

@@ -546,10 +546,11 @@ mod tests {
     use super::super::test_start as info;
     use super::*;
     use crate::engine::matcher::MatchEvent;
+    use crate::engine::observe::Observer;
     use crate::engine::radio::RadioReport;
     use crate::engine::summary::ProbeName;
     use crate::frame::SysComp;
-    use crate::output::{Event, Observer, StartInfo};
+    use crate::output::{Event, StartInfo};
 
     /// Two links with every kind of figure: responders with replies,
     /// losses and a clock, a SiK radio and another maker's.

@@ -2,17 +2,19 @@
 
 use std::io::{self, Write};
 
-use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, Lines, TextReporter};
+use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, TextReporter};
 use crate::engine::capacity::WireBudget;
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::RadioHeard;
 use crate::engine::radio::{self, Field, RadioKind, RadioReport, RadioSummary};
+use crate::engine::roster::Identity;
 use crate::engine::summary::{
     Direction, EchoInterim, ProbeName, ResponderSummary, ScheduleSummary, Summary,
 };
 use crate::engine::Nanos;
 use crate::frame::SysComp;
-use crate::output::{Event, StartInfo};
+use crate::output::StartInfo;
 use crate::verdict::{Check, Verdict};
 
 /// Reply lines carry the radio's figures at most this often.
@@ -60,14 +62,15 @@ impl<W: Write> TextReporter<W> {
 
     /// A radio's report: remembered for the reply lines; told at its first
     /// and when its kind changed, with what it is and why.
-    fn radio_event(
-        &mut self,
-        id: SysComp,
-        report: RadioReport,
-        judgement: &radio::Judgement,
-        (first, kind_changed): (bool, bool),
-        at: Nanos,
-    ) -> io::Result<()> {
+    pub(super) fn radio_line(&mut self, heard: &RadioHeard<'_>) -> io::Result<()> {
+        let RadioHeard {
+            id,
+            at,
+            report,
+            judgement,
+            first,
+            kind_changed,
+        } = *heard;
         let kind = judgement.kind;
         self.radio = Some((id, report, kind));
         if !first && !kind_changed {
@@ -90,42 +93,22 @@ impl<W: Write> TextReporter<W> {
         )
     }
 
-    pub(super) fn echo_event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        if let Event::Radio {
-            id,
-            report,
-            judgement,
-            first,
-            kind_changed,
-            at,
-        } = *event
-        {
-            return self.radio_event(id, report, judgement, (first, kind_changed), at);
-        }
-        match event {
-            Event::Step(step) => return self.step_row(step),
-            // A run in steps shows each step, not each reply.
-            Event::Match(_) if self.lines == Lines::Steps => return Ok(()),
-            _ => {}
-        }
-        if let (Some(_), Event::Match(e)) = (&self.progress, event) {
+    /// A reply, loss, late, duplicate or stale reply: a line each, or a
+    /// count in the status line of a fast run.
+    pub(super) fn match_line(&mut self, e: &MatchEvent) -> io::Result<()> {
+        if self.progress.is_some() {
             return self.tally(e);
         }
-        let at = match *event {
-            Event::Match(e) => e.at(),
-            Event::Heard { identity, .. } => identity.first_heard,
-            _ => 0,
-        };
-        self.stamp(at)?;
-        match *event {
-            Event::Match(MatchEvent::Reply {
+        self.stamp(e.at())?;
+        match *e {
+            MatchEvent::Reply {
                 responder,
                 seq,
                 rtt,
                 out_of_order,
                 at,
                 ..
-            }) => {
+            } => {
                 let note = self.radio_note(at);
                 writeln!(
                     self.out,
@@ -134,52 +117,51 @@ impl<W: Write> TextReporter<W> {
                     if out_of_order { " (out of order)" } else { "" }
                 )
             }
-            Event::Match(MatchEvent::Lost { responder, seq, .. }) => writeln!(
+            MatchEvent::Lost { responder, seq, .. } => writeln!(
                 self.out,
                 "no reply from {responder}: seq={seq} (timeout {})",
                 humantime::format_duration(self.timeout)
             ),
-            Event::Match(MatchEvent::Late {
+            MatchEvent::Late {
                 responder,
                 seq,
                 rtt,
                 ..
-            }) => writeln!(
+            } => writeln!(
                 self.out,
                 "late reply from {responder}: seq={seq} time={} ms (after the timeout)",
                 ms(rtt)
             ),
-            Event::Match(MatchEvent::Duplicate {
+            MatchEvent::Duplicate {
                 responder,
                 seq,
                 rtt,
                 ..
-            }) => writeln!(
+            } => writeln!(
                 self.out,
                 "reply from {responder}: seq={seq} time={} ms (DUP!)",
                 ms(rtt)
             ),
-            Event::Match(MatchEvent::Stale { responder, .. }) => writeln!(
+            MatchEvent::Stale { responder, .. } => writeln!(
                 self.out,
                 "stale reply from {responder}: matches no request we hold"
             ),
-            Event::Heard { id, identity } => writeln!(
-                self.out,
-                "heard {id}: {}, {}",
-                identity.vehicle,
-                identity.autopilot_said()
-            ),
-            Event::WaitingForPeer => writeln!(self.out, "waiting for a peer to send MAVLink..."),
-            Event::Radio { .. }
-            | Event::LinkNode { .. }
-            | Event::Command(_)
-            | Event::Clock { .. }
-            | Event::Step(_)
-            | Event::Sources { .. }
-            | Event::Progress { .. }
-            | Event::Flight(_)
-            | Event::LinkFailed { .. } => Ok(()),
         }
+    }
+
+    pub(super) fn heard_line(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
+        self.stamp(identity.first_heard)?;
+        writeln!(
+            self.out,
+            "heard {id}: {}, {}",
+            identity.vehicle,
+            identity.autopilot_said()
+        )
+    }
+
+    pub(super) fn waiting_line(&mut self) -> io::Result<()> {
+        self.stamp(0)?;
+        writeln!(self.out, "waiting for a peer to send MAVLink...")
     }
 
     /// `[12.0 s] 1/1: 120 sent, 118 received, 2 lost (1.67%), 0 late, 0
@@ -674,8 +656,9 @@ fn write_schedule(out: &mut impl Write, s: &Summary, p: &ScheduleSummary) -> io:
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::observe::Observer;
     use crate::frame::SysComp;
-    use crate::output::Observer;
+    use crate::output::Event;
 
     fn reply(seq: u32, at: Nanos) -> Event<'static> {
         Event::Match(MatchEvent::Reply {
@@ -707,14 +690,14 @@ mod tests {
             radio_type: radio::RadioType::Auto,
             evidence: vec!["compid 68 and no HEARTBEAT from 51/68".into()],
         };
-        t.event(&Event::Radio {
+        t.event(&Event::Radio(RadioHeard {
             id: SysComp::new(51, 68),
             at: 20_000_000,
             report: status,
             judgement: &sik,
             first: true,
             kind_changed: false,
-        })
+        }))
         .unwrap();
         for (seq, at) in [(1, 30_000_000), (2, 500_000_000), (3, 1_030_000_000)] {
             t.event(&reply(seq, at)).unwrap();
@@ -728,5 +711,27 @@ mod tests {
             "{out}"
         );
         assert!(notes[1].contains("seq=3 "), "{out}");
+    }
+
+    /// `-D` stamps the lines written, and only them: events with no line
+    /// (progress, clock estimates, sources) once left a stray stamp each.
+    #[test]
+    fn timestamps_go_on_written_lines_only() {
+        let wall = crate::output::WallClock::starting(true);
+        let mut t = TextReporter::new(Vec::new(), false).timestamps(Some(wall));
+        t.event(&Event::Progress {
+            at: 1_000_000_000,
+            requests: 3,
+        })
+        .unwrap();
+        t.event(&Event::Match(MatchEvent::Lost {
+            responder: SysComp::new(1, 1),
+            seq: 4,
+            sent_at: 200_000_000,
+            at: 2_200_000_000,
+        }))
+        .unwrap();
+        let out = String::from_utf8(t.into_inner()).unwrap();
+        assert_eq!(out, "[2.200000] no reply from 1/1: seq=4 (timeout 0s)\n");
     }
 }

@@ -13,10 +13,14 @@ mod sweep;
 
 use std::io::{self, Write};
 
-use super::{Event, Observer, Prefixed, Reporter, RunKind, StartInfo, WallClock};
+use super::{Prefixed, Reporter, RunKind, StartInfo, WallClock};
+use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::{CommandEvent, RadioHeard};
 use crate::engine::radio::{RadioKind, RadioReport};
+use crate::engine::roster::Identity;
 use crate::engine::stats::Bucket;
-use crate::engine::summary::{Interim, LinkSummary};
+use crate::engine::summary::{EchoInterim, LinkSummary, PassiveInterim};
+use crate::engine::sweep_report::StepFigures;
 use crate::engine::Nanos;
 use crate::frame::signing::SigningSummary;
 use crate::frame::SysComp;
@@ -116,7 +120,15 @@ impl<W: Write> TextReporter<W> {
     }
 }
 
-impl<W: Write> Observer for TextReporter<W> {
+impl<W: Write> TextReporter<W> {
+    /// Event lines other than a command's are shown: not in quiet mode,
+    /// and not in a command run, which shows its commands' fate only.
+    fn shows_events(&self) -> bool {
+        !self.quiet && self.lines != Lines::Commands
+    }
+}
+
+impl<W: Write> Reporter for TextReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.timeout = info.timeout;
         self.lines = match info.run {
@@ -135,15 +147,51 @@ impl<W: Write> Observer for TextReporter<W> {
         }
     }
 
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+    fn command(&mut self, event: &CommandEvent) -> io::Result<()> {
         if self.quiet {
             return Ok(());
         }
-        match event {
-            Event::Command(e) => self.command_event(e),
-            // A command run prints its commands' fate only.
-            _ if self.lines == Lines::Commands => Ok(()),
-            _ => self.echo_event(event),
+        self.command_event(event)
+    }
+
+    /// A run in steps shows each step, not each reply.
+    fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
+        if self.shows_events() && self.lines == Lines::Replies {
+            self.match_line(event)
+        } else {
+            Ok(())
+        }
+    }
+
+    fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
+        if self.shows_events() {
+            self.heard_line(id, identity)
+        } else {
+            Ok(())
+        }
+    }
+
+    fn radio(&mut self, radio: &RadioHeard<'_>) -> io::Result<()> {
+        if self.shows_events() {
+            self.radio_line(radio)
+        } else {
+            Ok(())
+        }
+    }
+
+    fn step(&mut self, step: &StepFigures) -> io::Result<()> {
+        if self.shows_events() {
+            self.step_row(step)
+        } else {
+            Ok(())
+        }
+    }
+
+    fn waiting_for_peer(&mut self) -> io::Result<()> {
+        if self.shows_events() {
+            self.waiting_line()
+        } else {
+            Ok(())
         }
     }
 
@@ -152,15 +200,14 @@ impl<W: Write> Observer for TextReporter<W> {
     }
 
     /// A line per responder, in quiet mode too: that is what `-Q` is for.
-    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
-        match figures {
-            Interim::Echo(e) => self.write_interim(e),
-            Interim::Passive(p) => self.passive_interim(p),
-        }
+    fn echo_interim(&mut self, figures: &EchoInterim) -> io::Result<()> {
+        self.write_interim(figures)
     }
-}
 
-impl<W: Write> Reporter for TextReporter<W> {
+    fn passive_interim(&mut self, figures: &PassiveInterim) -> io::Result<()> {
+        self.write_passive_interim(figures)
+    }
+
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
         let quiet = self.quiet;
         let steps_shown = self.steps_shown;

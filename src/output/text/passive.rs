@@ -42,7 +42,7 @@ impl<W: Write> TextReporter<W> {
 
     /// `[12.0 s] 1/1: 600 received, 3 lost (0.50%), 1 duplicate, 2
     /// reordered, 0 silences, 50.0 frames/s`, a line per source.
-    pub(super) fn passive_interim(&mut self, figures: &PassiveInterim) -> io::Result<()> {
+    pub(super) fn write_passive_interim(&mut self, figures: &PassiveInterim) -> io::Result<()> {
         let at = figures.at as f64 / 1e9;
         if figures.table.sources.is_empty() {
             self.stamp(figures.at)?;

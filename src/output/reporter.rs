@@ -1,0 +1,188 @@
+//! What an output format is: a follower of a session that takes the
+//! events of the kinds it shows and leaves the rest. Each kind of event
+//! and each kind of summary has a method here whose default does nothing
+//! (as ripgrep's `Sink`), so a format implements what it shows and a new
+//! kind costs a method here and the formats that show it, not an "ignore"
+//! arm in every format. That every format takes every event and summary
+//! of every kind without failing is a test (`json/tests.rs`), not an
+//! exhaustive match.
+
+use std::io;
+
+use crate::engine::clock_offset::ClockSummary;
+use crate::engine::link_node::LinkNodeReport;
+use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::{CommandEvent, Event, Observer, RadioHeard, StartInfo};
+use crate::engine::probe::passive::flight::FlightEvent;
+use crate::engine::roster::Identity;
+use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::summary::Summary;
+use crate::engine::summary::{CommandSummary, EchoInterim, Interim, LinkSummary, PassiveInterim};
+use crate::engine::sweep_report::StepFigures;
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+use crate::verdict::Verdict;
+
+/// An output format. Every method has a default: a format that shows no
+/// radios has no `radio`, one that writes nothing at the end no summary.
+#[allow(unused_variables)]
+pub(crate) trait Reporter {
+    /// What the run is, told first.
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// An echo probe's reply, loss, late, duplicate or stale reply.
+    fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A command's transmission, acknowledgement or failure.
+    fn command(&mut self, event: &CommandEvent) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A system's first HEARTBEAT.
+    fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A radio's report (see [`Event::Radio`]).
+    fn radio(&mut self, radio: &RadioHeard<'_>) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A node's LINK_NODE_STATUS.
+    fn link_node(
+        &mut self,
+        id: SysComp,
+        at: Nanos,
+        report: &LinkNodeReport,
+        first: bool,
+    ) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A TIMESYNC responder's clock offset so far.
+    fn clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// Nothing to send to yet.
+    fn waiting_for_peer(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// Requests put on the wire so far.
+    fn progress(&mut self, at: Nanos, requests: u64) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A step of a run in steps ended.
+    fn step(&mut self, step: &StepFigures) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// Every source's sequence figures so far, once a second.
+    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A telemetry log's timeline: a window, a silence or a burst.
+    fn flight(&mut self, event: &FlightEvent) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// The link failed; the session ends.
+    fn link_failed(&mut self, at: Nanos, error: &str) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// Pushes buffered output to the reader.
+    fn flush(&mut self) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// An echo run's figures so far (`-Q`, SIGQUIT).
+    fn echo_interim(&mut self, figures: &EchoInterim) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A passive run's figures so far.
+    fn passive_interim(&mut self, figures: &PassiveInterim) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// An echo run's summary (PING, TIMESYNC, a run in steps).
+    fn echo_summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A command run's summary.
+    fn command_summary(&mut self, summary: &CommandSummary, verdict: &Verdict) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// A passive run's (or a telemetry log's) summary.
+    fn passive_summary(&mut self, summary: &PassiveSummary, verdict: &Verdict) -> io::Result<()> {
+        Ok(())
+    }
+
+    /// Every event, handed to the method of its kind; a format that
+    /// passes events on whole ([`super::Fanout`]) takes them here.
+    fn tell(&mut self, event: &Event<'_>) -> io::Result<()> {
+        match *event {
+            Event::Match(ref e) => self.matched(e),
+            Event::Command(ref e) => self.command(e),
+            Event::Heard { id, identity } => self.heard(id, identity),
+            Event::Radio(ref radio) => self.radio(radio),
+            Event::LinkNode {
+                id,
+                at,
+                ref report,
+                first,
+            } => self.link_node(id, at, report, first),
+            Event::Clock { id, at, ref clock } => self.clock(id, at, clock),
+            Event::WaitingForPeer => self.waiting_for_peer(),
+            Event::Progress { at, requests } => self.progress(at, requests),
+            Event::Step(step) => self.step(step),
+            Event::Sources { at, table } => self.sources(at, table),
+            Event::Flight(e) => self.flight(e),
+            Event::LinkFailed { at, error } => self.link_failed(at, error),
+        }
+    }
+
+    /// The figures so far, by the kind of run.
+    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
+        match figures {
+            Interim::Echo(e) => self.echo_interim(e),
+            Interim::Passive(p) => self.passive_interim(p),
+        }
+    }
+
+    /// The judged summary at the end, by the kind of run.
+    fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
+        match summary {
+            LinkSummary::Echo(s) => self.echo_summary(s, verdict),
+            LinkSummary::Command(s) => self.command_summary(s, verdict),
+            LinkSummary::Passive(s) => self.passive_summary(s, verdict),
+        }
+    }
+}
+
+/// The engine tells its events to an [`Observer`]; a format is one by
+/// being a [`Reporter`].
+impl<R: Reporter + ?Sized> Observer for R {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        Reporter::start(self, info)
+    }
+    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
+        self.tell(event)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        Reporter::flush(self)
+    }
+    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
+        Reporter::interim(self, figures)
+    }
+}
