@@ -2,6 +2,8 @@
 //! [`Observer`] and renders the judged summary at the end ([`Reporter`]).
 
 pub(crate) mod basic_auth;
+#[cfg(test)]
+mod every_format;
 pub(crate) mod hgrm;
 pub mod http;
 pub(crate) mod json;
@@ -9,6 +11,8 @@ pub(crate) mod live;
 pub(crate) mod plot;
 pub mod prometheus;
 mod reporter;
+#[cfg(test)]
+mod runs;
 pub(crate) mod samples;
 pub(crate) mod text;
 pub(crate) mod textfile;

@@ -46,6 +46,11 @@ pub(crate) struct SampleLog<W: Write> {
 }
 
 impl<W: Write> SampleLog<W> {
+    #[cfg(test)]
+    pub(crate) fn into_inner(self) -> W {
+        self.out
+    }
+
     pub(crate) fn new(out: W) -> Self {
         SampleLog {
             out,

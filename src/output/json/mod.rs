@@ -165,6 +165,11 @@ impl<W: Write> JsonReporter<W> {
         }
     }
 
+    #[cfg(test)]
+    pub(crate) fn into_inner(self) -> W {
+        self.out
+    }
+
     /// Adds `"link": LINK` to every event (the start and summary objects
     /// always carry it), for runs over several links.
     pub(crate) fn with_link(mut self, link: Option<String>) -> Self {
