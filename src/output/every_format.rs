@@ -11,6 +11,7 @@ use super::runs::{Borrowed, Run, Told, RUNS};
 use super::samples::SampleLog;
 use super::text::TextReporter;
 use super::{Event, Reporter, WallClock};
+use crate::engine::summary::LinkSummary;
 
 /// Tells `out` a whole run, as a session would.
 fn tell_run(out: &mut dyn Reporter, run: Run, borrowed: &Borrowed) {
@@ -33,7 +34,7 @@ fn tell_run(out: &mut dyn Reporter, run: Run, borrowed: &Borrowed) {
 fn measures(run: Run, borrowed: &Borrowed, at_end: bool) -> bool {
     run.told(borrowed).iter().any(|t| match t {
         Told::Event(Event::Match(_) | Event::Sources { .. }) => true,
-        Told::Summary(super::LinkSummary::Passive(_), _) => at_end,
+        Told::Summary(LinkSummary::Passive(_), _) => at_end,
         _ => false,
     })
 }
@@ -67,9 +68,9 @@ fn the_runs_tell_every_kind_of_event_and_summary() {
                 Told::Event(e) => kinds.insert(kind(&e)),
                 Told::Interim(_) => kinds.insert("interim"),
                 Told::Summary(s, _) => kinds.insert(match s {
-                    super::LinkSummary::Echo(_) => "echo_summary",
-                    super::LinkSummary::Command(_) => "command_summary",
-                    super::LinkSummary::Passive(_) => "passive_summary",
+                    LinkSummary::Echo(_) => "echo_summary",
+                    LinkSummary::Command(_) => "command_summary",
+                    LinkSummary::Passive(_) => "passive_summary",
                 }),
                 Told::Start(_) => kinds.insert("start"),
             };

@@ -2,15 +2,14 @@
 
 use serde::Serialize;
 
+use super::heard::Heartbeat;
 use super::{seconds, sweep, us, Line, Lines, Stamp, SCHEMA_VERSION};
 use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::Hint;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::RadioHeard;
-use crate::engine::radio::{Judgement, RadioReport, RadioSummary};
-use crate::engine::roster::Identity;
+use crate::engine::radio::RadioSummary;
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::engine::summary::ProbeName;
 use crate::engine::summary::{self, Direction, ResponderSummary, ScheduleSummary};
@@ -18,42 +17,6 @@ use crate::frame::signing::SigningSummary;
 use crate::frame::{ScanStats, SysComp};
 use crate::transport::RxClock;
 use crate::verdict::Verdict;
-
-/// `waiting`: nothing to send to yet.
-#[derive(Serialize)]
-pub(super) struct Waiting {
-    r#type: &'static str,
-    reason: &'static str,
-}
-
-/// `responder`: a system's first HEARTBEAT.
-#[derive(Serialize)]
-pub(super) struct Heard<'a> {
-    #[serde(flatten)]
-    stamp: Stamp,
-    #[serde(flatten)]
-    identity: Heartbeat<'a>,
-}
-
-/// What a system's HEARTBEAT says it is.
-#[derive(Serialize)]
-struct Heartbeat<'a> {
-    mav_type: u8,
-    autopilot: u8,
-    vehicle: &'a str,
-    autopilot_name: &'a str,
-}
-
-impl<'a> Heartbeat<'a> {
-    fn of(i: &'a Identity) -> Self {
-        Heartbeat {
-            mav_type: i.mav_type,
-            autopilot: i.autopilot,
-            vehicle: &i.vehicle,
-            autopilot_name: &i.autopilot_name,
-        }
-    }
-}
 
 /// `reply`: an answer within the timeout.
 #[derive(Serialize)]
@@ -81,18 +44,6 @@ pub(super) struct Again {
     stamp: Stamp,
     seq: u32,
     rtt_us: f64,
-}
-
-/// `radio`: a radio's first RADIO_STATUS, and any report after which
-/// its kind changed, with what it is and why.
-#[derive(Serialize)]
-pub(super) struct Radio<'a> {
-    #[serde(flatten)]
-    stamp: Stamp,
-    status: RadioReport,
-    #[serde(flatten)]
-    judgement: &'a Judgement,
-    first: bool,
 }
 
 /// `interim`: each responder's figures so far.
@@ -222,33 +173,6 @@ impl Lines {
             }),
             MatchEvent::Stale { responder, at } => Line::Stale(self.stamp("stale", at, responder)),
         }
-    }
-
-    pub(super) fn heard_line<'a>(&self, id: SysComp, identity: &'a Identity) -> Line<'a> {
-        Line::Responder(Heard {
-            stamp: self.stamp("responder", identity.first_heard, id),
-            identity: Heartbeat::of(identity),
-        })
-    }
-
-    pub(super) fn waiting_line() -> Line<'static> {
-        Line::Waiting(Waiting {
-            r#type: "waiting",
-            reason: "no peer heard yet",
-        })
-    }
-
-    /// The first report of each radio, and one whose kind changed; the
-    /// summary has the rest.
-    pub(super) fn radio_line<'a>(&self, heard: &RadioHeard<'a>) -> Option<Line<'a>> {
-        (heard.first || heard.kind_changed).then(|| {
-            Line::Radio(Radio {
-                stamp: self.stamp("radio", heard.at, heard.id),
-                status: heard.report,
-                judgement: heard.judgement,
-                first: heard.first,
-            })
-        })
     }
 }
 

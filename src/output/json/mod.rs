@@ -11,6 +11,7 @@
 mod command;
 mod echo;
 mod flight;
+mod heard;
 mod passive;
 mod round_trips;
 mod sweep;
@@ -41,14 +42,14 @@ pub(crate) const SCHEMA_VERSION: u32 = 2;
 enum Line<'a> {
     // Boxed: once a run each, and much larger than the others.
     Start(Box<Start<'a>>),
-    Waiting(echo::Waiting),
-    Responder(echo::Heard<'a>),
+    Waiting(heard::Waiting),
+    Responder(heard::Heard<'a>),
     Reply(echo::Reply),
     Lost(echo::Lost),
     Late(echo::Again),
     Duplicate(echo::Again),
     Stale(Stamp),
-    Radio(echo::Radio<'a>),
+    Radio(heard::Radio<'a>),
     Interim(echo::Interim),
     PassiveInterim(Box<passive::Interim<'a>>),
     Step(sweep::Step),

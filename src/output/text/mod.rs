@@ -6,6 +6,7 @@
 mod command;
 mod echo;
 mod flight;
+mod heard;
 mod link_node;
 mod passive;
 mod round_trips;

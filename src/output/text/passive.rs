@@ -362,7 +362,7 @@ pub(super) fn write_summary(
         }
     }
     for r in &s.radios {
-        super::echo::write_radio(out, r)?;
+        super::heard::write_radio(out, r)?;
     }
     if let (Some(f), Some(log)) = (&s.flight, &s.log) {
         super::flight::write_flight(out, f, super::flight::LogClock(log.stamps.first_us))?;
