@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Counts code lines of Rust source folders: not blank, not a comment, not
-in a test (files named tests.rs or under a tests/ or snapshots/ folder, and
-`#[cfg(test)]` items, whose braces are followed to their end).
+in a test (files named tests.rs or under a tests/ or snapshots/ folder, files
+that say `#![cfg(test)]`, and `#[cfg(test)]` items, whose braces are followed
+to their end).
 `python3 scripts/code-lines.py [FOLDER ...]` (default: src/output and,
 where it exists, src/report): one line per folder and the total, the
 figure issue 39 holds the formats and the report model to."""
@@ -10,7 +11,10 @@ import sys
 
 
 def code_lines(text):
-    """Lines with code outside comments and `#[cfg(test)]` items."""
+    """Lines with code outside comments and `#[cfg(test)]` items (a file
+    whose inner attributes say `#![cfg(test)]` is all test)."""
+    if "\n#![cfg(test)]" in "\n" + text:
+        return 0
     count, depth, skipping, pending_test, in_block = 0, 0, False, False, False
     for raw in text.splitlines():
         line = raw.strip()

@@ -2,6 +2,7 @@
 //! over the events once guarded, now that a format implements only the
 //! kinds it shows. Each format must take every event and summary without
 //! an error, and show what it is for from each kind it shows.
+#![cfg(test)]
 
 use super::json::JsonReporter;
 use super::live::LiveState;

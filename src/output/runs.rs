@@ -3,6 +3,7 @@
 //! order, with made-up but consistent figures. The JSON tests check each
 //! line against the schema; `every_format.rs` sends every run through
 //! every format.
+#![cfg(test)]
 use std::time::Duration;
 
 use crate::engine::clock_offset::ClockSummary;

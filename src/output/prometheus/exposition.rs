@@ -87,6 +87,22 @@ pub(super) struct Figure<V> {
     pub(super) value: V,
 }
 
+impl<V> Figure<V> {
+    pub(super) const fn gauge(name: &'static str, help: &'static str, value: V) -> Self {
+        Figure {
+            family: Family::gauge(name, help),
+            value,
+        }
+    }
+
+    pub(super) const fn counter(name: &'static str, help: &'static str, value: V) -> Self {
+        Figure {
+            family: Family::counter(name, help),
+            value,
+        }
+    }
+}
+
 /// Text being written in the exposition format: a family's `HELP` and
 /// `TYPE` lines, then its samples.
 #[derive(Default)]

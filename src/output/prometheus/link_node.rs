@@ -6,7 +6,7 @@
 
 use std::collections::BTreeMap;
 
-use super::exposition::{Exposition, Family, Figure};
+use super::exposition::{Exposition, Figure};
 use super::Metrics;
 use crate::engine::link_node::{LinkNodeReport, NodeCounters, MAX_NODES};
 use crate::frame::SysComp;
@@ -39,76 +39,56 @@ impl Nodes {
 type NodeFigure = Figure<fn(&NodeSeries) -> Option<f64>>;
 
 const NODE: [NodeFigure; 10] = [
-    Figure {
-        family: Family::counter(
-            "mavping_link_node_reports_total",
-            "LINK_NODE_STATUS reports received from the node.",
-        ),
-        value: |n| Some(n.reports as f64),
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_link_node_received_total",
-            "Messages the node says it received on its link since mavping first heard it (every sender's, ours included; its 32-bit counter's wraps and reboots followed).",
-        ),
-        value: |n| Some(n.counters.received.grown() as f64),
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_link_node_lost_total",
-            "Messages the node says it lost on its way to it (by their packet sequence) since mavping first heard it.",
-        ),
-        value: |n| Some(n.counters.lost.grown() as f64),
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_link_node_sent_total",
-            "Messages the node says it sent on its link since mavping first heard it.",
-        ),
-        value: |n| Some(n.counters.sent.grown() as f64),
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_link_node_rx_parse_errors_total",
-            "Bytes the node could not parse since mavping first heard it.",
-        ),
-        value: |n| Some(n.counters.rx_parse_err.grown() as f64),
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_link_node_rx_overflows_total",
-            "The node's receive buffer overflows since mavping first heard it.",
-        ),
-        value: |n| Some(n.counters.rx_overflows.grown() as f64),
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_link_node_tx_overflows_total",
-            "The node's transmit buffer overflows since mavping first heard it.",
-        ),
-        value: |n| Some(n.counters.tx_overflows.grown() as f64),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_link_node_loss_ratio",
-            "What the node lost of its link since mavping first heard it: lost / (received + lost), 0 to 1 (the vehicle's own view of the uplink).",
-        ),
-        value: |n| n.counters.loss(),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_link_node_rx_rate_bytes_per_second",
-            "The node's receive rate on its link, as its latest report says.",
-        ),
-        value: |n| Some(f64::from(n.latest.rx_rate)),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_link_node_tx_rate_bytes_per_second",
-            "The node's transmit rate on its link, as its latest report says.",
-        ),
-        value: |n| Some(f64::from(n.latest.tx_rate)),
-    },
+    Figure::counter(
+        "mavping_link_node_reports_total",
+        "LINK_NODE_STATUS reports received from the node.",
+        |n| Some(n.reports as f64),
+    ),
+    Figure::counter(
+        "mavping_link_node_received_total",
+        "Messages the node says it received on its link since mavping first heard it (every sender's, ours included; its 32-bit counter's wraps and reboots followed).",
+        |n| Some(n.counters.received.grown() as f64),
+    ),
+    Figure::counter(
+        "mavping_link_node_lost_total",
+        "Messages the node says it lost on its way to it (by their packet sequence) since mavping first heard it.",
+        |n| Some(n.counters.lost.grown() as f64),
+    ),
+    Figure::counter(
+        "mavping_link_node_sent_total",
+        "Messages the node says it sent on its link since mavping first heard it.",
+        |n| Some(n.counters.sent.grown() as f64),
+    ),
+    Figure::counter(
+        "mavping_link_node_rx_parse_errors_total",
+        "Bytes the node could not parse since mavping first heard it.",
+        |n| Some(n.counters.rx_parse_err.grown() as f64),
+    ),
+    Figure::counter(
+        "mavping_link_node_rx_overflows_total",
+        "The node's receive buffer overflows since mavping first heard it.",
+        |n| Some(n.counters.rx_overflows.grown() as f64),
+    ),
+    Figure::counter(
+        "mavping_link_node_tx_overflows_total",
+        "The node's transmit buffer overflows since mavping first heard it.",
+        |n| Some(n.counters.tx_overflows.grown() as f64),
+    ),
+    Figure::gauge(
+        "mavping_link_node_loss_ratio",
+        "What the node lost of its link since mavping first heard it: lost / (received + lost), 0 to 1 (the vehicle's own view of the uplink).",
+        |n| n.counters.loss(),
+    ),
+    Figure::gauge(
+        "mavping_link_node_rx_rate_bytes_per_second",
+        "The node's receive rate on its link, as its latest report says.",
+        |n| Some(f64::from(n.latest.rx_rate)),
+    ),
+    Figure::gauge(
+        "mavping_link_node_tx_rate_bytes_per_second",
+        "The node's transmit rate on its link, as its latest report says.",
+        |n| Some(f64::from(n.latest.tx_rate)),
+    ),
 ];
 
 /// Every link's nodes, each family once.

@@ -28,117 +28,87 @@ impl Metrics {
 type SourceCount = Figure<fn(&Figures) -> f64>;
 
 const SOURCE_COUNTS: [SourceCount; 10] = [
-    Figure {
-        family: Family::counter(
-            "mavping_source_received_total",
-            "Frames received from the source, duplicates included (--passive: its own packet sequence).",
-        ),
-        value: |f| f.seq.received as f64,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_damaged_total",
-            "Whole frames from the source whose CRC failed (damaged on the way, or a dialect whose CRC differs): they arrived, so their numbers are not lost; not in mavping_source_received_total.",
-        ),
-        value: |f| f.seq.damaged as f64,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_lost_total",
-            "Frames its packet sequence proves lost, counted once no late frame can fill the gap (128 behind its latest frame, in a silence, or at the run's end); mavping_source_lost_pending holds the rest.",
-        ),
-        value: |f| f.lost_settled as f64,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_duplicate_total",
-            "Frames whose sequence number had been received already.",
-        ),
-        value: |f| f.seq.duplicate as f64,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_reordered_total",
-            "Frames that came after a later one and filled their gap.",
-        ),
-        value: |f| f.seq.reordered as f64,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_resyncs_total",
-            "Times the count restarted on a frame the sequence could not place (after a long silence, or 128 away).",
-        ),
-        value: |f| f.seq.resyncs as f64,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_bytes_total",
-            "Frame bytes received from the source, duplicates included.",
-        ),
-        value: |f| f.bytes as f64,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_silences_total",
-            "Times the source was heard from nothing for longer than the gap (--gap), an ongoing silence included.",
-        ),
-        value: |f| f.silences as f64,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_silence_seconds_total",
-            "Time the source spent in silences, an ongoing one up to the latest count (once a second).",
-        ),
-        value: |f| f.silence_ns as f64 / 1e9,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_source_pymavlink_lost_total",
-            "pymavlink's loss count for the same frames (mavutil: (seq - expected) % 256 at each mismatch, so a duplicate costs it 255), to compare with MAVProxy's link or mavloss.py; not mavping's.",
-        ),
-        value: |f| f.pymav_loss as f64,
-    },
+    Figure::counter(
+        "mavping_source_received_total",
+        "Frames received from the source, duplicates included (--passive: its own packet sequence).",
+        |f| f.seq.received as f64,
+    ),
+    Figure::counter(
+        "mavping_source_damaged_total",
+        "Whole frames from the source whose CRC failed (damaged on the way, or a dialect whose CRC differs): they arrived, so their numbers are not lost; not in mavping_source_received_total.",
+        |f| f.seq.damaged as f64,
+    ),
+    Figure::counter(
+        "mavping_source_lost_total",
+        "Frames its packet sequence proves lost, counted once no late frame can fill the gap (128 behind its latest frame, in a silence, or at the run's end); mavping_source_lost_pending holds the rest.",
+        |f| f.lost_settled as f64,
+    ),
+    Figure::counter(
+        "mavping_source_duplicate_total",
+        "Frames whose sequence number had been received already.",
+        |f| f.seq.duplicate as f64,
+    ),
+    Figure::counter(
+        "mavping_source_reordered_total",
+        "Frames that came after a later one and filled their gap.",
+        |f| f.seq.reordered as f64,
+    ),
+    Figure::counter(
+        "mavping_source_resyncs_total",
+        "Times the count restarted on a frame the sequence could not place (after a long silence, or 128 away).",
+        |f| f.seq.resyncs as f64,
+    ),
+    Figure::counter(
+        "mavping_source_bytes_total",
+        "Frame bytes received from the source, duplicates included.",
+        |f| f.bytes as f64,
+    ),
+    Figure::counter(
+        "mavping_source_silences_total",
+        "Times the source was heard from nothing for longer than the gap (--gap), an ongoing silence included.",
+        |f| f.silences as f64,
+    ),
+    Figure::counter(
+        "mavping_source_silence_seconds_total",
+        "Time the source spent in silences, an ongoing one up to the latest count (once a second).",
+        |f| f.silence_ns as f64 / 1e9,
+    ),
+    Figure::counter(
+        "mavping_source_pymavlink_lost_total",
+        "pymavlink's loss count for the same frames (mavutil: (seq - expected) % 256 at each mismatch, so a duplicate costs it 255), to compare with MAVProxy's link or mavloss.py; not mavping's.",
+        |f| f.pymav_loss as f64,
+    ),
 ];
 
 /// A source's gauge; a series without the figure is left out.
 type SourceGauge = Figure<fn(&SourceSeries) -> Option<f64>>;
 
 const SOURCE_GAUGES: [SourceGauge; 5] = [
-    Figure {
-        family: Family::gauge(
-            "mavping_source_lost_pending",
-            "Frames counted lost that may still arrive late and be reordered (within 127 of the latest frame, outside a silence): not in mavping_source_lost_total yet.",
-        ),
-        value: |s| s.pending().map(|p| p as f64),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_source_loss_ratio",
-            "Lost over the frames its sequence numbered (received once or lost), since it was first heard (0 to 1).",
-        ),
-        value: SourceSeries::loss_ratio,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_source_pymavlink_loss_ratio",
-            "pymavlink's figure, not mavping's: its loss over count + loss, as MAVProxy's link and mavloss.py show it (a duplicate or a swap costs it about 255 frames).",
-        ),
-        value: SourceSeries::pymav_loss_ratio,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_source_frames_per_second",
-            "Frames per second from the source's first frame to its latest, in this session of the link.",
-        ),
-        value: SourceSeries::frames_per_s,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_source_silent",
-            "1 while the source is in a silence (heard from nothing for longer than the gap), 0 while it is heard.",
-        ),
-        value: |s| s.silent().map(|on| f64::from(u8::from(on))),
-    },
+    Figure::gauge(
+        "mavping_source_lost_pending",
+        "Frames counted lost that may still arrive late and be reordered (within 127 of the latest frame, outside a silence): not in mavping_source_lost_total yet.",
+        |s| s.pending().map(|p| p as f64),
+    ),
+    Figure::gauge(
+        "mavping_source_loss_ratio",
+        "Lost over the frames its sequence numbered (received once or lost), since it was first heard (0 to 1).",
+        SourceSeries::loss_ratio,
+    ),
+    Figure::gauge(
+        "mavping_source_pymavlink_loss_ratio",
+        "pymavlink's figure, not mavping's: its loss over count + loss, as MAVProxy's link and mavloss.py show it (a duplicate or a swap costs it about 255 frames).",
+        SourceSeries::pymav_loss_ratio,
+    ),
+    Figure::gauge(
+        "mavping_source_frames_per_second",
+        "Frames per second from the source's first frame to its latest, in this session of the link.",
+        SourceSeries::frames_per_s,
+    ),
+    Figure::gauge(
+        "mavping_source_silent",
+        "1 while the source is in a silence (heard from nothing for longer than the gap), 0 while it is heard.",
+        |s| s.silent().map(|on| f64::from(u8::from(on))),
+    ),
 ];
 
 /// A passive link's sources, each family once across the links.

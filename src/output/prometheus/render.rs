@@ -81,153 +81,113 @@ fn rtt_histogram(scope: Scope) -> Family {
 type Gauge = Figure<fn(&Series) -> Option<f64>>;
 
 const GAUGES: [Gauge; 5] = [
-    Figure {
-        family: Family::gauge(
-            "mavping_last_rtt_seconds",
-            "Round-trip time of the latest reply within the timeout.",
-        ),
-        value: |s| s.last_rtt_s,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_rtt_p50_seconds",
-            "Median round-trip time (HDR histogram; at the end of a run or probe).",
-        ),
-        value: |s| s.p50_s,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_rtt_p99_seconds",
-            "99th percentile round-trip time (HDR histogram; at the end of a run or probe).",
-        ),
-        value: |s| s.p99_s,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_clock_offset_seconds",
-            "Responder's clock minus ours at its latest reply (TIMESYNC probe; updated at most once a second).",
-        ),
-        value: |s| s.clock_offset_s,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_responder_via_timesync",
-            "--probe auto: 1 when the responder is measured by TIMESYNC (it does not answer PING), 0 by PING.",
-        ),
-        value: |s| s.via_timesync.map(f64::from),
-    },
+    Figure::gauge(
+        "mavping_last_rtt_seconds",
+        "Round-trip time of the latest reply within the timeout.",
+        |s| s.last_rtt_s,
+    ),
+    Figure::gauge(
+        "mavping_rtt_p50_seconds",
+        "Median round-trip time (HDR histogram; at the end of a run or probe).",
+        |s| s.p50_s,
+    ),
+    Figure::gauge(
+        "mavping_rtt_p99_seconds",
+        "99th percentile round-trip time (HDR histogram; at the end of a run or probe).",
+        |s| s.p99_s,
+    ),
+    Figure::gauge(
+        "mavping_clock_offset_seconds",
+        "Responder's clock minus ours at its latest reply (TIMESYNC probe; updated at most once a second).",
+        |s| s.clock_offset_s,
+    ),
+    Figure::gauge(
+        "mavping_responder_via_timesync",
+        "--probe auto: 1 when the responder is measured by TIMESYNC (it does not answer PING), 0 by PING.",
+        |s| s.via_timesync.map(f64::from),
+    ),
 ];
 
 /// A radio's figure (`None`: left out).
 type RadioFigure = Figure<fn(&RadioSeries) -> Option<f64>>;
 
 const RADIO: [RadioFigure; 15] = [
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_info",
-            "1 for each radio, its kind (sik, mlrs, elrs, esp, unknown) in a label: from what it sends, or --radio-type.",
-        ),
-        // Written apart, with its extra label.
-        value: |_| None,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_rssi",
-            "Local signal strength, raw RADIO_STATUS units (255, unknown, left out).",
-        ),
-        value: |r| known(r.latest.rssi),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_remote_rssi",
-            "Remote signal strength, raw RADIO_STATUS units.",
-        ),
-        value: |r| known(r.latest.remrssi),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_noise",
-            "Local background noise, raw RADIO_STATUS units.",
-        ),
-        value: |r| known(r.latest.noise),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_remote_noise",
-            "Remote background noise, raw RADIO_STATUS units.",
-        ),
-        value: |r| known(r.latest.remnoise),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_rssi_dbm",
-            "Local signal strength in dBm, on a known scale only: SiK raw / 1.9 - 127 (approximate), mLRS -120..-50 dBm as 0..254, an ESP8266 bridge's WiFi RSSI.",
-        ),
-        value: |r| in_kind_units(r, "rssi_dbm"),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_remote_rssi_dbm",
-            "Remote signal strength in dBm: SiK (approximate), mLRS; ExpressLRS's uplink RSSI (-remrssi).",
-        ),
-        value: |r| in_kind_units(r, "remrssi_dbm"),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_noise_dbm",
-            "Local noise floor in dBm (SiK radios, approximate; other radios' noise is no noise floor).",
-        ),
-        value: |r| in_kind_units(r, "noise_dbm"),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_remote_noise_dbm",
-            "Remote noise floor in dBm (SiK radios, approximate).",
-        ),
-        value: |r| in_kind_units(r, "remnoise_dbm"),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_snr_db",
-            "Signal-to-noise ratio in dB: mLRS (10 - noise), ExpressLRS (noise).",
-        ),
-        value: |r| in_kind_units(r, "snr_db"),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_link_quality_percent",
-            "ExpressLRS's uplink link quality, percent (rssi / 2.55).",
-        ),
-        value: |r| in_kind_units(r, "link_quality_pct"),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_vehicle_lost_percent",
-            "An ESP8266 WiFi bridge's share of the vehicle's (serial) messages lost, percent (its remnoise).",
-        ),
-        value: |r| in_kind_units(r, "vehicle_lost_pct"),
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_radio_txbuf_percent",
-            "Free space in the radio's transmit buffer, percent.",
-        ),
-        value: |r| known(r.latest.txbuf),
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_radio_rxerrors_total",
-            "Receive errors the radio counted since mavping first heard it (its 16-bit counter's wraps and restarts followed; not an ESP8266 bridge's, whose rxerrors is a percentage).",
-        ),
-        value: |r| (!r.kind.rxerrors_is_gcs_lost_pct()).then_some(r.rxerrors.grown() as f64),
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_radio_fixed_total",
-            "Packets the radio's error correction repaired since mavping first heard it.",
-        ),
-        value: |r| Some(r.fixed.grown() as f64),
-    },
+    // Written apart, with its extra label.
+    Figure::gauge(
+        "mavping_radio_info",
+        "1 for each radio, its kind (sik, mlrs, elrs, esp, unknown) in a label: from what it sends, or --radio-type.",
+        |_| None,
+    ),
+    Figure::gauge(
+        "mavping_radio_rssi",
+        "Local signal strength, raw RADIO_STATUS units (255, unknown, left out).",
+        |r| known(r.latest.rssi),
+    ),
+    Figure::gauge(
+        "mavping_radio_remote_rssi",
+        "Remote signal strength, raw RADIO_STATUS units.",
+        |r| known(r.latest.remrssi),
+    ),
+    Figure::gauge(
+        "mavping_radio_noise",
+        "Local background noise, raw RADIO_STATUS units.",
+        |r| known(r.latest.noise),
+    ),
+    Figure::gauge(
+        "mavping_radio_remote_noise",
+        "Remote background noise, raw RADIO_STATUS units.",
+        |r| known(r.latest.remnoise),
+    ),
+    Figure::gauge(
+        "mavping_radio_rssi_dbm",
+        "Local signal strength in dBm, on a known scale only: SiK raw / 1.9 - 127 (approximate), mLRS -120..-50 dBm as 0..254, an ESP8266 bridge's WiFi RSSI.",
+        |r| in_kind_units(r, "rssi_dbm"),
+    ),
+    Figure::gauge(
+        "mavping_radio_remote_rssi_dbm",
+        "Remote signal strength in dBm: SiK (approximate), mLRS; ExpressLRS's uplink RSSI (-remrssi).",
+        |r| in_kind_units(r, "remrssi_dbm"),
+    ),
+    Figure::gauge(
+        "mavping_radio_noise_dbm",
+        "Local noise floor in dBm (SiK radios, approximate; other radios' noise is no noise floor).",
+        |r| in_kind_units(r, "noise_dbm"),
+    ),
+    Figure::gauge(
+        "mavping_radio_remote_noise_dbm",
+        "Remote noise floor in dBm (SiK radios, approximate).",
+        |r| in_kind_units(r, "remnoise_dbm"),
+    ),
+    Figure::gauge(
+        "mavping_radio_snr_db",
+        "Signal-to-noise ratio in dB: mLRS (10 - noise), ExpressLRS (noise).",
+        |r| in_kind_units(r, "snr_db"),
+    ),
+    Figure::gauge(
+        "mavping_radio_link_quality_percent",
+        "ExpressLRS's uplink link quality, percent (rssi / 2.55).",
+        |r| in_kind_units(r, "link_quality_pct"),
+    ),
+    Figure::gauge(
+        "mavping_radio_vehicle_lost_percent",
+        "An ESP8266 WiFi bridge's share of the vehicle's (serial) messages lost, percent (its remnoise).",
+        |r| in_kind_units(r, "vehicle_lost_pct"),
+    ),
+    Figure::gauge(
+        "mavping_radio_txbuf_percent",
+        "Free space in the radio's transmit buffer, percent.",
+        |r| known(r.latest.txbuf),
+    ),
+    Figure::counter(
+        "mavping_radio_rxerrors_total",
+        "Receive errors the radio counted since mavping first heard it (its 16-bit counter's wraps and restarts followed; not an ESP8266 bridge's, whose rxerrors is a percentage).",
+        |r| (!r.kind.rxerrors_is_gcs_lost_pct()).then_some(r.rxerrors.grown() as f64),
+    ),
+    Figure::counter(
+        "mavping_radio_fixed_total",
+        "Packets the radio's error correction repaired since mavping first heard it.",
+        |r| Some(r.fixed.grown() as f64),
+    ),
 ];
 
 fn known(raw: u8) -> Option<f64> {
@@ -414,59 +374,46 @@ pub(crate) struct Health {
 type HealthFigure = Figure<fn(&Health) -> u64>;
 
 const HEALTH: [HealthFigure; 8] = [
-    Figure {
-        family: Family::counter(
-            "mavping_exporter_probes_total",
-            "/probe requests that ran a probe.",
-        ),
-        value: |h| h.probes,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_exporter_probes_failed_total",
-            "Probes that ran and failed (mavping_probe_success 0).",
-        ),
-        value: |h| h.probes_failed,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_exporter_probes_refused_total",
-            "/probe requests refused: bad or forbidden (400) or too many at once (503).",
-        ),
-        value: |h| h.probes_refused,
-    },
-    Figure {
-        family: Family::gauge("mavping_exporter_probes_running", "Probes running now."),
-        value: |h| h.probes_running,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_exporter_open_links",
-            "Links open now: continuous links that are up and the links of running probes.",
-        ),
-        value: |h| h.open_links,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_exporter_config_reloads_total",
-            "Configuration reloads asked for (SIGHUP, POST /-/reload).",
-        ),
-        value: |h| h.reloads,
-    },
-    Figure {
-        family: Family::counter(
-            "mavping_exporter_config_reloads_failed_total",
-            "Reloads refused because the new configuration was invalid (the old one stays).",
-        ),
-        value: |h| h.reloads_failed,
-    },
-    Figure {
-        family: Family::gauge(
-            "mavping_exporter_config_last_reload_successful",
-            "1 when the configuration in use is the one last read from the file.",
-        ),
-        value: |h| u64::from(h.last_reload_ok),
-    },
+    Figure::counter(
+        "mavping_exporter_probes_total",
+        "/probe requests that ran a probe.",
+        |h| h.probes,
+    ),
+    Figure::counter(
+        "mavping_exporter_probes_failed_total",
+        "Probes that ran and failed (mavping_probe_success 0).",
+        |h| h.probes_failed,
+    ),
+    Figure::counter(
+        "mavping_exporter_probes_refused_total",
+        "/probe requests refused: bad or forbidden (400) or too many at once (503).",
+        |h| h.probes_refused,
+    ),
+    Figure::gauge(
+        "mavping_exporter_probes_running",
+        "Probes running now.",
+        |h| h.probes_running,
+    ),
+    Figure::gauge(
+        "mavping_exporter_open_links",
+        "Links open now: continuous links that are up and the links of running probes.",
+        |h| h.open_links,
+    ),
+    Figure::counter(
+        "mavping_exporter_config_reloads_total",
+        "Configuration reloads asked for (SIGHUP, POST /-/reload).",
+        |h| h.reloads,
+    ),
+    Figure::counter(
+        "mavping_exporter_config_reloads_failed_total",
+        "Reloads refused because the new configuration was invalid (the old one stays).",
+        |h| h.reloads_failed,
+    ),
+    Figure::gauge(
+        "mavping_exporter_config_last_reload_successful",
+        "1 when the configuration in use is the one last read from the file.",
+        |h| u64::from(h.last_reload_ok),
+    ),
 ];
 
 /// `mavping serve`'s `/metrics`: its health, then its continuous links.
