@@ -181,7 +181,7 @@ impl Signer {
 
 /// What the gate decided about one received frame.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(crate) enum Verdict {
+pub(crate) enum SignatureCheck {
     /// Signed with our key, timestamp newer than its stream's last one.
     Signed,
     /// Not signed, and unsigned frames are allowed.
@@ -193,11 +193,11 @@ pub(crate) enum Verdict {
     RejectedReplay,
 }
 
-impl Verdict {
+impl SignatureCheck {
     pub(crate) fn accepted(self) -> bool {
         matches!(
             self,
-            Verdict::Signed | Verdict::Unsigned | Verdict::SignedUnchecked
+            SignatureCheck::Signed | SignatureCheck::Unsigned | SignatureCheck::SignedUnchecked
         )
     }
 }
@@ -221,14 +221,14 @@ pub(crate) struct SigningCounts {
 }
 
 impl SigningCounts {
-    fn record(&mut self, v: Verdict) {
+    fn record(&mut self, v: SignatureCheck) {
         match v {
-            Verdict::Signed => self.signed += 1,
-            Verdict::SignedUnchecked => self.signed_unchecked += 1,
-            Verdict::Unsigned => self.unsigned += 1,
-            Verdict::RejectedUnsigned => self.rejected_unsigned += 1,
-            Verdict::RejectedBadSignature => self.rejected_bad_signature += 1,
-            Verdict::RejectedReplay => self.rejected_replay += 1,
+            SignatureCheck::Signed => self.signed += 1,
+            SignatureCheck::SignedUnchecked => self.signed_unchecked += 1,
+            SignatureCheck::Unsigned => self.unsigned += 1,
+            SignatureCheck::RejectedUnsigned => self.rejected_unsigned += 1,
+            SignatureCheck::RejectedBadSignature => self.rejected_bad_signature += 1,
+            SignatureCheck::RejectedReplay => self.rejected_replay += 1,
         }
     }
 }
@@ -358,30 +358,30 @@ impl Gate {
         source: SysComp,
         signed: Option<&SignedBytes>,
         radio_status: bool,
-    ) -> Verdict {
+    ) -> SignatureCheck {
         let Some(policy) = &self.policy else {
-            let verdict = match signed {
-                None => Verdict::Unsigned,
-                Some(_) => Verdict::SignedUnchecked,
+            let check = match signed {
+                None => SignatureCheck::Unsigned,
+                Some(_) => SignatureCheck::SignedUnchecked,
             };
-            self.counts.record(verdict);
-            return verdict;
+            self.counts.record(check);
+            return check;
         };
-        let verdict = match signed {
-            None if policy.require_signed && !radio_status => Verdict::RejectedUnsigned,
-            None => Verdict::Unsigned,
-            Some(s) if !s.verify(&policy.key) => Verdict::RejectedBadSignature,
+        let check = match signed {
+            None if policy.require_signed && !radio_status => SignatureCheck::RejectedUnsigned,
+            None => SignatureCheck::Unsigned,
+            Some(s) if !s.verify(&policy.key) => SignatureCheck::RejectedBadSignature,
             Some(s) => {
                 let stream = (source.sysid, source.compid, s.link_id());
                 if self.replay.admit(stream, s.timestamp()) {
-                    Verdict::Signed
+                    SignatureCheck::Signed
                 } else {
-                    Verdict::RejectedReplay
+                    SignatureCheck::RejectedReplay
                 }
             }
         };
-        self.counts.record(verdict);
-        verdict
+        self.counts.record(check);
+        check
     }
 
     pub(crate) fn counts(&self) -> SigningCounts {
@@ -552,20 +552,29 @@ mod tests {
         let forged = SignedBytes::of(&signed_ping(&mut forger, 5_000)).unwrap();
 
         let mut gate = Gate::new(Some(policy(true)));
-        assert_eq!(gate.judge(id, Some(&first), false), Verdict::Signed);
-        assert_eq!(gate.judge(id, Some(&first), false), Verdict::RejectedReplay);
-        assert_eq!(gate.judge(id, Some(&second), false), Verdict::Signed);
-        assert_eq!(gate.judge(id, Some(&first), false), Verdict::RejectedReplay);
+        assert_eq!(gate.judge(id, Some(&first), false), SignatureCheck::Signed);
+        assert_eq!(
+            gate.judge(id, Some(&first), false),
+            SignatureCheck::RejectedReplay
+        );
+        assert_eq!(gate.judge(id, Some(&second), false), SignatureCheck::Signed);
+        assert_eq!(
+            gate.judge(id, Some(&first), false),
+            SignatureCheck::RejectedReplay
+        );
         assert_eq!(
             gate.judge(id, Some(&forged), false),
-            Verdict::RejectedBadSignature
+            SignatureCheck::RejectedBadSignature
         );
-        assert_eq!(gate.judge(id, None, false), Verdict::RejectedUnsigned);
-        assert_eq!(gate.judge(id, None, true), Verdict::Unsigned);
+        assert_eq!(
+            gate.judge(id, None, false),
+            SignatureCheck::RejectedUnsigned
+        );
+        assert_eq!(gate.judge(id, None, true), SignatureCheck::Unsigned);
         // The same bytes from another sender are another stream.
         assert_eq!(
             gate.judge(SysComp::new(2, 1), Some(&first), false),
-            Verdict::Signed
+            SignatureCheck::Signed
         );
         assert_eq!(
             gate.counts(),
@@ -580,19 +589,19 @@ mod tests {
         );
 
         let mut lenient = Gate::new(Some(policy(false)));
-        assert_eq!(lenient.judge(id, None, false), Verdict::Unsigned);
+        assert_eq!(lenient.judge(id, None, false), SignatureCheck::Unsigned);
         assert_eq!(
             lenient.judge(id, Some(&forged), false),
-            Verdict::RejectedBadSignature
+            SignatureCheck::RejectedBadSignature
         );
 
         // Without a key nothing is checked, and what came signed is said.
         let mut keyless = Gate::new(None);
         assert_eq!(
             keyless.judge(id, Some(&forged), false),
-            Verdict::SignedUnchecked
+            SignatureCheck::SignedUnchecked
         );
-        assert_eq!(keyless.judge(id, None, false), Verdict::Unsigned);
+        assert_eq!(keyless.judge(id, None, false), SignatureCheck::Unsigned);
         let summary = keyless.summary();
         assert!(!summary.key && summary.link_id.is_none());
         assert_eq!(
