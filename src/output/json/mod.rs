@@ -27,8 +27,9 @@ use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{CommandEvent, RadioHeard};
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::roster::Identity;
+use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::ProbeName;
-use crate::engine::summary::{Interim, LinkSummary};
+use crate::engine::summary::{CommandSummary, Interim, Summary};
 use crate::engine::sweep_report::StepFigures;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -221,28 +222,6 @@ impl Lines {
         }))
     }
 
-    /// The summary line.
-    fn summary<'a>(&'a self, summary: &'a LinkSummary, verdict: &'a Verdict) -> Line<'a> {
-        match summary {
-            LinkSummary::Echo(s) => Line::Summary(Box::new(echo::Summary::of(
-                s,
-                verdict,
-                self.link_or(&s.link),
-            ))),
-            LinkSummary::Command(s) => Line::CommandSummary(Box::new(command::Summary::of(
-                s,
-                verdict,
-                self.link_or(&s.link),
-            ))),
-            LinkSummary::Passive(s) => Line::PassiveSummary(Box::new(passive::Summary::of(
-                s,
-                verdict,
-                self.link_or(&s.link),
-                self,
-            ))),
-        }
-    }
-
     /// The line of the figures so far.
     fn interim<'a>(&self, figures: &'a Interim) -> Line<'a> {
         match figures {
@@ -271,6 +250,12 @@ fn us(ns: Nanos) -> f64 {
 }
 
 impl<W: Write> JsonReporter<W> {
+    /// Writes the summary line, in quiet mode too, and pushes it out.
+    fn summary_line(lines: &Lines, out: &mut W, line: &Line<'_>) -> io::Result<()> {
+        lines.write(out, line)?;
+        out.flush()
+    }
+
     /// Writes an event's line: not in quiet mode, and in a command run
     /// only the command's own (`command`).
     fn event_line(&mut self, line: Option<Line<'_>>, command: bool) -> io::Result<()> {
@@ -331,22 +316,37 @@ impl<W: Write> Reporter for JsonReporter<W> {
         self.out.flush()
     }
 
-    fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
-        // A log's last, partial, window ends with the log: told here.
-        if let (LinkSummary::Passive(s), false) = (summary, self.quiet) {
-            if let Some(f) = s.flight.as_ref() {
-                if let Some(last) = f.last.as_ref() {
-                    let line = Line::FlightWindow(self.lines.flight_window(last));
-                    self.lines.write(&mut self.out, &line)?;
-                }
-                if let Some(b) = f.last_burst.as_ref() {
-                    let line = Line::FlightBurst(self.lines.flight_span("flight_burst", b));
-                    self.lines.write(&mut self.out, &line)?;
-                }
+    fn echo_summary(&mut self, s: &Summary, verdict: &Verdict) -> io::Result<()> {
+        let line = echo::Summary::of(s, verdict, self.lines.link_or(&s.link));
+        Self::summary_line(&self.lines, &mut self.out, &Line::Summary(Box::new(line)))
+    }
+
+    fn command_summary(&mut self, s: &CommandSummary, verdict: &Verdict) -> io::Result<()> {
+        let line = command::Summary::of(s, verdict, self.lines.link_or(&s.link));
+        Self::summary_line(
+            &self.lines,
+            &mut self.out,
+            &Line::CommandSummary(Box::new(line)),
+        )
+    }
+
+    /// A log's last, partial, window ends with the log: told here.
+    fn passive_summary(&mut self, s: &PassiveSummary, verdict: &Verdict) -> io::Result<()> {
+        if let (Some(f), false) = (s.flight.as_ref(), self.quiet) {
+            if let Some(last) = f.last.as_ref() {
+                let line = Line::FlightWindow(self.lines.flight_window(last));
+                self.lines.write(&mut self.out, &line)?;
+            }
+            if let Some(b) = f.last_burst.as_ref() {
+                let line = Line::FlightBurst(self.lines.flight_span("flight_burst", b));
+                self.lines.write(&mut self.out, &line)?;
             }
         }
-        self.lines
-            .write(&mut self.out, &self.lines.summary(summary, verdict))?;
-        self.out.flush()
+        let line = passive::Summary::of(s, verdict, self.lines.link_or(&s.link), &self.lines);
+        Self::summary_line(
+            &self.lines,
+            &mut self.out,
+            &Line::PassiveSummary(Box::new(line)),
+        )
     }
 }

@@ -9,10 +9,34 @@ use std::time::SystemTime;
 use serde_json::Value;
 
 use super::{JsonReporter, Line};
+use crate::engine::summary::LinkSummary;
 use crate::output::runs::*;
 use crate::output::{Event, Reporter, WallClock};
+use crate::verdict::Verdict;
 
 impl super::Lines {
+    /// The summary line the reporter writes.
+    fn summary<'a>(&'a self, summary: &'a LinkSummary, verdict: &'a Verdict) -> Line<'a> {
+        match summary {
+            LinkSummary::Echo(s) => Line::Summary(Box::new(super::echo::Summary::of(
+                s,
+                verdict,
+                self.link_or(&s.link),
+            ))),
+            LinkSummary::Command(s) => Line::CommandSummary(Box::new(super::command::Summary::of(
+                s,
+                verdict,
+                self.link_or(&s.link),
+            ))),
+            LinkSummary::Passive(s) => Line::PassiveSummary(Box::new(super::passive::Summary::of(
+                s,
+                verdict,
+                self.link_or(&s.link),
+                self,
+            ))),
+        }
+    }
+
     /// The line the reporter writes for `event`, if any (the reporter's
     /// own path is pinned by the snapshot of every line).
     fn event<'a>(&self, event: &Event<'a>) -> Option<Line<'a>> {

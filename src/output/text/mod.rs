@@ -20,7 +20,8 @@ use crate::engine::observe::{CommandEvent, RadioHeard};
 use crate::engine::radio::{RadioKind, RadioReport};
 use crate::engine::roster::Identity;
 use crate::engine::stats::Bucket;
-use crate::engine::summary::{EchoInterim, LinkSummary, PassiveInterim};
+use crate::engine::summary::passive::PassiveSummary;
+use crate::engine::summary::{CommandSummary, EchoInterim, PassiveInterim, Summary};
 use crate::engine::sweep_report::StepFigures;
 use crate::engine::Nanos;
 use crate::frame::signing::SigningSummary;
@@ -122,6 +123,17 @@ impl<W: Write> TextReporter<W> {
 }
 
 impl<W: Write> TextReporter<W> {
+    /// The summary's header, as ping's; the summary is written unprefixed.
+    fn summary_head(&mut self, link: &str) -> io::Result<&mut W> {
+        let quiet = self.quiet;
+        let out = self.out.inner();
+        if !quiet {
+            writeln!(out)?;
+        }
+        writeln!(out, "--- {link} mavping statistics ---")?;
+        Ok(out)
+    }
+
     /// Event lines other than a command's are shown: not in quiet mode,
     /// and not in a command run, which shows its commands' fate only.
     fn shows_events(&self) -> bool {
@@ -209,20 +221,23 @@ impl<W: Write> Reporter for TextReporter<W> {
         self.write_passive_interim(figures)
     }
 
-    fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
-        let quiet = self.quiet;
+    /// Steps not shown as they ended (-q, or cut short) are shown here.
+    fn echo_summary(&mut self, s: &Summary, verdict: &Verdict) -> io::Result<()> {
         let steps_shown = self.steps_shown;
-        let out = self.out.inner();
-        if !quiet {
-            writeln!(out)?;
-        }
-        writeln!(out, "--- {} mavping statistics ---", summary.link())?;
-        match summary {
-            // Steps not shown as they ended (-q, or cut short) are shown here.
-            LinkSummary::Echo(s) => echo::write_summary(out, s, verdict, steps_shown)?,
-            LinkSummary::Command(s) => command::write_summary(out, s)?,
-            LinkSummary::Passive(s) => passive::write_summary(out, s, verdict)?,
-        }
+        let out = self.summary_head(&s.link)?;
+        echo::write_summary(out, s, verdict, steps_shown)?;
+        out.flush()
+    }
+
+    fn command_summary(&mut self, s: &CommandSummary, _: &Verdict) -> io::Result<()> {
+        let out = self.summary_head(&s.link)?;
+        command::write_summary(out, s)?;
+        out.flush()
+    }
+
+    fn passive_summary(&mut self, s: &PassiveSummary, verdict: &Verdict) -> io::Result<()> {
+        let out = self.summary_head(&s.link)?;
+        passive::write_summary(out, s, verdict)?;
         out.flush()
     }
 }
