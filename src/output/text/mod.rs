@@ -28,26 +28,14 @@ use crate::frame::signing::SigningSummary;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
-/// What a run's event lines show.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Lines {
-    /// An echo probe's: a line per reply, loss and the like.
-    Replies,
-    /// A run in steps (`--sweep`, `--load`): a row per step instead of a
-    /// line per reply.
-    Steps,
-    /// A command probe's: only its own events.
-    Commands,
-}
-
 pub(crate) struct TextReporter<W: Write> {
     /// Event lines go through the link's prefix (with several links);
     /// the summary is written unprefixed, under its own header.
     out: Prefixed<W>,
     /// Only the summary (`-q`).
     quiet: bool,
-    /// What event lines show, from the kind of run.
-    lines: Lines,
+    /// What kind of run it is, which decides what event lines show.
+    run: RunKind,
     timeout: std::time::Duration,
     /// Print every reply even at high rates (`--every-reply`).
     every_reply: bool,
@@ -70,7 +58,7 @@ impl<W: Write> TextReporter<W> {
         TextReporter {
             out: Prefixed::new(out, None),
             quiet,
-            lines: Lines::Replies,
+            run: RunKind::Echo,
             timeout: std::time::Duration::ZERO,
             every_reply: false,
             progress: None,
@@ -137,18 +125,14 @@ impl<W: Write> TextReporter<W> {
     /// Event lines other than a command's are shown: not in quiet mode,
     /// and not in a command run, which shows its commands' fate only.
     fn shows_events(&self) -> bool {
-        !self.quiet && self.lines != Lines::Commands
+        !self.quiet && self.run.command().is_none()
     }
 }
 
 impl<W: Write> Reporter for TextReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.timeout = info.timeout;
-        self.lines = match info.run {
-            RunKind::Echo | RunKind::Passive { .. } => Lines::Replies,
-            RunKind::Steps(_) => Lines::Steps,
-            RunKind::Command(_) => Lines::Commands,
-        };
+        self.run = info.run.clone();
         if self.quiet {
             return Ok(());
         }
@@ -169,7 +153,7 @@ impl<W: Write> Reporter for TextReporter<W> {
 
     /// A run in steps shows each step, not each reply.
     fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
-        if self.shows_events() && self.lines == Lines::Replies {
+        if self.shows_events() && self.run.steps().is_none() {
             self.match_line(event)
         } else {
             Ok(())
