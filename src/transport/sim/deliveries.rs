@@ -24,7 +24,7 @@ pub(super) struct Delivery {
     pub(super) bytes: Vec<u8>,
     /// What it is, for the ground truth of what arrived.
     pub(super) payload: Payload,
-    /// A responder's frame (not RADIO_STATUS): for [`DownTruth`].
+    /// A responder's frame (not RADIO_STATUS): for [`DownTruth`](super::truth::DownTruth).
     pub(super) frame: Option<Tag>,
 }
 
