@@ -231,3 +231,22 @@ pub(crate) fn push_datagram(
         out.push(Inbound::of(raw, kind, at, path, keep_raw))
     });
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn receive_clocks_serialise_as_reports_show_them() {
+        for clock in [
+            RxClock::Kernel,
+            RxClock::UserSpace,
+            RxClock::Simulated,
+            RxClock::Log,
+        ] {
+            assert_eq!(serde_json::to_value(clock).unwrap(), clock.as_str());
+            assert_eq!(clock.to_string(), clock.as_str());
+        }
+        assert_eq!(RxClock::UserSpace.as_str(), "user-space receive timestamps");
+    }
+}

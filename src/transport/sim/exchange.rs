@@ -7,7 +7,9 @@ use std::time::Duration;
 
 use tokio::time::Instant;
 
-use super::{Copies, Payload, Reply, Sends, SimLink};
+use super::deliveries::{Copies, Payload};
+use super::link::SimLink;
+use super::outgoing::{Reply, Sends};
 use crate::frame::{self, Frame, Header, Msg};
 
 /// How a frame we sent reached one responder.

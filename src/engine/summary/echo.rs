@@ -1,0 +1,307 @@
+//! The end of an echo run (PING, TIMESYNC, auto, a sweep's steps): the
+//! [`Summary`] with each responder's figures, its send pacing, and the
+//! wire budget a serial link's baud rate sets; built from the matcher and
+//! the roster.
+
+use serde::Serialize;
+
+use super::direction::Direction;
+use super::probe_name::ProbeName;
+use crate::engine::capacity::WireBudget;
+use crate::engine::clock_offset::ClockSummary;
+use crate::engine::hint::{Hint, HintCode};
+use crate::engine::link_node::LinkNodeSummary;
+use crate::engine::matcher::{Counts, Matcher};
+use crate::engine::radio::RadioSummary;
+use crate::engine::roster::{Identity, Roster};
+use crate::engine::stats::{Bucket, RttSummary};
+use crate::engine::sweep_report::SweepSummary;
+use crate::frame::signing::SigningSummary;
+use crate::frame::{ScanStats, SysComp};
+use crate::transport::RxClock;
+
+/// Rows in the ASCII/JSON RTT distribution.
+pub(crate) const HISTOGRAM_ROWS: usize = 8;
+
+#[derive(Debug, Clone, Serialize)]
+pub struct ResponderSummary {
+    pub id: SysComp,
+    pub counts: Counts,
+    pub(crate) loss_ratio: f64,
+    pub(crate) rtt: Option<RttSummary>,
+    pub(crate) histogram: Vec<Bucket>,
+    pub(crate) identity: Option<Identity>,
+    /// The probe it was measured by (`--probe auto` only: PING or
+    /// TIMESYNC, chosen per responder).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) probe: Option<ProbeName>,
+    /// Clock offset and drift (TIMESYNC probe only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) clock: Option<ClockSummary>,
+    /// Which way the losses were, when there were any: the responder's
+    /// own sequence numbers give the downlink.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) direction: Option<Direction>,
+}
+
+/// How well requests kept to their schedule (see the session's pacing).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub(crate) struct ScheduleSummary {
+    pub(crate) requested_rate_hz: f64,
+    pub(crate) achieved_rate_hz: f64,
+    /// Actual send minus planned send, over all requests.
+    pub(crate) lateness_p50_us: f64,
+    pub(crate) lateness_p99_us: f64,
+    pub(crate) lateness_max_us: f64,
+    /// Requests the link refused because its peer is not reading (a
+    /// byte stream whose queue was full): never sent, so never lost.
+    pub(crate) not_sent: u64,
+}
+
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    pub(crate) link: String,
+    pub(crate) probe: ProbeName,
+    pub(crate) ours: SysComp,
+    pub(crate) duration_s: f64,
+    /// Requests put on the wire.
+    pub requests: u64,
+    /// Requests still within their timeout when the run ended, unanswered
+    /// by at least one responder: counted neither received nor lost.
+    pub(crate) in_flight: u64,
+    /// A listening link heard no MAVLink system in this many seconds, and
+    /// the run ended.
+    pub(crate) no_peer_heard_s: Option<f64>,
+    pub responders: Vec<ResponderSummary>,
+    /// Replies addressed to another system.
+    pub(crate) foreign_replies: u64,
+    /// Replies naming a responder that answered from another link peer
+    /// (spoofed ids): counted, never measured.
+    pub(crate) wrong_path_replies: u64,
+    /// Replies from responders beyond the tracking limit.
+    pub(crate) untracked_replies: u64,
+    pub(crate) frames: ScanStats,
+    pub(crate) hints: Vec<Hint>,
+    pub(crate) interrupted: bool,
+    pub(crate) link_error: Option<String>,
+    /// Seconds the link was down while reconnecting (`--reconnect`).
+    pub(crate) downtime_s: f64,
+    /// Send pacing figures, once a request was sent.
+    pub(crate) schedule: Option<ScheduleSummary>,
+    /// How receive times were taken (kernel timestamps or user space).
+    pub(crate) rx_clock: RxClock,
+    /// Radios heard by their RADIO_STATUS.
+    pub(crate) radios: Vec<RadioSummary>,
+    /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view of
+    /// the link), each beside mavping's uplink estimate for its system.
+    pub(crate) link_node: Vec<LinkNodeSummary>,
+    /// What a serial link's baud rate carries (serial links only).
+    pub(crate) wire: Option<WireBudget>,
+    /// What the signing gate accepted and refused, or, without a key, what
+    /// came signed unchecked.
+    pub(crate) signing: SigningSummary,
+    /// `--sweep` or `--load`: the steps and what they say.
+    pub(crate) sweep: Option<Box<SweepSummary>>,
+}
+
+impl Summary {
+    /// True when at least one responder answered in time.
+    pub(crate) fn any_reply(&self) -> bool {
+        self.responders.iter().any(|r| r.counts.received > 0)
+    }
+
+    /// Puts a serial link's budget in the summary and, when the run shows
+    /// the link was overrun (losses, or an RTT spread far beyond the wire
+    /// time, which is a queue growing), says so. Replies faster than the
+    /// baud rate allows show the device ignores it (USB CDC, a pty): then
+    /// there is no budget to report.
+    pub(crate) fn apply_wire(&mut self, budget: WireBudget) {
+        let fastest = self
+            .responders
+            .iter()
+            .filter_map(|r| r.rtt)
+            .map(|t| t.min_us)
+            .reduce(f64::min);
+        // Well under the floor: the clocks' and the arithmetic's rounding
+        // cannot explain it.
+        if let Some(fastest) = fastest.filter(|&f| f < 0.9 * budget.floor_us) {
+            self.hints.push(Hint::new(
+                HintCode::BaudNotInEffect,
+                format!(
+                    "replies came back in {:.3} ms, faster than {} baud allows ({:.3} ms per \
+                     round trip): the device ignores the baud rate (USB CDC or a pty), so no \
+                     wire floor or capacity applies",
+                    fastest / 1e3,
+                    budget.baud,
+                    budget.floor_us / 1e3
+                ),
+            ));
+            return;
+        }
+        if let (Some(device), Some(fastest)) = (budget.ignorer, fastest) {
+            self.hints.push(Hint::new(
+                HintCode::BaudUnverified,
+                format!(
+                    "the wire figures assume {} baud paces this link, but the device is {}, \
+                     which passes data as fast as it is read unless something behind it \
+                     paces it; the fastest reply ({:.3} ms) fits a {:.3} ms wire floor either \
+                     way, so they are unproven",
+                    budget.baud,
+                    device,
+                    fastest / 1e3,
+                    budget.floor_us / 1e3
+                ),
+            ));
+        }
+        self.wire = Some(budget);
+        let Some(rate) = self.schedule.map(|s| s.requested_rate_hz) else {
+            return;
+        };
+        // After the run the responders are known, not guessed.
+        let b = budget.with_replies(self.responders.len() as u64);
+        let overrun = self.responders.iter().any(|r| {
+            r.counts.lost > 0
+                || r.rtt
+                    .is_some_and(|t| t.max_us - t.min_us > 10.0 * budget.floor_us)
+        });
+        if overrun {
+            if let Some(w) = b.warning(rate) {
+                self.hints.push(Hint::new(
+                    HintCode::WireOverrun,
+                    format!("{w}: this run did"),
+                ));
+            }
+        }
+    }
+}
+
+pub(crate) fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<ResponderSummary> {
+    let mut out: Vec<ResponderSummary> = matcher
+        .responders()
+        .iter()
+        .map(|r| (r, matcher.counts_now(r)))
+        .map(|(r, counts)| ResponderSummary {
+            id: r.id,
+            counts,
+            loss_ratio: counts.loss_ratio(),
+            rtt: r.rtt.summary(),
+            histogram: r.rtt.distribution(HISTOGRAM_ROWS),
+            identity: roster.get(r.id).cloned(),
+            probe: None,
+            clock: None,
+            direction: None,
+        })
+        .collect();
+    out.sort_by_key(|r| r.id);
+    out
+}
+
+#[cfg(test)]
+impl Summary {
+    /// A run of `requests` PINGs on `link` with nothing in it, for tests
+    /// to fill in.
+    pub(crate) fn empty(link: &str, requests: u64) -> Summary {
+        Summary {
+            link: link.into(),
+            probe: ProbeName::Ping,
+            ours: SysComp::new(250, 190),
+            duration_s: 1.0,
+            requests,
+            in_flight: 0,
+            no_peer_heard_s: None,
+            responders: vec![],
+            foreign_replies: 0,
+            wrong_path_replies: 0,
+            untracked_replies: 0,
+            frames: ScanStats::default(),
+            hints: vec![],
+            interrupted: false,
+            link_error: None,
+            downtime_s: 0.0,
+            schedule: None,
+            rx_clock: RxClock::Simulated,
+            radios: vec![],
+            link_node: vec![],
+            wire: None,
+            signing: crate::frame::signing::Gate::new(None).summary(),
+            sweep: None,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::matcher::Counts;
+    use crate::engine::stats::RttStats;
+
+    fn run(lost: u64, requested_rate_hz: f64, min_rtt_ms: u64) -> Summary {
+        let mut rtt = RttStats::new();
+        rtt.record(min_rtt_ms * 1_000_000);
+        Summary {
+            responders: vec![ResponderSummary {
+                id: SysComp::new(1, 1),
+                counts: Counts {
+                    sent: 10,
+                    received: 10 - lost,
+                    lost,
+                    ..Counts::default()
+                },
+                loss_ratio: lost as f64 / 10.0,
+                rtt: rtt.summary(),
+                histogram: vec![],
+                identity: None,
+                probe: None,
+                clock: None,
+                direction: None,
+            }],
+            schedule: Some(ScheduleSummary {
+                requested_rate_hz,
+                achieved_rate_hz: requested_rate_hz,
+                lateness_p50_us: 0.0,
+                lateness_p99_us: 0.0,
+                lateness_max_us: 0.0,
+                not_sent: 0,
+            }),
+            ..Summary::empty("serial:/dev/x:57600", 10)
+        }
+    }
+
+    #[test]
+    fn the_summary_says_so_only_when_the_run_shows_it() {
+        let b = crate::engine::capacity::budget(57_600, crate::frame::Version::V2, 99, 1);
+        // Over capacity and losing: said.
+        let mut s = run(3, 500.0, 20);
+        s.apply_wire(b);
+        assert_eq!(s.wire, Some(b));
+        assert_eq!(s.hints.len(), 1, "{:?}", s.hints);
+        assert_eq!(s.hints[0].code, HintCode::WireOverrun);
+        assert!(s.hints[0]
+            .text
+            .ends_with("will queue and then lose: this run did"));
+        // Over capacity but nothing lost: silent.
+        let mut s = run(0, 500.0, 20);
+        s.apply_wire(b);
+        assert!(s.hints.is_empty());
+        // Losing below capacity: the wire is not the reason.
+        let mut s = run(3, 50.0, 20);
+        s.apply_wire(b);
+        assert!(s.hints.is_empty());
+    }
+
+    #[test]
+    fn replies_faster_than_the_baud_allows_drop_the_budget() {
+        let b = crate::engine::capacity::budget(57_600, crate::frame::Version::V2, 99, 1);
+        // 8.16 ms is the floor at 57600 baud; a pty answers in 1 ms.
+        let mut s = run(3, 500.0, 1);
+        s.apply_wire(b);
+        assert_eq!(s.wire, None);
+        let codes: Vec<HintCode> = s.hints.iter().map(|h| h.code).collect();
+        assert_eq!(codes, [HintCode::BaudNotInEffect]);
+        assert!(
+            s.hints[0].text.contains("faster than 57600 baud allows"),
+            "{:?}",
+            s.hints
+        );
+    }
+}

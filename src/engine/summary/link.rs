@@ -1,0 +1,36 @@
+//! The end of one link's run, whichever probe ran it ([`LinkSummary`]):
+//! the one value the run hands the reports, dispatching to the echo,
+//! command or passive summary.
+
+use super::command::CommandSummary;
+use super::echo::Summary;
+use super::passive;
+
+/// The end of one link's run, by probe kind.
+#[derive(Debug, Clone)]
+pub enum LinkSummary {
+    /// PING or TIMESYNC.
+    Echo(Box<Summary>),
+    /// COMMAND_LONG until acknowledged.
+    Command(Box<CommandSummary>),
+    /// `--passive`: no probes, the sources' own sequence numbers.
+    Passive(Box<passive::PassiveSummary>),
+}
+
+impl LinkSummary {
+    pub(crate) fn link(&self) -> &str {
+        match self {
+            LinkSummary::Echo(s) => &s.link,
+            LinkSummary::Command(s) => &s.link,
+            LinkSummary::Passive(s) => &s.link,
+        }
+    }
+
+    pub(crate) fn link_error(&self) -> Option<&str> {
+        match self {
+            LinkSummary::Echo(s) => s.link_error.as_deref(),
+            LinkSummary::Command(s) => s.link_error.as_deref(),
+            LinkSummary::Passive(s) => s.link_error.as_deref(),
+        }
+    }
+}

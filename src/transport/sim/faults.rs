@@ -1,0 +1,80 @@
+//! The fault model: the delay and jitter of a leg, the outage window,
+//! and the draws of the per-direction faults (`loss_down=`,
+//! `reorder_down=`, `dup_down=`), from the link's and the responders'
+//! own random streams.
+
+use std::time::Duration;
+
+use rand::rngs::SmallRng;
+use rand::Rng;
+use tokio::time::Instant;
+
+use super::deliveries::Payload;
+use super::link::SimLink;
+use super::params::SimParams;
+
+/// `delay=` plus a draw of `jitter=`.
+fn one_way(params: &SimParams, rng: &mut SmallRng) -> Duration {
+    let jitter = params.jitter.as_nanos() as u64;
+    let extra = if jitter == 0 {
+        0
+    } else {
+        rng.gen_range(0..=jitter)
+    };
+    params.delay + Duration::from_nanos(extra)
+}
+
+impl SimLink {
+    pub(super) fn one_way(&mut self) -> Duration {
+        one_way(&self.params, &mut self.rng)
+    }
+
+    /// A one-way delay drawn for the responders' own frames.
+    pub(super) fn vehicle_one_way(&mut self) -> Duration {
+        one_way(&self.params, &mut self.vehicle_rng)
+    }
+
+    /// True while an `outage=` window is on (`outage_every=` repeats it).
+    pub(super) fn in_outage(&self, now: Instant) -> bool {
+        self.params.outage.is_some_and(|(start, length)| {
+            let Some(t) = now
+                .saturating_duration_since(self.started)
+                .checked_sub(start)
+            else {
+                return false;
+            };
+            let into = match self.params.outage_every {
+                Some(every) => Duration::from_nanos((t.as_nanos() % every.as_nanos()) as u64),
+                None => t,
+            };
+            into < length
+        })
+    }
+
+    pub(super) fn chance(&mut self, p: f64) -> bool {
+        p > 0.0 && self.rng.gen::<f64>() < p
+    }
+
+    /// A per-direction fault's draw, from the responders' own draws.
+    pub(super) fn vehicle_chance(&mut self, p: f64) -> bool {
+        p > 0.0 && self.vehicle_rng.gen::<f64>() < p
+    }
+
+    /// The per-direction faults on a frame of responder `i` due at `at`.
+    pub(super) fn send_down(&mut self, i: usize, index: u64, bytes: Vec<u8>, mut at: Instant) {
+        if self.vehicle_chance(self.params.loss_down) {
+            self.responders[i].truth.down.dropped += 1;
+            return;
+        }
+        if self.vehicle_chance(self.params.reorder_down) {
+            at += self.params.hold;
+        }
+        let mut copies = [(at, Payload::Plain); 2];
+        let mut n = 1;
+        if self.vehicle_chance(self.params.dup_down) {
+            copies[1].0 = at + self.vehicle_one_way();
+            n = 2;
+        }
+        self.put_on_way(i, index, bytes, (copies, n));
+    }
+}

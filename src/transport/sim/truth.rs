@@ -1,0 +1,86 @@
+//! The ground truth ([`SimTruth`], [`DownTruth`], [`UpTruth`]): what the
+//! simulated link did to each responder's exchanges and frames, kept
+//! apart from the simulation so tests can hold mavping's counts against
+//! it.
+
+/// What the simulated link did to one responder's exchanges: the ground
+/// truth tests hold mavping's counts against.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct SimTruth {
+    /// Requests the responder answered (before faults).
+    pub answered: u64,
+    /// Exchanges the link dropped...
+    pub dropped: u64,
+    /// ...of which before the first exchange whose reply was put on its
+    /// way, in time or spiked (outside the pinger's window: not charged).
+    pub dropped_before_first: u64,
+    /// Replies delivered (first copies), not spiked.
+    pub delivered: u64,
+    /// Extra replies put on their way: copies (`dup=`, `dup_down=`), and
+    /// the second answer to a request heard twice (`dup_up=`).
+    pub duplicated: u64,
+    /// ...of which handed to the pinger before it stopped reading.
+    pub duplicates_arrived: u64,
+    /// Exchanges the radio's full buffer dropped (`baud=`), also counted
+    /// in `dropped`.
+    pub(crate) overflowed: u64,
+    /// Exchanges lost to the outage (`outage=`), also counted in `dropped`.
+    pub(crate) outage: u64,
+    /// Replies delayed by a spike (`spike=`); not in `delivered`: with a
+    /// `spike_delay` past the timeout they arrive late.
+    pub(crate) spiked: u64,
+    /// ...of which handed to the pinger before it stopped reading (the
+    /// late replies it can have seen).
+    pub(crate) spiked_arrived: u64,
+    /// Every frame the responder sent, by its sequence numbers.
+    pub(crate) down: DownTruth,
+    /// Every frame mavping sent towards it.
+    pub(crate) up: UpTruth,
+}
+
+/// What became of the frames a responder sent (HEARTBEAT, telemetry,
+/// replies), each numbered: what a passive count of its packet sequence
+/// numbers is held against. `sent = dropped + delivered + in flight`.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct DownTruth {
+    /// Frames it numbered and sent.
+    pub(crate) sent: u64,
+    /// ...lost on the way to mavping: `loss_down=`, a full radio buffer
+    /// (`baud=`), the outage (telemetry; `outage=`).
+    pub(crate) dropped: u64,
+    /// Extra copies put on their way (`dup=` on replies, `dup_down=`).
+    pub(crate) duplicated: u64,
+    /// ...of which arrived.
+    pub(crate) duplicates_arrived: u64,
+    /// Frames that arrived (first copies), reordered ones included.
+    pub(crate) delivered: u64,
+    /// ...of which after a frame it sent later had arrived (`hold=` by
+    /// `reorder=` or `reorder_down=`, or a jitter wider than the gap).
+    pub(crate) reordered: u64,
+}
+
+/// What became of the frames mavping sent, as one responder hears them.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct UpTruth {
+    /// Frames mavping sent (requests, its HEARTBEAT, `--load`).
+    pub(crate) sent: u64,
+    /// ...lost on the way to this responder: `loss_up=`, a full buffer
+    /// (`baud=`).
+    pub(crate) dropped: u64,
+    /// ...of which requests it would have answered (also counted in
+    /// `answered` and `dropped`: the exchange is lost).
+    pub(crate) requests_dropped: u64,
+    /// Frames it heard twice (`dup_up=`)...
+    pub(crate) duplicated: u64,
+    /// ...of which requests it answered twice: two replies, each numbered
+    /// in its sequence; the second to arrive is a duplicate reply
+    /// (`duplicated`), and the exchange is lost only if both are.
+    pub(crate) requests_duplicated: u64,
+}
+
+impl SimTruth {
+    pub(super) fn dropped(&mut self, replied: bool) {
+        self.dropped += 1;
+        self.dropped_before_first += u64::from(!replied);
+    }
+}
