@@ -11,8 +11,8 @@
 //! figures and an echo run's loss by direction come from the table of
 //! sources the engine tells once a second ([`sources`]).
 //!
-//! This file declares and re-exports, and hands each [`Reporter`] call to
-//! the link's [`Metrics`] (`metrics.rs`); a responder's series are in
+//! This file declares and re-exports, and hands each `Reporter` call to
+//! the link's `Metrics` (`metrics.rs`); a responder's series are in
 //! `series.rs`, a radio's in `radio_series.rs`, the exposition text in
 //! `render.rs`.
 
