@@ -2,7 +2,8 @@
 
 use serde::Serialize;
 
-use super::{seconds, us, Line, SCHEMA_VERSION};
+use super::lines::{Line, SCHEMA_VERSION};
+use super::units::{seconds, us};
 use crate::engine::hint::Hint;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::summary::{CommandSummary, CommandTargetSummary};

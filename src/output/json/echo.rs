@@ -3,7 +3,9 @@
 use serde::Serialize;
 
 use super::heard::Heartbeat;
-use super::{seconds, sweep, us, Line, Lines, Stamp, SCHEMA_VERSION};
+use super::lines::{Line, Lines, Stamp, SCHEMA_VERSION};
+use super::sweep;
+use super::units::{seconds, us};
 use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::Hint;

@@ -5,9 +5,13 @@
 //! since the log's first record (`t_s`, `end_t_s`) and as the log's wall
 //! clock (`time`, `end_time`).
 
+use std::io::{self, Write};
+
 use serde::Serialize;
 
-use super::{seconds, Lines};
+use super::lines::{Line, Lines};
+use super::units::seconds;
+use super::JsonReporter;
 use crate::engine::probe::passive::flight::{
     diagnosis_text, FlightEvent, FlightSummary, FlightWindow, Origin, RadioWindow, Range,
     SilenceRadio, Span,
@@ -113,13 +117,11 @@ impl Lines {
         }
     }
 
-    pub(super) fn flight_event(&self, e: &FlightEvent) -> super::Line<'static> {
+    pub(super) fn flight_event(&self, e: &FlightEvent) -> Line<'static> {
         match e {
-            FlightEvent::Window(w) => super::Line::FlightWindow(self.flight_window(w)),
-            FlightEvent::Silence(s) => {
-                super::Line::FlightSilence(self.flight_span("flight_silence", s))
-            }
-            FlightEvent::Burst(b) => super::Line::FlightBurst(self.flight_span("flight_burst", b)),
+            FlightEvent::Window(w) => Line::FlightWindow(self.flight_window(w)),
+            FlightEvent::Silence(s) => Line::FlightSilence(self.flight_span("flight_silence", s)),
+            FlightEvent::Burst(b) => Line::FlightBurst(self.flight_span("flight_burst", b)),
         }
     }
 
@@ -143,5 +145,24 @@ impl Lines {
             burst_count: f.burst_count,
             bursts: spans("flight_burst", &f.bursts),
         }
+    }
+}
+
+impl<W: Write> JsonReporter<W> {
+    /// The log's last, partial, window and the burst still on when it
+    /// ended, just before the summary (not with `-q`).
+    pub(super) fn flight_ends(&mut self, f: &FlightSummary) -> io::Result<()> {
+        if self.quiet {
+            return Ok(());
+        }
+        if let Some(last) = f.last.as_ref() {
+            let line = Line::FlightWindow(self.lines.flight_window(last));
+            self.lines.write(&mut self.out, &line)?;
+        }
+        if let Some(b) = f.last_burst.as_ref() {
+            let line = Line::FlightBurst(self.lines.flight_span("flight_burst", b));
+            self.lines.write(&mut self.out, &line)?;
+        }
+        Ok(())
     }
 }

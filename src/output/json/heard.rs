@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use super::{Line, Lines, Stamp};
+use super::lines::{Line, Lines, Stamp};
 use crate::engine::observe::RadioHeard;
 use crate::engine::radio::{Judgement, RadioReport};
 use crate::engine::roster::Identity;

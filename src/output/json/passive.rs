@@ -4,8 +4,9 @@
 
 use serde::Serialize;
 
+use super::lines::{Line, Lines, SCHEMA_VERSION};
 use super::round_trips::RoundTrips;
-use super::{seconds, Line, Lines, SCHEMA_VERSION};
+use super::units::seconds;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;

@@ -3,7 +3,8 @@
 
 use serde::Serialize;
 
-use super::{seconds, Lines};
+use super::lines::Lines;
+use super::units::seconds;
 use crate::engine::capacity::WireBudget;
 use crate::engine::load::LoadSummary;
 use crate::engine::sweep::step::{Phase, StepFigures, StepRadio};

@@ -8,13 +8,14 @@ use std::time::SystemTime;
 
 use serde_json::Value;
 
-use super::{JsonReporter, Line};
+use super::lines::{Line, Lines};
+use super::JsonReporter;
 use crate::engine::summary::LinkSummary;
 use crate::output::runs::*;
 use crate::output::{Event, Reporter, WallClock};
 use crate::verdict::Verdict;
 
-impl super::Lines {
+impl Lines {
     /// The summary line the reporter writes.
     fn summary<'a>(&'a self, summary: &'a LinkSummary, verdict: &'a Verdict) -> Line<'a> {
         match summary {

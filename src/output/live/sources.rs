@@ -7,7 +7,7 @@
 
 use std::collections::{BTreeMap, VecDeque};
 
-use super::RECENT;
+use super::state::RECENT;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{SeqCounts, TableSummary};
 use crate::engine::Nanos;

@@ -16,7 +16,7 @@ use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
 use ratatui::Frame;
 
 use super::sources::{Second, SourceRow};
-use super::{Mark, RowView, Rows, Screen};
+use super::state::{Mark, RowView, Rows, Screen};
 use crate::engine::summary::ProbeName;
 
 const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];

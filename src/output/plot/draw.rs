@@ -9,9 +9,11 @@ use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::frame::{self, Area, DrawResult, Layout, LegendRow, FONT, MARGIN, ROW_H, TITLE_H};
+use super::data::{bin, bin_low_ms, PlotData, Track, BINS_PER_DECADE};
+use super::frame::{
+    self, Area, DrawResult, Layout, LegendRow, PlotError, FONT, MARGIN, ROW_H, TITLE_H,
+};
 use super::style::Look;
-use super::{bin, bin_low_ms, PlotData, PlotError, Track, BINS_PER_DECADE};
 use crate::engine::Nanos;
 
 const TIME_H: u32 = 300;

@@ -10,10 +10,10 @@
 
 use plotters::prelude::*;
 
+use super::data::SPANS;
 use super::draw::{caption_font, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Layout, LegendRow, MARGIN, ROW_H, TITLE_H};
+use super::frame::{self, Area, DrawResult, Layout, LegendRow, PlotError, MARGIN, ROW_H, TITLE_H};
 use super::style::Look;
-use super::{PlotError, SPANS};
 use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, DEFAULT_WINDOW_NS};
 
 /// Distance bins at most.

@@ -1,14 +1,19 @@
 //! What every picture `--plot` draws shares: its width (the legend's
 //! labels and the title decide it), the title across the top, and the
 //! legend table below the charts (a row per line: its colour and marker,
-//! its label, its figures).
+//! its label, its figures); and [`PlotError`], when the drawing fails.
 
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+use thiserror::Error;
 
 use super::style::Look;
-use super::PlotError;
+
+/// The SVG could not be drawn: the drawing library's message.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("{0}")]
+pub(crate) struct PlotError(String);
 
 pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
 

@@ -7,9 +7,10 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::draw::{caption_font, log_ticks, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Layout, LegendRow, FONT, MARGIN, ROW_H, TITLE_H};
+use super::frame::{
+    self, Area, DrawResult, Layout, LegendRow, PlotError, FONT, MARGIN, ROW_H, TITLE_H,
+};
 use super::style::Look;
-use super::PlotError;
 use crate::engine::sweep::step::StepFigures;
 use crate::engine::sweep::verdict::SweepSummary;
 

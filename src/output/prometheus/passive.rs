@@ -190,8 +190,8 @@ pub(super) fn write_directions(out: &mut Exposition, links: &[&Metrics]) {
 
 #[cfg(test)]
 mod tests {
-    use super::super::render;
-    use super::super::test_start as info;
+    use super::super::render::render;
+    use super::super::test_support::{has, test_start as info};
     use super::*;
     use crate::engine::matcher::MatchEvent;
     use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
@@ -201,10 +201,6 @@ mod tests {
     use crate::output::Reporter;
 
     const MS: Nanos = 1_000_000;
-
-    fn has(text: &str, line: &str) {
-        assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
-    }
 
     fn passive_start(link: &str) -> StartInfo {
         StartInfo {

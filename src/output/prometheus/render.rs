@@ -8,8 +8,21 @@ use std::fmt::Write as _;
 use super::exposition::{escape, Exposition, Family, Figure};
 use super::link_node::write_link_nodes;
 use super::passive::{write_directions, write_sources};
-use super::{Metrics, RadioSeries, Scope, Series, BUCKETS_S};
+use super::radio_series::RadioSeries;
+use super::series::{Series, BUCKETS_S};
+use super::Metrics;
 use crate::engine::radio::{Field, RadioKind, UNKNOWN};
+
+/// What a [`Metrics`] stands for, which decides how its counts are typed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Scope {
+    /// A run or a continuous link: counters that only grow (`_total`).
+    Run,
+    /// One `/probe`: that probe's counts (as gauges) and histogram, under
+    /// names of their own, so `rate()` is never applied to figures that
+    /// start afresh each scrape.
+    Probe,
+}
 
 /// A per-responder count: a counter in a run, a gauge of one probe under
 /// a name of its own (see [`Scope`]).
@@ -490,7 +503,7 @@ pub(crate) fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_start as info;
+    use super::super::test_support::{has, test_start as info};
     use super::*;
     use crate::engine::matcher::MatchEvent;
     use crate::engine::observe::Observer;
@@ -654,10 +667,6 @@ mod tests {
             );
             assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
         }
-    }
-
-    fn has(text: &str, line: &str) {
-        assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
     }
 
     fn radio(rssi: u8, txbuf: u8) -> RadioReport {

@@ -2,7 +2,10 @@
 
 use std::io::{self, Write};
 
-use super::{ms, ms_us, rate, write_histogram, write_signing, TextReporter};
+use super::format::{ms, ms_us, rate};
+use super::histogram::write_histogram;
+use super::signing::write_signing;
+use super::TextReporter;
 use crate::engine::stats::RttSummary;
 use crate::engine::summary::CommandSummary;
 use crate::engine::{observe::CommandEvent, CommandSpec};

@@ -2,7 +2,10 @@
 
 use std::io::{self, Write};
 
-use super::{ms, ms_us, per_second, rate, write_histogram, write_signing, TextReporter};
+use super::format::{ms, ms_us, per_second, rate};
+use super::histogram::write_histogram;
+use super::signing::write_signing;
+use super::TextReporter;
 use crate::engine::capacity::WireBudget;
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;

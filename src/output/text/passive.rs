@@ -5,7 +5,8 @@
 
 use std::io::{self, Write};
 
-use super::{per_second, TextReporter};
+use super::format::per_second;
+use super::TextReporter;
 use crate::engine::observe::StartInfo;
 use crate::engine::summary::passive::{
     LinkTotals, MsgCount, PassiveSummary, PerLink, Silence, SourceSummary,

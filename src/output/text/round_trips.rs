@@ -4,7 +4,7 @@
 
 use std::io::{self, Write};
 
-use super::ms_us;
+use super::format::ms_us;
 use crate::engine::probe::passive::round_trips::{PairSummary, RequesterSummary, RoundTripSummary};
 use crate::transport::tlog::LogFacts;
 

@@ -5,7 +5,8 @@
 
 use std::io::{self, Write};
 
-use super::{ms_us, TextReporter};
+use super::format::ms_us;
+use super::TextReporter;
 use crate::engine::capacity::WireBudget;
 use crate::engine::sweep::step::Phase;
 use crate::engine::sweep::step::{StepFigures, KNEE_MAX_LOSS};

@@ -1,0 +1,59 @@
+//! The JSON reporter: where its lines go, and which it writes (`-q`
+//! keeps the summary only, a command run its commands' own events).
+
+use std::io::{self, Write};
+
+use super::lines::{Line, Lines};
+use crate::output::WallClock;
+
+pub(crate) struct JsonReporter<W: Write> {
+    pub(super) out: W,
+    /// Only the summary object (`--json -q`).
+    pub(super) quiet: bool,
+    pub(super) lines: Lines,
+}
+
+impl<W: Write> JsonReporter<W> {
+    pub(crate) fn new(out: W, quiet: bool, wall: WallClock) -> Self {
+        JsonReporter {
+            out,
+            quiet,
+            lines: Lines {
+                wall,
+                link: None,
+                command: false,
+            },
+        }
+    }
+
+    #[cfg(test)]
+    pub(crate) fn into_inner(self) -> W {
+        self.out
+    }
+
+    /// Adds `"link": LINK` to every event (the start and summary objects
+    /// always carry it), for runs over several links.
+    pub(crate) fn with_link(mut self, link: Option<String>) -> Self {
+        self.lines.link = link;
+        self
+    }
+}
+
+impl<W: Write> JsonReporter<W> {
+    /// Writes the summary line, in quiet mode too, and pushes it out.
+    pub(super) fn summary_line(lines: &Lines, out: &mut W, line: &Line<'_>) -> io::Result<()> {
+        lines.write(out, line)?;
+        out.flush()
+    }
+
+    /// Writes an event's line: not in quiet mode, and in a command run
+    /// only the command's own (`command`).
+    pub(super) fn event_line(&mut self, line: Option<Line<'_>>, command: bool) -> io::Result<()> {
+        match line {
+            Some(line) if !self.quiet && command == self.lines.command => {
+                self.lines.write(&mut self.out, &line)
+            }
+            _ => Ok(()),
+        }
+    }
+}

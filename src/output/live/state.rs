@@ -1,0 +1,501 @@
+//! What `--live` shows of one link, kept from its session's events:
+//! [`LiveState`], a row per responder (its counts, RTT figures and recent
+//! outcomes) or, in a passive run, per source; and the [`Screen`] one
+//! frame is drawn from.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::io;
+
+use super::sources::{SourceRow, Sources};
+use crate::engine::matcher::MatchEvent;
+use crate::engine::roster::Identity;
+use crate::engine::stats::RttStats;
+use crate::engine::summary::passive::TableSummary;
+use crate::engine::summary::ProbeName;
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+use crate::output::{Reporter, RunKind, StartInfo};
+
+/// Outcomes kept per responder for the strip: more than a wide terminal shows.
+pub(crate) const RECENT: usize = 240;
+
+/// One request's outcome for one responder, as the strip shows it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Mark {
+    Rtt(Nanos),
+    Lost,
+    Late,
+}
+
+#[derive(Clone)]
+struct Track {
+    sent: u64,
+    received: u64,
+    lost: u64,
+    late: u64,
+    duplicate: u64,
+    rtt: RttStats,
+    recent: VecDeque<Mark>,
+    heard_as: Option<String>,
+}
+
+impl Track {
+    fn new() -> Self {
+        Track {
+            sent: 0,
+            received: 0,
+            lost: 0,
+            late: 0,
+            duplicate: 0,
+            rtt: RttStats::new(),
+            recent: VecDeque::with_capacity(RECENT),
+            heard_as: None,
+        }
+    }
+
+    fn push(&mut self, mark: Mark) {
+        if self.recent.len() == RECENT {
+            self.recent.pop_front();
+        }
+        self.recent.push_back(mark);
+    }
+}
+
+/// What the view shows, updated from events; bounded per responder.
+#[derive(Clone, Default)]
+pub(crate) struct LiveState {
+    link: String,
+    /// `None` before the session starts.
+    probe: Option<ProbeName>,
+    /// Session time of the latest event.
+    now: Nanos,
+    waiting: bool,
+    /// The link failed (to open, or during the run): why, as its error
+    /// line says, shown in its section while the others go on.
+    failed: Option<String>,
+    tracks: BTreeMap<SysComp, Track>,
+    /// A passive run's sources (`None` in a probe run, whose table is told
+    /// for its direction split only).
+    sources: Option<Sources>,
+}
+
+/// The state follows the link's session: it takes what the view shows.
+impl Reporter for LiveState {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        self.link = info.link.clone();
+        self.probe = Some(info.probe);
+        if matches!(info.run, RunKind::Passive { .. }) {
+            self.sources = Some(Sources::default());
+        }
+        Ok(())
+    }
+
+    fn waiting_for_peer(&mut self) -> io::Result<()> {
+        self.waiting = true;
+        Ok(())
+    }
+
+    fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
+        match self.sources.as_mut() {
+            Some(sources) => sources.heard(id, identity),
+            None => {
+                self.tracks.entry(id).or_insert_with(Track::new).heard_as = Some(format!(
+                    "{} {}",
+                    identity.vehicle,
+                    identity.autopilot_said()
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// A passive run's table (an echo run's is for its direction split).
+    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
+        if let Some(sources) = self.sources.as_mut() {
+            sources.table(at, table);
+            self.now = self.now.max(at);
+            self.waiting = false;
+        }
+        Ok(())
+    }
+
+    fn link_failed(&mut self, _: Nanos, error: &str) -> io::Result<()> {
+        self.failed = Some(error.to_string());
+        Ok(())
+    }
+
+    fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
+        self.waiting = false;
+        let (id, at) = match *e {
+            MatchEvent::Reply { responder, at, .. }
+            | MatchEvent::Late { responder, at, .. }
+            | MatchEvent::Duplicate { responder, at, .. }
+            | MatchEvent::Lost { responder, at, .. } => (responder, at),
+            MatchEvent::Stale { .. } => return Ok(()),
+        };
+        self.now = self.now.max(at);
+        let t = self.tracks.entry(id).or_insert_with(Track::new);
+        match *e {
+            MatchEvent::Reply { rtt, .. } => {
+                t.sent += 1;
+                t.received += 1;
+                t.rtt.record(rtt);
+                t.push(Mark::Rtt(rtt));
+            }
+            MatchEvent::Lost { .. } => {
+                t.sent += 1;
+                t.lost += 1;
+                t.push(Mark::Lost);
+            }
+            MatchEvent::Late { .. } => {
+                t.late += 1;
+                t.push(Mark::Late);
+            }
+            MatchEvent::Duplicate { .. } => t.duplicate += 1,
+            MatchEvent::Stale { .. } => {}
+        }
+        Ok(())
+    }
+}
+
+impl LiveState {
+    /// A link that could not be opened: its section says why.
+    pub(super) fn unopened(link: &str, error: &str) -> Self {
+        LiveState {
+            link: link.to_string(),
+            failed: Some(error.to_string()),
+            ..LiveState::default()
+        }
+    }
+
+    /// The figures to draw, computed while the state is locked so the
+    /// drawing itself runs without the lock.
+    pub(crate) fn screen(&self) -> Screen {
+        Screen {
+            link: self.link.clone(),
+            probe: self.probe,
+            now: self.now,
+            waiting: self.waiting,
+            failed: self.failed.clone(),
+            rows: match &self.sources {
+                Some(sources) => Rows::Passive(sources.rows()),
+                None => Rows::Echo(self.echo_rows()),
+            },
+        }
+    }
+
+    fn echo_rows(&self) -> Vec<RowView> {
+        self.tracks
+            .iter()
+            .map(|(id, t)| {
+                let s = t.rtt.summary();
+                RowView {
+                    id: format!("{}/{}", id.sysid, id.compid),
+                    heard_as: t.heard_as.clone(),
+                    sent: t.sent,
+                    received: t.received,
+                    lost: t.lost,
+                    late: t.late,
+                    duplicate: t.duplicate,
+                    last_ms: t.rtt.last().map(|ns| ns as f64 / 1e6),
+                    p50_ms: s.map(|s| s.p50_us / 1e3),
+                    p99_ms: s.map(|s| s.p99_us / 1e3),
+                    jitter_ms: s.map(|s| s.jitter_us / 1e3),
+                    recent: t.recent.iter().copied().collect(),
+                }
+            })
+            .collect()
+    }
+}
+
+/// A section's rows, by the kind of run.
+#[derive(Debug, Clone)]
+pub(crate) enum Rows {
+    /// A responder's each (PING, TIMESYNC, commands).
+    Echo(Vec<RowView>),
+    /// A source's each (`--passive`).
+    Passive(Vec<SourceRow>),
+}
+
+impl Rows {
+    pub(crate) fn len(&self) -> usize {
+        match self {
+            Rows::Echo(r) => r.len(),
+            Rows::Passive(r) => r.len(),
+        }
+    }
+
+    pub(crate) fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}
+
+/// One responder's row.
+#[derive(Debug, Clone)]
+pub(crate) struct RowView {
+    pub(crate) id: String,
+    pub(crate) heard_as: Option<String>,
+    pub(crate) sent: u64,
+    pub(crate) received: u64,
+    pub(crate) lost: u64,
+    pub(crate) late: u64,
+    pub(crate) duplicate: u64,
+    pub(crate) last_ms: Option<f64>,
+    pub(crate) p50_ms: Option<f64>,
+    pub(crate) p99_ms: Option<f64>,
+    pub(crate) jitter_ms: Option<f64>,
+    pub(crate) recent: Vec<Mark>,
+}
+
+/// Everything one frame shows.
+#[derive(Debug, Clone)]
+pub(crate) struct Screen {
+    pub(crate) link: String,
+    pub(crate) probe: Option<ProbeName>,
+    /// Session time of the latest event.
+    pub(crate) now: Nanos,
+    pub(crate) waiting: bool,
+    /// Why the link failed, if it did.
+    pub(crate) failed: Option<String>,
+    pub(crate) rows: Rows,
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::Duration;
+
+    use ratatui::backend::TestBackend;
+    use ratatui::style::Color;
+    use ratatui::Terminal;
+
+    use super::super::view;
+    use super::*;
+    use crate::output::Event;
+
+    impl LiveState {
+        fn on_start(&mut self, info: &StartInfo) {
+            self.start(info).expect("the state takes every start");
+        }
+
+        fn on_event(&mut self, event: &Event<'_>) {
+            self.tell(event).expect("the state takes every event");
+        }
+    }
+
+    fn reply(responder: SysComp, seq: u32, rtt_ms: u64) -> Event<'static> {
+        Event::Match(MatchEvent::Reply {
+            responder,
+            seq,
+            rtt: rtt_ms * 1_000_000,
+            sent_at: u64::from(seq) * 100_000_000,
+            at: u64::from(seq) * 100_000_000 + rtt_ms * 1_000_000,
+            out_of_order: false,
+            first_from_responder: seq == 0,
+        })
+    }
+
+    fn lost(responder: SysComp, seq: u32) -> Event<'static> {
+        Event::Match(MatchEvent::Lost {
+            responder,
+            seq,
+            sent_at: u64::from(seq) * 100_000_000,
+            at: u64::from(seq) * 100_000_000 + 2_000_000_000,
+        })
+    }
+
+    fn state() -> LiveState {
+        let mut s = LiveState::default();
+        s.on_start(&start("sim:?responders=2"));
+        let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));
+        for seq in 0..30 {
+            s.on_event(&reply(a, seq, 10 + u64::from(seq % 5)));
+            if seq % 7 == 3 {
+                s.on_event(&lost(b, seq));
+            } else {
+                s.on_event(&reply(b, seq, 20 + u64::from(seq % 3) * 4));
+            }
+        }
+        s.on_event(&Event::Match(MatchEvent::Late {
+            responder: b,
+            seq: 3,
+            rtt: 2_500_000_000,
+            sent_at: 300_000_000,
+            at: 2_800_000_000,
+        }));
+        s
+    }
+
+    fn start(link: &str) -> StartInfo {
+        StartInfo {
+            link: link.into(),
+            probe: ProbeName::Ping,
+            ours: SysComp::new(255, 190),
+            interval: Duration::from_millis(100),
+            timeout: Duration::from_secs(2),
+            count: None,
+            run: RunKind::Echo,
+        }
+    }
+
+    /// The frame drawn in a `width` x `height` terminal.
+    fn frame(width: u16, height: u16, screens: &[Screen]) -> String {
+        let mut terminal = Terminal::new(TestBackend::new(width, height)).unwrap();
+        terminal.draw(|f| view::render(f, screens)).unwrap();
+        terminal.backend().to_string()
+    }
+
+    #[test]
+    fn a_frame_shows_counts_figures_and_losses() {
+        let screen = state().screen();
+        insta::assert_snapshot!("80_columns", frame(80, 8, std::slice::from_ref(&screen)));
+        // A wider terminal shows more of the recent outcomes.
+        insta::assert_snapshot!("120_columns", frame(120, 8, &[screen]));
+    }
+
+    #[test]
+    fn several_links_get_a_section_each() {
+        let mut other = LiveState::default();
+        other.on_start(&start(
+            "udpout:10.8.0.2:14550?a-very-long-name-that-does-not-fit-in-eighty-columns",
+        ));
+        other.on_event(&Event::WaitingForPeer);
+        let screens = [state().screen(), other.screen()];
+        insta::assert_snapshot!(frame(80, 11, &screens));
+    }
+
+    #[test]
+    fn responders_beyond_the_screen_are_counted() {
+        let mut many = LiveState::default();
+        many.on_start(&start("sim:?responders=12"));
+        for sysid in 1..=12 {
+            many.on_event(&reply(SysComp::new(sysid, 1), 0, 10));
+        }
+        let screens = [state().screen(), many.screen()];
+        insta::assert_snapshot!(frame(80, 12, &screens));
+    }
+
+    /// A passive run of `seconds`: 1/1 (a quadrotor heard by its
+    /// HEARTBEAT) at 50 frames a second, losing one in every third
+    /// second, with a silent second; 2/1 at 10 a second, once sending a
+    /// frame twice; the SiK radio's own reports once a second.
+    fn passive(seconds: u64) -> LiveState {
+        use crate::engine::probe::passive::tracker::{SourceTable, RADIO_SOURCE};
+        let mut s = LiveState::default();
+        s.on_start(&StartInfo {
+            probe: ProbeName::Passive,
+            run: RunKind::Passive {
+                heartbeat: true,
+                log: false,
+            },
+            ..start("sim:?responders=2&stream=ATTITUDE@50")
+        });
+        let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));
+        let identity = crate::engine::roster::Identity {
+            mav_type: 2,
+            autopilot: 12,
+            vehicle: "quadrotor".into(),
+            autopilot_name: "px4".into(),
+            first_heard: 0,
+        };
+        s.on_event(&Event::Heard {
+            id: a,
+            identity: &identity,
+        });
+        let mut table = SourceTable::new(None, 32);
+        let ms = 1_000_000;
+        let (mut seq_a, mut seq_b) = (0u8, 0u8);
+        for second in 0..seconds {
+            let t0 = second * 1_000 * ms;
+            for k in 0..50 {
+                // Second 7 is silent; one frame lost every third second.
+                if second != 7 && !(second % 3 == 2 && k == 25) {
+                    table.on_frame(a, seq_a, 30, 40, t0 + k * 20 * ms);
+                }
+                seq_a = seq_a.wrapping_add(1);
+            }
+            for k in 0..10 {
+                table.on_frame(b, seq_b, 33, 40, t0 + k * 100 * ms);
+                if second == 4 && k == 3 {
+                    table.on_frame(b, seq_b, 33, 40, t0 + k * 100 * ms + ms);
+                }
+                seq_b = seq_b.wrapping_add(1);
+            }
+            table.on_frame(RADIO_SOURCE, second as u8, 109, 38, t0 + 500 * ms);
+            let at = t0 + 1_000 * ms;
+            s.on_event(&Event::Sources {
+                at,
+                table: &table.summary(at),
+            });
+        }
+        s
+    }
+
+    #[test]
+    fn a_passive_frame_shows_each_source_and_its_seconds() {
+        // A wider terminal shows more of the recent seconds.
+        let screen = passive(60).screen();
+        insta::assert_snapshot!(
+            "passive_80_columns",
+            frame(80, 8, std::slice::from_ref(&screen))
+        );
+        insta::assert_snapshot!("passive_120_columns", frame(120, 8, &[screen]));
+    }
+
+    #[test]
+    fn a_second_that_lost_frames_is_red_and_a_silent_one_a_dot() {
+        let screen = passive(12).screen();
+        let mut terminal = Terminal::new(TestBackend::new(80, 8)).unwrap();
+        terminal.draw(|f| view::render(f, &[screen])).unwrap();
+        let buffer = terminal.backend().buffer();
+        // 1/1's row: the strip follows its rate, newest last.
+        let row: Vec<_> = (0..80).map(|x| &buffer[(x, 3)]).collect();
+        let symbols: Vec<&str> = row.iter().map(|c| c.symbol()).collect();
+        let at = (0..76)
+            .find(|&x| symbols[x..x + 5].concat() == "49.0 ")
+            .expect("1/1's rate");
+        let strip: Vec<_> = row[at + 5..at + 17].iter().collect();
+        let colours: Vec<Color> = strip.iter().map(|c| c.fg).collect();
+        let symbols: String = strip.iter().map(|c| c.symbol()).collect();
+        assert_eq!(symbols, "███████·████", "{row:?}");
+        // Seconds 2, 5 and 11 lost a frame; 8 lost the silent second 7's.
+        let red: Vec<usize> = (0..12).filter(|&i| colours[i] == Color::Red).collect();
+        assert_eq!(red, [2, 5, 8, 11]);
+        assert_eq!(colours[7], Color::DarkGray);
+        assert_eq!(colours[0], Color::Green);
+    }
+
+    #[test]
+    fn a_probe_runs_table_makes_no_source_rows() {
+        use crate::engine::probe::passive::tracker::SourceTable;
+        let mut s = state();
+        let mut table = SourceTable::new(None, 32);
+        table.on_frame(SysComp::new(1, 1), 0, 0, 21, 0);
+        s.on_event(&Event::Sources {
+            at: 1_000_000_000,
+            table: &table.summary(1_000_000_000),
+        });
+        assert!(matches!(s.screen().rows, Rows::Echo(ref r) if r.len() == 2));
+    }
+
+    #[test]
+    fn a_sources_seconds_are_bounded() {
+        let s = passive(RECENT as u64 + 60);
+        let Rows::Passive(rows) = s.screen().rows else {
+            panic!("not a passive screen");
+        };
+        assert!(rows.iter().all(|r| r.recent.len() == RECENT));
+        assert_eq!(rows[1].received, 10 * (RECENT as u64 + 60) + 1);
+    }
+
+    #[test]
+    fn recent_outcomes_are_bounded() {
+        let mut s = state();
+        let a = SysComp::new(1, 1);
+        for seq in 0..10_000 {
+            s.on_event(&reply(a, seq, 5));
+        }
+        let t = &s.tracks[&a];
+        assert_eq!(t.recent.len(), RECENT);
+        assert_eq!(t.sent, 10_030);
+    }
+}

@@ -1,0 +1,344 @@
+//! One link's metrics: what its sessions' events add up to, per
+//! responder, radio, node and source, and the link's own state.
+
+use std::collections::BTreeMap;
+
+use super::radio_series::RadioSeries;
+use super::series::{Series, Split};
+use super::{link_node, sources};
+use crate::engine::clock_offset::ClockSummary;
+use crate::engine::matcher::MatchEvent;
+use crate::engine::observe::{CommandEvent, StartInfo};
+use crate::engine::radio::{RadioKind, RadioReport, MAX_RADIOS};
+use crate::engine::summary::passive::TableSummary;
+use crate::engine::summary::{ProbeName, Summary};
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+
+/// One link's metrics.
+#[derive(Debug, Default)]
+pub(crate) struct Metrics {
+    pub(super) link: String,
+    /// `None` before a session starts (an unopened link's metrics).
+    pub(super) probe: Option<ProbeName>,
+    pub(super) responders: BTreeMap<SysComp, Series>,
+    /// Each radio heard.
+    pub(super) radios: BTreeMap<SysComp, RadioSeries>,
+    /// Each node heard by its LINK_NODE_STATUS.
+    pub(super) link_nodes: link_node::Nodes,
+    /// Each source's packet sequence (a passive run's figures; an echo
+    /// run's responders' downlink).
+    pub(super) sources: sources::Sources,
+    /// Open now, and (a continuous link of `mavping serve`) how often it
+    /// was reopened after breaking; `None` before a session starts.
+    pub(super) state: Option<LinkState>,
+    pub(super) requests: Requests,
+}
+
+/// Requests the link put on the wire, whoever answered them: in the
+/// sessions before (a continuous link reopened), and in this one so far.
+#[derive(Debug, Default, Clone, Copy)]
+pub(super) struct Requests {
+    earlier: u64,
+    pub(super) session: u64,
+}
+
+impl Requests {
+    pub(super) fn total(self) -> u64 {
+        self.earlier + self.session
+    }
+}
+
+#[derive(Debug, Default, Clone, Copy)]
+pub(super) struct LinkState {
+    pub(super) up: bool,
+    pub(super) restarts: u64,
+}
+
+impl Metrics {
+    /// A continuous link's metrics, named `link` before its first session
+    /// (so a link that never opens still shows `mavping_link_up 0`).
+    pub(crate) fn continuous(link: &str, probe: ProbeName) -> Self {
+        Metrics {
+            link: link.to_string(),
+            probe: Some(probe),
+            state: Some(LinkState::default()),
+            ..Metrics::default()
+        }
+    }
+
+    /// A run's link that could not be opened: down from the start.
+    pub(crate) fn unopened(link: &str) -> Self {
+        Metrics {
+            link: link.to_string(),
+            state: Some(LinkState::default()),
+            ..Metrics::default()
+        }
+    }
+
+    /// A link opened (`true`) or broke (`false`).
+    pub(crate) fn set_up(&mut self, up: bool) {
+        let state = self.state.get_or_insert_with(LinkState::default);
+        state.up = up;
+    }
+
+    /// Whether a continuous link is open now.
+    pub(crate) fn is_up(&self) -> bool {
+        self.state.is_some_and(|s| s.up)
+    }
+
+    /// A continuous link is being reopened after it broke.
+    pub(crate) fn restarted(&mut self) {
+        self.state.get_or_insert_with(LinkState::default).restarts += 1;
+    }
+
+    pub(crate) fn on_start(&mut self, info: &StartInfo) {
+        self.link = info.link.clone();
+        self.probe = Some(info.probe);
+        self.set_up(true);
+        // A continuous link's new session: its sequences start afresh,
+        // its counters go on.
+        self.sources.carry();
+        self.requests.earlier += std::mem::take(&mut self.requests.session);
+        for s in self.responders.values_mut() {
+            s.split = Split::Live;
+            s.answering = false;
+        }
+    }
+
+    /// Whether the link sends requests (a passive one does not); `None`
+    /// before a session starts.
+    pub(super) fn sends(&self) -> bool {
+        self.probe.is_some_and(|p| p != ProbeName::Passive)
+    }
+
+    /// Responders that answered in the link's current session.
+    pub(super) fn answering(&self) -> usize {
+        self.responders.values().filter(|s| s.answering).count()
+    }
+
+    /// The table of sources, as told while the session goes on (`ended`
+    /// false) or in its summary.
+    pub(crate) fn on_sources(&mut self, table: &TableSummary, ended: bool) {
+        self.sources.update(table, ended);
+    }
+
+    pub(crate) fn on_event(&mut self, e: &MatchEvent) {
+        match *e {
+            MatchEvent::Reply { responder, rtt, .. } => {
+                let auto = self.probe == Some(ProbeName::Auto);
+                let s = self.responders.entry(responder).or_default();
+                s.decided(Some(rtt));
+                // PING until its clock says TIMESYNC (told with its first
+                // reply, in the same report).
+                if auto && s.via_timesync.is_none() {
+                    s.via_timesync = Some(0);
+                }
+            }
+            MatchEvent::Lost { responder, .. } => {
+                self.responders.entry(responder).or_default().decided(None);
+            }
+            // A late reply was already counted sent and lost when its
+            // timeout passed.
+            MatchEvent::Late { responder, .. } => {
+                let s = self.responders.entry(responder).or_default();
+                s.late += 1;
+                s.answering = true;
+            }
+            MatchEvent::Duplicate { responder, .. } => {
+                let s = self.responders.entry(responder).or_default();
+                s.duplicate += 1;
+                s.answering = true;
+            }
+            MatchEvent::Stale { .. } => {}
+        }
+    }
+
+    /// `--probe command`: a command target is a responder whose requests
+    /// are commands; acknowledged is received, failed is lost, and the
+    /// time to ACK its RTT.
+    pub(crate) fn on_command(&mut self, e: &CommandEvent) {
+        match *e {
+            CommandEvent::Acked {
+                target,
+                time_to_ack,
+                ..
+            } => self
+                .responders
+                .entry(target)
+                .or_default()
+                .decided(Some(time_to_ack)),
+            CommandEvent::Failed { target, .. } => {
+                self.responders.entry(target).or_default().decided(None);
+            }
+            CommandEvent::LateAck { from, .. } => {
+                let s = self.responders.entry(from).or_default();
+                s.late += 1;
+                s.answering = true;
+            }
+            CommandEvent::DuplicateAck { from, .. } => {
+                let s = self.responders.entry(from).or_default();
+                s.duplicate += 1;
+                s.answering = true;
+            }
+            CommandEvent::Send { .. } | CommandEvent::Skipped { .. } => {}
+        }
+    }
+
+    /// A RADIO_STATUS from a radio of `kind`: its figures replace the
+    /// radio's last ones.
+    pub(crate) fn on_radio(&mut self, id: SysComp, report: RadioReport, kind: RadioKind) {
+        if self.radios.len() < MAX_RADIOS || self.radios.contains_key(&id) {
+            self.radios
+                .entry(id)
+                .or_insert_with(|| RadioSeries::new(kind))
+                .record(report, kind);
+        }
+    }
+
+    /// A TIMESYNC responder's clock offset so far, carried from the run's
+    /// start to `at` along the measured drift (none until it is measured).
+    pub(crate) fn on_clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) {
+        let auto = self.probe == Some(ProbeName::Auto);
+        if let Some(s) = self.responders.get_mut(&id) {
+            // Only TIMESYNC replies give a clock.
+            if auto {
+                s.via_timesync = Some(1);
+            }
+            let drift_ns = clock.drift_ppm.unwrap_or(0.0) * 1e-6 * at as f64;
+            s.clock_offset_s = Some((clock.offset_ns as f64 + drift_ns) / 1e9);
+        }
+    }
+
+    /// The figures known only at the end (percentiles from the HDR
+    /// histogram), so a last scrape or a `/probe` has them.
+    pub(crate) fn on_summary(&mut self, summary: &Summary) {
+        for r in &summary.responders {
+            let s = self.responders.entry(r.id).or_default();
+            // The live figure, when there is one, is the later.
+            if let (None, Some(c)) = (s.clock_offset_s, &r.clock) {
+                s.clock_offset_s = Some(c.offset_ns as f64 / 1e9);
+            }
+            if let Some(rtt) = &r.rtt {
+                s.p50_s = Some(rtt.p50_us / 1e6);
+                s.p99_s = Some(rtt.p99_us / 1e6);
+            }
+            s.split = Split::AtEnd(r.direction);
+            if let Some(p) = r.probe {
+                s.via_timesync = Some(u8::from(p == ProbeName::Timesync));
+            }
+        }
+    }
+
+    #[cfg(test)]
+    /// The exposition of this link alone, as `--prometheus` serves it.
+    pub(crate) fn render(&self) -> String {
+        super::render::render(&[self])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::test_support::test_start;
+    use super::*;
+    use crate::output::{Event, Reporter};
+
+    #[test]
+    fn counters_and_histogram_follow_the_events() {
+        let mut m = Metrics::default();
+        m.on_start(&test_start("udpout:\"a\\b\""));
+        let r = SysComp::new(1, 1);
+        let reply = |seq, rtt| MatchEvent::Reply {
+            responder: r,
+            seq,
+            rtt,
+            sent_at: 0,
+            at: rtt,
+            out_of_order: false,
+            first_from_responder: seq == 0,
+        };
+        m.on_event(&reply(0, 800_000));
+        m.on_event(&reply(1, 30_000_000));
+        m.on_event(&MatchEvent::Lost {
+            responder: r,
+            seq: 2,
+            sent_at: 0,
+            at: 0,
+        });
+        m.on_event(&MatchEvent::Late {
+            responder: r,
+            seq: 2,
+            rtt: 20_000_000_000,
+            sent_at: 0,
+            at: 0,
+        });
+        m.on_event(&MatchEvent::Duplicate {
+            responder: r,
+            seq: 1,
+            rtt: 1,
+            sent_at: 0,
+            at: 0,
+        });
+        let text = m.render();
+        let l = r#"link="udpout:\"a\\b\"",probe="ping",sysid="1",compid="1""#;
+        for line in [
+            format!("mavping_sent_total{{{l}}} 3"),
+            format!("mavping_received_total{{{l}}} 2"),
+            format!("mavping_lost_total{{{l}}} 1"),
+            format!("mavping_late_total{{{l}}} 1"),
+            format!("mavping_duplicate_total{{{l}}} 1"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"0.0005\"}} 0"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"0.001\"}} 1"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"0.025\"}} 1"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"0.05\"}} 2"),
+            format!("mavping_rtt_seconds_bucket{{{l},le=\"+Inf\"}} 2"),
+            format!("mavping_rtt_seconds_count{{{l}}} 2"),
+            format!("mavping_last_rtt_seconds{{{l}}} 0.03"),
+        ] {
+            assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
+        }
+        let sum: f64 = text
+            .lines()
+            .find_map(|x| x.strip_prefix(&format!("mavping_rtt_seconds_sum{{{l}}} ")))
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!((sum - 0.0308).abs() < 1e-12, "{sum}");
+        assert!(!text.contains("mavping_clock_offset_seconds{"));
+    }
+
+    /// A continuous link's requests go on across its sessions; who answers
+    /// is its current session's.
+    #[test]
+    fn requests_add_up_across_sessions_and_responders_are_the_sessions() {
+        let mut m = Metrics::continuous("udpout:h:1", ProbeName::Ping);
+        let link = r#"link="udpout:h:1",probe="ping""#;
+        let has = |m: &Metrics, line: String| {
+            let text = m.render();
+            assert!(text.lines().any(|x| x == line), "{line} not in\n{text}");
+        };
+        has(&m, format!("mavping_requests_total{{{link}}} 0"));
+        has(&m, format!("mavping_responders{{{link}}} 0"));
+        let _ = m.start(&test_start("udpout:h:1"));
+        let _ = m.tell(&Event::Progress { at: 0, requests: 3 });
+        m.on_event(&MatchEvent::Reply {
+            responder: SysComp::new(1, 1),
+            seq: 0,
+            rtt: 1,
+            sent_at: 0,
+            at: 1,
+            out_of_order: false,
+            first_from_responder: true,
+        });
+        has(&m, format!("mavping_requests_total{{{link}}} 3"));
+        has(&m, format!("mavping_responders{{{link}}} 1"));
+        // Reopened: nobody has answered the new session yet.
+        let _ = m.start(&test_start("udpout:h:1"));
+        let _ = m.tell(&Event::Progress { at: 0, requests: 2 });
+        has(&m, format!("mavping_requests_total{{{link}}} 5"));
+        has(&m, format!("mavping_responders{{{link}}} 0"));
+        // A passive link sends nothing: neither family.
+        let passive = Metrics::continuous("udpin:0.0.0.0:1", ProbeName::Passive);
+        assert!(!passive.render().contains("mavping_requests_total"));
+    }
+}

@@ -1,0 +1,112 @@
+//! The text reporter: where its lines go (through the link's prefix, the
+//! summary under its own header), and which it shows (`-q`, `-D`,
+//! `--every-reply`, what kind of run it is).
+
+use std::io::{self, Write};
+
+use super::echo;
+use crate::engine::radio::{RadioKind, RadioReport};
+use crate::engine::Nanos;
+use crate::frame::SysComp;
+use crate::output::{Prefixed, RunKind, WallClock};
+
+pub(crate) struct TextReporter<W: Write> {
+    /// Event lines go through the link's prefix (with several links);
+    /// the summary is written unprefixed, under its own header.
+    pub(super) out: Prefixed<W>,
+    /// Only the summary (`-q`).
+    pub(super) quiet: bool,
+    /// What kind of run it is, which decides what event lines show.
+    pub(super) run: RunKind,
+    pub(super) timeout: std::time::Duration,
+    /// Print every reply even at high rates (`--every-reply`).
+    pub(super) every_reply: bool,
+    /// Above [`echo::MAX_LINE_RATE`] requests/s: one status line per
+    /// second instead of a line per event, so printing never paces the
+    /// engine.
+    pub(super) progress: Option<echo::Progress>,
+    /// The latest RADIO_STATUS and its radio's kind, and when a reply
+    /// line last showed one.
+    pub(super) radio: Option<(SysComp, RadioReport, RadioKind)>,
+    pub(super) radio_shown: Option<Nanos>,
+    /// `-D`: each event line starts with its Unix time, as `ping -D`.
+    pub(super) timestamps: Option<WallClock>,
+    /// Step rows printed as the steps ended; the summary shows the rest.
+    pub(super) steps_shown: usize,
+}
+
+impl<W: Write> TextReporter<W> {
+    pub(crate) fn new(out: W, quiet: bool) -> Self {
+        TextReporter {
+            out: Prefixed::new(out, None),
+            quiet,
+            run: RunKind::Echo,
+            timeout: std::time::Duration::ZERO,
+            every_reply: false,
+            progress: None,
+            radio: None,
+            radio_shown: None,
+            timestamps: None,
+            steps_shown: 0,
+        }
+    }
+
+    /// Event lines start with `[UNIX.MICROS] ` on `wall` (`-D`).
+    pub(crate) fn timestamps(mut self, wall: Option<WallClock>) -> Self {
+        self.timestamps = wall;
+        self
+    }
+
+    /// The `-D` stamp of an event at session time `at`, if asked for.
+    pub(super) fn stamp(&mut self, at: Nanos) -> io::Result<()> {
+        let Some(wall) = self.timestamps else {
+            return Ok(());
+        };
+        let since = wall
+            .at(at)
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        write!(
+            self.out,
+            "[{}.{:06}] ",
+            since.as_secs(),
+            since.subsec_micros()
+        )
+    }
+
+    /// A line per reply whatever the rate.
+    pub(crate) fn every_reply(mut self, every: bool) -> Self {
+        self.every_reply = every;
+        self
+    }
+
+    /// Event lines start with `[LINK] ` (one of several links).
+    pub(crate) fn prefixed(mut self, prefix: Option<String>) -> Self {
+        self.out = Prefixed::new(self.out.into_inner(), prefix);
+        self
+    }
+
+    #[cfg(test)]
+    pub(crate) fn into_inner(self) -> W {
+        self.out.into_inner()
+    }
+}
+
+impl<W: Write> TextReporter<W> {
+    /// The summary's header, as ping's; the summary is written unprefixed.
+    pub(super) fn summary_head(&mut self, link: &str) -> io::Result<&mut W> {
+        let quiet = self.quiet;
+        let out = self.out.inner();
+        if !quiet {
+            writeln!(out)?;
+        }
+        writeln!(out, "--- {link} mavping statistics ---")?;
+        Ok(out)
+    }
+
+    /// Event lines other than a command's are shown: not in quiet mode,
+    /// and not in a command run, which shows its commands' fate only.
+    pub(super) fn shows_events(&self) -> bool {
+        !self.quiet && self.run.command().is_none()
+    }
+}
