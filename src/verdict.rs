@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use crate::engine::stats::RttSummary;
 use crate::engine::summary::passive::PassiveSummary;
-use crate::engine::summary::{CommandSummary, LinkSummary, ResponderSummary, Summary};
+use crate::engine::summary::{CommandSummary, EchoSummary, LinkSummary, ResponderSummary};
 use crate::exit::{self, LinkEnd};
 use crate::frame::SysComp;
 
@@ -287,7 +287,7 @@ fn judge_who(ids: &[SysComp], t: &Thresholds, who: Who, out: &mut Vec<Failure>) 
 }
 
 /// Judges a finished run. A link failure is exit 2 whatever else held.
-pub(crate) fn judge(summary: &Summary, t: &Thresholds) -> Verdict {
+pub(crate) fn judge(summary: &EchoSummary, t: &Thresholds) -> Verdict {
     let mut failures = Vec::new();
     let answering: Vec<&ResponderSummary> = summary
         .responders
@@ -417,10 +417,10 @@ mod tests {
         }
     }
 
-    fn summary(responders: Vec<ResponderSummary>) -> Summary {
-        Summary {
+    fn summary(responders: Vec<ResponderSummary>) -> EchoSummary {
+        EchoSummary {
             responders,
-            ..Summary::empty("sim:", 10)
+            ..EchoSummary::empty("sim:", 10)
         }
     }
 

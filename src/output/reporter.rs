@@ -16,7 +16,7 @@ use crate::engine::observe::{CommandEvent, Event, Observer, RadioHeard, StartInf
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{PassiveSummary, TableSummary};
-use crate::engine::summary::Summary;
+use crate::engine::summary::EchoSummary;
 use crate::engine::summary::{CommandSummary, EchoInterim, Interim, LinkSummary, PassiveInterim};
 use crate::engine::sweep_report::StepFigures;
 use crate::engine::Nanos;
@@ -114,7 +114,7 @@ pub(crate) trait Reporter {
     }
 
     /// An echo run's summary (PING, TIMESYNC, a run in steps).
-    fn echo_summary(&mut self, summary: &Summary, verdict: &Verdict) -> io::Result<()> {
+    fn echo_summary(&mut self, summary: &EchoSummary, verdict: &Verdict) -> io::Result<()> {
         Ok(())
     }
 

@@ -20,8 +20,8 @@ use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
 use crate::engine::summary::ProbeName;
 use crate::engine::summary::{
-    AckResult, CommandSummary, CommandTargetSummary, EchoInterim, Interim, LinkSummary,
-    PassiveInterim, ResponderSummary, ScheduleSummary, Summary,
+    AckResult, CommandSummary, CommandTargetSummary, EchoInterim, EchoSummary, Interim,
+    LinkSummary, PassiveInterim, ResponderSummary, ScheduleSummary,
 };
 use crate::engine::sweep::step::{Phase, StepFigures, StepRadio};
 use crate::engine::sweep::verdict::{self as sweep_verdict, SweepEnd, SweepSummary};
@@ -175,7 +175,7 @@ pub(crate) fn link_nodes(compared: bool) -> Vec<LinkNodeSummary> {
     summaries
 }
 
-pub(crate) fn echo_summary(probe: &'static str) -> Summary {
+pub(crate) fn echo_summary(probe: &'static str) -> EchoSummary {
     let mut first = responder(ONE, true);
     if probe == "timesync" {
         first.clock = Some(clock(true));
@@ -184,7 +184,7 @@ pub(crate) fn echo_summary(probe: &'static str) -> Summary {
     if probe == "timesync" {
         second.clock = Some(clock(false));
     }
-    Summary {
+    EchoSummary {
         probe: probe_name(probe),
         duration_s: 1.234,
         in_flight: 1,
@@ -219,7 +219,7 @@ pub(crate) fn echo_summary(probe: &'static str) -> Summary {
         radios: radios(),
         wire: Some(capacity::budget(57_600, Version::V2, 99, 2)),
         link_node: link_nodes(true),
-        ..Summary::empty("sim:?seed=1", 8)
+        ..EchoSummary::empty("sim:?seed=1", 8)
     }
 }
 
@@ -488,7 +488,7 @@ pub(crate) fn sweep_run(plan: PlanKind, borrowed: &Borrowed) -> Vec<Told<'_>> {
         PlanKind::Load { .. } => "load",
     };
     let steps = borrowed.steps.clone();
-    let summary = Summary {
+    let summary = EchoSummary {
         sweep: Some(Box::new(SweepSummary {
             kind,
             knee: sweep_verdict::knee(&steps),

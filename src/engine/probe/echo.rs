@@ -21,7 +21,7 @@ use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
 use crate::engine::summary::{
-    responder_summaries, Direction, EchoInterim, Interim, LinkSummary, ScheduleSummary, Summary,
+    responder_summaries, Direction, EchoInterim, EchoSummary, Interim, LinkSummary, ScheduleSummary,
 };
 use crate::engine::Nanos;
 use crate::engine::SessionConfig;
@@ -357,7 +357,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
                 ),
             ))
         }));
-        let summary = Summary {
+        let summary = EchoSummary {
             link: cfg.link_name.clone(),
             probe: name,
             ours: self.ours,

@@ -1,5 +1,5 @@
 //! The end of an echo run (PING, TIMESYNC, auto, a sweep's steps): the
-//! [`Summary`] with each responder's figures, its send pacing, and the
+//! [`EchoSummary`] with each responder's figures, its send pacing, and the
 //! wire budget a serial link's baud rate sets; built from the matcher and
 //! the roster.
 
@@ -59,7 +59,7 @@ pub(crate) struct ScheduleSummary {
 }
 
 #[derive(Debug, Clone, Serialize)]
-pub struct Summary {
+pub struct EchoSummary {
     pub(crate) link: String,
     pub(crate) probe: ProbeName,
     pub(crate) ours: SysComp,
@@ -104,7 +104,7 @@ pub struct Summary {
     pub(crate) sweep: Option<Box<SweepSummary>>,
 }
 
-impl Summary {
+impl EchoSummary {
     /// True when at least one responder answered in time.
     pub(crate) fn any_reply(&self) -> bool {
         self.responders.iter().any(|r| r.counts.received > 0)
@@ -197,11 +197,11 @@ pub(crate) fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<Res
 }
 
 #[cfg(test)]
-impl Summary {
+impl EchoSummary {
     /// A run of `requests` PINGs on `link` with nothing in it, for tests
     /// to fill in.
-    pub(crate) fn empty(link: &str, requests: u64) -> Summary {
-        Summary {
+    pub(crate) fn empty(link: &str, requests: u64) -> EchoSummary {
+        EchoSummary {
             link: link.into(),
             probe: ProbeName::Ping,
             ours: SysComp::new(250, 190),
@@ -235,10 +235,10 @@ mod tests {
     use crate::engine::matcher::Counts;
     use crate::engine::stats::RttStats;
 
-    fn run(lost: u64, requested_rate_hz: f64, min_rtt_ms: u64) -> Summary {
+    fn run(lost: u64, requested_rate_hz: f64, min_rtt_ms: u64) -> EchoSummary {
         let mut rtt = RttStats::new();
         rtt.record(min_rtt_ms * 1_000_000);
-        Summary {
+        EchoSummary {
             responders: vec![ResponderSummary {
                 id: SysComp::new(1, 1),
                 counts: Counts {
@@ -263,7 +263,7 @@ mod tests {
                 lateness_max_us: 0.0,
                 not_sent: 0,
             }),
-            ..Summary::empty("serial:/dev/x:57600", 10)
+            ..EchoSummary::empty("serial:/dev/x:57600", 10)
         }
     }
 

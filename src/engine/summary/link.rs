@@ -3,14 +3,14 @@
 //! command or passive summary.
 
 use super::command::CommandSummary;
-use super::echo::Summary;
+use super::echo::EchoSummary;
 use super::passive;
 
 /// The end of one link's run, by probe kind.
 #[derive(Debug, Clone)]
 pub enum LinkSummary {
     /// PING or TIMESYNC.
-    Echo(Box<Summary>),
+    Echo(Box<EchoSummary>),
     /// COMMAND_LONG until acknowledged.
     Command(Box<CommandSummary>),
     /// `--passive`: no probes, the sources' own sequence numbers.

@@ -16,7 +16,7 @@ pub use command::CommandSummary;
 pub(crate) use command::{AckResult, CommandTargetSummary};
 pub(crate) use direction::Direction;
 pub(crate) use echo::{responder_summaries, ScheduleSummary, HISTOGRAM_ROWS};
-pub use echo::{ResponderSummary, Summary};
+pub use echo::{EchoSummary, ResponderSummary};
 pub use interim::{EchoInterim, Interim, PassiveInterim};
 pub use link::LinkSummary;
 pub use probe_name::ProbeName;

@@ -212,7 +212,7 @@ pub(super) struct Summary<'a> {
 }
 
 impl<'a> Summary<'a> {
-    pub(super) fn of(s: &'a summary::Summary, verdict: &'a Verdict, link: &'a str) -> Self {
+    pub(super) fn of(s: &'a summary::EchoSummary, verdict: &'a Verdict, link: &'a str) -> Self {
         Summary {
             r#type: "summary",
             schema_version: SCHEMA_VERSION,

@@ -35,7 +35,7 @@ use crate::engine::observe::{CommandEvent, RadioHeard};
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
-use crate::engine::summary::{CommandSummary, Interim, Summary};
+use crate::engine::summary::{CommandSummary, EchoSummary, Interim};
 use crate::engine::sweep_report::StepFigures;
 use crate::frame::SysComp;
 use crate::output::StartInfo;
@@ -90,7 +90,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
         self.out.flush()
     }
 
-    fn echo_summary(&mut self, s: &Summary, verdict: &Verdict) -> io::Result<()> {
+    fn echo_summary(&mut self, s: &EchoSummary, verdict: &Verdict) -> io::Result<()> {
         let line = echo::Summary::of(s, verdict, self.lines.link_or(&s.link));
         Self::summary_line(&self.lines, &mut self.out, &Line::Summary(Box::new(line)))
     }

@@ -31,7 +31,7 @@ use crate::engine::matcher::MatchEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::passive::TableSummary;
-use crate::engine::summary::Summary;
+use crate::engine::summary::EchoSummary;
 use crate::engine::Nanos;
 use crate::verdict::Verdict;
 pub(crate) use frame::PlotError;
@@ -64,7 +64,7 @@ impl Reporter for PlotLink {
         Ok(())
     }
 
-    fn echo_summary(&mut self, s: &Summary, _: &Verdict) -> io::Result<()> {
+    fn echo_summary(&mut self, s: &EchoSummary, _: &Verdict) -> io::Result<()> {
         let mut data = self.data.borrow_mut();
         data.on_summary(self.index, &s.responders);
         if let Some(sweep) = &s.sweep {

@@ -11,7 +11,7 @@ use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{CommandEvent, StartInfo};
 use crate::engine::radio::{RadioKind, RadioReport, MAX_RADIOS};
 use crate::engine::summary::passive::TableSummary;
-use crate::engine::summary::{ProbeName, Summary};
+use crate::engine::summary::{EchoSummary, ProbeName};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 
@@ -212,7 +212,7 @@ impl Metrics {
 
     /// The figures known only at the end (percentiles from the HDR
     /// histogram), so a last scrape or a `/probe` has them.
-    pub(crate) fn on_summary(&mut self, summary: &Summary) {
+    pub(crate) fn on_summary(&mut self, summary: &EchoSummary) {
         for r in &summary.responders {
             let s = self.responders.entry(r.id).or_default();
             // The live figure, when there is one, is the later.

@@ -36,7 +36,7 @@ use crate::engine::link_node::LinkNodeReport;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{CommandEvent, RadioHeard, StartInfo};
 use crate::engine::summary::passive::{PassiveSummary, TableSummary};
-use crate::engine::summary::{CommandSummary, Summary};
+use crate::engine::summary::{CommandSummary, EchoSummary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -97,7 +97,7 @@ impl Reporter for Metrics {
         Ok(())
     }
 
-    fn echo_summary(&mut self, summary: &Summary, _: &Verdict) -> io::Result<()> {
+    fn echo_summary(&mut self, summary: &EchoSummary, _: &Verdict) -> io::Result<()> {
         self.requests.session = summary.requests;
         self.on_summary(summary);
         Ok(())

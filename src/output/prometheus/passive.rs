@@ -485,9 +485,9 @@ mod tests {
             clock: None,
             direction,
         };
-        m.on_summary(&crate::engine::summary::Summary {
+        m.on_summary(&crate::engine::summary::EchoSummary {
             responders: vec![responder],
-            ..crate::engine::summary::Summary::empty("sim:", 4)
+            ..crate::engine::summary::EchoSummary::empty("sim:", 4)
         });
         let text = render(&[&m]);
         let l = r#"link="sim:",probe="ping",sysid="1",compid="1""#;

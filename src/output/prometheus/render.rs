@@ -47,7 +47,7 @@ const COUNTS: [Count; 5] = [
         run: "mavping_sent_total",
         probe: "mavping_probe_sent",
         help: "Requests in the responder's window whose fate is decided (received + lost).",
-        value: |s| s.sent,
+        value: |s| s.decided,
     },
     Count {
         run: "mavping_received_total",
@@ -610,9 +610,9 @@ mod tests {
             }),
             direction: None,
         };
-        b.on_summary(&crate::engine::summary::Summary {
+        b.on_summary(&crate::engine::summary::EchoSummary {
             responders: vec![responder],
-            ..crate::engine::summary::Summary::empty("b", 4)
+            ..crate::engine::summary::EchoSummary::empty("b", 4)
         });
         b.set_up(false);
         (a, b)

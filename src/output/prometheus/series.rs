@@ -14,7 +14,9 @@ pub(crate) const BUCKETS_S: [f64; 14] = [
 
 #[derive(Debug, Default, Clone)]
 pub(super) struct Series {
-    pub(super) sent: u64,
+    /// Requests whose fate is decided (received + lost): what
+    /// `mavping_sent_total` exports, not the matcher's `sent`.
+    pub(super) decided: u64,
     pub(super) received: u64,
     pub(super) lost: u64,
     pub(super) late: u64,
@@ -58,7 +60,7 @@ impl Series {
     }
 
     pub(super) fn decided(&mut self, received: Option<Nanos>) {
-        self.sent += 1;
+        self.decided += 1;
         match received {
             Some(rtt) => {
                 self.answering = true;
@@ -70,7 +72,7 @@ impl Series {
     }
 
     pub(super) fn loss_ratio(&self) -> Option<f64> {
-        (self.sent > 0).then(|| self.lost as f64 / self.sent as f64)
+        (self.decided > 0).then(|| self.lost as f64 / self.decided as f64)
     }
 
     /// Its loss by direction, from its requests and its own frames'
@@ -78,7 +80,9 @@ impl Series {
     pub(super) fn direction(&self, downlink: Option<&SourceSeries>) -> Option<Direction> {
         match self.split {
             Split::AtEnd(at_end) => at_end,
-            Split::Live => Direction::of_sequence(self.loss_ratio()?, self.sent, &downlink?.seq()),
+            Split::Live => {
+                Direction::of_sequence(self.loss_ratio()?, self.decided, &downlink?.seq())
+            }
         }
     }
 }

@@ -10,7 +10,7 @@ use crate::engine::capacity::WireBudget;
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::{
-    Direction, EchoInterim, ProbeName, ResponderSummary, ScheduleSummary, Summary,
+    Direction, EchoInterim, EchoSummary, ProbeName, ResponderSummary, ScheduleSummary,
 };
 use crate::engine::Nanos;
 use crate::output::StartInfo;
@@ -339,7 +339,7 @@ fn write_direction(out: &mut impl Write, d: &Direction) -> io::Result<()> {
 
 pub(super) fn write_summary(
     out: &mut impl Write,
-    s: &Summary,
+    s: &EchoSummary,
     verdict: &Verdict,
     steps_shown: usize,
 ) -> io::Result<()> {
@@ -374,7 +374,7 @@ pub(super) fn write_summary(
 }
 
 /// `30 requests sent in 0.640 s`, and when nothing answered, why.
-fn write_requests(out: &mut impl Write, s: &Summary) -> io::Result<()> {
+fn write_requests(out: &mut impl Write, s: &EchoSummary) -> io::Result<()> {
     write!(out, "{} requests sent in {:.3} s", s.requests, s.duration_s)?;
     if s.in_flight > 0 {
         write!(out, ", {} still in flight (not counted)", s.in_flight)?;
@@ -391,7 +391,7 @@ fn write_requests(out: &mut impl Write, s: &Summary) -> io::Result<()> {
 }
 
 /// `wire: 57600 baud carries ...`: what the baud rate allows.
-fn write_wire(out: &mut impl Write, s: &Summary, w: &WireBudget) -> io::Result<()> {
+fn write_wire(out: &mut impl Write, s: &EchoSummary, w: &WireBudget) -> io::Result<()> {
     let unproven = w
         .ignorer
         .map(|device| format!(" (unproven on {device})"))
@@ -425,7 +425,7 @@ fn write_wire(out: &mut impl Write, s: &Summary, w: &WireBudget) -> io::Result<(
 
 /// What the link did besides carrying replies: junk, replies from the
 /// wrong peer, time down.
-fn write_link_faults(out: &mut impl Write, s: &Summary) -> io::Result<()> {
+fn write_link_faults(out: &mut impl Write, s: &EchoSummary) -> io::Result<()> {
     let f = &s.frames;
     if f.bad_crc + f.damaged + f.skipped_bytes + f.unknown_id + f.truncated + s.foreign_replies > 0
     {
@@ -454,7 +454,7 @@ fn write_link_faults(out: &mut impl Write, s: &Summary) -> io::Result<()> {
 }
 
 /// `schedule: 50/s achieved of 50/s, send lateness ...`.
-fn write_schedule(out: &mut impl Write, s: &Summary, p: &ScheduleSummary) -> io::Result<()> {
+fn write_schedule(out: &mut impl Write, s: &EchoSummary, p: &ScheduleSummary) -> io::Result<()> {
     let rate = if p.not_sent > 0 {
         format!(
             "the link took {}/s of {}/s ({} requests not sent: it is not reading)",

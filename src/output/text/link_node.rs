@@ -19,7 +19,9 @@ fn grouped(n: u64) -> String {
     out
 }
 
-fn percent(ratio: f64) -> String {
+/// Always two decimals: the vehicle's counts and the estimate are compared
+/// digit for digit.
+fn percent_2dp(ratio: f64) -> String {
     format!("{:.2}%", ratio * 100.0)
 }
 
@@ -40,7 +42,7 @@ pub(super) fn write_link_nodes(out: &mut impl Write, nodes: &[LinkNodeSummary]) 
                 "received {}, lost {} ({})",
                 grouped(n.received_delta),
                 grouped(n.lost_delta),
-                percent(loss)
+                percent_2dp(loss)
             )?,
             None if n.reports == 1 => write!(out, "one report, no count to grow")?,
             None => write!(out, "received +0, lost +0")?,
@@ -68,8 +70,8 @@ fn write_comparison(out: &mut impl Write, c: &UplinkComparison) -> io::Result<()
     writeln!(
         out,
         "  beside mavping's up ~{} ± {} for {}: {} ({:.1} standard errors apart{})",
-        percent(c.estimate),
-        percent(c.estimate_stderr),
+        percent_2dp(c.estimate),
+        percent_2dp(c.estimate_stderr),
         c.responder,
         if c.agrees { "agrees" } else { "DISAGREES" },
         c.sigmas,

@@ -27,7 +27,7 @@ use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{CommandEvent, RadioHeard};
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
-use crate::engine::summary::{CommandSummary, EchoInterim, PassiveInterim, Summary};
+use crate::engine::summary::{CommandSummary, EchoInterim, EchoSummary, PassiveInterim};
 use crate::engine::sweep_report::StepFigures;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -110,7 +110,7 @@ impl<W: Write> Reporter for TextReporter<W> {
     }
 
     /// Steps not shown as they ended (-q, or cut short) are shown here.
-    fn echo_summary(&mut self, s: &Summary, verdict: &Verdict) -> io::Result<()> {
+    fn echo_summary(&mut self, s: &EchoSummary, verdict: &Verdict) -> io::Result<()> {
         let steps_shown = self.steps_shown;
         let out = self.summary_head(&s.link)?;
         echo::write_summary(out, s, verdict, steps_shown)?;
