@@ -6,8 +6,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use super::{
-    invalid, signing, validate_baud, validate_ids, validate_listen, Config, ConfigError, Keys,
-    LinkConfig, OutputConfig, Probe, MAX_RATE, MAX_TIMEOUT,
+    signing, validate_baud, validate_ids, validate_listen, Config, ConfigError, Keys, LinkConfig,
+    OutputConfig, Probe, MAX_RATE, MAX_TIMEOUT,
 };
 use crate::cli::{Format, PingArgs, ProbeKind};
 use crate::engine::matcher::Window;
@@ -24,6 +24,8 @@ use crate::verdict::{Expected, Thresholds};
 /// More requests than this in flight at once would need an unreasonably
 /// large pending table: lower the rate or the timeout.
 pub(super) const MAX_IN_FLIGHT: u64 = 1 << 21;
+/// Where the options that follow an echo's replies work.
+pub(super) const ECHO_PROBES: &str = "--probe ping and timesync, not command";
 /// The longest interval between requests (the lowest rate).
 const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
 
@@ -42,10 +44,11 @@ fn validate_scoped_expect(
             .zip(links)
             .position(|(given, spec)| given.trim() == link || spec.to_string() == *link)
             .ok_or_else(|| {
-                invalid(format!(
-                    "--expect {link}={}: {link} is not one of the links given",
-                    e.id
-                ))
+                ConfigError::value(
+                    "--expect",
+                    format!("{link}={}", e.id),
+                    format!("{link} is not one of the links given"),
+                )
             })?;
         scoped.push((index, e.id));
     }
@@ -65,11 +68,16 @@ fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigE
         Some(text) => {
             let addr = text
                 .parse::<SocketAddr>()
-                .or_else(|_| text.parse::<std::net::IpAddr>().map(|ip| SocketAddr::new(ip, 0)))
+                .or_else(|_| {
+                    text.parse::<std::net::IpAddr>()
+                        .map(|ip| SocketAddr::new(ip, 0))
+                })
                 .map_err(|_| {
-                    invalid(format!(
-                        "--bind {text}: expected ADDR or ADDR:PORT, e.g. 192.168.1.5 or 0.0.0.0:14551"
-                    ))
+                    ConfigError::value(
+                        "--bind",
+                        text,
+                        "expected ADDR or ADDR:PORT, e.g. 192.168.1.5 or 0.0.0.0:14551",
+                    )
                 })?;
             let outgoing = links.iter().any(|l| {
                 matches!(
@@ -78,10 +86,12 @@ fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigE
                 )
             });
             if !outgoing {
-                return Err(invalid(format!(
-                    "--bind {text}: only links that send first (udpout:, tcp:, udpbcast:) take a \
-                     local address; a listening link names its own"
-                )));
+                return Err(ConfigError::value(
+                    "--bind",
+                    text,
+                    "only links that send first (udpout:, tcp:, udpbcast:) take a local \
+                     address; a listening link names its own",
+                ));
             }
             Some(addr)
         }
@@ -89,14 +99,16 @@ fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigE
     let interface = match cli.interface.as_deref() {
         None => None,
         Some(name) if name.is_empty() || name.len() > 15 || name.contains(['/', ' ']) => {
-            return Err(invalid(format!(
-                "-I {name}: expected a network interface name (up to 15 characters), e.g. wlan0"
-            )))
+            return Err(ConfigError::value(
+                "-I",
+                name,
+                "expected a network interface name (up to 15 characters), e.g. wlan0",
+            ))
         }
         Some(name) if cfg!(mavping_portable) => {
-            return Err(invalid(crate::transport::route::interface_needs_linux(
-                name,
-            )))
+            return Err(ConfigError::InterfaceNeedsLinux {
+                interface: name.to_string(),
+            })
         }
         Some(name) => Some(name.to_string()),
     };
@@ -116,7 +128,10 @@ fn links_from_file(path: &Path) -> Result<Vec<(String, LinkSpec)>, ConfigError> 
     } else {
         std::fs::read_to_string(path)
     }
-    .map_err(|e| invalid(format!("-f {shown}: cannot read it: {e}")))?;
+    .map_err(|source| ConfigError::Unreadable {
+        what: format!("-f {shown}"),
+        source,
+    })?;
     let mut links = Vec::new();
     for (n, line) in text.lines().enumerate() {
         let link = line.split('#').next().unwrap_or_default().trim();
@@ -125,11 +140,11 @@ fn links_from_file(path: &Path) -> Result<Vec<(String, LinkSpec)>, ConfigError> 
         }
         let spec = link
             .parse::<LinkSpec>()
-            .map_err(|e| invalid(format!("-f {shown}, line {}: {e}", n + 1)))?;
+            .map_err(|e| ConfigError::from(e).within(format!("-f {shown}, line {}", n + 1)))?;
         links.push((link.to_string(), spec));
     }
     if links.is_empty() {
-        return Err(invalid(format!("-f {shown}: no link in it")));
+        return Err(ConfigError::value("-f", shown, "no link in it"));
     }
     Ok(links)
 }
@@ -139,22 +154,17 @@ fn links_from_file(path: &Path) -> Result<Vec<(String, LinkSpec)>, ConfigError> 
 fn validate_links(given: &[String], links: &[LinkSpec]) -> Result<(), ConfigError> {
     for (i, link) in links.iter().enumerate() {
         if links[..i].iter().any(|l| l.to_string() == link.to_string()) {
-            return Err(invalid(format!(
-                "{} names the same link as an earlier one ({link}): name each link once",
-                given[i]
-            )));
+            return Err(ConfigError::SameLink {
+                given: given[i].clone(),
+                link: link.clone(),
+            });
         }
     }
     if links.iter().any(LinkSpec::is_virtual) && !links.iter().all(LinkSpec::is_virtual) {
         if let Some(log) = links.iter().find(|l| l.is_log()) {
-            return Err(invalid(format!(
-                "{log} runs on the log's own clock and cannot run beside live links: read logs \
-                 on their own (or beside sim:?clock=virtual links)"
-            )));
+            return Err(ConfigError::LogBesideLive { log: log.clone() });
         }
-        return Err(invalid(
-            "sim:?clock=virtual cannot run beside other links: use clock=virtual on every sim: link or on none",
-        ));
+        return Err(ConfigError::VirtualBesideReal);
     }
     Ok(())
 }
@@ -183,10 +193,10 @@ fn refuse_probes_on_logs(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), Confi
         .find_map(|(set, flag)| set.then_some(flag))
     });
     match given {
-        Some(flag) => Err(invalid(format!(
-            "{flag}: {log} is a telemetry log, read without probes (--passive is implied); \
-             drop {flag}"
-        ))),
+        Some(flag) => Err(ConfigError::LogProbed {
+            flag,
+            log: log.clone(),
+        }),
         None => Ok(()),
     }
 }
@@ -200,18 +210,24 @@ fn validate_tlog(cli: &PingArgs, given: &[String], links: &[LinkSpec]) -> Result
     };
     let shown = path.display();
     if let Some(log) = links.iter().find(|l| l.is_log()) {
-        return Err(invalid(format!(
-            "--tlog {shown}: {log} is a telemetry log already; --tlog records live links"
-        )));
+        return Err(ConfigError::value(
+            "--tlog",
+            shown,
+            format!("{log} is a telemetry log already; --tlog records live links"),
+        ));
     }
     if links.len() > writer::MAX_LINKS {
-        return Err(invalid(format!(
-            "--tlog {shown}: records at most {} links in one log (the stamps' link bits), not {}: \
-             run {} separately",
-            writer::MAX_LINKS,
-            links.len(),
-            given[writer::MAX_LINKS..].join(" ")
-        )));
+        return Err(ConfigError::value(
+            "--tlog",
+            shown,
+            format!(
+                "records at most {} links in one log (the stamps' link bits), not {}: run {} \
+                 separately",
+                writer::MAX_LINKS,
+                links.len(),
+                given[writer::MAX_LINKS..].join(" ")
+            ),
+        ));
     }
     Ok(())
 }
@@ -222,10 +238,11 @@ fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
     if !svg {
-        return Err(invalid(format!(
-            "--plot {}: only .svg files can be drawn",
-            path.display()
-        )));
+        return Err(ConfigError::value(
+            "--plot",
+            path.display(),
+            "only .svg files can be drawn",
+        ));
     }
     Ok(path.to_path_buf())
 }
@@ -233,10 +250,11 @@ fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
 /// node_exporter's textfile collector reads `*.prom` files only.
 fn validate_textfile(path: &Path) -> Result<PathBuf, ConfigError> {
     if path.extension().is_none_or(|e| e != "prom") {
-        return Err(invalid(format!(
-            "--prometheus-textfile {}: node_exporter's textfile collector reads only files named *.prom",
-            path.display()
-        )));
+        return Err(ConfigError::value(
+            "--prometheus-textfile",
+            path.display(),
+            "node_exporter's textfile collector reads only files named *.prom",
+        ));
     }
     Ok(path.to_path_buf())
 }
@@ -253,14 +271,17 @@ fn validate_views(cli: &PingArgs) -> Result<(), ConfigError> {
             (cli.samples.is_some(), "--samples"),
         ] {
             if set {
-                return Err(invalid(format!(
-                    "{flag} works with --probe ping and timesync, not command"
-                )));
+                return Err(ConfigError::WorksWith {
+                    setting: flag,
+                    with: ECHO_PROBES,
+                });
             }
         }
     }
     if cli.live && (cli.json || cli.format == Format::Json) {
-        return Err(invalid("--live cannot be used with --json"));
+        return Err(ConfigError::Other(
+            "--live cannot be used with --json".into(),
+        ));
     }
     Ok(())
 }
@@ -269,15 +290,19 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
     let interval = match (cli.rate, cli.interval) {
         (Some(rate), _) => {
             if !rate.is_finite() || rate <= 0.0 || rate > MAX_RATE {
-                return Err(invalid(format!(
-                    "--rate {rate}: expected more than 0 and at most {MAX_RATE} requests per second"
-                )));
+                return Err(ConfigError::value(
+                    "--rate",
+                    rate,
+                    format!("expected more than 0 and at most {MAX_RATE} requests per second"),
+                ));
             }
             // A tiny rate would mean an interval past what a Duration holds.
             if rate < 1.0 / MAX_INTERVAL.as_secs_f64() {
-                return Err(invalid(format!(
-                    "--rate {rate}: at least one request a day (1.2e-5 per second)"
-                )));
+                return Err(ConfigError::value(
+                    "--rate",
+                    rate,
+                    "at least one request a day (1.2e-5 per second)",
+                ));
             }
             Duration::from_secs_f64(1.0 / rate)
         }
@@ -288,16 +313,18 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
         },
     };
     if interval < Duration::from_micros(1) {
-        return Err(invalid(format!(
-            "--interval {}: at least 1us (1,000,000 requests per second)",
-            humantime::format_duration(interval)
-        )));
+        return Err(ConfigError::value(
+            "--interval",
+            humantime::format_duration(interval),
+            "at least 1us (1,000,000 requests per second)",
+        ));
     }
     if interval > MAX_INTERVAL {
-        return Err(invalid(format!(
-            "--interval {}: at most 1 day",
-            humantime::format_duration(interval)
-        )));
+        return Err(ConfigError::value(
+            "--interval",
+            humantime::format_duration(interval),
+            "at most 1 day",
+        ));
     }
     Ok(interval)
 }
@@ -305,14 +332,16 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
 fn validate_signing(cli: &PingArgs) -> Result<Option<SigningConfig>, ConfigError> {
     let policy = signing(&cli.signing, cli.require_signed)?;
     if policy.is_none() && cli.require_signed {
-        return Err(invalid(
-            "--require-signed needs a signing key (--signing-key, MAVPING_SIGNING_KEY or --signing-key-file)",
-        ));
+        return Err(ConfigError::Needs {
+            setting: "--require-signed",
+            needs: "a signing key (--signing-key, MAVPING_SIGNING_KEY or --signing-key-file)",
+        });
     }
     if policy.is_some() && cli.mavlink_version == 1 {
-        return Err(invalid(
-            "--mavlink 1 with a signing key: signing needs MAVLink 2 (drop --mavlink 1)",
-        ));
+        return Err(ConfigError::SignedMavlink1 {
+            mavlink: "--mavlink",
+            hint: " (drop --mavlink 1)",
+        });
     }
     Ok(policy)
 }
@@ -325,12 +354,12 @@ pub(super) fn pending_capacity(
 ) -> Result<usize, ConfigError> {
     let in_flight = (timeout.as_nanos() / interval.as_nanos()) as u64 + 1;
     if in_flight > MAX_IN_FLIGHT {
-        return Err(invalid(format!(
-            "--timeout {} at one request every {} keeps {in_flight} requests in flight \
-             (at most {MAX_IN_FLIGHT}): lower the rate or the timeout",
-            humantime::format_duration(timeout),
-            humantime::format_duration(interval)
-        )));
+        return Err(ConfigError::InFlight {
+            timeout,
+            interval,
+            in_flight,
+            max: MAX_IN_FLIGHT,
+        });
     }
     Ok(((in_flight * 2 + 16) as usize).next_power_of_two().max(64))
 }
@@ -339,10 +368,11 @@ pub(super) fn pending_capacity(
 /// option or configuration key in errors.
 fn parse_target(key: Keys, text: &str) -> Result<SysComp, ConfigError> {
     let bad = || {
-        invalid(format!(
-            "{} {text}: expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)",
-            key.name("target")
-        ))
+        ConfigError::value(
+            key.name("target"),
+            text,
+            "expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)",
+        )
     };
     let (sys, comp) = text.split_once('/').unwrap_or((text, "0"));
     let sysid = sys.trim().parse::<u8>().map_err(|_| bad())?;
@@ -358,27 +388,28 @@ fn parse_command(key: Keys, text: &str) -> Result<(u16, [f32; 7]), ConfigError> 
     let command = match name.parse::<u16>() {
         Ok(id) => id,
         Err(_) => codec::command_id_from_name(name).ok_or_else(|| {
-            invalid(format!(
-                "{key} {text}: '{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"
-            ))
+            ConfigError::value(
+                &key,
+                text,
+                format!("'{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"),
+            )
         })?,
     };
     let mut params = [0.0f32; 7];
     for (i, p) in parts.enumerate() {
         if i >= params.len() {
-            return Err(invalid(format!(
-                "{key} {text}: at most 7 params after the command"
-            )));
+            return Err(ConfigError::value(
+                &key,
+                text,
+                "at most 7 params after the command",
+            ));
         }
         params[i] = p
             .parse::<f32>()
             .ok()
             .filter(|v| v.is_finite())
             .ok_or_else(|| {
-                invalid(format!(
-                    "{key} {text}: param {} '{p}' is not a number",
-                    i + 1
-                ))
+                ConfigError::value(&key, text, format!("param {} '{p}' is not a number", i + 1))
             })?;
     }
     Ok((command, params))
@@ -401,7 +432,7 @@ pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, Con
     match choice.kind {
         ProbeKind::Ping | ProbeKind::Auto => {
             if target.is_some() {
-                return Err(invalid(format!(
+                return Err(ConfigError::Other(format!(
                     "{}: PING requests are always broadcast; use it with {} timesync or command",
                     flag("target"),
                     flag("probe")
@@ -419,19 +450,22 @@ pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, Con
         ProbeKind::Command => {
             let target = target.unwrap_or(SysComp::new(1, 1));
             if target.sysid == 0 {
-                return Err(invalid(format!(
-                    "{} 0: a command needs one target system (e.g. {} 1/1)",
+                return Err(ConfigError::value(
                     flag("target"),
-                    flag("target")
-                )));
+                    0,
+                    format!(
+                        "a command needs one target system (e.g. {} 1/1)",
+                        flag("target")
+                    ),
+                ));
             }
             let retry = choice.retry_interval;
             if retry.is_zero() || retry > MAX_TIMEOUT {
-                return Err(invalid(format!(
-                    "{} {}: expected more than 0 and at most 1h",
+                return Err(ConfigError::value(
                     flag("retry-interval"),
-                    humantime::format_duration(retry)
-                )));
+                    humantime::format_duration(retry),
+                    "expected more than 0 and at most 1h",
+                ));
             }
             let (command, params) = parse_command(key, choice.command)?;
             Ok(Probe::Command(CommandSpec {
@@ -474,13 +508,17 @@ pub(super) fn count_wait(count: u64, interval: Duration, timeout: Duration) -> O
 fn validate_probe(cli: &PingArgs, links: &[LinkSpec]) -> Result<Probe, ConfigError> {
     let logs = links.iter().any(LinkSpec::is_log);
     if cli.gap.is_some() && !cli.passive && !logs {
-        return Err(invalid(
-            "--gap works with --passive (or a tlog: link, which is passive)",
-        ));
+        return Err(ConfigError::WorksWith {
+            setting: "--gap",
+            with: "--passive (or a tlog: link, which is passive)",
+        });
     }
     if cli.passive || logs {
         if cli.gap.is_some_and(|g| g < Duration::from_millis(10)) {
-            return Err(invalid("--gap: expected at least 10ms"));
+            return Err(ConfigError::Expected {
+                setting: "--gap",
+                expected: "at least 10ms",
+            });
         }
         return Ok(Probe::Passive { gap: cli.gap });
     }
@@ -513,22 +551,26 @@ fn session(
     super::sweep::validate_flags(cli)?;
     let interval = validate_interval(cli)?;
     if cli.count == Some(0) {
-        return Err(invalid("--count 0: expected at least 1"));
+        return Err(ConfigError::value("--count", 0, "expected at least 1"));
     }
     if cli.timeout.is_zero() || cli.timeout > MAX_TIMEOUT {
-        return Err(invalid(format!(
-            "--timeout {}: expected more than 0 and at most 1h",
-            humantime::format_duration(cli.timeout)
-        )));
+        return Err(ConfigError::value(
+            "--timeout",
+            humantime::format_duration(cli.timeout),
+            "expected more than 0 and at most 1h",
+        ));
     }
     if cli.deadline.is_some_and(|d| d.is_zero()) {
-        return Err(invalid("--deadline 0: expected more than 0"));
+        return Err(ConfigError::value("--deadline", 0, "expected more than 0"));
     }
     if cli.wait.is_some_and(|d| d.is_zero()) {
-        return Err(invalid("--wait 0: expected more than 0"));
+        return Err(ConfigError::value("--wait", 0, "expected more than 0"));
     }
     if cli.interim.is_some_and(|d| d < Duration::from_millis(10)) {
-        return Err(invalid("-Q: expected an interval of at least 10ms"));
+        return Err(ConfigError::Expected {
+            setting: "-Q",
+            expected: "an interval of at least 10ms",
+        });
     }
     let ours = validate_ids(cli.sysid, cli.compid)?;
     let signing = validate_signing(cli)?;
@@ -609,13 +651,17 @@ impl TryFrom<&PingArgs> for Config {
             }
         }
         if given.is_empty() {
-            return Err(invalid(
-                "missing CONNECTION (e.g. udp:127.0.0.1:14550 or sim:)",
+            return Err(ConfigError::Other(
+                "missing CONNECTION (e.g. udp:127.0.0.1:14550 or sim:)".into(),
             ));
         }
         validate_links(&given, &specs)?;
         if cli.min_responders == Some(0) {
-            return Err(invalid("--min-responders 0: expected at least 1"));
+            return Err(ConfigError::value(
+                "--min-responders",
+                0,
+                "expected at least 1",
+            ));
         }
         validate_baud(cli.baud)?;
         validate_views(cli)?;

@@ -2,6 +2,7 @@
 //! and transports get from it are their own plain types ([`SessionConfig`],
 //! [`CommandSpec`], [`LinkSpec`], [`ResponderSettings`]).
 
+mod error;
 mod measure;
 mod respond;
 mod serve;
@@ -11,8 +12,7 @@ use std::net::SocketAddr;
 use std::path::PathBuf;
 use std::time::Duration;
 
-use thiserror::Error;
-
+pub use error::ConfigError;
 pub(crate) use serve::{ContinuousLink, ProbePlan, WebConfig};
 pub use serve::{Pattern, ServeConfig, ServeSettings};
 
@@ -24,21 +24,9 @@ use crate::engine::SessionConfig;
 use crate::frame::signing::{SecretKey, SigningConfig};
 use crate::frame::SysComp;
 use crate::responder::ResponderSettings;
-use crate::transport::address::{AddressError, LinkSpec};
+use crate::transport::address::LinkSpec;
 use crate::transport::LinkOptions;
 use crate::verdict::Thresholds;
-
-#[derive(Debug, Error)]
-pub enum ConfigError {
-    #[error(transparent)]
-    Address(#[from] AddressError),
-    #[error("{0}")]
-    Invalid(String),
-}
-
-fn invalid(msg: impl Into<String>) -> ConfigError {
-    ConfigError::Invalid(msg.into())
-}
 
 /// A measurement run over one or more links.
 #[derive(Debug, Clone)]
@@ -180,9 +168,11 @@ impl Keys {
 /// behind the user's back (and `localhost` cannot silently mean IPv6 only).
 fn validate_listen(flag: &str, arg: &str) -> Result<SocketAddr, ConfigError> {
     arg.parse().map_err(|_| {
-        invalid(format!(
-            "{flag} {arg}: expected ADDR:PORT, e.g. 127.0.0.1:9090, 0.0.0.0:9090 or [::1]:9090"
-        ))
+        ConfigError::value(
+            flag,
+            arg,
+            "expected ADDR:PORT, e.g. 127.0.0.1:9090, 0.0.0.0:9090 or [::1]:9090",
+        )
     })
 }
 
@@ -194,8 +184,10 @@ const MAX_TIMEOUT: Duration = Duration::from_secs(3600);
 
 fn validate_baud(baud: u32) -> Result<u32, ConfigError> {
     if baud == 0 {
-        return Err(invalid(
-            "--baud 0: expected a baud rate such as 57600 or 115200",
+        return Err(ConfigError::value(
+            "--baud",
+            0,
+            "expected a baud rate such as 57600 or 115200",
         ));
     }
     Ok(baud)
@@ -203,13 +195,17 @@ fn validate_baud(baud: u32) -> Result<u32, ConfigError> {
 
 fn validate_ids(sysid: u8, compid: u8) -> Result<SysComp, ConfigError> {
     if sysid == 0 {
-        return Err(invalid(
-            "--sysid 0: 0 means 'broadcast'; use 1-255 (ground stations use 250-255)",
+        return Err(ConfigError::value(
+            "--sysid",
+            0,
+            "0 means 'broadcast'; use 1-255 (ground stations use 250-255)",
         ));
     }
     if compid == 0 {
-        return Err(invalid(
-            "--compid 0: 0 means 'all components'; use 1-255 (190 is a GCS)",
+        return Err(ConfigError::value(
+            "--compid",
+            0,
+            "0 means 'all components'; use 1-255 (190 is a GCS)",
         ));
     }
     Ok(SysComp::new(sysid, compid))
@@ -218,34 +214,35 @@ fn validate_ids(sysid: u8, compid: u8) -> Result<SysComp, ConfigError> {
 /// The signing key from `--signing-key` (or its env var) or the file
 /// `--signing-key-file` names; `None` when neither is given.
 fn signing_key(args: &SigningArgs) -> Result<Option<SecretKey>, ConfigError> {
-    let text =
-        match (&args.signing_key, &args.signing_key_file) {
-            (Some(_), Some(_)) => return Err(invalid(
-                "--signing-key (or MAVPING_SIGNING_KEY) and --signing-key-file: give one, not both",
-            )),
-            (Some(key), None) => key.trim().to_string(),
-            (None, Some(path)) => std::fs::read_to_string(path)
-                .map_err(|e| {
-                    invalid(format!(
-                        "--signing-key-file {}: cannot read it: {e}",
-                        path.display()
-                    ))
-                })?
-                .trim()
-                .to_string(),
-            (None, None) => return Ok(None),
-        };
+    let text = match (&args.signing_key, &args.signing_key_file) {
+        (Some(_), Some(_)) => {
+            return Err(ConfigError::GiveOne {
+                first: "--signing-key (or MAVPING_SIGNING_KEY)",
+                second: "--signing-key-file",
+            })
+        }
+        (Some(key), None) => key.trim().to_string(),
+        (None, Some(path)) => std::fs::read_to_string(path)
+            .map_err(|source| ConfigError::Unreadable {
+                what: format!("--signing-key-file {}", path.display()),
+                source,
+            })?
+            .trim()
+            .to_string(),
+        (None, None) => return Ok(None),
+    };
     let from = match &args.signing_key_file {
         Some(path) if args.signing_key.is_none() => {
             format!("--signing-key-file {}", path.display())
         }
         _ => "--signing-key".to_string(),
     };
-    SecretKey::parse(&text).map(Some).map_err(|e| {
-        invalid(format!(
-            "{from}: {e}; expected 64 hex characters or a passphrase"
-        ))
-    })
+    SecretKey::parse(&text)
+        .map(Some)
+        .map_err(|e| ConfigError::SigningKey {
+            from,
+            source: Box::new(e),
+        })
 }
 
 /// The signing policy: a key signs what we send and checks what comes.

@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use super::measure::{count_wait, listens, pending_capacity};
-use super::{invalid, validate_listen, ConfigError, LinkConfig, Probe};
+use super::{validate_listen, ConfigError, LinkConfig, Probe};
 use crate::cli::{ProbeKind, ServeArgs};
 use crate::engine::matcher::Window;
 use crate::engine::SessionConfig;
@@ -156,15 +156,10 @@ struct Common {
 /// paused.
 fn refuse_virtual(spec: &LinkSpec) -> Result<(), ConfigError> {
     if spec.is_log() {
-        return Err(invalid(format!(
-            "{spec} cannot be served: a telemetry log runs on its own clock (read it with \
-             mavping {spec})"
-        )));
+        return Err(ConfigError::LogServed { log: spec.clone() });
     }
     if spec.is_virtual() {
-        return Err(invalid(
-            "sim:?clock=virtual cannot be served: drop clock=virtual (the server runs on real time)",
-        ));
+        return Err(ConfigError::VirtualServed);
     }
     Ok(())
 }
@@ -218,30 +213,36 @@ fn session(
 
 fn validate_count(count: u64) -> Result<u64, ConfigError> {
     if count == 0 || count > MAX_PROBE_COUNT {
-        return Err(invalid(format!(
-            "count {count}: expected 1 to {MAX_PROBE_COUNT}"
-        )));
+        return Err(ConfigError::value(
+            "count",
+            count,
+            format!("expected 1 to {MAX_PROBE_COUNT}"),
+        ));
     }
     Ok(count)
 }
 
 fn validate_probe_interval(key: &str, d: Duration) -> Result<Duration, ConfigError> {
     if d < MIN_PROBE_INTERVAL || d > MAX_PROBE_INTERVAL {
-        return Err(invalid(format!(
-            "{key} {}: a probe's interval is 1ms to 1m",
-            humantime::format_duration(d)
-        )));
+        return Err(ConfigError::value(
+            key,
+            humantime::format_duration(d),
+            "a probe's interval is 1ms to 1m",
+        ));
     }
     Ok(d)
 }
 
 fn validate_timeout(key: &str, d: Duration, max: Duration) -> Result<Duration, ConfigError> {
     if d.is_zero() || d > max {
-        return Err(invalid(format!(
-            "{key} {}: expected more than 0 and at most {}",
+        return Err(ConfigError::value(
+            key,
             humantime::format_duration(d),
-            humantime::format_duration(max)
-        )));
+            format!(
+                "expected more than 0 and at most {}",
+                humantime::format_duration(max)
+            ),
+        ));
     }
     Ok(d)
 }
@@ -256,16 +257,18 @@ impl ServeSettings {
         let file = match path {
             None => File::default(),
             Some(path) => {
-                let text = std::fs::read_to_string(path).map_err(|e| {
-                    invalid(format!("--config {}: cannot read it: {e}", path.display()))
-                })?;
+                let text =
+                    std::fs::read_to_string(path).map_err(|source| ConfigError::Unreadable {
+                        what: format!("--config {}", path.display()),
+                        source,
+                    })?;
                 toml::from_str(&text).map_err(|e| file_error(path, &text, &e))?
             }
         };
         let path = path.unwrap_or(Path::new("--config"));
         let mut allow = Vec::new();
         for p in &args.allow {
-            allow.push(Pattern::parse(p).map_err(|e| invalid(format!("--allow: {e}")))?);
+            allow.push(Pattern::parse(p).map_err(|e| e.within("--allow"))?);
         }
         for p in &file.allow {
             allow.push(Pattern::parse(p).map_err(|e| within(path, "allow", e))?);
@@ -275,11 +278,11 @@ impl ServeSettings {
         for (name, table) in &file.module {
             let section = format!("[module.{name}]");
             if let Some(key) = table.misplaced(true) {
-                return Err(within(
-                    path,
-                    &section,
-                    invalid(format!("{key} belongs in a [[link]], not a module")),
-                ));
+                let e = ConfigError::Misplaced {
+                    key,
+                    table: "a [[link]], not a module",
+                };
+                return Err(within(path, &section, e));
             }
             let module = table.module().map_err(|e| within(path, &section, e))?;
             modules.insert(name.clone(), module);
@@ -289,34 +292,32 @@ impl ServeSettings {
             let c = Table::default().common(Duration::from_secs(2))?;
             links.push(
                 continuous_link(given, None, Duration::from_secs(1), c)
-                    .map_err(|e| invalid(format!("--link: {e}")))?,
+                    .map_err(|e| e.within("--link"))?,
             );
         }
         for (i, table) in file.link.iter().enumerate() {
             let section = format!("[[link]] #{}", i + 1);
             if let Some(key) = table.misplaced(false) {
-                return Err(within(
-                    path,
-                    &section,
-                    invalid(format!(
-                        "{key} belongs in a [module.NAME]: a continuous link has no end to judge (alert in Prometheus instead)"
-                    )),
-                ));
+                let e = ConfigError::Misplaced {
+                    key,
+                    table: "a [module.NAME]: a continuous link has no end to judge (alert in \
+                            Prometheus instead)",
+                };
+                return Err(within(path, &section, e));
             }
             links.push(table.continuous().map_err(|e| within(path, &section, e))?);
         }
         if links.len() > MAX_LINKS {
-            return Err(invalid(format!(
-                "{} continuous links: at most {MAX_LINKS}",
-                links.len()
-            )));
+            return Err(ConfigError::TooManyLinks {
+                links: links.len(),
+                max: MAX_LINKS,
+            });
         }
         for (i, l) in links.iter().enumerate() {
             if links[..i].iter().any(|o| o.link.name == l.link.name) {
-                return Err(invalid(format!(
-                    "two continuous links are named '{}': give each a name of its own (name = \"...\")",
-                    l.link.name
-                )));
+                return Err(ConfigError::SameName {
+                    name: l.link.name.clone(),
+                });
             }
         }
         let max_concurrent = args
@@ -324,9 +325,11 @@ impl ServeSettings {
             .or(file.max_concurrent)
             .unwrap_or(DEFAULT_MAX_CONCURRENT);
         if max_concurrent == 0 || max_concurrent > MAX_CONCURRENT {
-            return Err(invalid(format!(
-                "max_concurrent {max_concurrent}: expected 1 to {MAX_CONCURRENT}"
-            )));
+            return Err(ConfigError::value(
+                "max_concurrent",
+                max_concurrent,
+                format!("expected 1 to {MAX_CONCURRENT}"),
+            ));
         }
         Ok((
             ServeSettings {
