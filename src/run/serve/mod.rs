@@ -21,7 +21,7 @@ use tokio::sync::Semaphore;
 use crate::engine::session::Controls;
 
 use super::signals::Hangups;
-use crate::config::{ServeConfig, ServeSettings, WebConfig};
+use crate::config::{ConfigError, ServeConfig, ServeSettings, WebConfig};
 use crate::exit::Ending;
 use crate::output::http::{self, Head, Limits, Reply, Replying, SharedWeb};
 use crate::output::prometheus::{borrow_all, render_serve, Health, Metrics};
@@ -44,7 +44,7 @@ pub(super) struct Server {
     lifecycle: bool,
 }
 
-type Reloaded = Result<(ServeSettings, WebConfig), String>;
+type Reloaded = Result<(ServeSettings, WebConfig), ConfigError>;
 
 impl Server {
     fn new(settings: ServeSettings, web: WebConfig, reload: Box<dyn Fn() -> Reloaded>) -> Self {
@@ -81,7 +81,7 @@ impl Server {
 
     /// Rereads the files and takes what they say, or keeps the old ones and
     /// says why (also the answer to `POST /-/reload`).
-    fn reload(&self) -> Result<(), String> {
+    fn reload(&self) -> Result<(), ConfigError> {
         self.health(|h| h.reloads += 1);
         let (settings, web) = match (self.reload)() {
             Ok(both) => both,
@@ -217,7 +217,7 @@ pub(super) async fn run(config: Rc<ServeConfig>, controls: Controls) -> Ending {
         }
     };
     let rereads = config.clone();
-    let reload = Box::new(move || rereads.reload().map_err(|e| e.to_string()));
+    let reload = Box::new(move || rereads.reload());
     let mut server = Server::new(config.settings.clone(), config.web.clone(), reload);
     server.lifecycle = config.lifecycle;
     let server = Rc::new(server);
