@@ -5,16 +5,17 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::{
-    signing, validate_baud, validate_ids, validate_listen, Config, ConfigError, Keys, LinkConfig,
-    OutputConfig, Probe, MAX_RATE, MAX_TIMEOUT,
-};
+use super::error::ConfigError;
+use super::keys::Keys;
+use super::link::LinkConfig;
+use super::probe::{probe_of, wire_budget, Probe, ProbeChoice, ECHO_PROBES};
+use super::signing::signing;
+use super::values::{validate_baud, validate_ids, validate_listen, MAX_RATE, MAX_TIMEOUT};
 use crate::cli::{Format, PingArgs, ProbeKind};
 use crate::engine::matcher::Window;
-use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
-use crate::frame::{codec, SysComp, Version};
+use crate::frame::Version;
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;
 use crate::transport::tlog::writer;
@@ -24,10 +25,47 @@ use crate::verdict::{Expected, Thresholds};
 /// More requests than this in flight at once would need an unreasonably
 /// large pending table: lower the rate or the timeout.
 pub(super) const MAX_IN_FLIGHT: u64 = 1 << 21;
-/// Where the options that follow an echo's replies work.
-pub(super) const ECHO_PROBES: &str = "--probe ping and timesync, not command";
 /// The longest interval between requests (the lowest rate).
 const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
+
+/// A measurement run over one or more links.
+#[derive(Debug, Clone)]
+pub(crate) struct Config {
+    /// In command-line order; each gets its own session.
+    pub(crate) links: Vec<LinkConfig>,
+    pub(crate) link_options: LinkOptions,
+    pub(crate) probe: Probe,
+    pub(crate) output: OutputConfig,
+    pub(crate) verbose: u8,
+}
+
+/// Where results go.
+#[derive(Debug, Clone)]
+pub(crate) struct OutputConfig {
+    pub(crate) format: Format,
+    pub(crate) quiet: bool,
+    /// `-D`: event lines start with their Unix time.
+    pub(crate) timestamps: bool,
+    pub(crate) every_reply: bool,
+    /// `--live`; the run falls back to text when stdout is not a terminal.
+    pub(crate) live: bool,
+    pub(crate) hgrm: Option<PathBuf>,
+    pub(crate) samples: Option<PathBuf>,
+    pub(crate) plot: Option<PathBuf>,
+    pub(crate) prometheus: Option<SocketAddr>,
+    /// `--prometheus-textfile`: the run's metrics, written at its end.
+    pub(crate) prometheus_textfile: Option<PathBuf>,
+    /// `--tlog`: record what every link received and sent.
+    pub(crate) tlog: Option<PathBuf>,
+}
+
+impl Config {
+    /// True when the run should use tokio's paused, virtual clock (only
+    /// simulated links with `clock=virtual`; validation rejects a mix).
+    pub(crate) fn virtual_clock(&self) -> bool {
+        self.links.iter().all(|l| l.spec.is_virtual())
+    }
+}
 
 /// `--expect LINK=ID`: LINK must be one of the links (as given, or in the
 /// form mavping prints it). Returns (index of the link, responder).
@@ -364,121 +402,6 @@ pub(super) fn pending_capacity(
     Ok(((in_flight * 2 + 16) as usize).next_power_of_two().max(64))
 }
 
-/// "SYS/COMP", or "SYS" for every component of a system; `key` names the
-/// option or configuration key in errors.
-fn parse_target(key: Keys, text: &str) -> Result<SysComp, ConfigError> {
-    let bad = || {
-        ConfigError::value(
-            key.name("target"),
-            text,
-            "expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)",
-        )
-    };
-    let (sys, comp) = text.split_once('/').unwrap_or((text, "0"));
-    let sysid = sys.trim().parse::<u8>().map_err(|_| bad())?;
-    let compid = comp.trim().parse::<u8>().map_err(|_| bad())?;
-    Ok(SysComp::new(sysid, compid))
-}
-
-/// "REQUEST_MESSAGE,0" or "512,0": a MAV_CMD by name or id, then params.
-fn parse_command(key: Keys, text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
-    let key = key.name("command");
-    let mut parts = text.split(',').map(str::trim);
-    let name = parts.next().unwrap_or_default();
-    let command = match name.parse::<u16>() {
-        Ok(id) => id,
-        Err(_) => codec::command_id_from_name(name).ok_or_else(|| {
-            ConfigError::value(
-                &key,
-                text,
-                format!("'{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"),
-            )
-        })?,
-    };
-    let mut params = [0.0f32; 7];
-    for (i, p) in parts.enumerate() {
-        if i >= params.len() {
-            return Err(ConfigError::value(
-                &key,
-                text,
-                "at most 7 params after the command",
-            ));
-        }
-        params[i] = p
-            .parse::<f32>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| {
-                ConfigError::value(&key, text, format!("param {} '{p}' is not a number", i + 1))
-            })?;
-    }
-    Ok((command, params))
-}
-
-/// What a probe is given: its kind and, for TIMESYNC and commands, whom
-/// it addresses and how a command is re-sent.
-pub(super) struct ProbeChoice<'a> {
-    pub(crate) kind: ProbeKind,
-    pub(crate) target: Option<&'a str>,
-    pub(crate) command: &'a str,
-    pub(crate) retry_interval: Duration,
-    pub(crate) retries: u8,
-}
-
-/// The probe a choice names; `key` names options or configuration keys in errors.
-pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, ConfigError> {
-    let target = choice.target.map(|t| parse_target(key, t)).transpose()?;
-    let flag = |name| key.name(name);
-    match choice.kind {
-        ProbeKind::Ping | ProbeKind::Auto => {
-            if target.is_some() {
-                return Err(ConfigError::Other(format!(
-                    "{}: PING requests are always broadcast; use it with {} timesync or command",
-                    flag("target"),
-                    flag("probe")
-                )));
-            }
-            Ok(if choice.kind == ProbeKind::Auto {
-                Probe::Auto
-            } else {
-                Probe::Ping
-            })
-        }
-        ProbeKind::Timesync => Ok(Probe::Timesync {
-            target: target.unwrap_or(SysComp::new(0, 0)),
-        }),
-        ProbeKind::Command => {
-            let target = target.unwrap_or(SysComp::new(1, 1));
-            if target.sysid == 0 {
-                return Err(ConfigError::value(
-                    flag("target"),
-                    0,
-                    format!(
-                        "a command needs one target system (e.g. {} 1/1)",
-                        flag("target")
-                    ),
-                ));
-            }
-            let retry = choice.retry_interval;
-            if retry.is_zero() || retry > MAX_TIMEOUT {
-                return Err(ConfigError::value(
-                    flag("retry-interval"),
-                    humantime::format_duration(retry),
-                    "expected more than 0 and at most 1h",
-                ));
-            }
-            let (command, params) = parse_command(key, choice.command)?;
-            Ok(Probe::Command(CommandSpec {
-                target,
-                command,
-                params,
-                retry_interval: retry,
-                retries: choice.retries,
-            }))
-        }
-    }
-}
-
 /// How long a listening link waits for its first peer before the run ends:
 /// `--wait`, else what `-c` takes plus one timeout; other links do not
 /// wait for a peer (they send from the start).
@@ -693,7 +616,7 @@ impl TryFrom<&PingArgs> for Config {
                     .map(|(_, id)| *id),
             );
             let session = SessionConfig {
-                wire: super::wire_budget(&spec, cli.baud, &probe, &session),
+                wire: wire_budget(&spec, cli.baud, &probe, &session),
                 ..session.clone()
             };
             let sweep = super::sweep::for_link(cli, &session)?;
@@ -747,7 +670,9 @@ mod tests {
 
     use super::*;
     use crate::cli::Cli;
+    use crate::engine::CommandSpec;
     use crate::frame::signing::SecretKey;
+    use crate::frame::SysComp;
 
     fn config(args: &str) -> Result<Config, String> {
         let cli = Cli::try_parse_from(std::iter::once("mavping").chain(args.split_whitespace()))

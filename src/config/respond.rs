@@ -1,11 +1,22 @@
 //! `mavping respond [OPTIONS] LINK` into a [`RespondConfig`].
 
-use super::{signing, validate_baud, validate_ids, ConfigError, RespondConfig, MAX_TIMEOUT};
+use super::error::ConfigError;
+use super::signing::signing;
+use super::values::{validate_baud, validate_ids, MAX_TIMEOUT};
 use crate::cli::RespondArgs;
 use crate::responder::ResponderSettings;
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;
 use crate::transport::LinkOptions;
+
+/// `mavping respond`, validated.
+#[derive(Debug, Clone)]
+pub(crate) struct RespondConfig {
+    pub(crate) link: LinkSpec,
+    pub(crate) link_options: LinkOptions,
+    pub(crate) settings: ResponderSettings,
+    pub(crate) verbose: u8,
+}
 
 impl TryFrom<&RespondArgs> for RespondConfig {
     type Error = ConfigError;

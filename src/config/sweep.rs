@@ -4,8 +4,9 @@
 
 use std::time::Duration;
 
-use super::measure::ECHO_PROBES;
-use super::{ConfigError, MAX_RATE};
+use super::error::ConfigError;
+use super::probe::ECHO_PROBES;
+use super::values::MAX_RATE;
 use crate::cli::{PingArgs, ProbeKind};
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
 use crate::engine::SessionConfig;

@@ -4,7 +4,7 @@
 //! `udpout:10.0.0.*:14550` cannot be stretched to
 //! `udpout:10.0.0.5.evil.example:14550`.
 
-use crate::config::ConfigError;
+use crate::config::error::ConfigError;
 use crate::transport::address::LinkSpec;
 
 /// An allow pattern, in the canonical form targets are compared in.

@@ -15,10 +15,12 @@ use super::{
     ContinuousLink, Module, MAX_PROBE_TIMEOUT, MIN_PROBE_INTERVAL,
 };
 use crate::cli::{parse_expected, parse_rtt_limit, ProbeKind, SigningArgs};
-use crate::config::measure::{probe_of, ProbeChoice};
-use crate::config::{
-    signing, validate_baud, validate_ids, ConfigError, Keys, LinkConfig, Probe, MAX_TIMEOUT,
-};
+use crate::config::error::ConfigError;
+use crate::config::keys::Keys;
+use crate::config::link::LinkConfig;
+use crate::config::probe::{probe_of, Probe, ProbeChoice};
+use crate::config::signing::signing;
+use crate::config::values::{validate_baud, validate_ids, MAX_TIMEOUT};
 use crate::frame::{SysComp, Version};
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;

@@ -17,8 +17,11 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use super::error::ConfigError;
+use super::link::LinkConfig;
 use super::measure::{count_wait, listens, pending_capacity};
-use super::{validate_listen, ConfigError, LinkConfig, Probe};
+use super::probe::{wire_budget, Probe};
+use super::values::validate_listen;
 use crate::cli::{ProbeKind, ServeArgs};
 use crate::engine::matcher::Window;
 use crate::engine::SessionConfig;
@@ -207,7 +210,7 @@ fn session(
         wire: None,
         radio_type: c.radio_type,
     };
-    session.wire = super::wire_budget(spec, c.baud, &c.probe, &session);
+    session.wire = wire_budget(spec, c.baud, &c.probe, &session);
     Ok(session)
 }
 

@@ -13,8 +13,10 @@ use super::{
     Pattern, ProbePlan, ServeSettings, DEFAULT_MODULE, MAX_PROBE_TIMEOUT,
 };
 use crate::cli::ProbeKind;
-use crate::config::measure::{probe_of, ProbeChoice};
-use crate::config::{ConfigError, Keys, LinkConfig};
+use crate::config::error::ConfigError;
+use crate::config::keys::Keys;
+use crate::config::link::LinkConfig;
+use crate::config::probe::{probe_of, ProbeChoice};
 use crate::transport::address::{AddressError, LinkSpec};
 use crate::transport::route::Route;
 use crate::transport::LinkOptions;

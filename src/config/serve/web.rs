@@ -20,7 +20,7 @@ use serde::Deserialize;
 
 use thiserror::Error;
 
-use super::super::ConfigError;
+use crate::config::error::ConfigError;
 
 /// The headers the exporter-toolkit lets a web config set; the others
 /// (Content-Type, Content-Length...) are the server's to say.
