@@ -10,10 +10,12 @@ use std::time::Duration;
 use clap::ValueEnum;
 use serde::Deserialize;
 
-use super::{
-    refuse_virtual, session, validate_count, validate_probe_interval, validate_timeout, Common,
-    ContinuousLink, Module, MAX_PROBE_TIMEOUT, MIN_PROBE_INTERVAL,
+use super::limits::{
+    validate_count, validate_probe_interval, validate_timeout, MAX_PROBE_TIMEOUT,
+    MIN_PROBE_INTERVAL,
 };
+use super::session::{refuse_virtual, session, Common};
+use super::settings::{ContinuousLink, Module};
 use crate::cli::{parse_expected, parse_rtt_limit, ProbeKind, SigningArgs};
 use crate::config::error::ConfigError;
 use crate::config::keys::Keys;

@@ -7,20 +7,31 @@ use std::time::Duration;
 use clap::ValueEnum;
 use thiserror::Error;
 
+use super::allow::Pattern;
 use super::file::PROBES;
-use super::{
-    refuse_virtual, session, validate_count, validate_probe_interval, validate_timeout, Common,
-    Pattern, ProbePlan, ServeSettings, DEFAULT_MODULE, MAX_PROBE_TIMEOUT,
+use super::limits::{
+    validate_count, validate_probe_interval, validate_timeout, DEFAULT_MODULE, MAX_PROBE_TIMEOUT,
 };
+use super::session::{refuse_virtual, session, Common};
+use super::settings::ServeSettings;
 use crate::cli::ProbeKind;
 use crate::config::error::ConfigError;
 use crate::config::keys::Keys;
 use crate::config::link::LinkConfig;
-use crate::config::probe::{probe_of, ProbeChoice};
+use crate::config::probe::{probe_of, Probe, ProbeChoice};
 use crate::transport::address::{AddressError, LinkSpec};
 use crate::transport::route::Route;
 use crate::transport::LinkOptions;
 use crate::units::parse_duration;
+
+/// One `/probe` request, validated: what to open and how to measure it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ProbePlan {
+    pub(crate) module: String,
+    pub(crate) link: LinkConfig,
+    pub(crate) probe: Probe,
+    pub(crate) options: LinkOptions,
+}
 
 /// Why a `/probe` request is refused: one line, the HTTP 400 body.
 #[derive(Debug, Error)]
@@ -168,7 +179,7 @@ impl ServeSettings {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{test_args, ServeConfig};
+    use super::super::settings::{test_args, ServeConfig};
     use super::*;
 
     fn settings(line: &str) -> ServeSettings {
