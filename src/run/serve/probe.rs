@@ -17,7 +17,7 @@ use hyper::header::HeaderMap;
 use hyper::StatusCode;
 use thiserror::Error;
 
-use super::Server;
+use super::server::Server;
 use crate::engine::hint::HintCode;
 use crate::engine::summary::LinkSummary;
 use crate::output::http::Reply;
