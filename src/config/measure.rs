@@ -558,27 +558,34 @@ fn output(cli: &PingArgs) -> Result<OutputConfig, ConfigError> {
     })
 }
 
+/// The run's links, as given and parsed: the command line's, then those
+/// of `-f`.
+fn links_given(cli: &PingArgs) -> Result<(Vec<String>, Vec<LinkSpec>), ConfigError> {
+    let mut given: Vec<String> = cli.links.iter().map(|l| l.trim().to_string()).collect();
+    let mut specs = given
+        .iter()
+        .map(|l| l.parse::<LinkSpec>())
+        .collect::<Result<Vec<_>, _>>()?;
+    if let Some(path) = &cli.file {
+        for (link, spec) in links_from_file(path)? {
+            given.push(link);
+            specs.push(spec);
+        }
+    }
+    if given.is_empty() {
+        return Err(ConfigError::Other(
+            "missing CONNECTION (e.g. udp:127.0.0.1:14550 or sim:)".into(),
+        ));
+    }
+    validate_links(&given, &specs)?;
+    Ok((given, specs))
+}
+
 impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
     fn try_from(cli: &PingArgs) -> Result<Self, ConfigError> {
-        let mut given: Vec<String> = cli.links.iter().map(|l| l.trim().to_string()).collect();
-        let mut specs = given
-            .iter()
-            .map(|l| l.parse::<LinkSpec>())
-            .collect::<Result<Vec<_>, _>>()?;
-        if let Some(path) = &cli.file {
-            for (link, spec) in links_from_file(path)? {
-                given.push(link);
-                specs.push(spec);
-            }
-        }
-        if given.is_empty() {
-            return Err(ConfigError::Other(
-                "missing CONNECTION (e.g. udp:127.0.0.1:14550 or sim:)".into(),
-            ));
-        }
-        validate_links(&given, &specs)?;
+        let (given, specs) = links_given(cli)?;
         if cli.min_responders == Some(0) {
             return Err(ConfigError::value(
                 "--min-responders",
