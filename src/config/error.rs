@@ -11,10 +11,13 @@ use thiserror::Error;
 
 use crate::transport::address::{AddressError, LinkSpec};
 
-/// The error of a parser or check of its own, kept as the cause (some of
-/// those types are the crate's, this one is public).
+/// The error of a setting's own parser or check, kept as the cause; boxed
+/// because several of those types are the crate's own, which this public
+/// enum cannot name.
 type Cause = Box<dyn Error + Send + Sync>;
 
+/// Why the command line, `respond`'s options or the serve files are
+/// refused: one line, said as `mavping: ...` (or as the HTTP 400 body).
 #[derive(Debug, Error)]
 pub enum ConfigError {
     #[error(transparent)]
@@ -145,7 +148,7 @@ pub enum ConfigError {
     },
     #[error("{links} continuous links: at most {max}")]
     TooManyLinks { links: usize, max: usize },
-    /// A rule of its own, said once.
+    /// A rule of its own, said in one place only.
     #[error("{0}")]
     Other(String),
 }
