@@ -10,7 +10,7 @@ use crate::engine::load::LoadSpec;
 use crate::frame::SysComp;
 use crate::telemetry::StreamSpec;
 use crate::units::{parse_duration, parse_percent, DurationError};
-use crate::verdict::{Expected, RttLimit};
+use crate::verdict::{Expected, RttLimit, UnknownRttFigure};
 
 /// Flags set from the environment take what people write for a yes or
 /// a no (`1`, `yes`, `on`, `true`; `0`, `no`, `off`, `false`), not only
@@ -183,8 +183,8 @@ pub(crate) fn complete_link(
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 pub(crate) enum RttLimitError {
     /// Not an RTT figure (the message lists them).
-    #[error("{0}")]
-    Figure(String),
+    #[error(transparent)]
+    Figure(UnknownRttFigure),
     #[error(transparent)]
     Duration(#[from] DurationError),
 }

@@ -5,6 +5,7 @@ use std::fmt;
 use std::time::Duration;
 
 use serde::Serialize;
+use thiserror::Error;
 
 use crate::engine::stats::RttSummary;
 use crate::engine::summary::passive::PassiveSummary;
@@ -38,9 +39,14 @@ impl RttFigure {
     }
 }
 
+/// Not one of [`RttFigure::NAMES`]; the text given is quoted.
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+#[error("'{0}' is not an RTT figure; use one of {names}", names = RttFigure::NAMES)]
+pub(crate) struct UnknownRttFigure(String);
+
 impl std::str::FromStr for RttFigure {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownRttFigure;
+    fn from_str(s: &str) -> Result<Self, UnknownRttFigure> {
         match s {
             "mean" => Ok(RttFigure::Mean),
             "max" => Ok(RttFigure::Max),
@@ -48,10 +54,7 @@ impl std::str::FromStr for RttFigure {
             "p90" => Ok(RttFigure::P90),
             "p99" => Ok(RttFigure::P99),
             "p99.9" | "p999" => Ok(RttFigure::P999),
-            _ => Err(format!(
-                "'{s}' is not an RTT figure; use one of {}",
-                Self::NAMES
-            )),
+            _ => Err(UnknownRttFigure(s.to_string())),
         }
     }
 }

@@ -5,16 +5,17 @@ use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use super::{
-    invalid, signing, validate_baud, validate_ids, validate_listen, Config, ConfigError, Keys,
-    LinkConfig, OutputConfig, Probe, MAX_RATE, MAX_TIMEOUT,
-};
+use super::error::ConfigError;
+use super::keys::Keys;
+use super::link::LinkConfig;
+use super::probe::{probe_of, wire_budget, Probe, ProbeChoice, ECHO_PROBES};
+use super::signing::signing;
+use super::values::{validate_baud, validate_ids, validate_listen, MAX_RATE, MAX_TIMEOUT};
 use crate::cli::{Format, PingArgs, ProbeKind};
 use crate::engine::matcher::Window;
-use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
-use crate::frame::{codec, SysComp, Version};
+use crate::frame::Version;
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;
 use crate::transport::tlog::writer;
@@ -26,6 +27,45 @@ use crate::verdict::{Expected, Thresholds};
 pub(super) const MAX_IN_FLIGHT: u64 = 1 << 21;
 /// The longest interval between requests (the lowest rate).
 const MAX_INTERVAL: Duration = Duration::from_secs(86_400);
+
+/// A measurement run over one or more links.
+#[derive(Debug, Clone)]
+pub(crate) struct Config {
+    /// In command-line order; each gets its own session.
+    pub(crate) links: Vec<LinkConfig>,
+    pub(crate) link_options: LinkOptions,
+    pub(crate) probe: Probe,
+    pub(crate) output: OutputConfig,
+    pub(crate) verbose: u8,
+}
+
+/// Where results go.
+#[derive(Debug, Clone)]
+pub(crate) struct OutputConfig {
+    pub(crate) format: Format,
+    pub(crate) quiet: bool,
+    /// `-D`: event lines start with their Unix time.
+    pub(crate) timestamps: bool,
+    pub(crate) every_reply: bool,
+    /// `--live`; the run falls back to text when stdout is not a terminal.
+    pub(crate) live: bool,
+    pub(crate) hgrm: Option<PathBuf>,
+    pub(crate) samples: Option<PathBuf>,
+    pub(crate) plot: Option<PathBuf>,
+    pub(crate) prometheus: Option<SocketAddr>,
+    /// `--prometheus-textfile`: the run's metrics, written at its end.
+    pub(crate) prometheus_textfile: Option<PathBuf>,
+    /// `--tlog`: record what every link received and sent.
+    pub(crate) tlog: Option<PathBuf>,
+}
+
+impl Config {
+    /// True when the run should use tokio's paused, virtual clock (only
+    /// simulated links with `clock=virtual`; validation rejects a mix).
+    pub(crate) fn virtual_clock(&self) -> bool {
+        self.links.iter().all(|l| l.spec.is_virtual())
+    }
+}
 
 /// `--expect LINK=ID`: LINK must be one of the links (as given, or in the
 /// form mavping prints it). Returns (index of the link, responder).
@@ -42,10 +82,11 @@ fn validate_scoped_expect(
             .zip(links)
             .position(|(given, spec)| given.trim() == link || spec.to_string() == *link)
             .ok_or_else(|| {
-                invalid(format!(
-                    "--expect {link}={}: {link} is not one of the links given",
-                    e.id
-                ))
+                ConfigError::value(
+                    "--expect",
+                    format!("{link}={}", e.id),
+                    format!("{link} is not one of the links given"),
+                )
             })?;
         scoped.push((index, e.id));
     }
@@ -65,11 +106,16 @@ fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigE
         Some(text) => {
             let addr = text
                 .parse::<SocketAddr>()
-                .or_else(|_| text.parse::<std::net::IpAddr>().map(|ip| SocketAddr::new(ip, 0)))
+                .or_else(|_| {
+                    text.parse::<std::net::IpAddr>()
+                        .map(|ip| SocketAddr::new(ip, 0))
+                })
                 .map_err(|_| {
-                    invalid(format!(
-                        "--bind {text}: expected ADDR or ADDR:PORT, e.g. 192.168.1.5 or 0.0.0.0:14551"
-                    ))
+                    ConfigError::value(
+                        "--bind",
+                        text,
+                        "expected ADDR or ADDR:PORT, e.g. 192.168.1.5 or 0.0.0.0:14551",
+                    )
                 })?;
             let outgoing = links.iter().any(|l| {
                 matches!(
@@ -78,10 +124,12 @@ fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigE
                 )
             });
             if !outgoing {
-                return Err(invalid(format!(
-                    "--bind {text}: only links that send first (udpout:, tcp:, udpbcast:) take a \
-                     local address; a listening link names its own"
-                )));
+                return Err(ConfigError::value(
+                    "--bind",
+                    text,
+                    "only links that send first (udpout:, tcp:, udpbcast:) take a local \
+                     address; a listening link names its own",
+                ));
             }
             Some(addr)
         }
@@ -89,14 +137,16 @@ fn validate_route(cli: &PingArgs, links: &[LinkConfig]) -> Result<Route, ConfigE
     let interface = match cli.interface.as_deref() {
         None => None,
         Some(name) if name.is_empty() || name.len() > 15 || name.contains(['/', ' ']) => {
-            return Err(invalid(format!(
-                "-I {name}: expected a network interface name (up to 15 characters), e.g. wlan0"
-            )))
+            return Err(ConfigError::value(
+                "-I",
+                name,
+                "expected a network interface name (up to 15 characters), e.g. wlan0",
+            ))
         }
         Some(name) if cfg!(mavping_portable) => {
-            return Err(invalid(crate::transport::route::interface_needs_linux(
-                name,
-            )))
+            return Err(ConfigError::InterfaceNeedsLinux {
+                interface: name.to_string(),
+            })
         }
         Some(name) => Some(name.to_string()),
     };
@@ -116,7 +166,10 @@ fn links_from_file(path: &Path) -> Result<Vec<(String, LinkSpec)>, ConfigError> 
     } else {
         std::fs::read_to_string(path)
     }
-    .map_err(|e| invalid(format!("-f {shown}: cannot read it: {e}")))?;
+    .map_err(|source| ConfigError::Unreadable {
+        what: format!("-f {shown}"),
+        source,
+    })?;
     let mut links = Vec::new();
     for (n, line) in text.lines().enumerate() {
         let link = line.split('#').next().unwrap_or_default().trim();
@@ -125,11 +178,11 @@ fn links_from_file(path: &Path) -> Result<Vec<(String, LinkSpec)>, ConfigError> 
         }
         let spec = link
             .parse::<LinkSpec>()
-            .map_err(|e| invalid(format!("-f {shown}, line {}: {e}", n + 1)))?;
+            .map_err(|e| ConfigError::from(e).within(format!("-f {shown}, line {}", n + 1)))?;
         links.push((link.to_string(), spec));
     }
     if links.is_empty() {
-        return Err(invalid(format!("-f {shown}: no link in it")));
+        return Err(ConfigError::value("-f", shown, "no link in it"));
     }
     Ok(links)
 }
@@ -139,22 +192,17 @@ fn links_from_file(path: &Path) -> Result<Vec<(String, LinkSpec)>, ConfigError> 
 fn validate_links(given: &[String], links: &[LinkSpec]) -> Result<(), ConfigError> {
     for (i, link) in links.iter().enumerate() {
         if links[..i].iter().any(|l| l.to_string() == link.to_string()) {
-            return Err(invalid(format!(
-                "{} names the same link as an earlier one ({link}): name each link once",
-                given[i]
-            )));
+            return Err(ConfigError::SameLink {
+                given: given[i].clone(),
+                link: link.clone(),
+            });
         }
     }
     if links.iter().any(LinkSpec::is_virtual) && !links.iter().all(LinkSpec::is_virtual) {
         if let Some(log) = links.iter().find(|l| l.is_log()) {
-            return Err(invalid(format!(
-                "{log} runs on the log's own clock and cannot run beside live links: read logs \
-                 on their own (or beside sim:?clock=virtual links)"
-            )));
+            return Err(ConfigError::LogBesideLive { log: log.clone() });
         }
-        return Err(invalid(
-            "sim:?clock=virtual cannot run beside other links: use clock=virtual on every sim: link or on none",
-        ));
+        return Err(ConfigError::VirtualBesideReal);
     }
     Ok(())
 }
@@ -183,10 +231,10 @@ fn refuse_probes_on_logs(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), Confi
         .find_map(|(set, flag)| set.then_some(flag))
     });
     match given {
-        Some(flag) => Err(invalid(format!(
-            "{flag}: {log} is a telemetry log, read without probes (--passive is implied); \
-             drop {flag}"
-        ))),
+        Some(flag) => Err(ConfigError::LogProbed {
+            flag,
+            log: log.clone(),
+        }),
         None => Ok(()),
     }
 }
@@ -200,18 +248,24 @@ fn validate_tlog(cli: &PingArgs, given: &[String], links: &[LinkSpec]) -> Result
     };
     let shown = path.display();
     if let Some(log) = links.iter().find(|l| l.is_log()) {
-        return Err(invalid(format!(
-            "--tlog {shown}: {log} is a telemetry log already; --tlog records live links"
-        )));
+        return Err(ConfigError::value(
+            "--tlog",
+            shown,
+            format!("{log} is a telemetry log already; --tlog records live links"),
+        ));
     }
     if links.len() > writer::MAX_LINKS {
-        return Err(invalid(format!(
-            "--tlog {shown}: records at most {} links in one log (the stamps' link bits), not {}: \
-             run {} separately",
-            writer::MAX_LINKS,
-            links.len(),
-            given[writer::MAX_LINKS..].join(" ")
-        )));
+        return Err(ConfigError::value(
+            "--tlog",
+            shown,
+            format!(
+                "records at most {} links in one log (the stamps' link bits), not {}: run {} \
+                 separately",
+                writer::MAX_LINKS,
+                links.len(),
+                given[writer::MAX_LINKS..].join(" ")
+            ),
+        ));
     }
     Ok(())
 }
@@ -222,10 +276,11 @@ fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("svg"));
     if !svg {
-        return Err(invalid(format!(
-            "--plot {}: only .svg files can be drawn",
-            path.display()
-        )));
+        return Err(ConfigError::value(
+            "--plot",
+            path.display(),
+            "only .svg files can be drawn",
+        ));
     }
     Ok(path.to_path_buf())
 }
@@ -233,10 +288,11 @@ fn validate_plot(path: &Path) -> Result<PathBuf, ConfigError> {
 /// node_exporter's textfile collector reads `*.prom` files only.
 fn validate_textfile(path: &Path) -> Result<PathBuf, ConfigError> {
     if path.extension().is_none_or(|e| e != "prom") {
-        return Err(invalid(format!(
-            "--prometheus-textfile {}: node_exporter's textfile collector reads only files named *.prom",
-            path.display()
-        )));
+        return Err(ConfigError::value(
+            "--prometheus-textfile",
+            path.display(),
+            "node_exporter's textfile collector reads only files named *.prom",
+        ));
     }
     Ok(path.to_path_buf())
 }
@@ -253,14 +309,17 @@ fn validate_views(cli: &PingArgs) -> Result<(), ConfigError> {
             (cli.samples.is_some(), "--samples"),
         ] {
             if set {
-                return Err(invalid(format!(
-                    "{flag} works with --probe ping and timesync, not command"
-                )));
+                return Err(ConfigError::WorksWith {
+                    setting: flag,
+                    with: ECHO_PROBES,
+                });
             }
         }
     }
     if cli.live && (cli.json || cli.format == Format::Json) {
-        return Err(invalid("--live cannot be used with --json"));
+        return Err(ConfigError::Other(
+            "--live cannot be used with --json".into(),
+        ));
     }
     Ok(())
 }
@@ -269,15 +328,19 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
     let interval = match (cli.rate, cli.interval) {
         (Some(rate), _) => {
             if !rate.is_finite() || rate <= 0.0 || rate > MAX_RATE {
-                return Err(invalid(format!(
-                    "--rate {rate}: expected more than 0 and at most {MAX_RATE} requests per second"
-                )));
+                return Err(ConfigError::value(
+                    "--rate",
+                    rate,
+                    format!("expected more than 0 and at most {MAX_RATE} requests per second"),
+                ));
             }
             // A tiny rate would mean an interval past what a Duration holds.
             if rate < 1.0 / MAX_INTERVAL.as_secs_f64() {
-                return Err(invalid(format!(
-                    "--rate {rate}: at least one request a day (1.2e-5 per second)"
-                )));
+                return Err(ConfigError::value(
+                    "--rate",
+                    rate,
+                    "at least one request a day (1.2e-5 per second)",
+                ));
             }
             Duration::from_secs_f64(1.0 / rate)
         }
@@ -288,16 +351,18 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
         },
     };
     if interval < Duration::from_micros(1) {
-        return Err(invalid(format!(
-            "--interval {}: at least 1us (1,000,000 requests per second)",
-            humantime::format_duration(interval)
-        )));
+        return Err(ConfigError::value(
+            "--interval",
+            humantime::format_duration(interval),
+            "at least 1us (1,000,000 requests per second)",
+        ));
     }
     if interval > MAX_INTERVAL {
-        return Err(invalid(format!(
-            "--interval {}: at most 1 day",
-            humantime::format_duration(interval)
-        )));
+        return Err(ConfigError::value(
+            "--interval",
+            humantime::format_duration(interval),
+            "at most 1 day",
+        ));
     }
     Ok(interval)
 }
@@ -305,14 +370,16 @@ fn validate_interval(cli: &PingArgs) -> Result<Duration, ConfigError> {
 fn validate_signing(cli: &PingArgs) -> Result<Option<SigningConfig>, ConfigError> {
     let policy = signing(&cli.signing, cli.require_signed)?;
     if policy.is_none() && cli.require_signed {
-        return Err(invalid(
-            "--require-signed needs a signing key (--signing-key, MAVPING_SIGNING_KEY or --signing-key-file)",
-        ));
+        return Err(ConfigError::Needs {
+            setting: "--require-signed",
+            needs: "a signing key (--signing-key, MAVPING_SIGNING_KEY or --signing-key-file)",
+        });
     }
     if policy.is_some() && cli.mavlink_version == 1 {
-        return Err(invalid(
-            "--mavlink 1 with a signing key: signing needs MAVLink 2 (drop --mavlink 1)",
-        ));
+        return Err(ConfigError::SignedMavlink1 {
+            mavlink: "--mavlink",
+            hint: " (drop --mavlink 1)",
+        });
     }
     Ok(policy)
 }
@@ -325,124 +392,14 @@ pub(super) fn pending_capacity(
 ) -> Result<usize, ConfigError> {
     let in_flight = (timeout.as_nanos() / interval.as_nanos()) as u64 + 1;
     if in_flight > MAX_IN_FLIGHT {
-        return Err(invalid(format!(
-            "--timeout {} at one request every {} keeps {in_flight} requests in flight \
-             (at most {MAX_IN_FLIGHT}): lower the rate or the timeout",
-            humantime::format_duration(timeout),
-            humantime::format_duration(interval)
-        )));
+        return Err(ConfigError::InFlight {
+            timeout,
+            interval,
+            in_flight,
+            max: MAX_IN_FLIGHT,
+        });
     }
     Ok(((in_flight * 2 + 16) as usize).next_power_of_two().max(64))
-}
-
-/// "SYS/COMP", or "SYS" for every component of a system; `key` names the
-/// option or configuration key in errors.
-fn parse_target(key: Keys, text: &str) -> Result<SysComp, ConfigError> {
-    let bad = || {
-        invalid(format!(
-            "{} {text}: expected SYS/COMP or SYS, ids 0-255 (e.g. 1/1)",
-            key.name("target")
-        ))
-    };
-    let (sys, comp) = text.split_once('/').unwrap_or((text, "0"));
-    let sysid = sys.trim().parse::<u8>().map_err(|_| bad())?;
-    let compid = comp.trim().parse::<u8>().map_err(|_| bad())?;
-    Ok(SysComp::new(sysid, compid))
-}
-
-/// "REQUEST_MESSAGE,0" or "512,0": a MAV_CMD by name or id, then params.
-fn parse_command(key: Keys, text: &str) -> Result<(u16, [f32; 7]), ConfigError> {
-    let key = key.name("command");
-    let mut parts = text.split(',').map(str::trim);
-    let name = parts.next().unwrap_or_default();
-    let command = match name.parse::<u16>() {
-        Ok(id) => id,
-        Err(_) => codec::command_id_from_name(name).ok_or_else(|| {
-            invalid(format!(
-                "{key} {text}: '{name}' is not a MAV_CMD name or id (e.g. REQUEST_MESSAGE,0 or 512,0)"
-            ))
-        })?,
-    };
-    let mut params = [0.0f32; 7];
-    for (i, p) in parts.enumerate() {
-        if i >= params.len() {
-            return Err(invalid(format!(
-                "{key} {text}: at most 7 params after the command"
-            )));
-        }
-        params[i] = p
-            .parse::<f32>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| {
-                invalid(format!(
-                    "{key} {text}: param {} '{p}' is not a number",
-                    i + 1
-                ))
-            })?;
-    }
-    Ok((command, params))
-}
-
-/// What a probe is given: its kind and, for TIMESYNC and commands, whom
-/// it addresses and how a command is re-sent.
-pub(super) struct ProbeChoice<'a> {
-    pub(crate) kind: ProbeKind,
-    pub(crate) target: Option<&'a str>,
-    pub(crate) command: &'a str,
-    pub(crate) retry_interval: Duration,
-    pub(crate) retries: u8,
-}
-
-/// The probe a choice names; `key` names options or configuration keys in errors.
-pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, ConfigError> {
-    let target = choice.target.map(|t| parse_target(key, t)).transpose()?;
-    let flag = |name| key.name(name);
-    match choice.kind {
-        ProbeKind::Ping | ProbeKind::Auto => {
-            if target.is_some() {
-                return Err(invalid(format!(
-                    "{}: PING requests are always broadcast; use it with {} timesync or command",
-                    flag("target"),
-                    flag("probe")
-                )));
-            }
-            Ok(if choice.kind == ProbeKind::Auto {
-                Probe::Auto
-            } else {
-                Probe::Ping
-            })
-        }
-        ProbeKind::Timesync => Ok(Probe::Timesync {
-            target: target.unwrap_or(SysComp::new(0, 0)),
-        }),
-        ProbeKind::Command => {
-            let target = target.unwrap_or(SysComp::new(1, 1));
-            if target.sysid == 0 {
-                return Err(invalid(format!(
-                    "{} 0: a command needs one target system (e.g. {} 1/1)",
-                    flag("target"),
-                    flag("target")
-                )));
-            }
-            let retry = choice.retry_interval;
-            if retry.is_zero() || retry > MAX_TIMEOUT {
-                return Err(invalid(format!(
-                    "{} {}: expected more than 0 and at most 1h",
-                    flag("retry-interval"),
-                    humantime::format_duration(retry)
-                )));
-            }
-            let (command, params) = parse_command(key, choice.command)?;
-            Ok(Probe::Command(CommandSpec {
-                target,
-                command,
-                params,
-                retry_interval: retry,
-                retries: choice.retries,
-            }))
-        }
-    }
 }
 
 /// How long a listening link waits for its first peer before the run ends:
@@ -474,13 +431,17 @@ pub(super) fn count_wait(count: u64, interval: Duration, timeout: Duration) -> O
 fn validate_probe(cli: &PingArgs, links: &[LinkSpec]) -> Result<Probe, ConfigError> {
     let logs = links.iter().any(LinkSpec::is_log);
     if cli.gap.is_some() && !cli.passive && !logs {
-        return Err(invalid(
-            "--gap works with --passive (or a tlog: link, which is passive)",
-        ));
+        return Err(ConfigError::WorksWith {
+            setting: "--gap",
+            with: "--passive (or a tlog: link, which is passive)",
+        });
     }
     if cli.passive || logs {
         if cli.gap.is_some_and(|g| g < Duration::from_millis(10)) {
-            return Err(invalid("--gap: expected at least 10ms"));
+            return Err(ConfigError::Expected {
+                setting: "--gap",
+                expected: "at least 10ms",
+            });
         }
         return Ok(Probe::Passive { gap: cli.gap });
     }
@@ -513,22 +474,26 @@ fn session(
     super::sweep::validate_flags(cli)?;
     let interval = validate_interval(cli)?;
     if cli.count == Some(0) {
-        return Err(invalid("--count 0: expected at least 1"));
+        return Err(ConfigError::value("--count", 0, "expected at least 1"));
     }
     if cli.timeout.is_zero() || cli.timeout > MAX_TIMEOUT {
-        return Err(invalid(format!(
-            "--timeout {}: expected more than 0 and at most 1h",
-            humantime::format_duration(cli.timeout)
-        )));
+        return Err(ConfigError::value(
+            "--timeout",
+            humantime::format_duration(cli.timeout),
+            "expected more than 0 and at most 1h",
+        ));
     }
     if cli.deadline.is_some_and(|d| d.is_zero()) {
-        return Err(invalid("--deadline 0: expected more than 0"));
+        return Err(ConfigError::value("--deadline", 0, "expected more than 0"));
     }
     if cli.wait.is_some_and(|d| d.is_zero()) {
-        return Err(invalid("--wait 0: expected more than 0"));
+        return Err(ConfigError::value("--wait", 0, "expected more than 0"));
     }
     if cli.interim.is_some_and(|d| d < Duration::from_millis(10)) {
-        return Err(invalid("-Q: expected an interval of at least 10ms"));
+        return Err(ConfigError::Expected {
+            setting: "-Q",
+            expected: "an interval of at least 10ms",
+        });
     }
     let ours = validate_ids(cli.sysid, cli.compid)?;
     let signing = validate_signing(cli)?;
@@ -593,29 +558,40 @@ fn output(cli: &PingArgs) -> Result<OutputConfig, ConfigError> {
     })
 }
 
+/// The run's links, as given and parsed: the command line's, then those
+/// of `-f`.
+fn links_given(cli: &PingArgs) -> Result<(Vec<String>, Vec<LinkSpec>), ConfigError> {
+    let mut given: Vec<String> = cli.links.iter().map(|l| l.trim().to_string()).collect();
+    let mut specs = given
+        .iter()
+        .map(|l| l.parse::<LinkSpec>())
+        .collect::<Result<Vec<_>, _>>()?;
+    if let Some(path) = &cli.file {
+        for (link, spec) in links_from_file(path)? {
+            given.push(link);
+            specs.push(spec);
+        }
+    }
+    if given.is_empty() {
+        return Err(ConfigError::Other(
+            "missing CONNECTION (e.g. udp:127.0.0.1:14550 or sim:)".into(),
+        ));
+    }
+    validate_links(&given, &specs)?;
+    Ok((given, specs))
+}
+
 impl TryFrom<&PingArgs> for Config {
     type Error = ConfigError;
 
     fn try_from(cli: &PingArgs) -> Result<Self, ConfigError> {
-        let mut given: Vec<String> = cli.links.iter().map(|l| l.trim().to_string()).collect();
-        let mut specs = given
-            .iter()
-            .map(|l| l.parse::<LinkSpec>())
-            .collect::<Result<Vec<_>, _>>()?;
-        if let Some(path) = &cli.file {
-            for (link, spec) in links_from_file(path)? {
-                given.push(link);
-                specs.push(spec);
-            }
-        }
-        if given.is_empty() {
-            return Err(invalid(
-                "missing CONNECTION (e.g. udp:127.0.0.1:14550 or sim:)",
-            ));
-        }
-        validate_links(&given, &specs)?;
+        let (given, specs) = links_given(cli)?;
         if cli.min_responders == Some(0) {
-            return Err(invalid("--min-responders 0: expected at least 1"));
+            return Err(ConfigError::value(
+                "--min-responders",
+                0,
+                "expected at least 1",
+            ));
         }
         validate_baud(cli.baud)?;
         validate_views(cli)?;
@@ -647,7 +623,7 @@ impl TryFrom<&PingArgs> for Config {
                     .map(|(_, id)| *id),
             );
             let session = SessionConfig {
-                wire: super::wire_budget(&spec, cli.baud, &probe, &session),
+                wire: wire_budget(&spec, cli.baud, &probe, &session),
                 ..session.clone()
             };
             let sweep = super::sweep::for_link(cli, &session)?;
@@ -701,7 +677,9 @@ mod tests {
 
     use super::*;
     use crate::cli::Cli;
+    use crate::engine::CommandSpec;
     use crate::frame::signing::SecretKey;
+    use crate::frame::SysComp;
 
     fn config(args: &str) -> Result<Config, String> {
         let cli = Cli::try_parse_from(std::iter::once("mavping").chain(args.split_whitespace()))

@@ -1,13 +1,22 @@
 //! `mavping respond [OPTIONS] LINK` into a [`RespondConfig`].
 
-use super::{
-    invalid, signing, validate_baud, validate_ids, ConfigError, RespondConfig, MAX_TIMEOUT,
-};
+use super::error::ConfigError;
+use super::signing::signing;
+use super::values::{validate_baud, validate_ids, MAX_TIMEOUT};
 use crate::cli::RespondArgs;
 use crate::responder::ResponderSettings;
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;
 use crate::transport::LinkOptions;
+
+/// `mavping respond`, validated.
+#[derive(Debug, Clone)]
+pub(crate) struct RespondConfig {
+    pub(crate) link: LinkSpec,
+    pub(crate) link_options: LinkOptions,
+    pub(crate) settings: ResponderSettings,
+    pub(crate) verbose: u8,
+}
 
 impl TryFrom<&RespondArgs> for RespondConfig {
     type Error = ConfigError;
@@ -15,24 +24,28 @@ impl TryFrom<&RespondArgs> for RespondConfig {
     fn try_from(cli: &RespondArgs) -> Result<Self, ConfigError> {
         let link: LinkSpec = cli.link.parse()?;
         if link.is_log() {
-            return Err(invalid(format!(
-                "mavping respond {link}: a telemetry log is only read; answer on a live link"
-            )));
+            return Err(ConfigError::value(
+                "mavping respond",
+                &link,
+                "a telemetry log is only read; answer on a live link",
+            ));
         }
         for (flag, d) in [("--delay", cli.delay), ("--jitter", cli.jitter)] {
             if d > MAX_TIMEOUT {
-                return Err(invalid(format!(
-                    "{flag} {}: at most 1h",
-                    humantime::format_duration(d)
-                )));
+                return Err(ConfigError::value(
+                    flag,
+                    humantime::format_duration(d),
+                    "at most 1h",
+                ));
             }
         }
         crate::telemetry::check_distinct(&cli.stream)
-            .map_err(|e| invalid(format!("--stream: {e}")))?;
+            .map_err(|e| ConfigError::rejected("--stream", e))?;
         if cli.stream_drop > 0.0 && cli.stream.is_empty() {
-            return Err(invalid(
-                "--stream-drop needs --stream MSG@HZ: nothing is streamed",
-            ));
+            return Err(ConfigError::Needs {
+                setting: "--stream-drop",
+                needs: "--stream MSG@HZ: nothing is streamed",
+            });
         }
         Ok(RespondConfig {
             link,

@@ -4,7 +4,9 @@
 
 use std::time::Duration;
 
-use super::{invalid, ConfigError, MAX_RATE};
+use super::error::ConfigError;
+use super::probe::ECHO_PROBES;
+use super::values::MAX_RATE;
 use crate::cli::{PingArgs, ProbeKind};
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
 use crate::engine::SessionConfig;
@@ -37,11 +39,17 @@ pub(super) fn validate_flags(cli: &PingArgs) -> Result<(), ConfigError> {
             (cli.sweep_loss.is_some(), "--sweep-loss"),
         ] {
             if set {
-                return Err(invalid(format!("{flag} needs --sweep")));
+                return Err(ConfigError::Needs {
+                    setting: flag,
+                    needs: "--sweep",
+                });
             }
         }
         if cli.step.is_some() && cli.load.is_empty() {
-            return Err(invalid("--step needs --sweep or --load"));
+            return Err(ConfigError::Needs {
+                setting: "--step",
+                needs: "--sweep or --load",
+            });
         }
     }
     if !wanted(cli) {
@@ -49,12 +57,13 @@ pub(super) fn validate_flags(cli: &PingArgs) -> Result<(), ConfigError> {
     }
     let what = if cli.sweep { "--sweep" } else { "--load" };
     if cli.probe == ProbeKind::Command {
-        return Err(invalid(format!(
-            "{what} works with --probe ping and timesync, not command"
-        )));
+        return Err(ConfigError::WorksWith {
+            setting: what,
+            with: ECHO_PROBES,
+        });
     }
     if cli.count.is_some() {
-        return Err(invalid(format!(
+        return Err(ConfigError::Other(format!(
             "{what} runs in steps of --step each; -c does not apply"
         )));
     }
@@ -62,22 +71,28 @@ pub(super) fn validate_flags(cli: &PingArgs) -> Result<(), ConfigError> {
         let thresholds =
             cli.max_loss.is_some() || !cli.max_rtt.is_empty() || cli.max_jitter.is_some();
         if thresholds {
-            return Err(invalid(
+            return Err(ConfigError::Other(
                 "--sweep loses on purpose past the knee: --max-loss, --max-rtt and --max-jitter \
-                 judge a whole run, not a sweep",
+                 judge a whole run, not a sweep"
+                    .into(),
             ));
         }
     }
     if let Some(step) = cli.step {
         if !(MIN_STEP..=MAX_STEP).contains(&step) {
-            return Err(invalid(format!(
-                "--step {}: expected 100ms to 1h",
-                humantime::format_duration(step)
-            )));
+            return Err(ConfigError::value(
+                "--step",
+                humantime::format_duration(step),
+                "expected 100ms to 1h",
+            ));
         }
     }
     if cli.sweep_loss.is_some_and(|l| l <= 0.0) {
-        return Err(invalid("--sweep-loss 0: expected more than 0%"));
+        return Err(ConfigError::value(
+            "--sweep-loss",
+            0,
+            "expected more than 0%",
+        ));
     }
     Ok(())
 }
@@ -121,10 +136,14 @@ pub(super) fn for_link(
     let plan = if cli.sweep {
         let (max_hz, max_from) = sweep_max(cli, session);
         if !max_hz.is_finite() || max_hz <= first_hz || max_hz > MAX_RATE {
-            return Err(invalid(format!(
-                "--sweep-max {max_hz}: expected more than the first step's {first_hz}/s and at \
-                 most {MAX_RATE} requests per second"
-            )));
+            return Err(ConfigError::value(
+                "--sweep-max",
+                max_hz,
+                format!(
+                    "expected more than the first step's {first_hz}/s and at most {MAX_RATE} \
+                     requests per second"
+                ),
+            ));
         }
         PlanKind::Sweep {
             first_hz,

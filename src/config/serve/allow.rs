@@ -4,7 +4,7 @@
 //! `udpout:10.0.0.*:14550` cannot be stretched to
 //! `udpout:10.0.0.5.evil.example:14550`.
 
-use crate::config::{invalid, ConfigError};
+use crate::config::error::ConfigError;
 use crate::transport::address::LinkSpec;
 
 /// An allow pattern, in the canonical form targets are compared in.
@@ -29,19 +29,23 @@ impl Pattern {
     pub fn parse(text: &str) -> Result<Self, ConfigError> {
         let text = text.trim();
         let Some((given, canonical)) = KINDS.iter().find(|(k, _)| text.starts_with(k)) else {
-            return Err(invalid(format!(
-                "allow pattern '{text}': start it with a link kind (udpout:, udpin:, udpbcast:, \
-                 tcp:, tcpin:, serial:, /dev/..., sim:), e.g. 'udpout:127.0.0.1:*'"
-            )));
+            return Err(ConfigError::value(
+                "allow pattern",
+                format!("'{text}'"),
+                "start it with a link kind (udpout:, udpin:, udpbcast:, tcp:, tcpin:, serial:, \
+                 /dev/..., sim:), e.g. 'udpout:127.0.0.1:*'",
+            ));
         };
         let mut pattern = format!("{canonical}{}", &text[given.len()..]);
         if pattern.starts_with("serial:") {
             pattern = without_baud(&pattern).to_string();
         }
         if pattern.len() <= canonical.len() {
-            return Err(invalid(format!(
-                "allow pattern '{text}': it names no address; '{canonical}**' allows every one"
-            )));
+            return Err(ConfigError::value(
+                "allow pattern",
+                format!("'{text}'"),
+                format!("it names no address; '{canonical}**' allows every one"),
+            ));
         }
         Ok(Pattern(pattern))
     }

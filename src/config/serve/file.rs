@@ -10,22 +10,28 @@ use std::time::Duration;
 use clap::ValueEnum;
 use serde::Deserialize;
 
-use super::{
-    refuse_virtual, session, validate_count, validate_probe_interval, validate_timeout, Common,
-    ContinuousLink, Module, MAX_PROBE_TIMEOUT, MIN_PROBE_INTERVAL,
+use super::limits::{
+    validate_count, validate_probe_interval, validate_timeout, MAX_PROBE_TIMEOUT,
+    MIN_PROBE_INTERVAL,
 };
+use super::session::{refuse_virtual, session, Common};
+use super::settings::{ContinuousLink, Module};
 use crate::cli::{parse_expected, parse_rtt_limit, ProbeKind, SigningArgs};
-use crate::config::measure::{probe_of, ProbeChoice};
-use crate::config::{
-    invalid, signing, validate_baud, validate_ids, ConfigError, Keys, LinkConfig, Probe,
-    MAX_TIMEOUT,
-};
+use crate::config::error::ConfigError;
+use crate::config::keys::Keys;
+use crate::config::link::LinkConfig;
+use crate::config::probe::{probe_of, Probe, ProbeChoice};
+use crate::config::signing::signing;
+use crate::config::values::{validate_baud, validate_ids, MAX_TIMEOUT};
 use crate::frame::{SysComp, Version};
 use crate::transport::address::LinkSpec;
 use crate::transport::route::Route;
 use crate::transport::{serial, LinkOptions};
 use crate::units::{parse_duration, parse_percent};
 use crate::verdict::Thresholds;
+
+/// The probes a module or a `/probe` request may name.
+pub(super) const PROBES: &str = "auto, ping, timesync or command";
 
 /// The shortest silence threshold a passive link takes, as `--gap`.
 const MIN_GAP: Duration = Duration::from_millis(10);
@@ -44,7 +50,7 @@ impl FileDuration {
             FileDuration::Text(t) => parse_duration(t),
             FileDuration::Seconds(s) => parse_duration(&s.to_string()),
         }
-        .map_err(|e| invalid(format!("{key}: {e}")))
+        .map_err(|e| ConfigError::rejected(key, e))
     }
 }
 
@@ -125,10 +131,10 @@ impl Table {
     pub(super) fn common(&self, default_timeout: Duration) -> Result<Common, ConfigError> {
         let kind = match &self.probe {
             None => ProbeKind::Ping,
-            Some(p) => ProbeKind::from_str(p, true).map_err(|_| {
-                invalid(format!(
-                    "probe '{p}': expected auto, ping, timesync or command"
-                ))
+            Some(p) => ProbeKind::from_str(p, true).map_err(|_| ConfigError::Unknown {
+                setting: "probe",
+                value: p.clone(),
+                expected: PROBES,
             })?,
         };
         let retry_interval = match &self.retry_interval {
@@ -148,11 +154,14 @@ impl Table {
         let version = match self.mavlink.unwrap_or(2) {
             1 => Version::V1,
             2 => Version::V2,
-            v => return Err(invalid(format!("mavlink {v}: expected 1 or 2"))),
+            v => return Err(ConfigError::value("mavlink", v, "expected 1 or 2")),
         };
         let signing = match &self.signing_key_file {
             None if self.require_signed.is_some() => {
-                return Err(invalid("require_signed needs signing_key_file"))
+                return Err(ConfigError::Needs {
+                    setting: "require_signed",
+                    needs: "signing_key_file",
+                })
             }
             None => None,
             Some(path) => signing(
@@ -165,9 +174,10 @@ impl Table {
             )?,
         };
         if signing.is_some() && version == Version::V1 {
-            return Err(invalid(
-                "mavlink 1 with a signing key: signing needs MAVLink 2",
-            ));
+            return Err(ConfigError::SignedMavlink1 {
+                mavlink: "mavlink",
+                hint: "",
+            });
         }
         let timeout = match &self.timeout {
             Some(d) => validate_timeout("timeout", d.get("timeout")?, MAX_TIMEOUT)?,
@@ -199,21 +209,24 @@ impl Table {
             None => Duration::from_millis(100),
         };
         if c.timeout > MAX_PROBE_TIMEOUT {
-            return Err(invalid(format!(
-                "timeout {}: a probe's timeout is at most 1m",
-                humantime::format_duration(c.timeout)
-            )));
+            return Err(ConfigError::value(
+                "timeout",
+                humantime::format_duration(c.timeout),
+                "a probe's timeout is at most 1m",
+            ));
         }
         let thresholds = Thresholds {
             max_loss: self
                 .max_loss
                 .as_deref()
-                .map(|p| parse_percent(p).map_err(|e| invalid(format!("max_loss: {e}"))))
+                .map(|p| parse_percent(p).map_err(|e| ConfigError::rejected("max_loss", e)))
                 .transpose()?,
             max_rtt: self
                 .max_rtt
                 .iter()
-                .map(|r| parse_rtt_limit(r).map_err(|e| invalid(format!("max_rtt {r}: {e}"))))
+                .map(|r| {
+                    parse_rtt_limit(r).map_err(|e| ConfigError::rejected(format!("max_rtt {r}"), e))
+                })
                 .collect::<Result<_, _>>()?,
             max_jitter: self
                 .max_jitter
@@ -223,10 +236,16 @@ impl Table {
             expect: self
                 .expect
                 .iter()
-                .map(|e| parse_expected(e).map_err(|m| invalid(format!("expect: {m}"))))
+                .map(|e| parse_expected(e).map_err(|m| ConfigError::rejected("expect", m)))
                 .collect::<Result<_, _>>()?,
             min_responders: match self.min_responders {
-                Some(0) => return Err(invalid("min_responders 0: expected at least 1")),
+                Some(0) => {
+                    return Err(ConfigError::value(
+                        "min_responders",
+                        0,
+                        "expected at least 1",
+                    ))
+                }
                 n => n,
             },
         };
@@ -275,26 +294,33 @@ impl Table {
         let gap = self.gap.as_ref().map(|g| g.get("gap")).transpose()?;
         if self.passive != Some(true) {
             return match gap {
-                Some(_) => Err(invalid("gap needs passive = true")),
+                Some(_) => Err(ConfigError::Needs {
+                    setting: "gap",
+                    needs: "passive = true",
+                }),
                 None => Ok(None),
             };
         }
         if let Some(key) = self.probing_key() {
-            return Err(invalid(format!(
+            return Err(ConfigError::Other(format!(
                 "passive = true sends no probes: drop {key}, or drop passive to probe the link"
             )));
         }
         if gap.is_some_and(|g| g < MIN_GAP) {
-            return Err(invalid("gap: expected at least 10ms"));
+            return Err(ConfigError::Expected {
+                setting: "gap",
+                expected: "at least 10ms",
+            });
         }
         Ok(Some(Probe::Passive { gap }))
     }
 
     pub(super) fn continuous(&self) -> Result<ContinuousLink, ConfigError> {
         let Some(given) = &self.link else {
-            return Err(invalid(
-                "a [[link]] needs link = \"CONNECTION\", e.g. link = \"udpout:10.0.0.2:14550\"",
-            ));
+            return Err(ConfigError::Needs {
+                setting: "a [[link]]",
+                needs: "link = \"CONNECTION\", e.g. link = \"udpout:10.0.0.2:14550\"",
+            });
         };
         let mut c = self.common(Duration::from_secs(2))?;
         if let Some(passive) = self.passive_probe()? {
@@ -302,22 +328,30 @@ impl Table {
             return continuous_link(given, self.name.as_deref(), Duration::from_secs(1), c);
         }
         let interval = match (self.rate, &self.interval) {
-            (Some(_), Some(_)) => return Err(invalid("rate and interval: give one, not both")),
+            (Some(_), Some(_)) => {
+                return Err(ConfigError::GiveOne {
+                    first: "rate",
+                    second: "interval",
+                })
+            }
             (Some(rate), None) => {
                 if !rate.is_finite() || !(1.0 / 86_400.0..=1000.0).contains(&rate) {
-                    return Err(invalid(format!(
-                        "rate {rate}: expected at least one request a day and at most 1000 a second"
-                    )));
+                    return Err(ConfigError::value(
+                        "rate",
+                        rate,
+                        "expected at least one request a day and at most 1000 a second",
+                    ));
                 }
                 Duration::from_secs_f64(1.0 / rate)
             }
             (None, Some(d)) => {
                 let d = d.get("interval")?;
                 if d < MIN_PROBE_INTERVAL || d > Duration::from_secs(86_400) {
-                    return Err(invalid(format!(
-                        "interval {}: expected 1ms to 1 day",
-                        humantime::format_duration(d)
-                    )));
+                    return Err(ConfigError::value(
+                        "interval",
+                        humantime::format_duration(d),
+                        "expected 1ms to 1 day",
+                    ));
                 }
                 d
             }
@@ -337,7 +371,7 @@ pub(super) fn continuous_link(
     refuse_virtual(&spec)?;
     let name = name.unwrap_or(given).trim().to_string();
     if name.is_empty() {
-        return Err(invalid(format!("link {given}: its name is empty")));
+        return Err(ConfigError::value("link", given, "its name is empty"));
     }
     Ok(ContinuousLink {
         link: LinkConfig {
@@ -371,15 +405,19 @@ pub(super) fn file_error(path: &Path, text: &str, e: &toml::de::Error) -> Config
         .span()
         .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
     let message = e.message().lines().next().unwrap_or("invalid TOML");
-    match line {
-        Some(line) => invalid(format!("{}:{line}: {message}", path.display())),
-        None => invalid(format!("{}: {message}", path.display())),
+    let place = match line {
+        Some(line) => format!("{}:{line}", path.display()),
+        None => path.display().to_string(),
+    };
+    ConfigError::Syntax {
+        place,
+        message: message.to_string(),
     }
 }
 
 /// Names the file and the table an error is about.
 pub(super) fn within(path: &Path, table: &str, e: ConfigError) -> ConfigError {
-    invalid(format!("{}: {table}: {e}", path.display()))
+    e.within(format!("{}: {table}", path.display()))
 }
 
 /// `radio_type = "..."`: as `--radio-type`.
@@ -394,10 +432,13 @@ fn radio_type(value: Option<&str>) -> Result<RadioType, ConfigError> {
     ];
     match value {
         None => Ok(RadioType::Auto),
-        Some(v) => all.into_iter().find(|t| t.as_str() == v).ok_or_else(|| {
-            invalid(format!(
-                "radio_type '{v}': expected auto, sik, mlrs, elrs, esp or raw"
-            ))
-        }),
+        Some(v) => all
+            .into_iter()
+            .find(|t| t.as_str() == v)
+            .ok_or_else(|| ConfigError::Unknown {
+                setting: "radio_type",
+                value: v.to_string(),
+                expected: "auto, sik, mlrs, elrs, esp or raw",
+            }),
     }
 }

@@ -7,86 +7,117 @@ use std::time::Duration;
 use clap::ValueEnum;
 use thiserror::Error;
 
-use super::{
-    refuse_virtual, session, validate_count, validate_probe_interval, validate_timeout, Common,
-    Pattern, ProbePlan, ServeSettings, DEFAULT_MODULE, MAX_PROBE_TIMEOUT,
+use super::allow::Pattern;
+use super::file::PROBES;
+use super::limits::{
+    validate_count, validate_probe_interval, validate_timeout, DEFAULT_MODULE, MAX_PROBE_TIMEOUT,
 };
+use super::session::{refuse_virtual, session, Common};
+use super::settings::ServeSettings;
 use crate::cli::ProbeKind;
-use crate::config::measure::{probe_of, ProbeChoice};
-use crate::config::{ConfigError, Keys, LinkConfig};
-use crate::transport::address::LinkSpec;
+use crate::config::error::ConfigError;
+use crate::config::keys::Keys;
+use crate::config::link::LinkConfig;
+use crate::config::probe::{probe_of, Probe, ProbeChoice};
+use crate::transport::address::{AddressError, LinkSpec};
 use crate::transport::route::Route;
 use crate::transport::LinkOptions;
 use crate::units::parse_duration;
 
+/// One `/probe` request, validated: what to open and how to measure it.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ProbePlan {
+    pub(crate) module: String,
+    pub(crate) link: LinkConfig,
+    pub(crate) probe: Probe,
+    pub(crate) options: LinkOptions,
+}
+
 /// Why a `/probe` request is refused: one line, the HTTP 400 body.
-#[derive(Debug, Clone, PartialEq, Eq, Error)]
-#[error("{0}")]
-pub(crate) struct BadProbeRequest(String);
+#[derive(Debug, Error)]
+pub(crate) enum BadProbeRequest {
+    #[error(
+        "unknown parameter '{0}'; /probe takes target, module, count, interval, timeout and probe"
+    )]
+    UnknownParameter(String),
+    #[error("parameter '{0}' is given twice")]
+    Twice(String),
+    #[error("missing target: /probe?target=LINK, e.g. /probe?target=udpout:127.0.0.1:14550")]
+    MissingTarget,
+    #[error("unknown module '{name}'; known: {}", .known.join(", "))]
+    UnknownModule { name: String, known: Vec<String> },
+    #[error("target: {0}")]
+    Target(#[source] AddressError),
+    /// Default deny, and nothing allowed.
+    #[error(
+        "target {0} is not allowed: no target is; start mavping serve with \
+         --allow PATTERN (e.g. --allow 'udpout:127.0.0.1:*') or list patterns in \
+         allow = [...] of --config"
+    )]
+    NoneAllowed(String),
+    #[error(
+        "target {target} is not allowed: it matches no allow pattern ({})",
+        .allow.iter().map(Pattern::to_string).collect::<Vec<_>>().join(", ")
+    )]
+    NotAllowed { target: String, allow: Vec<Pattern> },
+    /// What the module or the command line would refuse alike.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+}
 
 impl ServeSettings {
     /// A `/probe` request's query string into what to run, or the one line
     /// that says why not (the HTTP 400 body).
     pub(crate) fn plan(&self, query: &str) -> Result<ProbePlan, BadProbeRequest> {
-        self.plan_query(query).map_err(BadProbeRequest)
-    }
-
-    fn plan_query(&self, query: &str) -> Result<ProbePlan, String> {
         let mut params: BTreeMap<String, String> = BTreeMap::new();
         for (key, value) in form_urlencoded::parse(query.as_bytes()) {
             if !["target", "module", "count", "interval", "timeout", "probe"].contains(&&*key) {
-                return Err(format!(
-                    "unknown parameter '{key}'; /probe takes target, module, count, interval, timeout and probe"
-                ));
+                return Err(BadProbeRequest::UnknownParameter(key.to_string()));
             }
             if params.insert(key.to_string(), value.to_string()).is_some() {
-                return Err(format!("parameter '{key}' is given twice"));
+                return Err(BadProbeRequest::Twice(key.to_string()));
             }
         }
         let Some(target) = params.get("target").map(|t| t.trim()) else {
-            return Err(
-                "missing target: /probe?target=LINK, e.g. /probe?target=udpout:127.0.0.1:14550"
-                    .into(),
-            );
+            return Err(BadProbeRequest::MissingTarget);
         };
         let module_name = params.get("module").map_or(DEFAULT_MODULE, String::as_str);
         let Some(module) = self.modules.get(module_name) else {
-            let known: Vec<&str> = self.modules.keys().map(String::as_str).collect();
-            return Err(format!(
-                "unknown module '{module_name}'; known: {}",
-                known.join(", ")
-            ));
+            return Err(BadProbeRequest::UnknownModule {
+                name: module_name.to_string(),
+                known: self.modules.keys().cloned().collect(),
+            });
         };
-        let spec: LinkSpec = target
-            .parse()
-            .map_err(|e: crate::transport::address::AddressError| format!("target: {e}"))?;
+        let spec: LinkSpec = target.parse().map_err(BadProbeRequest::Target)?;
         self.admit(target, &spec)?;
-        let plan = |e: ConfigError| e.to_string();
         let count = match params.get("count") {
-            Some(c) => validate_count(
-                c.parse()
-                    .map_err(|_| format!("count '{c}': expected a whole number"))?,
-            )
-            .map_err(plan)?,
+            Some(c) => validate_count(c.parse().map_err(|_| ConfigError::Unknown {
+                setting: "count",
+                value: c.clone(),
+                expected: "a whole number",
+            })?)?,
             None => module.count,
         };
-        let duration = |key: &str| -> Result<Option<Duration>, String> {
+        let duration = |key: &'static str| -> Result<Option<Duration>, ConfigError> {
             params
                 .get(key)
-                .map(|d| parse_duration(d).map_err(|e| format!("{key}: {e}")))
+                .map(|d| parse_duration(d).map_err(|e| ConfigError::rejected(key, e)))
                 .transpose()
         };
         let interval = match duration("interval")? {
-            Some(d) => validate_probe_interval("interval", d).map_err(plan)?,
+            Some(d) => validate_probe_interval("interval", d)?,
             None => module.interval,
         };
         let timeout = match duration("timeout")? {
-            Some(d) => validate_timeout("timeout", d, MAX_PROBE_TIMEOUT).map_err(plan)?,
+            Some(d) => validate_timeout("timeout", d, MAX_PROBE_TIMEOUT)?,
             None => module.timeout,
         };
         let kind = match params.get("probe") {
-            Some(p) => ProbeKind::from_str(p, true)
-                .map_err(|_| format!("probe '{p}': expected auto, ping, timesync or command"))?,
+            Some(p) => ProbeKind::from_str(p, true).map_err(|_| ConfigError::Unknown {
+                setting: "probe",
+                value: p.clone(),
+                expected: PROBES,
+            })?,
             None => module.kind,
         };
         let probe = probe_of(
@@ -99,8 +130,7 @@ impl ServeSettings {
                 retry_interval: module.retry_interval,
                 retries: module.retries,
             },
-        )
-        .map_err(plan)?;
+        )?;
         let common = Common {
             probe: probe.clone(),
             kind,
@@ -116,8 +146,7 @@ impl ServeSettings {
         Ok(ProbePlan {
             module: module_name.to_string(),
             link: LinkConfig {
-                session: session(&spec, target, Some(count), interval, timeout, &common)
-                    .map_err(plan)?,
+                session: session(&spec, target, Some(count), interval, timeout, &common)?,
                 spec,
                 name: target.to_string(),
                 thresholds: module.thresholds.clone(),
@@ -133,24 +162,16 @@ impl ServeSettings {
     }
 
     /// Default deny: the target must match an allow pattern.
-    fn admit(&self, given: &str, spec: &LinkSpec) -> Result<(), String> {
-        refuse_virtual(spec).map_err(|e| e.to_string())?;
+    fn admit(&self, given: &str, spec: &LinkSpec) -> Result<(), BadProbeRequest> {
+        refuse_virtual(spec)?;
         if self.allow.is_empty() {
-            return Err(format!(
-                "target {given} is not allowed: no target is; start mavping serve with \
-                 --allow PATTERN (e.g. --allow 'udpout:127.0.0.1:*') or list patterns in \
-                 allow = [...] of --config"
-            ));
+            return Err(BadProbeRequest::NoneAllowed(given.to_string()));
         }
         if !self.allow.iter().any(|p| p.admits(spec)) {
-            return Err(format!(
-                "target {given} is not allowed: it matches no allow pattern ({})",
-                self.allow
-                    .iter()
-                    .map(Pattern::to_string)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
+            return Err(BadProbeRequest::NotAllowed {
+                target: given.to_string(),
+                allow: self.allow.clone(),
+            });
         }
         Ok(())
     }
@@ -158,7 +179,7 @@ impl ServeSettings {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{test_args, ServeConfig};
+    use super::super::settings::{test_args, ServeConfig};
     use super::*;
 
     fn settings(line: &str) -> ServeSettings {

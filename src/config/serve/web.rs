@@ -18,7 +18,9 @@ use rustls_pki_types::pem::PemObject;
 use rustls_pki_types::{CertificateDer, PrivateKeyDer};
 use serde::Deserialize;
 
-use super::super::{invalid, ConfigError};
+use thiserror::Error;
+
+use crate::config::error::ConfigError;
 
 /// The headers the exporter-toolkit lets a web config set; the others
 /// (Content-Type, Content-Length...) are the server's to say.
@@ -112,13 +114,19 @@ impl WebConfig {
         let Some(path) = path else {
             return Ok(WebConfig::default());
         };
-        let fail = |e: String| invalid(format!("--web.config.file {}: {e}", path.display()));
-        let text =
-            std::fs::read_to_string(path).map_err(|e| fail(format!("cannot read it: {e}")))?;
+        let what = || format!("--web.config.file {}", path.display());
+        let fail = |e: WebError| ConfigError::rejected(what(), e);
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Unreadable {
+            what: what(),
+            source,
+        })?;
         let file: File = if text.trim().is_empty() {
             File::default()
         } else {
-            serde_norway::from_str(&text).map_err(|e| fail(one_line(&e.to_string())))?
+            serde_norway::from_str(&text).map_err(|e| ConfigError::Syntax {
+                place: what(),
+                message: one_line(&e.to_string()),
+            })?
         };
         // Relative paths are the file's, as the exporter-toolkit reads them.
         let dir = path.parent().unwrap_or(Path::new("."));
@@ -174,9 +182,90 @@ fn one_line(message: &str) -> String {
     message.lines().next().unwrap_or(message).to_string()
 }
 
-fn tls(t: &TlsFile, dir: &Path) -> Result<(rustls::ServerConfig, ClientAuth), String> {
+/// What is wrong inside the web config (its name is put before it).
+#[derive(Debug, Error)]
+pub(crate) enum WebError {
+    #[error("tls_server_config needs both cert_file and key_file")]
+    CertAndKey,
+    /// Go's TLS knobs that rustls does not have.
+    #[error(
+        "{0} is not supported: mavping's TLS (rustls) offers only its own modern suites and groups; remove it"
+    )]
+    GoOnly(&'static str),
+    #[error("client_auth_type {0} needs client_ca_file")]
+    NoClientCa(ClientAuth),
+    #[error(
+        "client_auth_type {0} accepts certificates nobody verified: use RequireAndVerifyClientCert (or VerifyClientCertIfGiven) with client_ca_file"
+    )]
+    Unverified(String),
+    #[error(
+        "client_auth_type '{0}': expected NoClientCert, VerifyClientCertIfGiven or RequireAndVerifyClientCert"
+    )]
+    ClientAuthType(String),
+    #[error("{key} {version}: mavping speaks TLS 1.2 and 1.3 only (use TLS12 or TLS13)")]
+    OldTls { key: &'static str, version: String },
+    #[error("{key} '{version}': expected TLS12 or TLS13")]
+    TlsVersion { key: &'static str, version: String },
+    #[error("min_version is above max_version")]
+    VersionsCrossed,
+    /// A PEM file (`cert_file`, `key_file`, `client_ca_file`) that cannot
+    /// be read or holds no such thing.
+    #[error("{key} {}: {source}", .path.display())]
+    Pem {
+        key: &'static str,
+        path: PathBuf,
+        source: rustls_pki_types::pem::Error,
+    },
+    #[error("{key} {}: no PEM certificate in it", .path.display())]
+    NoCertificate { key: &'static str, path: PathBuf },
+    #[error("client_ca_file {}: {source}", .path.display())]
+    ClientCa {
+        path: PathBuf,
+        source: rustls::Error,
+    },
+    /// The protocol versions asked of rustls.
+    #[error(transparent)]
+    Versions(rustls::Error),
+    #[error(transparent)]
+    Verifier(#[from] rustls::server::VerifierBuilderError),
+    #[error(
+        "cert_file {} and key_file {}: {}",
+        .cert.display(),
+        .key.display(),
+        why_not_a_pair(.source)
+    )]
+    NotAPair {
+        cert: PathBuf,
+        key: PathBuf,
+        source: rustls::Error,
+    },
+    #[error("basic_auth_users: user '{0}' has a ':', which basic auth cannot carry")]
+    UserWithColon(String),
+    #[error(
+        "basic_auth_users.{0}: not a bcrypt hash (make one with `htpasswd -nBC 10 \"\" | tr -d ':\\n'`)"
+    )]
+    NotBcrypt(String),
+    #[error(
+        "http_server_config.headers: {0} cannot be set; allowed: {allowed}",
+        allowed = HEADERS.join(", ")
+    )]
+    Header(String),
+    #[error("http_server_config.headers.{0}: not a valid header value")]
+    HeaderValue(String),
+}
+
+/// Why rustls refused a certificate and key, in the user's words when it
+/// is the common mistake.
+fn why_not_a_pair(e: &rustls::Error) -> String {
+    match e {
+        rustls::Error::InconsistentKeys(_) => "the key is not the certificate's".to_string(),
+        e => e.to_string(),
+    }
+}
+
+fn tls(t: &TlsFile, dir: &Path) -> Result<(rustls::ServerConfig, ClientAuth), WebError> {
     let (Some(cert_file), Some(key_file)) = (&t.cert_file, &t.key_file) else {
-        return Err("tls_server_config needs both cert_file and key_file".into());
+        return Err(WebError::CertAndKey);
     };
     for (key, given) in [
         ("cipher_suites", &t.cipher_suites),
@@ -184,32 +273,34 @@ fn tls(t: &TlsFile, dir: &Path) -> Result<(rustls::ServerConfig, ClientAuth), St
         ("client_allowed_sans", &t.client_allowed_sans),
     ] {
         if !given.is_empty() {
-            return Err(format!(
-                "{key} is not supported: mavping's TLS (rustls) offers only its own modern suites and groups; remove it"
-            ));
+            return Err(WebError::GoOnly(key));
         }
     }
     let versions = versions(t.min_version.as_deref(), t.max_version.as_deref())?;
     let auth = client_auth(t)?;
     if auth != ClientAuth::NoClientCert && t.client_ca_file.is_none() {
-        return Err(format!("client_auth_type {auth} needs client_ca_file"));
+        return Err(WebError::NoClientCa(auth));
     }
     let chain = certificates(&dir.join(cert_file), "cert_file")?;
-    let key = PrivateKeyDer::from_pem_file(dir.join(key_file))
-        .map_err(|e| format!("key_file {}: {e}", key_file.display()))?;
+    let key = PrivateKeyDer::from_pem_file(dir.join(key_file)).map_err(|source| WebError::Pem {
+        key: "key_file",
+        path: key_file.clone(),
+        source,
+    })?;
     let provider = Arc::new(rustls::crypto::ring::default_provider());
     let builder = rustls::ServerConfig::builder_with_provider(provider.clone())
         .with_protocol_versions(&versions)
-        .map_err(|e| e.to_string())?;
+        .map_err(WebError::Versions)?;
     let builder = match (auth, &t.client_ca_file) {
         // (A verifying type without a CA was refused above.)
         (ClientAuth::NoClientCert, _) | (_, None) => builder.with_no_client_auth(),
         (_, Some(ca)) => {
             let mut roots = RootCertStore::empty();
             for cert in certificates(&dir.join(ca), "client_ca_file")? {
-                roots
-                    .add(cert)
-                    .map_err(|e| format!("client_ca_file {}: {e}", ca.display()))?;
+                roots.add(cert).map_err(|source| WebError::ClientCa {
+                    path: ca.clone(),
+                    source,
+                })?;
             }
             let verifier = WebPkiClientVerifier::builder_with_provider(Arc::new(roots), provider);
             let verifier = if auth == ClientAuth::VerifyClientCertIfGiven {
@@ -217,71 +308,76 @@ fn tls(t: &TlsFile, dir: &Path) -> Result<(rustls::ServerConfig, ClientAuth), St
             } else {
                 verifier
             };
-            builder.with_client_cert_verifier(verifier.build().map_err(|e| e.to_string())?)
+            builder.with_client_cert_verifier(verifier.build()?)
         }
     };
-    let config = builder.with_single_cert(chain, key).map_err(|e| {
-        let why = match e {
-            rustls::Error::InconsistentKeys(_) => "the key is not the certificate's".to_string(),
-            e => e.to_string(),
-        };
-        format!(
-            "cert_file {} and key_file {}: {why}",
-            cert_file.display(),
-            key_file.display()
-        )
-    })?;
+    let config = builder
+        .with_single_cert(chain, key)
+        .map_err(|source| WebError::NotAPair {
+            cert: cert_file.clone(),
+            key: key_file.clone(),
+            source,
+        })?;
     Ok((config, auth))
 }
 
 /// Every certificate of a PEM file; none is an error.
-fn certificates(path: &Path, key: &str) -> Result<Vec<CertificateDer<'static>>, String> {
-    let what = |e: String| format!("{key} {}: {e}", path.display());
+fn certificates(path: &Path, key: &'static str) -> Result<Vec<CertificateDer<'static>>, WebError> {
+    let pem = |source| WebError::Pem {
+        key,
+        path: path.to_path_buf(),
+        source,
+    };
     let chain = CertificateDer::pem_file_iter(path)
-        .map_err(|e| what(e.to_string()))?
+        .map_err(pem)?
         .collect::<Result<Vec<_>, _>>()
-        .map_err(|e| what(e.to_string()))?;
+        .map_err(pem)?;
     if chain.is_empty() {
-        return Err(what("no PEM certificate in it".into()));
+        return Err(WebError::NoCertificate {
+            key,
+            path: path.to_path_buf(),
+        });
     }
     Ok(chain)
 }
 
 /// The exporter-toolkit's default client authentication: none, unless a
 /// client CA is given (then required and verified).
-fn client_auth(t: &TlsFile) -> Result<ClientAuth, String> {
+fn client_auth(t: &TlsFile) -> Result<ClientAuth, WebError> {
     match t.client_auth_type.as_deref() {
         None | Some("") if t.client_ca_file.is_some() => Ok(ClientAuth::RequireAndVerifyClientCert),
         None | Some("" | "NoClientCert") => Ok(ClientAuth::NoClientCert),
         Some("VerifyClientCertIfGiven") => Ok(ClientAuth::VerifyClientCertIfGiven),
         Some("RequireAndVerifyClientCert") => Ok(ClientAuth::RequireAndVerifyClientCert),
-        Some(other @ ("RequestClientCert" | "RequireAnyClientCert")) => Err(format!(
-            "client_auth_type {other} accepts certificates nobody verified: use RequireAndVerifyClientCert (or VerifyClientCertIfGiven) with client_ca_file"
-        )),
-        Some(other) => Err(format!(
-            "client_auth_type '{other}': expected NoClientCert, VerifyClientCertIfGiven or RequireAndVerifyClientCert"
-        )),
+        Some(other @ ("RequestClientCert" | "RequireAnyClientCert")) => {
+            Err(WebError::Unverified(other.to_string()))
+        }
+        Some(other) => Err(WebError::ClientAuthType(other.to_string())),
     }
 }
 
 fn versions(
     min: Option<&str>,
     max: Option<&str>,
-) -> Result<Vec<&'static rustls::SupportedProtocolVersion>, String> {
-    let rank = |key: &str, v: Option<&str>, default: u8| -> Result<u8, String> {
+) -> Result<Vec<&'static rustls::SupportedProtocolVersion>, WebError> {
+    let rank = |key: &'static str, v: Option<&str>, default: u8| -> Result<u8, WebError> {
         match v {
             None | Some("") => Ok(default),
             Some("TLS12") => Ok(12),
             Some("TLS13") => Ok(13),
-            Some(old @ ("TLS10" | "TLS11")) => Err(format!(
-                "{key} {old}: mavping speaks TLS 1.2 and 1.3 only (use TLS12 or TLS13)"
-            )),
-            Some(other) => Err(format!("{key} '{other}': expected TLS12 or TLS13")),
+            Some(old @ ("TLS10" | "TLS11")) => Err(WebError::OldTls {
+                key,
+                version: old.to_string(),
+            }),
+            Some(other) => Err(WebError::TlsVersion {
+                key,
+                version: other.to_string(),
+            }),
         }
     };
     let (min, max) = (rank("min_version", min, 12)?, rank("max_version", max, 13)?);
     if min > max {
-        return Err("min_version is above max_version".into());
+        return Err(WebError::VersionsCrossed);
     }
     Ok(
         [(12, &rustls::version::TLS12), (13, &rustls::version::TLS13)]
@@ -294,36 +390,27 @@ fn versions(
 
 /// Each hash must be bcrypt's (`$2y$10$...`): a plain password there would
 /// lock its user out, which is better said now.
-fn users(given: &BTreeMap<String, String>) -> Result<BTreeMap<String, String>, String> {
+fn users(given: &BTreeMap<String, String>) -> Result<BTreeMap<String, String>, WebError> {
     for (user, hash) in given {
         if user.contains(':') {
-            return Err(format!(
-                "basic_auth_users: user '{user}' has a ':', which basic auth cannot carry"
-            ));
+            return Err(WebError::UserWithColon(user.clone()));
         }
-        bcrypt::HashParts::from_str(hash).map_err(|_| {
-            format!(
-                "basic_auth_users.{user}: not a bcrypt hash (make one with `htpasswd -nBC 10 \"\" | tr -d ':\\n'`)"
-            )
-        })?;
+        bcrypt::HashParts::from_str(hash).map_err(|_| WebError::NotBcrypt(user.clone()))?;
     }
     Ok(given.clone())
 }
 
-fn headers(http: Option<&HttpFile>) -> Result<Vec<(HeaderName, HeaderValue)>, String> {
+fn headers(http: Option<&HttpFile>) -> Result<Vec<(HeaderName, HeaderValue)>, WebError> {
     let Some(http) = http else {
         return Ok(Vec::new());
     };
     let mut out = Vec::new();
     for (name, value) in &http.headers {
         if !HEADERS.iter().any(|h| h.eq_ignore_ascii_case(name)) {
-            return Err(format!(
-                "http_server_config.headers: {name} cannot be set; allowed: {}",
-                HEADERS.join(", ")
-            ));
+            return Err(WebError::Header(name.clone()));
         }
-        let value = HeaderValue::from_str(value)
-            .map_err(|_| format!("http_server_config.headers.{name}: not a valid header value"))?;
+        let value =
+            HeaderValue::from_str(value).map_err(|_| WebError::HeaderValue(name.clone()))?;
         out.push((HeaderName::from_str(name).expect("a known name"), value));
     }
     Ok(out)

@@ -15,8 +15,9 @@ use std::time::{Duration, Instant};
 use crate::engine::session::Controls;
 use hyper::header::HeaderMap;
 use hyper::StatusCode;
+use thiserror::Error;
 
-use super::Server;
+use super::server::Server;
 use crate::engine::hint::HintCode;
 use crate::engine::summary::LinkSummary;
 use crate::output::http::Reply;
@@ -66,8 +67,13 @@ impl Drop for Running<'_> {
     }
 }
 
+/// A `debug=` that is neither true nor false.
+#[derive(Debug, Error)]
+#[error("debug '{0}': expected true or false")]
+struct BadDebugFlag(String);
+
 /// `debug=true` taken out of the query (the rest is the probe's).
-fn debug_flag(query: &str) -> (String, Result<bool, String>) {
+fn debug_flag(query: &str) -> (String, Result<bool, BadDebugFlag>) {
     let mut rest = form_urlencoded::Serializer::new(String::new());
     let mut debug = Ok(false);
     for (key, value) in form_urlencoded::parse(query.as_bytes()) {
@@ -75,7 +81,7 @@ fn debug_flag(query: &str) -> (String, Result<bool, String>) {
             debug = match &*value {
                 "true" | "1" => Ok(true),
                 "false" | "0" | "" => Ok(false),
-                other => Err(format!("debug '{other}': expected true or false")),
+                other => Err(BadDebugFlag(other.to_string())),
             };
         } else {
             rest.append_pair(&key, &value);

@@ -8,8 +8,10 @@ use thiserror::Error;
 
 use super::radio::{AirParams, DEFAULT_TDM_ROUND};
 use crate::frame::SysComp;
-use crate::telemetry::{self, StreamSpec};
-use crate::units::{parse_duration, parse_duration_up_to, parse_percent};
+use crate::telemetry::{self, StreamSpec, StreamSpecError};
+use crate::units::{
+    parse_duration, parse_duration_up_to, parse_percent, DurationError, PercentError,
+};
 
 /// The radio's transmit buffer when `buffer=` does not say.
 pub const DEFAULT_BUFFER_BYTES: u64 = 1024;
@@ -130,11 +132,70 @@ loss_down=PCT, dup_down=PCT, reorder_down=PCT, loss_up=PCT, dup_up=PCT";
 /// What is wrong with a `sim:` query: which key, and why (or which keys
 /// go together).
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
-#[error("{0}")]
-pub struct SimParamsError(String);
+#[error(transparent)]
+pub struct SimParamsError(Problem);
+
+#[derive(Debug, Clone, PartialEq, Eq, Error)]
+enum Problem {
+    /// A value its key does not take.
+    #[error("{key}={value}: expected {expected}")]
+    Expected {
+        key: String,
+        value: String,
+        expected: &'static str,
+    },
+    #[error("{key}={value}: {source}")]
+    Duration {
+        key: String,
+        value: String,
+        source: DurationError,
+    },
+    #[error("{key}={value}: {source}")]
+    Percent {
+        key: String,
+        value: String,
+        source: PercentError,
+    },
+    #[error("{key}={value}: {source}")]
+    Stream {
+        key: String,
+        value: String,
+        source: StreamSpecError,
+    },
+    /// The streams together (each message once).
+    #[error("stream=: {0}")]
+    Streams(StreamSpecError),
+    #[error("'{0}' is not key=value; keys: {SIM_KEYS}")]
+    NotKeyValue(String),
+    #[error("{0}= is given twice: give each key once")]
+    Twice(String),
+    #[error("unknown key '{0}'; keys: {SIM_KEYS}")]
+    UnknownKey(String),
+    /// A key (with its value when it matters) that needs another.
+    #[error("{key} needs {needs}")]
+    Needs { key: String, needs: &'static str },
+    #[error(
+        "outage_every={}: must be longer than the outage ({})",
+        humantime::format_duration(*.every),
+        humantime::format_duration(*.outage)
+    )]
+    OutageEvery { every: Duration, outage: Duration },
+    #[error("too many responders for the sysid range")]
+    TooManyResponders,
+}
+
+impl Problem {
+    fn expected(key: &str, value: &str, expected: &'static str) -> Self {
+        Problem::Expected {
+            key: key.to_string(),
+            value: value.to_string(),
+            expected,
+        }
+    }
+}
 
 /// `64000`, `64k`, `1.5M`: bits per second.
-fn bit_rate(key: &str, value: &str) -> Result<u32, String> {
+fn bit_rate(key: &str, value: &str) -> Result<u32, Problem> {
     let (number, scale) = match value.strip_suffix(['k', 'K']) {
         Some(n) => (n, 1e3),
         None => match value.strip_suffix('M') {
@@ -149,31 +210,42 @@ fn bit_rate(key: &str, value: &str) -> Result<u32, String> {
         .filter(|v| (1_000.0..=10_000_000.0).contains(v))
         .map(|v| v.round() as u32)
         .ok_or_else(|| {
-            format!("{key}={value}: expected an air rate from 1k to 10M bits per second, e.g. 64k")
+            Problem::expected(
+                key,
+                value,
+                "an air rate from 1k to 10M bits per second, e.g. 64k",
+            )
         })
 }
 
-fn percent(key: &str, value: &str) -> Result<f64, String> {
-    parse_percent(value).map_err(|e| format!("{key}={value}: {e}"))
+fn percent(key: &str, value: &str) -> Result<f64, Problem> {
+    parse_percent(value).map_err(|source| Problem::Percent {
+        key: key.to_string(),
+        value: value.to_string(),
+        source,
+    })
 }
 
-fn duration(key: &str, value: &str) -> Result<Duration, String> {
-    parse_duration_up_to(value, Duration::from_secs(3600))
-        .map_err(|e| format!("{key}={value}: {e}"))
+fn duration(key: &str, value: &str) -> Result<Duration, Problem> {
+    parse_duration_up_to(value, Duration::from_secs(3600)).map_err(|source| Problem::Duration {
+        key: key.to_string(),
+        value: value.to_string(),
+        source,
+    })
 }
 
-fn switch(key: &str, value: &str) -> Result<bool, String> {
+fn switch(key: &str, value: &str) -> Result<bool, Problem> {
     match value {
         "on" | "1" | "true" | "yes" => Ok(true),
         "off" | "0" | "false" | "no" => Ok(false),
-        _ => Err(format!("{key}={value}: expected on or off")),
+        _ => Err(Problem::expected(key, value, "on or off")),
     }
 }
 
-fn number<T: std::str::FromStr>(key: &str, value: &str, range: &str) -> Result<T, String> {
+fn number<T: std::str::FromStr>(key: &str, value: &str, range: &'static str) -> Result<T, Problem> {
     value
         .parse()
-        .map_err(|_| format!("{key}={value}: expected {range}"))
+        .map_err(|_| Problem::expected(key, value, range))
 }
 
 /// The radio keys that mean something only beside `air=`.
@@ -187,7 +259,7 @@ struct AirKeys {
 
 impl AirKeys {
     /// The radio pair's air side, if `air=` was given (it needs `baud=`).
-    fn params(self, baud: Option<u32>) -> Result<Option<AirParams>, String> {
+    fn params(self, baud: Option<u32>) -> Result<Option<AirParams>, Problem> {
         let Some(air_bps) = self.air else {
             let given = [
                 (self.duty.is_some(), "duty"),
@@ -195,16 +267,18 @@ impl AirKeys {
                 (self.tdm.is_some(), "tdm"),
             ];
             return match given.iter().find(|(set, _)| *set) {
-                Some((_, key)) => Err(format!(
-                    "{key}= needs air=BITS_PER_S (e.g. baud=57600&air=64k)"
-                )),
+                Some((_, key)) => Err(Problem::Needs {
+                    key: format!("{key}="),
+                    needs: "air=BITS_PER_S (e.g. baud=57600&air=64k)",
+                }),
                 None => Ok(None),
             };
         };
         if baud.is_none() {
-            return Err(format!(
-                "air={air_bps} needs baud=N: the radios' serial side (e.g. baud=57600&air=64k)"
-            ));
+            return Err(Problem::Needs {
+                key: format!("air={air_bps}"),
+                needs: "baud=N: the radios' serial side (e.g. baud=57600&air=64k)",
+            });
         }
         Ok(Some(AirParams {
             air_bps,
@@ -216,7 +290,7 @@ impl AirKeys {
 }
 
 /// A signed duration up to ten years: `1.5s`, `-250ms`, `+2h`.
-fn offset_ns(key: &str, value: &str) -> Result<i64, String> {
+fn offset_ns(key: &str, value: &str) -> Result<i64, Problem> {
     let (negative, magnitude) = match value.strip_prefix('-') {
         Some(rest) => (true, rest),
         None => (false, value.strip_prefix('+').unwrap_or(value)),
@@ -226,7 +300,7 @@ fn offset_ns(key: &str, value: &str) -> Result<i64, String> {
         .and_then(|d| i64::try_from(d.as_nanos()).ok())
         .filter(|ns| *ns <= 10 * 365 * 86_400 * 1_000_000_000)
         .ok_or_else(|| {
-            format!("{key}={value}: expected a duration up to 10 years, e.g. 1.5s or -250ms")
+            Problem::expected(key, value, "a duration up to 10 years, e.g. 1.5s or -250ms")
         })?;
     Ok(if negative { -ns } else { ns })
 }
@@ -236,14 +310,14 @@ fn bounded<T>(
     key: &str,
     value: &str,
     range: impl std::ops::RangeBounds<T>,
-    expected: &str,
-) -> Result<T, String>
+    expected: &'static str,
+) -> Result<T, Problem>
 where
     T: std::str::FromStr + PartialOrd,
 {
     let n: T = number(key, value, expected)?;
     if !range.contains(&n) {
-        return Err(format!("{key}={value}: expected {expected}"));
+        return Err(Problem::expected(key, value, expected));
     }
     Ok(n)
 }
@@ -254,7 +328,7 @@ impl SimParams {
         Self::parse_query(query).map_err(SimParamsError)
     }
 
-    fn parse_query(query: &str) -> Result<Self, String> {
+    fn parse_query(query: &str) -> Result<Self, Problem> {
         let mut p = SimParams::default();
         let mut air = AirKeys::default();
         let query = query.strip_prefix('?').unwrap_or(query);
@@ -262,10 +336,10 @@ impl SimParams {
         for pair in query.split('&').filter(|s| !s.is_empty()) {
             let (key, value) = pair
                 .split_once('=')
-                .ok_or_else(|| format!("'{pair}' is not key=value; keys: {SIM_KEYS}"))?;
+                .ok_or_else(|| Problem::NotKeyValue(pair.to_string()))?;
             // `loss=5%&loss=6%` would silently mean 6 %; streams add up.
             if key != "stream" && seen.contains(&key) {
-                return Err(format!("{key}= is given twice: give each key once"));
+                return Err(Problem::Twice(key.to_string()));
             }
             seen.push(key);
             p.set(key, value, &mut air)?;
@@ -276,7 +350,7 @@ impl SimParams {
     }
 
     /// Sets one key of the query.
-    fn set(&mut self, key: &str, value: &str, air: &mut AirKeys) -> Result<(), String> {
+    fn set(&mut self, key: &str, value: &str, air: &mut AirKeys) -> Result<(), Problem> {
         match key {
             "responders" => self.responders = bounded(key, value, 1..=1000, "1 to 1000")?,
             "sysid" => self.first_sysid = bounded(key, value, 1..=255, "1 to 255")?,
@@ -292,19 +366,29 @@ impl SimParams {
             "heartbeat" => self.heartbeat = switch(key, value)?,
             "outage" => {
                 let (start, length) = value.split_once('+').ok_or_else(|| {
-                    format!("{key}={value}: expected START+LENGTH, e.g. outage=30s+5s")
+                    Problem::expected(key, value, "START+LENGTH, e.g. outage=30s+5s")
                 })?;
                 self.outage = Some((duration(key, start)?, duration(key, length)?));
             }
             "outage_every" => {
                 self.outage_every =
-                    Some(parse_duration(value).map_err(|e| format!("{key}={value}: {e}"))?)
+                    Some(parse_duration(value).map_err(|source| Problem::Duration {
+                        key: key.to_string(),
+                        value: value.to_string(),
+                        source,
+                    })?)
             }
             "spike" => self.spike = percent(key, value)?,
             "spike_delay" => self.spike_delay = duration(key, value)?,
             "stream" => self
                 .streams
-                .extend(telemetry::parse_list(value).map_err(|e| format!("{key}={value}: {e}"))?),
+                .extend(
+                    telemetry::parse_list(value).map_err(|source| Problem::Stream {
+                        key: key.to_string(),
+                        value: value.to_string(),
+                        source,
+                    })?,
+                ),
             "loss_down" => self.loss_down = percent(key, value)?,
             "dup_down" => self.dup_down = percent(key, value)?,
             "reorder_down" => self.reorder_down = percent(key, value)?,
@@ -314,26 +398,26 @@ impl SimParams {
             "baud" | "radio" | "buffer" | "air" | "duty" | "ecc" | "tdm" => {
                 self.set_radio(key, value, air)?
             }
-            _ => return Err(format!("unknown key '{key}'; keys: {SIM_KEYS}")),
+            _ => return Err(Problem::UnknownKey(key.to_string())),
         }
         Ok(())
     }
 
     /// The responders' clocks: `clock=`, `offset=`, `drift=`.
-    fn set_clock(&mut self, key: &str, value: &str) -> Result<(), String> {
+    fn set_clock(&mut self, key: &str, value: &str) -> Result<(), Problem> {
         match key {
             "clock" => {
                 self.virtual_clock = match value {
                     "virtual" => true,
                     "real" => false,
-                    _ => return Err(format!("{key}={value}: expected real or virtual")),
+                    _ => return Err(Problem::expected(key, value, "real or virtual")),
                 }
             }
             "offset" => self.clock_offset_ns = offset_ns(key, value)?,
             _ => {
                 self.drift_ppm = number(key, value, "parts per million, -1000000 to 1000000")?;
                 if !self.drift_ppm.is_finite() || self.drift_ppm.abs() > 1e6 {
-                    return Err(format!("{key}={value}: expected -1000000 to 1000000 ppm"));
+                    return Err(Problem::expected(key, value, "-1000000 to 1000000 ppm"));
                 }
             }
         }
@@ -341,7 +425,7 @@ impl SimParams {
     }
 
     /// A radio link: `baud=`, `radio=`, `buffer=`, and the air keys.
-    fn set_radio(&mut self, key: &str, value: &str, air: &mut AirKeys) -> Result<(), String> {
+    fn set_radio(&mut self, key: &str, value: &str, air: &mut AirKeys) -> Result<(), Problem> {
         match key {
             "baud" => {
                 let baud = "a baud rate from 300 to 10000000";
@@ -355,7 +439,7 @@ impl SimParams {
             "duty" => {
                 let d = percent(key, value)?;
                 if d <= 0.0 {
-                    return Err(format!("{key}={value}: expected more than 0%"));
+                    return Err(Problem::expected(key, value, "more than 0%"));
                 }
                 air.duty = Some(d);
             }
@@ -363,7 +447,7 @@ impl SimParams {
             _ => {
                 let round = duration(key, value)?;
                 if !(Duration::from_millis(1)..=Duration::from_secs(1)).contains(&round) {
-                    return Err(format!("{key}={value}: expected 1ms to 1s"));
+                    return Err(Problem::expected(key, value, "1ms to 1s"));
                 }
                 air.tdm = Some(round);
             }
@@ -372,30 +456,35 @@ impl SimParams {
     }
 
     /// What no single key can check.
-    fn check(&self) -> Result<(), String> {
+    fn check(&self) -> Result<(), Problem> {
         if self.baud.is_none() && self.buffer != DEFAULT_BUFFER_BYTES {
-            return Err("buffer= needs baud=N: only a serial radio link has a buffer".into());
+            return Err(Problem::Needs {
+                key: "buffer=".into(),
+                needs: "baud=N: only a serial radio link has a buffer",
+            });
         }
         match (self.outage, self.outage_every) {
-            (None, Some(_)) => return Err("outage_every needs outage=START+LENGTH".into()),
-            (Some((_, length)), Some(every)) if every <= length => {
-                return Err(format!(
-                    "outage_every={}: must be longer than the outage ({})",
-                    humantime::format_duration(every),
-                    humantime::format_duration(length)
-                ))
+            (None, Some(_)) => {
+                return Err(Problem::Needs {
+                    key: "outage_every".into(),
+                    needs: "outage=START+LENGTH",
+                })
+            }
+            (Some((_, outage)), Some(every)) if every <= outage => {
+                return Err(Problem::OutageEvery { every, outage })
             }
             _ => {}
         }
-        telemetry::check_distinct(&self.streams).map_err(|e| format!("stream=: {e}"))?;
+        telemetry::check_distinct(&self.streams).map_err(Problem::Streams)?;
         if let Some(rate) = telemetry::heartbeat_rate(&self.streams).filter(|_| !self.heartbeat) {
-            return Err(format!(
-                "stream=HEARTBEAT@{rate} needs heartbeat=on (heartbeat=off sends none)"
-            ));
+            return Err(Problem::Needs {
+                key: format!("stream=HEARTBEAT@{rate}"),
+                needs: "heartbeat=on (heartbeat=off sends none)",
+            });
         }
         // Responders are numbered by sysid; the last one must still fit.
         if usize::from(self.first_sysid) + usize::from(self.responders) - 1 > 255 * 255 {
-            return Err("too many responders for the sysid range".into());
+            return Err(Problem::TooManyResponders);
         }
         Ok(())
     }
