@@ -37,9 +37,12 @@ pub(crate) struct AckResult {
     pub(crate) count: u64,
 }
 
-/// The end of a `--probe command` run.
+/// The end of a `--probe command` run. Serialised as the JSON
+/// `command_summary` line's figures, which the line follows with the link
+/// as named (so the run's own is skipped here).
 #[derive(Debug, Clone, Serialize)]
 pub struct CommandSummary {
+    #[serde(skip)]
     pub(crate) link: String,
     pub(crate) ours: SysComp,
     pub(crate) command: u16,

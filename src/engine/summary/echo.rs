@@ -58,8 +58,13 @@ pub(crate) struct ScheduleSummary {
     pub(crate) not_sent: u64,
 }
 
+/// The end of an echo run. Serialised as the JSON `summary` line's
+/// figures, in this order (the line adds the link as named, the
+/// responders with the verdict's messages about each, and the sweep); the
+/// fields it adds itself are skipped here.
 #[derive(Debug, Clone, Serialize)]
 pub struct EchoSummary {
+    #[serde(skip)]
     pub(crate) link: String,
     pub(crate) probe: ProbeName,
     pub(crate) ours: SysComp,
@@ -72,16 +77,6 @@ pub struct EchoSummary {
     /// A listening link heard no MAVLink system in this many seconds, and
     /// the run ended.
     pub(crate) no_peer_heard_s: Option<f64>,
-    pub responders: Vec<ResponderSummary>,
-    /// Replies addressed to another system.
-    pub(crate) foreign_replies: u64,
-    /// Replies naming a responder that answered from another link peer
-    /// (spoofed ids): counted, never measured.
-    pub(crate) wrong_path_replies: u64,
-    /// Replies from responders beyond the tracking limit.
-    pub(crate) untracked_replies: u64,
-    pub(crate) frames: ScanStats,
-    pub(crate) hints: Vec<Hint>,
     pub(crate) interrupted: bool,
     pub(crate) link_error: Option<String>,
     /// Seconds the link was down while reconnecting (`--reconnect`).
@@ -90,6 +85,15 @@ pub struct EchoSummary {
     pub(crate) schedule: Option<ScheduleSummary>,
     /// How receive times were taken (kernel timestamps or user space).
     pub(crate) rx_clock: RxClock,
+    pub(crate) frames: ScanStats,
+    /// Replies addressed to another system.
+    pub(crate) foreign_replies: u64,
+    /// Replies naming a responder that answered from another link peer
+    /// (spoofed ids): counted, never measured.
+    pub(crate) wrong_path_replies: u64,
+    /// Replies from responders beyond the tracking limit.
+    pub(crate) untracked_replies: u64,
+    pub(crate) hints: Vec<Hint>,
     /// Radios heard by their RADIO_STATUS.
     pub(crate) radios: Vec<RadioSummary>,
     /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view of
@@ -100,7 +104,10 @@ pub struct EchoSummary {
     /// What the signing gate accepted and refused, or, without a key, what
     /// came signed unchecked.
     pub(crate) signing: SigningSummary,
+    #[serde(skip)]
+    pub responders: Vec<ResponderSummary>,
     /// `--sweep` or `--load`: the steps and what they say.
+    #[serde(skip)]
     pub(crate) sweep: Option<Box<SweepSummary>>,
 }
 

@@ -4,13 +4,10 @@ use serde::Serialize;
 
 use super::lines::{Line, SCHEMA_VERSION};
 use super::units::{seconds, us};
-use crate::engine::hint::Hint;
-use crate::engine::link_node::LinkNodeSummary;
-use crate::engine::summary::{CommandSummary, CommandTargetSummary};
+use crate::engine::summary::CommandSummary;
 use crate::engine::{observe::CommandEvent, CommandSpec};
 use crate::frame::codec;
-use crate::frame::signing::SigningSummary;
-use crate::frame::{ScanStats, SysComp};
+use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
 /// The start line's `command`: what is sent, and how.
@@ -152,23 +149,13 @@ pub(super) fn line(event: &CommandEvent) -> Option<Line<'static>> {
     Some(line)
 }
 
-/// The `command_summary` line.
+/// The `command_summary` line: the run's figures as the engine
+/// serialises them, after the link as named.
 #[derive(Serialize)]
 pub(super) struct Summary<'a> {
     link: &'a str,
-    ours: SysComp,
-    command: u16,
-    command_name: &'a str,
-    duration_s: f64,
-    in_flight: u64,
-    targets: &'a [CommandTargetSummary],
-    hints: &'a [Hint],
-    unmatched_acks: u64,
-    frames: ScanStats,
-    interrupted: bool,
-    link_error: Option<&'a str>,
-    signing: SigningSummary,
-    link_node: &'a [LinkNodeSummary],
+    #[serde(flatten)]
+    figures: &'a CommandSummary,
     r#type: &'static str,
     schema_version: u32,
     exit_code: u8,
@@ -178,19 +165,7 @@ impl<'a> Summary<'a> {
     pub(super) fn of(s: &'a CommandSummary, verdict: &Verdict, link: &'a str) -> Self {
         Summary {
             link,
-            ours: s.ours,
-            command: s.command,
-            command_name: &s.command_name,
-            duration_s: s.duration_s,
-            in_flight: s.in_flight,
-            targets: &s.targets,
-            hints: &s.hints,
-            unmatched_acks: s.unmatched_acks,
-            frames: s.frames,
-            interrupted: s.interrupted,
-            link_error: s.link_error.as_deref(),
-            signing: s.signing,
-            link_node: &s.link_node,
+            figures: s,
             r#type: "command_summary",
             schema_version: SCHEMA_VERSION,
             exit_code: verdict.exit_code(),

@@ -6,18 +6,12 @@ use super::heard::Heartbeat;
 use super::lines::{Line, Lines, Stamp, SCHEMA_VERSION};
 use super::sweep;
 use super::units::{seconds, us};
-use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::ClockSummary;
-use crate::engine::hint::Hint;
-use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::radio::RadioSummary;
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::engine::summary::ProbeName;
-use crate::engine::summary::{self, Direction, ResponderSummary, ScheduleSummary};
-use crate::frame::signing::SigningSummary;
-use crate::frame::{ScanStats, SysComp};
-use crate::transport::RxClock;
+use crate::engine::summary::{self, Direction, ResponderSummary};
+use crate::frame::SysComp;
 use crate::verdict::Verdict;
 
 /// `reply`: an answer within the timeout.
@@ -178,32 +172,15 @@ impl Lines {
     }
 }
 
-/// The `summary` line.
+/// The `summary` line: the echo run's figures as the engine serialises
+/// them, between what the line adds.
 #[derive(Serialize)]
 pub(super) struct Summary<'a> {
     r#type: &'static str,
     schema_version: u32,
     link: &'a str,
-    probe: ProbeName,
-    ours: SysComp,
-    duration_s: f64,
-    requests: u64,
-    in_flight: u64,
-    no_peer_heard_s: Option<f64>,
-    interrupted: bool,
-    link_error: Option<&'a str>,
-    downtime_s: f64,
-    schedule: Option<ScheduleSummary>,
-    rx_clock: RxClock,
-    frames: ScanStats,
-    foreign_replies: u64,
-    wrong_path_replies: u64,
-    untracked_replies: u64,
-    hints: &'a [Hint],
-    radios: &'a [RadioSummary],
-    link_node: &'a [LinkNodeSummary],
-    wire: Option<WireBudget>,
-    signing: SigningSummary,
+    #[serde(flatten)]
+    figures: &'a summary::EchoSummary,
     responders: Vec<Responder<'a>>,
     verdict: &'a Verdict,
     exit_code: u8,
@@ -217,26 +194,7 @@ impl<'a> Summary<'a> {
             r#type: "summary",
             schema_version: SCHEMA_VERSION,
             link,
-            probe: s.probe,
-            ours: s.ours,
-            duration_s: s.duration_s,
-            requests: s.requests,
-            in_flight: s.in_flight,
-            no_peer_heard_s: s.no_peer_heard_s,
-            interrupted: s.interrupted,
-            link_error: s.link_error.as_deref(),
-            downtime_s: s.downtime_s,
-            schedule: s.schedule,
-            rx_clock: s.rx_clock,
-            frames: s.frames,
-            foreign_replies: s.foreign_replies,
-            wrong_path_replies: s.wrong_path_replies,
-            untracked_replies: s.untracked_replies,
-            hints: &s.hints,
-            radios: &s.radios,
-            link_node: &s.link_node,
-            wire: s.wire,
-            signing: s.signing,
+            figures: s,
             responders: s
                 .responders
                 .iter()
