@@ -51,27 +51,32 @@ impl Probe {
 
 /// What the baud rate allows `spec` for `session`'s requests: set once
 /// here, so every front end reports the same. The command probe has none
-/// (its frames and retries vary).
+/// (its frames and retries vary), nor a link without a baud rate.
 pub(super) fn wire_budget(
     spec: &LinkSpec,
     default_baud: u32,
     probe: &Probe,
     session: &SessionConfig,
 ) -> Option<WireBudget> {
-    match probe {
-        Probe::Command(_) | Probe::Passive { .. } => None,
+    let exchange = match probe {
+        Probe::Command(_) | Probe::Passive { .. } => return None,
         // Auto sends a PING each slot (and a TIMESYNC only to those that
         // need it): the PING's sizes are the floor.
-        Probe::Auto | Probe::Ping => {
-            capacity::for_link(spec, default_baud, session, capacity::Exchange::Ping)
-        }
-        Probe::Timesync { target } => capacity::for_link(
-            spec,
-            default_baud,
-            session,
-            capacity::Exchange::Timesync { target: *target },
-        ),
-    }
+        Probe::Auto | Probe::Ping => capacity::Exchange::Ping,
+        Probe::Timesync { target } => capacity::Exchange::Timesync { target: *target },
+    };
+    // One responder on a real link unless the run shows more: the
+    // warning is a floor.
+    let (baud, replies) = match spec {
+        LinkSpec::Serial { baud, .. } => (baud.unwrap_or(default_baud), 1),
+        LinkSpec::Sim(p) => (p.baud?, u64::from(p.responders)),
+        _ => return None,
+    };
+    Some(WireBudget {
+        ignorer: spec.baud_ignorer(),
+        may_ignore_baud: spec.may_ignore_baud(),
+        ..capacity::for_baud(baud, replies, session, exchange)
+    })
 }
 
 /// "SYS/COMP", or "SYS" for every component of a system; `key` names the

@@ -9,7 +9,6 @@ use serde::Serialize;
 
 use super::SessionConfig;
 use crate::frame::Version;
-use crate::transport::LinkSpec;
 
 /// Start bit, 8 data bits, stop bit.
 pub(crate) const BITS_PER_BYTE: u64 = 10;
@@ -158,19 +157,15 @@ fn sized(message: &'static str, baud: u32, request: u64, reply: u64, replies: u6
     .with_replies(replies)
 }
 
-/// The budget of `exchange` on a link that has a baud rate; None for the
-/// others.
-pub(crate) fn for_link(
-    link: &LinkSpec,
-    default_baud: u32,
+/// The budget of `exchange` at `baud`, where each request draws
+/// `replies` (one on a real link unless the run shows more: the warning is
+/// a floor). Which links have a baud rate is the configuration's business.
+pub(crate) fn for_baud(
+    baud: u32,
+    replies: u64,
     session: &SessionConfig,
     exchange: Exchange,
-) -> Option<WireBudget> {
-    let (baud, replies) = match link {
-        LinkSpec::Serial { baud, .. } => (baud.unwrap_or(default_baud), 1),
-        LinkSpec::Sim(p) => (p.baud?, u64::from(p.responders)),
-        _ => return None,
-    };
+) -> WireBudget {
     // The largest seq of the run sets the request's length; an endless run
     // is assumed to reach full width.
     let max_seq = session
@@ -178,12 +173,10 @@ pub(crate) fn for_link(
         .and_then(|c| u32::try_from(c.saturating_sub(1)).ok())
         .and_then(|c| session.first_seq.checked_add(c))
         .unwrap_or(u32::MAX);
-    // One responder on a real link unless the run shows more: the warning
-    // is a floor.
     let b = exchange_budget(exchange, baud, session.version, max_seq, replies);
     // Signed, our request and (from a peer that signs) each reply carry a
     // 13-byte signature more.
-    let b = match session.signing {
+    match session.signing {
         Some(_) => sized(
             b.message,
             baud,
@@ -192,12 +185,7 @@ pub(crate) fn for_link(
             replies,
         ),
         None => b,
-    };
-    Some(WireBudget {
-        ignorer: link.baud_ignorer(),
-        may_ignore_baud: link.may_ignore_baud(),
-        ..b
-    })
+    }
 }
 
 impl WireBudget {
@@ -276,14 +264,7 @@ mod tests {
                 wire: None,
                 radio_type: crate::engine::radio::RadioType::Auto,
             };
-            let link: LinkSpec = "serial:/dev/ttyUSB0:57600".parse().unwrap();
-            for_link(
-                &link,
-                crate::transport::LinkOptions::default().baud,
-                &session,
-                Exchange::Ping,
-            )
-            .unwrap()
+            for_baud(57_600, 1, &session, Exchange::Ping)
         };
         let plain = budget_of(None);
         let signed = budget_of(Some(SigningConfig {
