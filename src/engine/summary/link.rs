@@ -33,4 +33,15 @@ impl LinkSummary {
             LinkSummary::Passive(s) => s.link_error.as_deref(),
         }
     }
+
+    /// Requests put on the wire (commands, re-sends not counted), and
+    /// those still within their timeout at the end: what every kind of
+    /// run counts alike. A passive run sends none.
+    pub(crate) fn requests(&self) -> (u64, u64) {
+        match self {
+            LinkSummary::Echo(s) => (s.requests, s.in_flight),
+            LinkSummary::Command(s) => (s.targets.iter().map(|t| t.commands).sum(), s.in_flight),
+            LinkSummary::Passive(_) => (0, 0),
+        }
+    }
 }

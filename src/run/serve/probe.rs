@@ -257,12 +257,7 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
             reasons.push(reason);
         }
     }
-    let (requests, in_flight) = match summary {
-        LinkSummary::Echo(s) => (s.requests, s.in_flight),
-        LinkSummary::Command(s) => (s.targets.iter().map(|t| t.commands).sum(), s.in_flight),
-        // Passive runs send nothing.
-        LinkSummary::Passive(_) => (0, 0),
-    };
+    let (requests, in_flight) = summary.requests();
     let message = summary
         .link_error()
         .or(no_peer)
