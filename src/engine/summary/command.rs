@@ -68,6 +68,11 @@ pub struct CommandSummary {
 }
 
 impl CommandSummary {
+    /// Commands put on the wire, every target's (re-sends not counted).
+    pub(crate) fn commands(&self) -> u64 {
+        self.targets.iter().map(|t| t.commands).sum()
+    }
+
     pub(crate) fn any_ack(&self) -> bool {
         self.targets.iter().any(|t| t.acknowledged > 0)
     }

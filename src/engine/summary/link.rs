@@ -40,7 +40,7 @@ impl LinkSummary {
     pub(crate) fn requests(&self) -> (u64, u64) {
         match self {
             LinkSummary::Echo(s) => (s.requests, s.in_flight),
-            LinkSummary::Command(s) => (s.targets.iter().map(|t| t.commands).sum(), s.in_flight),
+            LinkSummary::Command(s) => (s.commands(), s.in_flight),
             LinkSummary::Passive(_) => (0, 0),
         }
     }

@@ -109,7 +109,7 @@ impl Reporter for Metrics {
     }
 
     fn command_summary(&mut self, summary: &CommandSummary, _: &Verdict) -> io::Result<()> {
-        self.requests.session = summary.targets.iter().map(|t| t.commands).sum();
+        self.requests.session = summary.commands();
         Ok(())
     }
 }

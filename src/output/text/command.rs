@@ -91,7 +91,7 @@ fn write_time_to_ack(out: &mut impl Write, t: &RttSummary) -> io::Result<()> {
 }
 
 pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Result<()> {
-    let sent: u64 = s.targets.iter().map(|t| t.commands).sum();
+    let sent = s.commands();
     write!(
         out,
         "{sent} {} commands sent in {:.3} s",
