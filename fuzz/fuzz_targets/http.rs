@@ -21,7 +21,7 @@ use libfuzzer_sys::fuzz_target;
 use mavping::cli::{Cli, Mode};
 use mavping::config::ServeConfig;
 use mavping::engine::matcher::MatchEvent;
-use mavping::engine::observe::{Event, Observer, RunKind, StartInfo};
+use mavping::engine::observe::{Event, Observer, StartInfo};
 use mavping::engine::summary::ProbeName;
 use mavping::frame::SysComp;
 use mavping::output::http::{serve_one, Limits};
@@ -56,10 +56,10 @@ fn exporter() -> PrometheusExporter {
         interval: Duration::from_millis(100),
         timeout: Duration::from_secs(1),
         count: None,
-        run: RunKind::Echo,
+        plan: None,
     });
     for seq in 0..3u32 {
-        let _ = link.event(&Event::Match(MatchEvent::Reply {
+        let _ = link.event(&Event::of(&MatchEvent::Reply {
             responder: SysComp::new(1, 1),
             seq,
             rtt: 1_000_000 * u64::from(seq + 1),

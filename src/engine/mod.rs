@@ -7,6 +7,7 @@ pub(crate) mod capacity;
 pub(crate) mod clock_offset;
 pub(crate) mod diagnosis;
 pub(crate) mod hint;
+pub mod kind;
 pub(crate) mod link_io;
 pub(crate) mod link_node;
 pub(crate) mod load;

@@ -3,19 +3,15 @@
 //! engine names none of them.
 
 use std::io;
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::clock_offset::ClockSummary;
+use super::kind::KindValue;
 use super::link_node::LinkNodeReport;
-use super::matcher::MatchEvent;
-use super::probe::passive::flight::FlightEvent;
 use super::radio::{Judgement, RadioReport};
 use super::roster::Identity;
-use super::summary::passive::TableSummary;
 use super::summary::{Interim, ProbeName};
-use super::sweep_report::StepFigures;
-use super::sweep_report::SweepConfig;
-use super::CommandSpec;
 use super::Nanos;
 use crate::frame::SysComp;
 
@@ -29,49 +25,26 @@ pub struct StartInfo {
     /// The reply timeout (the retry interval for commands).
     pub timeout: Duration,
     pub count: Option<u64>,
-    pub run: RunKind,
+    /// What only this kind of run has, planned before it starts (the
+    /// steps of a sweep, the command sent, what a passive run listens to);
+    /// `None` for an echo probe at one rate.
+    pub plan: Option<Arc<dyn KindValue + Send + Sync>>,
 }
 
-/// What kind of run a session is, with what only that kind has: what
-/// reporters tell apart once, at its start.
-#[derive(Debug, Clone, PartialEq)]
-pub enum RunKind {
-    /// An echo probe (PING, TIMESYNC) at one rate: a line per reply.
-    Echo,
-    /// `--sweep` or `--load`: an echo probe in steps; the steps planned,
-    /// the load sent.
-    Steps(SweepConfig),
-    /// `--probe command`: what is sent, and how it is re-sent.
-    Command(CommandSpec),
-    /// `--passive`: nothing sent but our HEARTBEAT, if that is on; `log`:
-    /// a telemetry log read (passive by nature, nothing sent).
-    Passive { heartbeat: bool, log: bool },
-}
-
-impl RunKind {
-    /// The command a command run sends.
-    pub(crate) fn command(&self) -> Option<&CommandSpec> {
-        match self {
-            RunKind::Command(spec) => Some(spec),
-            _ => None,
-        }
-    }
-
-    /// The steps of a run in steps.
-    pub(crate) fn steps(&self) -> Option<&SweepConfig> {
-        match self {
-            RunKind::Steps(plan) => Some(plan),
-            _ => None,
-        }
+impl StartInfo {
+    /// The plan, if this run's is a `T`.
+    pub fn plan<T: KindValue>(&self) -> Option<&T> {
+        self.plan.as_deref()?.get()
     }
 }
 
 #[derive(Debug, Clone, Copy)]
 pub enum Event<'a> {
-    /// An echo probe's reply, loss, late or duplicate reply.
-    Match(MatchEvent),
-    /// A command's transmission, acknowledgement or failure.
-    Command(CommandEvent),
+    /// What only one kind of run tells, by its own type: an echo probe's
+    /// replies and losses, a command's sends and acknowledgements, a step
+    /// of a sweep ended, every source's sequence figures so far (once a
+    /// second), a telemetry log's timeline.
+    Kind(&'a dyn KindValue),
     /// A system's first HEARTBEAT.
     Heard { id: SysComp, identity: &'a Identity },
     /// A RADIO_STATUS (or RADIO) counted.
@@ -98,18 +71,24 @@ pub enum Event<'a> {
     /// the figure changed, at most once a second while the run sends, and
     /// once at its end. A link nobody answers shows in nothing else.
     Progress { at: Nanos, requests: u64 },
-    /// A step of a sweep (or of a `--load` run) ended.
-    Step(&'a StepFigures),
-    /// Every source's packet-sequence figures so far (cumulative), once a
-    /// second of session time: passive runs, and echo runs for the
-    /// direction split.
-    Sources { at: Nanos, table: &'a TableSummary },
-    /// A telemetry log's timeline: a window of log time closed, or a
-    /// silence or a loss burst ended.
-    Flight(&'a FlightEvent),
     /// The link failed; the session ends (told before its summary, so an
     /// exporter shows it while a run's other links go on).
     LinkFailed { at: Nanos, error: &'a str },
+}
+
+impl<'a> Event<'a> {
+    /// A kind's own event.
+    pub fn of(value: &'a dyn KindValue) -> Self {
+        Event::Kind(value)
+    }
+
+    /// The kind's own event, if this is one and a `T`.
+    pub fn kind<T: KindValue>(&self) -> Option<&'a T> {
+        match *self {
+            Event::Kind(value) => value.get(),
+            _ => None,
+        }
+    }
 }
 
 /// A RADIO_STATUS (or RADIO) counted: `first` for each radio's first
@@ -197,6 +176,21 @@ pub(crate) fn tell_each<'a>(
     result
 }
 
+/// Tells `observer` each of a kind's own events in order, as
+/// [`tell_each`] does.
+pub(crate) fn tell_kind<T: KindValue>(
+    observer: &mut dyn Observer,
+    events: impl Iterator<Item = T>,
+) -> io::Result<()> {
+    let mut result = Ok(());
+    for event in events {
+        if result.is_ok() {
+            result = observer.event(&Event::Kind(&event));
+        }
+    }
+    result
+}
+
 /// Follows nothing: for runs whose outcome is all that matters.
 pub struct Unobserved;
 
@@ -207,49 +201,6 @@ impl Observer for Unobserved {
     fn event(&mut self, _: &Event<'_>) -> io::Result<()> {
         Ok(())
     }
-}
-
-/// What the command probe decided (its tracker is pure; the driver turns
-/// `Send` into a frame on the wire).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum CommandEvent {
-    /// Put attempt `attempt` (1-based) of command `n` on the wire.
-    Send {
-        n: u64,
-        target: SysComp,
-        command: u16,
-        attempt: u32,
-    },
-    Skipped {
-        target: SysComp,
-        command: u16,
-        at: Nanos,
-    },
-    Acked {
-        n: u64,
-        target: SysComp,
-        from: SysComp,
-        command: u16,
-        result: u8,
-        attempts: u32,
-        time_to_ack: Nanos,
-    },
-    Failed {
-        n: u64,
-        target: SysComp,
-        command: u16,
-        attempts: u32,
-    },
-    LateAck {
-        from: SysComp,
-        command: u16,
-        result: u8,
-    },
-    DuplicateAck {
-        from: SysComp,
-        command: u16,
-        result: u8,
-    },
 }
 
 #[cfg(test)]

@@ -691,8 +691,8 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             gate: self.heard.gate,
         });
         // Last, as it judges the finished figures (a sweep's included).
-        if let (LinkSummary::Echo(s), Some(wire)) = (&mut summary, self.cfg.wire) {
-            s.apply_wire(wire);
+        if let Some(wire) = self.cfg.wire {
+            summary.apply_wire(wire);
         }
         Measurement {
             summary,

@@ -90,7 +90,7 @@ pub(crate) struct StepRadio {
 
 /// One step as reported.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct StepFigures {
+pub(crate) struct StepFigures {
     /// 1 for the first step.
     pub(crate) index: u32,
     pub(crate) phase: Phase,

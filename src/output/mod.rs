@@ -22,7 +22,7 @@ mod wall_clock;
 pub(crate) mod windows;
 mod writers;
 
-pub(crate) use crate::engine::observe::{Event, RunKind, StartInfo};
+pub(crate) use crate::engine::observe::{Event, StartInfo};
 pub(crate) use fanout::Fanout;
 pub(crate) use reporter::Reporter;
 pub(crate) use wall_clock::WallClock;

@@ -10,10 +10,13 @@
 use std::io;
 
 use crate::engine::clock_offset::ClockSummary;
+use crate::engine::kind::KindValue;
 use crate::engine::link_node::LinkNodeReport;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::{CommandEvent, Event, Observer, RadioHeard, StartInfo};
+use crate::engine::observe::{Event, Observer, RadioHeard, StartInfo};
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
+use crate::engine::probe::passive::SourcesNow;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{PassiveSummary, TableSummary};
 use crate::engine::summary::EchoSummary;
@@ -132,8 +135,7 @@ pub(crate) trait Reporter {
     /// passes events on whole ([`super::Fanout`]) takes them here.
     fn tell(&mut self, event: &Event<'_>) -> io::Result<()> {
         match *event {
-            Event::Match(ref e) => self.matched(e),
-            Event::Command(ref e) => self.command(e),
+            Event::Kind(value) => self.kind_event(value),
             Event::Heard { id, identity } => self.heard(id, identity),
             Event::Radio(ref radio) => self.radio(radio),
             Event::LinkNode {
@@ -145,27 +147,49 @@ pub(crate) trait Reporter {
             Event::Clock { id, at, ref clock } => self.clock(id, at, clock),
             Event::WaitingForPeer => self.waiting_for_peer(),
             Event::Progress { at, requests } => self.progress(at, requests),
-            Event::Step(step) => self.step(step),
-            Event::Sources { at, table } => self.sources(at, table),
-            Event::Flight(e) => self.flight(e),
             Event::LinkFailed { at, error } => self.link_failed(at, error),
+        }
+    }
+
+    /// A kind's own event, by its type (the most frequent first). One
+    /// that no method takes is shown by no format.
+    fn kind_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
+        if let Some(e) = value.get::<MatchEvent>() {
+            self.matched(e)
+        } else if let Some(e) = value.get::<CommandEvent>() {
+            self.command(e)
+        } else if let Some(s) = value.get::<SourcesNow>() {
+            self.sources(s.at, &s.table)
+        } else if let Some(step) = value.get::<StepFigures>() {
+            self.step(step)
+        } else if let Some(e) = value.get::<FlightEvent>() {
+            self.flight(e)
+        } else {
+            Ok(())
         }
     }
 
     /// The figures so far, by the kind of run.
     fn interim(&mut self, figures: &Interim) -> io::Result<()> {
-        match figures {
-            Interim::Echo(e) => self.echo_interim(e),
-            Interim::Passive(p) => self.passive_interim(p),
+        if let Some(echo) = figures.get::<EchoInterim>() {
+            self.echo_interim(echo)
+        } else if let Some(passive) = figures.get::<PassiveInterim>() {
+            self.passive_interim(passive)
+        } else {
+            Ok(())
         }
     }
 
     /// The judged summary at the end, by the kind of run.
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
-        match summary {
-            LinkSummary::Echo(s) => self.echo_summary(s, verdict),
-            LinkSummary::Command(s) => self.command_summary(s, verdict),
-            LinkSummary::Passive(s) => self.passive_summary(s, verdict),
+        if let Some(echo) = summary.get::<EchoSummary>() {
+            self.echo_summary(echo, verdict)
+        } else if let Some(command) = summary.get::<CommandSummary>() {
+            self.command_summary(command, verdict)
+        } else if let Some(passive) = summary.get::<PassiveSummary>() {
+            self.passive_summary(passive, verdict)
+        } else {
+            Ok(())
         }
     }
 }

@@ -4,17 +4,20 @@
 //! line against the schema; `every_format.rs` sends every run through
 //! every format.
 #![cfg(test)]
+use std::sync::Arc;
 use std::time::Duration;
 
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
+use crate::engine::kind::KindValue;
 use crate::engine::link_node::{LinkNodeReport, LinkNodeSummary, LinkNodes, UplinkComparison};
 use crate::engine::load::{Load, LoadKind, LoadSpec};
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::observe::RadioHeard;
-use crate::engine::observe::{CommandEvent, RunKind};
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::{Flight, FlightEvent, FlightSummary, Totals};
 use crate::engine::probe::passive::tracker::RADIO_SOURCE;
+use crate::engine::probe::passive::{PassivePlan, SourcesNow};
 use crate::engine::radio::{Judgement, RadioKind, RadioReport, RadioType, Radios, UNKNOWN};
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
@@ -31,6 +34,12 @@ use crate::frame::{ScanStats, SysComp, Version};
 use crate::output::{Event, StartInfo};
 use crate::transport::RxClock;
 use crate::verdict::{self, Thresholds, Verdict};
+
+/// A kind's own event as the engine tells it; a test's events live as
+/// long as the test run.
+pub(crate) fn kind<T: KindValue>(value: T) -> Event<'static> {
+    Event::Kind(Box::leak(Box::new(value)))
+}
 
 /// The probe a test names.
 pub(crate) fn probe_name(probe: &str) -> ProbeName {
@@ -62,7 +71,7 @@ pub(crate) fn start(probe: &'static str) -> StartInfo {
         interval: Duration::from_millis(100),
         timeout: Duration::from_secs(2),
         count: Some(10),
-        run: RunKind::Echo,
+        plan: None,
     }
 }
 
@@ -247,7 +256,7 @@ pub(crate) struct Borrowed {
     steps: Vec<StepFigures>,
     flight: (Vec<FlightEvent>, FlightSummary),
     /// A passive run's sources a second in.
-    sources: crate::engine::summary::passive::TableSummary,
+    sources: SourcesNow,
 }
 
 impl Borrowed {
@@ -271,7 +280,10 @@ impl Borrowed {
                 for seq in [0, 1, 3] {
                     table.on_frame(ONE, seq, 30, 39, u64::from(seq) * 20_000_000);
                 }
-                table.summary(1_000_000_000)
+                SourcesNow {
+                    at: 1_000_000_000,
+                    table: table.summary(1_000_000_000),
+                }
             },
         }
     }
@@ -319,7 +331,7 @@ pub(crate) fn flight() -> (Vec<FlightEvent>, FlightSummary) {
 /// A PING (or TIMESYNC) run: every echo event, figures so far, the summary.
 pub(crate) fn echo_run<'a>(probe: &'static str, borrowed: &'a Borrowed) -> Vec<Told<'a>> {
     let reply = |seq, at, out_of_order| {
-        Event::Match(MatchEvent::Reply {
+        kind(MatchEvent::Reply {
             responder: ONE,
             seq,
             rtt: 10_123_456,
@@ -339,27 +351,27 @@ pub(crate) fn echo_run<'a>(probe: &'static str, borrowed: &'a Borrowed) -> Vec<T
             },
             reply(0, 110_123_456, false),
             reply(2, 310_000_001, true),
-            Event::Match(MatchEvent::Lost {
+            kind(MatchEvent::Lost {
                 responder: ONE,
                 seq: 1,
                 sent_at: 200_000_000,
                 at: 2_200_000_000,
             }),
-            Event::Match(MatchEvent::Late {
+            kind(MatchEvent::Late {
                 responder: ONE,
                 seq: 1,
                 rtt: 2_500_000_001,
                 sent_at: 200_000_000,
                 at: 2_700_000_001,
             }),
-            Event::Match(MatchEvent::Duplicate {
+            kind(MatchEvent::Duplicate {
                 responder: ONE,
                 seq: 2,
                 rtt: 12_000_000,
                 sent_at: 300_000_000,
                 at: 312_000_000,
             }),
-            Event::Match(MatchEvent::Stale {
+            kind(MatchEvent::Stale {
                 responder: TWO,
                 at: 400_000_000,
             }),
@@ -416,14 +428,14 @@ pub(crate) fn echo_run<'a>(probe: &'static str, borrowed: &'a Borrowed) -> Vec<T
         ]
         .map(Told::Event),
     );
-    told.push(Told::Interim(Interim::Echo(EchoInterim {
+    told.push(Told::Interim(Interim::new(EchoInterim {
         at: 2_500_000_000,
         requests: 8,
         responders: vec![responder(ONE, true), responder(TWO, false)],
     })));
     let summary = echo_summary(probe);
     let verdict = verdict::judge(&summary, &thresholds());
-    told.push(Told::Summary(LinkSummary::Echo(Box::new(summary)), verdict));
+    told.push(Told::Summary(LinkSummary::new(summary), verdict));
     told
 }
 
@@ -474,15 +486,15 @@ pub(crate) fn load() -> Vec<LoadSpec> {
 pub(crate) fn sweep_run(plan: PlanKind, borrowed: &Borrowed) -> Vec<Told<'_>> {
     let mut told = vec![Told::Start(StartInfo {
         count: None,
-        run: RunKind::Steps(SweepConfig {
+        plan: Some(Arc::new(SweepConfig {
             plan,
             step: Duration::from_millis(1500),
             load: load(),
             load_bytes_per_s: 1_234.5,
-        }),
+        })),
         ..start("ping")
     })];
-    told.extend(borrowed.steps.iter().map(|s| Told::Event(Event::Step(s))));
+    told.extend(borrowed.steps.iter().map(|s| Told::Event(Event::Kind(s))));
     let kind = match plan {
         PlanKind::Sweep { .. } => "sweep",
         PlanKind::Load { .. } => "load",
@@ -502,7 +514,7 @@ pub(crate) fn sweep_run(plan: PlanKind, borrowed: &Borrowed) -> Vec<Told<'_>> {
         ..echo_summary("ping")
     };
     let verdict = verdict::judge(&summary, &Thresholds::default());
-    told.push(Told::Summary(LinkSummary::Echo(Box::new(summary)), verdict));
+    told.push(Told::Summary(LinkSummary::new(summary), verdict));
     told
 }
 
@@ -551,14 +563,14 @@ pub(crate) fn command_summary() -> CommandSummary {
 /// A `--probe command` run: every command event, and its summary.
 pub(crate) fn command_run() -> Vec<Told<'static>> {
     let mut told = vec![Told::Start(StartInfo {
-        run: RunKind::Command(CommandSpec {
+        plan: Some(Arc::new(CommandSpec {
             target: ONE,
             command: 512,
             // f32 params: written as the f64 they widen to.
             params: [0.0, 0.1, 2.5, -3.3, 1e-7, 65_535.0, 7.0],
             retry_interval: Duration::from_millis(100),
             retries: 3,
-        }),
+        })),
         ..start("command")
     })];
     told.extend(
@@ -601,16 +613,13 @@ pub(crate) fn command_run() -> Vec<Told<'static>> {
                 result: 4,
             },
         ]
-        .map(|e| Told::Event(Event::Command(e))),
+        .map(|e| Told::Event(kind(e))),
     );
     // Not written: a command run writes its commands' events only.
     told.push(Told::Event(Event::WaitingForPeer));
     let summary = command_summary();
     let verdict = verdict::judge_command(&summary);
-    told.push(Told::Summary(
-        LinkSummary::Command(Box::new(summary)),
-        verdict,
-    ));
+    told.push(Told::Summary(LinkSummary::new(summary), verdict));
     told
 }
 
@@ -629,7 +638,7 @@ pub(crate) fn passive_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
     table.on_frame(RADIO_SOURCE, 0, 109, 38, 100 * ms);
     table.on_frame(SysComp::new(9, 9), 0, 0, 21, 100 * ms);
     // The figures so far, before the silence ended.
-    let interim = Interim::Passive(PassiveInterim {
+    let interim = Interim::new(PassiveInterim {
         at: 1_000 * ms,
         table: table.summary(1_000 * ms),
         identities: vec![(ONE, identity())],
@@ -666,18 +675,15 @@ pub(crate) fn passive_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
         Told::Start(StartInfo {
             probe: ProbeName::Passive,
             count: None,
-            run: RunKind::Passive {
+            plan: Some(Arc::new(PassivePlan {
                 heartbeat: true,
                 log: false,
-            },
+            })),
             ..start("ping")
         }),
-        Told::Event(Event::Sources {
-            at: 1_000 * ms,
-            table: &borrowed.sources,
-        }),
+        Told::Event(Event::Kind(&borrowed.sources)),
         Told::Interim(interim),
-        Told::Summary(LinkSummary::Passive(Box::new(summary)), verdict),
+        Told::Summary(LinkSummary::new(summary), verdict),
     ]
 }
 
@@ -753,10 +759,10 @@ pub(crate) fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
         link: "tlog:flight.tlog".into(),
         probe: ProbeName::Passive,
         count: None,
-        run: RunKind::Passive {
+        plan: Some(Arc::new(PassivePlan {
             heartbeat: false,
             log: true,
-        },
+        })),
         ..start("ping")
     })]
     .into_iter()
@@ -765,12 +771,9 @@ pub(crate) fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
             .flight
             .0
             .iter()
-            .map(|e| Told::Event(Event::Flight(e))),
+            .map(|e| Told::Event(Event::Kind(e))),
     )
-    .chain([Told::Summary(
-        LinkSummary::Passive(Box::new(summary)),
-        verdict,
-    )])
+    .chain([Told::Summary(LinkSummary::new(summary), verdict)])
     .collect()
 }
 

@@ -7,11 +7,12 @@
 use std::io::{self, Write};
 
 use super::windows::{Window, Windows};
-use super::{Reporter, RunKind, StartInfo};
+use super::{Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
+use crate::engine::probe::passive::PassivePlan;
 use crate::engine::radio::{self, RadioReport};
-use crate::engine::summary::passive::TableSummary;
+use crate::engine::summary::passive::{PassiveSummary, TableSummary};
 use crate::engine::summary::LinkSummary;
 use crate::engine::Nanos;
 use crate::verdict::Verdict;
@@ -139,7 +140,7 @@ impl<W: Write> SampleLog<W> {
 
 impl<W: Write> Reporter for SampleLog<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        let passive = matches!(info.run, RunKind::Passive { .. });
+        let passive = info.plan::<PassivePlan>().is_some();
         self.windows = passive.then(Windows::default);
         let header = if passive { PASSIVE_HEADER } else { HEADER };
         match (self.header, &self.link) {
@@ -207,7 +208,7 @@ impl<W: Write> Reporter for SampleLog<W> {
 
     /// A passive run's last, partial, window comes from its summary.
     fn summary(&mut self, summary: &LinkSummary, _: &Verdict) -> io::Result<()> {
-        if let LinkSummary::Passive(s) = summary {
+        if let Some(s) = summary.get::<PassiveSummary>() {
             let end = (s.duration_s * 1e9) as u64;
             self.windows(end, &s.table, true)?;
         }
@@ -218,15 +219,17 @@ impl<W: Write> Reporter for SampleLog<W> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::observe::{Event, RunKind};
+    use crate::engine::observe::Event;
+    use crate::engine::probe::passive::{PassivePlan, SourcesNow};
     use crate::engine::summary::ProbeName;
     use crate::frame::SysComp;
+    use crate::output::runs::kind;
 
     #[test]
     fn rows_carry_the_latest_radio_figures() {
         let mut log = SampleLog::new(Vec::new());
         let lost = |seq| {
-            Event::Match(MatchEvent::Lost {
+            kind(MatchEvent::Lost {
                 responder: SysComp::new(1, 1),
                 seq,
                 sent_at: 0,
@@ -272,16 +275,16 @@ mod tests {
             interval: std::time::Duration::from_secs(1),
             timeout: std::time::Duration::from_secs(1),
             count: None,
-            run: RunKind::Passive {
+            plan: Some(std::sync::Arc::new(PassivePlan {
                 heartbeat: true,
                 log: false,
-            },
+            })),
         }
     }
 
     fn passive_summary(duration_s: f64, table: TableSummary) -> LinkSummary {
         use crate::engine::summary::passive::PassiveSummary;
-        LinkSummary::Passive(Box::new(PassiveSummary {
+        LinkSummary::new(PassiveSummary {
             link: "sim:".into(),
             ours: SysComp::new(250, 190),
             heartbeat: true,
@@ -300,7 +303,7 @@ mod tests {
             per_link: None,
             round_trips: None,
             flight: None,
-        }))
+        })
     }
 
     fn judged(summary: &LinkSummary) -> Verdict {
@@ -320,10 +323,10 @@ mod tests {
             table.on_frame(a, seq, 30, 40, at * ms);
         }
         let first = table.summary(1_000 * ms);
-        log.tell(&Event::Sources {
+        log.tell(&kind(SourcesNow {
             at: 1_000 * ms,
-            table: &first,
-        })
+            table: first.clone(),
+        }))
         .unwrap();
         table.on_frame(a, 2, 30, 40, 1_100 * ms);
         table.on_frame(b, 0, 0, 21, 1_200 * ms);
@@ -353,15 +356,15 @@ mod tests {
         // An echo run's table (told for its direction split) is not sampled.
         let mut echo = SampleLog::new(Vec::new());
         echo.start(&StartInfo {
-            run: RunKind::Echo,
+            plan: None,
             ..passive_start()
         })
         .unwrap();
         for l in [&mut log, &mut echo] {
-            l.tell(&Event::Sources {
+            l.tell(&kind(SourcesNow {
                 at: 1_000_000_000,
-                table: &at_one,
-            })
+                table: at_one.clone(),
+            }))
             .unwrap();
         }
         let end = passive_summary(1.0, at_one.clone());
@@ -382,9 +385,9 @@ mod tests {
             interval: std::time::Duration::from_secs(1),
             timeout: std::time::Duration::from_secs(1),
             count: None,
-            run: RunKind::Echo,
+            plan: None,
         };
-        let lost = Event::Match(MatchEvent::Lost {
+        let lost = kind(MatchEvent::Lost {
             responder: SysComp::new(1, 1),
             seq: 3,
             sent_at: 0,

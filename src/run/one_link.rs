@@ -11,7 +11,7 @@ use crate::engine::probe::ping::PingProbe;
 use crate::engine::probe::timesync::TimesyncProbe;
 use crate::engine::probe::EchoProbe;
 use crate::engine::session::{self, Controls, Measurement};
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::{sweep, SessionConfig};
 use crate::output::WallClock;
 use crate::transport::recording::{Recorded, Tap};
@@ -82,7 +82,8 @@ pub(super) async fn measure_recorded(
             echo_or_steps(session, &mut link, probe, observer, controls).await
         }
     };
-    if let (Link::Tlog(log), LinkSummary::Passive(s)) = (link.inner(), &mut outcome.summary) {
+    if let (Link::Tlog(log), Some(s)) = (link.inner(), outcome.summary.get_mut::<PassiveSummary>())
+    {
         s.log = log.facts();
     }
     // The simulated link's ground truth, for soak scripts (`-v`).

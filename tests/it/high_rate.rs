@@ -13,7 +13,7 @@ use mavping::engine::observe::Unobserved;
 use mavping::engine::probe::echo;
 use mavping::engine::probe::ping::PingProbe;
 use mavping::engine::session::Controls;
-use mavping::engine::summary::LinkSummary;
+use mavping::engine::summary::EchoSummary;
 use mavping::engine::SessionConfig;
 use mavping::frame::{SysComp, Version};
 use mavping::transport::sim::{SimLink, SimParams};
@@ -55,9 +55,10 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         let outcome = echo::run(&cfg, &mut link, probe, &mut Unobserved, &controls).await;
         (outcome, link.truth())
     });
-    let LinkSummary::Echo(summary) = outcome.summary else {
-        panic!("an echo probe's summary")
-    };
+    let summary = outcome
+        .summary
+        .get::<EchoSummary>()
+        .expect("an echo probe's summary");
     assert_eq!(summary.requests, 100_000);
     for (id, t) in truth {
         let c = summary

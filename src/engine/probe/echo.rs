@@ -3,6 +3,7 @@
 
 use std::collections::HashMap;
 use std::io;
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::passive::driver::{self as passive_driver, tell_sources};
@@ -11,9 +12,10 @@ use super::passive::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{Classified, EchoProbe};
 use crate::engine::diagnosis::{diagnose, Observed};
 use crate::engine::hint::{Hint, HintCode};
+use crate::engine::kind::KindValue;
 use crate::engine::link_io::{Clock, Sender, WallAtZero};
 use crate::engine::matcher::{MatchEvent, Matcher, MAX_RESPONDERS};
-use crate::engine::observe::{tell_each, Event, Observer, RunKind, StartInfo};
+use crate::engine::observe::{tell_each, tell_kind, Event, Observer, StartInfo};
 use crate::engine::probe::uplink_check::compare_uplink;
 use crate::engine::radio::{radio_hints, Radios};
 use crate::engine::roster::Roster;
@@ -179,7 +181,10 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             interval: cfg.interval,
             timeout: cfg.timeout,
             count: cfg.count,
-            run: cfg.sweep.clone().map_or(RunKind::Echo, RunKind::Steps),
+            plan: cfg
+                .sweep
+                .clone()
+                .map(|plan| Arc::new(plan) as Arc<dyn KindValue + Send + Sync>),
         }
     }
 
@@ -268,7 +273,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             MatchEvent::Lost { sent_at, .. } => radios.outcome(true, sent_at),
             _ => {}
         });
-        let matched = tell_each(observer, events.map(Event::Match));
+        let matched = tell_kind(observer, events);
         let probe = &self.probe;
         let clocks = self.clocks_due.drain(..).filter_map(|(id, at)| {
             Some(Event::Clock {
@@ -288,7 +293,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
     }
 
     fn interim(&self, roster: &Roster, at: Nanos) -> Option<Interim> {
-        Some(Interim::Echo(EchoInterim {
+        Some(Interim::new(EchoInterim {
             at,
             requests: self.matcher.issued(),
             responders: self.summaries(roster),
@@ -390,7 +395,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             .into_iter()
             .map(|r| (r.id, r.rtt))
             .collect();
-        (LinkSummary::Echo(Box::new(summary)), histograms)
+        (LinkSummary::new(summary), histograms)
     }
 }
 

@@ -77,3 +77,15 @@ impl CommandSummary {
         self.targets.iter().any(|t| t.acknowledged > 0)
     }
 }
+
+impl super::KindSummary for CommandSummary {
+    fn link(&self) -> &str {
+        &self.link
+    }
+    fn link_error(&self) -> Option<&str> {
+        self.link_error.as_deref()
+    }
+    fn requests(&self) -> (u64, u64) {
+        (self.commands(), self.in_flight)
+    }
+}

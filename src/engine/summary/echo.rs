@@ -203,6 +203,21 @@ pub(crate) fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<Res
     out
 }
 
+impl super::KindSummary for EchoSummary {
+    fn link(&self) -> &str {
+        &self.link
+    }
+    fn link_error(&self) -> Option<&str> {
+        self.link_error.as_deref()
+    }
+    fn requests(&self) -> (u64, u64) {
+        (self.requests, self.in_flight)
+    }
+    fn apply_wire(&mut self, budget: WireBudget) {
+        EchoSummary::apply_wire(self, budget);
+    }
+}
+
 #[cfg(test)]
 impl EchoSummary {
     /// A run of `requests` PINGs on `link` with nothing in it, for tests

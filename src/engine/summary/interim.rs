@@ -1,23 +1,27 @@
-//! The figures of a run so far (`-Q`, SIGQUIT), by the kind of run that
-//! has them: a snapshot the reporters print mid-run, apart from the
+//! The figures of a run so far (`-Q`, SIGQUIT): a snapshot the reporters
+//! print mid-run, of the kind's own type ([`Interim`]), apart from the
 //! summaries it borrows its parts from.
 
 use super::echo::ResponderSummary;
 use super::passive;
+use crate::engine::kind::KindValue;
 use crate::engine::roster::Identity;
 use crate::frame::SysComp;
 
-/// The figures of a run so far (`-Q`, SIGQUIT), by the kind of run that
-/// has them.
-#[derive(Debug, Clone)]
-pub enum Interim {
-    /// An echo probe's (PING, TIMESYNC, and a sweep's steps).
-    Echo(EchoInterim),
-    /// A `--passive` run's.
-    Passive(PassiveInterim),
-}
+/// The figures of a run so far, of whichever kind has them.
+#[derive(Debug)]
+pub struct Interim(Box<dyn KindValue>);
 
-impl Interim {}
+impl Interim {
+    pub(crate) fn new(figures: impl KindValue) -> Self {
+        Interim(Box::new(figures))
+    }
+
+    /// The figures, if their kind's are a `T`.
+    pub fn get<T: KindValue>(&self) -> Option<&T> {
+        self.0.get()
+    }
+}
 
 /// An echo run so far: each responder's counts of decided requests and
 /// its RTT figures.

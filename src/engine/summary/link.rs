@@ -1,47 +1,63 @@
-//! The end of one link's run, whichever probe ran it ([`LinkSummary`]):
-//! the one value the run hands the reports, dispatching to the echo,
-//! command or passive summary.
+//! The end of one link's run, whichever kind ran it ([`LinkSummary`]):
+//! the one value the run hands the reports. Each kind's summary is its
+//! own type ([`KindSummary`]); what every kind answers alike is asked
+//! here, the rest read by type.
 
-use super::command::CommandSummary;
-use super::echo::EchoSummary;
-use super::passive;
+use std::any::Any;
+use std::fmt::Debug;
 
-/// The end of one link's run, by probe kind.
-#[derive(Debug, Clone)]
-pub enum LinkSummary {
-    /// PING or TIMESYNC.
-    Echo(Box<EchoSummary>),
-    /// COMMAND_LONG until acknowledged.
-    Command(Box<CommandSummary>),
-    /// `--passive`: no probes, the sources' own sequence numbers.
-    Passive(Box<passive::PassiveSummary>),
+use crate::engine::capacity::WireBudget;
+
+/// What every kind of run's summary answers alike.
+pub trait KindSummary: Any + Debug + Send + Sync {
+    /// The link's name.
+    fn link(&self) -> &str;
+    /// Why the link failed, if it did.
+    fn link_error(&self) -> Option<&str>;
+    /// Requests put on the wire (commands, re-sends not counted), and
+    /// those still within their timeout at the end. A kind that sends
+    /// nothing has none.
+    fn requests(&self) -> (u64, u64) {
+        (0, 0)
+    }
+    /// The serial link's wire budget, judged against the finished figures
+    /// by a kind whose figures it explains.
+    fn apply_wire(&mut self, _budget: WireBudget) {}
 }
 
+/// The end of one link's run, of whichever kind.
+#[derive(Debug)]
+pub struct LinkSummary(Box<dyn KindSummary>);
+
 impl LinkSummary {
+    pub(crate) fn new(summary: impl KindSummary) -> Self {
+        LinkSummary(Box::new(summary))
+    }
+
+    /// The summary, if its kind's is a `T`.
+    pub fn get<T: KindSummary>(&self) -> Option<&T> {
+        (&*self.0 as &dyn Any).downcast_ref()
+    }
+
+    pub(crate) fn get_mut<T: KindSummary>(&mut self) -> Option<&mut T> {
+        (&mut *self.0 as &mut dyn Any).downcast_mut()
+    }
+
     pub(crate) fn link(&self) -> &str {
-        match self {
-            LinkSummary::Echo(s) => &s.link,
-            LinkSummary::Command(s) => &s.link,
-            LinkSummary::Passive(s) => &s.link,
-        }
+        self.0.link()
     }
 
     pub(crate) fn link_error(&self) -> Option<&str> {
-        match self {
-            LinkSummary::Echo(s) => s.link_error.as_deref(),
-            LinkSummary::Command(s) => s.link_error.as_deref(),
-            LinkSummary::Passive(s) => s.link_error.as_deref(),
-        }
+        self.0.link_error()
     }
 
-    /// Requests put on the wire (commands, re-sends not counted), and
-    /// those still within their timeout at the end: what every kind of
-    /// run counts alike. A passive run sends none.
+    /// See [`KindSummary::requests`].
     pub(crate) fn requests(&self) -> (u64, u64) {
-        match self {
-            LinkSummary::Echo(s) => (s.requests, s.in_flight),
-            LinkSummary::Command(s) => (s.commands(), s.in_flight),
-            LinkSummary::Passive(_) => (0, 0),
-        }
+        self.0.requests()
+    }
+
+    /// See [`KindSummary::apply_wire`].
+    pub(crate) fn apply_wire(&mut self, budget: WireBudget) {
+        self.0.apply_wire(budget);
     }
 }

@@ -18,5 +18,5 @@ pub(crate) use direction::Direction;
 pub(crate) use echo::{responder_summaries, ScheduleSummary, HISTOGRAM_ROWS};
 pub use echo::{EchoSummary, ResponderSummary};
 pub use interim::{EchoInterim, Interim, PassiveInterim};
-pub use link::LinkSummary;
+pub use link::{KindSummary, LinkSummary};
 pub use probe_name::ProbeName;

@@ -16,7 +16,7 @@ use crate::transport::RxClock;
 
 /// A `--passive` run on one link.
 #[derive(Debug, Clone)]
-pub struct PassiveSummary {
+pub(crate) struct PassiveSummary {
     pub(crate) link: String,
     pub(crate) ours: SysComp,
     /// Our HEARTBEAT went out at 1 Hz (routers send only to what they hear).
@@ -316,7 +316,7 @@ pub(crate) struct PerLink {
 
 /// What a [`SourceTable`] reports.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct TableSummary {
+pub(crate) struct TableSummary {
     /// By source address; the radio, if heard, among them, flagged.
     pub(crate) sources: Vec<SourceSummary>,
     pub(crate) totals: LinkTotals,
@@ -327,4 +327,13 @@ pub struct TableSummary {
 /// 2^53, where `f64` is exact.
 pub(crate) fn percent(part: u64, whole: u64) -> Option<f64> {
     (whole > 0).then(|| 100.0 * part as f64 / whole as f64)
+}
+
+impl super::KindSummary for PassiveSummary {
+    fn link(&self) -> &str {
+        &self.link
+    }
+    fn link_error(&self) -> Option<&str> {
+        self.link_error.as_deref()
+    }
 }

@@ -29,7 +29,7 @@ use crate::engine::radio::{RadioReport, Radios};
 use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
-use crate::engine::summary::{Interim, LinkSummary};
+use crate::engine::summary::{EchoSummary, Interim, LinkSummary};
 use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{Frame, ScanStats, SysComp};
 use crate::transport::{LinkError, PathId, Transport};
@@ -171,10 +171,10 @@ impl Observer for Tap<'_> {
     }
 
     fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        if let Event::Match(MatchEvent::Late { at, .. }) = event {
+        if let Some(MatchEvent::Late { at, .. }) = event.kind::<MatchEvent>() {
             *self.last_late = Some(*at);
         }
-        if let (Event::Match(e), Some(step)) = (event, self.step.as_deref_mut()) {
+        if let (Some(e), Some(step)) = (event.kind::<MatchEvent>(), self.step.as_deref_mut()) {
             let sent_at = match *e {
                 MatchEvent::Reply { sent_at, .. }
                 | MatchEvent::Lost { sent_at, .. }
@@ -275,7 +275,7 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
         let mut told = Ok(());
         for step in &self.steps[self.told..] {
             if told.is_ok() {
-                told = observer.event(&Event::Step(step));
+                told = observer.event(&Event::Kind(step));
             }
         }
         self.told = self.steps.len();
@@ -335,7 +335,7 @@ impl<P: EchoProbe> Driver for SweepDriver<P> {
         let sweep = self.summary(ending);
         let self_plan = self.config.plan;
         let (mut summary, histograms) = self.inner.finish(ended);
-        if let LinkSummary::Echo(s) = &mut summary {
+        if let Some(s) = summary.get_mut::<EchoSummary>() {
             // The rate changed at every step: the steps' own achieved
             // rates say how well they kept to it.
             s.schedule = None;

@@ -4,8 +4,9 @@ use serde::Serialize;
 
 use super::lines::{Line, SCHEMA_VERSION};
 use super::units::{seconds, us};
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::summary::CommandSummary;
-use crate::engine::{observe::CommandEvent, CommandSpec};
+use crate::engine::CommandSpec;
 use crate::frame::codec;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;

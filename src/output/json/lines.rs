@@ -8,10 +8,12 @@ use serde::Serialize;
 
 use super::units::seconds;
 use super::{command, echo, flight, heard, passive, sweep};
-use crate::engine::summary::{Interim, ProbeName};
+use crate::engine::summary::{EchoInterim, Interim, PassiveInterim, ProbeName};
+use crate::engine::sweep_report::SweepConfig;
+use crate::engine::CommandSpec;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
-use crate::output::{RunKind, StartInfo, WallClock};
+use crate::output::{StartInfo, WallClock};
 
 pub(crate) const SCHEMA_VERSION: u32 = 2;
 
@@ -128,7 +130,7 @@ pub(super) struct Lines {
 impl Lines {
     /// Notes what the run is: a command probe's writes its own events only.
     pub(super) fn starts(&mut self, info: &StartInfo) {
-        self.command = matches!(info.run, RunKind::Command(_));
+        self.command = info.plan::<CommandSpec>().is_some();
     }
 
     /// Writes `line` and its newline.
@@ -163,17 +165,19 @@ impl Lines {
             rate_hz: 1.0 / info.interval.as_secs_f64(),
             timeout_s: info.timeout.as_secs_f64(),
             count: info.count,
-            command: info.run.command().map(command::Spec::of),
-            sweep: info.run.steps().map(sweep::Plan::of),
+            command: info.plan::<CommandSpec>().map(command::Spec::of),
+            sweep: info.plan::<SweepConfig>().map(sweep::Plan::of),
         }))
     }
 
     /// The line of the figures so far.
-    pub(super) fn interim<'a>(&self, figures: &'a Interim) -> Line<'a> {
-        match figures {
-            Interim::Echo(e) => self.echo_interim(e),
-            Interim::Passive(p) => self.passive_interim(p),
+    pub(super) fn interim<'a>(&self, figures: &'a Interim) -> Option<Line<'a>> {
+        if let Some(echo) = figures.get::<EchoInterim>() {
+            return Some(self.echo_interim(echo));
         }
+        figures
+            .get::<PassiveInterim>()
+            .map(|passive| self.passive_interim(passive))
     }
 
     /// What every timed event of a responder starts with.

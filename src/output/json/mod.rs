@@ -31,7 +31,8 @@ use std::io::{self, Write};
 use self::lines::{Line, Lines};
 use super::Reporter;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::{CommandEvent, RadioHeard};
+use crate::engine::observe::RadioHeard;
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
@@ -85,8 +86,9 @@ impl<W: Write> Reporter for JsonReporter<W> {
 
     /// Written in quiet mode too: that is what `-Q` is for.
     fn interim(&mut self, figures: &Interim) -> io::Result<()> {
-        self.lines
-            .write(&mut self.out, &self.lines.interim(figures))?;
+        if let Some(line) = self.lines.interim(figures) {
+            self.lines.write(&mut self.out, &line)?;
+        }
         self.out.flush()
     }
 

@@ -10,7 +10,12 @@ use serde_json::Value;
 
 use super::lines::{Line, Lines};
 use super::JsonReporter;
-use crate::engine::summary::LinkSummary;
+use crate::engine::matcher::MatchEvent;
+use crate::engine::probe::command::CommandEvent;
+use crate::engine::probe::passive::flight::FlightEvent;
+use crate::engine::summary::passive::PassiveSummary;
+use crate::engine::summary::{CommandSummary, EchoSummary, LinkSummary};
+use crate::engine::sweep_report::StepFigures;
 use crate::output::runs::*;
 use crate::output::{Event, Reporter, WallClock};
 use crate::verdict::Verdict;
@@ -18,37 +23,47 @@ use crate::verdict::Verdict;
 impl Lines {
     /// The summary line the reporter writes.
     fn summary<'a>(&'a self, summary: &'a LinkSummary, verdict: &'a Verdict) -> Line<'a> {
-        match summary {
-            LinkSummary::Echo(s) => Line::Summary(Box::new(super::echo::Summary::of(
+        if let Some(s) = summary.get::<EchoSummary>() {
+            Line::Summary(Box::new(super::echo::Summary::of(
                 s,
                 verdict,
                 self.link_or(&s.link),
-            ))),
-            LinkSummary::Command(s) => Line::CommandSummary(Box::new(super::command::Summary::of(
+            )))
+        } else if let Some(s) = summary.get::<CommandSummary>() {
+            Line::CommandSummary(Box::new(super::command::Summary::of(
                 s,
                 verdict,
                 self.link_or(&s.link),
-            ))),
-            LinkSummary::Passive(s) => Line::PassiveSummary(Box::new(super::passive::Summary::of(
+            )))
+        } else {
+            let s = summary
+                .get::<PassiveSummary>()
+                .expect("a summary of a known kind");
+            Line::PassiveSummary(Box::new(super::passive::Summary::of(
                 s,
                 verdict,
                 self.link_or(&s.link),
                 self,
-            ))),
+            )))
         }
     }
 
     /// The line the reporter writes for `event`, if any (the reporter's
     /// own path is pinned by the snapshot of every line).
     fn event<'a>(&self, event: &Event<'a>) -> Option<Line<'a>> {
+        if let Some(e) = event.kind::<MatchEvent>() {
+            return Some(self.match_line(e));
+        } else if let Some(e) = event.kind::<CommandEvent>() {
+            return super::command::line(e);
+        } else if let Some(step) = event.kind::<StepFigures>() {
+            return Some(Line::Step(self.step(step)));
+        } else if let Some(e) = event.kind::<FlightEvent>() {
+            return Some(self.flight_event(e));
+        }
         match *event {
-            Event::Match(ref e) => Some(self.match_line(e)),
-            Event::Command(ref e) => super::command::line(e),
             Event::Heard { id, identity } => Some(self.heard_line(id, identity)),
             Event::Radio(ref radio) => self.radio_line(radio),
             Event::WaitingForPeer => Some(Self::waiting_line()),
-            Event::Step(step) => Some(Line::Step(self.step(step))),
-            Event::Flight(e) => Some(self.flight_event(e)),
             _ => None,
         }
     }
@@ -265,7 +280,7 @@ fn the_schema_accepts_every_kind_of_line() {
                         Some(lines.start(info))
                     }
                     Told::Event(event) => lines.event(event),
-                    Told::Interim(figures) => Some(lines.interim(figures)),
+                    Told::Interim(figures) => lines.interim(figures),
                     Told::Summary(summary, verdict) => Some(lines.summary(summary, verdict)),
                 };
                 let Some(line) = line else { continue };

@@ -8,13 +8,14 @@ use std::io;
 
 use super::sources::{SourceRow, Sources};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::probe::passive::PassivePlan;
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::ProbeName;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
-use crate::output::{Reporter, RunKind, StartInfo};
+use crate::output::{Reporter, StartInfo};
 
 /// Outcomes kept per responder for the strip: more than a wide terminal shows.
 pub(crate) const RECENT: usize = 240;
@@ -84,7 +85,7 @@ impl Reporter for LiveState {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.link = info.link.clone();
         self.probe = Some(info.probe);
-        if matches!(info.run, RunKind::Passive { .. }) {
+        if info.plan::<PassivePlan>().is_some() {
             self.sources = Some(Sources::default());
         }
         Ok(())
@@ -262,6 +263,8 @@ pub(crate) struct Screen {
 
 #[cfg(test)]
 mod tests {
+    use crate::engine::probe::passive::{PassivePlan, SourcesNow};
+    use crate::output::runs::kind;
     use std::time::Duration;
 
     use ratatui::backend::TestBackend;
@@ -283,7 +286,7 @@ mod tests {
     }
 
     fn reply(responder: SysComp, seq: u32, rtt_ms: u64) -> Event<'static> {
-        Event::Match(MatchEvent::Reply {
+        kind(MatchEvent::Reply {
             responder,
             seq,
             rtt: rtt_ms * 1_000_000,
@@ -295,7 +298,7 @@ mod tests {
     }
 
     fn lost(responder: SysComp, seq: u32) -> Event<'static> {
-        Event::Match(MatchEvent::Lost {
+        kind(MatchEvent::Lost {
             responder,
             seq,
             sent_at: u64::from(seq) * 100_000_000,
@@ -315,7 +318,7 @@ mod tests {
                 s.on_event(&reply(b, seq, 20 + u64::from(seq % 3) * 4));
             }
         }
-        s.on_event(&Event::Match(MatchEvent::Late {
+        s.on_event(&kind(MatchEvent::Late {
             responder: b,
             seq: 3,
             rtt: 2_500_000_000,
@@ -333,7 +336,7 @@ mod tests {
             interval: Duration::from_millis(100),
             timeout: Duration::from_secs(2),
             count: None,
-            run: RunKind::Echo,
+            plan: None,
         }
     }
 
@@ -383,10 +386,10 @@ mod tests {
         let mut s = LiveState::default();
         s.on_start(&StartInfo {
             probe: ProbeName::Passive,
-            run: RunKind::Passive {
+            plan: Some(std::sync::Arc::new(PassivePlan {
                 heartbeat: true,
                 log: false,
-            },
+            })),
             ..start("sim:?responders=2&stream=ATTITUDE@50")
         });
         let (a, b) = (SysComp::new(1, 1), SysComp::new(2, 1));
@@ -422,10 +425,10 @@ mod tests {
             }
             table.on_frame(RADIO_SOURCE, second as u8, 109, 38, t0 + 500 * ms);
             let at = t0 + 1_000 * ms;
-            s.on_event(&Event::Sources {
+            s.on_event(&kind(SourcesNow {
                 at,
-                table: &table.summary(at),
-            });
+                table: table.summary(at),
+            }));
         }
         s
     }
@@ -470,10 +473,10 @@ mod tests {
         let mut s = state();
         let mut table = SourceTable::new(None, 32);
         table.on_frame(SysComp::new(1, 1), 0, 0, 21, 0);
-        s.on_event(&Event::Sources {
+        s.on_event(&kind(SourcesNow {
             at: 1_000_000_000,
-            table: &table.summary(1_000_000_000),
-        });
+            table: table.summary(1_000_000_000),
+        }));
         assert!(matches!(s.screen().rows, Rows::Echo(ref r) if r.len() == 2));
     }
 

@@ -26,9 +26,10 @@ mod sweep;
 use std::io;
 
 use super::windows::Windows;
-use super::{Reporter, RunKind, StartInfo};
+use super::{Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
+use crate::engine::probe::passive::PassivePlan;
 use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::EchoSummary;
@@ -40,7 +41,7 @@ pub(crate) use link::{Plot, PlotLink};
 impl Reporter for PlotLink {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.data.borrow_mut().links[self.index] = info.link.clone();
-        if matches!(info.run, RunKind::Passive { .. }) {
+        if info.plan::<PassivePlan>().is_some() {
             self.windows = Some(Windows::default());
         }
         Ok(())

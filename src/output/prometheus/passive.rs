@@ -194,10 +194,12 @@ mod tests {
     use super::super::test_support::{has, test_start as info};
     use super::*;
     use crate::engine::matcher::MatchEvent;
-    use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
+    use crate::engine::observe::{Observer, StartInfo};
     use crate::engine::probe::passive::tracker::{SourceTable, RADIO_SOURCE};
+    use crate::engine::probe::passive::{PassivePlan, SourcesNow};
     use crate::engine::summary::LinkSummary;
     use crate::engine::Nanos;
+    use crate::output::runs::kind;
     use crate::output::Reporter;
 
     const MS: Nanos = 1_000_000;
@@ -205,10 +207,10 @@ mod tests {
     fn passive_start(link: &str) -> StartInfo {
         StartInfo {
             probe: ProbeName::Passive,
-            run: RunKind::Passive {
+            plan: Some(std::sync::Arc::new(PassivePlan {
                 heartbeat: true,
                 log: false,
-            },
+            })),
             ..info(link)
         }
     }
@@ -241,10 +243,10 @@ mod tests {
     fn a_passive_link_shows_each_source_as_counters_and_gauges() {
         let (mut m, table) = passive_link();
         let at = 3_200 * MS;
-        m.event(&Event::Sources {
+        m.event(&kind(SourcesNow {
             at,
-            table: &table.summary(at),
-        })
+            table: table.summary(at),
+        }))
         .unwrap();
         let text = render(&[&m]);
         let one = r#"link="udp:0.0.0.0:14550",sysid="1",compid="1""#;
@@ -295,7 +297,7 @@ mod tests {
         has(&text, &format!("mavping_source_lost_pending{{{radio}}} 1"));
 
         // The run ends: what was pending is lost for good.
-        let end = LinkSummary::Passive(Box::new(passive_summary(&table, at)));
+        let end = LinkSummary::new(passive_summary(&table, at));
         let verdict = crate::verdict::judge_link(&end, &crate::verdict::Thresholds::default());
         m.summary(&end, &verdict).unwrap();
         let text = render(&[&m]);

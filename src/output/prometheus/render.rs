@@ -869,7 +869,7 @@ mod tests {
 
     #[test]
     fn a_command_target_counts_as_a_responder() {
-        use crate::engine::observe::CommandEvent;
+        use crate::engine::probe::command::CommandEvent;
         let mut m = Metrics::default();
         m.on_start(&StartInfo {
             probe: ProbeName::Command,

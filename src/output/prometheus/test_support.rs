@@ -3,7 +3,6 @@
 
 use std::time::Duration;
 
-use crate::engine::observe::RunKind;
 use crate::engine::summary::ProbeName;
 use crate::frame::SysComp;
 use crate::output::StartInfo;
@@ -17,7 +16,7 @@ pub(super) fn test_start(link: &str) -> StartInfo {
         interval: Duration::from_secs(1),
         timeout: Duration::from_secs(2),
         count: None,
-        run: RunKind::Echo,
+        plan: None,
     }
 }
 

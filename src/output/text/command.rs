@@ -6,9 +6,10 @@ use super::format::{ms, ms_us, rate};
 use super::histogram::write_histogram;
 use super::signing::write_signing;
 use super::TextReporter;
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::stats::RttSummary;
 use crate::engine::summary::CommandSummary;
-use crate::engine::{observe::CommandEvent, CommandSpec};
+use crate::engine::CommandSpec;
 use crate::frame::codec;
 use crate::output::StartInfo;
 

@@ -486,10 +486,11 @@ mod tests {
     use crate::engine::observe::RadioHeard;
     use crate::engine::radio::{self, RadioKind, RadioReport};
     use crate::frame::SysComp;
+    use crate::output::runs::kind;
     use crate::output::Event;
 
     fn reply(seq: u32, at: Nanos) -> Event<'static> {
-        Event::Match(MatchEvent::Reply {
+        kind(MatchEvent::Reply {
             responder: SysComp::new(1, 1),
             seq,
             rtt: 1_000_000,
@@ -552,7 +553,7 @@ mod tests {
             requests: 3,
         })
         .unwrap();
-        t.event(&Event::Match(MatchEvent::Lost {
+        t.event(&kind(MatchEvent::Lost {
             responder: SysComp::new(1, 1),
             seq: 4,
             sent_at: 200_000_000,

@@ -22,13 +22,16 @@ mod sweep;
 
 use std::io::{self, Write};
 
-use super::{Reporter, RunKind, StartInfo};
+use super::{Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::{CommandEvent, RadioHeard};
+use crate::engine::observe::RadioHeard;
+use crate::engine::probe::command::CommandEvent;
+use crate::engine::probe::passive::PassivePlan;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::{CommandSummary, EchoInterim, EchoSummary, PassiveInterim};
-use crate::engine::sweep_report::StepFigures;
+use crate::engine::sweep_report::{StepFigures, SweepConfig};
+use crate::engine::CommandSpec;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
 pub(crate) use reporter::TextReporter;
@@ -36,15 +39,19 @@ pub(crate) use reporter::TextReporter;
 impl<W: Write> Reporter for TextReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.timeout = info.timeout;
-        self.run = info.run.clone();
+        self.commands = info.plan::<CommandSpec>().is_some();
+        self.in_steps = info.plan::<SweepConfig>().is_some();
         if self.quiet {
             return Ok(());
         }
-        match &info.run {
-            RunKind::Echo => self.echo_start(info),
-            RunKind::Steps(plan) => self.sweep_start(info, plan),
-            RunKind::Command(spec) => self.command_start(info, spec),
-            RunKind::Passive { heartbeat, log } => self.passive_start(info, *heartbeat, *log),
+        if let Some(plan) = info.plan::<SweepConfig>() {
+            self.sweep_start(info, plan)
+        } else if let Some(spec) = info.plan::<CommandSpec>() {
+            self.command_start(info, spec)
+        } else if let Some(plan) = info.plan::<PassivePlan>() {
+            self.passive_start(info, plan.heartbeat, plan.log)
+        } else {
+            self.echo_start(info)
         }
     }
 
@@ -57,7 +64,7 @@ impl<W: Write> Reporter for TextReporter<W> {
 
     /// A run in steps shows each step, not each reply.
     fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
-        if self.shows_events() && self.run.steps().is_none() {
+        if self.shows_events() && !self.in_steps {
             self.match_line(event)
         } else {
             Ok(())

@@ -547,7 +547,7 @@ mod tests {
         let mut text = TextReporter::new(Vec::new(), true);
         let empty = SourceTable::new(None, 32).summary(MS);
         for (at, table) in [(MS, empty), (2_000 * MS, table.summary(2_000 * MS))] {
-            text.interim(&Interim::Passive(PassiveInterim {
+            text.interim(&Interim::new(PassiveInterim {
                 at,
                 table,
                 identities: vec![],

@@ -8,7 +8,7 @@ use super::echo;
 use crate::engine::radio::{RadioKind, RadioReport};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
-use crate::output::{Prefixed, RunKind, WallClock};
+use crate::output::{Prefixed, WallClock};
 
 pub(crate) struct TextReporter<W: Write> {
     /// Event lines go through the link's prefix (with several links);
@@ -16,8 +16,10 @@ pub(crate) struct TextReporter<W: Write> {
     pub(super) out: Prefixed<W>,
     /// Only the summary (`-q`).
     pub(super) quiet: bool,
-    /// What kind of run it is, which decides what event lines show.
-    pub(super) run: RunKind,
+    /// A command run shows its commands' fate only.
+    pub(super) commands: bool,
+    /// A run in steps shows each step, not each reply.
+    pub(super) in_steps: bool,
     pub(super) timeout: std::time::Duration,
     /// Print every reply even at high rates (`--every-reply`).
     pub(super) every_reply: bool,
@@ -40,7 +42,8 @@ impl<W: Write> TextReporter<W> {
         TextReporter {
             out: Prefixed::new(out, None),
             quiet,
-            run: RunKind::Echo,
+            commands: false,
+            in_steps: false,
             timeout: std::time::Duration::ZERO,
             every_reply: false,
             progress: None,
@@ -107,6 +110,6 @@ impl<W: Write> TextReporter<W> {
     /// Event lines other than a command's are shown: not in quiet mode,
     /// and not in a command run, which shows its commands' fate only.
     pub(super) fn shows_events(&self) -> bool {
-        !self.quiet && self.run.command().is_none()
+        !self.quiet && !self.commands
     }
 }

@@ -19,7 +19,7 @@ use thiserror::Error;
 
 use super::server::Server;
 use crate::engine::hint::HintCode;
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::{EchoSummary, LinkSummary};
 use crate::output::http::Reply;
 use crate::output::prometheus::{render_probe, ProbeResult, SharedMetrics};
 use crate::output::text::TextReporter;
@@ -276,10 +276,9 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
 /// What a listening link that heard no peer within its count's time says
 /// ("no MAVLink system heard on udpin:... in 1.1 s").
 fn no_peer_heard(summary: &LinkSummary) -> Option<&str> {
-    let LinkSummary::Echo(s) = summary else {
-        return None;
-    };
-    s.hints
+    summary
+        .get::<EchoSummary>()?
+        .hints
         .iter()
         .find(|h| h.code == HintCode::NoPeerHeard)
         .map(|h| h.text.as_str())

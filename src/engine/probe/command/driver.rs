@@ -6,15 +6,16 @@
 //! clock, framing, schedule and loop are the session's.
 
 use std::io;
+use std::sync::Arc;
 
 use crate::engine::stats::RttStats;
 
 use super::tracker::CommandTracker;
+use super::CommandEvent;
 use crate::engine::diagnosis::{command_hints, Observed};
 use crate::engine::hint::Hint;
 use crate::engine::link_io::{Clock, Sender};
-use crate::engine::observe::{tell_each, Event, Observer, StartInfo};
-use crate::engine::observe::{CommandEvent, RunKind};
+use crate::engine::observe::{tell_kind, Observer, StartInfo};
 use crate::engine::radio::Radios;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
@@ -100,7 +101,7 @@ impl Driver for CommandDriver {
             interval: cfg.interval,
             timeout: self.spec.retry_interval,
             count: cfg.count,
-            run: RunKind::Command(self.spec.clone()),
+            plan: Some(Arc::new(self.spec.clone())),
         }
     }
 
@@ -170,7 +171,7 @@ impl Driver for CommandDriver {
 
     fn report(&mut self, _radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
         self.transmitted = 0;
-        tell_each(observer, self.events.drain(..).map(Event::Command))
+        tell_kind(observer, self.events.drain(..))
     }
 
     fn next_deadline(&self) -> Option<Nanos> {
@@ -211,6 +212,6 @@ impl Driver for CommandDriver {
             .iter()
             .map(|t| (t.id, t.time_to_ack.clone()))
             .collect();
-        (LinkSummary::Command(Box::new(summary)), histograms)
+        (LinkSummary::new(summary), histograms)
     }
 }

@@ -3,4 +3,7 @@
 //! joins it to the session.
 
 pub(crate) mod driver;
+mod event;
 pub(crate) mod tracker;
+
+pub(crate) use event::CommandEvent;

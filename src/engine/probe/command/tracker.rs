@@ -18,7 +18,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::engine::observe::CommandEvent;
+use super::CommandEvent;
 use crate::engine::roster::Roster;
 use crate::engine::stats::RttStats;
 use crate::engine::summary::{AckResult, CommandTargetSummary, HISTOGRAM_ROWS};

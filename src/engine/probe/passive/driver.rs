@@ -9,6 +9,7 @@
 //! log.
 
 use std::io;
+use std::sync::Arc;
 use std::time::Duration;
 
 use super::flight::{self, Flight, Totals};
@@ -16,8 +17,9 @@ use super::links;
 use super::round_trips::RoundTrips;
 use super::ticks::Ticks;
 use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
+use super::{PassivePlan, SourcesNow};
 use crate::engine::link_io::{Clock, Sender};
-use crate::engine::observe::{Event, Observer, RunKind, StartInfo};
+use crate::engine::observe::{Event, Observer, StartInfo};
 use crate::engine::radio::Radios;
 use crate::engine::roster::{Identity, Roster};
 use crate::engine::schedule::Schedule;
@@ -215,7 +217,7 @@ fn tell_flight(flight: Option<&mut Flight>, observer: &mut dyn Observer) -> io::
     let mut result = Ok(());
     for e in f.drain() {
         if result.is_ok() {
-            result = observer.event(&Event::Flight(&e));
+            result = observer.event(&Event::Kind(&e));
         }
     }
     result
@@ -228,10 +230,10 @@ pub(crate) fn tell_sources(
     observer: &mut dyn Observer,
 ) -> io::Result<()> {
     match ticks.take() {
-        Some(at) => observer.event(&Event::Sources {
+        Some(at) => observer.event(&Event::Kind(&SourcesNow {
             at,
-            table: &table.summary(at),
-        }),
+            table: table.summary(at),
+        })),
         None => Ok(()),
     }
 }
@@ -254,10 +256,10 @@ impl Driver for PassiveDriver {
             interval: cfg.interval,
             timeout: cfg.timeout,
             count: None,
-            run: RunKind::Passive {
+            plan: Some(Arc::new(PassivePlan {
                 heartbeat: cfg.heartbeat,
                 log: self.paths.is_some(),
-            },
+            })),
         }
     }
 
@@ -361,13 +363,13 @@ impl Driver for PassiveDriver {
             round_trips: self.round_trips.as_mut().map(|rt| rt.summary(at)),
             flight,
         };
-        (LinkSummary::Passive(Box::new(summary)), Vec::new())
+        (LinkSummary::new(summary), Vec::new())
     }
 
     /// Every source's figures as of `at`, as the summary would give them.
     fn interim(&self, roster: &Roster, at: Nanos) -> Option<Interim> {
         let table = self.table.summary(at);
-        Some(Interim::Passive(PassiveInterim {
+        Some(Interim::new(PassiveInterim {
             at,
             identities: identities(&table, roster),
             table,

@@ -101,7 +101,7 @@ pub(crate) struct RadioWindow {
 /// One window of log time, `start` to `end` (ns since the log's first
 /// record).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct FlightWindow {
+pub(crate) struct FlightWindow {
     /// Its place, from 0.
     pub(crate) index: u64,
     pub(crate) start: Nanos,
@@ -119,7 +119,7 @@ pub struct FlightWindow {
 
 /// A silence or a loss burst, `start` to `end`.
 #[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Span {
+pub(crate) struct Span {
     pub(crate) start: Nanos,
     pub(crate) end: Nanos,
     /// Frames received and lost in it (a burst's windows; 0 for a silence).
@@ -199,7 +199,7 @@ impl Span {
 
 /// What the timeline tells, in order.
 #[derive(Debug, Clone, PartialEq)]
-pub enum FlightEvent {
+pub(crate) enum FlightEvent {
     Window(FlightWindow),
     Silence(Span),
     Burst(Span),

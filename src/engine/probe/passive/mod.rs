@@ -7,4 +7,7 @@ pub(crate) mod links;
 mod rate;
 pub(crate) mod round_trips;
 pub(crate) mod ticks;
+mod told;
 pub mod tracker;
+
+pub use told::{PassivePlan, SourcesNow};

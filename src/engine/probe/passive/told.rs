@@ -1,0 +1,23 @@
+//! What a passive run tells beside its summary: its plan at the start,
+//! and every source's figures so far, once a second.
+
+use crate::engine::summary::passive::TableSummary;
+use crate::engine::Nanos;
+
+/// What a passive run listens to (`--passive`, or a telemetry log read).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct PassivePlan {
+    /// Our HEARTBEAT goes out, so the vehicle streams to us.
+    pub(crate) heartbeat: bool,
+    /// A telemetry log read, not a live link.
+    pub(crate) log: bool,
+}
+
+/// Every source's packet-sequence figures so far (cumulative), told once
+/// a second of session time: passive runs, and echo runs for the
+/// direction split.
+#[derive(Debug)]
+pub struct SourcesNow {
+    pub(crate) at: Nanos,
+    pub(crate) table: TableSummary,
+}
