@@ -20,6 +20,7 @@ pub mod config;
 pub mod engine;
 pub mod exit;
 pub mod frame;
+pub mod http;
 pub mod output;
 pub(crate) mod responder;
 pub mod run;

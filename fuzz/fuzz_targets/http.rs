@@ -24,7 +24,7 @@ use mavping::engine::matcher::MatchEvent;
 use mavping::engine::observe::{Event, Observer, StartInfo};
 use mavping::engine::summary::ProbeName;
 use mavping::frame::SysComp;
-use mavping::output::http::{serve_one, Limits};
+use mavping::http::{serve_one, Limits};
 use mavping::output::prometheus::PrometheusExporter;
 use tokio::io::{AsyncReadExt, AsyncWriteExt};
 

@@ -2,12 +2,10 @@
 //! as an `Observer`; it takes the kinds of event it shows and renders the
 //! judged summary at the end. This file only declares and re-exports.
 
-pub(crate) mod basic_auth;
 #[cfg(test)]
 mod every_format;
 mod fanout;
 pub(crate) mod hgrm;
-pub mod http;
 pub(crate) mod json;
 pub(crate) mod live;
 pub(crate) mod plot;

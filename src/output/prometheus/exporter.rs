@@ -12,7 +12,7 @@ use hyper::StatusCode;
 use super::render::render;
 use super::Metrics;
 use crate::engine::summary::LinkSummary;
-use crate::output::http::{self, Head, Limits, Reply, Replying};
+use crate::http::{self, Head, Limits, Reply, Replying};
 use crate::output::{Event, Reporter, StartInfo};
 use crate::verdict::Verdict;
 

@@ -9,7 +9,7 @@ use super::server::{handler, Server};
 use crate::config::ServeConfig;
 use crate::engine::session::Controls;
 use crate::exit::Ending;
-use crate::output::http::{self, Limits};
+use crate::http::{self, Limits};
 use crate::run::signals::Hangups;
 use crate::stderr;
 

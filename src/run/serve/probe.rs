@@ -20,7 +20,7 @@ use thiserror::Error;
 use super::server::Server;
 use crate::engine::hint::HintCode;
 use crate::engine::summary::{EchoSummary, LinkSummary};
-use crate::output::http::Reply;
+use crate::http::Reply;
 use crate::output::prometheus::{render_probe, ProbeResult, SharedMetrics};
 use crate::output::text::TextReporter;
 use crate::output::{Fanout, Reporter, Shared, WallClock};

@@ -12,7 +12,7 @@ use tokio::sync::Semaphore;
 use super::links::Links;
 use super::probe;
 use crate::config::{ConfigError, ServeSettings, WebConfig};
-use crate::output::http::{Head, Reply, Replying, SharedWeb};
+use crate::http::{Head, Reply, Replying, SharedWeb};
 use crate::output::prometheus::{borrow_all, render_serve, Health, Metrics};
 use crate::stderr;
 

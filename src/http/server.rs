@@ -1,5 +1,4 @@
-//! The one HTTP server of mavping, behind `--prometheus` and `mavping serve`:
-//! hyper's HTTP/1.1 (parsing, framing, `HEAD`, error statuses) with the
+//! The server: hyper's HTTP/1.1 (parsing, framing, `HEAD`, error statuses) with the
 //! limits that keep a scrape answerable whatever other clients do.
 //!
 //! - A request head must arrive within [`Limits::header_read_timeout`] and
