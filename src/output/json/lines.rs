@@ -9,6 +9,7 @@ use serde::Serialize;
 use super::units::seconds;
 use super::{command, echo, flight, heard, passive, sweep};
 use crate::engine::summary::{Interim, ProbeName};
+use crate::engine::sweep_report::SweepConfig;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::output::{RunKind, StartInfo, WallClock};
@@ -31,7 +32,7 @@ pub(super) enum Line<'a> {
     Radio(heard::Radio<'a>),
     Interim(echo::Interim),
     PassiveInterim(Box<passive::Interim<'a>>),
-    Step(sweep::Step),
+    Step(sweep::Step<'a>),
     Summary(Box<echo::Summary<'a>>),
     Ack(command::Ack),
     CommandFailed(command::Failed),
@@ -103,7 +104,7 @@ pub(super) struct Start<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     command: Option<command::Spec>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    sweep: Option<sweep::Plan>,
+    sweep: Option<&'a SweepConfig>,
 }
 
 /// What every timed event of a responder starts with: its type, session
@@ -164,7 +165,7 @@ impl Lines {
             timeout_s: info.timeout.as_secs_f64(),
             count: info.count,
             command: info.run.command().map(command::Spec::of),
-            sweep: info.run.steps().map(sweep::Plan::of),
+            sweep: info.run.steps(),
         }))
     }
 
