@@ -41,7 +41,7 @@ pub(super) enum Line<'a> {
     DuplicateAck(command::AckAgain),
     CommandSummary(Box<command::Summary<'a>>),
     PassiveSummary(Box<passive::Summary<'a>>),
-    FlightWindow(flight::Window),
+    FlightWindow(flight::Window<'a>),
     FlightSilence(flight::Timed),
     FlightBurst(flight::Timed),
 }
