@@ -242,6 +242,7 @@ fn ns<S: Serializer>(v: &i128, s: S) -> Result<S::Ok, S::Error> {
 
 /// The bounds as two figures, `lower_ns` and `upper_ns`, each null
 /// without them.
+#[allow(clippy::ref_option)] // serde's `serialize_with` lends the field as it is
 fn bounds<S: Serializer>(b: &Option<(i128, i128)>, s: S) -> Result<S::Ok, S::Error> {
     let mut map = s.serialize_map(Some(2))?;
     map.serialize_entry("lower_ns", &b.map(|(lower, _)| clamped(lower)))?;

@@ -93,6 +93,7 @@ pub(crate) struct RttSummary {
 
 /// The figures each named with its unit (`min_us`…), as the command
 /// summary's `time_to_ack` gives them.
+#[allow(clippy::ref_option)] // serde's `serialize_with` lends the field as it is
 pub(crate) fn with_units<S: Serializer>(r: &Option<RttSummary>, s: S) -> Result<S::Ok, S::Error> {
     let Some(r) = r else {
         return s.serialize_none();
