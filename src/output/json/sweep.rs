@@ -1,5 +1,6 @@
-//! Lines of a sweep (`--sweep`) or a `--load` run: what the start line
-//! adds, a `step` line per step, and the summary's `sweep`.
+//! Lines of a sweep (`--sweep`) or a `--load` run: a `step` line per
+//! step, and the summary's `sweep` (the start line's is the engine's
+//! `SweepConfig` as it serialises).
 
 use serde::Serialize;
 
@@ -34,7 +35,8 @@ impl Lines {
 }
 
 /// The summary's `sweep`: every step, the knee beside what the baud rate
-/// alone allows, queueing, and the load.
+/// alone allows (the echo summary's wire budget, hence a struct here
+/// rather than `SweepSummary` flattened), queueing, and the load.
 #[derive(Serialize)]
 pub(super) struct Summary<'a> {
     kind: &'a str,
