@@ -48,9 +48,11 @@ invocations=(
   "-c 30 -i 100ms sim:?baud=57600&radio=on&seed=12&$V"
   "-c 30 -i 100ms --json sim:?baud=57600&radio=on&seed=12&$V"
   "-i 50ms --load ATTITUDE@50 --step 500ms sim:?baud=57600&radio=on&seed=13&$V"
+  "-i 50ms --load ATTITUDE@50 --step 500ms --json sim:?baud=57600&radio=on&seed=13&$V"
   # passive
   "--passive -w 3s sim:?responders=2&stream=ATTITUDE@50,GLOBAL_POSITION_INT@5&loss=5%&seed=14&$V"
   "--passive -w 3s --json sim:?responders=2&stream=ATTITUDE@50,GLOBAL_POSITION_INT@5&loss=5%&seed=14&$V"
+  "--passive -w 3s -Q 1s --json sim:?responders=2&stream=ATTITUDE@50,GLOBAL_POSITION_INT@5&loss=5%&seed=14&$V"
   "-c 30 -i 50ms sim:?stream=ATTITUDE@50&loss_down=5%&loss_up=10%&seed=15&$V"
   # bad input
   "sim:?loss=abc"

@@ -29,7 +29,8 @@
 //!
 //! Pure: times are passed in (ns on our clock), no clock is read here.
 
-use serde::Serialize;
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
 
 use super::Nanos;
 
@@ -209,11 +210,13 @@ struct Drift {
 pub struct ClockSummary {
     /// Their clock minus ours at the start of the run (our time 0), ns;
     /// inside the bounds when they intersect.
+    #[serde(serialize_with = "ns")]
     pub(crate) offset_ns: i128,
     /// Half the width of the bounds, or half the lowest RTT without them.
     pub(crate) uncertainty_ns: u64,
     /// The causal bounds of the offset at the start of the run; `None`
     /// when the exchanges' bounds do not intersect.
+    #[serde(flatten, serialize_with = "bounds")]
     pub(crate) bounds_ns: Option<(i128, i128)>,
     /// The limit on the clocks' relative rate the bounds assume, ppm.
     pub(crate) bounds_drift_limit_ppm: u32,
@@ -225,6 +228,26 @@ pub struct ClockSummary {
     pub(crate) drift_ppm: Option<f64>,
     pub(crate) drift_stderr_ppm: Option<f64>,
     pub(crate) samples: u64,
+}
+
+/// i64 holds ±292 years of ns: enough for any two clocks, and what a
+/// JSON reader takes whole.
+fn clamped(v: i128) -> i64 {
+    i64::try_from(v).unwrap_or(if v < 0 { i64::MIN } else { i64::MAX })
+}
+
+fn ns<S: Serializer>(v: &i128, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_i64(clamped(*v))
+}
+
+/// The bounds as two figures, `lower_ns` and `upper_ns`, each null
+/// without them.
+#[allow(clippy::ref_option)] // serde's `serialize_with` lends the field as it is
+fn bounds<S: Serializer>(b: &Option<(i128, i128)>, s: S) -> Result<S::Ok, S::Error> {
+    let mut map = s.serialize_map(Some(2))?;
+    map.serialize_entry("lower_ns", &b.map(|(lower, _)| clamped(lower)))?;
+    map.serialize_entry("upper_ns", &b.map(|(_, upper)| clamped(upper)))?;
+    map.end()
 }
 
 /// The running intersection of every exchange's bounds, referred to time

@@ -1,7 +1,8 @@
 //! RTT statistics for one responder, in constant memory.
 
 use hdrhistogram::{Counter, Histogram};
-use serde::Serialize;
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
 
 use super::Nanos;
 
@@ -65,18 +66,49 @@ pub(crate) struct Bucket {
     pub(crate) count: u64,
 }
 
-/// The figures a report shows, in µs.
+/// The figures a report shows, in µs. Serialised without the unit, as
+/// the JSON lines name it once where they hold the figures (`rtt_us`);
+/// the command summary names it in each ([`with_units`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub(crate) struct RttSummary {
+    #[serde(rename = "min")]
     pub(crate) min_us: f64,
+    #[serde(rename = "mean")]
     pub(crate) mean_us: f64,
+    #[serde(rename = "max")]
     pub(crate) max_us: f64,
+    #[serde(rename = "stddev")]
     pub(crate) stddev_us: f64,
+    #[serde(rename = "p50")]
     pub(crate) p50_us: f64,
+    #[serde(rename = "p90")]
     pub(crate) p90_us: f64,
+    #[serde(rename = "p99")]
     pub(crate) p99_us: f64,
+    #[serde(rename = "p99_9")]
     pub(crate) p999_us: f64,
+    #[serde(rename = "jitter")]
     pub(crate) jitter_us: f64,
+}
+
+/// The figures each named with its unit (`min_us`…), as the command
+/// summary's `time_to_ack` gives them.
+#[allow(clippy::ref_option)] // serde's `serialize_with` lends the field as it is
+pub(crate) fn with_units<S: Serializer>(r: &Option<RttSummary>, s: S) -> Result<S::Ok, S::Error> {
+    let Some(r) = r else {
+        return s.serialize_none();
+    };
+    let mut map = s.serialize_map(Some(9))?;
+    map.serialize_entry("min_us", &r.min_us)?;
+    map.serialize_entry("mean_us", &r.mean_us)?;
+    map.serialize_entry("max_us", &r.max_us)?;
+    map.serialize_entry("stddev_us", &r.stddev_us)?;
+    map.serialize_entry("p50_us", &r.p50_us)?;
+    map.serialize_entry("p90_us", &r.p90_us)?;
+    map.serialize_entry("p99_us", &r.p99_us)?;
+    map.serialize_entry("p999_us", &r.p999_us)?;
+    map.serialize_entry("jitter_us", &r.jitter_us)?;
+    map.end()
 }
 
 impl RttStats {

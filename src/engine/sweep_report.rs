@@ -6,7 +6,7 @@
 
 use std::time::Duration;
 
-use serde::Serialize;
+use serde::{Serialize, Serializer};
 
 use super::load::{LoadSpec, LoadSummary};
 use crate::frame::SysComp;
@@ -25,7 +25,8 @@ pub(crate) enum MaxFrom {
 }
 
 /// What the steps are.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
 pub(crate) enum PlanKind {
     /// `--sweep`: ramp the rate from `first_hz` to `max_hz` and find the
     /// knee; stop ramping past `loss_limit` (a share, 0..=1).
@@ -39,17 +40,38 @@ pub(crate) enum PlanKind {
     Load { rate_hz: f64 },
 }
 
-/// A run in steps, validated.
-#[derive(Debug, Clone, PartialEq)]
+/// A run in steps, validated. Serialised as the JSON `start` line's
+/// `sweep`, in this order.
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct SweepConfig {
+    #[serde(flatten)]
     pub(crate) plan: PlanKind,
     /// How long each step sends.
+    #[serde(rename = "step_s", serialize_with = "seconds")]
     pub(crate) step: Duration,
     /// Background load, on in every step but the unloaded baseline.
+    #[serde(serialize_with = "streams")]
     pub(crate) load: Vec<LoadSpec>,
     /// What the load puts on the wire, in this session's MAVLink version
     /// and signing.
     pub(crate) load_bytes_per_s: f64,
+}
+
+fn seconds<S: Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_f64(d.as_secs_f64())
+}
+
+/// Each `--load` stream as given: its message by name, and its rate.
+fn streams<S: Serializer>(load: &[LoadSpec], s: S) -> Result<S::Ok, S::Error> {
+    #[derive(Serialize)]
+    struct Stream {
+        message: &'static str,
+        rate: f64,
+    }
+    s.collect_seq(load.iter().map(|l| Stream {
+        message: l.kind.name(),
+        rate: l.rate,
+    }))
 }
 
 /// What a step is for.
@@ -66,11 +88,15 @@ pub(crate) enum Phase {
     Loaded,
 }
 
-/// A step's RTT figures over every responder's in-time replies, in µs.
+/// A step's RTT figures over every responder's in-time replies, in µs
+/// (the step names the unit once: `rtt_us`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub(crate) struct StepRtt {
+    #[serde(rename = "p50")]
     pub(crate) p50_us: f64,
+    #[serde(rename = "p99")]
     pub(crate) p99_us: f64,
+    #[serde(rename = "max")]
     pub(crate) max_us: f64,
 }
 
@@ -88,7 +114,8 @@ pub(crate) struct StepRadio {
     pub(crate) rxerrors_delta: u64,
 }
 
-/// One step as reported.
+/// One step as reported; serialised as the JSON `step` line's figures
+/// and the summary's steps, in this order.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub(crate) struct StepFigures {
     /// 1 for the first step.
@@ -110,6 +137,7 @@ pub(crate) struct StepFigures {
     pub(crate) late: u64,
     /// lost / (received + lost).
     pub(crate) loss_ratio: f64,
+    #[serde(rename = "rtt_us")]
     pub(crate) rtt: Option<StepRtt>,
     /// Bytes per second we sent (probes, load, HEARTBEAT) while the step
     /// sent, and received (every valid frame) from its start until it

@@ -23,6 +23,7 @@ pub(crate) struct CommandTargetSummary {
     pub(crate) duplicate_acks: u64,
     /// `attempts[k - 1]`: commands acknowledged after k transmissions.
     pub(crate) attempts: Vec<u64>,
+    #[serde(serialize_with = "crate::engine::stats::with_units")]
     pub(crate) time_to_ack: Option<RttSummary>,
     pub(crate) histogram: Vec<Bucket>,
     pub(crate) results: Vec<AckResult>,

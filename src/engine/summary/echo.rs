@@ -3,7 +3,8 @@
 //! wire budget a serial link's baud rate sets; built from the matcher and
 //! the roster.
 
-use serde::Serialize;
+use serde::ser::SerializeMap;
+use serde::{Serialize, Serializer};
 
 use super::direction::Direction;
 use super::probe_name::ProbeName;
@@ -23,25 +24,49 @@ use crate::transport::RxClock;
 /// Rows in the ASCII/JSON RTT distribution.
 pub(crate) const HISTOGRAM_ROWS: usize = 8;
 
+/// One responder's figures. Serialised as a responder of the JSON
+/// `summary` line, in this order; the line adds the verdict's messages
+/// about it, and then the direction, so that is skipped here.
 #[derive(Debug, Clone, Serialize)]
 pub struct ResponderSummary {
+    #[serde(rename = "responder")]
     pub id: SysComp,
+    pub(crate) identity: Option<Identity>,
+    #[serde(flatten, serialize_with = "counts")]
     pub counts: Counts,
+    /// Written among the counts it is computed from.
+    #[serde(skip)]
     pub(crate) loss_ratio: f64,
+    #[serde(rename = "rtt_us")]
     pub(crate) rtt: Option<RttSummary>,
     pub(crate) histogram: Vec<Bucket>,
-    pub(crate) identity: Option<Identity>,
     /// The probe it was measured by (`--probe auto` only: PING or
     /// TIMESYNC, chosen per responder).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) probe: Option<ProbeName>,
     /// Clock offset and drift (TIMESYNC probe only).
-    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) clock: Option<ClockSummary>,
     /// Which way the losses were, when there were any: the responder's
     /// own sequence numbers give the downlink.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    #[serde(skip)]
     pub(crate) direction: Option<Direction>,
+}
+
+/// A responder's counts with its loss ratio, in the order the JSON has
+/// always given them.
+fn counts<S: Serializer>(c: &Counts, s: S) -> Result<S::Ok, S::Error> {
+    let mut map = s.serialize_map(Some(10))?;
+    map.serialize_entry("sent", &c.sent)?;
+    map.serialize_entry("received", &c.received)?;
+    map.serialize_entry("lost", &c.lost)?;
+    map.serialize_entry("loss_ratio", &c.loss_ratio())?;
+    map.serialize_entry("late", &c.late)?;
+    map.serialize_entry("duplicate", &c.duplicate)?;
+    map.serialize_entry("out_of_order", &c.out_of_order)?;
+    map.serialize_entry("stale", &c.stale)?;
+    map.serialize_entry("not_charged", &c.not_charged)?;
+    map.serialize_entry("in_flight", &c.in_flight)?;
+    map.end()
 }
 
 /// How well requests kept to their schedule (see the session's pacing).

@@ -2,14 +2,10 @@
 
 use serde::Serialize;
 
-use super::heard::Heartbeat;
 use super::lines::{Line, Lines, Stamp, SCHEMA_VERSION};
 use super::sweep;
 use super::units::{seconds, us};
-use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::MatchEvent;
-use crate::engine::stats::{Bucket, RttSummary};
-use crate::engine::summary::ProbeName;
 use crate::engine::summary::{self, Direction, ResponderSummary};
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
@@ -210,28 +206,12 @@ impl<'a> Summary<'a> {
     }
 }
 
-/// One responder in the summary.
+/// One responder in the summary: its figures as the engine serialises
+/// them, then the verdict's messages about it and the way it lost.
 #[derive(Serialize)]
 struct Responder<'a> {
-    responder: SysComp,
-    identity: Option<Heartbeat<'a>>,
-    sent: u64,
-    received: u64,
-    lost: u64,
-    loss_ratio: f64,
-    late: u64,
-    duplicate: u64,
-    out_of_order: u64,
-    stale: u64,
-    not_charged: u64,
-    in_flight: u64,
-    rtt_us: Option<Rtt>,
-    histogram: &'a [Bucket],
-    /// `--probe auto`: the probe this responder was measured by.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    probe: Option<ProbeName>,
-    clock: Option<Clock>,
-    /// The verdict's messages about it.
+    #[serde(flatten)]
+    figures: &'a ResponderSummary,
     failures: Vec<&'a str>,
     #[serde(skip_serializing_if = "Option::is_none")]
     direction: Option<Direction>,
@@ -240,22 +220,7 @@ struct Responder<'a> {
 impl<'a> Responder<'a> {
     fn of(r: &'a ResponderSummary, verdict: &'a Verdict) -> Self {
         Responder {
-            responder: r.id,
-            identity: r.identity.as_ref().map(Heartbeat::of),
-            sent: r.counts.sent,
-            received: r.counts.received,
-            lost: r.counts.lost,
-            loss_ratio: r.loss_ratio,
-            late: r.counts.late,
-            duplicate: r.counts.duplicate,
-            out_of_order: r.counts.out_of_order,
-            stale: r.counts.stale,
-            not_charged: r.counts.not_charged,
-            in_flight: r.counts.in_flight,
-            rtt_us: r.rtt.as_ref().map(Rtt::of),
-            histogram: &r.histogram,
-            probe: r.probe,
-            clock: r.clock.as_ref().map(Clock::of),
+            figures: r,
             failures: verdict
                 .failures
                 .iter()
@@ -265,69 +230,4 @@ impl<'a> Responder<'a> {
             direction: r.direction,
         }
     }
-}
-
-/// The RTT figures, in µs.
-#[derive(Serialize)]
-pub(super) struct Rtt {
-    min: f64,
-    mean: f64,
-    max: f64,
-    stddev: f64,
-    p50: f64,
-    p90: f64,
-    p99: f64,
-    p99_9: f64,
-    jitter: f64,
-}
-
-impl Rtt {
-    pub(super) fn of(s: &RttSummary) -> Self {
-        Rtt {
-            min: s.min_us,
-            mean: s.mean_us,
-            max: s.max_us,
-            stddev: s.stddev_us,
-            p50: s.p50_us,
-            p90: s.p90_us,
-            p99: s.p99_us,
-            p99_9: s.p999_us,
-            jitter: s.jitter_us,
-        }
-    }
-}
-
-/// A TIMESYNC responder's clock against ours.
-#[derive(Serialize)]
-struct Clock {
-    offset_ns: i64,
-    uncertainty_ns: u64,
-    lower_ns: Option<i64>,
-    upper_ns: Option<i64>,
-    bounds_drift_limit_ppm: u32,
-    spread_ns: f64,
-    drift_ppm: Option<f64>,
-    drift_stderr_ppm: Option<f64>,
-    samples: u64,
-}
-
-impl Clock {
-    fn of(c: &ClockSummary) -> Self {
-        Clock {
-            offset_ns: ns(c.offset_ns),
-            uncertainty_ns: c.uncertainty_ns,
-            lower_ns: c.bounds_ns.map(|(lower, _)| ns(lower)),
-            upper_ns: c.bounds_ns.map(|(_, upper)| ns(upper)),
-            bounds_drift_limit_ppm: c.bounds_drift_limit_ppm,
-            spread_ns: c.spread_ns,
-            drift_ppm: c.drift_ppm,
-            drift_stderr_ppm: c.drift_stderr_ppm,
-            samples: c.samples,
-        }
-    }
-}
-
-/// i64 holds ±292 years of ns: enough for any two clocks.
-fn ns(v: i128) -> i64 {
-    i64::try_from(v).unwrap_or(if v < 0 { i64::MIN } else { i64::MAX })
 }

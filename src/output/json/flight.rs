@@ -13,26 +13,23 @@ use super::lines::{Line, Lines};
 use super::units::seconds;
 use super::JsonReporter;
 use crate::engine::probe::passive::flight::{
-    diagnosis_text, FlightEvent, FlightSummary, FlightWindow, Origin, RadioWindow, Range,
-    SilenceRadio, Span,
+    diagnosis_text, FlightEvent, FlightSummary, FlightWindow, Origin, SilenceRadio, Span,
 };
 use crate::engine::radio::RadioKind;
 use crate::frame::SysComp;
 
+/// A window: its place and times, then its figures as the engine
+/// serialises them.
 #[derive(Serialize)]
-pub(super) struct Window {
+pub(super) struct Window<'a> {
     r#type: &'static str,
     index: u64,
     t_s: f64,
     end_t_s: f64,
     time: String,
     end_time: String,
-    received: u64,
-    duplicate: u64,
-    lost: i64,
-    loss_pct: Option<f64>,
-    radio: Option<RadioWindow>,
-    range: Option<Range>,
+    #[serde(flatten)]
+    figures: &'a FlightWindow,
 }
 
 #[derive(Serialize)]
@@ -72,8 +69,8 @@ pub(super) struct Summary<'a> {
     radio: Option<SysComp>,
     radio_kind: Option<RadioKind>,
     radio_evidence: &'a [String],
-    farthest: Option<Window>,
-    worst: Vec<Window>,
+    farthest: Option<Window<'a>>,
+    worst: Vec<Window<'a>>,
     silence_count: u64,
     silences: Vec<Timed>,
     burst_count: u64,
@@ -81,7 +78,7 @@ pub(super) struct Summary<'a> {
 }
 
 impl Lines {
-    pub(super) fn flight_window(&self, w: &FlightWindow) -> Window {
+    pub(super) fn flight_window<'a>(&self, w: &'a FlightWindow) -> Window<'a> {
         Window {
             r#type: "flight_window",
             index: w.index,
@@ -89,12 +86,7 @@ impl Lines {
             end_t_s: seconds(w.end),
             time: self.wall.rfc3339(w.start),
             end_time: self.wall.rfc3339(w.end),
-            received: w.received,
-            duplicate: w.duplicate,
-            lost: w.lost,
-            loss_pct: w.loss_pct,
-            radio: w.radio,
-            range: w.range,
+            figures: w,
         }
     }
 
@@ -117,7 +109,7 @@ impl Lines {
         }
     }
 
-    pub(super) fn flight_event(&self, e: &FlightEvent) -> Line<'static> {
+    pub(super) fn flight_event<'a>(&self, e: &'a FlightEvent) -> Line<'a> {
         match e {
             FlightEvent::Window(w) => Line::FlightWindow(self.flight_window(w)),
             FlightEvent::Silence(s) => Line::FlightSilence(self.flight_span("flight_silence", s)),

@@ -22,27 +22,7 @@ pub(super) struct Heard<'a> {
     #[serde(flatten)]
     stamp: Stamp,
     #[serde(flatten)]
-    identity: Heartbeat<'a>,
-}
-
-/// What a system's HEARTBEAT says it is.
-#[derive(Serialize)]
-pub(super) struct Heartbeat<'a> {
-    mav_type: u8,
-    autopilot: u8,
-    vehicle: &'a str,
-    autopilot_name: &'a str,
-}
-
-impl<'a> Heartbeat<'a> {
-    pub(super) fn of(i: &'a Identity) -> Self {
-        Heartbeat {
-            mav_type: i.mav_type,
-            autopilot: i.autopilot,
-            vehicle: &i.vehicle,
-            autopilot_name: &i.autopilot_name,
-        }
-    }
+    identity: &'a Identity,
 }
 
 /// `radio`: a radio's first RADIO_STATUS, and any report after which
@@ -61,7 +41,7 @@ impl Lines {
     pub(super) fn heard_line<'a>(&self, id: SysComp, identity: &'a Identity) -> Line<'a> {
         Line::Responder(Heard {
             stamp: self.stamp("responder", identity.first_heard, id),
-            identity: Heartbeat::of(identity),
+            identity,
         })
     }
 

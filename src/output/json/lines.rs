@@ -33,7 +33,7 @@ pub(super) enum Line<'a> {
     Radio(heard::Radio<'a>),
     Interim(echo::Interim),
     PassiveInterim(Box<passive::Interim<'a>>),
-    Step(sweep::Step),
+    Step(sweep::Step<'a>),
     Summary(Box<echo::Summary<'a>>),
     Ack(command::Ack),
     CommandFailed(command::Failed),
@@ -42,7 +42,7 @@ pub(super) enum Line<'a> {
     DuplicateAck(command::AckAgain),
     CommandSummary(Box<command::Summary<'a>>),
     PassiveSummary(Box<passive::Summary<'a>>),
-    FlightWindow(flight::Window),
+    FlightWindow(flight::Window<'a>),
     FlightSilence(flight::Timed),
     FlightBurst(flight::Timed),
 }
@@ -105,7 +105,7 @@ pub(super) struct Start<'a> {
     #[serde(skip_serializing_if = "Option::is_none")]
     command: Option<command::Spec>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    sweep: Option<sweep::Plan>,
+    sweep: Option<&'a SweepConfig>,
 }
 
 /// What every timed event of a responder starts with: its type, session
@@ -166,7 +166,7 @@ impl Lines {
             timeout_s: info.timeout.as_secs_f64(),
             count: info.count,
             command: info.plan::<CommandSpec>().map(command::Spec::of),
-            sweep: info.plan::<SweepConfig>().map(sweep::Plan::of),
+            sweep: info.plan::<SweepConfig>(),
         }))
     }
 

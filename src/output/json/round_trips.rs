@@ -3,33 +3,16 @@
 
 use serde::Serialize;
 
-use super::echo::Rtt;
-use crate::engine::probe::passive::round_trips::{
-    Kind, PairCounts, RequesterSummary, RoundTripSummary,
-};
-use crate::frame::SysComp;
+use crate::engine::probe::passive::round_trips::RoundTripSummary;
 use crate::transport::tlog::LogFacts;
-
-/// One requester → responder exchange.
-#[derive(Serialize)]
-pub(super) struct Pair {
-    kind: Kind,
-    requester: SysComp,
-    responder: SysComp,
-    #[serde(flatten)]
-    counts: PairCounts,
-    rtt: Option<Rtt>,
-}
 
 #[derive(Serialize)]
 pub(super) struct RoundTrips<'a> {
     /// What the RTTs were computed from: the log's stamps, in steps of
     /// this (1000: QGroundControl's whole milliseconds).
     resolution_us: u64,
-    timeout_s: f64,
-    pairs: Vec<Pair>,
-    requesters: &'a [RequesterSummary],
-    untracked: u64,
+    #[serde(flatten)]
+    figures: &'a RoundTripSummary,
 }
 
 impl<'a> RoundTrips<'a> {
@@ -40,20 +23,7 @@ impl<'a> RoundTrips<'a> {
             } else {
                 1
             },
-            timeout_s: rt.timeout_s,
-            pairs: rt
-                .pairs
-                .iter()
-                .map(|p| Pair {
-                    kind: p.kind,
-                    requester: p.requester,
-                    responder: p.responder,
-                    counts: p.counts,
-                    rtt: p.rtt.as_ref().map(Rtt::of),
-                })
-                .collect(),
-            requesters: &rt.requesters,
-            untracked: rt.untracked,
+            figures: rt,
         }
     }
 }

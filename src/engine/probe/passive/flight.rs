@@ -99,12 +99,17 @@ pub(crate) struct RadioWindow {
 }
 
 /// One window of log time, `start` to `end` (ns since the log's first
-/// record).
+/// record). Serialised as the JSON `flight_window` line's figures, which
+/// the line follows its place and its times with (so they are skipped
+/// here).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub(crate) struct FlightWindow {
     /// Its place, from 0.
+    #[serde(skip)]
     pub(crate) index: u64,
+    #[serde(skip)]
     pub(crate) start: Nanos,
+    #[serde(skip)]
     pub(crate) end: Nanos,
     pub(crate) received: u64,
     /// Of `received`, frames whose number had been seen already.

@@ -273,13 +273,14 @@ pub(crate) struct RequesterSummary {
     pub(crate) counts: RequestCounts,
 }
 
-/// Every round trip recovered.
+/// Every round trip recovered. Serialised as the `round_trips` of the
+/// JSON `passive_summary`, in this order, after what the line adds.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub(crate) struct RoundTripSummary {
     /// A request not answered within this is unanswered (`-W`).
     pub(crate) timeout_s: f64,
-    pub(crate) requesters: Vec<RequesterSummary>,
     pub(crate) pairs: Vec<PairSummary>,
+    pub(crate) requesters: Vec<RequesterSummary>,
     /// Requests and replies beyond the tables' caps: counted, not matched.
     pub(crate) untracked: u64,
 }
