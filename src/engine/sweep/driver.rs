@@ -2,7 +2,8 @@
 //! and matching; this one wraps it, gives the session a new [`Schedule`]
 //! at each step (the step's rate, the step's count), waits between steps
 //! until the last one's requests are decided, runs the `--load` streams,
-//! and tells the observer each step as it ends ([`Event::Step`]).
+//! and tells the observer each step as it ends (its `StepFigures`, a
+//! kind's own event).
 //!
 //! Steps never overlap: the next starts once every request of the last is
 //! answered or timed out, so every loss is its own step's. A request that
