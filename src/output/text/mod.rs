@@ -101,16 +101,19 @@ impl<W: Write> Reporter for TextReporter<W> {
     /// Steps not shown as they ended (-q, or cut short) are shown here.
     fn echo_summary(&mut self, s: &EchoSummary, verdict: &Verdict) -> io::Result<()> {
         let steps_shown = self.steps_shown;
-        self.summary(&s.link, |out| {
+        self.summary_block(&s.link, |out| {
             echo::write_summary(out, s, verdict, steps_shown)
         })
     }
 
     fn command_summary(&mut self, s: &CommandSummary, _: &Verdict) -> io::Result<()> {
-        self.summary(&s.link, |out| command::write_summary(out, s))
+        self.summary_block(&s.link, |out| command::write_summary(out, s))
     }
 
     fn passive_summary(&mut self, s: &PassiveSummary, verdict: &Verdict) -> io::Result<()> {
-        self.summary(&s.link, |out| passive::write_summary(out, s, verdict))
+        self.summary_block(&s.link, |out| passive::write_summary(out, s, verdict))
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -113,7 +113,7 @@ impl<W: Write> TextReporter<W> {
 
 impl<W: Write> TextReporter<W> {
     /// The summary, under its header as ping's; written unprefixed.
-    pub(super) fn summary(
+    pub(super) fn summary_block(
         &mut self,
         link: &str,
         write: impl FnOnce(&mut W) -> io::Result<()>,
