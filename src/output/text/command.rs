@@ -2,12 +2,10 @@
 
 use std::io::{self, Write};
 
-use super::format::{ms, ms_us, rate};
-use super::histogram::write_histogram;
-use super::signing::write_signing;
+use super::format::{ms, rate, who};
+use super::summary::{write_histogram, write_rtt, write_sent, write_signing};
 use super::TextReporter;
 use crate::engine::probe::command::CommandEvent;
-use crate::engine::stats::RttSummary;
 use crate::engine::summary::CommandSummary;
 use crate::engine::CommandSpec;
 use crate::frame::codec;
@@ -15,16 +13,16 @@ use crate::output::StartInfo;
 
 impl<W: Write> TextReporter<W> {
     pub(super) fn command_start(&mut self, info: &StartInfo, spec: &CommandSpec) -> io::Result<()> {
-        writeln!(
-            self.out,
-            "MAVPING {} from {}: COMMAND_LONG {} to {} {}, re-sent every {} up to {} times",
-            info.link,
-            info.ours,
-            codec::command_name(spec.command).to_uppercase(),
-            spec.target,
-            rate(info.interval),
-            humantime::format_duration(spec.retry_interval),
-            spec.retries
+        self.start_line(
+            info,
+            format_args!(
+                "COMMAND_LONG {} to {} {}, re-sent every {} up to {} times",
+                codec::command_name(spec.command).to_uppercase(),
+                spec.target,
+                rate(info.interval),
+                humantime::format_duration(spec.retry_interval),
+                spec.retries
+            ),
         )
     }
 
@@ -72,42 +70,15 @@ impl<W: Write> TextReporter<W> {
     }
 }
 
-fn write_time_to_ack(out: &mut impl Write, t: &RttSummary) -> io::Result<()> {
-    writeln!(
-        out,
-        "  time to ack min/mean/max/stddev = {}/{}/{}/{} ms",
-        ms_us(t.min_us),
-        ms_us(t.mean_us),
-        ms_us(t.max_us),
-        ms_us(t.stddev_us)
-    )?;
-    writeln!(
-        out,
-        "  time to ack p50/p90/p99/p99.9   = {}/{}/{}/{} ms",
-        ms_us(t.p50_us),
-        ms_us(t.p90_us),
-        ms_us(t.p99_us),
-        ms_us(t.p999_us)
-    )
-}
-
 pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Result<()> {
-    let sent = s.commands();
-    write!(
-        out,
-        "{sent} {} commands sent in {:.3} s",
-        s.command_name.to_uppercase(),
-        s.duration_s
-    )?;
-    if s.in_flight > 0 {
-        write!(out, ", {} still in flight (not counted)", s.in_flight)?;
-    }
-    writeln!(out)?;
+    let sent = format!(
+        "{} {} commands",
+        s.commands(),
+        s.command_name.to_uppercase()
+    );
+    write_sent(out, &sent, s.duration_s, s.in_flight)?;
     for t in &s.targets {
-        let who = match &t.identity {
-            Some(i) => format!("{} ({}, {})", t.id, i.vehicle, i.autopilot_said()),
-            None => t.id.to_string(),
-        };
+        let who = who(t.id, t.identity.as_ref());
         writeln!(
             out,
             "{who}: {} commands, {} acknowledged, {} failed, {} skipped, {} late acks, {} duplicate acks",
@@ -124,7 +95,7 @@ pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Res
             writeln!(out, "  attempts until ack: {}", attempts.join(", "))?;
         }
         if let Some(tta) = &t.time_to_ack {
-            write_time_to_ack(out, tta)?;
+            write_rtt(out, "time to ack", tta, false)?;
             write_histogram(out, &t.histogram)?;
         }
         if !t.results.is_empty() {

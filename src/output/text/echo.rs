@@ -2,9 +2,8 @@
 
 use std::io::{self, Write};
 
-use super::format::{ms, ms_us, per_second, rate};
-use super::histogram::write_histogram;
-use super::signing::write_signing;
+use super::format::{ms, ms_each, ms_us, per_second, rate, who};
+use super::summary::{write_failures, write_histogram, write_rtt, write_sent, write_signing};
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
 use crate::engine::hint::HintCode;
@@ -14,7 +13,7 @@ use crate::engine::summary::{
 };
 use crate::engine::Nanos;
 use crate::output::StartInfo;
-use crate::verdict::{Check, Verdict};
+use crate::verdict::Verdict;
 
 /// Requests per second above which per-reply lines are summarised.
 pub(super) const MAX_LINE_RATE: f64 = 100.0;
@@ -41,18 +40,18 @@ impl<W: Write> TextReporter<W> {
             ProbeName::Auto => ("PING".to_string(), " (TIMESYNC where PING is not answered)"),
             p => (p.as_str().to_uppercase(), ""),
         };
-        writeln!(
-            self.out,
-            "MAVPING {} from {}: {probe} {}{also}, timeout {}{}",
-            info.link,
-            info.ours,
-            rate(info.interval),
-            humantime::format_duration(info.timeout),
-            if summarised {
-                " (one status line per second; --every-reply for all)"
-            } else {
-                ""
-            }
+        let lines = if summarised {
+            " (one status line per second; --every-reply for all)"
+        } else {
+            ""
+        };
+        self.start_line(
+            info,
+            format_args!(
+                "{probe} {}{also}, timeout {}{lines}",
+                rate(info.interval),
+                humantime::format_duration(info.timeout)
+            ),
         )
     }
 
@@ -116,35 +115,18 @@ impl<W: Write> TextReporter<W> {
     /// duplicate; rtt p50/p99 = 21.304/25.611 ms`, a line per responder.
     pub(super) fn write_interim(&mut self, figures: &EchoInterim) -> io::Result<()> {
         if figures.responders.is_empty() {
-            self.stamp(figures.at)?;
-            return writeln!(
-                self.out,
-                "[{:.1} s] {} requests sent, no replies yet",
-                figures.at as f64 / 1e9,
-                figures.requests
-            );
+            self.interim_head(figures.at)?;
+            let requests = figures.requests;
+            return writeln!(self.out, "{requests} requests sent, no replies yet");
         }
         for r in &figures.responders {
-            let c = &r.counts;
-            self.stamp(figures.at)?;
-            write!(
-                self.out,
-                "[{:.1} s] {}: {} sent, {} received, {} lost ({}), {} late, {} duplicate",
-                figures.at as f64 / 1e9,
-                r.id,
-                c.sent,
-                c.received,
-                c.lost,
-                percent(r.loss_ratio),
-                c.late,
-                c.duplicate
-            )?;
+            self.interim_head(figures.at)?;
+            write!(self.out, "{}: {}", r.id, counts(r))?;
             match &r.rtt {
                 Some(t) => writeln!(
                     self.out,
-                    "; rtt p50/p99 = {}/{} ms",
-                    ms_us(t.p50_us),
-                    ms_us(t.p99_us)
+                    "; rtt p50/p99 = {} ms",
+                    ms_each(&[t.p50_us, t.p99_us])
                 )?,
                 None => writeln!(self.out)?,
             }
@@ -157,32 +139,22 @@ impl<W: Write> TextReporter<W> {
         let Some(p) = self.progress.as_mut() else {
             return Ok(());
         };
-        let at = match *e {
-            MatchEvent::Reply { rtt, at, .. } => {
+        match *e {
+            MatchEvent::Reply { rtt, .. } => {
                 p.replies += 1;
                 p.last_rtt = Some(rtt);
-                at
             }
-            MatchEvent::Lost { at, .. } => {
-                p.lost += 1;
-                at
-            }
-            MatchEvent::Late { at, .. } => {
-                p.late += 1;
-                at
-            }
-            MatchEvent::Duplicate { at, .. } => {
-                p.duplicate += 1;
-                at
-            }
-            MatchEvent::Stale { at, .. } => at,
-        };
+            MatchEvent::Lost { .. } => p.lost += 1,
+            MatchEvent::Late { .. } => p.late += 1,
+            MatchEvent::Duplicate { .. } => p.duplicate += 1,
+            MatchEvent::Stale { .. } => {}
+        }
+        let at = e.at();
         if at.saturating_sub(p.window_start) < PROGRESS_EVERY_NS {
             return Ok(());
         }
         let line = format!(
-            "[{:.1} s] {} replies, {} lost, {} late, {} duplicate in the last {:.1} s; last rtt {} ms",
-            at as f64 / 1e9,
+            "{} replies, {} lost, {} late, {} duplicate in the last {:.1} s; last rtt {} ms",
             p.replies,
             p.lost,
             p.late,
@@ -195,7 +167,7 @@ impl<W: Write> TextReporter<W> {
             ..Progress::default()
         };
         let note = self.radio_note(at);
-        self.stamp(at)?;
+        self.interim_head(at)?;
         writeln!(self.out, "{line}{note}")
     }
 }
@@ -217,26 +189,28 @@ fn percent(ratio: f64) -> String {
     }
 }
 
-fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()> {
+/// `120 sent, 118 received, 2 lost (1.67%), 0 late, 0 duplicate`: a
+/// responder's counts, in its interim line and its summary alike.
+fn counts(r: &ResponderSummary) -> String {
     let c = &r.counts;
-    let mut who = match &r.identity {
-        Some(i) => format!("{} ({}, {})", r.id, i.vehicle, i.autopilot_said()),
-        None => r.id.to_string(),
-    };
-    if let Some(probe) = r.probe {
-        who = format!("{who} via {}", probe.as_str().to_uppercase());
-    }
-    write!(
-        out,
-        "{who}: {} sent, {} received, {} lost ({}), {} late, {} duplicate, {} out of order",
+    format!(
+        "{} sent, {} received, {} lost ({}), {} late, {} duplicate",
         c.sent,
         c.received,
         c.lost,
         percent(r.loss_ratio),
         c.late,
-        c.duplicate,
-        c.out_of_order
-    )?;
+        c.duplicate
+    )
+}
+
+fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()> {
+    let c = &r.counts;
+    let mut who = who(r.id, r.identity.as_ref());
+    if let Some(probe) = r.probe {
+        who = format!("{who} via {}", probe.as_str().to_uppercase());
+    }
+    write!(out, "{who}: {}, {} out of order", counts(r), c.out_of_order)?;
     if c.stale > 0 {
         write!(out, ", {} stale", c.stale)?;
     }
@@ -244,20 +218,21 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
         write!(out, ", {} in flight", c.in_flight)?;
     }
     // Said, so that the requests add up: not charged + sent + in flight.
-    let requests = |n: u64| if n == 1 { "request" } else { "requests" };
-    if c.not_charged > 0 && c.sent + c.in_flight == 0 {
+    if c.not_charged > 0 {
+        let requests = if c.not_charged == 1 {
+            "request"
+        } else {
+            "requests"
+        };
+        let (earlier, why) = if c.sent + c.in_flight == 0 {
+            ("", "it answered none")
+        } else {
+            ("earlier ", "sent before its first answer")
+        };
         write!(
             out,
-            "; {} {} not charged (it answered none)",
-            c.not_charged,
-            requests(c.not_charged)
-        )?;
-    } else if c.not_charged > 0 {
-        write!(
-            out,
-            "; {} earlier {} not charged (sent before its first answer)",
-            c.not_charged,
-            requests(c.not_charged)
+            "; {} {earlier}{requests} not charged ({why})",
+            c.not_charged
         )?;
     }
     writeln!(out)?;
@@ -267,23 +242,7 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
     let Some(rtt) = &r.rtt else {
         return Ok(());
     };
-    writeln!(
-        out,
-        "  rtt min/mean/max/stddev = {}/{}/{}/{} ms",
-        ms_us(rtt.min_us),
-        ms_us(rtt.mean_us),
-        ms_us(rtt.max_us),
-        ms_us(rtt.stddev_us)
-    )?;
-    writeln!(
-        out,
-        "  rtt p50/p90/p99/p99.9   = {}/{}/{}/{} ms, jitter {} ms",
-        ms_us(rtt.p50_us),
-        ms_us(rtt.p90_us),
-        ms_us(rtt.p99_us),
-        ms_us(rtt.p999_us),
-        ms_us(rtt.jitter_us)
-    )?;
+    write_rtt(out, "rtt", rtt, true)?;
     if let Some(clock) = &r.clock {
         let drift = match (clock.drift_ppm, clock.drift_stderr_ppm) {
             (Some(d), Some(e)) => format!("{d:+.2} ± {e:.2} ppm"),
@@ -366,20 +325,13 @@ pub(super) fn write_summary(
     for hint in s.hints.iter().filter(|h| h.code != HintCode::NoPeerHeard) {
         writeln!(out, "hint: {}", hint.text)?;
     }
-    // Threshold failures; "no reply at all" is already plain above.
-    for f in verdict.failures.iter().filter(|f| f.check != Check::Reply) {
-        writeln!(out, "FAILED {}: {}", f.check, f.message)?;
-    }
-    Ok(())
+    write_failures(out, verdict)
 }
 
 /// `30 requests sent in 0.640 s`, and when nothing answered, why.
 fn write_requests(out: &mut impl Write, s: &EchoSummary) -> io::Result<()> {
-    write!(out, "{} requests sent in {:.3} s", s.requests, s.duration_s)?;
-    if s.in_flight > 0 {
-        write!(out, ", {} still in flight (not counted)", s.in_flight)?;
-    }
-    writeln!(out)?;
+    let requests = format!("{} requests", s.requests);
+    write_sent(out, &requests, s.duration_s, s.in_flight)?;
     // A listening link that gave up says so in its own words (the hint);
     // "no replies" would hide that nothing was ever heard.
     let no_peer = s.hints.iter().find(|h| h.code == HintCode::NoPeerHeard);
@@ -471,10 +423,8 @@ fn write_schedule(out: &mut impl Write, s: &EchoSummary, p: &ScheduleSummary) ->
     };
     writeln!(
         out,
-        "schedule: {rate}, send lateness p50/p99/max = {}/{}/{} ms; {}",
-        ms_us(p.lateness_p50_us),
-        ms_us(p.lateness_p99_us),
-        ms_us(p.lateness_max_us),
+        "schedule: {rate}, send lateness p50/p99/max = {} ms; {}",
+        ms_each(&[p.lateness_p50_us, p.lateness_p99_us, p.lateness_max_us]),
         s.rx_clock
     )
 }

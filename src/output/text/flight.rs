@@ -6,6 +6,7 @@
 use std::io::{self, Write};
 use std::time::{Duration, SystemTime};
 
+use super::format::{percent_or_dash, whole_or};
 use crate::engine::probe::passive::flight::{
     diagnosis_text, FlightSummary, FlightWindow, OriginKind, SilenceFigure, Span,
 };
@@ -122,22 +123,15 @@ fn write_range(out: &mut impl Write, f: &FlightSummary, clock: LogClock) -> io::
 /// `120.0-130.0 s (...): 450 received, 50 lost (10.00%); rssi 150/148
 /// noise 40/41 rxerrors +12; 1203 m (ground 1200 m, alt 150.0 m)`.
 fn window(w: &FlightWindow, clock: LogClock) -> String {
-    let mut line = format!(
-        "{}: {} received, {} lost ({})",
-        clock.span(w.start, w.end),
-        w.received,
-        w.lost,
-        w.loss_pct
-            .map_or_else(|| "-".into(), |p| format!("{p:.2}%"))
-    );
-    let one = |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.0}"));
+    let span = clock.span(w.start, w.end);
+    let mut line = format!("{span}: {}", received_lost(w.received, w.lost, w.loss_pct));
     if let Some(r) = &w.radio {
         line += &format!(
             "; rssi {}/{} noise {}/{} rxerrors +{}",
-            one(r.rssi),
-            one(r.remrssi),
-            one(r.noise),
-            one(r.remnoise),
+            whole_or(r.rssi, "-"),
+            whole_or(r.remrssi, "-"),
+            whole_or(r.noise, "-"),
+            whole_or(r.remnoise, "-"),
             r.rxerrors
         );
     }
@@ -150,6 +144,14 @@ fn window(w: &FlightWindow, clock: LogClock) -> String {
     line
 }
 
+/// `450 received, 50 lost (10.00%)`: a window's or a burst's frames.
+fn received_lost(received: u64, lost: impl std::fmt::Display, loss_pct: Option<f64>) -> String {
+    format!(
+        "{received} received, {lost} lost ({})",
+        percent_or_dash(loss_pct)
+    )
+}
+
 fn span(s: &Span, clock: LogClock, burst: bool) -> String {
     let mut line = format!(
         "{}, {:.1} s",
@@ -157,13 +159,7 @@ fn span(s: &Span, clock: LogClock, burst: bool) -> String {
         s.length_ns() as f64 / 1e9
     );
     if burst {
-        line += &format!(
-            ": {} received, {} lost ({})",
-            s.received,
-            s.lost,
-            s.loss_pct()
-                .map_or_else(|| "-".into(), |p| format!("{p:.2}%"))
-        );
+        line += &format!(": {}", received_lost(s.received, s.lost, s.loss_pct()));
     }
     if s.ongoing {
         line += ", still on at the end of the log";

@@ -1,7 +1,9 @@
 //! Numbers as the text shows them: milliseconds as ping prints them,
-//! rates and the request interval.
+//! percentages, rates and the request interval; and who a system is.
 
+use crate::engine::roster::Identity;
 use crate::engine::Nanos;
+use crate::frame::SysComp;
 
 /// Milliseconds with µs resolution, as ping prints them.
 pub(super) fn ms(ns: Nanos) -> String {
@@ -10,6 +12,35 @@ pub(super) fn ms(ns: Nanos) -> String {
 
 pub(super) fn ms_us(us: f64) -> String {
     format!("{:.3}", us / 1e3)
+}
+
+/// Figures in ms, slash-separated as the `min/mean/max` lines give them.
+pub(super) fn ms_each(us: &[f64]) -> String {
+    let each: Vec<String> = us.iter().map(|&v| ms_us(v)).collect();
+    each.join("/")
+}
+
+/// A percentage with two decimals, `-` where there is none.
+pub(super) fn percent_or_dash(pct: Option<f64>) -> String {
+    pct.map_or_else(|| "-".into(), |p| format!("{p:.2}%"))
+}
+
+/// A figure to the unit, `none` (`?`, `-`) where it is not known.
+pub(super) fn whole_or(v: Option<f64>, none: &str) -> String {
+    v.map_or_else(|| none.into(), |v| format!("{v:.0}"))
+}
+
+/// What a system said it is in its HEARTBEAT: `quadrotor, ArduPilot`.
+pub(super) fn identity(i: &Identity) -> String {
+    format!("{}, {}", i.vehicle, i.autopilot_said())
+}
+
+/// `1/1 (quadrotor, ArduPilot)`, or the ids alone if it said nothing.
+pub(super) fn who(id: SysComp, said: Option<&Identity>) -> String {
+    match said {
+        Some(i) => format!("{id} ({})", identity(i)),
+        None => id.to_string(),
+    }
 }
 
 /// A rate with one decimal, or three significant digits below 0.1/s (a

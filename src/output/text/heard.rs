@@ -4,7 +4,7 @@
 
 use std::io::{self, Write};
 
-use super::TextReporter;
+use super::{format, TextReporter};
 use crate::engine::observe::RadioHeard;
 use crate::engine::radio::{self, Field, RadioKind, RadioReport, RadioSummary};
 use crate::engine::roster::Identity;
@@ -32,30 +32,16 @@ impl<W: Write> TextReporter<W> {
             return Ok(());
         }
         self.stamp(at)?;
+        let (heard, what) = (radio_heard(kind, &report), judgement.describe());
         if kind_changed {
-            return writeln!(
-                self.out,
-                "radio {id} is {}: {}",
-                judgement.describe(),
-                radio_heard(kind, &report)
-            );
+            return writeln!(self.out, "radio {id} is {what}: {heard}");
         }
-        writeln!(
-            self.out,
-            "heard radio {id}: {} — {}",
-            radio_heard(kind, &report),
-            judgement.describe()
-        )
+        writeln!(self.out, "heard radio {id}: {heard} — {what}")
     }
 
     pub(super) fn heard_line(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
         self.stamp(identity.first_heard)?;
-        writeln!(
-            self.out,
-            "heard {id}: {}, {}",
-            identity.vehicle,
-            identity.autopilot_said()
-        )
+        writeln!(self.out, "heard {id}: {}", format::identity(identity))
     }
 
     pub(super) fn waiting_line(&mut self) -> io::Result<()> {

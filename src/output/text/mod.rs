@@ -4,20 +4,19 @@
 //!
 //! This file declares and re-exports, and hands each [`Reporter`] call to
 //! the file that writes its lines; the reporter itself is in
-//! `reporter.rs`, and what the kinds of run share in `format.rs` (numbers),
-//! `histogram.rs` and `signing.rs`.
+//! `reporter.rs`, and what the kinds of run share in `format.rs` (numbers,
+//! who a system is) and `summary.rs` (summary lines).
 
 mod command;
 mod echo;
 mod flight;
 mod format;
 mod heard;
-mod histogram;
 mod link_node;
 mod passive;
 mod reporter;
 mod round_trips;
-mod signing;
+mod summary;
 mod sweep;
 
 use std::io::{self, Write};
@@ -64,43 +63,26 @@ impl<W: Write> Reporter for TextReporter<W> {
 
     /// A run in steps shows each step, not each reply.
     fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
-        if self.shows_events() && !self.in_steps {
-            self.match_line(event)
-        } else {
-            Ok(())
+        if self.in_steps {
+            return Ok(());
         }
+        self.if_shown(|t| t.match_line(event))
     }
 
     fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
-        if self.shows_events() {
-            self.heard_line(id, identity)
-        } else {
-            Ok(())
-        }
+        self.if_shown(|t| t.heard_line(id, identity))
     }
 
     fn radio(&mut self, radio: &RadioHeard<'_>) -> io::Result<()> {
-        if self.shows_events() {
-            self.radio_line(radio)
-        } else {
-            Ok(())
-        }
+        self.if_shown(|t| t.radio_line(radio))
     }
 
     fn step(&mut self, step: &StepFigures) -> io::Result<()> {
-        if self.shows_events() {
-            self.step_row(step)
-        } else {
-            Ok(())
-        }
+        self.if_shown(|t| t.step_row(step))
     }
 
     fn waiting_for_peer(&mut self) -> io::Result<()> {
-        if self.shows_events() {
-            self.waiting_line()
-        } else {
-            Ok(())
-        }
+        self.if_shown(Self::waiting_line)
     }
 
     fn flush(&mut self) -> io::Result<()> {
@@ -119,20 +101,19 @@ impl<W: Write> Reporter for TextReporter<W> {
     /// Steps not shown as they ended (-q, or cut short) are shown here.
     fn echo_summary(&mut self, s: &EchoSummary, verdict: &Verdict) -> io::Result<()> {
         let steps_shown = self.steps_shown;
-        let out = self.summary_head(&s.link)?;
-        echo::write_summary(out, s, verdict, steps_shown)?;
-        out.flush()
+        self.summary_block(&s.link, |out| {
+            echo::write_summary(out, s, verdict, steps_shown)
+        })
     }
 
     fn command_summary(&mut self, s: &CommandSummary, _: &Verdict) -> io::Result<()> {
-        let out = self.summary_head(&s.link)?;
-        command::write_summary(out, s)?;
-        out.flush()
+        self.summary_block(&s.link, |out| command::write_summary(out, s))
     }
 
     fn passive_summary(&mut self, s: &PassiveSummary, verdict: &Verdict) -> io::Result<()> {
-        let out = self.summary_head(&s.link)?;
-        passive::write_summary(out, s, verdict)?;
-        out.flush()
+        self.summary_block(&s.link, |out| passive::write_summary(out, s, verdict))
     }
 }
+
+#[cfg(test)]
+mod tests;

@@ -5,7 +5,8 @@
 
 use std::io::{self, Write};
 
-use super::format::per_second;
+use super::format::{identity, per_second, percent_or_dash, whole_or};
+use super::summary::write_failures;
 use super::TextReporter;
 use crate::engine::observe::StartInfo;
 use crate::engine::summary::passive::{
@@ -14,7 +15,7 @@ use crate::engine::summary::passive::{
 use crate::engine::summary::PassiveInterim;
 use crate::frame::codec::message_name;
 use crate::transport::tlog::LogFacts;
-use crate::verdict::{Check, Verdict};
+use crate::verdict::Verdict;
 
 /// Message ids named per source under the table; the rest are counted.
 const TOP_MSG_IDS: usize = 4;
@@ -26,52 +27,40 @@ impl<W: Write> TextReporter<W> {
         heartbeat: bool,
         log: bool,
     ) -> io::Result<()> {
-        writeln!(
-            self.out,
-            "MAVPING {} from {}: PASSIVE, no probes; {}",
-            info.link,
-            info.ours,
-            if log {
-                "a telemetry log, read on its own clock (--passive implied); nothing sent"
-            } else if heartbeat {
-                "our HEARTBEAT at 1 Hz (--no-heartbeat for none)"
-            } else {
-                "nothing sent (--no-heartbeat)"
-            }
-        )
+        let sent = if log {
+            "a telemetry log, read on its own clock (--passive implied); nothing sent"
+        } else if heartbeat {
+            "our HEARTBEAT at 1 Hz (--no-heartbeat for none)"
+        } else {
+            "nothing sent (--no-heartbeat)"
+        };
+        self.start_line(info, format_args!("PASSIVE, no probes; {sent}"))
     }
 
     /// `[12.0 s] 1/1: 600 received, 3 lost (0.50%), 1 duplicate, 2
     /// reordered, 0 silences, 50.0 frames/s`, a line per source.
     pub(super) fn write_passive_interim(&mut self, figures: &PassiveInterim) -> io::Result<()> {
-        let at = figures.at as f64 / 1e9;
         if figures.table.sources.is_empty() {
-            self.stamp(figures.at)?;
-            writeln!(self.out, "[{at:.1} s] nothing heard yet")?;
+            self.interim_head(figures.at)?;
+            writeln!(self.out, "nothing heard yet")?;
         }
         for r in &figures.table.sources {
-            self.stamp(figures.at)?;
+            self.interim_head(figures.at)?;
+            let role = match (r.radio, r.ground) {
+                (true, _) => " (radio)",
+                (_, true) => " (the ground station's own)",
+                _ => "",
+            };
+            let damaged = match r.counts.damaged {
+                0 => String::new(),
+                n => format!("{n} damaged, "),
+            };
+            let [received, lost, loss, duplicate, reordered, silences, per_s, _] =
+                source_figures(r);
             writeln!(
                 self.out,
-                "[{at:.1} s] {}{}: {} received, {}{} lost ({}), {} duplicate, {} reordered, {} silences, {} frames/s",
+                "{}{role}: {received} received, {damaged}{lost} lost ({loss}), {duplicate} duplicate, {reordered} reordered, {silences} silences, {per_s} frames/s",
                 r.source,
-                match (r.radio, r.ground) {
-                    (true, _) => " (radio)",
-                    (_, true) => " (the ground station's own)",
-                    _ => "",
-                },
-                r.counts.received,
-                if r.counts.damaged > 0 {
-                    format!("{} damaged, ", r.counts.damaged)
-                } else {
-                    String::new()
-                },
-                r.counts.lost,
-                loss_column(r.loss_pct),
-                r.counts.duplicate,
-                r.counts.reordered,
-                r.silence_count,
-                r.frames_per_s.map_or_else(|| "-".into(), per_second),
             )?;
         }
         self.out.flush()
@@ -82,31 +71,52 @@ fn seconds(ns: u64) -> String {
     format!("{:.3} s", ns as f64 / 1e9)
 }
 
-/// A percentage for the table's loss column: two decimals, "-" for none.
-fn loss_column(p: Option<f64>) -> String {
-    p.map_or_else(|| "-".into(), |p| format!("{p:.2}%"))
+/// A source's figures as its table row and its interim line give them:
+/// received, lost, loss, duplicate, reordered, silences, frames/s, B/s.
+fn source_figures(r: &SourceSummary) -> [String; 8] {
+    let c = &r.counts;
+    [
+        c.received.to_string(),
+        c.lost.to_string(),
+        percent_or_dash(r.loss_pct),
+        c.duplicate.to_string(),
+        c.reordered.to_string(),
+        r.silence_count.to_string(),
+        r.frames_per_s.map_or_else(|| "-".into(), per_second),
+        whole_or(r.bytes_per_s, "-"),
+    ]
 }
 
-fn row(out: &mut impl Write, s: &PassiveSummary, r: &SourceSummary) -> io::Result<()> {
-    let who = match s.identity(r.source) {
-        Some(i) => format!("{}, {}", i.vehicle, i.autopilot_said()),
-        None if r.radio => "radio".into(),
-        None => "-".into(),
-    };
+/// The source table: its column names after `lead` (the per-link table's
+/// link column), then a row per source.
+fn write_table<'a>(
+    out: &mut impl Write,
+    lead: &str,
+    s: &PassiveSummary,
+    rows: impl IntoIterator<Item = (String, &'a SourceSummary)>,
+) -> io::Result<()> {
+    let titles = [
+        "received", "lost", "loss", "dup", "reorder", "silences", "frames/s", "B/s",
+    ];
+    write!(out, "{lead}")?;
+    table_line(out, "source", "identity", titles.map(String::from))?;
+    for (lead, r) in rows {
+        let who = match s.identity(r.source) {
+            Some(i) => identity(i),
+            None if r.radio => "radio".into(),
+            None => "-".into(),
+        };
+        write!(out, "{lead}")?;
+        table_line(out, &r.source.to_string(), &who, source_figures(r))?;
+    }
+    Ok(())
+}
+
+fn table_line(out: &mut impl Write, source: &str, who: &str, f: [String; 8]) -> io::Result<()> {
+    let [received, lost, loss, dup, reorder, silences, per_s, bytes] = f;
     writeln!(
         out,
-        "{:<9} {:<22} {:>9} {:>7} {:>7} {:>5} {:>7} {:>8} {:>9} {:>9}",
-        r.source.to_string(),
-        who,
-        r.counts.received,
-        r.counts.lost,
-        loss_column(r.loss_pct),
-        r.counts.duplicate,
-        r.counts.reordered,
-        r.silence_count,
-        r.frames_per_s.map_or_else(|| "-".into(), per_second),
-        r.bytes_per_s
-            .map_or_else(|| "-".into(), |b| format!("{b:.0}")),
+        "{source:<9} {who:<22} {received:>9} {lost:>7} {loss:>7} {dup:>5} {reorder:>7} {silences:>8} {per_s:>9} {bytes:>9}"
     )
 }
 
@@ -122,25 +132,17 @@ fn write_messages(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
         .msg_ids
         .iter()
         .take(TOP_MSG_IDS)
-        .map(|m| {
-            let name = id_name(m.id);
-            match r.frames_per_s {
-                Some(rate) if r.counts.received > 0 => {
-                    let share = rate * m.count as f64 / r.counts.received as f64;
-                    format!("{name} {}/s", per_second(share))
-                }
-                _ => format!("{name} ×{}", m.count),
+        .map(|m| match r.frames_per_s {
+            Some(rate) if r.counts.received > 0 => {
+                let share = rate * m.count as f64 / r.counts.received as f64;
+                format!("{} {}/s", id_name(m.id), per_second(share))
             }
+            _ => id_count(m),
         })
         .collect();
     let more = r.msg_ids.len().saturating_sub(TOP_MSG_IDS);
-    let rest: u64 = r
-        .msg_ids
-        .iter()
-        .skip(TOP_MSG_IDS)
-        .map(|m| m.count)
-        .sum::<u64>()
-        + r.msg_ids_other;
+    let rest: u64 = r.msg_ids.iter().skip(TOP_MSG_IDS).map(|m| m.count).sum();
+    let rest = rest + r.msg_ids_other;
     let tail = match (more, r.msg_ids_other) {
         (0, 0) => String::new(),
         (0, _) => format!(", and more ids ({rest} frames)"),
@@ -233,44 +235,46 @@ fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
             ", stopped before its end"
         },
     )?;
-    if r.junk_bytes > 0 {
-        writeln!(
-            out,
-            "log: {} bytes of junk between records, in {} stretches, skipped ({} began with a \
-             frame that failed its CRC)",
-            r.junk_bytes, r.junk_stretches, r.bad_crc
-        )?;
-    }
-    if r.truncated_bytes > 0 {
-        writeln!(
-            out,
-            "log: its last record is cut short ({} bytes)",
-            r.truncated_bytes
-        )?;
-    }
-    if r.damaged > 0 {
-        writeln!(
-            out,
-            "log: {} records whose frame failed its CRC, whole between records: damaged frames, \
-             their headers read (pymavlink calls them BAD_DATA)",
-            r.damaged
-        )?;
-    }
-    if r.unknown_id > 0 {
-        writeln!(
-            out,
-            "log: {} records of message ids this build does not know, lined up between records: \
-             their headers read (pymavlink calls them BAD_DATA)",
-            r.unknown_id
-        )?;
-    }
-    if st.behind > 0 || st.steps > 0 {
-        writeln!(
-            out,
-            "log: {} records stamped behind the latest (dated at it), {} clock steps (the time \
-             goes on from the latest, no gap)",
-            st.behind, st.steps
-        )?;
+    let notes = [
+        (
+            r.junk_bytes,
+            format!(
+                "{} bytes of junk between records, in {} stretches, skipped ({} began with a \
+                 frame that failed its CRC)",
+                r.junk_bytes, r.junk_stretches, r.bad_crc
+            ),
+        ),
+        (
+            r.truncated_bytes,
+            format!("its last record is cut short ({} bytes)", r.truncated_bytes),
+        ),
+        (
+            r.damaged,
+            format!(
+                "{} records whose frame failed its CRC, whole between records: damaged frames, \
+                 their headers read (pymavlink calls them BAD_DATA)",
+                r.damaged
+            ),
+        ),
+        (
+            r.unknown_id,
+            format!(
+                "{} records of message ids this build does not know, lined up between records: \
+                 their headers read (pymavlink calls them BAD_DATA)",
+                r.unknown_id
+            ),
+        ),
+        (
+            st.behind + st.steps,
+            format!(
+                "{} records stamped behind the latest (dated at it), {} clock steps (the time \
+                 goes on from the latest, no gap)",
+                st.behind, st.steps
+            ),
+        ),
+    ];
+    for (_, note) in notes.iter().filter(|(n, _)| *n > 0) {
+        writeln!(out, "log: {note}")?;
     }
     Ok(())
 }
@@ -281,13 +285,11 @@ fn write_links(out: &mut impl Write, s: &PassiveSummary, per: &PerLink) -> io::R
         out,
         "per MAVProxy link (the stamps' two lowest bits; link 3 is what MAVProxy sent):"
     )?;
-    table_header(out, "link ")?;
-    for l in &per.links {
-        for r in &l.table.sources {
-            write!(out, "{:<4} ", l.link)?;
-            row(out, s, r)?;
-        }
-    }
+    let rows = per.links.iter().flat_map(|l| {
+        let lead = format!("{:<4} ", l.link);
+        l.table.sources.iter().map(move |r| (lead.clone(), r))
+    });
+    write_table(out, "link ", s, rows)?;
     if !per.unlinked.is_empty() {
         let ids: Vec<String> = per.unlinked.iter().map(ToString::to_string).collect();
         writeln!(
@@ -332,10 +334,8 @@ pub(super) fn write_summary(
     if s.table.sources.iter().all(|r| r.ground) {
         writeln!(out, "nothing heard")?;
     } else {
-        table_header(out, "")?;
-        for r in s.table.sources.iter().filter(|r| !r.ground) {
-            row(out, s, r)?;
-        }
+        let rows = s.table.sources.iter().filter(|r| !r.ground);
+        write_table(out, "", s, rows.map(|r| (String::new(), r)))?;
         write_link_line(out, t)?;
     }
     write_ground(out, s)?;
@@ -377,13 +377,7 @@ pub(super) fn write_summary(
         )?;
     }
     writeln!(out, "receive times: {}", s.rx_clock)?;
-    for f in &verdict.failures {
-        match f.check {
-            Check::Reply => {}
-            _ => writeln!(out, "FAILED {}: {}", f.check, f.message)?,
-        }
-    }
-    Ok(())
+    write_failures(out, verdict)
 }
 
 /// `link:`, the totals of every source but the radio's and the ground
@@ -394,7 +388,7 @@ fn write_link_line(out: &mut impl Write, t: &LinkTotals) -> io::Result<()> {
         "link: {} received, {} lost ({}), {} duplicate, {} reordered{}{}; pymavlink's figure: {} lost ({:.2}%)",
         t.counts.received,
         t.counts.lost,
-        loss_column(t.loss_pct),
+        percent_or_dash(t.loss_pct),
         t.counts.duplicate,
         t.counts.reordered,
         if t.counts.damaged > 0 {
@@ -418,8 +412,7 @@ fn write_link_line(out: &mut impl Write, t: &LinkTotals) -> io::Result<()> {
 /// A log's ground station's own frames, apart: logged as it sent them,
 /// so their gaps are what the logger did not record, not the link's loss.
 fn write_ground(out: &mut impl Write, s: &PassiveSummary) -> io::Result<()> {
-    let ground: Vec<&SourceSummary> = s.table.sources.iter().filter(|r| r.ground).collect();
-    if ground.is_empty() {
+    if !s.table.sources.iter().any(|r| r.ground) {
         return Ok(());
     }
     writeln!(
@@ -427,11 +420,8 @@ fn write_ground(out: &mut impl Write, s: &PassiveSummary) -> io::Result<()> {
         "the ground station's own frames (logged as it sent them: not the link's; their gaps are \
          numbers it did not log):"
     )?;
-    table_header(out, "")?;
-    for r in ground {
-        row(out, s, r)?;
-    }
-    Ok(())
+    let rows = s.table.sources.iter().filter(|r| r.ground);
+    write_table(out, "", s, rows.map(|r| (String::new(), r)))
 }
 
 /// `two senders behind 255/190: ...`: a second counter under one id.
@@ -453,11 +443,7 @@ fn write_second_counter(out: &mut impl Write, r: &SourceSummary) -> io::Result<(
 
 /// `DISTANCE_SENSOR ×1949, id 60045 ×3`.
 fn name_counts(ids: &[MsgCount]) -> String {
-    let mut each: Vec<String> = ids
-        .iter()
-        .take(TOP_MSG_IDS)
-        .map(|m| format!("{} ×{}", id_name(m.id), m.count))
-        .collect();
+    let mut each: Vec<String> = ids.iter().take(TOP_MSG_IDS).map(id_count).collect();
     let more = ids.len().saturating_sub(TOP_MSG_IDS);
     if more > 0 {
         each.push(format!("{more} more ids"));
@@ -465,28 +451,14 @@ fn name_counts(ids: &[MsgCount]) -> String {
     each.join(", ")
 }
 
+/// `DISTANCE_SENSOR ×1949`: an id and how many frames it had.
+fn id_count(m: &MsgCount) -> String {
+    format!("{} ×{}", id_name(m.id), m.count)
+}
+
 /// A message id by the dialect's name, `id N` where it has none.
 fn id_name(id: u32) -> String {
     message_name(id).map_or_else(|| format!("id {id}"), String::from)
-}
-
-/// The source table's column names, after `lead` (the per-link table's
-/// link column).
-fn table_header(out: &mut impl Write, lead: &str) -> io::Result<()> {
-    writeln!(
-        out,
-        "{lead}{:<9} {:<22} {:>9} {:>7} {:>7} {:>5} {:>7} {:>8} {:>9} {:>9}",
-        "source",
-        "identity",
-        "received",
-        "lost",
-        "loss",
-        "dup",
-        "reorder",
-        "silences",
-        "frames/s",
-        "B/s"
-    )
 }
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ use super::echo;
 use crate::engine::radio::{RadioKind, RadioReport};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
-use crate::output::{Prefixed, WallClock};
+use crate::output::{Prefixed, StartInfo, WallClock};
 
 pub(crate) struct TextReporter<W: Write> {
     /// Event lines go through the link's prefix (with several links);
@@ -77,6 +77,22 @@ impl<W: Write> TextReporter<W> {
         )
     }
 
+    /// `[12.0 s] ` after the `-D` stamp: how interim and status lines
+    /// start.
+    pub(super) fn interim_head(&mut self, at: Nanos) -> io::Result<()> {
+        self.stamp(at)?;
+        write!(self.out, "[{:.1} s] ", at as f64 / 1e9)
+    }
+
+    /// The first line, as ping's: `MAVPING LINK from OURS: ` and `what`.
+    pub(super) fn start_line(
+        &mut self,
+        info: &StartInfo,
+        what: std::fmt::Arguments<'_>,
+    ) -> io::Result<()> {
+        writeln!(self.out, "MAVPING {} from {}: {what}", info.link, info.ours)
+    }
+
     /// A line per reply whatever the rate.
     pub(crate) fn every_reply(mut self, every: bool) -> Self {
         self.every_reply = every;
@@ -96,20 +112,31 @@ impl<W: Write> TextReporter<W> {
 }
 
 impl<W: Write> TextReporter<W> {
-    /// The summary's header, as ping's; the summary is written unprefixed.
-    pub(super) fn summary_head(&mut self, link: &str) -> io::Result<&mut W> {
+    /// The summary, under its header as ping's; written unprefixed.
+    pub(super) fn summary_block(
+        &mut self,
+        link: &str,
+        write: impl FnOnce(&mut W) -> io::Result<()>,
+    ) -> io::Result<()> {
         let quiet = self.quiet;
         let out = self.out.inner();
         if !quiet {
             writeln!(out)?;
         }
         writeln!(out, "--- {link} mavping statistics ---")?;
-        Ok(out)
+        write(out)?;
+        out.flush()
     }
 
-    /// Event lines other than a command's are shown: not in quiet mode,
-    /// and not in a command run, which shows its commands' fate only.
-    pub(super) fn shows_events(&self) -> bool {
-        !self.quiet && !self.commands
+    /// Writes an event's line if event lines are shown: not in quiet
+    /// mode, and not in a command run, which shows its commands' fate only.
+    pub(super) fn if_shown(
+        &mut self,
+        write: impl FnOnce(&mut Self) -> io::Result<()>,
+    ) -> io::Result<()> {
+        if self.quiet || self.commands {
+            return Ok(());
+        }
+        write(self)
     }
 }

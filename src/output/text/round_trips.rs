@@ -4,8 +4,9 @@
 
 use std::io::{self, Write};
 
-use super::format::ms_us;
+use super::format::ms_each;
 use crate::engine::probe::passive::round_trips::{PairSummary, RequesterSummary, RoundTripSummary};
+use crate::frame::SysComp;
 use crate::transport::tlog::LogFacts;
 
 /// Nothing when the log held no exchange.
@@ -68,32 +69,26 @@ fn write_pair(out: &mut impl Write, p: &PairSummary) -> io::Result<()> {
         }
     }
     let rtt = p.rtt.map_or_else(String::new, |r| {
-        format!(
-            "; rtt n={} min/p50/p90/p99/max = {}/{}/{}/{}/{} ms",
-            c.matched,
-            ms_us(r.min_us),
-            ms_us(r.p50_us),
-            ms_us(r.p90_us),
-            ms_us(r.p99_us),
-            ms_us(r.max_us)
-        )
+        let figures = ms_each(&[r.min_us, r.p50_us, r.p90_us, r.p99_us, r.max_us]);
+        format!("; rtt n={} min/p50/p90/p99/max = {figures} ms", c.matched)
     });
-    let responder = if p.responder.sysid == 0 && p.responder.compid == 0 {
-        "any (none heard answering)".to_string()
-    } else {
-        p.responder.to_string()
-    };
-    let requester = if p.requester.sysid == 0 && p.requester.compid == 0 {
-        "(no requester named)".to_string()
-    } else {
-        p.requester.to_string()
-    };
+    let responder = named(p.responder, "any (none heard answering)");
+    let requester = named(p.requester, "(no requester named)");
     writeln!(
         out,
         "  {} {requester} -> {responder}: {}{rtt}",
         p.kind.as_str(),
         parts.join(", ")
     )
+}
+
+/// The ids, or `unnamed` for 0/0: the log named none.
+fn named(id: SysComp, unnamed: &str) -> String {
+    if id == SysComp::new(0, 0) {
+        unnamed.into()
+    } else {
+        id.to_string()
+    }
 }
 
 /// `requests: timesync from 255/190: 100 (1 logged again)`.

@@ -5,7 +5,7 @@
 
 use std::io::{self, Write};
 
-use super::format::ms_us;
+use super::format::{ms_us, whole_or};
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
 use crate::engine::sweep::step::Phase;
@@ -85,6 +85,7 @@ impl<W: Write> TextReporter<W> {
     /// The first line: what will be sent.
     pub(super) fn sweep_start(&mut self, info: &StartInfo, c: &SweepConfig) -> io::Result<()> {
         let step = humantime::format_duration(c.step);
+        let probe = info.probe.as_str().to_uppercase();
         let what = match c.plan {
             PlanKind::Sweep {
                 first_hz,
@@ -108,16 +109,14 @@ impl<W: Write> TextReporter<W> {
                     format!(", first {step} at {}/s without the load", hz(first_hz))
                 };
                 format!(
-                    "{} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {} loss{baseline}",
-                    info.probe.as_str().to_uppercase(),
+                    "{probe} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {} loss{baseline}",
                     hz(first_hz),
                     hz(max_hz),
                     pct(loss_limit),
                 )
             }
             PlanKind::Load { rate_hz } => format!(
-                "{} {}/s, {step} without the load then {step} with it",
-                info.probe.as_str().to_uppercase(),
+                "{probe} {}/s, {step} without the load then {step} with it",
                 hz(rate_hz)
             ),
         };
@@ -126,13 +125,8 @@ impl<W: Write> TextReporter<W> {
         } else {
             format!("; load {}", load_line(c))
         };
-        writeln!(
-            self.out,
-            "MAVPING {} from {}: {what}{load}, timeout {}",
-            info.link,
-            info.ours,
-            humantime::format_duration(info.timeout)
-        )
+        let timeout = humantime::format_duration(info.timeout);
+        self.start_line(info, format_args!("{what}{load}, timeout {timeout}"))
     }
 
     /// A step's row; the first comes under the table's header.
@@ -141,8 +135,7 @@ impl<W: Write> TextReporter<W> {
             writeln!(self.out, "{}", header())?;
         }
         self.steps_shown += 1;
-        let row = row(s);
-        writeln!(self.out, "{row}")
+        writeln!(self.out, "{}", row(s))
     }
 }
 
@@ -188,14 +181,13 @@ fn row(s: &StepFigures) -> String {
         knee_mark(s),
     );
     if let Some(r) = &s.radio {
-        let figure = |v: Option<f64>| v.map_or("?".into(), |v| format!("{v:.0}"));
         line.push_str(&format!(
             "  radio {} txbuf min {}% mean {}%, rssi {} remrssi {}, rxerrors +{}",
             r.id,
             r.txbuf_min.map_or("?".into(), |v| v.to_string()),
-            figure(r.txbuf_mean),
-            figure(r.rssi_mean),
-            figure(r.remrssi_mean),
+            whole_or(r.txbuf_mean, "?"),
+            whole_or(r.rssi_mean, "?"),
+            whole_or(r.remrssi_mean, "?"),
             r.rxerrors_delta
         ));
     }

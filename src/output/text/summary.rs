@@ -1,0 +1,96 @@
+//! The lines several kinds' summaries share: what was sent, the RTT
+//! figures and their histogram, the signing gate, the failed thresholds.
+
+use std::io::{self, Write};
+
+use super::format::{ms_each, ms_us};
+use crate::engine::stats::{Bucket, RttSummary};
+use crate::frame::signing::SigningSummary;
+use crate::verdict::{Check, Verdict};
+
+/// `30 requests sent in 0.640 s`, and how many were still in flight.
+pub(super) fn write_sent(
+    out: &mut impl Write,
+    what: &str,
+    duration_s: f64,
+    in_flight: u64,
+) -> io::Result<()> {
+    write!(out, "{what} sent in {duration_s:.3} s")?;
+    if in_flight > 0 {
+        write!(out, ", {in_flight} still in flight (not counted)")?;
+    }
+    writeln!(out)
+}
+
+/// `  rtt min/mean/max/stddev = …` and the percentiles under it (the
+/// echo probes' with the jitter), for an RTT or a time to ack alike.
+pub(super) fn write_rtt(
+    out: &mut impl Write,
+    what: &str,
+    t: &RttSummary,
+    jitter: bool,
+) -> io::Result<()> {
+    writeln!(
+        out,
+        "  {what} min/mean/max/stddev = {} ms",
+        ms_each(&[t.min_us, t.mean_us, t.max_us, t.stddev_us])
+    )?;
+    write!(
+        out,
+        "  {what} p50/p90/p99/p99.9   = {} ms",
+        ms_each(&[t.p50_us, t.p90_us, t.p99_us, t.p999_us])
+    )?;
+    if jitter {
+        write!(out, ", jitter {} ms", ms_us(t.jitter_us))?;
+    }
+    writeln!(out)
+}
+
+/// An RTT histogram: a bar per bucket, the longest 40 wide.
+pub(super) fn write_histogram(out: &mut impl Write, histogram: &[Bucket]) -> io::Result<()> {
+    let most = histogram.iter().map(|b| b.count).max().unwrap_or(0).max(1);
+    for b in histogram {
+        const WIDTH: u64 = 40;
+        let bar = (b.count * WIDTH).div_ceil(most) as usize;
+        writeln!(
+            out,
+            "  {:>9} ms |{:<40}| {}",
+            ms_us(b.low_us),
+            "#".repeat(bar),
+            b.count
+        )?;
+    }
+    Ok(())
+}
+
+/// One line: what the signing gate let through and what it refused
+/// (refused frames were never measured); without a key, only when signed
+/// frames came (their signatures could not be checked).
+pub(super) fn write_signing(out: &mut impl Write, s: &SigningSummary) -> io::Result<()> {
+    match s.link_id {
+        Some(link_id) => writeln!(
+            out,
+            "signing (link id {link_id}, {}): {}",
+            if s.required {
+                "signatures required"
+            } else {
+                "unsigned accepted"
+            },
+            s.counts
+        ),
+        None if s.counts.signed_unchecked > 0 => writeln!(
+            out,
+            "signing (no key): {} signed frames accepted unchecked, {} unsigned",
+            s.counts.signed_unchecked, s.counts.unsigned
+        ),
+        None => Ok(()),
+    }
+}
+
+/// The thresholds that failed; "no reply at all" is already plain above.
+pub(super) fn write_failures(out: &mut impl Write, verdict: &Verdict) -> io::Result<()> {
+    for f in verdict.failures.iter().filter(|f| f.check != Check::Reply) {
+        writeln!(out, "FAILED {}: {}", f.check, f.message)?;
+    }
+    Ok(())
+}
