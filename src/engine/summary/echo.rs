@@ -243,6 +243,16 @@ impl super::KindSummary for EchoSummary {
     }
 }
 
+/// An echo run so far: each responder's counts of decided requests and
+/// its RTT figures.
+#[derive(Debug, Clone)]
+pub struct EchoInterim {
+    /// Session time, ns.
+    pub(crate) at: crate::engine::Nanos,
+    pub(crate) requests: u64,
+    pub(crate) responders: Vec<ResponderSummary>,
+}
+
 #[cfg(test)]
 impl EchoSummary {
     /// A run of `requests` PINGs on `link` with nothing in it, for tests

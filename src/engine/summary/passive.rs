@@ -337,3 +337,14 @@ impl super::KindSummary for PassiveSummary {
         self.link_error.as_deref()
     }
 }
+
+/// A passive run so far: every source's sequence figures (cumulative), as
+/// the summary will give them.
+#[derive(Debug, Clone)]
+pub struct PassiveInterim {
+    /// Session time, ns.
+    pub(crate) at: Nanos,
+    pub(crate) table: TableSummary,
+    /// What each source said it is, from its HEARTBEAT.
+    pub(crate) identities: Vec<(SysComp, Identity)>,
+}
