@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use super::lines::{Line, SCHEMA_VERSION};
+use super::lines::SCHEMA_VERSION;
 use super::units::{seconds, us};
 use crate::engine::probe::command::CommandEvent;
 use crate::engine::summary::CommandSummary;
@@ -78,8 +78,19 @@ pub(super) struct AckAgain {
     result: u8,
 }
 
+/// The line of a command's acknowledgement, failure or skip, or of an ACK
+/// after it was decided.
+#[derive(Serialize)]
+#[serde(untagged)]
+pub(super) enum CommandLine {
+    Ack(Ack),
+    Failed(Failed),
+    Skipped(Skipped),
+    Again(AckAgain),
+}
+
 /// The line of a command event, if it has one.
-pub(super) fn line(event: &CommandEvent) -> Option<Line<'static>> {
+pub(super) fn line(event: &CommandEvent) -> Option<CommandLine> {
     use CommandEvent as E;
     let line = match *event {
         // Each transmission is in the summary's attempt counts.
@@ -92,7 +103,7 @@ pub(super) fn line(event: &CommandEvent) -> Option<Line<'static>> {
             result,
             attempts,
             time_to_ack,
-        } => Line::Ack(Ack {
+        } => CommandLine::Ack(Ack {
             r#type: "ack",
             n,
             target,
@@ -108,7 +119,7 @@ pub(super) fn line(event: &CommandEvent) -> Option<Line<'static>> {
             target,
             command,
             attempts,
-        } => Line::CommandFailed(Failed {
+        } => CommandLine::Failed(Failed {
             r#type: "command_failed",
             n,
             target,
@@ -120,7 +131,7 @@ pub(super) fn line(event: &CommandEvent) -> Option<Line<'static>> {
             command,
             at,
             ..
-        } => Line::Skipped(Skipped {
+        } => CommandLine::Skipped(Skipped {
             r#type: "skipped",
             t_s: seconds(at),
             target,
@@ -130,7 +141,7 @@ pub(super) fn line(event: &CommandEvent) -> Option<Line<'static>> {
             from,
             command,
             result,
-        } => Line::LateAck(AckAgain {
+        } => CommandLine::Again(AckAgain {
             r#type: "late_ack",
             from,
             command,
@@ -140,7 +151,7 @@ pub(super) fn line(event: &CommandEvent) -> Option<Line<'static>> {
             from,
             command,
             result,
-        } => Line::DuplicateAck(AckAgain {
+        } => CommandLine::Again(AckAgain {
             r#type: "duplicate_ack",
             from,
             command,

@@ -2,7 +2,7 @@
 
 use serde::Serialize;
 
-use super::lines::{Line, Lines, Stamp, SCHEMA_VERSION};
+use super::lines::{Lines, Stamp, SCHEMA_VERSION};
 use super::sweep;
 use super::units::{seconds, us};
 use crate::engine::matcher::MatchEvent;
@@ -27,6 +27,16 @@ pub(super) struct Lost {
     stamp: Stamp,
     seq: u32,
     sent_t_s: f64,
+}
+
+/// The line of a reply, loss, late, duplicate or stale reply.
+#[derive(Serialize)]
+#[serde(untagged)]
+pub(super) enum MatchLine {
+    Reply(Reply),
+    Lost(Lost),
+    Again(Again),
+    Stale(Stamp),
 }
 
 /// `late` or `duplicate`: an answer after the timeout, or another one.
@@ -101,8 +111,8 @@ impl InterimResponder {
 
 impl Lines {
     /// The `interim` line.
-    pub(super) fn echo_interim(&self, figures: &summary::EchoInterim) -> Line<'static> {
-        Line::Interim(Interim {
+    pub(super) fn echo_interim(&self, figures: &summary::EchoInterim) -> Interim {
+        Interim {
             r#type: "interim",
             t_s: seconds(figures.at),
             time: self.wall.rfc3339(figures.at),
@@ -112,11 +122,11 @@ impl Lines {
                 .iter()
                 .map(InterimResponder::of)
                 .collect(),
-        })
+        }
     }
 
     /// A reply, loss, late, duplicate or stale reply.
-    pub(super) fn match_line(&self, e: &MatchEvent) -> Line<'static> {
+    pub(super) fn match_line(&self, e: &MatchEvent) -> MatchLine {
         match *e {
             MatchEvent::Reply {
                 responder,
@@ -125,7 +135,7 @@ impl Lines {
                 at,
                 out_of_order,
                 ..
-            } => Line::Reply(Reply {
+            } => MatchLine::Reply(Reply {
                 stamp: self.stamp("reply", at, responder),
                 seq,
                 rtt_us: us(rtt),
@@ -136,7 +146,7 @@ impl Lines {
                 seq,
                 sent_at,
                 at,
-            } => Line::Lost(Lost {
+            } => MatchLine::Lost(Lost {
                 stamp: self.stamp("lost", at, responder),
                 seq,
                 sent_t_s: seconds(sent_at),
@@ -147,7 +157,7 @@ impl Lines {
                 rtt,
                 at,
                 ..
-            } => Line::Late(Again {
+            } => MatchLine::Again(Again {
                 stamp: self.stamp("late", at, responder),
                 seq,
                 rtt_us: us(rtt),
@@ -158,12 +168,14 @@ impl Lines {
                 rtt,
                 at,
                 ..
-            } => Line::Duplicate(Again {
+            } => MatchLine::Again(Again {
                 stamp: self.stamp("duplicate", at, responder),
                 seq,
                 rtt_us: us(rtt),
             }),
-            MatchEvent::Stale { responder, at } => Line::Stale(self.stamp("stale", at, responder)),
+            MatchEvent::Stale { responder, at } => {
+                MatchLine::Stale(self.stamp("stale", at, responder))
+            }
         }
     }
 }

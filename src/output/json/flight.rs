@@ -9,7 +9,7 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 
-use super::lines::{Line, Lines};
+use super::lines::Lines;
 use super::units::seconds;
 use super::JsonReporter;
 use crate::engine::probe::passive::flight::{
@@ -77,6 +77,14 @@ pub(super) struct Summary<'a> {
     bursts: Vec<Timed>,
 }
 
+/// The line of a flight event: a window, a silence or a burst.
+#[derive(Serialize)]
+#[serde(untagged)]
+pub(super) enum FlightLine<'a> {
+    Window(Window<'a>),
+    Span(Timed),
+}
+
 impl Lines {
     pub(super) fn flight_window<'a>(&self, w: &'a FlightWindow) -> Window<'a> {
         Window {
@@ -109,11 +117,11 @@ impl Lines {
         }
     }
 
-    pub(super) fn flight_event<'a>(&self, e: &'a FlightEvent) -> Line<'a> {
+    pub(super) fn flight_event<'a>(&self, e: &'a FlightEvent) -> FlightLine<'a> {
         match e {
-            FlightEvent::Window(w) => Line::FlightWindow(self.flight_window(w)),
-            FlightEvent::Silence(s) => Line::FlightSilence(self.flight_span("flight_silence", s)),
-            FlightEvent::Burst(b) => Line::FlightBurst(self.flight_span("flight_burst", b)),
+            FlightEvent::Window(w) => FlightLine::Window(self.flight_window(w)),
+            FlightEvent::Silence(s) => FlightLine::Span(self.flight_span("flight_silence", s)),
+            FlightEvent::Burst(b) => FlightLine::Span(self.flight_span("flight_burst", b)),
         }
     }
 
@@ -148,11 +156,11 @@ impl<W: Write> JsonReporter<W> {
             return Ok(());
         }
         if let Some(last) = f.last.as_ref() {
-            let line = Line::FlightWindow(self.lines.flight_window(last));
+            let line = self.lines.flight_window(last);
             self.lines.write(&mut self.out, &line)?;
         }
         if let Some(b) = f.last_burst.as_ref() {
-            let line = Line::FlightBurst(self.lines.flight_span("flight_burst", b));
+            let line = self.lines.flight_span("flight_burst", b);
             self.lines.write(&mut self.out, &line)?;
         }
         Ok(())

@@ -3,7 +3,7 @@
 
 use serde::Serialize;
 
-use super::lines::{Line, Lines, Stamp};
+use super::lines::{Lines, Stamp};
 use crate::engine::observe::RadioHeard;
 use crate::engine::radio::{Judgement, RadioReport};
 use crate::engine::roster::Identity;
@@ -38,30 +38,28 @@ pub(super) struct Radio<'a> {
 }
 
 impl Lines {
-    pub(super) fn heard_line<'a>(&self, id: SysComp, identity: &'a Identity) -> Line<'a> {
-        Line::Responder(Heard {
+    pub(super) fn heard_line<'a>(&self, id: SysComp, identity: &'a Identity) -> Heard<'a> {
+        Heard {
             stamp: self.stamp("responder", identity.first_heard, id),
             identity,
-        })
+        }
     }
 
-    pub(super) fn waiting_line() -> Line<'static> {
-        Line::Waiting(Waiting {
+    pub(super) fn waiting_line() -> Waiting {
+        Waiting {
             r#type: "waiting",
             reason: "no peer heard yet",
-        })
+        }
     }
 
     /// The first report of each radio, and one whose kind changed; the
     /// summary has the rest.
-    pub(super) fn radio_line<'a>(&self, heard: &RadioHeard<'a>) -> Option<Line<'a>> {
-        (heard.first || heard.kind_changed).then(|| {
-            Line::Radio(Radio {
-                stamp: self.stamp("radio", heard.at, heard.id),
-                status: heard.report,
-                judgement: heard.judgement,
-                first: heard.first,
-            })
+    pub(super) fn radio_line<'a>(&self, heard: &RadioHeard<'a>) -> Option<Radio<'a>> {
+        (heard.first || heard.kind_changed).then(|| Radio {
+            stamp: self.stamp("radio", heard.at, heard.id),
+            status: heard.report,
+            judgement: heard.judgement,
+            first: heard.first,
         })
     }
 }

@@ -1,5 +1,5 @@
-//! What every line is made of: the [`Line`] enum of every `type`, the
-//! [`Lines`] that write them (the wall clock, the link a line names), the
+//! What every line is made of: the [`Lines`] that write them (the wall
+//! clock, the link a line names), the
 //! [`Stamp`] a responder's timed event starts with, and the `start` line.
 
 use std::io::{self, Write};
@@ -7,8 +7,8 @@ use std::io::{self, Write};
 use serde::Serialize;
 
 use super::units::seconds;
-use super::{command, echo, flight, heard, passive, sweep};
-use crate::engine::summary::{EchoInterim, Interim, PassiveInterim, ProbeName};
+use super::command;
+use crate::engine::summary::ProbeName;
 use crate::engine::sweep_report::SweepConfig;
 use crate::engine::CommandSpec;
 use crate::engine::Nanos;
@@ -17,73 +17,11 @@ use crate::output::{StartInfo, WallClock};
 
 pub(crate) const SCHEMA_VERSION: u32 = 2;
 
-/// One line of the output, by its `type`.
-#[derive(Serialize)]
-#[serde(untagged)]
-pub(super) enum Line<'a> {
-    // Boxed: once a run each, and much larger than the others.
-    Start(Box<Start<'a>>),
-    Waiting(heard::Waiting),
-    Responder(heard::Heard<'a>),
-    Reply(echo::Reply),
-    Lost(echo::Lost),
-    Late(echo::Again),
-    Duplicate(echo::Again),
-    Stale(Stamp),
-    Radio(heard::Radio<'a>),
-    Interim(echo::Interim),
-    PassiveInterim(Box<passive::Interim<'a>>),
-    Step(sweep::Step<'a>),
-    Summary(Box<echo::Summary<'a>>),
-    Ack(command::Ack),
-    CommandFailed(command::Failed),
-    Skipped(command::Skipped),
-    LateAck(command::AckAgain),
-    DuplicateAck(command::AckAgain),
-    CommandSummary(Box<command::Summary<'a>>),
-    PassiveSummary(Box<passive::Summary<'a>>),
-    FlightWindow(flight::Window<'a>),
-    FlightSilence(flight::Timed),
-    FlightBurst(flight::Timed),
-}
-
-impl Line<'_> {
-    /// The start and summary lines always name their link; the others
-    /// only in a run of several links, at their end.
-    fn names_its_link(&self) -> bool {
-        match self {
-            Line::Start(_)
-            | Line::Summary(_)
-            | Line::CommandSummary(_)
-            | Line::PassiveSummary(_) => true,
-            Line::Waiting(_)
-            | Line::Responder(_)
-            | Line::Reply(_)
-            | Line::Lost(_)
-            | Line::Late(_)
-            | Line::Duplicate(_)
-            | Line::Stale(_)
-            | Line::Radio(_)
-            | Line::Interim(_)
-            | Line::PassiveInterim(_)
-            | Line::Step(_)
-            | Line::Ack(_)
-            | Line::CommandFailed(_)
-            | Line::Skipped(_)
-            | Line::LateAck(_)
-            | Line::DuplicateAck(_)
-            | Line::FlightWindow(_)
-            | Line::FlightSilence(_)
-            | Line::FlightBurst(_) => false,
-        }
-    }
-}
-
 /// A line and, when it does not name it itself, its link.
 #[derive(Serialize)]
-struct Linked<'a> {
+struct Linked<'a, T> {
     #[serde(flatten)]
-    line: &'a Line<'a>,
+    line: &'a T,
     #[serde(skip_serializing_if = "Option::is_none")]
     link: Option<&'a str>,
 }
@@ -133,13 +71,23 @@ impl Lines {
         self.command = info.plan::<CommandSpec>().is_some();
     }
 
-    /// Writes `line` and its newline.
-    pub(super) fn write(&self, out: &mut impl Write, line: &Line<'_>) -> io::Result<()> {
-        let link = if line.names_its_link() {
-            None
-        } else {
-            self.link.as_deref()
-        };
+    /// Writes an event's `line` and its newline; in a run of several
+    /// links, the line ends with its link.
+    pub(super) fn write(&self, out: &mut impl Write, line: &impl Serialize) -> io::Result<()> {
+        Self::write_linked(out, line, self.link.as_deref())
+    }
+
+    /// Writes a line that names its link itself (the start and summary
+    /// lines) and its newline.
+    pub(super) fn write_named(out: &mut impl Write, line: &impl Serialize) -> io::Result<()> {
+        Self::write_linked(out, line, None)
+    }
+
+    fn write_linked<T: Serialize>(
+        out: &mut impl Write,
+        line: &T,
+        link: Option<&str>,
+    ) -> io::Result<()> {
         serde_json::to_writer(&mut *out, &Linked { line, link })?;
         out.write_all(b"\n")
     }
@@ -152,8 +100,8 @@ impl Lines {
     }
 
     /// The `start` line.
-    pub(super) fn start<'a>(&'a self, info: &'a StartInfo) -> Line<'a> {
-        Line::Start(Box::new(Start {
+    pub(super) fn start<'a>(&'a self, info: &'a StartInfo) -> Start<'a> {
+        Start {
             r#type: "start",
             schema_version: SCHEMA_VERSION,
             mavping_version: env!("CARGO_PKG_VERSION"),
@@ -167,17 +115,7 @@ impl Lines {
             count: info.count,
             command: info.plan::<CommandSpec>().map(command::Spec::of),
             sweep: info.plan::<SweepConfig>(),
-        }))
-    }
-
-    /// The line of the figures so far.
-    pub(super) fn interim<'a>(&self, figures: &'a Interim) -> Option<Line<'a>> {
-        if let Some(echo) = figures.get::<EchoInterim>() {
-            return Some(self.echo_interim(echo));
         }
-        figures
-            .get::<PassiveInterim>()
-            .map(|passive| self.passive_interim(passive))
     }
 
     /// What every timed event of a responder starts with.

@@ -32,7 +32,7 @@ mod units;
 
 use std::io::{self, Write};
 
-use self::lines::{Line, Lines};
+use self::lines::Lines;
 use super::Reporter;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
@@ -40,7 +40,9 @@ use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
-use crate::engine::summary::{CommandSummary, EchoSummary, Interim};
+use crate::engine::summary::{
+    CommandSummary, EchoInterim, EchoSummary, PassiveInterim,
+};
 use crate::engine::sweep_report::StepFigures;
 use crate::frame::SysComp;
 use crate::output::StartInfo;
@@ -53,7 +55,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
         if self.quiet {
             return Ok(());
         }
-        self.lines.write(&mut self.out, &self.lines.start(info))
+        Lines::write_named(&mut self.out, &self.lines.start(info))
     }
 
     fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
@@ -77,7 +79,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
     }
 
     fn step(&mut self, step: &StepFigures) -> io::Result<()> {
-        self.event_line(Some(Line::Step(self.lines.step(step))), false)
+        self.event_line(Some(self.lines.step(step)), false)
     }
 
     fn flight(&mut self, event: &FlightEvent) -> io::Result<()> {
@@ -88,26 +90,24 @@ impl<W: Write> Reporter for JsonReporter<W> {
         self.out.flush()
     }
 
-    /// Written in quiet mode too: that is what `-Q` is for.
-    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
-        if let Some(line) = self.lines.interim(figures) {
-            self.lines.write(&mut self.out, &line)?;
-        }
-        self.out.flush()
+    fn echo_interim(&mut self, figures: &EchoInterim) -> io::Result<()> {
+        let line = self.lines.echo_interim(figures);
+        self.interim_line(&line)
+    }
+
+    fn passive_interim(&mut self, figures: &PassiveInterim) -> io::Result<()> {
+        let line = self.lines.passive_interim(figures);
+        self.interim_line(&line)
     }
 
     fn echo_summary(&mut self, s: &EchoSummary, verdict: &Verdict) -> io::Result<()> {
         let line = echo::Summary::of(s, verdict, self.lines.link_or(&s.link));
-        Self::summary_line(&self.lines, &mut self.out, &Line::Summary(Box::new(line)))
+        Self::summary_line(&mut self.out, &line)
     }
 
     fn command_summary(&mut self, s: &CommandSummary, verdict: &Verdict) -> io::Result<()> {
         let line = command::Summary::of(s, verdict, self.lines.link_or(&s.link));
-        Self::summary_line(
-            &self.lines,
-            &mut self.out,
-            &Line::CommandSummary(Box::new(line)),
-        )
+        Self::summary_line(&mut self.out, &line)
     }
 
     /// A log's last, partial, window ends with the log: told here.
@@ -116,10 +116,6 @@ impl<W: Write> Reporter for JsonReporter<W> {
             self.flight_ends(f)?;
         }
         let line = passive::Summary::of(s, verdict, self.lines.link_or(&s.link), &self.lines);
-        Self::summary_line(
-            &self.lines,
-            &mut self.out,
-            &Line::PassiveSummary(Box::new(line)),
-        )
+        Self::summary_line(&mut self.out, &line)
     }
 }

@@ -4,7 +4,7 @@
 
 use serde::Serialize;
 
-use super::lines::{Line, Lines, SCHEMA_VERSION};
+use super::lines::{Lines, SCHEMA_VERSION};
 use super::round_trips::RoundTrips;
 use super::units::seconds;
 use crate::engine::link_node::LinkNodeSummary;
@@ -57,15 +57,15 @@ pub(super) struct Interim<'a> {
 
 impl Lines {
     /// The `passive_interim` line.
-    pub(super) fn passive_interim<'a>(&self, figures: &'a PassiveInterim) -> Line<'a> {
-        Line::PassiveInterim(Box::new(Interim {
+    pub(super) fn passive_interim<'a>(&self, figures: &'a PassiveInterim) -> Interim<'a> {
+        Interim {
             r#type: "passive_interim",
             t_s: seconds(figures.at),
             time: self.wall.rfc3339(figures.at),
             totals: &figures.table.totals,
             sources: sources(&figures.table, &figures.identities),
             untracked: figures.table.untracked,
-        }))
+        }
     }
 }
 

@@ -3,7 +3,9 @@
 
 use std::io::{self, Write};
 
-use super::lines::{Line, Lines};
+use serde::Serialize;
+
+use super::lines::Lines;
 use crate::output::WallClock;
 
 pub(crate) struct JsonReporter<W: Write> {
@@ -41,14 +43,25 @@ impl<W: Write> JsonReporter<W> {
 
 impl<W: Write> JsonReporter<W> {
     /// Writes the summary line, in quiet mode too, and pushes it out.
-    pub(super) fn summary_line(lines: &Lines, out: &mut W, line: &Line<'_>) -> io::Result<()> {
-        lines.write(out, line)?;
+    pub(super) fn summary_line(out: &mut W, line: &impl Serialize) -> io::Result<()> {
+        Lines::write_named(out, line)?;
         out.flush()
+    }
+
+    /// Writes the line of the figures so far, in quiet mode too (that is
+    /// what `-Q` is for), and pushes it out.
+    pub(super) fn interim_line(&mut self, line: &impl Serialize) -> io::Result<()> {
+        self.lines.write(&mut self.out, line)?;
+        self.out.flush()
     }
 
     /// Writes an event's line: not in quiet mode, and in a command run
     /// only the command's own (`command`).
-    pub(super) fn event_line(&mut self, line: Option<Line<'_>>, command: bool) -> io::Result<()> {
+    pub(super) fn event_line(
+        &mut self,
+        line: Option<impl Serialize>,
+        command: bool,
+    ) -> io::Result<()> {
         match line {
             Some(line) if !self.quiet && command == self.lines.command => {
                 self.lines.write(&mut self.out, &line)
