@@ -6,8 +6,8 @@ use std::io::{self, Write};
 
 use serde::Serialize;
 
-use super::units::seconds;
 use super::command;
+use super::units::seconds;
 use crate::engine::summary::ProbeName;
 use crate::engine::sweep_report::SweepConfig;
 use crate::engine::CommandSpec;

@@ -40,9 +40,7 @@ use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
-use crate::engine::summary::{
-    CommandSummary, EchoInterim, EchoSummary, PassiveInterim,
-};
+use crate::engine::summary::{CommandSummary, EchoInterim, EchoSummary, PassiveInterim};
 use crate::engine::sweep_report::StepFigures;
 use crate::frame::SysComp;
 use crate::output::StartInfo;
