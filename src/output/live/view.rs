@@ -292,18 +292,19 @@ fn aligned(kind: &Spec, column: usize, text: String) -> Line<'static> {
 
 /// A responder's figures, each with whether it is bad news.
 fn figures(r: &RowView) -> Cells {
-    let loss = if r.sent == 0 {
+    let c = &r.counts;
+    let loss = if c.sent == 0 {
         0.0
     } else {
-        100.0 * r.lost as f64 / r.sent as f64
+        100.0 * c.lost as f64 / c.sent as f64
     };
     vec![
         (r.id.clone(), false),
-        (r.sent.to_string(), false),
-        (r.received.to_string(), false),
-        (format!("{loss:.1}"), r.lost > 0),
-        (r.late.to_string(), r.late > 0),
-        (r.duplicate.to_string(), false),
+        (c.sent.to_string(), false),
+        (c.received.to_string(), false),
+        (format!("{loss:.1}"), c.lost > 0),
+        (c.late.to_string(), c.late > 0),
+        (c.duplicate.to_string(), false),
         (ms(r.last_ms), false),
         (ms(r.p50_ms), false),
         (ms(r.p99_ms), false),
@@ -387,7 +388,7 @@ fn ellipsis(text: &str, max: usize) -> String {
 /// The strip of recent outcomes, or what was heard from a responder that
 /// never answered.
 fn recent(r: &RowView, width: u16) -> Cell<'static> {
-    match (&r.heard_as, r.received) {
+    match (&r.heard_as, r.counts.received) {
         (Some(heard), 0) => {
             let long = format!("heard ({heard}), no reply");
             let text = if long.chars().count() <= usize::from(width) {

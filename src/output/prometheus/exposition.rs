@@ -9,24 +9,30 @@ use crate::engine::summary::ProbeName;
 use crate::frame::SysComp;
 
 impl Metrics {
-    pub(super) fn labels(&self, id: SysComp) -> String {
-        format!(
-            "link=\"{}\",probe=\"{}\",sysid=\"{}\",compid=\"{}\"",
-            escape(&self.link),
-            self.probe.map_or("", ProbeName::as_str),
-            id.sysid,
-            id.compid
-        )
+    /// The link's own series: its state.
+    pub(super) fn link_labels(&self) -> String {
+        format!("link=\"{}\"", escape(&self.link))
     }
 
-    pub(super) fn radio_labels(&self, id: SysComp) -> String {
-        format!(
-            "link=\"{}\",sysid=\"{}\",compid=\"{}\"",
-            escape(&self.link),
-            id.sysid,
-            id.compid
-        )
+    /// What the link measures with: its requests and who answers them.
+    pub(super) fn probe_labels(&self) -> String {
+        let probe = self.probe.map_or("", ProbeName::as_str);
+        format!("{},probe=\"{probe}\"", self.link_labels())
     }
+
+    /// A responder's series.
+    pub(super) fn labels(&self, id: SysComp) -> String {
+        with_id(self.probe_labels(), id)
+    }
+
+    /// A radio's, a node's or a source's series: not the probe's.
+    pub(super) fn radio_labels(&self, id: SysComp) -> String {
+        with_id(self.link_labels(), id)
+    }
+}
+
+fn with_id(labels: String, id: SysComp) -> String {
+    format!("{labels},sysid=\"{}\",compid=\"{}\"", id.sysid, id.compid)
 }
 
 /// What a family's samples are, as its `TYPE` line says.
@@ -136,6 +142,20 @@ impl Exposition {
         self.header(family);
         for (labels, value) in samples {
             self.sample(family.name, &labels, value);
+        }
+    }
+
+    /// Each figure of `table` as a family, with a sample for each of
+    /// `items` that has the figure: the shape of every per-series table.
+    pub(super) fn figures<'a, T: 'a, V: Display, I>(
+        &mut self,
+        table: &[Figure<fn(&T) -> Option<V>>],
+        items: impl Fn() -> I,
+    ) where
+        I: Iterator<Item = (String, &'a T)>,
+    {
+        for Figure { family, value } in table {
+            self.family(family, items().filter_map(|(l, x)| Some((l, value(x)?))));
         }
     }
 }

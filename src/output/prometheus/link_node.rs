@@ -93,15 +93,15 @@ const NODE: [NodeFigure; 10] = [
 
 /// Every link's nodes, each family once.
 pub(super) fn write_link_nodes(out: &mut Exposition, links: &[&Metrics]) {
-    for Figure { family, value } in &NODE {
-        let nodes = links.iter().flat_map(|m| {
+    let nodes = || {
+        links.iter().flat_map(|m| {
             m.link_nodes
                 .0
                 .iter()
-                .filter_map(move |(id, n)| Some((m.radio_labels(*id), value(n)?)))
-        });
-        out.family(family, nodes);
-    }
+                .map(move |(id, n)| (m.radio_labels(*id), n))
+        })
+    };
+    out.figures(&NODE, nodes);
 }
 
 #[cfg(test)]

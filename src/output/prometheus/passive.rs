@@ -126,9 +126,7 @@ pub(super) fn write_sources(out: &mut Exposition, links: &[&Metrics]) {
     for Figure { family, value } in &SOURCE_COUNTS {
         out.family(family, series().map(|(l, s)| (l, value(&s.counters()))));
     }
-    for Figure { family, value } in &SOURCE_GAUGES {
-        out.family(family, series().filter_map(|(l, s)| Some((l, value(s)?))));
-    }
+    out.figures(&SOURCE_GAUGES, series);
 }
 
 const DIRECTION_LOSS: Family = Family::gauge(
