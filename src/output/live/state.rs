@@ -6,7 +6,7 @@
 use std::collections::{BTreeMap, VecDeque};
 use std::io;
 
-use super::sources::{SourceRow, Sources};
+use super::sources::{heard_as, SourceRow, Sources};
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::probe::passive::PassivePlan;
 use crate::engine::roster::Identity;
@@ -104,11 +104,8 @@ impl Reporter for LiveState {
         match self.sources.as_mut() {
             Some(sources) => sources.heard(id, identity),
             None => {
-                self.tracks.entry(id).or_insert_with(Track::new).heard_as = Some(format!(
-                    "{} {}",
-                    identity.vehicle,
-                    identity.autopilot_said()
-                ));
+                let track = self.tracks.entry(id).or_insert_with(Track::new);
+                track.heard_as = Some(heard_as(identity));
             }
         }
         Ok(())

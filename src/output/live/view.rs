@@ -405,7 +405,7 @@ fn recent(r: &RowView, width: u16) -> Cell<'static> {
 /// The recent outcomes, newest on the right, scaled between the lowest and
 /// highest RTT shown: `×` lost (red), `!` late (yellow).
 pub(super) fn strip(recent: &[Mark], width: usize) -> Line<'static> {
-    let shown = &recent[recent.len().saturating_sub(width)..];
+    let shown = newest(recent, width);
     let rtts = shown.iter().filter_map(|m| match m {
         Mark::Rtt(ns) => Some(*ns),
         _ => None,
@@ -415,14 +415,8 @@ pub(super) fn strip(recent: &[Mark], width: usize) -> Line<'static> {
     let spans: Vec<Span<'static>> = shown
         .iter()
         .map(|m| match *m {
-            Mark::Rtt(ns) => {
-                let level = if hi > lo {
-                    ((ns - lo) as f64 / (hi - lo) as f64 * 7.0).round() as usize
-                } else {
-                    0
-                };
-                Span::styled(BARS[level].to_string(), Style::new().fg(Color::Green))
-            }
+            Mark::Rtt(ns) if hi > lo => bar((ns - lo) as f64 / (hi - lo) as f64, Color::Green),
+            Mark::Rtt(_) => bar(0.0, Color::Green),
             Mark::Lost => Span::styled(
                 "×",
                 Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
@@ -437,7 +431,7 @@ pub(super) fn strip(recent: &[Mark], width: usize) -> Line<'static> {
 /// from none to the most frames shown, red where its sequence lost any,
 /// `·` a second without a frame.
 pub(super) fn seconds(recent: &[Second], width: usize) -> Line<'static> {
-    let shown = &recent[recent.len().saturating_sub(width)..];
+    let shown = newest(recent, width);
     let most = shown.iter().map(|s| s.frames).max().unwrap_or(0).max(1);
     let spans: Vec<Span<'static>> = shown
         .iter()
@@ -445,12 +439,22 @@ pub(super) fn seconds(recent: &[Second], width: usize) -> Line<'static> {
             if s.frames == 0 {
                 return Span::styled("·", Style::new().fg(Color::DarkGray));
             }
-            let level = (s.frames as f64 / most as f64 * 7.0).round() as usize;
             let colour = if s.lost { Color::Red } else { Color::Green };
-            Span::styled(BARS[level].to_string(), Style::new().fg(colour))
+            bar(s.frames as f64 / most as f64, colour)
         })
         .collect();
     Line::from(spans)
+}
+
+/// The last `width` of a strip's marks.
+fn newest<T>(recent: &[T], width: usize) -> &[T] {
+    &recent[recent.len().saturating_sub(width)..]
+}
+
+/// A bar `fraction` of the full height (0 to 1).
+fn bar(fraction: f64, colour: Color) -> Span<'static> {
+    let level = (fraction * 7.0).round() as usize;
+    Span::styled(BARS[level].to_string(), Style::new().fg(colour))
 }
 
 #[cfg(test)]

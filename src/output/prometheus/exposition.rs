@@ -63,27 +63,19 @@ pub(super) struct Family {
 
 impl Family {
     pub(super) const fn gauge(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Gauge,
-        }
+        Family::of(FamilyKind::Gauge, name, help)
     }
 
     pub(super) const fn counter(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Counter,
-        }
+        Family::of(FamilyKind::Counter, name, help)
     }
 
     pub(super) const fn histogram(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Histogram,
-        }
+        Family::of(FamilyKind::Histogram, name, help)
+    }
+
+    const fn of(kind: FamilyKind, name: &'static str, help: &'static str) -> Self {
+        Family { name, help, kind }
     }
 }
 
@@ -95,19 +87,19 @@ pub(super) struct Figure<V> {
 
 impl<V> Figure<V> {
     pub(super) const fn gauge(name: &'static str, help: &'static str, value: V) -> Self {
-        Figure {
-            family: Family::gauge(name, help),
-            value,
-        }
+        let family = Family::gauge(name, help);
+        Figure { family, value }
     }
 
     pub(super) const fn counter(name: &'static str, help: &'static str, value: V) -> Self {
-        Figure {
-            family: Family::counter(name, help),
-            value,
-        }
+        let family = Family::counter(name, help);
+        Figure { family, value }
     }
 }
+
+/// A figure of each series of a kind (`T`), left out where the series
+/// has none.
+pub(super) type SeriesFigure<T> = Figure<fn(&T) -> Option<f64>>;
 
 /// Text being written in the exposition format: a family's `HELP` and
 /// `TYPE` lines, then its samples.
@@ -147,11 +139,8 @@ impl Exposition {
 
     /// Each figure of `table` as a family, with a sample for each of
     /// `items` that has the figure: the shape of every per-series table.
-    pub(super) fn figures<'a, T: 'a, V: Display, I>(
-        &mut self,
-        table: &[Figure<fn(&T) -> Option<V>>],
-        items: impl Fn() -> I,
-    ) where
+    pub(super) fn figures<'a, T: 'a, I>(&mut self, table: &[SeriesFigure<T>], items: impl Fn() -> I)
+    where
         I: Iterator<Item = (String, &'a T)>,
     {
         for Figure { family, value } in table {

@@ -5,8 +5,9 @@ use std::collections::BTreeMap;
 
 use super::radio_series::RadioSeries;
 use super::series::{Outcome, Series, Split};
-use super::{link_node, sources};
+use super::sources;
 use crate::engine::clock_offset::ClockSummary;
+use crate::engine::link_node::LinkNodes;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::StartInfo;
 use crate::engine::probe::command::CommandEvent;
@@ -26,7 +27,7 @@ pub(crate) struct Metrics {
     /// Each radio heard.
     pub(super) radios: BTreeMap<SysComp, RadioSeries>,
     /// Each node heard by its LINK_NODE_STATUS.
-    pub(super) link_nodes: link_node::Nodes,
+    pub(super) link_nodes: LinkNodes,
     /// Each source's packet sequence (a passive run's figures; an echo
     /// run's responders' downlink).
     pub(super) sources: sources::Sources,

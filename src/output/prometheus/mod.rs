@@ -71,11 +71,11 @@ impl Reporter for Metrics {
     fn link_node(
         &mut self,
         id: SysComp,
-        _: Nanos,
+        at: Nanos,
         report: &LinkNodeReport,
         _: bool,
     ) -> io::Result<()> {
-        self.link_nodes.record(id, *report);
+        self.link_nodes.record(id, *report, at);
         Ok(())
     }
 

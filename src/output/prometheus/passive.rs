@@ -4,7 +4,7 @@
 //! and an echo run's loss by direction per responder
 //! (`mavping_direction_*`), split by the summary's own formula.
 
-use super::exposition::{Exposition, Family, Figure};
+use super::exposition::{Exposition, Family, Figure, SeriesFigure};
 use super::sources::{Figures, SourceSeries};
 use super::Metrics;
 use crate::engine::summary::{Direction, ProbeName};
@@ -80,10 +80,7 @@ const SOURCE_COUNTS: [SourceCount; 10] = [
     ),
 ];
 
-/// A source's gauge; a series without the figure is left out.
-type SourceGauge = Figure<fn(&SourceSeries) -> Option<f64>>;
-
-const SOURCE_GAUGES: [SourceGauge; 5] = [
+const SOURCE_GAUGES: [SeriesFigure<SourceSeries>; 5] = [
     Figure::gauge(
         "mavping_source_lost_pending",
         "Frames counted lost that may still arrive late and be reordered (within 127 of the latest frame, outside a silence): not in mavping_source_lost_total yet.",

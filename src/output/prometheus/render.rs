@@ -5,7 +5,7 @@
 
 use std::fmt::Write as _;
 
-use super::exposition::{Exposition, Family, Figure};
+use super::exposition::{Exposition, Family, Figure, SeriesFigure};
 use super::link_node::write_link_nodes;
 use super::passive::{write_directions, write_sources};
 use super::radio_series::RadioSeries;
@@ -90,10 +90,7 @@ fn rtt_histogram(scope: Scope) -> Family {
     Family::histogram(name, "Round-trip time of replies within the timeout.")
 }
 
-/// A per-responder gauge; a series without the figure is left out.
-type Gauge = Figure<fn(&Series) -> Option<f64>>;
-
-const GAUGES: [Gauge; 5] = [
+const GAUGES: [SeriesFigure<Series>; 5] = [
     Figure::gauge(
         "mavping_last_rtt_seconds",
         "Round-trip time of the latest reply within the timeout.",
@@ -121,10 +118,7 @@ const GAUGES: [Gauge; 5] = [
     ),
 ];
 
-/// A radio's figure (`None`: left out).
-type RadioFigure = Figure<fn(&RadioSeries) -> Option<f64>>;
-
-const RADIO: [RadioFigure; 15] = [
+const RADIO: [SeriesFigure<RadioSeries>; 15] = [
     // Written apart, with its extra label.
     Figure::gauge(
         "mavping_radio_info",
