@@ -62,10 +62,8 @@ impl Metrics {
     /// (so a link that never opens still shows `mavping_link_up 0`).
     pub(crate) fn continuous(link: &str, probe: ProbeName) -> Self {
         Metrics {
-            link: link.to_string(),
             probe: Some(probe),
-            state: Some(LinkState::default()),
-            ..Metrics::default()
+            ..Metrics::unopened(link)
         }
     }
 
