@@ -5,11 +5,11 @@
 //!
 //! [`Event::Sources`]: crate::engine::observe::Event::Sources
 
-use std::collections::{BTreeMap, VecDeque};
+use std::collections::BTreeMap;
 
 use super::state::RECENT;
 use crate::engine::roster::Identity;
-use crate::engine::summary::passive::{SeqCounts, TableSummary};
+use crate::engine::summary::passive::TableSummary;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::output::windows::Windows;
@@ -26,22 +26,17 @@ pub(crate) struct Second {
     pub(crate) lost: bool,
 }
 
-#[derive(Debug, Clone)]
-struct Source {
-    radio: bool,
-    counts: SeqCounts,
-    loss_pct: Option<f64>,
-    silences: u64,
-    /// Frames a second in the latest window.
-    rate: Option<f64>,
-    recent: VecDeque<Second>,
+/// Who a system says it is, as a row shows it: `vehicle autopilot`.
+pub(super) fn heard_as(identity: &Identity) -> String {
+    format!("{} {}", identity.vehicle, identity.autopilot_said())
 }
 
 /// A passive run's sources, as the view follows them.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Sources {
     windows: Windows,
-    sources: BTreeMap<SysComp, Source>,
+    /// Each source's row, but for who it is (filled in when drawn).
+    sources: BTreeMap<SysComp, SourceRow>,
     /// `vehicle autopilot` from each system's first HEARTBEAT.
     heard: BTreeMap<SysComp, String>,
 }
@@ -49,32 +44,26 @@ pub(super) struct Sources {
 impl Sources {
     pub(super) fn heard(&mut self, id: SysComp, identity: &Identity) {
         if self.heard.len() < MAX_HEARD || self.heard.contains_key(&id) {
-            self.heard.insert(
-                id,
-                format!("{} {}", identity.vehicle, identity.autopilot_said()),
-            );
+            self.heard.insert(id, heard_as(identity));
         }
     }
 
     /// The table as of `at`: each source's figures, and its latest second.
     pub(super) fn table(&mut self, at: Nanos, table: &TableSummary) {
         for (w, s) in self.windows.next(at, table).iter().zip(&table.sources) {
-            let t = self.sources.entry(s.source).or_insert_with(|| Source {
-                radio: s.radio,
-                counts: SeqCounts::default(),
-                loss_pct: None,
-                silences: 0,
-                rate: None,
-                recent: VecDeque::with_capacity(RECENT),
-            });
-            t.counts = s.counts;
+            let t = self.sources.entry(s.source).or_default();
+            t.radio = s.radio;
+            t.received = s.counts.received;
+            t.lost = s.counts.lost;
             t.loss_pct = s.loss_pct;
+            t.duplicate = s.counts.duplicate;
+            t.reordered = s.counts.reordered;
             t.silences = s.silence_count;
             t.rate = w.frames_per_s();
             if t.recent.len() == RECENT {
-                t.recent.pop_front();
+                t.recent.remove(0);
             }
-            t.recent.push_back(Second {
+            t.recent.push(Second {
                 frames: w.received,
                 lost: w.lost > 0,
             });
@@ -92,22 +81,14 @@ impl Sources {
                     .get(id)
                     .cloned()
                     .or_else(|| s.radio.then(|| "radio".to_string())),
-                radio: s.radio,
-                received: s.counts.received,
-                lost: s.counts.lost,
-                loss_pct: s.loss_pct,
-                duplicate: s.counts.duplicate,
-                reordered: s.counts.reordered,
-                silences: s.silences,
-                rate: s.rate,
-                recent: s.recent.iter().copied().collect(),
+                ..s.clone()
             })
             .collect()
     }
 }
 
 /// One source's row.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, Default)]
 pub(crate) struct SourceRow {
     pub(crate) id: String,
     /// What its HEARTBEAT said it is; `radio` for the SiK radio's own.

@@ -6,8 +6,8 @@
 use std::collections::{BTreeMap, VecDeque};
 use std::io;
 
-use super::sources::{SourceRow, Sources};
-use crate::engine::matcher::MatchEvent;
+use super::sources::{heard_as, SourceRow, Sources};
+use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::probe::passive::PassivePlan;
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
@@ -15,6 +15,7 @@ use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::ProbeName;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
+use crate::output::prometheus::Outcome;
 use crate::output::{Reporter, StartInfo};
 
 /// Outcomes kept per responder for the strip: more than a wide terminal shows.
@@ -30,11 +31,8 @@ pub(crate) enum Mark {
 
 #[derive(Clone)]
 struct Track {
-    sent: u64,
-    received: u64,
-    lost: u64,
-    late: u64,
-    duplicate: u64,
+    /// Counted as the exporter counts them.
+    counts: Counts,
     rtt: RttStats,
     recent: VecDeque<Mark>,
     heard_as: Option<String>,
@@ -43,18 +41,24 @@ struct Track {
 impl Track {
     fn new() -> Self {
         Track {
-            sent: 0,
-            received: 0,
-            lost: 0,
-            late: 0,
-            duplicate: 0,
+            counts: Counts::default(),
             rtt: RttStats::new(),
             recent: VecDeque::with_capacity(RECENT),
             heard_as: None,
         }
     }
 
-    fn push(&mut self, mark: Mark) {
+    fn record(&mut self, outcome: Outcome) {
+        outcome.count(&mut self.counts);
+        let mark = match outcome {
+            Outcome::Received(rtt) => {
+                self.rtt.record(rtt);
+                Mark::Rtt(rtt)
+            }
+            Outcome::Lost => Mark::Lost,
+            Outcome::Late => Mark::Late,
+            Outcome::Duplicate => return,
+        };
         if self.recent.len() == RECENT {
             self.recent.pop_front();
         }
@@ -100,11 +104,8 @@ impl Reporter for LiveState {
         match self.sources.as_mut() {
             Some(sources) => sources.heard(id, identity),
             None => {
-                self.tracks.entry(id).or_insert_with(Track::new).heard_as = Some(format!(
-                    "{} {}",
-                    identity.vehicle,
-                    identity.autopilot_said()
-                ));
+                let track = self.tracks.entry(id).or_insert_with(Track::new);
+                track.heard_as = Some(heard_as(identity));
             }
         }
         Ok(())
@@ -127,33 +128,12 @@ impl Reporter for LiveState {
 
     fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
         self.waiting = false;
-        let (id, at) = match *e {
-            MatchEvent::Reply { responder, at, .. }
-            | MatchEvent::Late { responder, at, .. }
-            | MatchEvent::Duplicate { responder, at, .. }
-            | MatchEvent::Lost { responder, at, .. } => (responder, at),
-            MatchEvent::Stale { .. } => return Ok(()),
-        };
-        self.now = self.now.max(at);
-        let t = self.tracks.entry(id).or_insert_with(Track::new);
-        match *e {
-            MatchEvent::Reply { rtt, .. } => {
-                t.sent += 1;
-                t.received += 1;
-                t.rtt.record(rtt);
-                t.push(Mark::Rtt(rtt));
-            }
-            MatchEvent::Lost { .. } => {
-                t.sent += 1;
-                t.lost += 1;
-                t.push(Mark::Lost);
-            }
-            MatchEvent::Late { .. } => {
-                t.late += 1;
-                t.push(Mark::Late);
-            }
-            MatchEvent::Duplicate { .. } => t.duplicate += 1,
-            MatchEvent::Stale { .. } => {}
+        if let Some((id, outcome)) = Outcome::of_match(e) {
+            self.now = self.now.max(e.at());
+            self.tracks
+                .entry(id)
+                .or_insert_with(Track::new)
+                .record(outcome);
         }
         Ok(())
     }
@@ -193,11 +173,7 @@ impl LiveState {
                 RowView {
                     id: format!("{}/{}", id.sysid, id.compid),
                     heard_as: t.heard_as.clone(),
-                    sent: t.sent,
-                    received: t.received,
-                    lost: t.lost,
-                    late: t.late,
-                    duplicate: t.duplicate,
+                    counts: t.counts,
                     last_ms: t.rtt.last().map(|ns| ns as f64 / 1e6),
                     p50_ms: s.map(|s| s.p50_us / 1e3),
                     p99_ms: s.map(|s| s.p99_us / 1e3),
@@ -236,11 +212,7 @@ impl Rows {
 pub(crate) struct RowView {
     pub(crate) id: String,
     pub(crate) heard_as: Option<String>,
-    pub(crate) sent: u64,
-    pub(crate) received: u64,
-    pub(crate) lost: u64,
-    pub(crate) late: u64,
-    pub(crate) duplicate: u64,
+    pub(crate) counts: Counts,
     pub(crate) last_ms: Option<f64>,
     pub(crate) p50_ms: Option<f64>,
     pub(crate) p99_ms: Option<f64>,
@@ -499,6 +471,6 @@ mod tests {
         }
         let t = &s.tracks[&a];
         assert_eq!(t.recent.len(), RECENT);
-        assert_eq!(t.sent, 10_030);
+        assert_eq!(t.counts.sent, 10_030);
     }
 }

@@ -292,18 +292,19 @@ fn aligned(kind: &Spec, column: usize, text: String) -> Line<'static> {
 
 /// A responder's figures, each with whether it is bad news.
 fn figures(r: &RowView) -> Cells {
-    let loss = if r.sent == 0 {
+    let c = &r.counts;
+    let loss = if c.sent == 0 {
         0.0
     } else {
-        100.0 * r.lost as f64 / r.sent as f64
+        100.0 * c.lost as f64 / c.sent as f64
     };
     vec![
         (r.id.clone(), false),
-        (r.sent.to_string(), false),
-        (r.received.to_string(), false),
-        (format!("{loss:.1}"), r.lost > 0),
-        (r.late.to_string(), r.late > 0),
-        (r.duplicate.to_string(), false),
+        (c.sent.to_string(), false),
+        (c.received.to_string(), false),
+        (format!("{loss:.1}"), c.lost > 0),
+        (c.late.to_string(), c.late > 0),
+        (c.duplicate.to_string(), false),
         (ms(r.last_ms), false),
         (ms(r.p50_ms), false),
         (ms(r.p99_ms), false),
@@ -387,7 +388,7 @@ fn ellipsis(text: &str, max: usize) -> String {
 /// The strip of recent outcomes, or what was heard from a responder that
 /// never answered.
 fn recent(r: &RowView, width: u16) -> Cell<'static> {
-    match (&r.heard_as, r.received) {
+    match (&r.heard_as, r.counts.received) {
         (Some(heard), 0) => {
             let long = format!("heard ({heard}), no reply");
             let text = if long.chars().count() <= usize::from(width) {
@@ -404,7 +405,7 @@ fn recent(r: &RowView, width: u16) -> Cell<'static> {
 /// The recent outcomes, newest on the right, scaled between the lowest and
 /// highest RTT shown: `×` lost (red), `!` late (yellow).
 pub(super) fn strip(recent: &[Mark], width: usize) -> Line<'static> {
-    let shown = &recent[recent.len().saturating_sub(width)..];
+    let shown = newest(recent, width);
     let rtts = shown.iter().filter_map(|m| match m {
         Mark::Rtt(ns) => Some(*ns),
         _ => None,
@@ -414,14 +415,8 @@ pub(super) fn strip(recent: &[Mark], width: usize) -> Line<'static> {
     let spans: Vec<Span<'static>> = shown
         .iter()
         .map(|m| match *m {
-            Mark::Rtt(ns) => {
-                let level = if hi > lo {
-                    ((ns - lo) as f64 / (hi - lo) as f64 * 7.0).round() as usize
-                } else {
-                    0
-                };
-                Span::styled(BARS[level].to_string(), Style::new().fg(Color::Green))
-            }
+            Mark::Rtt(ns) if hi > lo => bar((ns - lo) as f64 / (hi - lo) as f64, Color::Green),
+            Mark::Rtt(_) => bar(0.0, Color::Green),
             Mark::Lost => Span::styled(
                 "×",
                 Style::new().fg(Color::Red).add_modifier(Modifier::BOLD),
@@ -436,7 +431,7 @@ pub(super) fn strip(recent: &[Mark], width: usize) -> Line<'static> {
 /// from none to the most frames shown, red where its sequence lost any,
 /// `·` a second without a frame.
 pub(super) fn seconds(recent: &[Second], width: usize) -> Line<'static> {
-    let shown = &recent[recent.len().saturating_sub(width)..];
+    let shown = newest(recent, width);
     let most = shown.iter().map(|s| s.frames).max().unwrap_or(0).max(1);
     let spans: Vec<Span<'static>> = shown
         .iter()
@@ -444,12 +439,22 @@ pub(super) fn seconds(recent: &[Second], width: usize) -> Line<'static> {
             if s.frames == 0 {
                 return Span::styled("·", Style::new().fg(Color::DarkGray));
             }
-            let level = (s.frames as f64 / most as f64 * 7.0).round() as usize;
             let colour = if s.lost { Color::Red } else { Color::Green };
-            Span::styled(BARS[level].to_string(), Style::new().fg(colour))
+            bar(s.frames as f64 / most as f64, colour)
         })
         .collect();
     Line::from(spans)
+}
+
+/// The last `width` of a strip's marks.
+fn newest<T>(recent: &[T], width: usize) -> &[T] {
+    &recent[recent.len().saturating_sub(width)..]
+}
+
+/// A bar `fraction` of the full height (0 to 1).
+fn bar(fraction: f64, colour: Color) -> Span<'static> {
+    let level = (fraction * 7.0).round() as usize;
+    Span::styled(BARS[level].to_string(), Style::new().fg(colour))
 }
 
 #[cfg(test)]

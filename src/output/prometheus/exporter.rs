@@ -54,6 +54,13 @@ pub(crate) fn borrow_all(links: &[SharedMetrics]) -> Vec<Ref<'_, Metrics>> {
     links.iter().map(SharedMetrics::get).collect()
 }
 
+/// The run's exposition of shared links, each borrowed while it is written.
+fn render_shared(links: &[SharedMetrics]) -> String {
+    let all = borrow_all(links);
+    let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();
+    render(&refs)
+}
+
 /// `--prometheus`: the run's links at `/metrics` while the run goes on.
 #[derive(Default)]
 pub struct PrometheusExporter {
@@ -76,12 +83,7 @@ impl PrometheusExporter {
         let links = self.links.clone();
         move |head: Head| -> Replying {
             let reply = match head.uri.path() {
-                "/metrics" => {
-                    let links = links.borrow();
-                    let all = borrow_all(&links);
-                    let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();
-                    Reply::metrics(render(&refs))
-                }
+                "/metrics" => Reply::metrics(render_shared(&links.borrow())),
                 "/" => Reply::text(StatusCode::OK, "mavping: metrics at /metrics\n"),
                 _ => Reply::text(StatusCode::NOT_FOUND, "not found\n"),
             };
@@ -91,10 +93,7 @@ impl PrometheusExporter {
 
     /// Every link as it is now, as `/metrics` would show it.
     pub(crate) fn render_now(&self) -> String {
-        let links = self.links.borrow();
-        let all = borrow_all(&links);
-        let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();
-        render(&refs)
+        render_shared(&self.links.borrow())
     }
 
     /// The reporter of the `index`-th link, served at the same address.

@@ -9,24 +9,30 @@ use crate::engine::summary::ProbeName;
 use crate::frame::SysComp;
 
 impl Metrics {
-    pub(super) fn labels(&self, id: SysComp) -> String {
-        format!(
-            "link=\"{}\",probe=\"{}\",sysid=\"{}\",compid=\"{}\"",
-            escape(&self.link),
-            self.probe.map_or("", ProbeName::as_str),
-            id.sysid,
-            id.compid
-        )
+    /// The link's own series: its state.
+    pub(super) fn link_labels(&self) -> String {
+        format!("link=\"{}\"", escape(&self.link))
     }
 
-    pub(super) fn radio_labels(&self, id: SysComp) -> String {
-        format!(
-            "link=\"{}\",sysid=\"{}\",compid=\"{}\"",
-            escape(&self.link),
-            id.sysid,
-            id.compid
-        )
+    /// What the link measures with: its requests and who answers them.
+    pub(super) fn probe_labels(&self) -> String {
+        let probe = self.probe.map_or("", ProbeName::as_str);
+        format!("{},probe=\"{probe}\"", self.link_labels())
     }
+
+    /// A responder's series.
+    pub(super) fn labels(&self, id: SysComp) -> String {
+        with_id(self.probe_labels(), id)
+    }
+
+    /// A radio's, a node's or a source's series: not the probe's.
+    pub(super) fn radio_labels(&self, id: SysComp) -> String {
+        with_id(self.link_labels(), id)
+    }
+}
+
+fn with_id(labels: String, id: SysComp) -> String {
+    format!("{labels},sysid=\"{}\",compid=\"{}\"", id.sysid, id.compid)
 }
 
 /// What a family's samples are, as its `TYPE` line says.
@@ -57,27 +63,19 @@ pub(super) struct Family {
 
 impl Family {
     pub(super) const fn gauge(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Gauge,
-        }
+        Family::of(FamilyKind::Gauge, name, help)
     }
 
     pub(super) const fn counter(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Counter,
-        }
+        Family::of(FamilyKind::Counter, name, help)
     }
 
     pub(super) const fn histogram(name: &'static str, help: &'static str) -> Self {
-        Family {
-            name,
-            help,
-            kind: FamilyKind::Histogram,
-        }
+        Family::of(FamilyKind::Histogram, name, help)
+    }
+
+    const fn of(kind: FamilyKind, name: &'static str, help: &'static str) -> Self {
+        Family { name, help, kind }
     }
 }
 
@@ -89,19 +87,19 @@ pub(super) struct Figure<V> {
 
 impl<V> Figure<V> {
     pub(super) const fn gauge(name: &'static str, help: &'static str, value: V) -> Self {
-        Figure {
-            family: Family::gauge(name, help),
-            value,
-        }
+        let family = Family::gauge(name, help);
+        Figure { family, value }
     }
 
     pub(super) const fn counter(name: &'static str, help: &'static str, value: V) -> Self {
-        Figure {
-            family: Family::counter(name, help),
-            value,
-        }
+        let family = Family::counter(name, help);
+        Figure { family, value }
     }
 }
+
+/// A figure of each series of a kind (`T`), left out where the series
+/// has none.
+pub(super) type SeriesFigure<T> = Figure<fn(&T) -> Option<f64>>;
 
 /// Text being written in the exposition format: a family's `HELP` and
 /// `TYPE` lines, then its samples.
@@ -136,6 +134,17 @@ impl Exposition {
         self.header(family);
         for (labels, value) in samples {
             self.sample(family.name, &labels, value);
+        }
+    }
+
+    /// Each figure of `table` as a family, with a sample for each of
+    /// `items` that has the figure: the shape of every per-series table.
+    pub(super) fn figures<'a, T: 'a, I>(&mut self, table: &[SeriesFigure<T>], items: impl Fn() -> I)
+    where
+        I: Iterator<Item = (String, &'a T)>,
+    {
+        for Figure { family, value } in table {
+            self.family(family, items().filter_map(|(l, x)| Some((l, value(x)?))));
         }
     }
 }

@@ -1,44 +1,17 @@
 //! LINK_NODE_STATUS as metrics: each node's own counts of the link (what
 //! it received, lost and sent, its parse errors and overflows) as counters
 //! that only grow since mavping first heard it, its loss ratio and rates
-//! as gauges. The node's own counters are since its boot and wrap; they
-//! are followed by the engine's [`NodeCounters`].
+//! as gauges. The node's own counters are since its boot and wrap; the
+//! engine's table of nodes ([`LinkNodes`]) follows them, and bounds how
+//! many nodes a link keeps.
+//!
+//! [`LinkNodes`]: crate::engine::link_node::LinkNodes
 
-use std::collections::BTreeMap;
-
-use super::exposition::{Exposition, Figure};
+use super::exposition::{Exposition, Figure, SeriesFigure};
 use super::Metrics;
-use crate::engine::link_node::{LinkNodeReport, NodeCounters, MAX_NODES};
-use crate::frame::SysComp;
+use crate::engine::link_node::LinkNodeSummary;
 
-/// One node: its reports, the latest, and its counters followed.
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct NodeSeries {
-    reports: u64,
-    latest: LinkNodeReport,
-    counters: NodeCounters,
-}
-
-/// Every node heard on a link, at most [`MAX_NODES`].
-#[derive(Debug, Clone, Default)]
-pub(super) struct Nodes(BTreeMap<SysComp, NodeSeries>);
-
-impl Nodes {
-    /// A LINK_NODE_STATUS from `id`.
-    pub(super) fn record(&mut self, id: SysComp, report: LinkNodeReport) {
-        if self.0.len() >= MAX_NODES && !self.0.contains_key(&id) {
-            return;
-        }
-        let node = self.0.entry(id).or_default();
-        node.reports += 1;
-        node.latest = report;
-        node.counters.record(&report);
-    }
-}
-
-type NodeFigure = Figure<fn(&NodeSeries) -> Option<f64>>;
-
-const NODE: [NodeFigure; 10] = [
+const NODE: [SeriesFigure<LinkNodeSummary>; 10] = [
     Figure::counter(
         "mavping_link_node_reports_total",
         "LINK_NODE_STATUS reports received from the node.",
@@ -47,66 +20,70 @@ const NODE: [NodeFigure; 10] = [
     Figure::counter(
         "mavping_link_node_received_total",
         "Messages the node says it received on its link since mavping first heard it (every sender's, ours included; its 32-bit counter's wraps and reboots followed).",
-        |n| Some(n.counters.received.grown() as f64),
+        |n| Some(n.received_delta as f64),
     ),
     Figure::counter(
         "mavping_link_node_lost_total",
         "Messages the node says it lost on its way to it (by their packet sequence) since mavping first heard it.",
-        |n| Some(n.counters.lost.grown() as f64),
+        |n| Some(n.lost_delta as f64),
     ),
     Figure::counter(
         "mavping_link_node_sent_total",
         "Messages the node says it sent on its link since mavping first heard it.",
-        |n| Some(n.counters.sent.grown() as f64),
+        |n| Some(n.sent_delta as f64),
     ),
     Figure::counter(
         "mavping_link_node_rx_parse_errors_total",
         "Bytes the node could not parse since mavping first heard it.",
-        |n| Some(n.counters.rx_parse_err.grown() as f64),
+        |n| Some(n.rx_parse_err_delta as f64),
     ),
     Figure::counter(
         "mavping_link_node_rx_overflows_total",
         "The node's receive buffer overflows since mavping first heard it.",
-        |n| Some(n.counters.rx_overflows.grown() as f64),
+        |n| Some(n.rx_overflows_delta as f64),
     ),
     Figure::counter(
         "mavping_link_node_tx_overflows_total",
         "The node's transmit buffer overflows since mavping first heard it.",
-        |n| Some(n.counters.tx_overflows.grown() as f64),
+        |n| Some(n.tx_overflows_delta as f64),
     ),
     Figure::gauge(
         "mavping_link_node_loss_ratio",
         "What the node lost of its link since mavping first heard it: lost / (received + lost), 0 to 1 (the vehicle's own view of the uplink).",
-        |n| n.counters.loss(),
+        |n| n.uplink_loss,
     ),
     Figure::gauge(
         "mavping_link_node_rx_rate_bytes_per_second",
         "The node's receive rate on its link, as its latest report says.",
-        |n| Some(f64::from(n.latest.rx_rate)),
+        |n| Some(f64::from(n.last.rx_rate)),
     ),
     Figure::gauge(
         "mavping_link_node_tx_rate_bytes_per_second",
         "The node's transmit rate on its link, as its latest report says.",
-        |n| Some(f64::from(n.latest.tx_rate)),
+        |n| Some(f64::from(n.last.tx_rate)),
     ),
 ];
 
-/// Every link's nodes, each family once.
+/// Every link's nodes, each family once: the figures the engine's table
+/// of nodes sums up for a run's end, as they are now.
 pub(super) fn write_link_nodes(out: &mut Exposition, links: &[&Metrics]) {
-    for Figure { family, value } in &NODE {
-        let nodes = links.iter().flat_map(|m| {
-            m.link_nodes
-                .0
-                .iter()
-                .filter_map(move |(id, n)| Some((m.radio_labels(*id), value(n)?)))
-        });
-        out.family(family, nodes);
-    }
+    let summaries: Vec<_> = links
+        .iter()
+        .map(|m| (m, m.link_nodes.summaries()))
+        .collect();
+    let nodes = || {
+        summaries
+            .iter()
+            .flat_map(|(m, nodes)| nodes.iter().map(|n| (m.radio_labels(n.id), n)))
+    };
+    out.figures(&NODE, nodes);
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::link_node::LinkNodeReport;
+    use crate::frame::SysComp;
 
     fn report(t: u64, received: u32, lost: u32) -> LinkNodeReport {
         LinkNodeReport {
@@ -129,7 +106,7 @@ mod tests {
         // 100 through the wrap, then a reboot (its clock went back): 40
         // more counted from 0.
         for (t, received, lost) in [(5_000, u32::MAX - 49, 7), (6_000, 50, 9), (300, 40, 0)] {
-            m.link_nodes.record(id, report(t, received, lost));
+            m.link_nodes.record(id, report(t, received, lost), 0);
         }
         let text = m.render();
         let l = r#"link="udpout:127.0.0.1:14550",sysid="1",compid="1""#;
@@ -143,14 +120,5 @@ mod tests {
         ] {
             assert!(text.lines().any(|t| t == line), "{line}\n{text}");
         }
-    }
-
-    #[test]
-    fn nodes_are_bounded() {
-        let mut nodes = Nodes::default();
-        for sysid in 0..=255u8 {
-            nodes.record(SysComp::new(sysid, 1), report(1, 1, 0));
-        }
-        assert_eq!(nodes.0.len(), MAX_NODES);
     }
 }

@@ -4,9 +4,10 @@
 use std::collections::BTreeMap;
 
 use super::radio_series::RadioSeries;
-use super::series::{Series, Split};
-use super::{link_node, sources};
+use super::series::{Outcome, Series, Split};
+use super::sources;
 use crate::engine::clock_offset::ClockSummary;
+use crate::engine::link_node::LinkNodes;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::StartInfo;
 use crate::engine::probe::command::CommandEvent;
@@ -26,7 +27,7 @@ pub(crate) struct Metrics {
     /// Each radio heard.
     pub(super) radios: BTreeMap<SysComp, RadioSeries>,
     /// Each node heard by its LINK_NODE_STATUS.
-    pub(super) link_nodes: link_node::Nodes,
+    pub(super) link_nodes: LinkNodes,
     /// Each source's packet sequence (a passive run's figures; an echo
     /// run's responders' downlink).
     pub(super) sources: sources::Sources,
@@ -61,10 +62,8 @@ impl Metrics {
     /// (so a link that never opens still shows `mavping_link_up 0`).
     pub(crate) fn continuous(link: &str, probe: ProbeName) -> Self {
         Metrics {
-            link: link.to_string(),
             probe: Some(probe),
-            state: Some(LinkState::default()),
-            ..Metrics::default()
+            ..Metrics::unopened(link)
         }
     }
 
@@ -125,64 +124,25 @@ impl Metrics {
     }
 
     pub(crate) fn on_event(&mut self, e: &MatchEvent) {
-        match *e {
-            MatchEvent::Reply { responder, rtt, .. } => {
-                let auto = self.probe == Some(ProbeName::Auto);
-                let s = self.responders.entry(responder).or_default();
-                s.decided(Some(rtt));
-                // PING until its clock says TIMESYNC (told with its first
-                // reply, in the same report).
-                if auto && s.via_timesync.is_none() {
-                    s.via_timesync = Some(0);
-                }
-            }
-            MatchEvent::Lost { responder, .. } => {
-                self.responders.entry(responder).or_default().decided(None);
-            }
-            // A late reply was already counted sent and lost when its
-            // timeout passed.
-            MatchEvent::Late { responder, .. } => {
-                let s = self.responders.entry(responder).or_default();
-                s.late += 1;
-                s.answering = true;
-            }
-            MatchEvent::Duplicate { responder, .. } => {
-                let s = self.responders.entry(responder).or_default();
-                s.duplicate += 1;
-                s.answering = true;
-            }
-            MatchEvent::Stale { .. } => {}
+        if let Some((id, outcome)) = Outcome::of_match(e) {
+            self.record(id, outcome);
         }
     }
 
-    /// `--probe command`: a command target is a responder whose requests
-    /// are commands; acknowledged is received, failed is lost, and the
-    /// time to ACK its RTT.
     pub(crate) fn on_command(&mut self, e: &CommandEvent) {
-        match *e {
-            CommandEvent::Acked {
-                target,
-                time_to_ack,
-                ..
-            } => self
-                .responders
-                .entry(target)
-                .or_default()
-                .decided(Some(time_to_ack)),
-            CommandEvent::Failed { target, .. } => {
-                self.responders.entry(target).or_default().decided(None);
-            }
-            CommandEvent::LateAck { from, .. } => {
-                let s = self.responders.entry(from).or_default();
-                s.late += 1;
-                s.answering = true;
-            }
-            CommandEvent::DuplicateAck { from, .. } => {
-                let s = self.responders.entry(from).or_default();
-                s.duplicate += 1;
-                s.answering = true;
-            }
-            CommandEvent::Send { .. } | CommandEvent::Skipped { .. } => {}
+        if let Some((id, outcome)) = Outcome::of_command(e) {
+            self.record(id, outcome);
+        }
+    }
+
+    fn record(&mut self, id: SysComp, outcome: Outcome) {
+        let auto = self.probe == Some(ProbeName::Auto);
+        let s = self.responders.entry(id).or_default();
+        s.record(outcome);
+        // PING until its clock says TIMESYNC (told with its first reply,
+        // in the same report).
+        if auto && matches!(outcome, Outcome::Received(_)) && s.via_timesync.is_none() {
+            s.via_timesync = Some(0);
         }
     }
 

@@ -45,6 +45,7 @@ pub(crate) use exporter::borrow_all;
 pub use exporter::{PrometheusExporter, SharedMetrics};
 pub(crate) use metrics::Metrics;
 pub(crate) use render::{render_probe, render_serve, Health, ProbeResult};
+pub(crate) use series::Outcome;
 
 impl Reporter for Metrics {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
@@ -70,11 +71,11 @@ impl Reporter for Metrics {
     fn link_node(
         &mut self,
         id: SysComp,
-        _: Nanos,
+        at: Nanos,
         report: &LinkNodeReport,
         _: bool,
     ) -> io::Result<()> {
-        self.link_nodes.record(id, *report);
+        self.link_nodes.record(id, *report, at);
         Ok(())
     }
 

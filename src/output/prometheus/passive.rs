@@ -4,7 +4,7 @@
 //! and an echo run's loss by direction per responder
 //! (`mavping_direction_*`), split by the summary's own formula.
 
-use super::exposition::{Exposition, Family, Figure};
+use super::exposition::{Exposition, Family, Figure, SeriesFigure};
 use super::sources::{Figures, SourceSeries};
 use super::Metrics;
 use crate::engine::summary::{Direction, ProbeName};
@@ -80,10 +80,7 @@ const SOURCE_COUNTS: [SourceCount; 10] = [
     ),
 ];
 
-/// A source's gauge; a series without the figure is left out.
-type SourceGauge = Figure<fn(&SourceSeries) -> Option<f64>>;
-
-const SOURCE_GAUGES: [SourceGauge; 5] = [
+const SOURCE_GAUGES: [SeriesFigure<SourceSeries>; 5] = [
     Figure::gauge(
         "mavping_source_lost_pending",
         "Frames counted lost that may still arrive late and be reordered (within 127 of the latest frame, outside a silence): not in mavping_source_lost_total yet.",
@@ -126,9 +123,7 @@ pub(super) fn write_sources(out: &mut Exposition, links: &[&Metrics]) {
     for Figure { family, value } in &SOURCE_COUNTS {
         out.family(family, series().map(|(l, s)| (l, value(&s.counters()))));
     }
-    for Figure { family, value } in &SOURCE_GAUGES {
-        out.family(family, series().filter_map(|(l, s)| Some((l, value(s)?))));
-    }
+    out.figures(&SOURCE_GAUGES, series);
 }
 
 const DIRECTION_LOSS: Family = Family::gauge(

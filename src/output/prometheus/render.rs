@@ -5,7 +5,7 @@
 
 use std::fmt::Write as _;
 
-use super::exposition::{escape, Exposition, Family, Figure};
+use super::exposition::{Exposition, Family, Figure, SeriesFigure};
 use super::link_node::write_link_nodes;
 use super::passive::{write_directions, write_sources};
 use super::radio_series::RadioSeries;
@@ -47,31 +47,31 @@ const COUNTS: [Count; 5] = [
         run: "mavping_sent_total",
         probe: "mavping_probe_sent",
         help: "Requests in the responder's window whose fate is decided (received + lost).",
-        value: |s| s.decided,
+        value: |s| s.counts.sent,
     },
     Count {
         run: "mavping_received_total",
         probe: "mavping_probe_received",
         help: "Replies received within the timeout.",
-        value: |s| s.received,
+        value: |s| s.counts.received,
     },
     Count {
         run: "mavping_lost_total",
         probe: "mavping_probe_lost",
         help: "Requests not answered within the timeout.",
-        value: |s| s.lost,
+        value: |s| s.counts.lost,
     },
     Count {
         run: "mavping_late_total",
         probe: "mavping_probe_late",
         help: "First replies after the timeout (each also counted lost).",
-        value: |s| s.late,
+        value: |s| s.counts.late,
     },
     Count {
         run: "mavping_duplicate_total",
         probe: "mavping_probe_duplicate",
         help: "Second and later replies to the same request.",
-        value: |s| s.duplicate,
+        value: |s| s.counts.duplicate,
     },
 ];
 
@@ -90,10 +90,7 @@ fn rtt_histogram(scope: Scope) -> Family {
     Family::histogram(name, "Round-trip time of replies within the timeout.")
 }
 
-/// A per-responder gauge; a series without the figure is left out.
-type Gauge = Figure<fn(&Series) -> Option<f64>>;
-
-const GAUGES: [Gauge; 5] = [
+const GAUGES: [SeriesFigure<Series>; 5] = [
     Figure::gauge(
         "mavping_last_rtt_seconds",
         "Round-trip time of the latest reply within the timeout.",
@@ -121,10 +118,7 @@ const GAUGES: [Gauge; 5] = [
     ),
 ];
 
-/// A radio's figure (`None`: left out).
-type RadioFigure = Figure<fn(&RadioSeries) -> Option<f64>>;
-
-const RADIO: [RadioFigure; 15] = [
+const RADIO: [SeriesFigure<RadioSeries>; 15] = [
     // Written apart, with its extra label.
     Figure::gauge(
         "mavping_radio_info",
@@ -242,14 +236,10 @@ const RESPONDERS: Family = Family::gauge(
 /// Each link's requests and responders, by link and probe.
 fn write_senders(out: &mut Exposition, links: &[&Metrics]) {
     let senders = || {
-        links.iter().filter(|m| m.sends()).map(|m| {
-            let labels = format!(
-                "link=\"{}\",probe=\"{}\"",
-                escape(&m.link),
-                m.probe.map_or("", |p| p.as_str())
-            );
-            (labels, *m)
-        })
+        links
+            .iter()
+            .filter(|m| m.sends())
+            .map(|m| (m.probe_labels(), *m))
     };
     out.family(&REQUESTS, senders().map(|(l, m)| (l, m.requests.total())));
     out.family(&RESPONDERS, senders().map(|(l, m)| (l, m.answering())));
@@ -297,27 +287,18 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
             );
         }
         out.sample(&format!("{name}_sum"), &labels, s.rtt_sum_s);
-        out.sample(&format!("{name}_count"), &labels, s.received);
+        out.sample(&format!("{name}_count"), &labels, s.counts.received);
     }
-    for Figure { family, value } in &GAUGES {
-        out.family(family, series().filter_map(|(l, s)| Some((l, value(s)?))));
-    }
+    out.figures(&GAUGES, series);
+    let radios = || {
+        links
+            .iter()
+            .flat_map(|m| m.radios.iter().map(move |(id, r)| (m.radio_labels(*id), r)))
+    };
     let (info, figures) = RADIO.split_first().expect("the info family");
-    let infos = links.iter().flat_map(|m| {
-        m.radios.iter().map(move |(id, r)| {
-            let labels = format!("{},kind=\"{}\"", m.radio_labels(*id), kind_label(r.kind));
-            (labels, 1)
-        })
-    });
-    out.family(&info.family, infos);
-    for Figure { family, value } in figures {
-        let radios = links.iter().flat_map(|m| {
-            m.radios
-                .iter()
-                .filter_map(move |(id, r)| Some((m.radio_labels(*id), value(r)?)))
-        });
-        out.family(family, radios);
-    }
+    let kind = |l, r: &RadioSeries| (format!("{l},kind=\"{}\"", kind_label(r.kind)), 1);
+    out.family(&info.family, radios().map(|(l, r)| kind(l, r)));
+    out.figures(figures, radios);
     write_link_nodes(out, links);
     write_directions(out, links);
     write_sources(out, links);
@@ -343,27 +324,28 @@ const LINK_RESTARTS: Family = Family::counter(
 /// The exposition of one or several links of a run (`--prometheus`).
 pub(crate) fn render(links: &[&Metrics]) -> String {
     let mut out = Exposition::default();
-    out.family(
-        &RUN_LINK_UP,
-        links.iter().filter_map(|m| {
-            let state = m.state?;
-            Some((format!("link=\"{}\"", escape(&m.link)), u8::from(state.up)))
-        }),
-    );
+    write_link_states(&mut out, links, &RUN_LINK_UP, None);
     write_links(&mut out, links, Scope::Run);
     out.0
 }
 
-/// The continuous links' state (`mavping serve`).
-fn write_link_states(out: &mut Exposition, links: &[&Metrics]) {
+/// Each link's state: whether it is up, and (`mavping serve`'s
+/// continuous links) how often it was reopened.
+fn write_link_states(
+    out: &mut Exposition,
+    links: &[&Metrics],
+    up: &Family,
+    restarts: Option<&Family>,
+) {
     let states = || {
-        links.iter().filter_map(|m| {
-            let state = m.state?;
-            Some((format!("link=\"{}\"", escape(&m.link)), state))
-        })
+        links
+            .iter()
+            .filter_map(|m| Some((m.link_labels(), m.state?)))
     };
-    out.family(&SERVE_LINK_UP, states().map(|(l, s)| (l, u8::from(s.up))));
-    out.family(&LINK_RESTARTS, states().map(|(l, s)| (l, s.restarts)));
+    out.family(up, states().map(|(l, s)| (l, u8::from(s.up))));
+    if let Some(restarts) = restarts {
+        out.family(restarts, states().map(|(l, s)| (l, s.restarts)));
+    }
 }
 
 /// What `mavping serve` says about itself at `/metrics`.
@@ -435,7 +417,7 @@ pub(crate) fn render_serve(links: &[&Metrics], health: &Health) -> String {
     for Figure { family, value } in &HEALTH {
         out.family(family, [(String::new(), value(health))]);
     }
-    write_link_states(&mut out, links);
+    write_link_states(&mut out, links, &SERVE_LINK_UP, Some(&LINK_RESTARTS));
     write_links(&mut out, links, Scope::Run);
     out.0
 }

@@ -3,8 +3,11 @@
 //! direction).
 
 use super::sources::SourceSeries;
+use crate::engine::matcher::{Counts, MatchEvent};
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::summary::Direction;
 use crate::engine::Nanos;
+use crate::frame::SysComp;
 
 /// Upper bounds of the RTT histogram, in seconds: from loopback (sub-ms)
 /// to a congested 57600-baud radio (seconds).
@@ -12,15 +15,69 @@ pub(crate) const BUCKETS_S: [f64; 14] = [
     0.000_5, 0.001, 0.002_5, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0,
 ];
 
+/// What one event told of a responder's requests. The exporter and the
+/// live view count the same events the same way, in the matcher's own
+/// [`Counts`] (whose `sent` is the requests decided: received + lost).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Outcome {
+    /// Answered within the timeout, in this RTT.
+    Received(Nanos),
+    Lost,
+    /// A first reply after the timeout: the request was counted lost then.
+    Late,
+    Duplicate,
+}
+
+impl Outcome {
+    /// An echo probe's event, and whose; a stale reply tells nothing.
+    pub(crate) fn of_match(e: &MatchEvent) -> Option<(SysComp, Outcome)> {
+        Some(match *e {
+            MatchEvent::Reply { responder, rtt, .. } => (responder, Outcome::Received(rtt)),
+            MatchEvent::Lost { responder, .. } => (responder, Outcome::Lost),
+            MatchEvent::Late { responder, .. } => (responder, Outcome::Late),
+            MatchEvent::Duplicate { responder, .. } => (responder, Outcome::Duplicate),
+            MatchEvent::Stale { .. } => return None,
+        })
+    }
+
+    /// `--probe command`: a command target is a responder whose requests
+    /// are commands; acknowledged is received, failed is lost, and the
+    /// time to ACK its RTT.
+    pub(crate) fn of_command(e: &CommandEvent) -> Option<(SysComp, Outcome)> {
+        Some(match *e {
+            CommandEvent::Acked {
+                target,
+                time_to_ack,
+                ..
+            } => (target, Outcome::Received(time_to_ack)),
+            CommandEvent::Failed { target, .. } => (target, Outcome::Lost),
+            CommandEvent::LateAck { from, .. } => (from, Outcome::Late),
+            CommandEvent::DuplicateAck { from, .. } => (from, Outcome::Duplicate),
+            CommandEvent::Send { .. } | CommandEvent::Skipped { .. } => return None,
+        })
+    }
+
+    pub(crate) fn count(self, counts: &mut Counts) {
+        match self {
+            Outcome::Received(_) => {
+                counts.sent += 1;
+                counts.received += 1;
+            }
+            Outcome::Lost => {
+                counts.sent += 1;
+                counts.lost += 1;
+            }
+            Outcome::Late => counts.late += 1,
+            Outcome::Duplicate => counts.duplicate += 1,
+        }
+    }
+}
+
 #[derive(Debug, Default, Clone)]
 pub(super) struct Series {
-    /// Requests whose fate is decided (received + lost): what
-    /// `mavping_sent_total` exports, not the matcher's `sent`.
-    pub(super) decided: u64,
-    pub(super) received: u64,
-    pub(super) lost: u64,
-    pub(super) late: u64,
-    pub(super) duplicate: u64,
+    /// Counted from the events; only `sent` (the requests decided),
+    /// `received`, `lost`, `late` and `duplicate` are kept.
+    pub(super) counts: Counts,
     /// Non-cumulative counts per bucket; the last one is +Inf.
     pub(super) buckets: [u64; BUCKETS_S.len() + 1],
     pub(super) rtt_sum_s: f64,
@@ -59,20 +116,16 @@ impl Series {
         self.last_rtt_s = Some(s);
     }
 
-    pub(super) fn decided(&mut self, received: Option<Nanos>) {
-        self.decided += 1;
-        match received {
-            Some(rtt) => {
-                self.answering = true;
-                self.received += 1;
-                self.observe(rtt);
-            }
-            None => self.lost += 1,
+    pub(super) fn record(&mut self, outcome: Outcome) {
+        outcome.count(&mut self.counts);
+        self.answering |= outcome != Outcome::Lost;
+        if let Outcome::Received(rtt) = outcome {
+            self.observe(rtt);
         }
     }
 
     pub(super) fn loss_ratio(&self) -> Option<f64> {
-        (self.decided > 0).then(|| self.lost as f64 / self.decided as f64)
+        (self.counts.sent > 0).then(|| self.counts.loss_ratio())
     }
 
     /// Its loss by direction, from its requests and its own frames'
@@ -81,7 +134,7 @@ impl Series {
         match self.split {
             Split::AtEnd(at_end) => at_end,
             Split::Live => {
-                Direction::of_sequence(self.loss_ratio()?, self.decided, &downlink?.seq())
+                Direction::of_sequence(self.loss_ratio()?, self.counts.sent, &downlink?.seq())
             }
         }
     }

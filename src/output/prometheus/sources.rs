@@ -33,8 +33,8 @@ pub(super) struct Figures {
 }
 
 impl Figures {
-    fn of(s: &SourceSummary, ended: bool) -> Self {
-        let pending = if ended { 0 } else { s.lost_pending };
+    /// `pending`: the losses a late frame may still fill.
+    fn of(s: &SourceSummary, pending: u64) -> Self {
         Figures {
             seq: s.counts,
             lost_settled: s.counts.lost.saturating_sub(pending),
@@ -50,7 +50,16 @@ impl Figures {
     /// (an ongoing silence measured to a tick can end a little before it,
     /// by a frame read after the tick but stamped before).
     fn max(self, o: Figures) -> Figures {
-        let seq = |f: fn(&SeqCounts) -> u64| f(&self.seq).max(f(&o.seq));
+        self.zip(o, u64::max)
+    }
+
+    fn plus(self, o: Figures) -> Figures {
+        self.zip(o, u64::saturating_add)
+    }
+
+    /// `f` of the two, field by field.
+    fn zip(self, o: Figures, f: fn(u64, u64) -> u64) -> Figures {
+        let seq = |g: fn(&SeqCounts) -> u64| f(g(&self.seq), g(&o.seq));
         Figures {
             seq: SeqCounts {
                 received: seq(|c| c.received),
@@ -60,24 +69,12 @@ impl Figures {
                 reordered: seq(|c| c.reordered),
                 resyncs: seq(|c| c.resyncs),
             },
-            lost_settled: self.lost_settled.max(o.lost_settled),
-            bytes: self.bytes.max(o.bytes),
-            silences: self.silences.max(o.silences),
-            silence_ns: self.silence_ns.max(o.silence_ns),
-            pymav_count: self.pymav_count.max(o.pymav_count),
-            pymav_loss: self.pymav_loss.max(o.pymav_loss),
-        }
-    }
-
-    fn plus(self, o: Figures) -> Figures {
-        Figures {
-            seq: add_seq(self.seq, o.seq),
-            lost_settled: self.lost_settled + o.lost_settled,
-            bytes: self.bytes.saturating_add(o.bytes),
-            silences: self.silences + o.silences,
-            silence_ns: self.silence_ns.saturating_add(o.silence_ns),
-            pymav_count: self.pymav_count + o.pymav_count,
-            pymav_loss: self.pymav_loss + o.pymav_loss,
+            lost_settled: f(self.lost_settled, o.lost_settled),
+            bytes: f(self.bytes, o.bytes),
+            silences: f(self.silences, o.silences),
+            silence_ns: f(self.silence_ns, o.silence_ns),
+            pymav_count: f(self.pymav_count, o.pymav_count),
+            pymav_loss: f(self.pymav_loss, o.pymav_loss),
         }
     }
 
@@ -89,10 +86,6 @@ impl Figures {
             ..self
         }
     }
-}
-
-fn add_seq(a: SeqCounts, b: SeqCounts) -> SeqCounts {
-    a.plus(&b)
 }
 
 /// The latest table's figures that are not counters.
@@ -119,12 +112,13 @@ pub(super) struct SourceSeries {
 
 impl SourceSeries {
     fn update(&mut self, s: &SourceSummary, ended: bool) {
-        let figures = Figures::of(s, ended);
+        let pending = if ended { 0 } else { s.lost_pending };
+        let figures = Figures::of(s, pending);
         self.radio = s.radio;
         self.shown = self.shown.max(figures);
         self.latest = Some(Latest {
             figures,
-            pending: if ended { 0 } else { s.lost_pending },
+            pending,
             frames_per_s: s.frames_per_s,
             silent: s.silences.last().is_some_and(|x| x.ongoing),
         });
@@ -143,22 +137,16 @@ impl SourceSeries {
         self.carried.plus(self.shown)
     }
 
-    /// The sequence as last told, earlier sessions included (a ratio's
+    /// The figures as last told, earlier sessions included (a ratio's
     /// or the direction split's input: `lost` is not settled).
-    pub(super) fn seq(&self) -> SeqCounts {
-        let latest = self.latest.map_or(SeqCounts::default(), |l| l.figures.seq);
-        add_seq(self.carried.seq, latest)
+    fn told(&self) -> Figures {
+        let latest = self.latest.map_or(Figures::default(), |l| l.figures);
+        self.carried.plus(latest)
     }
 
-    /// pymavlink's count and loss, earlier sessions included.
-    fn pymav(&self) -> (u64, u64) {
-        let (count, loss) = self
-            .latest
-            .map_or((0, 0), |l| (l.figures.pymav_count, l.figures.pymav_loss));
-        (
-            self.carried.pymav_count + count,
-            self.carried.pymav_loss + loss,
-        )
+    /// The sequence as last told, earlier sessions included.
+    pub(super) fn seq(&self) -> SeqCounts {
+        self.told().seq
     }
 
     /// Lost over the numbers the sequence accounts for.
@@ -170,7 +158,8 @@ impl SourceSeries {
 
     /// pymavlink's `packet_loss()`, as a ratio: loss over count + loss.
     pub(super) fn pymav_loss_ratio(&self) -> Option<f64> {
-        let (count, loss) = self.pymav();
+        let told = self.told();
+        let (count, loss) = (told.pymav_count, told.pymav_loss);
         (count + loss > 0).then(|| loss as f64 / (count + loss) as f64)
     }
 
