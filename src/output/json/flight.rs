@@ -81,7 +81,7 @@ pub(super) struct Summary<'a> {
 #[derive(Serialize)]
 #[serde(untagged)]
 pub(super) enum FlightLine<'a> {
-    Window(Window<'a>),
+    Window(Box<Window<'a>>),
     Span(Timed),
 }
 
@@ -119,7 +119,7 @@ impl Lines {
 
     pub(super) fn flight_event<'a>(&self, e: &'a FlightEvent) -> FlightLine<'a> {
         match e {
-            FlightEvent::Window(w) => FlightLine::Window(self.flight_window(w)),
+            FlightEvent::Window(w) => FlightLine::Window(Box::new(self.flight_window(w))),
             FlightEvent::Silence(s) => FlightLine::Span(self.flight_span("flight_silence", s)),
             FlightEvent::Burst(b) => FlightLine::Span(self.flight_span("flight_burst", b)),
         }
