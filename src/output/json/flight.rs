@@ -77,14 +77,6 @@ pub(super) struct Summary<'a> {
     bursts: Vec<Timed>,
 }
 
-/// The line of a flight event: a window, a silence or a burst.
-#[derive(Serialize)]
-#[serde(untagged)]
-pub(super) enum FlightLine<'a> {
-    Window(Box<Window<'a>>),
-    Span(Timed),
-}
-
 impl Lines {
     pub(super) fn flight_window<'a>(&self, w: &'a FlightWindow) -> Window<'a> {
         Window {
@@ -117,14 +109,6 @@ impl Lines {
         }
     }
 
-    pub(super) fn flight_event<'a>(&self, e: &'a FlightEvent) -> FlightLine<'a> {
-        match e {
-            FlightEvent::Window(w) => FlightLine::Window(Box::new(self.flight_window(w))),
-            FlightEvent::Silence(s) => FlightLine::Span(self.flight_span("flight_silence", s)),
-            FlightEvent::Burst(b) => FlightLine::Span(self.flight_span("flight_burst", b)),
-        }
-    }
-
     pub(super) fn flight_summary<'a>(&self, f: &'a FlightSummary) -> Summary<'a> {
         let spans = |kind, v: &[Span]| v.iter().map(|s| self.flight_span(kind, s)).collect();
         Summary {
@@ -149,6 +133,19 @@ impl Lines {
 }
 
 impl<W: Write> JsonReporter<W> {
+    /// The line of a window closed, or of a silence or burst ended.
+    pub(super) fn flight_line(&mut self, e: &FlightEvent) -> io::Result<()> {
+        match e {
+            FlightEvent::Window(w) => self.event_line(Some(self.lines.flight_window(w)), false),
+            FlightEvent::Silence(s) => {
+                self.event_line(Some(self.lines.flight_span("flight_silence", s)), false)
+            }
+            FlightEvent::Burst(b) => {
+                self.event_line(Some(self.lines.flight_span("flight_burst", b)), false)
+            }
+        }
+    }
+
     /// The log's last, partial, window and the burst still on when it
     /// ended, just before the summary (not with `-q`).
     pub(super) fn flight_ends(&mut self, f: &FlightSummary) -> io::Result<()> {

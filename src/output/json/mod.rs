@@ -81,7 +81,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
     }
 
     fn flight(&mut self, event: &FlightEvent) -> io::Result<()> {
-        self.event_line(Some(self.lines.flight_event(event)), false)
+        self.flight_line(event)
     }
 
     fn flush(&mut self) -> io::Result<()> {
