@@ -5,9 +5,9 @@
 use std::collections::BTreeMap;
 
 use super::flight::{self, FlightTrack};
-use super::frame::PlotError;
+use super::frame::{self, PlotError};
 use super::passive::{self, SourceTrack};
-use super::{draw, style, sweep};
+use super::{draw, sweep};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::ResponderSummary;
@@ -146,11 +146,12 @@ impl PlotData {
         }
     }
 
-    /// The plot's title: the link, or how many.
-    pub(super) fn title(&self) -> String {
+    /// The plot's title: `kind` (as the command line names it) and the
+    /// link, or how many.
+    fn title(&self, kind: &str) -> String {
         match self.links.as_slice() {
-            [one] => format!("mavping {one}"),
-            several => format!("mavping, {} links", several.len()),
+            [one] => format!("mavping{kind} {one}"),
+            several => format!("mavping{kind}, {} links", several.len()),
         }
     }
 
@@ -191,48 +192,20 @@ impl PlotData {
             return flight::svg(&flight::title(name, track), track);
         }
         if !self.sources.is_empty() {
-            return self.passive_svg();
+            let entries = frame::entries(&self.sources, |(link, id), track| {
+                let radio = if track.is_radio() { " (radio)" } else { "" };
+                format!("{}{radio}", self.label(link, id))
+            });
+            return passive::svg(&self.title(" --passive"), &entries);
         }
         if self.sweeps.is_empty() {
-            return draw::svg(self);
+            let entries = frame::entries(&self.tracks, |(link, id), _| self.label(link, id));
+            return draw::svg(&self.title(""), &entries);
         }
-        let entries: Vec<sweep::SweepEntry<'_>> = self
-            .sweeps
-            .iter()
-            .enumerate()
-            .map(|(n, (&link, s))| sweep::SweepEntry {
-                label: self.links.get(link).cloned().unwrap_or_default(),
-                look: style::Look::nth(n),
-                sweep: s,
-            })
-            .collect();
-        let title = match self.links.as_slice() {
-            [one] => format!("mavping sweep {one}"),
-            several => format!("mavping sweep, {} links", several.len()),
-        };
-        sweep::svg(&title, &entries)
-    }
-
-    /// A passive run: each source's rate and loss over time.
-    fn passive_svg(&self) -> Result<String, PlotError> {
-        let entries: Vec<passive::SourceEntry<'_>> = self
-            .sources
-            .iter()
-            .enumerate()
-            .map(|(n, (&(link, id), track))| {
-                let radio = if track.is_radio() { " (radio)" } else { "" };
-                passive::SourceEntry {
-                    label: format!("{}{radio}", self.label(link, id)),
-                    look: style::Look::nth(n),
-                    track,
-                }
-            })
-            .collect();
-        let title = match self.links.as_slice() {
-            [one] => format!("mavping --passive {one}"),
-            several => format!("mavping --passive, {} links", several.len()),
-        };
-        passive::svg(&title, &entries)
+        let entries = frame::entries(&self.sweeps, |link, _| {
+            self.links.get(link).cloned().unwrap_or_default()
+        });
+        sweep::svg(&self.title(" sweep"), &entries)
     }
 
     /// A link's sweep, drawn instead of its RTT over time.

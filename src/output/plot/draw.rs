@@ -9,11 +9,8 @@ use plotters::coord::ranged1d::ValueFormatter;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::data::{bin, bin_low_ms, PlotData, Track, BINS_PER_DECADE};
-use super::frame::{
-    self, Area, DrawResult, Layout, LegendRow, PlotError, FONT, MARGIN, ROW_H, TITLE_H,
-};
-use super::style::Look;
+use super::data::{bin, bin_low_ms, Track, BINS_PER_DECADE};
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT, MARGIN};
 use crate::engine::Nanos;
 
 const TIME_H: u32 = 300;
@@ -68,54 +65,33 @@ pub(super) fn log_ticks(from: f64, to: f64) -> Vec<f64> {
     (first..=last).map(|k| k as f64 * step).collect()
 }
 
-/// One responder, in drawing order.
-struct Entry<'a> {
-    label: String,
-    look: Look,
-    track: &'a Track,
-}
-
-pub(super) fn svg(data: &PlotData) -> Result<String, PlotError> {
-    let entries: Vec<Entry<'_>> = data
-        .tracks
-        .iter()
-        .enumerate()
-        .map(|(n, (&(link, id), track))| Entry {
-            label: data.label(link, id),
-            look: Look::nth(n),
-            track,
-        })
-        .collect();
-    let title = data.title();
-    let layout = Layout::new(
-        &title,
-        "responder",
-        entries.iter().map(|e| e.label.as_str()),
-        4,
-        NUMBER_W,
-    );
-    let rows = entries.len().max(1) as u32;
-    let height = TITLE_H + TIME_H + LANE_H * rows + LANES_AXIS_H + DIST_H + ROW_H * (rows + 1) + 20;
-    frame::svg(&title, &layout, height, |area| {
-        draw(&entries, area, &layout)
+pub(super) fn svg(title: &str, entries: &[Entry<'_, Track>]) -> Result<String, PlotError> {
+    let rows = frame::rows(entries, |t| {
+        let f = t.figures;
+        vec![
+            f.map(|f| f.sent.to_string()),
+            f.map(|f| format!("{:.2}", f.loss_pct)),
+            f.and_then(|f| f.p50_ms).map(|v| format!("{v:.3}")),
+            f.and_then(|f| f.p99_ms).map(|v| format!("{v:.3}")),
+        ]
+    });
+    let legend = Legend {
+        heads: ("responder", &["sent", "loss %", "p50 ms", "p99 ms"]),
+        number_w: NUMBER_W,
+        rows,
+        empty: "no responder answered",
+    };
+    let lanes = LANE_H * entries.len().max(1) as u32 + LANES_AXIS_H;
+    frame::page(title, &legend, &[TIME_H, lanes, DIST_H], |areas| {
+        let t_max = entries
+            .iter()
+            .map(|e| e.track.spans.len() as f64 * e.track.span_ns as f64 / 1e9)
+            .reduce(f64::max)
+            .unwrap_or(1.0);
+        over_time(entries, &areas[0], t_max)?;
+        losses(entries, &areas[1], t_max)?;
+        distribution_chart(entries, &areas[2])
     })
-}
-
-fn draw(entries: &[Entry<'_>], rest: &Area<'_>, layout: &Layout) -> DrawResult {
-    let rows = entries.len().max(1) as u32;
-    let (time, rest) = rest.split_vertically(TIME_H);
-    let (lanes, rest) = rest.split_vertically(LANE_H * rows + LANES_AXIS_H);
-    let (distribution, legend) = rest.split_vertically(DIST_H);
-
-    let t_max = entries
-        .iter()
-        .map(|e| e.track.spans.len() as f64 * e.track.span_ns as f64 / 1e9)
-        .reduce(f64::max)
-        .unwrap_or(1.0);
-    over_time(entries, &time, t_max)?;
-    losses(entries, &lanes, t_max)?;
-    distribution_chart(entries, &distribution)?;
-    legend_table(entries, &legend, layout)
 }
 
 fn axis_font() -> TextStyle<'static> {
@@ -127,7 +103,7 @@ pub(super) fn caption_font() -> TextStyle<'static> {
 }
 
 /// Each responder's mean RTT per span, one line each.
-fn over_time(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
+fn over_time(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResult {
     let rtt_max = entries
         .iter()
         .flat_map(|e| e.track.spans.iter().filter(|s| s.replies > 0))
@@ -192,7 +168,7 @@ fn at(t: &Track, i: usize) -> f64 {
 
 /// A row per responder, in legend order, with its marker where a span lost
 /// a request; it carries the time axis of the chart above.
-fn losses(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
+fn losses(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResult {
     let n = entries.len().max(1);
     let mut chart = ChartBuilder::on(area)
         .margin(MARGIN)
@@ -230,7 +206,7 @@ fn losses(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
 
 /// Each responder's share of replies per RTT bin, as a step outline so
 /// several stay readable overlaid.
-fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
+fn distribution_chart(entries: &[Entry<'_, Track>], area: &Area<'_>) -> DrawResult {
     let used: Vec<usize> = entries
         .iter()
         .flat_map(|e| e.track.bins.iter().enumerate().filter(|(_, &c)| c > 0))
@@ -279,35 +255,6 @@ fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
         }
     }
     Ok(())
-}
-
-/// The legend: a row per responder with its line and marker, its label
-/// and the run's figures for it.
-fn legend_table(entries: &[Entry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let rows: Vec<LegendRow<'_>> = entries
-        .iter()
-        .map(|e| {
-            let f = e.track.figures;
-            LegendRow {
-                look: e.look,
-                label: &e.label,
-                cells: vec![
-                    f.map(|f| f.sent.to_string()),
-                    f.map(|f| format!("{:.2}", f.loss_pct)),
-                    f.and_then(|f| f.p50_ms).map(|v| format!("{v:.3}")),
-                    f.and_then(|f| f.p99_ms).map(|v| format!("{v:.3}")),
-                ],
-            }
-        })
-        .collect();
-    let columns = ["sent", "loss %", "p50 ms", "p99 ms"];
-    frame::legend(
-        area,
-        layout,
-        ("responder", &columns),
-        &rows,
-        "no responder answered",
-    )
 }
 
 #[cfg(test)]

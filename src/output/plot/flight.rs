@@ -12,7 +12,7 @@ use plotters::prelude::*;
 
 use super::data::SPANS;
 use super::draw::{caption_font, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Layout, LegendRow, PlotError, MARGIN, ROW_H, TITLE_H};
+use super::frame::{self, Area, DrawResult, Legend, LegendRow, PlotError, MARGIN};
 use super::style::Look;
 use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, DEFAULT_WINDOW_NS};
 
@@ -160,22 +160,46 @@ impl FlightTrack {
     }
 }
 
+/// Three rows in the legend, a line each: its figure over the whole log,
+/// and the lowest and highest of its spans.
 pub(super) fn svg(title: &str, track: &FlightTrack) -> Result<String, PlotError> {
-    let labels = ["loss (%)", "rssi", "remote rssi"];
-    let layout = Layout::new(title, "", labels.into_iter(), 3, NUMBER_W);
-    let height = TITLE_H + LOSS_H + RSSI_H + RANGE_H + ROW_H * 4 + 20;
-    frame::svg(title, &layout, height, |area| draw(track, area, &layout))
-}
-
-fn draw(track: &FlightTrack, area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let (loss, rest) = area.split_vertically(LOSS_H);
-    let (rssi, rest) = rest.split_vertically(RSSI_H);
-    let (range, legend) = rest.split_vertically(RANGE_H);
-    let t_max = track.time.end().max(1.0);
-    loss_over_time(track, &loss, t_max)?;
-    rssi_over_time(track, &rssi, t_max)?;
-    loss_against_distance(track, &range)?;
-    legend_table(track, &legend, layout)
+    let total = track
+        .time
+        .bins
+        .iter()
+        .fold(Sums::default(), |a, &b| a.merge(b));
+    let row =
+        |n: usize, label: &'static str, whole: Option<f64>, f: &dyn Fn(&Sums) -> Option<f64>| {
+            let spans: Vec<f64> = track.time.bins.iter().filter_map(f).collect();
+            let low = spans.iter().copied().reduce(f64::min);
+            let high = spans.iter().copied().reduce(f64::max);
+            let decimals = if n == 0 { 2 } else { 0 };
+            let cell = |v: Option<f64>| v.map(|v| format!("{v:.decimals$}"));
+            LegendRow {
+                look: Look::nth(n),
+                label,
+                cells: vec![cell(whole), cell(low), cell(high)],
+            }
+        };
+    let rows = vec![
+        row(0, "loss (%)", total.loss_pct(), &Sums::loss_pct),
+        row(1, "rssi", Sums::mean(total.rssi), &|s| Sums::mean(s.rssi)),
+        row(2, "remote rssi", Sums::mean(total.remrssi), &|s| {
+            Sums::mean(s.remrssi)
+        }),
+    ];
+    let legend = Legend {
+        heads: ("", &["whole log", "lowest", "highest"]),
+        number_w: NUMBER_W,
+        rows,
+        empty: "no window",
+    };
+    frame::page(title, &legend, &[LOSS_H, RSSI_H, RANGE_H], |areas| {
+        let t_max = track.time.end().max(1.0);
+        loss_over_time(track, &areas[0], t_max)?;
+        rssi_over_time(track, &areas[1], t_max)?;
+        loss_against_distance(track, &areas[2])
+    })
 }
 
 /// Points of `f` over the time spans that have one.
@@ -275,38 +299,6 @@ fn loss_against_distance(track: &FlightTrack, area: &Area<'_>) -> DrawResult {
         ))?;
     }
     Ok(())
-}
-
-/// A row per line: its figure over the whole log, and the lowest and
-/// highest of its spans.
-fn legend_table(track: &FlightTrack, area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let total = track
-        .time
-        .bins
-        .iter()
-        .fold(Sums::default(), |a, &b| a.merge(b));
-    let row =
-        |n: usize, label: &'static str, whole: Option<f64>, f: &dyn Fn(&Sums) -> Option<f64>| {
-            let spans: Vec<f64> = track.time.bins.iter().filter_map(f).collect();
-            let low = spans.iter().copied().reduce(f64::min);
-            let high = spans.iter().copied().reduce(f64::max);
-            let decimals = if n == 0 { 2 } else { 0 };
-            let cell = |v: Option<f64>| v.map(|v| format!("{v:.decimals$}"));
-            LegendRow {
-                look: Look::nth(n),
-                label,
-                cells: vec![cell(whole), cell(low), cell(high)],
-            }
-        };
-    let rows = [
-        row(0, "loss (%)", total.loss_pct(), &Sums::loss_pct),
-        row(1, "rssi", Sums::mean(total.rssi), &|s| Sums::mean(s.rssi)),
-        row(2, "remote rssi", Sums::mean(total.remrssi), &|s| {
-            Sums::mean(s.remrssi)
-        }),
-    ];
-    let columns = ["whole log", "lowest", "highest"];
-    frame::legend(area, layout, ("", &columns), &rows, "no window")
 }
 
 /// The title: the link, and the flight's figures.

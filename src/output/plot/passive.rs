@@ -12,8 +12,7 @@ use plotters::prelude::*;
 
 use super::data::SPANS;
 use super::draw::{caption_font, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Layout, LegendRow, PlotError, MARGIN, ROW_H, TITLE_H};
-use super::style::Look;
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, MARGIN};
 use crate::engine::summary::passive::SourceSummary;
 use crate::engine::Nanos;
 use crate::output::windows::Window;
@@ -143,37 +142,37 @@ impl SourceTrack {
     }
 }
 
-/// One source, in drawing order.
-pub(super) struct SourceEntry<'a> {
-    pub(crate) label: String,
-    pub(crate) look: Look,
-    pub(crate) track: &'a SourceTrack,
-}
-
-pub(super) fn svg(title: &str, entries: &[SourceEntry<'_>]) -> Result<String, PlotError> {
-    let layout = Layout::new(
-        title,
-        "source",
-        entries.iter().map(|e| e.label.as_str()),
-        6,
-        NUMBER_W,
-    );
-    let rows = entries.len().max(1) as u32;
-    let height = TITLE_H + RATE_H + LOSS_H + ROW_H * (rows + 1) + 20;
-    frame::svg(title, &layout, height, |area| draw(entries, area, &layout))
-}
-
-fn draw(entries: &[SourceEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let (rate, rest) = area.split_vertically(RATE_H);
-    let (loss, legend) = rest.split_vertically(LOSS_H);
-    let t_max = entries.iter().map(|e| e.track.end_s()).fold(1.0, f64::max);
-    rate_chart(entries, &rate, t_max)?;
-    loss_chart(entries, &loss, t_max)?;
-    legend_table(entries, &legend, layout)
+pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<String, PlotError> {
+    let rows = frame::rows(entries, |t| {
+        let f = t.figures;
+        let one = |v: Option<f64>, decimals: usize| v.map(|v| format!("{v:.decimals$}"));
+        vec![
+            f.map(|f| f.received.to_string()),
+            f.map(|f| f.lost.to_string()),
+            f.and_then(|f| one(f.loss_pct, 2)),
+            f.map(|f| f.duplicate.to_string()),
+            f.map(|f| f.reordered.to_string()),
+            f.and_then(|f| one(f.frames_per_s, 1)),
+        ]
+    });
+    let legend = Legend {
+        heads: (
+            "source",
+            &["received", "lost", "loss %", "dup", "reordered", "frames/s"],
+        ),
+        number_w: NUMBER_W,
+        rows,
+        empty: "nothing heard",
+    };
+    frame::page(title, &legend, &[RATE_H, LOSS_H], |areas| {
+        let t_max = entries.iter().map(|e| e.track.end_s()).fold(1.0, f64::max);
+        rate_chart(entries, &areas[0], t_max)?;
+        loss_chart(entries, &areas[1], t_max)
+    })
 }
 
 /// Each source's frames a second per span, one line each.
-fn rate_chart(entries: &[SourceEntry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
+fn rate_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
     let top = entries
         .iter()
         .flat_map(|e| e.track.spans.iter().filter_map(Span::frames_per_s))
@@ -211,7 +210,7 @@ fn rate_chart(entries: &[SourceEntry<'_>], area: &Area<'_>, t_max: f64) -> DrawR
 
 /// Each source's sequence loss per span, a line each with its marker where
 /// a span lost frames; it carries the time axis.
-fn loss_chart(entries: &[SourceEntry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
+fn loss_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
     let top = entries
         .iter()
         .flat_map(|e| e.track.spans.iter().filter_map(Span::loss_pct))
@@ -246,32 +245,6 @@ fn loss_chart(entries: &[SourceEntry<'_>], area: &Area<'_>, t_max: f64) -> DrawR
         }
     }
     Ok(())
-}
-
-/// The legend: a row per source with its line and marker, its label and
-/// the run's figures for it.
-fn legend_table(entries: &[SourceEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let rows: Vec<LegendRow<'_>> = entries
-        .iter()
-        .map(|e| {
-            let f = e.track.figures;
-            let one = |v: Option<f64>, decimals: usize| v.map(|v| format!("{v:.decimals$}"));
-            LegendRow {
-                look: e.look,
-                label: &e.label,
-                cells: vec![
-                    f.map(|f| f.received.to_string()),
-                    f.map(|f| f.lost.to_string()),
-                    f.and_then(|f| one(f.loss_pct, 2)),
-                    f.map(|f| f.duplicate.to_string()),
-                    f.map(|f| f.reordered.to_string()),
-                    f.and_then(|f| one(f.frames_per_s, 1)),
-                ],
-            }
-        })
-        .collect();
-    let columns = ["received", "lost", "loss %", "dup", "reordered", "frames/s"];
-    frame::legend(area, layout, ("source", &columns), &rows, "nothing heard")
 }
 
 #[cfg(test)]

@@ -7,10 +7,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::draw::{caption_font, log_ticks, mesh, Y_LABELS_W};
-use super::frame::{
-    self, Area, DrawResult, Layout, LegendRow, PlotError, FONT, MARGIN, ROW_H, TITLE_H,
-};
-use super::style::Look;
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT, MARGIN};
 use crate::engine::sweep::step::StepFigures;
 use crate::engine::sweep::verdict::SweepSummary;
 
@@ -18,62 +15,62 @@ const RTT_H: u32 = 340;
 const LOSS_H: u32 = 230;
 const NUMBER_W: i32 = 130;
 
-/// One link's sweep, in drawing order.
-pub(super) struct SweepEntry<'a> {
-    pub(crate) label: String,
-    pub(crate) look: Look,
-    pub(crate) sweep: &'a SweepSummary,
-}
-
-impl SweepEntry<'_> {
-    /// The sweep's complete steps, by offered rate.
-    fn points(&self) -> Vec<&StepFigures> {
-        let mut steps: Vec<&StepFigures> = self
-            .sweep
-            .steps
-            .iter()
-            .filter(|s| s.phase.sweeps() && s.complete)
-            .collect();
-        steps.sort_by(|a, b| a.offered_hz.total_cmp(&b.offered_hz));
-        steps
-    }
-}
-
-pub(super) fn svg(title: &str, entries: &[SweepEntry<'_>]) -> Result<String, PlotError> {
-    let layout = Layout::new(
-        title,
-        "link",
-        entries.iter().map(|e| e.label.as_str()),
-        4,
-        NUMBER_W,
-    );
-    let rows = entries.len().max(1) as u32;
-    let height = TITLE_H + RTT_H + LOSS_H + ROW_H * (rows + 1) + 20;
-    frame::svg(title, &layout, height, |area| draw(entries, area, &layout))
-}
-
-fn draw(entries: &[SweepEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let (rtt, rest) = area.split_vertically(RTT_H);
-    let (loss, legend) = rest.split_vertically(LOSS_H);
-    let rates: Vec<f64> = entries
+/// A sweep's complete steps, by offered rate.
+fn points(sweep: &SweepSummary) -> Vec<&StepFigures> {
+    let mut steps: Vec<&StepFigures> = sweep
+        .steps
         .iter()
-        .flat_map(|e| e.points().into_iter().map(|s| s.offered_hz))
+        .filter(|s| s.phase.sweeps() && s.complete)
         .collect();
-    let lo = rates.iter().copied().reduce(f64::min).unwrap_or(1.0);
-    let hi = rates.iter().copied().reduce(f64::max).unwrap_or(100.0);
-    // A little room either side, so no marker sits on the frame.
-    let (from, to) = (lo / 1.15, (hi * 1.15).max(lo * 2.0));
-    rtt_chart(entries, &rtt, (from, to))?;
-    loss_chart(entries, &loss, (from, to))?;
-    legend_table(entries, &legend, layout)
+    steps.sort_by(|a, b| a.offered_hz.total_cmp(&b.offered_hz));
+    steps
+}
+
+/// A legend row per link: its knee (rate and bytes per second), the first
+/// step's p99 it was judged against, and its queueing grade (A+ to F, as
+/// the bufferbloat tests grade added latency).
+pub(super) fn svg(title: &str, entries: &[Entry<'_, SweepSummary>]) -> Result<String, PlotError> {
+    let rows = frame::rows(entries, |s| {
+        vec![
+            s.knee.map(|k| format!("{:.1}", k.rate_hz)),
+            s.knee.map(|k| format!("{:.0}", k.bytes_per_s)),
+            s.reference_p99_us.map(|p| format!("{:.3}", p / 1e3)),
+            s.queueing.map(|q| {
+                let bloat = if q.bufferbloat { ", bufferbloat" } else { "" };
+                format!("{}{bloat}", q.grade.as_str())
+            }),
+        ]
+    });
+    let legend = Legend {
+        heads: ("link", &["knee /s", "knee B/s", "first p99 ms", "queueing"]),
+        number_w: NUMBER_W,
+        rows,
+        empty: "no sweep",
+    };
+    frame::page(title, &legend, &[RTT_H, LOSS_H], |areas| {
+        let rates: Vec<f64> = entries
+            .iter()
+            .flat_map(|e| points(e.track).into_iter().map(|s| s.offered_hz))
+            .collect();
+        let lo = rates.iter().copied().reduce(f64::min).unwrap_or(1.0);
+        let hi = rates.iter().copied().reduce(f64::max).unwrap_or(100.0);
+        // A little room either side, so no marker sits on the frame.
+        let (from, to) = (lo / 1.15, (hi * 1.15).max(lo * 2.0));
+        rtt_chart(entries, &areas[0], (from, to))?;
+        loss_chart(entries, &areas[1], (from, to))
+    })
 }
 
 /// p99 as a solid line and p50 dashed, on log axes; the knee as a
 /// vertical rule with its rate.
-fn rtt_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64)) -> DrawResult {
+fn rtt_chart(
+    entries: &[Entry<'_, SweepSummary>],
+    area: &Area<'_>,
+    (from, to): (f64, f64),
+) -> DrawResult {
     let rtts: Vec<f64> = entries
         .iter()
-        .flat_map(|e| e.points())
+        .flat_map(|e| points(e.track))
         .filter_map(|s| s.rtt)
         .flat_map(|r| [r.p50_us / 1e3, r.p99_us / 1e3])
         .collect();
@@ -97,7 +94,7 @@ fn rtt_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64)
         )?;
     mesh(&mut chart).y_desc("RTT (ms, log scale)").draw()?;
     for e in entries {
-        let points = e.points();
+        let points = points(e.track);
         let p99: Vec<(f64, f64)> = points
             .iter()
             .filter_map(|s| Some((s.offered_hz, s.rtt?.p99_us / 1e3)))
@@ -119,7 +116,7 @@ fn rtt_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64)
         for &p in p99.iter().chain(&p50) {
             chart.plotting_area().draw(&e.look.marker(p, 4))?;
         }
-        if let Some(k) = &e.sweep.knee {
+        if let Some(k) = &e.track.knee {
             let rule = [(k.rate_hz, low), (k.rate_hz, high)];
             chart.draw_series(DashedLineSeries::new(
                 rule,
@@ -141,10 +138,14 @@ fn rtt_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64)
 }
 
 /// Each step's loss, on the same rate axis.
-fn loss_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64)) -> DrawResult {
+fn loss_chart(
+    entries: &[Entry<'_, SweepSummary>],
+    area: &Area<'_>,
+    (from, to): (f64, f64),
+) -> DrawResult {
     let top = entries
         .iter()
-        .flat_map(|e| e.points())
+        .flat_map(|e| points(e.track))
         .map(|s| s.loss_ratio * 100.0)
         .fold(5.0f64, f64::max);
     let mut chart = ChartBuilder::on(area)
@@ -161,8 +162,7 @@ fn loss_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64
         .y_desc("loss (%)")
         .draw()?;
     for e in entries {
-        let line: Vec<(f64, f64)> = e
-            .points()
+        let line: Vec<(f64, f64)> = points(e.track)
             .iter()
             .map(|s| (s.offered_hz, s.loss_ratio * 100.0))
             .collect();
@@ -175,31 +175,4 @@ fn loss_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64
         }
     }
     Ok(())
-}
-
-/// A row per link: its knee (rate and bytes per second), the first step's
-/// p99 it was judged against, and its queueing grade (A+ to F, as the
-/// bufferbloat tests grade added latency).
-fn legend_table(entries: &[SweepEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let rows: Vec<LegendRow<'_>> = entries
-        .iter()
-        .map(|e| {
-            let s = e.sweep;
-            LegendRow {
-                look: e.look,
-                label: &e.label,
-                cells: vec![
-                    s.knee.map(|k| format!("{:.1}", k.rate_hz)),
-                    s.knee.map(|k| format!("{:.0}", k.bytes_per_s)),
-                    s.reference_p99_us.map(|p| format!("{:.3}", p / 1e3)),
-                    s.queueing.map(|q| {
-                        let bloat = if q.bufferbloat { ", bufferbloat" } else { "" };
-                        format!("{}{bloat}", q.grade.as_str())
-                    }),
-                ],
-            }
-        })
-        .collect();
-    let columns = ["knee /s", "knee B/s", "first p99 ms", "queueing"];
-    frame::legend(area, layout, ("link", &columns), &rows, "no sweep")
 }
