@@ -5,12 +5,14 @@
 //! colour and one marker shape ([`Look`]) everywhere.
 
 use plotters::chart::MeshStyle;
-use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::combinators::WithKeyPoints;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::data::{bin, bin_low_ms, Track, BINS_PER_DECADE};
 use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT, MARGIN};
+use super::style::Look;
 use crate::engine::Nanos;
 
 const TIME_H: u32 = 300;
@@ -65,6 +67,11 @@ pub(super) fn log_ticks(from: f64, to: f64) -> Vec<f64> {
     (first..=last).map(|k| k as f64 * step).collect()
 }
 
+/// A log axis from `from` to `to` with round ticks.
+pub(super) fn log_axis(from: f64, to: f64) -> WithKeyPoints<LogCoord<f64>> {
+    (from..to).log_scale().with_key_points(log_ticks(from, to))
+}
+
 pub(super) fn svg(title: &str, entries: &[Entry<'_, Track>]) -> Result<String, PlotError> {
     let rows = frame::rows(entries, |t| {
         let f = t.figures;
@@ -110,34 +117,93 @@ fn over_time(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawR
         .map(|s| s.rtt_sum as f64 / s.replies as f64 / 1e6)
         .reduce(f64::max)
         .unwrap_or(1.0);
-    let mut chart = ChartBuilder::on(area)
-        .caption("RTT over time", caption_font())
-        .margin(MARGIN)
-        .margin_bottom(0)
-        .x_label_area_size(0)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..rtt_max * 1.08)?;
-    mesh(&mut chart).y_desc("RTT (ms)").draw()?;
+    let (x, y) = (0f64..t_max, 0f64..rtt_max * 1.08);
+    let mut chart = chart(area, "RTT over time", (None, "RTT (ms)"), x, y)?;
     for (k, e) in entries.iter().enumerate() {
         let t = e.track;
-        let line: Vec<(f64, f64)> = t
+        let points: Vec<(f64, f64)> = t
             .spans
             .iter()
             .enumerate()
             .filter(|(_, s)| s.replies > 0)
             .map(|(i, s)| (at(t, i), s.rtt_sum as f64 / s.replies as f64 / 1e6))
             .collect();
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            e.look.color.mix(0.85).stroke_width(2),
-        ))?;
-        // A few of its markers along each line, staggered between
-        // responders, tell the lines apart without their colour.
-        let every = (line.len() / MARKS_PER_LINE).max(1);
-        let offset = k * every / entries.len().max(1);
-        for &p in line.iter().skip(offset).step_by(every) {
-            chart.plotting_area().draw(&e.look.marker(p, 5))?;
+        line(
+            &mut chart,
+            &e.look,
+            &points,
+            Marks::Spread(k, entries.len()),
+        )?;
+    }
+    Ok(())
+}
+
+/// A chart on `area` with `caption`, its grid and axes drawn, the axes
+/// named `x_desc` and `y_desc`. Without an `x_desc` it has no x labels
+/// and sits on the chart below it, whose time axis it shares.
+pub(super) fn chart<'a, X: AsRangedCoord, Y: AsRangedCoord>(
+    area: &Area<'a>,
+    caption: &str,
+    (x_desc, y_desc): (Option<&str>, &str),
+    x: X,
+    y: Y,
+) -> Result<Chart<'a, X::CoordDescType, Y::CoordDescType>, Box<dyn std::error::Error>>
+where
+    X::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .caption(caption, caption_font())
+        .margin(MARGIN)
+        .y_label_area_size(Y_LABELS_W);
+    match x_desc {
+        Some(_) => builder.x_label_area_size(44),
+        None => builder.margin_bottom(0).x_label_area_size(0),
+    };
+    let mut chart = builder.build_cartesian_2d(x, y)?;
+    let mut mesh = mesh(&mut chart);
+    if let Some(x_desc) = x_desc {
+        mesh.x_desc(x_desc);
+    }
+    mesh.y_desc(y_desc).draw()?;
+    Ok(chart)
+}
+
+pub(super) type Chart<'a, X, Y> = ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>;
+
+/// Where a line's markers go.
+pub(super) enum Marks {
+    /// A few along it, staggered as the `k`-th of `n` lines', so that the
+    /// lines tell apart without their colour.
+    Spread(usize, usize),
+    /// Where its value is above 0: a span that lost.
+    Lost,
+}
+
+/// `points` as a line in `look`'s colour, with its markers at `marks`.
+pub(super) fn line<X, Y>(
+    chart: &mut Chart<'_, X, Y>,
+    look: &Look,
+    points: &[(f64, f64)],
+    marks: Marks,
+) -> DrawResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let style = look.color.mix(0.85).stroke_width(2);
+    chart.draw_series(LineSeries::new(points.iter().copied(), style))?;
+    let marked: Vec<(f64, f64)> = match marks {
+        Marks::Spread(k, n) => {
+            let every = (points.len() / MARKS_PER_LINE).max(1);
+            let spread = points.iter().skip(k * every / n).step_by(every);
+            spread.copied().collect()
         }
+        Marks::Lost => points.iter().filter(|p| p.1 > 0.0).copied().collect(),
+    };
+    for p in marked {
+        chart.plotting_area().draw(&look.marker(p, 5))?;
     }
     Ok(())
 }
@@ -225,19 +291,10 @@ fn distribution_chart(entries: &[Entry<'_, Track>], area: &Area<'_>) -> DrawResu
         .fold(1.0f64, f64::max);
     // A bin of room either side, so no outline sits on the frame.
     let (from, to) = (bin_low_ms(lo.saturating_sub(1)), bin_low_ms(hi + 1));
-    let mut chart = ChartBuilder::on(area)
-        .caption("RTT distribution (marker: median)", caption_font())
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(
-            (from..to).log_scale().with_key_points(log_ticks(from, to)),
-            0f64..top_share * 1.1,
-        )?;
-    mesh(&mut chart)
-        .x_desc("RTT (ms, log scale: each bin 4% wide)")
-        .y_desc("replies (%)")
-        .draw()?;
+    let x = log_axis(from, to);
+    let descs = (Some("RTT (ms, log scale: each bin 4% wide)"), "replies (%)");
+    let caption = "RTT distribution (marker: median)";
+    let mut chart = chart(area, caption, descs, x, 0f64..top_share * 1.1)?;
     for e in entries {
         let t = e.track;
         let mut steps = vec![(bin_low_ms(lo), 0.0)];

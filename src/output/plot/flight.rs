@@ -11,8 +11,8 @@
 use plotters::prelude::*;
 
 use super::data::SPANS;
-use super::draw::{caption_font, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Legend, LegendRow, PlotError, MARGIN};
+use super::draw::{caption_font, chart, line, Marks};
+use super::frame::{self, Area, DrawResult, Legend, LegendRow, PlotError};
 use super::style::Look;
 use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, DEFAULT_WINDOW_NS};
 
@@ -208,53 +208,22 @@ fn points(bins: &Bins, f: impl Fn(&Sums) -> Option<f64>) -> Vec<(f64, f64)> {
 }
 
 fn loss_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
-    let line = points(&track.time, Sums::loss_pct);
-    let top = line.iter().map(|p| p.1).fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            "sequence loss over time (marker: a span that lost frames)",
-            caption_font(),
-        )
-        .margin(MARGIN)
-        .margin_bottom(0)
-        .x_label_area_size(0)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..top * 1.1)?;
-    mesh(&mut chart).y_desc("lost (%)").draw()?;
-    let look = Look::nth(0);
-    chart.draw_series(LineSeries::new(
-        line.iter().copied(),
-        look.color.mix(0.85).stroke_width(2),
-    ))?;
-    for &p in line.iter().filter(|(_, pct)| *pct > 0.0) {
-        chart.plotting_area().draw(&look.marker(p, 5))?;
-    }
-    Ok(())
+    let points = points(&track.time, Sums::loss_pct);
+    let top = points.iter().map(|p| p.1).fold(1.0f64, f64::max);
+    let caption = "sequence loss over time (marker: a span that lost frames)";
+    let (x, y) = (0f64..t_max, 0f64..top * 1.1);
+    let mut chart = chart(area, caption, (None, "lost (%)"), x, y)?;
+    line(&mut chart, &Look::nth(0), &points, Marks::Lost)
 }
 
 fn rssi_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
     let rssi = points(&track.time, |s| Sums::mean(s.rssi));
     let remrssi = points(&track.time, |s| Sums::mean(s.remrssi));
-    let mut chart = ChartBuilder::on(area)
-        .caption("radio RSSI over time (RADIO_STATUS)", caption_font())
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..255f64)?;
-    mesh(&mut chart)
-        .x_desc("time since the log began (s)")
-        .y_desc("RSSI (0-254)")
-        .draw()?;
-    for (n, line) in [(1, rssi), (2, remrssi)] {
-        let look = Look::nth(n);
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            look.color.mix(0.85).stroke_width(2),
-        ))?;
-        let every = (line.len() / 12).max(1);
-        for &p in line.iter().skip(n * every / 3).step_by(every) {
-            chart.plotting_area().draw(&look.marker(p, 5))?;
-        }
+    let caption = "radio RSSI over time (RADIO_STATUS)";
+    let descs = (Some("time since the log began (s)"), "RSSI (0-254)");
+    let mut chart = chart(area, caption, descs, 0f64..t_max, 0f64..255f64)?;
+    for (n, points) in [(1, rssi), (2, remrssi)] {
+        line(&mut chart, &Look::nth(n), &points, Marks::Spread(n, 3))?;
     }
     if track.summary.as_ref().is_some_and(|s| s.radio.is_none()) {
         chart.plotting_area().draw(&Text::new(
@@ -271,22 +240,12 @@ fn loss_against_distance(track: &FlightTrack, area: &Area<'_>) -> DrawResult {
     let top = bars.iter().map(|p| p.1).fold(1.0f64, f64::max);
     let d_max = track.distance.end().max(FIRST_BIN_M);
     let half = track.distance.width * 0.4;
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            format!(
-                "sequence loss against distance from the origin ({:.0} m bins)",
-                track.distance.width
-            ),
-            caption_font(),
-        )
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..d_max, 0f64..top * 1.1)?;
-    mesh(&mut chart)
-        .x_desc("distance (m, straight line)")
-        .y_desc("lost (%)")
-        .draw()?;
+    let caption = format!(
+        "sequence loss against distance from the origin ({:.0} m bins)",
+        track.distance.width
+    );
+    let descs = (Some("distance (m, straight line)"), "lost (%)");
+    let mut chart = chart(area, &caption, descs, 0f64..d_max, 0f64..top * 1.1)?;
     let look = Look::nth(0);
     chart.draw_series(bars.iter().map(|&(x, pct)| {
         Rectangle::new([(x - half, 0.0), (x + half, pct)], look.color.filled())

@@ -8,11 +8,9 @@
 //! neighbours merge, so a long run is drawn at a coarser resolution, its
 //! frames and losses summed, never dropped.
 
-use plotters::prelude::*;
-
 use super::data::SPANS;
-use super::draw::{caption_font, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, MARGIN};
+use super::draw::{chart, line, Marks};
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError};
 use crate::engine::summary::passive::SourceSummary;
 use crate::engine::Nanos;
 use crate::output::windows::Window;
@@ -22,8 +20,6 @@ const FIRST_SPAN_NS: Nanos = 1_000_000_000;
 const RATE_H: u32 = 300;
 const LOSS_H: u32 = 280;
 const NUMBER_W: i32 = 100;
-/// Markers along a line of frames a second.
-const MARKS_PER_LINE: usize = 12;
 
 /// One time span of a source: its windows summed.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -131,9 +127,11 @@ impl SourceTrack {
         self.radio
     }
 
-    /// The middle of span `i`, in seconds.
-    fn at(&self, i: usize) -> f64 {
-        (i as f64 + 0.5) * self.span_ns as f64 / 1e9
+    /// Points of `f` over the spans that have one, at their middle.
+    fn points(&self, f: impl Fn(&Span) -> Option<f64>) -> Vec<(f64, f64)> {
+        let at = |i: usize| (i as f64 + 0.5) * self.span_ns as f64 / 1e9;
+        let each = self.spans.iter().enumerate();
+        each.filter_map(|(i, s)| Some((at(i), f(s)?))).collect()
     }
 
     /// The end of the last span, in seconds.
@@ -177,33 +175,17 @@ fn rate_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -
         .iter()
         .flat_map(|e| e.track.spans.iter().filter_map(Span::frames_per_s))
         .fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(area)
-        .caption("frames a second, by source", caption_font())
-        .margin(MARGIN)
-        .margin_bottom(0)
-        .x_label_area_size(0)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..top * 1.08)?;
-    mesh(&mut chart).y_desc("frames/s").draw()?;
+    let (x, y) = (0f64..t_max, 0f64..top * 1.08);
+    let descs = (None, "frames/s");
+    let mut chart = chart(area, "frames a second, by source", descs, x, y)?;
     for (k, e) in entries.iter().enumerate() {
-        let t = e.track;
-        let line: Vec<(f64, f64)> = t
-            .spans
-            .iter()
-            .enumerate()
-            .filter_map(|(i, s)| Some((t.at(i), s.frames_per_s()?)))
-            .collect();
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            e.look.color.mix(0.85).stroke_width(2),
-        ))?;
-        // A few markers along each line, staggered between sources, tell
-        // the lines apart without their colour.
-        let every = (line.len() / MARKS_PER_LINE).max(1);
-        let offset = k * every / entries.len().max(1);
-        for &p in line.iter().skip(offset).step_by(every) {
-            chart.plotting_area().draw(&e.look.marker(p, 5))?;
-        }
+        let points = e.track.points(Span::frames_per_s);
+        line(
+            &mut chart,
+            &e.look,
+            &points,
+            Marks::Spread(k, entries.len()),
+        )?;
     }
     Ok(())
 }
@@ -215,34 +197,16 @@ fn loss_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -
         .iter()
         .flat_map(|e| e.track.spans.iter().filter_map(Span::loss_pct))
         .fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            "sequence loss per span (marker: a span that lost frames)",
-            caption_font(),
-        )
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..top * 1.1)?;
-    mesh(&mut chart)
-        .x_desc("time since start (s)")
-        .y_desc("lost (%)")
-        .draw()?;
+    let caption = "sequence loss per span (marker: a span that lost frames)";
+    let descs = (Some("time since start (s)"), "lost (%)");
+    let mut chart = chart(area, caption, descs, 0f64..t_max, 0f64..top * 1.1)?;
     for e in entries {
-        let t = e.track;
-        let line: Vec<(f64, f64)> = t
-            .spans
-            .iter()
-            .enumerate()
-            .filter_map(|(i, s)| Some((t.at(i), s.loss_pct()?)))
-            .collect();
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            e.look.color.mix(0.85).stroke_width(2),
-        ))?;
-        for &p in line.iter().filter(|(_, pct)| *pct > 0.0) {
-            chart.plotting_area().draw(&e.look.marker(p, 5))?;
-        }
+        line(
+            &mut chart,
+            &e.look,
+            &e.track.points(Span::loss_pct),
+            Marks::Lost,
+        )?;
     }
     Ok(())
 }

@@ -6,8 +6,8 @@
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::draw::{caption_font, log_ticks, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT, MARGIN};
+use super::draw::{chart, log_axis};
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT};
 use crate::engine::sweep::step::StepFigures;
 use crate::engine::sweep::verdict::SweepSummary;
 
@@ -77,22 +77,9 @@ fn rtt_chart(
     let low = rtts.iter().copied().reduce(f64::min).unwrap_or(1.0) / 1.2;
     let high = rtts.iter().copied().reduce(f64::max).unwrap_or(100.0) * 1.2;
     let high = high.max(low * 4.0);
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            "RTT against offered rate (solid: p99, dashed: p50)",
-            caption_font(),
-        )
-        .margin(MARGIN)
-        .margin_bottom(0)
-        .x_label_area_size(0)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(
-            (from..to).log_scale().with_key_points(log_ticks(from, to)),
-            (low..high)
-                .log_scale()
-                .with_key_points(log_ticks(low, high)),
-        )?;
-    mesh(&mut chart).y_desc("RTT (ms, log scale)").draw()?;
+    let caption = "RTT against offered rate (solid: p99, dashed: p50)";
+    let (x, y) = (log_axis(from, to), log_axis(low, high));
+    let mut chart = chart(area, caption, (None, "RTT (ms, log scale)"), x, y)?;
     for e in entries {
         let points = points(e.track);
         let p99: Vec<(f64, f64)> = points
@@ -148,19 +135,9 @@ fn loss_chart(
         .flat_map(|e| points(e.track))
         .map(|s| s.loss_ratio * 100.0)
         .fold(5.0f64, f64::max);
-    let mut chart = ChartBuilder::on(area)
-        .caption("loss against offered rate", caption_font())
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(
-            (from..to).log_scale().with_key_points(log_ticks(from, to)),
-            0f64..top * 1.1,
-        )?;
-    mesh(&mut chart)
-        .x_desc("offered rate (requests/s, log scale)")
-        .y_desc("loss (%)")
-        .draw()?;
+    let descs = (Some("offered rate (requests/s, log scale)"), "loss (%)");
+    let (x, y) = (log_axis(from, to), 0f64..top * 1.1);
+    let mut chart = chart(area, "loss against offered rate", descs, x, y)?;
     for e in entries {
         let line: Vec<(f64, f64)> = points(e.track)
             .iter()
