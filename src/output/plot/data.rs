@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use super::flight::{self, FlightTrack};
 use super::frame::{self, PlotError};
 use super::passive::{self, SourceTrack};
+use super::spans::{Bins, Merge};
 use super::{draw, sweep};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::passive::TableSummary;
@@ -32,7 +33,7 @@ pub(super) struct Span {
     pub(super) lost: u64,
 }
 
-impl Span {
+impl Merge for Span {
     fn merge(self, other: Span) -> Span {
         Span {
             replies: self.replies + other.replies,
@@ -42,59 +43,40 @@ impl Span {
     }
 }
 
-/// A responder's figures from the run's summary, shown in the legend.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Figures {
-    pub(super) sent: u64,
-    pub(super) loss_pct: f64,
-    pub(super) p50_ms: Option<f64>,
-    pub(super) p99_ms: Option<f64>,
+impl Span {
+    /// The mean RTT in it, ms; `None` without replies.
+    pub(super) fn mean_ms(&self) -> Option<f64> {
+        (self.replies > 0).then(|| self.rtt_sum as f64 / self.replies as f64 / 1e6)
+    }
 }
 
 #[derive(Debug, Clone)]
 pub(super) struct Track {
-    pub(super) span_ns: Nanos,
-    pub(super) spans: Vec<Span>,
+    pub(super) spans: Bins<Nanos, Span>,
     pub(super) bins: [u64; BINS],
-    /// Known once the link's summary came.
-    pub(super) figures: Option<Figures>,
+    /// The run's own figures for it, for the legend: known once the
+    /// link's summary came.
+    pub(super) summary: Option<ResponderSummary>,
 }
 
 impl Track {
     fn new() -> Self {
         Track {
-            span_ns: FIRST_SPAN_NS,
-            spans: Vec::new(),
+            spans: Bins::new(FIRST_SPAN_NS, SPANS),
             bins: [0; BINS],
-            figures: None,
+            summary: None,
         }
-    }
-
-    fn span(&mut self, sent_at: Nanos) -> &mut Span {
-        while sent_at / self.span_ns >= SPANS as u64 {
-            self.spans = self
-                .spans
-                .chunks(2)
-                .map(|c| c.iter().fold(Span::default(), |a, &b| a.merge(b)))
-                .collect();
-            self.span_ns *= 2;
-        }
-        let i = (sent_at / self.span_ns) as usize;
-        if self.spans.len() <= i {
-            self.spans.resize(i + 1, Span::default());
-        }
-        &mut self.spans[i]
     }
 
     fn reply(&mut self, sent_at: Nanos, rtt: Nanos) {
-        let s = self.span(sent_at);
+        let s = self.spans.at(sent_at);
         s.replies += 1;
         s.rtt_sum += rtt;
         self.bins[bin(rtt)] += 1;
     }
 
     fn lost(&mut self, sent_at: Nanos) {
-        self.span(sent_at).lost += 1;
+        self.spans.at(sent_at).lost += 1;
     }
 }
 
@@ -219,12 +201,7 @@ impl PlotData {
     pub(crate) fn on_summary(&mut self, link: usize, responders: &[ResponderSummary]) {
         for r in responders {
             if let Some(t) = self.tracks.get_mut(&(link, r.id)) {
-                t.figures = Some(Figures {
-                    sent: r.counts.sent,
-                    loss_pct: 100.0 * r.loss_ratio,
-                    p50_ms: r.rtt.map(|s| s.p50_us / 1e3),
-                    p99_ms: r.rtt.map(|s| s.p99_us / 1e3),
-                });
+                t.summary = Some(r.clone());
             }
         }
     }
@@ -269,9 +246,9 @@ mod tests {
             }
         }
         let t = &d.tracks[&(0, r)];
-        assert!(t.spans.len() <= SPANS);
-        assert_eq!(t.spans.iter().map(|s| s.replies).sum::<u64>(), 324_000);
-        assert_eq!(t.spans.iter().map(|s| s.lost).sum::<u64>(), 36_000);
+        assert!(t.spans.bins.len() <= SPANS);
+        assert_eq!(t.spans.bins.iter().map(|s| s.replies).sum::<u64>(), 324_000);
+        assert_eq!(t.spans.bins.iter().map(|s| s.lost).sum::<u64>(), 36_000);
         assert_eq!(t.bins.iter().sum::<u64>(), 324_000);
         assert_eq!(bin(20_000_000), bin(20_400_000));
         assert_ne!(bin(20_000_000), bin(21_000_000));

@@ -10,7 +10,7 @@ use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::data::{bin, bin_low_ms, Track, BINS_PER_DECADE};
+use super::data::{bin, bin_low_ms, Span, Track, BINS_PER_DECADE};
 use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT, MARGIN};
 use super::style::Look;
 use crate::engine::Nanos;
@@ -74,12 +74,13 @@ pub(super) fn log_axis(from: f64, to: f64) -> WithKeyPoints<LogCoord<f64>> {
 
 pub(super) fn svg(title: &str, entries: &[Entry<'_, Track>]) -> Result<String, PlotError> {
     let rows = frame::rows(entries, |t| {
-        let f = t.figures;
+        let r = t.summary.as_ref();
+        let rtt = r.and_then(|r| r.rtt);
         vec![
-            f.map(|f| f.sent.to_string()),
-            f.map(|f| format!("{:.2}", f.loss_pct)),
-            f.and_then(|f| f.p50_ms).map(|v| format!("{v:.3}")),
-            f.and_then(|f| f.p99_ms).map(|v| format!("{v:.3}")),
+            r.map(|r| r.counts.sent.to_string()),
+            r.map(|r| format!("{:.2}", 100.0 * r.loss_ratio)),
+            rtt.map(|s| format!("{:.3}", s.p50_us / 1e3)),
+            rtt.map(|s| format!("{:.3}", s.p99_us / 1e3)),
         ]
     });
     let legend = Legend {
@@ -92,7 +93,7 @@ pub(super) fn svg(title: &str, entries: &[Entry<'_, Track>]) -> Result<String, P
     frame::page(title, &legend, &[TIME_H, lanes, DIST_H], |areas| {
         let t_max = entries
             .iter()
-            .map(|e| e.track.spans.len() as f64 * e.track.span_ns as f64 / 1e9)
+            .map(|e| e.track.spans.end())
             .reduce(f64::max)
             .unwrap_or(1.0);
         over_time(entries, &areas[0], t_max)?;
@@ -113,21 +114,13 @@ pub(super) fn caption_font() -> TextStyle<'static> {
 fn over_time(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResult {
     let rtt_max = entries
         .iter()
-        .flat_map(|e| e.track.spans.iter().filter(|s| s.replies > 0))
-        .map(|s| s.rtt_sum as f64 / s.replies as f64 / 1e6)
+        .flat_map(|e| e.track.spans.bins.iter().filter_map(Span::mean_ms))
         .reduce(f64::max)
         .unwrap_or(1.0);
     let (x, y) = (0f64..t_max, 0f64..rtt_max * 1.08);
     let mut chart = chart(area, "RTT over time", (None, "RTT (ms)"), x, y)?;
     for (k, e) in entries.iter().enumerate() {
-        let t = e.track;
-        let points: Vec<(f64, f64)> = t
-            .spans
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.replies > 0)
-            .map(|(i, s)| (at(t, i), s.rtt_sum as f64 / s.replies as f64 / 1e6))
-            .collect();
+        let points = e.track.spans.points(Span::mean_ms);
         line(
             &mut chart,
             &e.look,
@@ -227,11 +220,6 @@ where
     mesh
 }
 
-/// The middle of span `i`, in seconds.
-fn at(t: &Track, i: usize) -> f64 {
-    (i as f64 + 0.5) * t.span_ns as f64 / 1e9
-}
-
 /// A row per responder, in legend order, with its marker where a span lost
 /// a request; it carries the time axis of the chart above.
 fn losses(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResult {
@@ -251,12 +239,10 @@ fn losses(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResu
     for (k, e) in entries.iter().enumerate() {
         let guide = [(0.0, lane(k)), (t_max, lane(k))];
         chart.draw_series(LineSeries::new(guide, RGBColor(0xDD, 0xDD, 0xDD)))?;
-        let t = e.track;
-        let lost = t.spans.iter().enumerate().filter(|(_, s)| s.lost > 0);
-        for (i, _) in lost {
+        for (x, _) in e.track.spans.each().filter(|(_, s)| s.lost > 0) {
             chart
                 .plotting_area()
-                .draw(&e.look.marker((at(t, i), lane(k)), 5))?;
+                .draw(&e.look.marker((x, lane(k)), 5))?;
         }
     }
     // The rows' name, where the other charts have their y axis title.
@@ -304,7 +290,12 @@ fn distribution_chart(entries: &[Entry<'_, Track>], area: &Area<'_>) -> DrawResu
         }
         steps.push((bin_low_ms(hi), 0.0));
         chart.draw_series(LineSeries::new(steps, e.look.color.stroke_width(2)))?;
-        if let Some(p50) = t.figures.and_then(|f| f.p50_ms) {
+        if let Some(p50) = t
+            .summary
+            .as_ref()
+            .and_then(|r| r.rtt)
+            .map(|s| s.p50_us / 1e3)
+        {
             let i = bin((p50 * 1e6) as Nanos).clamp(lo, hi - 1);
             chart
                 .plotting_area()

@@ -13,6 +13,7 @@ use plotters::prelude::*;
 use super::data::SPANS;
 use super::draw::{caption_font, chart, line, Marks};
 use super::frame::{self, Area, DrawResult, Legend, LegendRow, PlotError};
+use super::spans::{Bins, Sums};
 use super::style::Look;
 use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, DEFAULT_WINDOW_NS};
 
@@ -25,104 +26,11 @@ const RSSI_H: u32 = 250;
 const RANGE_H: u32 = 300;
 const NUMBER_W: i32 = 110;
 
-/// Frames and losses summed, and the radio's figures.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-struct Sums {
-    received: u64,
-    duplicate: u64,
-    /// Signed: see [`FlightWindow::lost`].
-    lost: i64,
-    rssi: (f64, u64),
-    remrssi: (f64, u64),
-}
-
-impl Sums {
-    fn add(&mut self, w: &FlightWindow) {
-        self.received += w.received;
-        self.duplicate += w.duplicate;
-        self.lost += w.lost;
-        if let Some(r) = &w.radio {
-            // A window's mean stands for its reports.
-            for (sum, v) in [(&mut self.rssi, r.rssi), (&mut self.remrssi, r.remrssi)] {
-                if let Some(v) = v {
-                    sum.0 += v * r.reports as f64;
-                    sum.1 += r.reports;
-                }
-            }
-        }
-    }
-
-    fn merge(mut self, o: Sums) -> Sums {
-        self.received += o.received;
-        self.duplicate += o.duplicate;
-        self.lost += o.lost;
-        self.rssi = (self.rssi.0 + o.rssi.0, self.rssi.1 + o.rssi.1);
-        self.remrssi = (self.remrssi.0 + o.remrssi.0, self.remrssi.1 + o.remrssi.1);
-        self
-    }
-
-    fn loss_pct(&self) -> Option<f64> {
-        let lost = self.lost.max(0) as f64;
-        let whole = lost + self.received.saturating_sub(self.duplicate) as f64;
-        (whole > 0.0).then(|| 100.0 * lost / whole)
-    }
-
-    fn mean((sum, n): (f64, u64)) -> Option<f64> {
-        (n > 0).then(|| sum / n as f64)
-    }
-}
-
-/// Bins of a width that doubles, pairs merging, to stay at most `max`.
-#[derive(Debug, Clone)]
-struct Bins {
-    width: f64,
-    max: usize,
-    bins: Vec<Sums>,
-}
-
-impl Bins {
-    fn new(width: f64, max: usize) -> Self {
-        Bins {
-            width,
-            max,
-            bins: Vec::new(),
-        }
-    }
-
-    fn at(&mut self, x: f64) -> &mut Sums {
-        while x / self.width >= self.max as f64 {
-            self.bins = self
-                .bins
-                .chunks(2)
-                .map(|c| c.iter().fold(Sums::default(), |a, &b| a.merge(b)))
-                .collect();
-            self.width *= 2.0;
-        }
-        let i = (x / self.width).max(0.0) as usize;
-        if self.bins.len() <= i {
-            self.bins.resize(i + 1, Sums::default());
-        }
-        &mut self.bins[i]
-    }
-
-    /// Each bin's middle and sums.
-    fn each(&self) -> impl Iterator<Item = (f64, &Sums)> {
-        self.bins
-            .iter()
-            .enumerate()
-            .map(|(i, s)| ((i as f64 + 0.5) * self.width, s))
-    }
-
-    fn end(&self) -> f64 {
-        self.bins.len() as f64 * self.width
-    }
-}
-
 /// The flight of one log, window by window.
 #[derive(Debug, Clone)]
 pub(super) struct FlightTrack {
-    time: Bins,
-    distance: Bins,
+    time: Bins<f64, Sums>,
+    distance: Bins<f64, Sums>,
     windows: u64,
     summary: Option<FlightSummary>,
 }
@@ -141,9 +49,9 @@ impl Default for FlightTrack {
 impl FlightTrack {
     pub(super) fn window(&mut self, w: &FlightWindow) {
         self.windows += 1;
-        self.time.at(w.start as f64 / 1e9).add(w);
+        self.time.at(w.start as f64 / 1e9).flight(w);
         if let Some(r) = &w.range {
-            self.distance.at(r.distance_m).add(w);
+            self.distance.at(r.distance_m).flight(w);
         }
     }
 
@@ -163,11 +71,7 @@ impl FlightTrack {
 /// Three rows in the legend, a line each: its figure over the whole log,
 /// and the lowest and highest of its spans.
 pub(super) fn svg(title: &str, track: &FlightTrack) -> Result<String, PlotError> {
-    let total = track
-        .time
-        .bins
-        .iter()
-        .fold(Sums::default(), |a, &b| a.merge(b));
+    let total = track.time.total();
     let row =
         |n: usize, label: &'static str, whole: Option<f64>, f: &dyn Fn(&Sums) -> Option<f64>| {
             let spans: Vec<f64> = track.time.bins.iter().filter_map(f).collect();
@@ -202,13 +106,8 @@ pub(super) fn svg(title: &str, track: &FlightTrack) -> Result<String, PlotError>
     })
 }
 
-/// Points of `f` over the time spans that have one.
-fn points(bins: &Bins, f: impl Fn(&Sums) -> Option<f64>) -> Vec<(f64, f64)> {
-    bins.each().filter_map(|(x, s)| Some((x, f(s)?))).collect()
-}
-
 fn loss_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
-    let points = points(&track.time, Sums::loss_pct);
+    let points = track.time.points(Sums::loss_pct);
     let top = points.iter().map(|p| p.1).fold(1.0f64, f64::max);
     let caption = "sequence loss over time (marker: a span that lost frames)";
     let (x, y) = (0f64..t_max, 0f64..top * 1.1);
@@ -217,8 +116,8 @@ fn loss_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResul
 }
 
 fn rssi_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
-    let rssi = points(&track.time, |s| Sums::mean(s.rssi));
-    let remrssi = points(&track.time, |s| Sums::mean(s.remrssi));
+    let rssi = track.time.points(|s| Sums::mean(s.rssi));
+    let remrssi = track.time.points(|s| Sums::mean(s.remrssi));
     let caption = "radio RSSI over time (RADIO_STATUS)";
     let descs = (Some("time since the log began (s)"), "RSSI (0-254)");
     let mut chart = chart(area, caption, descs, 0f64..t_max, 0f64..255f64)?;
@@ -236,7 +135,7 @@ fn rssi_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResul
 }
 
 fn loss_against_distance(track: &FlightTrack, area: &Area<'_>) -> DrawResult {
-    let bars = points(&track.distance, Sums::loss_pct);
+    let bars = track.distance.points(Sums::loss_pct);
     let top = bars.iter().map(|p| p.1).fold(1.0f64, f64::max);
     let d_max = track.distance.end().max(FIRST_BIN_M);
     let half = track.distance.width * 0.4;
@@ -322,7 +221,7 @@ mod tests {
         }
         assert!(t.distance.bins.len() <= DISTANCE_BINS);
         assert!(t.time.bins.len() <= SPANS);
-        let sum = |b: &Bins| b.bins.iter().map(|s| s.received).sum::<u64>();
+        let sum = |b: &Bins<f64, Sums>| b.bins.iter().map(|s| s.received).sum::<u64>();
         assert_eq!(sum(&t.distance), 500 * n);
         assert_eq!(sum(&t.time), 500 * n);
         // 25 m doubled to 400 m: 10 km in 26 bins; the losses only in the

@@ -20,6 +20,7 @@ mod flight;
 mod frame;
 mod link;
 mod passive;
+mod spans;
 mod style;
 mod sweep;
 
