@@ -19,10 +19,8 @@ pub(crate) struct Textfile {
 
 impl Textfile {
     pub(crate) fn create(path: &Path) -> io::Result<Self> {
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
+        let parent = path.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = parent.unwrap_or(Path::new("."));
         let name = path
             .file_name()
             .map_or_else(|| "metrics".into(), |n| n.to_string_lossy().into_owned());

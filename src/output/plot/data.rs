@@ -52,7 +52,7 @@ impl Span {
 
 #[derive(Debug, Clone)]
 pub(super) struct Track {
-    pub(super) spans: Bins<Nanos, Span>,
+    pub(super) spans: Bins<Span>,
     pub(super) bins: [u64; BINS],
     /// The run's own figures for it, for the legend: known once the
     /// link's summary came.
@@ -62,21 +62,21 @@ pub(super) struct Track {
 impl Track {
     fn new() -> Self {
         Track {
-            spans: Bins::new(FIRST_SPAN_NS, SPANS),
+            spans: Bins::new(FIRST_SPAN_NS as f64, 1e9, SPANS),
             bins: [0; BINS],
             summary: None,
         }
     }
 
     fn reply(&mut self, sent_at: Nanos, rtt: Nanos) {
-        let s = self.spans.at(sent_at);
+        let s = self.spans.at(sent_at as f64);
         s.replies += 1;
         s.rtt_sum += rtt;
         self.bins[bin(rtt)] += 1;
     }
 
     fn lost(&mut self, sent_at: Nanos) {
-        self.spans.at(sent_at).lost += 1;
+        self.spans.at(sent_at as f64).lost += 1;
     }
 }
 

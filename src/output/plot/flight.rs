@@ -29,18 +29,16 @@ const NUMBER_W: i32 = 110;
 /// The flight of one log, window by window.
 #[derive(Debug, Clone)]
 pub(super) struct FlightTrack {
-    time: Bins<f64, Sums>,
-    distance: Bins<f64, Sums>,
-    windows: u64,
+    time: Bins<Sums>,
+    distance: Bins<Sums>,
     summary: Option<FlightSummary>,
 }
 
 impl Default for FlightTrack {
     fn default() -> Self {
         FlightTrack {
-            time: Bins::new(DEFAULT_WINDOW_NS as f64 / 1e9, SPANS),
-            distance: Bins::new(FIRST_BIN_M, DISTANCE_BINS),
-            windows: 0,
+            time: Bins::new(DEFAULT_WINDOW_NS as f64 / 1e9, 1.0, SPANS),
+            distance: Bins::new(FIRST_BIN_M, 1.0, DISTANCE_BINS),
             summary: None,
         }
     }
@@ -48,7 +46,6 @@ impl Default for FlightTrack {
 
 impl FlightTrack {
     pub(super) fn window(&mut self, w: &FlightWindow) {
-        self.windows += 1;
         self.time.at(w.start as f64 / 1e9).flight(w);
         if let Some(r) = &w.range {
             self.distance.at(r.distance_m).flight(w);
@@ -64,7 +61,8 @@ impl FlightTrack {
     }
 
     pub(super) fn is_empty(&self) -> bool {
-        self.windows == 0
+        // Every window widens or fills a time span.
+        self.time.bins.is_empty()
     }
 }
 
@@ -221,7 +219,7 @@ mod tests {
         }
         assert!(t.distance.bins.len() <= DISTANCE_BINS);
         assert!(t.time.bins.len() <= SPANS);
-        let sum = |b: &Bins<f64, Sums>| b.bins.iter().map(|s| s.received).sum::<u64>();
+        let sum = |b: &Bins<Sums>| b.bins.iter().map(|s| s.received).sum::<u64>();
         assert_eq!(sum(&t.distance), 500 * n);
         assert_eq!(sum(&t.time), 500 * n);
         // 25 m doubled to 400 m: 10 km in 26 bins; the losses only in the

@@ -54,48 +54,6 @@ pub(super) fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
     font.box_size(text).map_or(0, |(w, _)| w * 6 / 5)
 }
 
-/// How wide the picture is, where the legend's figures start, and the
-/// title's font size.
-#[derive(Debug, Clone, Copy)]
-struct Layout {
-    width: u32,
-    numbers_x: i32,
-    number_w: i32,
-    title_size: f64,
-}
-
-impl Layout {
-    /// For `title` over a legend whose first column (headed `first`) holds
-    /// `labels`, then `columns` columns of figures `number_w` wide.
-    fn new<'a>(
-        title: &str,
-        first: &'a str,
-        labels: impl Iterator<Item = &'a str>,
-        columns: i32,
-        number_w: i32,
-    ) -> Self {
-        let label_w = labels
-            .chain([first])
-            .map(|l| text_width(l, legend_font()))
-            .max()
-            .unwrap_or(0);
-        // The legend's columns after the labels, and wider when a label
-        // is long.
-        let numbers_x = 70 + label_w as i32 + 20;
-        let width = WIDTH.max((numbers_x + columns * number_w + 30) as u32);
-        // A long title (a simulated link with every parameter) gets a
-        // smaller font before the picture gets wider.
-        let title_size = fit(title, TITLE_SIZE, width - 2 * MARGIN);
-        let width = width.max(text_width(title, title_font(title_size)) + 2 * MARGIN);
-        Layout {
-            width,
-            numbers_x,
-            number_w,
-            title_size,
-        }
-    }
-}
-
 /// One line of a picture (a responder, a source, a link's sweep), in
 /// drawing order: its legend label, its look, and what it draws.
 pub(super) struct Entry<'a, T> {
@@ -138,20 +96,28 @@ pub(super) fn page(
     charts: impl FnOnce(&[Area<'_>]) -> DrawResult,
 ) -> Result<String, PlotError> {
     let (first, columns) = legend.heads;
-    let labels = legend.rows.iter().map(|r| r.label);
-    let layout = Layout::new(title, first, labels, columns.len() as i32, legend.number_w);
+    let labels = legend.rows.iter().map(|r| r.label).chain([first]);
+    let label_w = labels.map(|l| text_width(l, legend_font())).max();
+    // The legend's figures after the labels, and wider when a label is
+    // long.
+    let numbers_x = 70 + label_w.unwrap_or(0) as i32 + 20;
+    let width = WIDTH.max((numbers_x + columns.len() as i32 * legend.number_w + 30) as u32);
+    // A long title (a simulated link with every parameter) gets a smaller
+    // font before the picture gets wider.
+    let title_size = fit(title, TITLE_SIZE, width - 2 * MARGIN);
+    let width = width.max(text_width(title, title_font(title_size)) + 2 * MARGIN);
     let rows = legend.rows.len().max(1) as u32;
     let height = TITLE_H + heights.iter().sum::<u32>() + ROW_H * (rows + 1) + 20;
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (layout.width, height)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
         let drawn = (|| -> DrawResult {
             root.fill(&WHITE)?;
             let (head, mut rest) = root.split_vertically(TITLE_H);
             head.draw(&Text::new(
                 title,
                 (MARGIN as i32, TITLE_H as i32 / 2),
-                title_font(layout.title_size)
+                title_font(title_size)
                     .into_text_style(&root)
                     .pos(Pos::new(HPos::Left, VPos::Center)),
             ))?;
@@ -162,7 +128,7 @@ pub(super) fn page(
                 rest = below;
             }
             charts(&areas)?;
-            legend_table(&rest, &layout, legend)?;
+            legend_table(&rest, numbers_x, legend)?;
             root.present()?;
             Ok(())
         })();
@@ -181,29 +147,23 @@ pub(super) struct LegendRow<'a> {
 
 /// The legend: a header, a rule, and a row per line; its `empty` text
 /// in place of the rows when there are none.
-fn legend_table(area: &Area<'_>, layout: &Layout, legend: &Legend<'_>) -> DrawResult {
+fn legend_table(area: &Area<'_>, numbers_x: i32, legend: &Legend<'_>) -> DrawResult {
     let (first, columns) = legend.heads;
-    let font = legend_font();
-    let left = font
-        .clone()
-        .into_text_style(area)
-        .pos(Pos::new(HPos::Left, VPos::Center));
-    let right = font
-        .into_text_style(area)
-        .pos(Pos::new(HPos::Right, VPos::Center));
+    let style =
+        |font: FontDesc<'static>, h| font.into_text_style(area).pos(Pos::new(h, VPos::Center));
+    let (left, right) = (
+        style(legend_font(), HPos::Left),
+        style(legend_font(), HPos::Right),
+    );
+    let bold = || legend_font().style(FontStyle::Bold);
     let row_y = |r: usize| ROW_H as i32 * r as i32 + ROW_H as i32 / 2 + 4;
-    let column = |j: usize| layout.numbers_x + layout.number_w * (j as i32 + 1);
-    let bold = legend_font().style(FontStyle::Bold).into_text_style(area);
-    area.draw(&Text::new(
-        first,
-        (70, row_y(0)),
-        bold.clone().pos(Pos::new(HPos::Left, VPos::Center)),
-    ))?;
+    let column = |j: usize| numbers_x + legend.number_w * (j as i32 + 1);
+    area.draw(&Text::new(first, (70, row_y(0)), style(bold(), HPos::Left)))?;
     for (j, name) in columns.iter().enumerate() {
         area.draw(&Text::new(
             *name,
             (column(j), row_y(0)),
-            bold.clone().pos(Pos::new(HPos::Right, VPos::Center)),
+            style(bold(), HPos::Right),
         ))?;
     }
     let rule = row_y(0) + ROW_H as i32 / 2;

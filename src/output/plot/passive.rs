@@ -25,7 +25,7 @@ const NUMBER_W: i32 = 100;
 /// One source of a passive run, span by span.
 #[derive(Debug, Clone)]
 pub(super) struct SourceTrack {
-    spans: Bins<Nanos, Sums>,
+    spans: Bins<Sums>,
     radio: bool,
     /// The run's own figures for it, for the legend: known once the
     /// link's summary came.
@@ -35,7 +35,7 @@ pub(super) struct SourceTrack {
 impl SourceTrack {
     pub(super) fn new(radio: bool) -> Self {
         SourceTrack {
-            spans: Bins::new(FIRST_SPAN_NS, SPANS),
+            spans: Bins::new(FIRST_SPAN_NS as f64, 1e9, SPANS),
             radio,
             summary: None,
         }
@@ -47,7 +47,7 @@ impl SourceTrack {
         if w.start == w.end && w.is_empty() {
             return;
         }
-        self.spans.at(w.start).window(w);
+        self.spans.at(w.start as f64).window(w);
     }
 
     pub(super) fn on_summary(&mut self, s: &SourceSummary) {
@@ -170,7 +170,7 @@ mod tests {
         assert_eq!(covered, day * FIRST_SPAN_NS);
         // 128 s a span now: each still at 50 a second; the fourth, seconds
         // 384 to 511, lost 13 (390, 400, ... 510).
-        assert_eq!(t.spans.width, 128 * FIRST_SPAN_NS);
+        assert_eq!(t.spans.width, (128 * FIRST_SPAN_NS) as f64);
         let fourth = &t.spans.bins[3];
         assert_eq!(fourth.frames_per_s(), Some(50.0));
         assert_eq!(fourth.loss_pct(), Some(100.0 * 13.0 / (13.0 + 6_400.0)));

@@ -12,70 +12,39 @@ pub(super) trait Merge: Copy + Default {
     fn merge(self, other: Self) -> Self;
 }
 
-/// A bin's width: a time in ns (drawn in seconds), or a distance in metres.
-pub(super) trait Width: Copy {
-    /// The drawn unit, in the width's: a second's ns, or 1.
-    const UNIT: f64;
-    /// The bin `x` falls in.
-    fn index(x: Self, width: Self) -> usize;
-    fn doubled(self) -> Self;
-    fn as_f64(self) -> f64;
-}
-
-impl Width for Nanos {
-    const UNIT: f64 = 1e9;
-    fn index(x: Self, width: Self) -> usize {
-        (x / width) as usize
-    }
-    fn doubled(self) -> Self {
-        self * 2
-    }
-    fn as_f64(self) -> f64 {
-        self as f64
-    }
-}
-
-impl Width for f64 {
-    const UNIT: f64 = 1.0;
-    fn index(x: Self, width: Self) -> usize {
-        (x / width).max(0.0) as usize
-    }
-    fn doubled(self) -> Self {
-        self * 2.0
-    }
-    fn as_f64(self) -> f64 {
-        self
-    }
-}
-
-/// At most `max` bins, the first `width` wide.
+/// At most `max` bins, the first `width` wide, drawn in `unit`s (a time
+/// in ns drawn in seconds: 1e9). A time stays exact as an `f64` for 104
+/// days of ns.
 #[derive(Debug, Clone)]
-pub(super) struct Bins<W, T> {
-    pub(super) width: W,
+pub(super) struct Bins<T> {
+    pub(super) width: f64,
+    unit: f64,
     max: usize,
     pub(super) bins: Vec<T>,
 }
 
-impl<W: Width, T: Merge> Bins<W, T> {
-    pub(super) fn new(width: W, max: usize) -> Self {
+impl<T: Merge> Bins<T> {
+    pub(super) fn new(width: f64, unit: f64, max: usize) -> Self {
         Bins {
             width,
+            unit,
             max,
             bins: Vec::new(),
         }
     }
 
     /// The bin `x` falls in, the bins widened until it is one of them.
-    pub(super) fn at(&mut self, x: W) -> &mut T {
-        while W::index(x, self.width) >= self.max {
+    pub(super) fn at(&mut self, x: f64) -> &mut T {
+        let index = |width: f64| (x / width).max(0.0) as usize;
+        while index(self.width) >= self.max {
             self.bins = self
                 .bins
                 .chunks(2)
                 .map(|c| c.iter().fold(T::default(), |a, &b| a.merge(b)))
                 .collect();
-            self.width = self.width.doubled();
+            self.width *= 2.0;
         }
-        let i = W::index(x, self.width);
+        let i = index(self.width);
         if self.bins.len() <= i {
             self.bins.resize(i + 1, T::default());
         }
@@ -84,9 +53,8 @@ impl<W: Width, T: Merge> Bins<W, T> {
 
     /// Each bin's middle, in the drawn unit, and what it holds.
     pub(super) fn each(&self) -> impl Iterator<Item = (f64, &T)> {
-        let width = self.width.as_f64();
         let each = self.bins.iter().enumerate();
-        each.map(move |(i, s)| ((i as f64 + 0.5) * width / W::UNIT, s))
+        each.map(|(i, s)| ((i as f64 + 0.5) * self.width / self.unit, s))
     }
 
     /// Points of `f` over the bins that have one, at their middle.
@@ -96,7 +64,7 @@ impl<W: Width, T: Merge> Bins<W, T> {
 
     /// The end of the last bin, in the drawn unit.
     pub(super) fn end(&self) -> f64 {
-        self.bins.len() as f64 * self.width.as_f64() / W::UNIT
+        self.bins.len() as f64 * self.width / self.unit
     }
 
     /// Every bin merged.

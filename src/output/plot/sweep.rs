@@ -8,12 +8,15 @@ use plotters::style::text_anchor::{HPos, Pos, VPos};
 
 use super::draw::{chart, log_axis};
 use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT};
-use crate::engine::sweep::step::StepFigures;
+use crate::engine::sweep::step::{StepFigures, StepRtt};
 use crate::engine::sweep::verdict::SweepSummary;
 
 const RTT_H: u32 = 340;
 const LOSS_H: u32 = 230;
 const NUMBER_W: i32 = 130;
+
+/// Each link's sweep, in drawing order.
+type Sweeps<'a> = [Entry<'a, SweepSummary>];
 
 /// A sweep's complete steps, by offered rate.
 fn points(sweep: &SweepSummary) -> Vec<&StepFigures> {
@@ -29,7 +32,7 @@ fn points(sweep: &SweepSummary) -> Vec<&StepFigures> {
 /// A legend row per link: its knee (rate and bytes per second), the first
 /// step's p99 it was judged against, and its queueing grade (A+ to F, as
 /// the bufferbloat tests grade added latency).
-pub(super) fn svg(title: &str, entries: &[Entry<'_, SweepSummary>]) -> Result<String, PlotError> {
+pub(super) fn svg(title: &str, entries: &Sweeps<'_>) -> Result<String, PlotError> {
     let rows = frame::rows(entries, |s| {
         vec![
             s.knee.map(|k| format!("{:.1}", k.rate_hz)),
@@ -63,11 +66,7 @@ pub(super) fn svg(title: &str, entries: &[Entry<'_, SweepSummary>]) -> Result<St
 
 /// p99 as a solid line and p50 dashed, on log axes; the knee as a
 /// vertical rule with its rate.
-fn rtt_chart(
-    entries: &[Entry<'_, SweepSummary>],
-    area: &Area<'_>,
-    (from, to): (f64, f64),
-) -> DrawResult {
+fn rtt_chart(entries: &Sweeps<'_>, area: &Area<'_>, (from, to): (f64, f64)) -> DrawResult {
     let rtts: Vec<f64> = entries
         .iter()
         .flat_map(|e| points(e.track))
@@ -81,36 +80,22 @@ fn rtt_chart(
     let (x, y) = (log_axis(from, to), log_axis(low, high));
     let mut chart = chart(area, caption, (None, "RTT (ms, log scale)"), x, y)?;
     for e in entries {
-        let points = points(e.track);
-        let p99: Vec<(f64, f64)> = points
-            .iter()
-            .filter_map(|s| Some((s.offered_hz, s.rtt?.p99_us / 1e3)))
-            .collect();
-        let p50: Vec<(f64, f64)> = points
-            .iter()
-            .filter_map(|s| Some((s.offered_hz, s.rtt?.p50_us / 1e3)))
-            .collect();
-        chart.draw_series(LineSeries::new(
-            p99.iter().copied(),
-            e.look.color.stroke_width(2),
-        ))?;
-        chart.draw_series(DashedLineSeries::new(
-            p50.iter().copied(),
-            6,
-            4,
-            e.look.color.stroke_width(1),
-        ))?;
+        let rtt = |f: fn(&StepRtt) -> f64| -> Vec<(f64, f64)> {
+            let steps = points(e.track).into_iter();
+            steps
+                .filter_map(|s| Some((s.offered_hz, f(&s.rtt?) / 1e3)))
+                .collect()
+        };
+        let (p99, p50) = (rtt(|r| r.p99_us), rtt(|r| r.p50_us));
+        let (solid, thin) = (e.look.color.stroke_width(2), e.look.color.stroke_width(1));
+        chart.draw_series(LineSeries::new(p99.iter().copied(), solid))?;
+        chart.draw_series(DashedLineSeries::new(p50.iter().copied(), 6, 4, thin))?;
         for &p in p99.iter().chain(&p50) {
             chart.plotting_area().draw(&e.look.marker(p, 4))?;
         }
         if let Some(k) = &e.track.knee {
             let rule = [(k.rate_hz, low), (k.rate_hz, high)];
-            chart.draw_series(DashedLineSeries::new(
-                rule,
-                3,
-                3,
-                e.look.color.stroke_width(1),
-            ))?;
+            chart.draw_series(DashedLineSeries::new(rule, 3, 3, thin))?;
             chart.plotting_area().draw(&Text::new(
                 format!("knee {:.0}/s", k.rate_hz),
                 (k.rate_hz, high / 1.1),
@@ -125,11 +110,7 @@ fn rtt_chart(
 }
 
 /// Each step's loss, on the same rate axis.
-fn loss_chart(
-    entries: &[Entry<'_, SweepSummary>],
-    area: &Area<'_>,
-    (from, to): (f64, f64),
-) -> DrawResult {
+fn loss_chart(entries: &Sweeps<'_>, area: &Area<'_>, (from, to): (f64, f64)) -> DrawResult {
     let top = entries
         .iter()
         .flat_map(|e| points(e.track))
