@@ -5,7 +5,7 @@
 //! in `.prom`, which the collector skips), is synced, then renamed over the
 //! old one, which POSIX makes atomic.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
@@ -25,11 +25,7 @@ impl Textfile {
             .file_name()
             .map_or_else(|| "metrics".into(), |n| n.to_string_lossy().into_owned());
         let temp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-        let file = OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&temp)?;
+        let file = File::create(&temp)?;
         Ok(Textfile {
             path: path.to_path_buf(),
             temp,

@@ -106,24 +106,16 @@ pub(crate) struct PlotData {
 
 impl PlotData {
     pub(crate) fn on_event(&mut self, link: usize, e: &MatchEvent) {
+        let (MatchEvent::Reply { responder, .. } | MatchEvent::Lost { responder, .. }) = *e else {
+            return;
+        };
+        let track = self
+            .tracks
+            .entry((link, responder))
+            .or_insert_with(Track::new);
         match *e {
-            MatchEvent::Reply {
-                responder,
-                sent_at,
-                rtt,
-                ..
-            } => self
-                .tracks
-                .entry((link, responder))
-                .or_insert_with(Track::new)
-                .reply(sent_at, rtt),
-            MatchEvent::Lost {
-                responder, sent_at, ..
-            } => self
-                .tracks
-                .entry((link, responder))
-                .or_insert_with(Track::new)
-                .lost(sent_at),
+            MatchEvent::Reply { sent_at, rtt, .. } => track.reply(sent_at, rtt),
+            MatchEvent::Lost { sent_at, .. } => track.lost(sent_at),
             _ => {}
         }
     }
@@ -151,16 +143,15 @@ impl PlotData {
     pub(crate) fn on_sources(&mut self, link: usize, table: &TableSummary) {
         for s in &table.sources {
             if let Some(t) = self.sources.get_mut(&(link, s.source)) {
-                t.on_summary(s);
+                t.summary = Some(s.clone());
             }
         }
     }
 
     /// A responder's legend entry; with several links, its link too.
     pub(super) fn label(&self, link: usize, id: SysComp) -> String {
-        let id = format!("{}/{}", id.sysid, id.compid);
         match self.links.len() {
-            1 => id,
+            1 => id.to_string(),
             _ => format!("{} {id}", self.links.get(link).map_or("?", String::as_str)),
         }
     }
@@ -175,7 +166,7 @@ impl PlotData {
         }
         if !self.sources.is_empty() {
             let entries = frame::entries(&self.sources, |(link, id), track| {
-                let radio = if track.is_radio() { " (radio)" } else { "" };
+                let radio = if track.radio { " (radio)" } else { "" };
                 format!("{}{radio}", self.label(link, id))
             });
             return passive::svg(&self.title(" --passive"), &entries);

@@ -121,12 +121,8 @@ fn over_time(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawR
     let mut chart = chart(area, "RTT over time", (None, "RTT (ms)"), x, y)?;
     for (k, e) in entries.iter().enumerate() {
         let points = e.track.spans.points(Span::mean_ms);
-        line(
-            &mut chart,
-            &e.look,
-            &points,
-            Marks::Spread(k, entries.len()),
-        )?;
+        let marks = Marks::Spread(k, entries.len());
+        line(&mut chart, &e.look, &points, marks)?;
     }
     Ok(())
 }
@@ -162,6 +158,9 @@ where
     mesh.y_desc(y_desc).draw()?;
     Ok(chart)
 }
+
+/// A line's points, (x, y).
+pub(super) type Points = Vec<(f64, f64)>;
 
 pub(super) type Chart<'a, X, Y> = ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>;
 
@@ -240,9 +239,8 @@ fn losses(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResu
         let guide = [(0.0, lane(k)), (t_max, lane(k))];
         chart.draw_series(LineSeries::new(guide, RGBColor(0xDD, 0xDD, 0xDD)))?;
         for (x, _) in e.track.spans.each().filter(|(_, s)| s.lost > 0) {
-            chart
-                .plotting_area()
-                .draw(&e.look.marker((x, lane(k)), 5))?;
+            let mark = e.look.marker((x, lane(k)), 5);
+            chart.plotting_area().draw(&mark)?;
         }
     }
     // The rows' name, where the other charts have their y axis title.
@@ -290,12 +288,8 @@ fn distribution_chart(entries: &[Entry<'_, Track>], area: &Area<'_>) -> DrawResu
         }
         steps.push((bin_low_ms(hi), 0.0));
         chart.draw_series(LineSeries::new(steps, e.look.color.stroke_width(2)))?;
-        if let Some(p50) = t
-            .summary
-            .as_ref()
-            .and_then(|r| r.rtt)
-            .map(|s| s.p50_us / 1e3)
-        {
+        if let Some(rtt) = t.summary.as_ref().and_then(|r| r.rtt) {
+            let p50 = rtt.p50_us / 1e3;
             let i = bin((p50 * 1e6) as Nanos).clamp(lo, hi - 1);
             chart
                 .plotting_area()

@@ -36,13 +36,6 @@ pub(super) fn title_font(size: f64) -> FontDesc<'static> {
     (FONT, size).into_font()
 }
 
-/// The font size, from `size` down to three fifths of it, at which `text`
-/// fits in `width`.
-pub(super) fn fit(text: &str, size: f64, width: u32) -> f64 {
-    let wide = text_width(text, title_font(size)).max(1);
-    (size * f64::from(width) / f64::from(wide)).clamp(size * 0.6, size)
-}
-
 pub(super) fn legend_font() -> FontDesc<'static> {
     (FONT, 17).into_font()
 }
@@ -103,8 +96,10 @@ pub(super) fn page(
     let numbers_x = 70 + label_w.unwrap_or(0) as i32 + 20;
     let width = WIDTH.max((numbers_x + columns.len() as i32 * legend.number_w + 30) as u32);
     // A long title (a simulated link with every parameter) gets a smaller
-    // font before the picture gets wider.
-    let title_size = fit(title, TITLE_SIZE, width - 2 * MARGIN);
+    // font, down to three fifths, before the picture gets wider.
+    let wide = f64::from(text_width(title, title_font(TITLE_SIZE)).max(1));
+    let fitting = TITLE_SIZE * f64::from(width - 2 * MARGIN) / wide;
+    let title_size = fitting.clamp(TITLE_SIZE * 0.6, TITLE_SIZE);
     let width = width.max(text_width(title, title_font(title_size)) + 2 * MARGIN);
     let rows = legend.rows.len().max(1) as u32;
     let height = TITLE_H + heights.iter().sum::<u32>() + ROW_H * (rows + 1) + 20;
@@ -151,10 +146,8 @@ fn legend_table(area: &Area<'_>, numbers_x: i32, legend: &Legend<'_>) -> DrawRes
     let (first, columns) = legend.heads;
     let style =
         |font: FontDesc<'static>, h| font.into_text_style(area).pos(Pos::new(h, VPos::Center));
-    let (left, right) = (
-        style(legend_font(), HPos::Left),
-        style(legend_font(), HPos::Right),
-    );
+    let left = style(legend_font(), HPos::Left);
+    let right = style(legend_font(), HPos::Right);
     let bold = || legend_font().style(FontStyle::Bold);
     let row_y = |r: usize| ROW_H as i32 * r as i32 + ROW_H as i32 / 2 + 4;
     let column = |j: usize| numbers_x + legend.number_w * (j as i32 + 1);

@@ -9,7 +9,7 @@
 //! frames and losses summed, never dropped.
 
 use super::data::SPANS;
-use super::draw::{chart, line, Marks};
+use super::draw::{chart, line, Marks, Points};
 use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError};
 use super::spans::{Bins, Sums};
 use crate::engine::summary::passive::{SeqCounts, SourceSummary};
@@ -26,10 +26,11 @@ const NUMBER_W: i32 = 100;
 #[derive(Debug, Clone)]
 pub(super) struct SourceTrack {
     spans: Bins<Sums>,
-    radio: bool,
+    /// The SiK radio's own RADIO_STATUS source.
+    pub(super) radio: bool,
     /// The run's own figures for it, for the legend: known once the
     /// link's summary came.
-    summary: Option<SourceSummary>,
+    pub(super) summary: Option<SourceSummary>,
 }
 
 impl SourceTrack {
@@ -48,14 +49,6 @@ impl SourceTrack {
             return;
         }
         self.spans.at(w.start as f64).window(w);
-    }
-
-    pub(super) fn on_summary(&mut self, s: &SourceSummary) {
-        self.summary = Some(s.clone());
-    }
-
-    pub(super) fn is_radio(&self) -> bool {
-        self.radio
     }
 }
 
@@ -91,23 +84,28 @@ pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<Str
     })
 }
 
+/// Each source's `figure` per span, a line each.
+fn lines(entries: &[Entry<'_, SourceTrack>], figure: fn(&Sums) -> Option<f64>) -> Vec<Points> {
+    entries
+        .iter()
+        .map(|e| e.track.spans.points(figure))
+        .collect()
+}
+
+/// The highest of `lines`, 1 at least.
+fn top(lines: &[Points]) -> f64 {
+    lines.iter().flatten().map(|p| p.1).fold(1.0f64, f64::max)
+}
+
 /// Each source's frames a second per span, one line each.
 fn rate_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let top = entries
-        .iter()
-        .flat_map(|e| e.track.spans.bins.iter().filter_map(Sums::frames_per_s))
-        .fold(1.0f64, f64::max);
-    let (x, y) = (0f64..t_max, 0f64..top * 1.08);
+    let lines = lines(entries, Sums::frames_per_s);
+    let (x, y) = (0f64..t_max, 0f64..top(&lines) * 1.08);
     let descs = (None, "frames/s");
     let mut chart = chart(area, "frames a second, by source", descs, x, y)?;
-    for (k, e) in entries.iter().enumerate() {
-        let points = e.track.spans.points(Sums::frames_per_s);
-        line(
-            &mut chart,
-            &e.look,
-            &points,
-            Marks::Spread(k, entries.len()),
-        )?;
+    for (k, (e, points)) in entries.iter().zip(&lines).enumerate() {
+        let marks = Marks::Spread(k, entries.len());
+        line(&mut chart, &e.look, points, marks)?;
     }
     Ok(())
 }
@@ -115,20 +113,12 @@ fn rate_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -
 /// Each source's sequence loss per span, a line each with its marker where
 /// a span lost frames; it carries the time axis.
 fn loss_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let top = entries
-        .iter()
-        .flat_map(|e| e.track.spans.bins.iter().filter_map(Sums::loss_pct))
-        .fold(1.0f64, f64::max);
+    let lines = lines(entries, Sums::loss_pct);
     let caption = "sequence loss per span (marker: a span that lost frames)";
     let descs = (Some("time since start (s)"), "lost (%)");
-    let mut chart = chart(area, caption, descs, 0f64..t_max, 0f64..top * 1.1)?;
-    for e in entries {
-        line(
-            &mut chart,
-            &e.look,
-            &e.track.spans.points(Sums::loss_pct),
-            Marks::Lost,
-        )?;
+    let mut chart = chart(area, caption, descs, 0f64..t_max, 0f64..top(&lines) * 1.1)?;
+    for (e, points) in entries.iter().zip(&lines) {
+        line(&mut chart, &e.look, points, Marks::Lost)?;
     }
     Ok(())
 }
