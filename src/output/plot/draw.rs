@@ -112,17 +112,14 @@ pub(super) fn caption_font() -> TextStyle<'static> {
 
 /// Each responder's mean RTT per span, one line each.
 fn over_time(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let rtt_max = entries
-        .iter()
-        .flat_map(|e| e.track.spans.bins.iter().filter_map(Span::mean_ms))
-        .reduce(f64::max)
-        .unwrap_or(1.0);
+    let lines = lines(entries, |t| t.spans.points(Span::mean_ms));
+    let rtt_max = lines.iter().flatten().map(|p| p.1).reduce(f64::max);
+    let rtt_max = rtt_max.unwrap_or(1.0);
     let (x, y) = (0f64..t_max, 0f64..rtt_max * 1.08);
     let mut chart = chart(area, "RTT over time", (None, "RTT (ms)"), x, y)?;
-    for (k, e) in entries.iter().enumerate() {
-        let points = e.track.spans.points(Span::mean_ms);
+    for (k, (e, points)) in entries.iter().zip(&lines).enumerate() {
         let marks = Marks::Spread(k, entries.len());
-        line(&mut chart, &e.look, &points, marks)?;
+        line(&mut chart, &e.look, points, marks)?;
     }
     Ok(())
 }
@@ -163,6 +160,11 @@ where
 pub(super) type Points = Vec<(f64, f64)>;
 
 pub(super) type Chart<'a, X, Y> = ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>;
+
+/// Each entry's line, by `points`.
+pub(super) fn lines<T>(entries: &[Entry<'_, T>], points: impl Fn(&T) -> Points) -> Vec<Points> {
+    entries.iter().map(|e| points(e.track)).collect()
+}
 
 /// Where a line's markers go.
 pub(super) enum Marks {

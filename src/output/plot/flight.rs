@@ -13,7 +13,7 @@ use plotters::prelude::*;
 use super::data::SPANS;
 use super::draw::{caption_font, chart, line, Marks};
 use super::frame::{self, Area, DrawResult, Legend, LegendRow, PlotError};
-use super::spans::{Bins, Sums};
+use super::spans::{merged, Bins, Sums};
 use super::style::Look;
 use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, DEFAULT_WINDOW_NS};
 
@@ -69,7 +69,7 @@ impl FlightTrack {
 /// Three rows in the legend, a line each: its figure over the whole log,
 /// and the lowest and highest of its spans.
 pub(super) fn svg(title: &str, track: &FlightTrack) -> Result<String, PlotError> {
-    let total = track.time.total();
+    let total = merged(&track.time.bins);
     let row =
         |n: usize, label: &'static str, whole: Option<f64>, f: &dyn Fn(&Sums) -> Option<f64>| {
             let spans: Vec<f64> = track.time.bins.iter().filter_map(f).collect();

@@ -9,7 +9,7 @@
 //! frames and losses summed, never dropped.
 
 use super::data::SPANS;
-use super::draw::{chart, line, Marks, Points};
+use super::draw::{chart, line, lines, Marks, Points};
 use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError};
 use super::spans::{Bins, Sums};
 use crate::engine::summary::passive::{SeqCounts, SourceSummary};
@@ -84,14 +84,6 @@ pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<Str
     })
 }
 
-/// Each source's `figure` per span, a line each.
-fn lines(entries: &[Entry<'_, SourceTrack>], figure: fn(&Sums) -> Option<f64>) -> Vec<Points> {
-    entries
-        .iter()
-        .map(|e| e.track.spans.points(figure))
-        .collect()
-}
-
 /// The highest of `lines`, 1 at least.
 fn top(lines: &[Points]) -> f64 {
     lines.iter().flatten().map(|p| p.1).fold(1.0f64, f64::max)
@@ -99,7 +91,7 @@ fn top(lines: &[Points]) -> f64 {
 
 /// Each source's frames a second per span, one line each.
 fn rate_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let lines = lines(entries, Sums::frames_per_s);
+    let lines = lines(entries, |t| t.spans.points(Sums::frames_per_s));
     let (x, y) = (0f64..t_max, 0f64..top(&lines) * 1.08);
     let descs = (None, "frames/s");
     let mut chart = chart(area, "frames a second, by source", descs, x, y)?;
@@ -113,7 +105,7 @@ fn rate_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -
 /// Each source's sequence loss per span, a line each with its marker where
 /// a span lost frames; it carries the time axis.
 fn loss_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let lines = lines(entries, Sums::loss_pct);
+    let lines = lines(entries, |t| t.spans.points(Sums::loss_pct));
     let caption = "sequence loss per span (marker: a span that lost frames)";
     let descs = (Some("time since start (s)"), "lost (%)");
     let mut chart = chart(area, caption, descs, 0f64..t_max, 0f64..top(&lines) * 1.1)?;

@@ -12,6 +12,11 @@ pub(super) trait Merge: Copy + Default {
     fn merge(self, other: Self) -> Self;
 }
 
+/// `bins` summed into one.
+pub(super) fn merged<T: Merge>(bins: &[T]) -> T {
+    bins.iter().fold(T::default(), |a, &b| a.merge(b))
+}
+
 /// At most `max` bins, the first `width` wide, drawn in `unit`s (a time
 /// in ns drawn in seconds: 1e9). A time stays exact as an `f64` for 104
 /// days of ns.
@@ -37,11 +42,7 @@ impl<T: Merge> Bins<T> {
     pub(super) fn at(&mut self, x: f64) -> &mut T {
         let index = |width: f64| (x / width).max(0.0) as usize;
         while index(self.width) >= self.max {
-            self.bins = self
-                .bins
-                .chunks(2)
-                .map(|c| c.iter().fold(T::default(), |a, &b| a.merge(b)))
-                .collect();
+            self.bins = self.bins.chunks(2).map(merged).collect();
             self.width *= 2.0;
         }
         let i = index(self.width);
@@ -65,11 +66,6 @@ impl<T: Merge> Bins<T> {
     /// The end of the last bin, in the drawn unit.
     pub(super) fn end(&self) -> f64 {
         self.bins.len() as f64 * self.width / self.unit
-    }
-
-    /// Every bin merged.
-    pub(super) fn total(&self) -> T {
-        self.bins.iter().fold(T::default(), |a, &b| a.merge(b))
     }
 }
 
