@@ -39,15 +39,12 @@ pub(crate) fn write_section(
         total += v.count_since_last_iteration();
         let value = v.value_iterated_to() as f64 / SCALE;
         let q = v.quantile_iterated_to();
+        write!(out, "{value:12.3} {q:2.12} {total:10}")?;
+        // The last line, at 100 %, has no 1/(1-Percentile).
         if q < 1.0 {
-            writeln!(
-                out,
-                "{value:12.3} {q:2.12} {total:10} {:14.2}",
-                1.0 / (1.0 - q)
-            )?;
-        } else {
-            writeln!(out, "{value:12.3} {q:2.12} {total:10}")?;
+            write!(out, " {:14.2}", 1.0 / (1.0 - q))?;
         }
+        writeln!(out)?;
     }
     writeln!(
         out,

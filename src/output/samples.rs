@@ -84,14 +84,9 @@ fn radio_columns(r: Option<RadioReport>) -> String {
     let Some(r) = r else {
         return ",,,,".into();
     };
+    let known = |v: u8| (v != radio::UNKNOWN).then(|| v.to_string());
     [r.rssi, r.remrssi, r.txbuf, r.noise, r.remnoise]
-        .map(|v| {
-            if v == radio::UNKNOWN {
-                String::new()
-            } else {
-                v.to_string()
-            }
-        })
+        .map(|v| known(v).unwrap_or_default())
         .join(",")
 }
 

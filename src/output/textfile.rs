@@ -5,7 +5,7 @@
 //! in `.prom`, which the collector skips), is synced, then renamed over the
 //! old one, which POSIX makes atomic.
 
-use std::fs::{File, OpenOptions};
+use std::fs::File;
 use std::io::{self, Write};
 use std::path::{Path, PathBuf};
 
@@ -19,19 +19,13 @@ pub(crate) struct Textfile {
 
 impl Textfile {
     pub(crate) fn create(path: &Path) -> io::Result<Self> {
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d,
-            _ => Path::new("."),
-        };
+        let parent = path.parent().filter(|d| !d.as_os_str().is_empty());
+        let dir = parent.unwrap_or(Path::new("."));
         let name = path
             .file_name()
             .map_or_else(|| "metrics".into(), |n| n.to_string_lossy().into_owned());
         let temp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
-        let file = OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&temp)?;
+        let file = File::create(&temp)?;
         Ok(Textfile {
             path: path.to_path_buf(),
             temp,

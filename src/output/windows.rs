@@ -53,19 +53,13 @@ impl Window {
     }
 }
 
-/// The cumulative figures of one source at the last telling.
-#[derive(Debug, Clone, Copy, Default)]
-struct Seen {
-    counts: SeqCounts,
-    bytes: u64,
-}
-
 /// Turns successive tables into windows. Bounded as the table is (its
 /// tracked sources and the radio).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Windows {
     last_at: Nanos,
-    last: BTreeMap<SysComp, Seen>,
+    /// Each source's counts and bytes at the last telling.
+    last: BTreeMap<SysComp, (SeqCounts, u64)>,
 }
 
 impl Windows {
@@ -77,15 +71,9 @@ impl Windows {
             .sources
             .iter()
             .map(|s| {
-                let was = self.last.insert(
-                    s.source,
-                    Seen {
-                        counts: s.counts,
-                        bytes: s.bytes,
-                    },
-                );
-                let was = was.unwrap_or_default();
-                let (now, then) = (&s.counts, &was.counts);
+                let was = self.last.insert(s.source, (s.counts, s.bytes));
+                let (then, bytes) = was.unwrap_or_default();
+                let now = &s.counts;
                 Window {
                     source: s.source,
                     radio: s.radio,
@@ -95,7 +83,7 @@ impl Windows {
                     lost: now.lost as i64 - then.lost as i64,
                     duplicate: now.duplicate.saturating_sub(then.duplicate),
                     reordered: now.reordered.saturating_sub(then.reordered),
-                    bytes: s.bytes.saturating_sub(was.bytes),
+                    bytes: s.bytes.saturating_sub(bytes),
                 }
             })
             .collect();

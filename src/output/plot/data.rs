@@ -5,9 +5,10 @@
 use std::collections::BTreeMap;
 
 use super::flight::{self, FlightTrack};
-use super::frame::PlotError;
+use super::frame::{self, PlotError};
 use super::passive::{self, SourceTrack};
-use super::{draw, style, sweep};
+use super::spans::{Bins, Merge};
+use super::{draw, sweep};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::ResponderSummary;
@@ -32,7 +33,7 @@ pub(super) struct Span {
     pub(super) lost: u64,
 }
 
-impl Span {
+impl Merge for Span {
     fn merge(self, other: Span) -> Span {
         Span {
             replies: self.replies + other.replies,
@@ -42,59 +43,40 @@ impl Span {
     }
 }
 
-/// A responder's figures from the run's summary, shown in the legend.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct Figures {
-    pub(super) sent: u64,
-    pub(super) loss_pct: f64,
-    pub(super) p50_ms: Option<f64>,
-    pub(super) p99_ms: Option<f64>,
+impl Span {
+    /// The mean RTT in it, ms; `None` without replies.
+    pub(super) fn mean_ms(&self) -> Option<f64> {
+        (self.replies > 0).then(|| self.rtt_sum as f64 / self.replies as f64 / 1e6)
+    }
 }
 
 #[derive(Debug, Clone)]
 pub(super) struct Track {
-    pub(super) span_ns: Nanos,
-    pub(super) spans: Vec<Span>,
+    pub(super) spans: Bins<Span>,
     pub(super) bins: [u64; BINS],
-    /// Known once the link's summary came.
-    pub(super) figures: Option<Figures>,
+    /// The run's own figures for it, for the legend: known once the
+    /// link's summary came.
+    pub(super) summary: Option<ResponderSummary>,
 }
 
 impl Track {
     fn new() -> Self {
         Track {
-            span_ns: FIRST_SPAN_NS,
-            spans: Vec::new(),
+            spans: Bins::new(FIRST_SPAN_NS as f64, 1e9, SPANS),
             bins: [0; BINS],
-            figures: None,
+            summary: None,
         }
-    }
-
-    fn span(&mut self, sent_at: Nanos) -> &mut Span {
-        while sent_at / self.span_ns >= SPANS as u64 {
-            self.spans = self
-                .spans
-                .chunks(2)
-                .map(|c| c.iter().fold(Span::default(), |a, &b| a.merge(b)))
-                .collect();
-            self.span_ns *= 2;
-        }
-        let i = (sent_at / self.span_ns) as usize;
-        if self.spans.len() <= i {
-            self.spans.resize(i + 1, Span::default());
-        }
-        &mut self.spans[i]
     }
 
     fn reply(&mut self, sent_at: Nanos, rtt: Nanos) {
-        let s = self.span(sent_at);
+        let s = self.spans.at(sent_at as f64);
         s.replies += 1;
         s.rtt_sum += rtt;
         self.bins[bin(rtt)] += 1;
     }
 
     fn lost(&mut self, sent_at: Nanos) {
-        self.span(sent_at).lost += 1;
+        self.spans.at(sent_at as f64).lost += 1;
     }
 }
 
@@ -124,33 +106,26 @@ pub(crate) struct PlotData {
 
 impl PlotData {
     pub(crate) fn on_event(&mut self, link: usize, e: &MatchEvent) {
+        let (MatchEvent::Reply { responder, .. } | MatchEvent::Lost { responder, .. }) = *e else {
+            return;
+        };
+        let track = self
+            .tracks
+            .entry((link, responder))
+            .or_insert_with(Track::new);
         match *e {
-            MatchEvent::Reply {
-                responder,
-                sent_at,
-                rtt,
-                ..
-            } => self
-                .tracks
-                .entry((link, responder))
-                .or_insert_with(Track::new)
-                .reply(sent_at, rtt),
-            MatchEvent::Lost {
-                responder, sent_at, ..
-            } => self
-                .tracks
-                .entry((link, responder))
-                .or_insert_with(Track::new)
-                .lost(sent_at),
+            MatchEvent::Reply { sent_at, rtt, .. } => track.reply(sent_at, rtt),
+            MatchEvent::Lost { sent_at, .. } => track.lost(sent_at),
             _ => {}
         }
     }
 
-    /// The plot's title: the link, or how many.
-    pub(super) fn title(&self) -> String {
+    /// The plot's title: `kind` (as the command line names it) and the
+    /// link, or how many.
+    fn title(&self, kind: &str) -> String {
         match self.links.as_slice() {
-            [one] => format!("mavping {one}"),
-            several => format!("mavping, {} links", several.len()),
+            [one] => format!("mavping{kind} {one}"),
+            several => format!("mavping{kind}, {} links", several.len()),
         }
     }
 
@@ -168,16 +143,15 @@ impl PlotData {
     pub(crate) fn on_sources(&mut self, link: usize, table: &TableSummary) {
         for s in &table.sources {
             if let Some(t) = self.sources.get_mut(&(link, s.source)) {
-                t.on_summary(s);
+                t.summary = Some(s.clone());
             }
         }
     }
 
     /// A responder's legend entry; with several links, its link too.
     pub(super) fn label(&self, link: usize, id: SysComp) -> String {
-        let id = format!("{}/{}", id.sysid, id.compid);
         match self.links.len() {
-            1 => id,
+            1 => id.to_string(),
             _ => format!("{} {id}", self.links.get(link).map_or("?", String::as_str)),
         }
     }
@@ -191,48 +165,20 @@ impl PlotData {
             return flight::svg(&flight::title(name, track), track);
         }
         if !self.sources.is_empty() {
-            return self.passive_svg();
+            let entries = frame::entries(&self.sources, |(link, id), track| {
+                let radio = if track.radio { " (radio)" } else { "" };
+                format!("{}{radio}", self.label(link, id))
+            });
+            return passive::svg(&self.title(" --passive"), &entries);
         }
         if self.sweeps.is_empty() {
-            return draw::svg(self);
+            let entries = frame::entries(&self.tracks, |(link, id), _| self.label(link, id));
+            return draw::svg(&self.title(""), &entries);
         }
-        let entries: Vec<sweep::SweepEntry<'_>> = self
-            .sweeps
-            .iter()
-            .enumerate()
-            .map(|(n, (&link, s))| sweep::SweepEntry {
-                label: self.links.get(link).cloned().unwrap_or_default(),
-                look: style::Look::nth(n),
-                sweep: s,
-            })
-            .collect();
-        let title = match self.links.as_slice() {
-            [one] => format!("mavping sweep {one}"),
-            several => format!("mavping sweep, {} links", several.len()),
-        };
-        sweep::svg(&title, &entries)
-    }
-
-    /// A passive run: each source's rate and loss over time.
-    fn passive_svg(&self) -> Result<String, PlotError> {
-        let entries: Vec<passive::SourceEntry<'_>> = self
-            .sources
-            .iter()
-            .enumerate()
-            .map(|(n, (&(link, id), track))| {
-                let radio = if track.is_radio() { " (radio)" } else { "" };
-                passive::SourceEntry {
-                    label: format!("{}{radio}", self.label(link, id)),
-                    look: style::Look::nth(n),
-                    track,
-                }
-            })
-            .collect();
-        let title = match self.links.as_slice() {
-            [one] => format!("mavping --passive {one}"),
-            several => format!("mavping --passive, {} links", several.len()),
-        };
-        passive::svg(&title, &entries)
+        let entries = frame::entries(&self.sweeps, |link, _| {
+            self.links.get(link).cloned().unwrap_or_default()
+        });
+        sweep::svg(&self.title(" sweep"), &entries)
     }
 
     /// A link's sweep, drawn instead of its RTT over time.
@@ -246,12 +192,7 @@ impl PlotData {
     pub(crate) fn on_summary(&mut self, link: usize, responders: &[ResponderSummary]) {
         for r in responders {
             if let Some(t) = self.tracks.get_mut(&(link, r.id)) {
-                t.figures = Some(Figures {
-                    sent: r.counts.sent,
-                    loss_pct: 100.0 * r.loss_ratio,
-                    p50_ms: r.rtt.map(|s| s.p50_us / 1e3),
-                    p99_ms: r.rtt.map(|s| s.p99_us / 1e3),
-                });
+                t.summary = Some(r.clone());
             }
         }
     }
@@ -296,9 +237,9 @@ mod tests {
             }
         }
         let t = &d.tracks[&(0, r)];
-        assert!(t.spans.len() <= SPANS);
-        assert_eq!(t.spans.iter().map(|s| s.replies).sum::<u64>(), 324_000);
-        assert_eq!(t.spans.iter().map(|s| s.lost).sum::<u64>(), 36_000);
+        assert!(t.spans.bins.len() <= SPANS);
+        assert_eq!(t.spans.bins.iter().map(|s| s.replies).sum::<u64>(), 324_000);
+        assert_eq!(t.spans.bins.iter().map(|s| s.lost).sum::<u64>(), 36_000);
         assert_eq!(t.bins.iter().sum::<u64>(), 324_000);
         assert_eq!(bin(20_000_000), bin(20_400_000));
         assert_ne!(bin(20_000_000), bin(21_000_000));

@@ -5,14 +5,13 @@
 //! colour and one marker shape ([`Look`]) everywhere.
 
 use plotters::chart::MeshStyle;
-use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::combinators::WithKeyPoints;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::data::{bin, bin_low_ms, PlotData, Track, BINS_PER_DECADE};
-use super::frame::{
-    self, Area, DrawResult, Layout, LegendRow, PlotError, FONT, MARGIN, ROW_H, TITLE_H,
-};
+use super::data::{bin, bin_low_ms, Span, Track, BINS_PER_DECADE};
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT, MARGIN};
 use super::style::Look;
 use crate::engine::Nanos;
 
@@ -68,54 +67,39 @@ pub(super) fn log_ticks(from: f64, to: f64) -> Vec<f64> {
     (first..=last).map(|k| k as f64 * step).collect()
 }
 
-/// One responder, in drawing order.
-struct Entry<'a> {
-    label: String,
-    look: Look,
-    track: &'a Track,
+/// A log axis from `from` to `to` with round ticks.
+pub(super) fn log_axis(from: f64, to: f64) -> WithKeyPoints<LogCoord<f64>> {
+    (from..to).log_scale().with_key_points(log_ticks(from, to))
 }
 
-pub(super) fn svg(data: &PlotData) -> Result<String, PlotError> {
-    let entries: Vec<Entry<'_>> = data
-        .tracks
-        .iter()
-        .enumerate()
-        .map(|(n, (&(link, id), track))| Entry {
-            label: data.label(link, id),
-            look: Look::nth(n),
-            track,
-        })
-        .collect();
-    let title = data.title();
-    let layout = Layout::new(
-        &title,
-        "responder",
-        entries.iter().map(|e| e.label.as_str()),
-        4,
-        NUMBER_W,
-    );
-    let rows = entries.len().max(1) as u32;
-    let height = TITLE_H + TIME_H + LANE_H * rows + LANES_AXIS_H + DIST_H + ROW_H * (rows + 1) + 20;
-    frame::svg(&title, &layout, height, |area| {
-        draw(&entries, area, &layout)
+pub(super) fn svg(title: &str, entries: &[Entry<'_, Track>]) -> Result<String, PlotError> {
+    let rows = frame::rows(entries, |t| {
+        let r = t.summary.as_ref();
+        let rtt = r.and_then(|r| r.rtt);
+        vec![
+            r.map(|r| r.counts.sent.to_string()),
+            r.map(|r| format!("{:.2}", 100.0 * r.loss_ratio)),
+            rtt.map(|s| format!("{:.3}", s.p50_us / 1e3)),
+            rtt.map(|s| format!("{:.3}", s.p99_us / 1e3)),
+        ]
+    });
+    let legend = Legend {
+        heads: ("responder", &["sent", "loss %", "p50 ms", "p99 ms"]),
+        number_w: NUMBER_W,
+        rows,
+        empty: "no responder answered",
+    };
+    let lanes = LANE_H * entries.len().max(1) as u32 + LANES_AXIS_H;
+    frame::page(title, &legend, &[TIME_H, lanes, DIST_H], |areas| {
+        let t_max = entries
+            .iter()
+            .map(|e| e.track.spans.end())
+            .reduce(f64::max)
+            .unwrap_or(1.0);
+        over_time(entries, &areas[0], t_max)?;
+        losses(entries, &areas[1], t_max)?;
+        distribution_chart(entries, &areas[2])
     })
-}
-
-fn draw(entries: &[Entry<'_>], rest: &Area<'_>, layout: &Layout) -> DrawResult {
-    let rows = entries.len().max(1) as u32;
-    let (time, rest) = rest.split_vertically(TIME_H);
-    let (lanes, rest) = rest.split_vertically(LANE_H * rows + LANES_AXIS_H);
-    let (distribution, legend) = rest.split_vertically(DIST_H);
-
-    let t_max = entries
-        .iter()
-        .map(|e| e.track.spans.len() as f64 * e.track.span_ns as f64 / 1e9)
-        .reduce(f64::max)
-        .unwrap_or(1.0);
-    over_time(entries, &time, t_max)?;
-    losses(entries, &lanes, t_max)?;
-    distribution_chart(entries, &distribution)?;
-    legend_table(entries, &legend, layout)
 }
 
 fn axis_font() -> TextStyle<'static> {
@@ -127,41 +111,93 @@ pub(super) fn caption_font() -> TextStyle<'static> {
 }
 
 /// Each responder's mean RTT per span, one line each.
-fn over_time(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let rtt_max = entries
-        .iter()
-        .flat_map(|e| e.track.spans.iter().filter(|s| s.replies > 0))
-        .map(|s| s.rtt_sum as f64 / s.replies as f64 / 1e6)
-        .reduce(f64::max)
-        .unwrap_or(1.0);
-    let mut chart = ChartBuilder::on(area)
-        .caption("RTT over time", caption_font())
+fn over_time(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResult {
+    let lines = lines(entries, |t| t.spans.points(Span::mean_ms));
+    let rtt_max = lines.iter().flatten().map(|p| p.1).reduce(f64::max);
+    let rtt_max = rtt_max.unwrap_or(1.0);
+    let (x, y) = (0f64..t_max, 0f64..rtt_max * 1.08);
+    let mut chart = chart(area, "RTT over time", (None, "RTT (ms)"), x, y)?;
+    for (k, (e, points)) in entries.iter().zip(&lines).enumerate() {
+        let marks = Marks::Spread(k, entries.len());
+        line(&mut chart, &e.look, points, marks)?;
+    }
+    Ok(())
+}
+
+/// A chart on `area` with `caption`, its grid and axes drawn, the axes
+/// named `x_desc` and `y_desc`. Without an `x_desc` it has no x labels
+/// and sits on the chart below it, whose time axis it shares.
+pub(super) fn chart<'a, X: AsRangedCoord, Y: AsRangedCoord>(
+    area: &Area<'a>,
+    caption: &str,
+    (x_desc, y_desc): (Option<&str>, &str),
+    x: X,
+    y: Y,
+) -> Result<Chart<'a, X::CoordDescType, Y::CoordDescType>, Box<dyn std::error::Error>>
+where
+    X::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+{
+    let mut builder = ChartBuilder::on(area);
+    builder
+        .caption(caption, caption_font())
         .margin(MARGIN)
-        .margin_bottom(0)
-        .x_label_area_size(0)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..rtt_max * 1.08)?;
-    mesh(&mut chart).y_desc("RTT (ms)").draw()?;
-    for (k, e) in entries.iter().enumerate() {
-        let t = e.track;
-        let line: Vec<(f64, f64)> = t
-            .spans
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.replies > 0)
-            .map(|(i, s)| (at(t, i), s.rtt_sum as f64 / s.replies as f64 / 1e6))
-            .collect();
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            e.look.color.mix(0.85).stroke_width(2),
-        ))?;
-        // A few of its markers along each line, staggered between
-        // responders, tell the lines apart without their colour.
-        let every = (line.len() / MARKS_PER_LINE).max(1);
-        let offset = k * every / entries.len().max(1);
-        for &p in line.iter().skip(offset).step_by(every) {
-            chart.plotting_area().draw(&e.look.marker(p, 5))?;
+        .y_label_area_size(Y_LABELS_W);
+    match x_desc {
+        Some(_) => builder.x_label_area_size(44),
+        None => builder.margin_bottom(0).x_label_area_size(0),
+    };
+    let mut chart = builder.build_cartesian_2d(x, y)?;
+    let mut mesh = mesh(&mut chart);
+    if let Some(x_desc) = x_desc {
+        mesh.x_desc(x_desc);
+    }
+    mesh.y_desc(y_desc).draw()?;
+    Ok(chart)
+}
+
+/// A line's points, (x, y).
+pub(super) type Points = Vec<(f64, f64)>;
+
+pub(super) type Chart<'a, X, Y> = ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>;
+
+/// Each entry's line, by `points`.
+pub(super) fn lines<T>(entries: &[Entry<'_, T>], points: impl Fn(&T) -> Points) -> Vec<Points> {
+    entries.iter().map(|e| points(e.track)).collect()
+}
+
+/// Where a line's markers go.
+pub(super) enum Marks {
+    /// A few along it, staggered as the `k`-th of `n` lines', so that the
+    /// lines tell apart without their colour.
+    Spread(usize, usize),
+    /// Where its value is above 0: a span that lost.
+    Lost,
+}
+
+/// `points` as a line in `look`'s colour, with its markers at `marks`.
+pub(super) fn line<X, Y>(
+    chart: &mut Chart<'_, X, Y>,
+    look: &Look,
+    points: &[(f64, f64)],
+    marks: Marks,
+) -> DrawResult
+where
+    X: Ranged<ValueType = f64>,
+    Y: Ranged<ValueType = f64>,
+{
+    let style = look.color.mix(0.85).stroke_width(2);
+    chart.draw_series(LineSeries::new(points.iter().copied(), style))?;
+    let marked: Vec<(f64, f64)> = match marks {
+        Marks::Spread(k, n) => {
+            let every = (points.len() / MARKS_PER_LINE).max(1);
+            let spread = points.iter().skip(k * every / n).step_by(every);
+            spread.copied().collect()
         }
+        Marks::Lost => points.iter().filter(|p| p.1 > 0.0).copied().collect(),
+    };
+    for p in marked {
+        chart.plotting_area().draw(&look.marker(p, 5))?;
     }
     Ok(())
 }
@@ -185,14 +221,9 @@ where
     mesh
 }
 
-/// The middle of span `i`, in seconds.
-fn at(t: &Track, i: usize) -> f64 {
-    (i as f64 + 0.5) * t.span_ns as f64 / 1e9
-}
-
 /// A row per responder, in legend order, with its marker where a span lost
 /// a request; it carries the time axis of the chart above.
-fn losses(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
+fn losses(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResult {
     let n = entries.len().max(1);
     let mut chart = ChartBuilder::on(area)
         .margin(MARGIN)
@@ -209,12 +240,9 @@ fn losses(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
     for (k, e) in entries.iter().enumerate() {
         let guide = [(0.0, lane(k)), (t_max, lane(k))];
         chart.draw_series(LineSeries::new(guide, RGBColor(0xDD, 0xDD, 0xDD)))?;
-        let t = e.track;
-        let lost = t.spans.iter().enumerate().filter(|(_, s)| s.lost > 0);
-        for (i, _) in lost {
-            chart
-                .plotting_area()
-                .draw(&e.look.marker((at(t, i), lane(k)), 5))?;
+        for (x, _) in e.track.spans.each().filter(|(_, s)| s.lost > 0) {
+            let mark = e.look.marker((x, lane(k)), 5);
+            chart.plotting_area().draw(&mark)?;
         }
     }
     // The rows' name, where the other charts have their y axis title.
@@ -230,7 +258,7 @@ fn losses(entries: &[Entry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
 
 /// Each responder's share of replies per RTT bin, as a step outline so
 /// several stay readable overlaid.
-fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
+fn distribution_chart(entries: &[Entry<'_, Track>], area: &Area<'_>) -> DrawResult {
     let used: Vec<usize> = entries
         .iter()
         .flat_map(|e| e.track.bins.iter().enumerate().filter(|(_, &c)| c > 0))
@@ -249,19 +277,10 @@ fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
         .fold(1.0f64, f64::max);
     // A bin of room either side, so no outline sits on the frame.
     let (from, to) = (bin_low_ms(lo.saturating_sub(1)), bin_low_ms(hi + 1));
-    let mut chart = ChartBuilder::on(area)
-        .caption("RTT distribution (marker: median)", caption_font())
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(
-            (from..to).log_scale().with_key_points(log_ticks(from, to)),
-            0f64..top_share * 1.1,
-        )?;
-    mesh(&mut chart)
-        .x_desc("RTT (ms, log scale: each bin 4% wide)")
-        .y_desc("replies (%)")
-        .draw()?;
+    let x = log_axis(from, to);
+    let descs = (Some("RTT (ms, log scale: each bin 4% wide)"), "replies (%)");
+    let caption = "RTT distribution (marker: median)";
+    let mut chart = chart(area, caption, descs, x, 0f64..top_share * 1.1)?;
     for e in entries {
         let t = e.track;
         let mut steps = vec![(bin_low_ms(lo), 0.0)];
@@ -271,7 +290,8 @@ fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
         }
         steps.push((bin_low_ms(hi), 0.0));
         chart.draw_series(LineSeries::new(steps, e.look.color.stroke_width(2)))?;
-        if let Some(p50) = t.figures.and_then(|f| f.p50_ms) {
+        if let Some(rtt) = t.summary.as_ref().and_then(|r| r.rtt) {
+            let p50 = rtt.p50_us / 1e3;
             let i = bin((p50 * 1e6) as Nanos).clamp(lo, hi - 1);
             chart
                 .plotting_area()
@@ -279,35 +299,6 @@ fn distribution_chart(entries: &[Entry<'_>], area: &Area<'_>) -> DrawResult {
         }
     }
     Ok(())
-}
-
-/// The legend: a row per responder with its line and marker, its label
-/// and the run's figures for it.
-fn legend_table(entries: &[Entry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let rows: Vec<LegendRow<'_>> = entries
-        .iter()
-        .map(|e| {
-            let f = e.track.figures;
-            LegendRow {
-                look: e.look,
-                label: &e.label,
-                cells: vec![
-                    f.map(|f| f.sent.to_string()),
-                    f.map(|f| format!("{:.2}", f.loss_pct)),
-                    f.and_then(|f| f.p50_ms).map(|v| format!("{v:.3}")),
-                    f.and_then(|f| f.p99_ms).map(|v| format!("{v:.3}")),
-                ],
-            }
-        })
-        .collect();
-    let columns = ["sent", "loss %", "p50 ms", "p99 ms"];
-    frame::legend(
-        area,
-        layout,
-        ("responder", &columns),
-        &rows,
-        "no responder answered",
-    )
 }
 
 #[cfg(test)]

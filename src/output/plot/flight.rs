@@ -11,8 +11,9 @@
 use plotters::prelude::*;
 
 use super::data::SPANS;
-use super::draw::{caption_font, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Layout, LegendRow, PlotError, MARGIN, ROW_H, TITLE_H};
+use super::draw::{caption_font, chart, line, Marks};
+use super::frame::{self, Area, DrawResult, Legend, LegendRow, PlotError};
+use super::spans::{merged, Bins, Sums};
 use super::style::Look;
 use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, DEFAULT_WINDOW_NS};
 
@@ -25,114 +26,19 @@ const RSSI_H: u32 = 250;
 const RANGE_H: u32 = 300;
 const NUMBER_W: i32 = 110;
 
-/// Frames and losses summed, and the radio's figures.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-struct Sums {
-    received: u64,
-    duplicate: u64,
-    /// Signed: see [`FlightWindow::lost`].
-    lost: i64,
-    rssi: (f64, u64),
-    remrssi: (f64, u64),
-}
-
-impl Sums {
-    fn add(&mut self, w: &FlightWindow) {
-        self.received += w.received;
-        self.duplicate += w.duplicate;
-        self.lost += w.lost;
-        if let Some(r) = &w.radio {
-            // A window's mean stands for its reports.
-            for (sum, v) in [(&mut self.rssi, r.rssi), (&mut self.remrssi, r.remrssi)] {
-                if let Some(v) = v {
-                    sum.0 += v * r.reports as f64;
-                    sum.1 += r.reports;
-                }
-            }
-        }
-    }
-
-    fn merge(mut self, o: Sums) -> Sums {
-        self.received += o.received;
-        self.duplicate += o.duplicate;
-        self.lost += o.lost;
-        self.rssi = (self.rssi.0 + o.rssi.0, self.rssi.1 + o.rssi.1);
-        self.remrssi = (self.remrssi.0 + o.remrssi.0, self.remrssi.1 + o.remrssi.1);
-        self
-    }
-
-    fn loss_pct(&self) -> Option<f64> {
-        let lost = self.lost.max(0) as f64;
-        let whole = lost + self.received.saturating_sub(self.duplicate) as f64;
-        (whole > 0.0).then(|| 100.0 * lost / whole)
-    }
-
-    fn mean((sum, n): (f64, u64)) -> Option<f64> {
-        (n > 0).then(|| sum / n as f64)
-    }
-}
-
-/// Bins of a width that doubles, pairs merging, to stay at most `max`.
-#[derive(Debug, Clone)]
-struct Bins {
-    width: f64,
-    max: usize,
-    bins: Vec<Sums>,
-}
-
-impl Bins {
-    fn new(width: f64, max: usize) -> Self {
-        Bins {
-            width,
-            max,
-            bins: Vec::new(),
-        }
-    }
-
-    fn at(&mut self, x: f64) -> &mut Sums {
-        while x / self.width >= self.max as f64 {
-            self.bins = self
-                .bins
-                .chunks(2)
-                .map(|c| c.iter().fold(Sums::default(), |a, &b| a.merge(b)))
-                .collect();
-            self.width *= 2.0;
-        }
-        let i = (x / self.width).max(0.0) as usize;
-        if self.bins.len() <= i {
-            self.bins.resize(i + 1, Sums::default());
-        }
-        &mut self.bins[i]
-    }
-
-    /// Each bin's middle and sums.
-    fn each(&self) -> impl Iterator<Item = (f64, &Sums)> {
-        self.bins
-            .iter()
-            .enumerate()
-            .map(|(i, s)| ((i as f64 + 0.5) * self.width, s))
-    }
-
-    fn end(&self) -> f64 {
-        self.bins.len() as f64 * self.width
-    }
-}
-
 /// The flight of one log, window by window.
 #[derive(Debug, Clone)]
 pub(super) struct FlightTrack {
-    time: Bins,
-    distance: Bins,
-    windows: u64,
+    time: Bins<Sums>,
+    distance: Bins<Sums>,
     summary: Option<FlightSummary>,
 }
 
 impl Default for FlightTrack {
     fn default() -> Self {
         FlightTrack {
-            time: Bins::new(DEFAULT_WINDOW_NS as f64 / 1e9, SPANS),
-            distance: Bins::new(FIRST_BIN_M, DISTANCE_BINS),
-            windows: 0,
+            time: Bins::new(DEFAULT_WINDOW_NS as f64 / 1e9, 1.0, SPANS),
+            distance: Bins::new(FIRST_BIN_M, 1.0, DISTANCE_BINS),
             summary: None,
         }
     }
@@ -140,10 +46,9 @@ impl Default for FlightTrack {
 
 impl FlightTrack {
     pub(super) fn window(&mut self, w: &FlightWindow) {
-        self.windows += 1;
-        self.time.at(w.start as f64 / 1e9).add(w);
+        self.time.at(w.start as f64 / 1e9).flight(w);
         if let Some(r) = &w.range {
-            self.distance.at(r.distance_m).add(w);
+            self.distance.at(r.distance_m).flight(w);
         }
     }
 
@@ -156,135 +61,15 @@ impl FlightTrack {
     }
 
     pub(super) fn is_empty(&self) -> bool {
-        self.windows == 0
+        // Every window widens or fills a time span.
+        self.time.bins.is_empty()
     }
 }
 
+/// Three rows in the legend, a line each: its figure over the whole log,
+/// and the lowest and highest of its spans.
 pub(super) fn svg(title: &str, track: &FlightTrack) -> Result<String, PlotError> {
-    let labels = ["loss (%)", "rssi", "remote rssi"];
-    let layout = Layout::new(title, "", labels.into_iter(), 3, NUMBER_W);
-    let height = TITLE_H + LOSS_H + RSSI_H + RANGE_H + ROW_H * 4 + 20;
-    frame::svg(title, &layout, height, |area| draw(track, area, &layout))
-}
-
-fn draw(track: &FlightTrack, area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let (loss, rest) = area.split_vertically(LOSS_H);
-    let (rssi, rest) = rest.split_vertically(RSSI_H);
-    let (range, legend) = rest.split_vertically(RANGE_H);
-    let t_max = track.time.end().max(1.0);
-    loss_over_time(track, &loss, t_max)?;
-    rssi_over_time(track, &rssi, t_max)?;
-    loss_against_distance(track, &range)?;
-    legend_table(track, &legend, layout)
-}
-
-/// Points of `f` over the time spans that have one.
-fn points(bins: &Bins, f: impl Fn(&Sums) -> Option<f64>) -> Vec<(f64, f64)> {
-    bins.each().filter_map(|(x, s)| Some((x, f(s)?))).collect()
-}
-
-fn loss_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
-    let line = points(&track.time, Sums::loss_pct);
-    let top = line.iter().map(|p| p.1).fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            "sequence loss over time (marker: a span that lost frames)",
-            caption_font(),
-        )
-        .margin(MARGIN)
-        .margin_bottom(0)
-        .x_label_area_size(0)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..top * 1.1)?;
-    mesh(&mut chart).y_desc("lost (%)").draw()?;
-    let look = Look::nth(0);
-    chart.draw_series(LineSeries::new(
-        line.iter().copied(),
-        look.color.mix(0.85).stroke_width(2),
-    ))?;
-    for &p in line.iter().filter(|(_, pct)| *pct > 0.0) {
-        chart.plotting_area().draw(&look.marker(p, 5))?;
-    }
-    Ok(())
-}
-
-fn rssi_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
-    let rssi = points(&track.time, |s| Sums::mean(s.rssi));
-    let remrssi = points(&track.time, |s| Sums::mean(s.remrssi));
-    let mut chart = ChartBuilder::on(area)
-        .caption("radio RSSI over time (RADIO_STATUS)", caption_font())
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..255f64)?;
-    mesh(&mut chart)
-        .x_desc("time since the log began (s)")
-        .y_desc("RSSI (0-254)")
-        .draw()?;
-    for (n, line) in [(1, rssi), (2, remrssi)] {
-        let look = Look::nth(n);
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            look.color.mix(0.85).stroke_width(2),
-        ))?;
-        let every = (line.len() / 12).max(1);
-        for &p in line.iter().skip(n * every / 3).step_by(every) {
-            chart.plotting_area().draw(&look.marker(p, 5))?;
-        }
-    }
-    if track.summary.as_ref().is_some_and(|s| s.radio.is_none()) {
-        chart.plotting_area().draw(&Text::new(
-            "no RADIO_STATUS in the log",
-            (t_max * 0.02, 230.0),
-            caption_font(),
-        ))?;
-    }
-    Ok(())
-}
-
-fn loss_against_distance(track: &FlightTrack, area: &Area<'_>) -> DrawResult {
-    let bars = points(&track.distance, Sums::loss_pct);
-    let top = bars.iter().map(|p| p.1).fold(1.0f64, f64::max);
-    let d_max = track.distance.end().max(FIRST_BIN_M);
-    let half = track.distance.width * 0.4;
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            format!(
-                "sequence loss against distance from the origin ({:.0} m bins)",
-                track.distance.width
-            ),
-            caption_font(),
-        )
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..d_max, 0f64..top * 1.1)?;
-    mesh(&mut chart)
-        .x_desc("distance (m, straight line)")
-        .y_desc("lost (%)")
-        .draw()?;
-    let look = Look::nth(0);
-    chart.draw_series(bars.iter().map(|&(x, pct)| {
-        Rectangle::new([(x - half, 0.0), (x + half, pct)], look.color.filled())
-    }))?;
-    if bars.is_empty() {
-        chart.plotting_area().draw(&Text::new(
-            "no position in the log",
-            (d_max * 0.02, top),
-            caption_font(),
-        ))?;
-    }
-    Ok(())
-}
-
-/// A row per line: its figure over the whole log, and the lowest and
-/// highest of its spans.
-fn legend_table(track: &FlightTrack, area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let total = track
-        .time
-        .bins
-        .iter()
-        .fold(Sums::default(), |a, &b| a.merge(b));
+    let total = merged(&track.time.bins);
     let row =
         |n: usize, label: &'static str, whole: Option<f64>, f: &dyn Fn(&Sums) -> Option<f64>| {
             let spans: Vec<f64> = track.time.bins.iter().filter_map(f).collect();
@@ -298,15 +83,78 @@ fn legend_table(track: &FlightTrack, area: &Area<'_>, layout: &Layout) -> DrawRe
                 cells: vec![cell(whole), cell(low), cell(high)],
             }
         };
-    let rows = [
+    let rows = vec![
         row(0, "loss (%)", total.loss_pct(), &Sums::loss_pct),
         row(1, "rssi", Sums::mean(total.rssi), &|s| Sums::mean(s.rssi)),
         row(2, "remote rssi", Sums::mean(total.remrssi), &|s| {
             Sums::mean(s.remrssi)
         }),
     ];
-    let columns = ["whole log", "lowest", "highest"];
-    frame::legend(area, layout, ("", &columns), &rows, "no window")
+    let legend = Legend {
+        heads: ("", &["whole log", "lowest", "highest"]),
+        number_w: NUMBER_W,
+        rows,
+        empty: "no window",
+    };
+    frame::page(title, &legend, &[LOSS_H, RSSI_H, RANGE_H], |areas| {
+        let t_max = track.time.end().max(1.0);
+        loss_over_time(track, &areas[0], t_max)?;
+        rssi_over_time(track, &areas[1], t_max)?;
+        loss_against_distance(track, &areas[2])
+    })
+}
+
+fn loss_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
+    let points = track.time.points(Sums::loss_pct);
+    let top = points.iter().map(|p| p.1).fold(1.0f64, f64::max);
+    let caption = "sequence loss over time (marker: a span that lost frames)";
+    let (x, y) = (0f64..t_max, 0f64..top * 1.1);
+    let mut chart = chart(area, caption, (None, "lost (%)"), x, y)?;
+    line(&mut chart, &Look::nth(0), &points, Marks::Lost)
+}
+
+fn rssi_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
+    let rssi = track.time.points(|s| Sums::mean(s.rssi));
+    let remrssi = track.time.points(|s| Sums::mean(s.remrssi));
+    let caption = "radio RSSI over time (RADIO_STATUS)";
+    let descs = (Some("time since the log began (s)"), "RSSI (0-254)");
+    let mut chart = chart(area, caption, descs, 0f64..t_max, 0f64..255f64)?;
+    for (n, points) in [(1, rssi), (2, remrssi)] {
+        line(&mut chart, &Look::nth(n), &points, Marks::Spread(n, 3))?;
+    }
+    if track.summary.as_ref().is_some_and(|s| s.radio.is_none()) {
+        chart.plotting_area().draw(&Text::new(
+            "no RADIO_STATUS in the log",
+            (t_max * 0.02, 230.0),
+            caption_font(),
+        ))?;
+    }
+    Ok(())
+}
+
+fn loss_against_distance(track: &FlightTrack, area: &Area<'_>) -> DrawResult {
+    let bars = track.distance.points(Sums::loss_pct);
+    let top = bars.iter().map(|p| p.1).fold(1.0f64, f64::max);
+    let d_max = track.distance.end().max(FIRST_BIN_M);
+    let half = track.distance.width * 0.4;
+    let caption = format!(
+        "sequence loss against distance from the origin ({:.0} m bins)",
+        track.distance.width
+    );
+    let descs = (Some("distance (m, straight line)"), "lost (%)");
+    let mut chart = chart(area, &caption, descs, 0f64..d_max, 0f64..top * 1.1)?;
+    let look = Look::nth(0);
+    chart.draw_series(bars.iter().map(|&(x, pct)| {
+        Rectangle::new([(x - half, 0.0), (x + half, pct)], look.color.filled())
+    }))?;
+    if bars.is_empty() {
+        chart.plotting_area().draw(&Text::new(
+            "no position in the log",
+            (d_max * 0.02, top),
+            caption_font(),
+        ))?;
+    }
+    Ok(())
 }
 
 /// The title: the link, and the flight's figures.
@@ -371,7 +219,7 @@ mod tests {
         }
         assert!(t.distance.bins.len() <= DISTANCE_BINS);
         assert!(t.time.bins.len() <= SPANS);
-        let sum = |b: &Bins| b.bins.iter().map(|s| s.received).sum::<u64>();
+        let sum = |b: &Bins<Sums>| b.bins.iter().map(|s| s.received).sum::<u64>();
         assert_eq!(sum(&t.distance), 500 * n);
         assert_eq!(sum(&t.time), 500 * n);
         // 25 m doubled to 400 m: 10 km in 26 bins; the losses only in the

@@ -3,6 +3,8 @@
 //! legend table below the charts (a row per line: its colour and marker,
 //! its label, its figures); and [`PlotError`], when the drawing fails.
 
+use std::collections::BTreeMap;
+
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -18,27 +20,20 @@ pub(crate) struct PlotError(String);
 pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
 
 /// The narrowest picture; a long title or legend label widens it.
-pub(super) const WIDTH: u32 = 1000;
+const WIDTH: u32 = 1000;
 pub(super) const MARGIN: u32 = 14;
 pub(super) const FONT: &str = "sans-serif";
-pub(super) const TITLE_SIZE: f64 = 24.0;
+const TITLE_SIZE: f64 = 24.0;
 
 /// Height of the title band.
-pub(super) const TITLE_H: u32 = 44;
+const TITLE_H: u32 = 44;
 /// Height of a legend row.
-pub(super) const ROW_H: u32 = 26;
+const ROW_H: u32 = 26;
 
 pub(super) type Area<'a> = DrawingArea<SVGBackend<'a>, Shift>;
 
 pub(super) fn title_font(size: f64) -> FontDesc<'static> {
     (FONT, size).into_font()
-}
-
-/// The font size, from `size` down to three fifths of it, at which `text`
-/// fits in `width`.
-pub(super) fn fit(text: &str, size: f64, width: u32) -> f64 {
-    let wide = text_width(text, title_font(size)).max(1);
-    (size * f64::from(width) / f64::from(wide)).clamp(size * 0.6, size)
 }
 
 pub(super) fn legend_font() -> FontDesc<'static> {
@@ -52,70 +47,83 @@ pub(super) fn text_width(text: &str, font: FontDesc<'_>) -> u32 {
     font.box_size(text).map_or(0, |(w, _)| w * 6 / 5)
 }
 
-/// How wide the picture is, where the legend's figures start, and the
-/// title's font size.
-#[derive(Debug, Clone, Copy)]
-pub(super) struct Layout {
-    pub(crate) width: u32,
-    pub(crate) numbers_x: i32,
-    pub(crate) number_w: i32,
-    pub(crate) title_size: f64,
+/// One line of a picture (a responder, a source, a link's sweep), in
+/// drawing order: its legend label, its look, and what it draws.
+pub(super) struct Entry<'a, T> {
+    pub(super) label: String,
+    pub(super) look: Look,
+    pub(super) track: &'a T,
 }
 
-impl Layout {
-    /// For `title` over a legend whose first column (headed `first`) holds
-    /// `labels`, then `columns` columns of figures `number_w` wide.
-    pub(super) fn new<'a>(
-        title: &str,
-        first: &'a str,
-        labels: impl Iterator<Item = &'a str>,
-        columns: i32,
-        number_w: i32,
-    ) -> Self {
-        let label_w = labels
-            .chain([first])
-            .map(|l| text_width(l, legend_font()))
-            .max()
-            .unwrap_or(0);
-        // The legend's columns after the labels, and wider when a label
-        // is long.
-        let numbers_x = 70 + label_w as i32 + 20;
-        let width = WIDTH.max((numbers_x + columns * number_w + 30) as u32);
-        // A long title (a simulated link with every parameter) gets a
-        // smaller font before the picture gets wider.
-        let title_size = fit(title, TITLE_SIZE, width - 2 * MARGIN);
-        let width = width.max(text_width(title, title_font(title_size)) + 2 * MARGIN);
-        Layout {
-            width,
-            numbers_x,
-            number_w,
-            title_size,
-        }
-    }
+/// An entry per track, each with the next look.
+pub(super) fn entries<K: Copy, T>(
+    tracks: &BTreeMap<K, T>,
+    label: impl Fn(K, &T) -> String,
+) -> Vec<Entry<'_, T>> {
+    let each = tracks.iter().enumerate();
+    each.map(|(n, (&key, track))| Entry {
+        label: label(key, track),
+        look: Look::nth(n),
+        track,
+    })
+    .collect()
 }
 
-/// An SVG document `height` high: white, `title` across the top, and
-/// `body` drawn in the area below it.
-pub(super) fn svg(
+/// The legend under the charts: the first column's head (over the labels)
+/// and the figures' heads, how wide a figure's column is, a row per line,
+/// and what stands in place of the rows when there are none.
+pub(super) struct Legend<'a> {
+    pub(super) heads: (&'a str, &'a [&'a str]),
+    pub(super) number_w: i32,
+    pub(super) rows: Vec<LegendRow<'a>>,
+    pub(super) empty: &'a str,
+}
+
+/// An SVG document: white, `title` across the top, charts `heights` high
+/// one under the other (`charts` draws them), and `legend` below them,
+/// so nothing is ever drawn under it.
+pub(super) fn page(
     title: &str,
-    layout: &Layout,
-    height: u32,
-    body: impl FnOnce(&Area<'_>) -> DrawResult,
+    legend: &Legend<'_>,
+    heights: &[u32],
+    charts: impl FnOnce(&[Area<'_>]) -> DrawResult,
 ) -> Result<String, PlotError> {
+    let (first, columns) = legend.heads;
+    let labels = legend.rows.iter().map(|r| r.label).chain([first]);
+    let label_w = labels.map(|l| text_width(l, legend_font())).max();
+    // The legend's figures after the labels, and wider when a label is
+    // long.
+    let numbers_x = 70 + label_w.unwrap_or(0) as i32 + 20;
+    let width = WIDTH.max((numbers_x + columns.len() as i32 * legend.number_w + 30) as u32);
+    // A long title (a simulated link with every parameter) gets a smaller
+    // font, down to three fifths, before the picture gets wider.
+    let wide = f64::from(text_width(title, title_font(TITLE_SIZE)).max(1));
+    let fitting = TITLE_SIZE * f64::from(width - 2 * MARGIN) / wide;
+    let title_size = fitting.clamp(TITLE_SIZE * 0.6, TITLE_SIZE);
+    let width = width.max(text_width(title, title_font(title_size)) + 2 * MARGIN);
+    let rows = legend.rows.len().max(1) as u32;
+    let height = TITLE_H + heights.iter().sum::<u32>() + ROW_H * (rows + 1) + 20;
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (layout.width, height)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
         let drawn = (|| -> DrawResult {
             root.fill(&WHITE)?;
-            let (head, rest) = root.split_vertically(TITLE_H);
+            let (head, mut rest) = root.split_vertically(TITLE_H);
             head.draw(&Text::new(
                 title,
                 (MARGIN as i32, TITLE_H as i32 / 2),
-                title_font(layout.title_size)
+                title_font(title_size)
                     .into_text_style(&root)
                     .pos(Pos::new(HPos::Left, VPos::Center)),
             ))?;
-            body(&rest)?;
+            let mut areas = Vec::new();
+            for &h in heights {
+                let (chart, below) = rest.split_vertically(h);
+                areas.push(chart);
+                rest = below;
+            }
+            charts(&areas)?;
+            legend_table(&rest, numbers_x, legend)?;
             root.present()?;
             Ok(())
         })();
@@ -132,36 +140,23 @@ pub(super) struct LegendRow<'a> {
     pub(crate) cells: Vec<Option<String>>,
 }
 
-/// The legend: a header (`first`, then `columns`), a rule, and a row per
-/// line; `empty` in place of the rows when there are none.
-pub(super) fn legend(
-    area: &Area<'_>,
-    layout: &Layout,
-    (first, columns): (&str, &[&str]),
-    rows: &[LegendRow<'_>],
-    empty: &str,
-) -> DrawResult {
-    let font = legend_font();
-    let left = font
-        .clone()
-        .into_text_style(area)
-        .pos(Pos::new(HPos::Left, VPos::Center));
-    let right = font
-        .into_text_style(area)
-        .pos(Pos::new(HPos::Right, VPos::Center));
+/// The legend: a header, a rule, and a row per line; its `empty` text
+/// in place of the rows when there are none.
+fn legend_table(area: &Area<'_>, numbers_x: i32, legend: &Legend<'_>) -> DrawResult {
+    let (first, columns) = legend.heads;
+    let style =
+        |font: FontDesc<'static>, h| font.into_text_style(area).pos(Pos::new(h, VPos::Center));
+    let left = style(legend_font(), HPos::Left);
+    let right = style(legend_font(), HPos::Right);
+    let bold = || legend_font().style(FontStyle::Bold);
     let row_y = |r: usize| ROW_H as i32 * r as i32 + ROW_H as i32 / 2 + 4;
-    let column = |j: usize| layout.numbers_x + layout.number_w * (j as i32 + 1);
-    let bold = legend_font().style(FontStyle::Bold).into_text_style(area);
-    area.draw(&Text::new(
-        first,
-        (70, row_y(0)),
-        bold.clone().pos(Pos::new(HPos::Left, VPos::Center)),
-    ))?;
+    let column = |j: usize| numbers_x + legend.number_w * (j as i32 + 1);
+    area.draw(&Text::new(first, (70, row_y(0)), style(bold(), HPos::Left)))?;
     for (j, name) in columns.iter().enumerate() {
         area.draw(&Text::new(
             *name,
             (column(j), row_y(0)),
-            bold.clone().pos(Pos::new(HPos::Right, VPos::Center)),
+            style(bold(), HPos::Right),
         ))?;
     }
     let rule = row_y(0) + ROW_H as i32 / 2;
@@ -169,11 +164,11 @@ pub(super) fn legend(
         [(MARGIN as i32, rule), (column(columns.len() - 1), rule)],
         BLACK.stroke_width(1),
     ))?;
-    if rows.is_empty() {
-        area.draw(&Text::new(empty, (70, row_y(1)), left))?;
+    if legend.rows.is_empty() {
+        area.draw(&Text::new(legend.empty, (70, row_y(1)), left))?;
         return Ok(());
     }
-    for (r, row) in rows.iter().enumerate() {
+    for (r, row) in legend.rows.iter().enumerate() {
         let y = row_y(r + 1);
         area.draw(&PathElement::new(
             [(18, y), (58, y)],
@@ -187,4 +182,17 @@ pub(super) fn legend(
         }
     }
     Ok(())
+}
+
+/// A legend row per entry, its figures by `cells`.
+pub(super) fn rows<'a, T>(
+    entries: &'a [Entry<'_, T>],
+    cells: impl Fn(&T) -> Vec<Option<String>>,
+) -> Vec<LegendRow<'a>> {
+    let row = |e: &'a Entry<'_, T>| LegendRow {
+        look: e.look,
+        label: &e.label,
+        cells: cells(e.track),
+    };
+    entries.iter().map(row).collect()
 }

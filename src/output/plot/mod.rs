@@ -20,6 +20,7 @@ mod flight;
 mod frame;
 mod link;
 mod passive;
+mod spans;
 mod style;
 mod sweep;
 
@@ -41,9 +42,7 @@ pub(crate) use link::{Plot, PlotLink};
 impl Reporter for PlotLink {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.data.borrow_mut().links[self.index] = info.link.clone();
-        if info.plan::<PassivePlan>().is_some() {
-            self.windows = Some(Windows::default());
-        }
+        self.windows = info.plan::<PassivePlan>().is_some().then(Windows::default);
         Ok(())
     }
 

@@ -8,13 +8,11 @@
 //! neighbours merge, so a long run is drawn at a coarser resolution, its
 //! frames and losses summed, never dropped.
 
-use plotters::prelude::*;
-
 use super::data::SPANS;
-use super::draw::{caption_font, mesh, Y_LABELS_W};
-use super::frame::{self, Area, DrawResult, Layout, LegendRow, PlotError, MARGIN, ROW_H, TITLE_H};
-use super::style::Look;
-use crate::engine::summary::passive::SourceSummary;
+use super::draw::{chart, line, lines, Marks, Points};
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError};
+use super::spans::{Bins, Sums};
+use crate::engine::summary::passive::{SeqCounts, SourceSummary};
 use crate::engine::Nanos;
 use crate::output::windows::Window;
 
@@ -23,72 +21,24 @@ const FIRST_SPAN_NS: Nanos = 1_000_000_000;
 const RATE_H: u32 = 300;
 const LOSS_H: u32 = 280;
 const NUMBER_W: i32 = 100;
-/// Markers along a line of frames a second.
-const MARKS_PER_LINE: usize = 12;
-
-/// One time span of a source: its windows summed.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-struct Span {
-    received: u64,
-    /// Distinct frames (received less duplicates).
-    distinct: u64,
-    /// Signed: a late frame moves a loss from an earlier span to this one's
-    /// reordered (see [`Window::lost`]).
-    lost: i64,
-    /// Time the windows in it covered (the last one is partial).
-    covered_ns: Nanos,
-}
-
-impl Span {
-    fn merge(self, other: Span) -> Span {
-        Span {
-            received: self.received + other.received,
-            distinct: self.distinct + other.distinct,
-            lost: self.lost + other.lost,
-            covered_ns: self.covered_ns + other.covered_ns,
-        }
-    }
-
-    fn frames_per_s(&self) -> Option<f64> {
-        (self.covered_ns > 0).then(|| self.received as f64 * 1e9 / self.covered_ns as f64)
-    }
-
-    /// `100 * lost / (lost + distinct)`; `None` with nothing to compare.
-    fn loss_pct(&self) -> Option<f64> {
-        let lost = self.lost.max(0) as f64;
-        let whole = lost + self.distinct as f64;
-        (whole > 0.0).then(|| 100.0 * lost / whole)
-    }
-}
-
-/// A source's figures from the run's summary, shown in the legend.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Figures {
-    received: u64,
-    lost: u64,
-    loss_pct: Option<f64>,
-    duplicate: u64,
-    reordered: u64,
-    frames_per_s: Option<f64>,
-}
 
 /// One source of a passive run, span by span.
 #[derive(Debug, Clone)]
 pub(super) struct SourceTrack {
-    span_ns: Nanos,
-    spans: Vec<Span>,
-    radio: bool,
-    /// Known once the link's summary came.
-    figures: Option<Figures>,
+    spans: Bins<Sums>,
+    /// The SiK radio's own RADIO_STATUS source.
+    pub(super) radio: bool,
+    /// The run's own figures for it, for the legend: known once the
+    /// link's summary came.
+    pub(super) summary: Option<SourceSummary>,
 }
 
 impl SourceTrack {
     pub(super) fn new(radio: bool) -> Self {
         SourceTrack {
-            span_ns: FIRST_SPAN_NS,
-            spans: Vec::new(),
+            spans: Bins::new(FIRST_SPAN_NS as f64, 1e9, SPANS),
             radio,
-            figures: None,
+            summary: None,
         }
     }
 
@@ -98,180 +48,71 @@ impl SourceTrack {
         if w.start == w.end && w.is_empty() {
             return;
         }
-        while w.start / self.span_ns >= SPANS as u64 {
-            self.spans = self
-                .spans
-                .chunks(2)
-                .map(|c| c.iter().fold(Span::default(), |a, &b| a.merge(b)))
-                .collect();
-            self.span_ns *= 2;
-        }
-        let i = (w.start / self.span_ns) as usize;
-        if self.spans.len() <= i {
-            self.spans.resize(i + 1, Span::default());
-        }
-        let s = &mut self.spans[i];
-        s.received += w.received;
-        s.distinct += w.received.saturating_sub(w.duplicate);
-        s.lost += w.lost;
-        s.covered_ns += w.end.saturating_sub(w.start);
-    }
-
-    pub(super) fn on_summary(&mut self, s: &SourceSummary) {
-        self.figures = Some(Figures {
-            received: s.counts.received,
-            lost: s.counts.lost,
-            loss_pct: s.loss_pct,
-            duplicate: s.counts.duplicate,
-            reordered: s.counts.reordered,
-            frames_per_s: s.frames_per_s,
-        });
-    }
-
-    pub(super) fn is_radio(&self) -> bool {
-        self.radio
-    }
-
-    /// The middle of span `i`, in seconds.
-    fn at(&self, i: usize) -> f64 {
-        (i as f64 + 0.5) * self.span_ns as f64 / 1e9
-    }
-
-    /// The end of the last span, in seconds.
-    fn end_s(&self) -> f64 {
-        self.spans.len() as f64 * self.span_ns as f64 / 1e9
+        self.spans.at(w.start as f64).window(w);
     }
 }
 
-/// One source, in drawing order.
-pub(super) struct SourceEntry<'a> {
-    pub(crate) label: String,
-    pub(crate) look: Look,
-    pub(crate) track: &'a SourceTrack,
+pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<String, PlotError> {
+    let rows = frame::rows(entries, |t| {
+        let s = t.summary.as_ref();
+        let count = |n: fn(&SeqCounts) -> u64| s.map(|s| n(&s.counts).to_string());
+        vec![
+            count(|c| c.received),
+            count(|c| c.lost),
+            s.and_then(|s| s.loss_pct).map(|v| format!("{v:.2}")),
+            count(|c| c.duplicate),
+            count(|c| c.reordered),
+            s.and_then(|s| s.frames_per_s).map(|v| format!("{v:.1}")),
+        ]
+    });
+    let legend = Legend {
+        heads: (
+            "source",
+            &["received", "lost", "loss %", "dup", "reordered", "frames/s"],
+        ),
+        number_w: NUMBER_W,
+        rows,
+        empty: "nothing heard",
+    };
+    frame::page(title, &legend, &[RATE_H, LOSS_H], |areas| {
+        let t_max = entries
+            .iter()
+            .map(|e| e.track.spans.end())
+            .fold(1.0, f64::max);
+        rate_chart(entries, &areas[0], t_max)?;
+        loss_chart(entries, &areas[1], t_max)
+    })
 }
 
-pub(super) fn svg(title: &str, entries: &[SourceEntry<'_>]) -> Result<String, PlotError> {
-    let layout = Layout::new(
-        title,
-        "source",
-        entries.iter().map(|e| e.label.as_str()),
-        6,
-        NUMBER_W,
-    );
-    let rows = entries.len().max(1) as u32;
-    let height = TITLE_H + RATE_H + LOSS_H + ROW_H * (rows + 1) + 20;
-    frame::svg(title, &layout, height, |area| draw(entries, area, &layout))
-}
-
-fn draw(entries: &[SourceEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let (rate, rest) = area.split_vertically(RATE_H);
-    let (loss, legend) = rest.split_vertically(LOSS_H);
-    let t_max = entries.iter().map(|e| e.track.end_s()).fold(1.0, f64::max);
-    rate_chart(entries, &rate, t_max)?;
-    loss_chart(entries, &loss, t_max)?;
-    legend_table(entries, &legend, layout)
+/// The highest of `lines`, 1 at least.
+fn top(lines: &[Points]) -> f64 {
+    lines.iter().flatten().map(|p| p.1).fold(1.0f64, f64::max)
 }
 
 /// Each source's frames a second per span, one line each.
-fn rate_chart(entries: &[SourceEntry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let top = entries
-        .iter()
-        .flat_map(|e| e.track.spans.iter().filter_map(Span::frames_per_s))
-        .fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(area)
-        .caption("frames a second, by source", caption_font())
-        .margin(MARGIN)
-        .margin_bottom(0)
-        .x_label_area_size(0)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..top * 1.08)?;
-    mesh(&mut chart).y_desc("frames/s").draw()?;
-    for (k, e) in entries.iter().enumerate() {
-        let t = e.track;
-        let line: Vec<(f64, f64)> = t
-            .spans
-            .iter()
-            .enumerate()
-            .filter_map(|(i, s)| Some((t.at(i), s.frames_per_s()?)))
-            .collect();
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            e.look.color.mix(0.85).stroke_width(2),
-        ))?;
-        // A few markers along each line, staggered between sources, tell
-        // the lines apart without their colour.
-        let every = (line.len() / MARKS_PER_LINE).max(1);
-        let offset = k * every / entries.len().max(1);
-        for &p in line.iter().skip(offset).step_by(every) {
-            chart.plotting_area().draw(&e.look.marker(p, 5))?;
-        }
+fn rate_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
+    let lines = lines(entries, |t| t.spans.points(Sums::frames_per_s));
+    let (x, y) = (0f64..t_max, 0f64..top(&lines) * 1.08);
+    let descs = (None, "frames/s");
+    let mut chart = chart(area, "frames a second, by source", descs, x, y)?;
+    for (k, (e, points)) in entries.iter().zip(&lines).enumerate() {
+        let marks = Marks::Spread(k, entries.len());
+        line(&mut chart, &e.look, points, marks)?;
     }
     Ok(())
 }
 
 /// Each source's sequence loss per span, a line each with its marker where
 /// a span lost frames; it carries the time axis.
-fn loss_chart(entries: &[SourceEntry<'_>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let top = entries
-        .iter()
-        .flat_map(|e| e.track.spans.iter().filter_map(Span::loss_pct))
-        .fold(1.0f64, f64::max);
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            "sequence loss per span (marker: a span that lost frames)",
-            caption_font(),
-        )
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(0f64..t_max, 0f64..top * 1.1)?;
-    mesh(&mut chart)
-        .x_desc("time since start (s)")
-        .y_desc("lost (%)")
-        .draw()?;
-    for e in entries {
-        let t = e.track;
-        let line: Vec<(f64, f64)> = t
-            .spans
-            .iter()
-            .enumerate()
-            .filter_map(|(i, s)| Some((t.at(i), s.loss_pct()?)))
-            .collect();
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            e.look.color.mix(0.85).stroke_width(2),
-        ))?;
-        for &p in line.iter().filter(|(_, pct)| *pct > 0.0) {
-            chart.plotting_area().draw(&e.look.marker(p, 5))?;
-        }
+fn loss_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
+    let lines = lines(entries, |t| t.spans.points(Sums::loss_pct));
+    let caption = "sequence loss per span (marker: a span that lost frames)";
+    let descs = (Some("time since start (s)"), "lost (%)");
+    let mut chart = chart(area, caption, descs, 0f64..t_max, 0f64..top(&lines) * 1.1)?;
+    for (e, points) in entries.iter().zip(&lines) {
+        line(&mut chart, &e.look, points, Marks::Lost)?;
     }
     Ok(())
-}
-
-/// The legend: a row per source with its line and marker, its label and
-/// the run's figures for it.
-fn legend_table(entries: &[SourceEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let rows: Vec<LegendRow<'_>> = entries
-        .iter()
-        .map(|e| {
-            let f = e.track.figures;
-            let one = |v: Option<f64>, decimals: usize| v.map(|v| format!("{v:.decimals$}"));
-            LegendRow {
-                look: e.look,
-                label: &e.label,
-                cells: vec![
-                    f.map(|f| f.received.to_string()),
-                    f.map(|f| f.lost.to_string()),
-                    f.and_then(|f| one(f.loss_pct, 2)),
-                    f.map(|f| f.duplicate.to_string()),
-                    f.map(|f| f.reordered.to_string()),
-                    f.and_then(|f| one(f.frames_per_s, 1)),
-                ],
-            }
-        })
-        .collect();
-    let columns = ["received", "lost", "loss %", "dup", "reordered", "frames/s"];
-    frame::legend(area, layout, ("source", &columns), &rows, "nothing heard")
 }
 
 #[cfg(test)]
@@ -301,15 +142,18 @@ mod tests {
         for n in 0..day {
             t.window(&second(n, 50, i64::from(n % 10 == 0)));
         }
-        assert!(t.spans.len() <= SPANS, "{}", t.spans.len());
-        assert_eq!(t.spans.iter().map(|s| s.received).sum::<u64>(), 50 * day);
-        assert_eq!(t.spans.iter().map(|s| s.lost).sum::<i64>(), 8_640);
-        let covered: Nanos = t.spans.iter().map(|s| s.covered_ns).sum();
+        assert!(t.spans.bins.len() <= SPANS, "{}", t.spans.bins.len());
+        assert_eq!(
+            t.spans.bins.iter().map(|s| s.received).sum::<u64>(),
+            50 * day
+        );
+        assert_eq!(t.spans.bins.iter().map(|s| s.lost).sum::<i64>(), 8_640);
+        let covered: Nanos = t.spans.bins.iter().map(|s| s.covered_ns).sum();
         assert_eq!(covered, day * FIRST_SPAN_NS);
         // 128 s a span now: each still at 50 a second; the fourth, seconds
         // 384 to 511, lost 13 (390, 400, ... 510).
-        assert_eq!(t.span_ns, 128 * FIRST_SPAN_NS);
-        let fourth = &t.spans[3];
+        assert_eq!(t.spans.width, (128 * FIRST_SPAN_NS) as f64);
+        let fourth = &t.spans.bins[3];
         assert_eq!(fourth.frames_per_s(), Some(50.0));
         assert_eq!(fourth.loss_pct(), Some(100.0 * 13.0 / (13.0 + 6_400.0)));
     }
@@ -375,12 +219,12 @@ mod tests {
         let mut t = SourceTrack::new(false);
         t.window(&second(0, 49, 1));
         t.window(&second(1, 51, -1));
-        assert_eq!(t.spans[1].loss_pct(), Some(0.0));
+        assert_eq!(t.spans.bins[1].loss_pct(), Some(0.0));
         // Merged, the two add up.
         for n in 2..SPANS as u64 * 2 {
             t.window(&second(n, 50, 0));
         }
-        assert_eq!(t.spans[0].lost, 0);
-        assert_eq!(t.spans[0].received, 100);
+        assert_eq!(t.spans.bins[0].lost, 0);
+        assert_eq!(t.spans.bins[0].received, 100);
     }
 }

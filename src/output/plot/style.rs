@@ -67,13 +67,13 @@ impl Look {
         let line = ShapeStyle::from(self.color).stroke_width(2);
         let fill = ShapeStyle::from(self.color).filled();
         let e = EmptyElement::at(at);
+        let d = r + 1;
         match self.shape {
             Shape::Cross => (e + Cross::new((0, 0), r, line)).into_dyn(),
-            Shape::TriangleUp => (e + TriangleMarker::new((0, 0), r + 1, fill)).into_dyn(),
+            Shape::TriangleUp => (e + TriangleMarker::new((0, 0), d, fill)).into_dyn(),
             Shape::Circle => (e + Circle::new((0, 0), r, fill)).into_dyn(),
             Shape::Square => (e + Rectangle::new([(-r, -r), (r, r)], fill)).into_dyn(),
             Shape::Diamond => {
-                let d = r + 1;
                 (e + Polygon::new(vec![(0, -d), (d, 0), (0, d), (-d, 0)], fill)).into_dyn()
             }
             Shape::Plus => (e
@@ -81,7 +81,6 @@ impl Look {
                 + PathElement::new(vec![(0, -r), (0, r)], line))
             .into_dyn(),
             Shape::TriangleDown => {
-                let d = r + 1;
                 (e + Polygon::new(vec![(-d, -d * 2 / 3), (d, -d * 2 / 3), (0, d)], fill)).into_dyn()
             }
             Shape::Ring => (e + Circle::new((0, 0), r, line)).into_dyn(),

@@ -6,127 +6,96 @@
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::draw::{caption_font, log_ticks, mesh, Y_LABELS_W};
-use super::frame::{
-    self, Area, DrawResult, Layout, LegendRow, PlotError, FONT, MARGIN, ROW_H, TITLE_H,
-};
-use super::style::Look;
-use crate::engine::sweep::step::StepFigures;
+use super::draw::{chart, log_axis};
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT};
+use crate::engine::sweep::step::{StepFigures, StepRtt};
 use crate::engine::sweep::verdict::SweepSummary;
 
 const RTT_H: u32 = 340;
 const LOSS_H: u32 = 230;
 const NUMBER_W: i32 = 130;
 
-/// One link's sweep, in drawing order.
-pub(super) struct SweepEntry<'a> {
-    pub(crate) label: String,
-    pub(crate) look: Look,
-    pub(crate) sweep: &'a SweepSummary,
-}
+/// Each link's sweep, in drawing order.
+type Sweeps<'a> = [Entry<'a, SweepSummary>];
 
-impl SweepEntry<'_> {
-    /// The sweep's complete steps, by offered rate.
-    fn points(&self) -> Vec<&StepFigures> {
-        let mut steps: Vec<&StepFigures> = self
-            .sweep
-            .steps
-            .iter()
-            .filter(|s| s.phase.sweeps() && s.complete)
-            .collect();
-        steps.sort_by(|a, b| a.offered_hz.total_cmp(&b.offered_hz));
-        steps
-    }
-}
-
-pub(super) fn svg(title: &str, entries: &[SweepEntry<'_>]) -> Result<String, PlotError> {
-    let layout = Layout::new(
-        title,
-        "link",
-        entries.iter().map(|e| e.label.as_str()),
-        4,
-        NUMBER_W,
-    );
-    let rows = entries.len().max(1) as u32;
-    let height = TITLE_H + RTT_H + LOSS_H + ROW_H * (rows + 1) + 20;
-    frame::svg(title, &layout, height, |area| draw(entries, area, &layout))
-}
-
-fn draw(entries: &[SweepEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let (rtt, rest) = area.split_vertically(RTT_H);
-    let (loss, legend) = rest.split_vertically(LOSS_H);
-    let rates: Vec<f64> = entries
+/// A sweep's complete steps, by offered rate.
+fn points(sweep: &SweepSummary) -> Vec<&StepFigures> {
+    let mut steps: Vec<&StepFigures> = sweep
+        .steps
         .iter()
-        .flat_map(|e| e.points().into_iter().map(|s| s.offered_hz))
+        .filter(|s| s.phase.sweeps() && s.complete)
         .collect();
-    let lo = rates.iter().copied().reduce(f64::min).unwrap_or(1.0);
-    let hi = rates.iter().copied().reduce(f64::max).unwrap_or(100.0);
-    // A little room either side, so no marker sits on the frame.
-    let (from, to) = (lo / 1.15, (hi * 1.15).max(lo * 2.0));
-    rtt_chart(entries, &rtt, (from, to))?;
-    loss_chart(entries, &loss, (from, to))?;
-    legend_table(entries, &legend, layout)
+    steps.sort_by(|a, b| a.offered_hz.total_cmp(&b.offered_hz));
+    steps
+}
+
+/// A legend row per link: its knee (rate and bytes per second), the first
+/// step's p99 it was judged against, and its queueing grade (A+ to F, as
+/// the bufferbloat tests grade added latency).
+pub(super) fn svg(title: &str, entries: &Sweeps<'_>) -> Result<String, PlotError> {
+    let rows = frame::rows(entries, |s| {
+        vec![
+            s.knee.map(|k| format!("{:.1}", k.rate_hz)),
+            s.knee.map(|k| format!("{:.0}", k.bytes_per_s)),
+            s.reference_p99_us.map(|p| format!("{:.3}", p / 1e3)),
+            s.queueing.map(|q| {
+                let bloat = if q.bufferbloat { ", bufferbloat" } else { "" };
+                format!("{}{bloat}", q.grade.as_str())
+            }),
+        ]
+    });
+    let legend = Legend {
+        heads: ("link", &["knee /s", "knee B/s", "first p99 ms", "queueing"]),
+        number_w: NUMBER_W,
+        rows,
+        empty: "no sweep",
+    };
+    frame::page(title, &legend, &[RTT_H, LOSS_H], |areas| {
+        let rates: Vec<f64> = entries
+            .iter()
+            .flat_map(|e| points(e.track).into_iter().map(|s| s.offered_hz))
+            .collect();
+        let lo = rates.iter().copied().reduce(f64::min).unwrap_or(1.0);
+        let hi = rates.iter().copied().reduce(f64::max).unwrap_or(100.0);
+        // A little room either side, so no marker sits on the frame.
+        let (from, to) = (lo / 1.15, (hi * 1.15).max(lo * 2.0));
+        rtt_chart(entries, &areas[0], (from, to))?;
+        loss_chart(entries, &areas[1], (from, to))
+    })
 }
 
 /// p99 as a solid line and p50 dashed, on log axes; the knee as a
 /// vertical rule with its rate.
-fn rtt_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64)) -> DrawResult {
+fn rtt_chart(entries: &Sweeps<'_>, area: &Area<'_>, (from, to): (f64, f64)) -> DrawResult {
     let rtts: Vec<f64> = entries
         .iter()
-        .flat_map(|e| e.points())
+        .flat_map(|e| points(e.track))
         .filter_map(|s| s.rtt)
         .flat_map(|r| [r.p50_us / 1e3, r.p99_us / 1e3])
         .collect();
     let low = rtts.iter().copied().reduce(f64::min).unwrap_or(1.0) / 1.2;
     let high = rtts.iter().copied().reduce(f64::max).unwrap_or(100.0) * 1.2;
     let high = high.max(low * 4.0);
-    let mut chart = ChartBuilder::on(area)
-        .caption(
-            "RTT against offered rate (solid: p99, dashed: p50)",
-            caption_font(),
-        )
-        .margin(MARGIN)
-        .margin_bottom(0)
-        .x_label_area_size(0)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(
-            (from..to).log_scale().with_key_points(log_ticks(from, to)),
-            (low..high)
-                .log_scale()
-                .with_key_points(log_ticks(low, high)),
-        )?;
-    mesh(&mut chart).y_desc("RTT (ms, log scale)").draw()?;
+    let caption = "RTT against offered rate (solid: p99, dashed: p50)";
+    let (x, y) = (log_axis(from, to), log_axis(low, high));
+    let mut chart = chart(area, caption, (None, "RTT (ms, log scale)"), x, y)?;
     for e in entries {
-        let points = e.points();
-        let p99: Vec<(f64, f64)> = points
-            .iter()
-            .filter_map(|s| Some((s.offered_hz, s.rtt?.p99_us / 1e3)))
-            .collect();
-        let p50: Vec<(f64, f64)> = points
-            .iter()
-            .filter_map(|s| Some((s.offered_hz, s.rtt?.p50_us / 1e3)))
-            .collect();
-        chart.draw_series(LineSeries::new(
-            p99.iter().copied(),
-            e.look.color.stroke_width(2),
-        ))?;
-        chart.draw_series(DashedLineSeries::new(
-            p50.iter().copied(),
-            6,
-            4,
-            e.look.color.stroke_width(1),
-        ))?;
+        let rtt = |f: fn(&StepRtt) -> f64| -> Vec<(f64, f64)> {
+            let steps = points(e.track).into_iter();
+            steps
+                .filter_map(|s| Some((s.offered_hz, f(&s.rtt?) / 1e3)))
+                .collect()
+        };
+        let (p99, p50) = (rtt(|r| r.p99_us), rtt(|r| r.p50_us));
+        let (solid, thin) = (e.look.color.stroke_width(2), e.look.color.stroke_width(1));
+        chart.draw_series(LineSeries::new(p99.iter().copied(), solid))?;
+        chart.draw_series(DashedLineSeries::new(p50.iter().copied(), 6, 4, thin))?;
         for &p in p99.iter().chain(&p50) {
             chart.plotting_area().draw(&e.look.marker(p, 4))?;
         }
-        if let Some(k) = &e.sweep.knee {
+        if let Some(k) = &e.track.knee {
             let rule = [(k.rate_hz, low), (k.rate_hz, high)];
-            chart.draw_series(DashedLineSeries::new(
-                rule,
-                3,
-                3,
-                e.look.color.stroke_width(1),
-            ))?;
+            chart.draw_series(DashedLineSeries::new(rule, 3, 3, thin))?;
             chart.plotting_area().draw(&Text::new(
                 format!("knee {:.0}/s", k.rate_hz),
                 (k.rate_hz, high / 1.1),
@@ -141,28 +110,17 @@ fn rtt_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64)
 }
 
 /// Each step's loss, on the same rate axis.
-fn loss_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64)) -> DrawResult {
+fn loss_chart(entries: &Sweeps<'_>, area: &Area<'_>, (from, to): (f64, f64)) -> DrawResult {
     let top = entries
         .iter()
-        .flat_map(|e| e.points())
+        .flat_map(|e| points(e.track))
         .map(|s| s.loss_ratio * 100.0)
         .fold(5.0f64, f64::max);
-    let mut chart = ChartBuilder::on(area)
-        .caption("loss against offered rate", caption_font())
-        .margin(MARGIN)
-        .x_label_area_size(44)
-        .y_label_area_size(Y_LABELS_W)
-        .build_cartesian_2d(
-            (from..to).log_scale().with_key_points(log_ticks(from, to)),
-            0f64..top * 1.1,
-        )?;
-    mesh(&mut chart)
-        .x_desc("offered rate (requests/s, log scale)")
-        .y_desc("loss (%)")
-        .draw()?;
+    let descs = (Some("offered rate (requests/s, log scale)"), "loss (%)");
+    let (x, y) = (log_axis(from, to), 0f64..top * 1.1);
+    let mut chart = chart(area, "loss against offered rate", descs, x, y)?;
     for e in entries {
-        let line: Vec<(f64, f64)> = e
-            .points()
+        let line: Vec<(f64, f64)> = points(e.track)
             .iter()
             .map(|s| (s.offered_hz, s.loss_ratio * 100.0))
             .collect();
@@ -175,31 +133,4 @@ fn loss_chart(entries: &[SweepEntry<'_>], area: &Area<'_>, (from, to): (f64, f64
         }
     }
     Ok(())
-}
-
-/// A row per link: its knee (rate and bytes per second), the first step's
-/// p99 it was judged against, and its queueing grade (A+ to F, as the
-/// bufferbloat tests grade added latency).
-fn legend_table(entries: &[SweepEntry<'_>], area: &Area<'_>, layout: &Layout) -> DrawResult {
-    let rows: Vec<LegendRow<'_>> = entries
-        .iter()
-        .map(|e| {
-            let s = e.sweep;
-            LegendRow {
-                look: e.look,
-                label: &e.label,
-                cells: vec![
-                    s.knee.map(|k| format!("{:.1}", k.rate_hz)),
-                    s.knee.map(|k| format!("{:.0}", k.bytes_per_s)),
-                    s.reference_p99_us.map(|p| format!("{:.3}", p / 1e3)),
-                    s.queueing.map(|q| {
-                        let bloat = if q.bufferbloat { ", bufferbloat" } else { "" };
-                        format!("{}{bloat}", q.grade.as_str())
-                    }),
-                ],
-            }
-        })
-        .collect();
-    let columns = ["knee /s", "knee B/s", "first p99 ms", "queueing"];
-    frame::legend(area, layout, ("link", &columns), &rows, "no sweep")
 }
