@@ -61,7 +61,7 @@ impl<W: Write> Reporter for JsonReporter<W> {
     }
 
     fn command(&mut self, event: &CommandEvent) -> io::Result<()> {
-        self.event_line(command::line(event), true)
+        self.event_line(event.is_line().then_some(event), true)
     }
 
     fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
