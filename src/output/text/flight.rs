@@ -6,7 +6,7 @@
 use std::io::{self, Write};
 use std::time::{Duration, SystemTime};
 
-use super::format::{percent_or_dash, whole_or};
+use super::format::{counted, percent_or_dash, whole_or};
 use crate::engine::probe::passive::flight::{
     diagnosis_text, FlightSummary, FlightWindow, OriginKind, SilenceFigure, Span,
 };
@@ -89,11 +89,6 @@ pub(super) fn write_flight(
         writeln!(out, "flight: {} windows not told (output behind)", f.untold)?;
     }
     Ok(())
-}
-
-/// `1 silence`, `2 silences`.
-fn counted(n: u64, what: &str) -> String {
-    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }
 
 /// Where distances are from, and the farthest window.
