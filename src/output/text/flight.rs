@@ -76,13 +76,11 @@ pub(super) fn write_flight(
     for b in &f.bursts {
         writeln!(out, "flight burst: {}", span(b, clock, true))?;
     }
-    let more = |count: u64, kept: usize| count.saturating_sub(kept as u64);
-    if more(f.silence_count, f.silences.len()) + more(f.burst_count, f.bursts.len()) > 0 {
+    let (silences, bursts) = f.unlisted();
+    if silences + bursts > 0 {
         writeln!(
             out,
-            "flight: {} shorter silences and {} shorter bursts not listed (every one is in --json)",
-            more(f.silence_count, f.silences.len()),
-            more(f.burst_count, f.bursts.len())
+            "flight: {silences} shorter silences and {bursts} shorter bursts not listed (every one is in --json)"
         )?;
     }
     if f.untold > 0 {
