@@ -215,13 +215,15 @@ fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
         humantime::format_rfc3339_micros(t).to_string()
     };
     let r = &log.records;
-    let stamps = match st.whole_ms {
-        true => "all whole milliseconds, as QGroundControl writes them",
-        false => "in microseconds",
+    let stamps = if st.whole_ms {
+        "all whole milliseconds, as QGroundControl writes them"
+    } else {
+        "in microseconds"
     };
-    let end = match log.complete {
-        true => "read to its end",
-        false => "stopped before its end",
+    let end = if log.complete {
+        "read to its end"
+    } else {
+        "stopped before its end"
     };
     writeln!(
         out,
