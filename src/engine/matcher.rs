@@ -99,6 +99,38 @@ impl MatchEvent {
             | MatchEvent::Stale { at, .. } => at,
         }
     }
+
+    /// Who answered (or, for a loss, was asked).
+    pub(crate) fn responder(&self) -> SysComp {
+        match *self {
+            MatchEvent::Reply { responder, .. }
+            | MatchEvent::Late { responder, .. }
+            | MatchEvent::Duplicate { responder, .. }
+            | MatchEvent::Lost { responder, .. }
+            | MatchEvent::Stale { responder, .. } => responder,
+        }
+    }
+
+    /// The request's sequence number; a stale reply matches none.
+    pub(crate) fn seq(&self) -> Option<u32> {
+        match *self {
+            MatchEvent::Reply { seq, .. }
+            | MatchEvent::Late { seq, .. }
+            | MatchEvent::Duplicate { seq, .. }
+            | MatchEvent::Lost { seq, .. } => Some(seq),
+            MatchEvent::Stale { .. } => None,
+        }
+    }
+
+    /// The round trip, where a reply came for a request we held.
+    pub(crate) fn rtt(&self) -> Option<Nanos> {
+        match *self {
+            MatchEvent::Reply { rtt, .. }
+            | MatchEvent::Late { rtt, .. }
+            | MatchEvent::Duplicate { rtt, .. } => Some(rtt),
+            MatchEvent::Lost { .. } | MatchEvent::Stale { .. } => None,
+        }
+    }
 }
 
 /// Where a responder's accounting window opens.

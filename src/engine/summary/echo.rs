@@ -142,6 +142,13 @@ impl EchoSummary {
         self.responders.iter().any(|r| r.counts.received > 0)
     }
 
+    /// The smallest RTT median across the responders, in µs: what the
+    /// wire's floor is set beside.
+    pub(crate) fn smallest_p50_us(&self) -> Option<f64> {
+        let p50s = self.responders.iter().filter_map(|r| r.rtt);
+        p50s.map(|t| t.p50_us).reduce(f64::min)
+    }
+
     /// Puts a serial link's budget in the summary and, when the run shows
     /// the link was overrun (losses, or an RTT spread far beyond the wire
     /// time, which is a queue growing), says so. Replies faster than the
@@ -344,6 +351,20 @@ mod tests {
         let mut s = run(3, 50.0, 20);
         s.apply_wire(b);
         assert!(s.hints.is_empty());
+    }
+
+    #[test]
+    fn the_smallest_median_is_over_the_responders_that_answered() {
+        let mut s = run(0, 50.0, 20);
+        assert_eq!(s.smallest_p50_us().map(f64::round), Some(20_000.0));
+        let mut faster = s.responders[0].clone();
+        (faster.rtt.as_mut().unwrap().p50_us, faster.id) = (7_000.0, SysComp::new(2, 1));
+        let mut silent = faster.clone();
+        silent.rtt = None;
+        s.responders.extend([faster, silent]);
+        assert_eq!(s.smallest_p50_us(), Some(7_000.0));
+        s.responders.clear();
+        assert_eq!(s.smallest_p50_us(), None);
     }
 
     #[test]

@@ -215,6 +215,15 @@ pub(crate) struct SourceSummary {
     pub(crate) second_counter: Option<SecondCounter>,
 }
 
+impl SourceSummary {
+    /// A message id's share of the source's rate, where the rate is known.
+    pub(crate) fn msg_rate(&self, m: &MsgCount) -> Option<f64> {
+        let received = self.counts.received;
+        let rate = self.frames_per_s.filter(|_| received > 0)?;
+        Some(rate * m.count as f64 / received as f64)
+    }
+}
+
 /// A second counter under one source's ids.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub(crate) struct SecondCounter {
@@ -347,4 +356,29 @@ pub struct PassiveInterim {
     pub(crate) table: TableSummary,
     /// What each source said it is, from its HEARTBEAT.
     pub(crate) identities: Vec<(SysComp, Identity)>,
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::engine::probe::passive::tracker::SourceTable;
+    use crate::frame::SysComp;
+
+    #[test]
+    fn a_message_is_at_its_share_of_the_source_rate() {
+        let mut t = SourceTable::new(None, 32);
+        // Four frames 100 ms apart (10 a second), three of them id 30.
+        for (k, id) in [30u32, 30, 0, 30].into_iter().enumerate() {
+            t.on_frame(SysComp::new(1, 1), k as u8, id, 40, k as u64 * 100_000_000);
+        }
+        let s = t.summary(1_000_000_000).sources.remove(0);
+        let rate = |id| s.msg_rate(s.msg_ids.iter().find(|m| m.id == id).unwrap());
+        assert_eq!(s.frames_per_s, Some(10.0));
+        assert_eq!(rate(30), Some(7.5));
+        assert_eq!(rate(0), Some(2.5));
+        // One frame: no span, so no rate to share.
+        let mut one = SourceTable::new(None, 32);
+        one.on_frame(SysComp::new(2, 1), 0, 30, 40, 0);
+        let s = one.summary(1).sources.remove(0);
+        assert_eq!(s.msg_rate(&s.msg_ids[0]), None);
+    }
 }

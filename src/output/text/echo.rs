@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use super::format::{ms, ms_each, ms_us, per_second, rate, who};
+use super::format::{counted, ms, ms_each, ms_us, per_second, rate, who};
 use super::summary::{write_failures, write_histogram, write_rtt, write_sent, write_signing};
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
@@ -32,18 +32,15 @@ pub(super) struct Progress {
 impl<W: Write> TextReporter<W> {
     pub(super) fn echo_start(&mut self, info: &StartInfo) -> io::Result<()> {
         let summarised = !self.every_reply && 1.0 / info.interval.as_secs_f64() > MAX_LINE_RATE;
+        let mut lines = "";
         if summarised {
             self.progress = Some(Progress::default());
+            lines = " (one status line per second; --every-reply for all)";
         }
         // Auto sends PING to all, TIMESYNC only to some: say both.
         let (probe, also) = match info.probe {
             ProbeName::Auto => ("PING".to_string(), " (TIMESYNC where PING is not answered)"),
             p => (p.as_str().to_uppercase(), ""),
-        };
-        let lines = if summarised {
-            " (one status line per second; --every-reply for all)"
-        } else {
-            ""
         };
         self.start_line(
             info,
@@ -62,53 +59,37 @@ impl<W: Write> TextReporter<W> {
             return self.tally(e);
         }
         self.stamp(e.at())?;
-        match *e {
+        let (responder, seq) = (e.responder(), e.seq().unwrap_or_default());
+        // Replies in time, late and again share a line, told apart by its
+        // head and tail.
+        let (head, tail) = match *e {
             MatchEvent::Reply {
-                responder,
-                seq,
-                rtt,
-                out_of_order,
-                at,
-                ..
+                out_of_order, at, ..
             } => {
-                let note = self.radio_note(at);
-                writeln!(
-                    self.out,
-                    "reply from {responder}: seq={seq} time={} ms{}{note}",
-                    ms(rtt),
-                    if out_of_order { " (out of order)" } else { "" }
-                )
+                let order = if out_of_order { " (out of order)" } else { "" };
+                ("", format!("{order}{}", self.radio_note(at)))
             }
-            MatchEvent::Lost { responder, seq, .. } => writeln!(
-                self.out,
-                "no reply from {responder}: seq={seq} (timeout {})",
-                humantime::format_duration(self.timeout)
-            ),
-            MatchEvent::Late {
-                responder,
-                seq,
-                rtt,
-                ..
-            } => writeln!(
-                self.out,
-                "late reply from {responder}: seq={seq} time={} ms (after the timeout)",
-                ms(rtt)
-            ),
-            MatchEvent::Duplicate {
-                responder,
-                seq,
-                rtt,
-                ..
-            } => writeln!(
-                self.out,
-                "reply from {responder}: seq={seq} time={} ms (DUP!)",
-                ms(rtt)
-            ),
-            MatchEvent::Stale { responder, .. } => writeln!(
-                self.out,
-                "stale reply from {responder}: matches no request we hold"
-            ),
-        }
+            MatchEvent::Late { .. } => ("late ", " (after the timeout)".into()),
+            MatchEvent::Duplicate { .. } => ("", " (DUP!)".into()),
+            MatchEvent::Lost { .. } => {
+                let timeout = humantime::format_duration(self.timeout);
+                return writeln!(
+                    self.out,
+                    "no reply from {responder}: seq={seq} (timeout {timeout})"
+                );
+            }
+            MatchEvent::Stale { .. } => {
+                return writeln!(
+                    self.out,
+                    "stale reply from {responder}: matches no request we hold"
+                );
+            }
+        };
+        let time = ms(e.rtt().unwrap_or_default());
+        writeln!(
+            self.out,
+            "{head}reply from {responder}: seq={seq} time={time} ms{tail}"
+        )
     }
 
     /// `[12.0 s] 1/1: 120 sent, 118 received, 2 lost (1.67%), 0 late, 0
@@ -219,21 +200,13 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
     }
     // Said, so that the requests add up: not charged + sent + in flight.
     if c.not_charged > 0 {
-        let requests = if c.not_charged == 1 {
-            "request"
-        } else {
-            "requests"
-        };
         let (earlier, why) = if c.sent + c.in_flight == 0 {
             ("", "it answered none")
         } else {
             ("earlier ", "sent before its first answer")
         };
-        write!(
-            out,
-            "; {} {earlier}{requests} not charged ({why})",
-            c.not_charged
-        )?;
+        let requests = counted(c.not_charged, &format!("{earlier}request"));
+        write!(out, "; {requests} not charged ({why})")?;
     }
     writeln!(out)?;
     if let Some(d) = &r.direction {
@@ -274,18 +247,17 @@ fn write_direction(out: &mut impl Write, d: &Direction) -> io::Result<()> {
         d.downlink_lost,
         d.downlink_frames
     );
+    let round_trip = percent(d.round_trip_loss);
     match (d.uplink_loss, d.uplink_stderr) {
         _ if !d.consistent => writeln!(
             out,
-            "  direction: {down} is more than the round trip's {}: its sequence does not number \
-             just what it sends us on this link (a router re-sequencing or merging links?), so \
-             no split",
-            percent(d.round_trip_loss)
+            "  direction: {down} is more than the round trip's {round_trip}: its sequence does \
+             not number just what it sends us on this link (a router re-sequencing or merging \
+             links?), so no split"
         ),
         (Some(up), Some(e)) => writeln!(
             out,
-            "  direction: round trip {} lost = up ~{} ± {} and {down}",
-            percent(d.round_trip_loss),
+            "  direction: round trip {round_trip} lost = up ~{} ± {} and {down}",
             percent(up),
             percent(e)
         ),
@@ -359,13 +331,7 @@ fn write_wire(out: &mut impl Write, s: &EchoSummary, w: &WireBudget) -> io::Resu
         w.reply_bytes
     )?;
     // The rest of the RTT is the radio's and the autopilot's.
-    if let Some(p50) = s
-        .responders
-        .iter()
-        .filter_map(|r| r.rtt)
-        .map(|t| t.p50_us)
-        .reduce(f64::min)
-    {
+    if let Some(p50) = s.smallest_p50_us() {
         write!(
             out,
             ", {} ms of the rtt p50 is beyond the wire",
@@ -407,19 +373,13 @@ fn write_link_faults(out: &mut impl Write, s: &EchoSummary) -> io::Result<()> {
 
 /// `schedule: 50/s achieved of 50/s, send lateness ...`.
 fn write_schedule(out: &mut impl Write, s: &EchoSummary, p: &ScheduleSummary) -> io::Result<()> {
-    let rate = if p.not_sent > 0 {
-        format!(
-            "the link took {}/s of {}/s ({} requests not sent: it is not reading)",
-            per_second(p.achieved_rate_hz),
-            per_second(p.requested_rate_hz),
-            p.not_sent
-        )
-    } else {
-        format!(
-            "{}/s achieved of {}/s",
-            per_second(p.achieved_rate_hz),
-            per_second(p.requested_rate_hz)
-        )
+    let achieved = per_second(p.achieved_rate_hz);
+    let requested = per_second(p.requested_rate_hz);
+    let rate = match p.not_sent {
+        0 => format!("{achieved}/s achieved of {requested}/s"),
+        n => format!(
+            "the link took {achieved}/s of {requested}/s ({n} requests not sent: it is not reading)"
+        ),
     };
     writeln!(
         out,

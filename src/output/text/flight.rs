@@ -6,7 +6,7 @@
 use std::io::{self, Write};
 use std::time::{Duration, SystemTime};
 
-use super::format::{percent_or_dash, whole_or};
+use super::format::{counted, percent_or_dash, whole_or};
 use crate::engine::probe::passive::flight::{
     diagnosis_text, FlightSummary, FlightWindow, OriginKind, SilenceFigure, Span,
 };
@@ -76,24 +76,17 @@ pub(super) fn write_flight(
     for b in &f.bursts {
         writeln!(out, "flight burst: {}", span(b, clock, true))?;
     }
-    let more = |count: u64, kept: usize| count.saturating_sub(kept as u64);
-    if more(f.silence_count, f.silences.len()) + more(f.burst_count, f.bursts.len()) > 0 {
+    let (silences, bursts) = f.unlisted();
+    if silences + bursts > 0 {
         writeln!(
             out,
-            "flight: {} shorter silences and {} shorter bursts not listed (every one is in --json)",
-            more(f.silence_count, f.silences.len()),
-            more(f.burst_count, f.bursts.len())
+            "flight: {silences} shorter silences and {bursts} shorter bursts not listed (every one is in --json)"
         )?;
     }
     if f.untold > 0 {
         writeln!(out, "flight: {} windows not told (output behind)", f.untold)?;
     }
     Ok(())
-}
-
-/// `1 silence`, `2 silences`.
-fn counted(n: u64, what: &str) -> String {
-    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }
 
 /// Where distances are from, and the farthest window.

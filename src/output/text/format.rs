@@ -43,6 +43,11 @@ pub(super) fn who(id: SysComp, said: Option<&Identity>) -> String {
     }
 }
 
+/// `1 silence`, `2 silences`.
+pub(super) fn counted(n: u64, what: &str) -> String {
+    format!("{n} {what}{}", if n == 1 { "" } else { "s" })
+}
+
 /// A rate with one decimal, or three significant digits below 0.1/s (a
 /// PING every 30 s is 0.0333/s, not "0.0/s").
 pub(super) fn per_second(hz: f64) -> String {

@@ -18,21 +18,15 @@ impl<W: Write> TextReporter<W> {
     /// A radio's report: remembered for the reply lines; told at its first
     /// and when its kind changed, with what it is and why.
     pub(super) fn radio_line(&mut self, heard: &RadioHeard<'_>) -> io::Result<()> {
-        let RadioHeard {
-            id,
-            at,
-            report,
-            judgement,
-            first,
-            kind_changed,
-        } = *heard;
-        let kind = judgement.kind;
-        self.radio = Some((id, report, kind));
-        if !first && !kind_changed {
+        let (id, kind) = (heard.id, heard.judgement.kind);
+        self.radio = Some((id, heard.report, kind));
+        if !heard.first && !heard.kind_changed {
             return Ok(());
         }
-        self.stamp(at)?;
-        let (heard, what) = (radio_heard(kind, &report), judgement.describe());
+        self.stamp(heard.at)?;
+        let what = heard.judgement.describe();
+        let kind_changed = heard.kind_changed;
+        let heard = radio_heard(kind, &heard.report);
         if kind_changed {
             return writeln!(self.out, "radio {id} is {what}: {heard}");
         }

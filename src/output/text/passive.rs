@@ -132,12 +132,9 @@ fn write_messages(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
         .msg_ids
         .iter()
         .take(TOP_MSG_IDS)
-        .map(|m| match r.frames_per_s {
-            Some(rate) if r.counts.received > 0 => {
-                let share = rate * m.count as f64 / r.counts.received as f64;
-                format!("{} {}/s", id_name(m.id), per_second(share))
-            }
-            _ => id_count(m),
+        .map(|m| match r.msg_rate(m) {
+            Some(rate) => format!("{} {}/s", id_name(m.id), per_second(rate)),
+            None => id_count(m),
         })
         .collect();
     let more = r.msg_ids.len().saturating_sub(TOP_MSG_IDS);
@@ -170,17 +167,17 @@ fn write_damaged(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
 }
 
 fn write_silence(out: &mut impl Write, r: &SourceSummary, silence: &Silence) -> io::Result<()> {
+    let still = if silence.ongoing {
+        " (still silent)"
+    } else {
+        ""
+    };
     writeln!(
         out,
-        "silence: {} heard nothing for {} from {}{}: {}",
+        "silence: {} heard nothing for {} from {}{still}: {}",
         r.source,
         seconds(silence.length_ns),
         seconds(silence.start),
-        if silence.ongoing {
-            " (still silent)"
-        } else {
-            ""
-        },
         silence_figures(silence)
     )
 }
@@ -218,22 +215,22 @@ fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
         humantime::format_rfc3339_micros(t).to_string()
     };
     let r = &log.records;
+    let stamps = if st.whole_ms {
+        "all whole milliseconds, as QGroundControl writes them"
+    } else {
+        "in microseconds"
+    };
+    let end = if log.complete {
+        "read to its end"
+    } else {
+        "stopped before its end"
+    };
     writeln!(
         out,
-        "log: {} records from {} to {} (stamps {}){}",
+        "log: {} records from {} to {} (stamps {stamps}), {end}",
         r.records,
         wall(st.first_us),
         wall(st.latest_us),
-        if st.whole_ms {
-            "all whole milliseconds, as QGroundControl writes them"
-        } else {
-            "in microseconds"
-        },
-        if log.complete {
-            ", read to its end"
-        } else {
-            ", stopped before its end"
-        },
     )?;
     let notes = [
         (
@@ -312,15 +309,15 @@ pub(super) fn write_summary(
     if let Some(log) = &s.log {
         write_log(out, log)?;
     }
+    let how = if s.log.is_some() {
+        "of log"
+    } else {
+        "listened"
+    };
     writeln!(
         out,
-        "{:.1} s {}, {} sources heard, {} frames{}",
+        "{:.1} s {how}, {} sources heard, {} frames{}",
         s.duration_s,
-        if s.log.is_some() {
-            "of log"
-        } else {
-            "listened"
-        },
         t.sources,
         t.counts.received,
         match (t.radio_received, t.ground_received) {
@@ -383,27 +380,23 @@ pub(super) fn write_summary(
 /// `link:`, the totals of every source but the radio's and the ground
 /// station's own.
 fn write_link_line(out: &mut impl Write, t: &LinkTotals) -> io::Result<()> {
+    let c = &t.counts;
+    let damaged = match c.damaged {
+        0 => String::new(),
+        n => format!(", {n} damaged"),
+    };
+    let wrapped = match t.silence_frames_estimated {
+        0 => String::new(),
+        n => format!(", ~{n} more likely lost in silences the 8-bit counter wrapped in"),
+    };
     writeln!(
         out,
-        "link: {} received, {} lost ({}), {} duplicate, {} reordered{}{}; pymavlink's figure: {} lost ({:.2}%)",
-        t.counts.received,
-        t.counts.lost,
+        "link: {} received, {} lost ({}), {} duplicate, {} reordered{damaged}{wrapped}; pymavlink's figure: {} lost ({:.2}%)",
+        c.received,
+        c.lost,
         percent_or_dash(t.loss_pct),
-        t.counts.duplicate,
-        t.counts.reordered,
-        if t.counts.damaged > 0 {
-            format!(", {} damaged", t.counts.damaged)
-        } else {
-            String::new()
-        },
-        if t.silence_frames_estimated > 0 {
-            format!(
-                ", ~{} more likely lost in silences the 8-bit counter wrapped in",
-                t.silence_frames_estimated
-            )
-        } else {
-            String::new()
-        },
+        c.duplicate,
+        c.reordered,
         t.pymav.loss,
         t.pymav.loss_pct
     )

@@ -5,12 +5,12 @@
 
 use std::io::{self, Write};
 
-use super::format::{ms_us, whole_or};
+use super::format::{counted, ms_us, whole_or};
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
 use crate::engine::sweep::step::Phase;
 use crate::engine::sweep::step::{StepFigures, KNEE_MAX_LOSS};
-use crate::engine::sweep::verdict::{SweepEnd, SweepSummary};
+use crate::engine::sweep::verdict::{Queueing, SweepEnd, SweepSummary};
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
 use crate::output::StartInfo;
 
@@ -21,10 +21,6 @@ fn hz(v: f64) -> String {
     } else {
         format!("{v:.1}")
     }
-}
-
-fn pct(ratio: f64) -> String {
-    format!("{:.0}%", ratio * 100.0)
 }
 
 /// What the `--load` streams send, e.g. `ATTITUDE@50/s + BYTES@1000 B/s
@@ -109,10 +105,10 @@ impl<W: Write> TextReporter<W> {
                     format!(", first {step} at {}/s without the load", hz(first_hz))
                 };
                 format!(
-                    "{probe} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {} loss{baseline}",
+                    "{probe} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {:.0}% loss{baseline}",
                     hz(first_hz),
                     hz(max_hz),
-                    pct(loss_limit),
+                    loss_limit * 100.0,
                 )
             }
             PlanKind::Load { rate_hz } => format!(
@@ -218,18 +214,14 @@ pub(super) fn write_summary(
         SweepEnd::Deadline => "the deadline ended it; the steps so far are above",
         SweepEnd::LinkFailed => "the link failed; the steps so far are above",
     };
-    let n = s.steps.len();
-    let steps = if n == 1 { "step" } else { "steps" };
-    writeln!(out, "{}: {n} {steps}, {ending}", s.kind)?;
-    let baud = wire.map(|w| {
-        format!(
-            "; the baud rate alone says ~{}/s ({} baud)",
-            hz(w.max_rate_hz.floor()),
-            w.baud
-        )
+    let steps = counted(s.steps.len() as u64, "step");
+    writeln!(out, "{}: {steps}, {ending}", s.kind)?;
+    let baud = wire.map_or_else(String::new, |w| {
+        let carries = hz(w.max_rate_hz.floor());
+        format!("; the baud rate alone says ~{carries}/s ({} baud)", w.baud)
     });
     if s.kind == "sweep" {
-        write_knee(out, s, probe, baud.as_deref())?;
+        write_knee(out, s, probe, &baud)?;
         if let Some(q) = &s.queueing {
             write_queueing(out, q)?;
         }
@@ -263,80 +255,58 @@ pub(super) fn write_summary(
 }
 
 /// Where the sweep found the knee, beside what the baud rate alone says.
-fn write_knee(
-    out: &mut impl Write,
-    s: &SweepSummary,
-    probe: &str,
-    baud: Option<&str>,
-) -> io::Result<()> {
-    match &s.knee {
-        Some(k) => {
-            let above = match k.failed_above_hz {
-                Some(f) => format!("; {}/s failed", hz(f)),
-                None => {
-                    "; every rate tried passed, so the link carries more: raise --sweep-max".into()
-                }
-            };
-            writeln!(
-                out,
-                "knee: {} {probe}s/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, \
-                 loss {:.2}%, p99 {} ms{above}{}",
-                hz(k.rate_hz),
-                k.bytes_per_s,
-                k.tx_bytes_per_s,
-                k.rx_bytes_per_s,
-                k.step,
-                k.loss_ratio * 100.0,
-                ms_us(k.p99_us),
-                baud.unwrap_or_default()
-            )?;
-        }
-        None => writeln!(
+fn write_knee(out: &mut impl Write, s: &SweepSummary, probe: &str, baud: &str) -> io::Result<()> {
+    let Some(k) = &s.knee else {
+        return writeln!(
             out,
             "knee: none: no step lost under 1% with a p99 under twice the first step's (or under \
-             30 ms over it){}",
-            baud.unwrap_or_default()
-        )?,
-    }
-    Ok(())
+             30 ms over it){baud}"
+        );
+    };
+    let above = match k.failed_above_hz {
+        Some(f) => format!("; {}/s failed", hz(f)),
+        None => "; every rate tried passed, so the link carries more: raise --sweep-max".into(),
+    };
+    writeln!(
+        out,
+        "knee: {} {probe}s/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, loss \
+         {:.2}%, p99 {} ms{above}{baud}",
+        hz(k.rate_hz),
+        k.bytes_per_s,
+        k.tx_bytes_per_s,
+        k.rx_bytes_per_s,
+        k.step,
+        k.loss_ratio * 100.0,
+        ms_us(k.p99_us),
+    )
 }
 
 /// Whether the link queued before it dropped: the latency it added under
 /// load, graded, and "bufferbloat" from grade C down.
-fn write_queueing(
-    out: &mut impl Write,
-    q: &crate::engine::sweep::verdict::Queueing,
-) -> io::Result<()> {
-    let grade = q.grade.as_str();
-    let added = ms_us(q.added_us);
+fn write_queueing(out: &mut impl Write, q: &Queueing) -> io::Result<()> {
+    let (grade, added) = (q.grade.as_str(), ms_us(q.added_us));
+    let (at, worst) = (hz(q.worst_at_hz), ms_us(q.worst_p99_us));
+    let reference = ms_us(q.reference_p99_us);
     if q.bufferbloat {
-        writeln!(
+        return writeln!(
             out,
-            "queueing: bufferbloat, grade {grade} (+{added} ms under load): at {}/s the link lost \
-             under 1% yet its p99 reached {} ms, over the first step's {} ms: it queues before it \
-             drops",
-            hz(q.worst_at_hz),
-            ms_us(q.worst_p99_us),
-            ms_us(q.reference_p99_us)
-        )?;
-    } else {
-        let then = match q.lost_at_hz {
-            Some(rate) => format!(
-                "; from {}/s it lost instead: the link drops before it queues",
-                hz(rate)
-            ),
-            None => "; no step lost 1% or more".into(),
-        };
-        writeln!(
-            out,
-            "queueing: grade {grade} (+{added} ms under load), no bufferbloat: while it lost under \
-             1%, the p99 rose from the first step's {} ms to at most {} ms (at {}/s){then}",
-            ms_us(q.reference_p99_us),
-            ms_us(q.worst_p99_us),
-            hz(q.worst_at_hz)
-        )?;
+            "queueing: bufferbloat, grade {grade} (+{added} ms under load): at {at}/s the link lost \
+             under 1% yet its p99 reached {worst} ms, over the first step's {reference} ms: it \
+             queues before it drops"
+        );
     }
-    Ok(())
+    let then = match q.lost_at_hz {
+        Some(rate) => format!(
+            "; from {}/s it lost instead: the link drops before it queues",
+            hz(rate)
+        ),
+        None => "; no step lost 1% or more".into(),
+    };
+    writeln!(
+        out,
+        "queueing: grade {grade} (+{added} ms under load), no bufferbloat: while it lost under 1%, \
+         the p99 rose from the first step's {reference} ms to at most {worst} ms (at {at}/s){then}"
+    )
 }
 
 #[cfg(test)]

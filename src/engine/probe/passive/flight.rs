@@ -267,6 +267,16 @@ pub(crate) struct FlightSummary {
     pub(crate) radio_evidence: Vec<String>,
 }
 
+impl FlightSummary {
+    /// The silences and the bursts counted but not kept in the lists (the
+    /// shorter ones).
+    pub(crate) fn unlisted(&self) -> (u64, u64) {
+        let more = |count: u64, kept: usize| count.saturating_sub(kept as u64);
+        let silences = more(self.silence_count, self.silences.len());
+        (silences, more(self.burst_count, self.bursts.len()))
+    }
+}
+
 /// The window under way.
 #[derive(Debug, Clone, Default)]
 struct Current {
@@ -1187,6 +1197,7 @@ mod tests {
         assert_eq!(s.worst.len(), WORST);
         assert_eq!(s.bursts.len(), KEPT);
         assert_eq!(s.burst_count, 43_200);
+        assert_eq!(s.unlisted(), (0, 43_200 - KEPT as u64));
         assert_eq!(s.untold, 0);
     }
 
