@@ -122,6 +122,17 @@ impl MatchEvent {
         }
     }
 
+    /// When the request was sent; a stale reply matches none.
+    pub(crate) fn sent_at(&self) -> Option<Nanos> {
+        match *self {
+            MatchEvent::Reply { sent_at, .. }
+            | MatchEvent::Late { sent_at, .. }
+            | MatchEvent::Duplicate { sent_at, .. }
+            | MatchEvent::Lost { sent_at, .. } => Some(sent_at),
+            MatchEvent::Stale { .. } => None,
+        }
+    }
+
     /// The round trip, where a reply came for a request we held.
     pub(crate) fn rtt(&self) -> Option<Nanos> {
         match *self {

@@ -156,36 +156,18 @@ impl<W: Write> Reporter for SampleLog<W> {
     }
 
     fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
-        let (who, seq, sent, rtt, status) = match *e {
-            MatchEvent::Reply {
-                responder,
-                seq,
-                rtt,
-                sent_at,
-                ..
-            } => (responder, seq, sent_at, us(rtt), "ok"),
-            MatchEvent::Late {
-                responder,
-                seq,
-                rtt,
-                sent_at,
-                ..
-            } => (responder, seq, sent_at, us(rtt), "late"),
-            MatchEvent::Duplicate {
-                responder,
-                seq,
-                rtt,
-                sent_at,
-                ..
-            } => (responder, seq, sent_at, us(rtt), "duplicate"),
-            MatchEvent::Lost {
-                responder,
-                seq,
-                sent_at,
-                ..
-            } => (responder, seq, sent_at, String::new(), "lost"),
+        let status = match e {
+            MatchEvent::Reply { .. } => "ok",
+            MatchEvent::Late { .. } => "late",
+            MatchEvent::Duplicate { .. } => "duplicate",
+            MatchEvent::Lost { .. } => "lost",
             MatchEvent::Stale { .. } => return Ok(()),
         };
+        let (Some(seq), Some(sent)) = (e.seq(), e.sent_at()) else {
+            return Ok(());
+        };
+        let who = e.responder();
+        let rtt = e.rtt().map(us).unwrap_or_default();
         writeln!(
             self.out,
             "{},{},{seq},{},{rtt},{status},{}{}",

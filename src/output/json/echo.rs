@@ -127,55 +127,35 @@ impl Lines {
 
     /// A reply, loss, late, duplicate or stale reply.
     pub(super) fn match_line(&self, e: &MatchEvent) -> MatchLine {
+        let stamp = |r#type| self.stamp(r#type, e.at(), e.responder());
         match *e {
             MatchEvent::Reply {
-                responder,
                 seq,
                 rtt,
-                at,
                 out_of_order,
                 ..
             } => MatchLine::Reply(Reply {
-                stamp: self.stamp("reply", at, responder),
+                stamp: stamp("reply"),
                 seq,
                 rtt_us: us(rtt),
                 out_of_order,
             }),
-            MatchEvent::Lost {
-                responder,
-                seq,
-                sent_at,
-                at,
-            } => MatchLine::Lost(Lost {
-                stamp: self.stamp("lost", at, responder),
+            MatchEvent::Lost { seq, sent_at, .. } => MatchLine::Lost(Lost {
+                stamp: stamp("lost"),
                 seq,
                 sent_t_s: seconds(sent_at),
             }),
-            MatchEvent::Late {
-                responder,
-                seq,
-                rtt,
-                at,
-                ..
-            } => MatchLine::Again(Again {
-                stamp: self.stamp("late", at, responder),
+            MatchEvent::Late { seq, rtt, .. } => MatchLine::Again(Again {
+                stamp: stamp("late"),
                 seq,
                 rtt_us: us(rtt),
             }),
-            MatchEvent::Duplicate {
-                responder,
-                seq,
-                rtt,
-                at,
-                ..
-            } => MatchLine::Again(Again {
-                stamp: self.stamp("duplicate", at, responder),
+            MatchEvent::Duplicate { seq, rtt, .. } => MatchLine::Again(Again {
+                stamp: stamp("duplicate"),
                 seq,
                 rtt_us: us(rtt),
             }),
-            MatchEvent::Stale { responder, at } => {
-                MatchLine::Stale(self.stamp("stale", at, responder))
-            }
+            MatchEvent::Stale { .. } => MatchLine::Stale(stamp("stale")),
         }
     }
 }
