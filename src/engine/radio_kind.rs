@@ -94,9 +94,9 @@ impl RadioType {
     }
 }
 
-/// What a radio is.
+/// What a radio is; JSON and Prometheus name it by its [`RadioKind::key`].
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "snake_case")]
+#[serde(into = "&'static str")]
 pub(crate) enum RadioKind {
     Sik,
     Mlrs,
@@ -201,7 +201,24 @@ fn percent(v: u8) -> Option<f64> {
 
 const SIK_NOTE: &str = "approximate, SiK scale";
 
+impl From<RadioKind> for &'static str {
+    fn from(kind: RadioKind) -> Self {
+        kind.key()
+    }
+}
+
 impl RadioKind {
+    /// As machines read it: JSON's `kind` and Prometheus's `kind` label.
+    pub(crate) fn key(self) -> &'static str {
+        match self {
+            RadioKind::Sik => "sik",
+            RadioKind::Mlrs => "mlrs",
+            RadioKind::Elrs => "elrs",
+            RadioKind::Esp => "esp",
+            RadioKind::Unknown => "unknown",
+        }
+    }
+
     /// As reports name it.
     pub(crate) fn name(self) -> &'static str {
         match self {
@@ -570,6 +587,20 @@ mod tests {
     use crate::frame::RadioStatus;
 
     const S: Nanos = 1_000_000_000;
+
+    #[test]
+    fn json_names_a_kind_by_its_key() {
+        for (kind, key) in [
+            (RadioKind::Sik, "sik"),
+            (RadioKind::Mlrs, "mlrs"),
+            (RadioKind::Elrs, "elrs"),
+            (RadioKind::Esp, "esp"),
+            (RadioKind::Unknown, "unknown"),
+        ] {
+            assert_eq!(kind.key(), key);
+            assert_eq!(serde_json::to_value(kind).unwrap(), key);
+        }
+    }
 
     fn sik_report(rssi: u8, rxerrors: u16) -> RadioStatus {
         RadioStatus {

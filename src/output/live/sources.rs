@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 use super::state::RECENT;
 use crate::engine::roster::Identity;
-use crate::engine::summary::passive::TableSummary;
+use crate::engine::summary::passive::{SeqCounts, TableSummary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::output::windows::Windows;
@@ -53,11 +53,8 @@ impl Sources {
         for (w, s) in self.windows.next(at, table).iter().zip(&table.sources) {
             let t = self.sources.entry(s.source).or_default();
             t.radio = s.radio;
-            t.received = s.counts.received;
-            t.lost = s.counts.lost;
+            t.counts = s.counts;
             t.loss_pct = s.loss_pct;
-            t.duplicate = s.counts.duplicate;
-            t.reordered = s.counts.reordered;
             t.silences = s.silence_count;
             t.rate = w.frames_per_s();
             if t.recent.len() == RECENT {
@@ -94,11 +91,8 @@ pub(crate) struct SourceRow {
     /// What its HEARTBEAT said it is; `radio` for the SiK radio's own.
     pub(crate) identity: Option<String>,
     pub(crate) radio: bool,
-    pub(crate) received: u64,
-    pub(crate) lost: u64,
+    pub(crate) counts: SeqCounts,
     pub(crate) loss_pct: Option<f64>,
-    pub(crate) duplicate: u64,
-    pub(crate) reordered: u64,
     pub(crate) silences: u64,
     /// Frames a second in the latest second.
     pub(crate) rate: Option<f64>,

@@ -29,7 +29,7 @@ pub(crate) enum Mark {
     Late,
 }
 
-#[derive(Clone)]
+#[derive(Clone, Default)]
 struct Track {
     /// Counted as the exporter counts them.
     counts: Counts,
@@ -39,15 +39,6 @@ struct Track {
 }
 
 impl Track {
-    fn new() -> Self {
-        Track {
-            counts: Counts::default(),
-            rtt: RttStats::new(),
-            recent: VecDeque::with_capacity(RECENT),
-            heard_as: None,
-        }
-    }
-
     fn record(&mut self, outcome: Outcome) {
         outcome.count(&mut self.counts);
         let mark = match outcome {
@@ -104,7 +95,7 @@ impl Reporter for LiveState {
         match self.sources.as_mut() {
             Some(sources) => sources.heard(id, identity),
             None => {
-                let track = self.tracks.entry(id).or_insert_with(Track::new);
+                let track = self.tracks.entry(id).or_default();
                 track.heard_as = Some(heard_as(identity));
             }
         }
@@ -130,10 +121,7 @@ impl Reporter for LiveState {
         self.waiting = false;
         if let Some((id, outcome)) = Outcome::of_match(e) {
             self.now = self.now.max(e.at());
-            self.tracks
-                .entry(id)
-                .or_insert_with(Track::new)
-                .record(outcome);
+            self.tracks.entry(id).or_default().record(outcome);
         }
         Ok(())
     }
@@ -171,7 +159,7 @@ impl LiveState {
             .map(|(id, t)| {
                 let s = t.rtt.summary();
                 RowView {
-                    id: format!("{}/{}", id.sysid, id.compid),
+                    id: id.to_string(),
                     heard_as: t.heard_as.clone(),
                     counts: t.counts,
                     last_ms: t.rtt.last().map(|ns| ns as f64 / 1e6),
@@ -459,7 +447,7 @@ mod tests {
             panic!("not a passive screen");
         };
         assert!(rows.iter().all(|r| r.recent.len() == RECENT));
-        assert_eq!(rows[1].received, 10 * (RECENT as u64 + 60) + 1);
+        assert_eq!(rows[1].counts.received, 10 * (RECENT as u64 + 60) + 1);
     }
 
     #[test]

@@ -315,14 +315,15 @@ fn figures(r: &RowView) -> Cells {
 /// A source's figures, each with whether it is bad news.
 fn source_figures(r: &SourceRow) -> Cells {
     let one = |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.1}"));
+    let c = &r.counts;
     vec![
         (r.id.clone(), false),
         (r.identity.clone().unwrap_or_else(|| "-".into()), false),
-        (r.received.to_string(), false),
-        (r.lost.to_string(), r.lost > 0),
-        (one(r.loss_pct), r.lost > 0),
-        (r.duplicate.to_string(), false),
-        (r.reordered.to_string(), false),
+        (c.received.to_string(), false),
+        (c.lost.to_string(), c.lost > 0),
+        (one(r.loss_pct), c.lost > 0),
+        (c.duplicate.to_string(), false),
+        (c.reordered.to_string(), false),
         (r.silences.to_string(), r.silences > 0),
         (one(r.rate), false),
     ]

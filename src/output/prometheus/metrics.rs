@@ -2,20 +2,23 @@
 //! responder, radio, node and source, and the link's own state.
 
 use std::collections::BTreeMap;
+use std::io;
 
 use super::radio_series::RadioSeries;
 use super::series::{Outcome, Series, Split};
 use super::sources;
 use crate::engine::clock_offset::ClockSummary;
-use crate::engine::link_node::LinkNodes;
+use crate::engine::link_node::{LinkNodeReport, LinkNodes};
 use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::StartInfo;
+use crate::engine::observe::{RadioHeard, StartInfo};
 use crate::engine::probe::command::CommandEvent;
-use crate::engine::radio::{RadioKind, RadioReport, MAX_RADIOS};
-use crate::engine::summary::passive::TableSummary;
-use crate::engine::summary::{EchoSummary, ProbeName};
+use crate::engine::radio::MAX_RADIOS;
+use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::summary::{CommandSummary, EchoSummary, ProbeName};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
+use crate::output::Reporter;
+use crate::verdict::Verdict;
 
 /// One link's metrics.
 #[derive(Debug, Default)]
@@ -92,20 +95,6 @@ impl Metrics {
         self.state.get_or_insert_with(LinkState::default).restarts += 1;
     }
 
-    pub(crate) fn on_start(&mut self, info: &StartInfo) {
-        self.link = info.link.clone();
-        self.probe = Some(info.probe);
-        self.set_up(true);
-        // A continuous link's new session: its sequences start afresh,
-        // its counters go on.
-        self.sources.carry();
-        self.requests.earlier += std::mem::take(&mut self.requests.session);
-        for s in self.responders.values_mut() {
-            s.split = Split::Live;
-            s.answering = false;
-        }
-    }
-
     /// Whether the link sends requests (a passive one does not); `None`
     /// before a session starts.
     pub(super) fn sends(&self) -> bool {
@@ -115,24 +104,6 @@ impl Metrics {
     /// Responders that answered in the link's current session.
     pub(super) fn answering(&self) -> usize {
         self.responders.values().filter(|s| s.answering).count()
-    }
-
-    /// The table of sources, as told while the session goes on (`ended`
-    /// false) or in its summary.
-    pub(crate) fn on_sources(&mut self, table: &TableSummary, ended: bool) {
-        self.sources.update(table, ended);
-    }
-
-    pub(crate) fn on_event(&mut self, e: &MatchEvent) {
-        if let Some((id, outcome)) = Outcome::of_match(e) {
-            self.record(id, outcome);
-        }
-    }
-
-    pub(crate) fn on_command(&mut self, e: &CommandEvent) {
-        if let Some((id, outcome)) = Outcome::of_command(e) {
-            self.record(id, outcome);
-        }
     }
 
     fn record(&mut self, id: SysComp, outcome: Outcome) {
@@ -146,20 +117,71 @@ impl Metrics {
         }
     }
 
-    /// A RADIO_STATUS from a radio of `kind`: its figures replace the
-    /// radio's last ones.
-    pub(crate) fn on_radio(&mut self, id: SysComp, report: RadioReport, kind: RadioKind) {
+    #[cfg(test)]
+    /// The exposition of this link alone, as `--prometheus` serves it.
+    pub(crate) fn render(&self) -> String {
+        super::render::render(&[self])
+    }
+}
+
+/// The link's session, as its events tell it: each figure where the
+/// exposition reads it.
+impl Reporter for Metrics {
+    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
+        self.link = info.link.clone();
+        self.probe = Some(info.probe);
+        self.set_up(true);
+        // A continuous link's new session: its sequences start afresh,
+        // its counters go on.
+        self.sources.carry();
+        self.requests.earlier += std::mem::take(&mut self.requests.session);
+        for s in self.responders.values_mut() {
+            s.split = Split::Live;
+            s.answering = false;
+        }
+        Ok(())
+    }
+
+    fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
+        if let Some((id, outcome)) = Outcome::of_match(e) {
+            self.record(id, outcome);
+        }
+        Ok(())
+    }
+
+    fn command(&mut self, e: &CommandEvent) -> io::Result<()> {
+        if let Some((id, outcome)) = Outcome::of_command(e) {
+            self.record(id, outcome);
+        }
+        Ok(())
+    }
+
+    /// A RADIO_STATUS: its figures replace the radio's last ones.
+    fn radio(&mut self, radio: &RadioHeard<'_>) -> io::Result<()> {
+        let (id, kind) = (radio.id, radio.judgement.kind);
         if self.radios.len() < MAX_RADIOS || self.radios.contains_key(&id) {
             self.radios
                 .entry(id)
                 .or_insert_with(|| RadioSeries::new(kind))
-                .record(report, kind);
+                .record(radio.report, kind);
         }
+        Ok(())
+    }
+
+    fn link_node(
+        &mut self,
+        id: SysComp,
+        at: Nanos,
+        report: &LinkNodeReport,
+        _: bool,
+    ) -> io::Result<()> {
+        self.link_nodes.record(id, *report, at);
+        Ok(())
     }
 
     /// A TIMESYNC responder's clock offset so far, carried from the run's
     /// start to `at` along the measured drift (none until it is measured).
-    pub(crate) fn on_clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) {
+    fn clock(&mut self, id: SysComp, at: Nanos, clock: &ClockSummary) -> io::Result<()> {
         let auto = self.probe == Some(ProbeName::Auto);
         if let Some(s) = self.responders.get_mut(&id) {
             // Only TIMESYNC replies give a clock.
@@ -169,11 +191,29 @@ impl Metrics {
             let drift_ns = clock.drift_ppm.unwrap_or(0.0) * 1e-6 * at as f64;
             s.clock_offset_s = Some((clock.offset_ns as f64 + drift_ns) / 1e9);
         }
+        Ok(())
+    }
+
+    fn link_failed(&mut self, _: Nanos, _: &str) -> io::Result<()> {
+        self.set_up(false);
+        Ok(())
+    }
+
+    /// The table of sources, as told while the session goes on.
+    fn sources(&mut self, _: Nanos, table: &TableSummary) -> io::Result<()> {
+        self.sources.update(table, false);
+        Ok(())
+    }
+
+    fn progress(&mut self, _: Nanos, requests: u64) -> io::Result<()> {
+        self.requests.session = requests;
+        Ok(())
     }
 
     /// The figures known only at the end (percentiles from the HDR
     /// histogram), so a last scrape or a `/probe` has them.
-    pub(crate) fn on_summary(&mut self, summary: &EchoSummary) {
+    fn echo_summary(&mut self, summary: &EchoSummary, _: &Verdict) -> io::Result<()> {
+        self.requests.session = summary.requests;
         for r in &summary.responders {
             let s = self.responders.entry(r.id).or_default();
             // The live figure, when there is one, is the later.
@@ -189,12 +229,18 @@ impl Metrics {
                 s.via_timesync = Some(u8::from(p == ProbeName::Timesync));
             }
         }
+        Ok(())
     }
 
-    #[cfg(test)]
-    /// The exposition of this link alone, as `--prometheus` serves it.
-    pub(crate) fn render(&self) -> String {
-        super::render::render(&[self])
+    /// The table of sources as the session's summary has it.
+    fn passive_summary(&mut self, summary: &PassiveSummary, _: &Verdict) -> io::Result<()> {
+        self.sources.update(&summary.table, true);
+        Ok(())
+    }
+
+    fn command_summary(&mut self, summary: &CommandSummary, _: &Verdict) -> io::Result<()> {
+        self.requests.session = summary.commands();
+        Ok(())
     }
 }
 

@@ -11,7 +11,7 @@ use super::passive::{write_directions, write_sources};
 use super::radio_series::RadioSeries;
 use super::series::{Series, BUCKETS_S};
 use super::Metrics;
-use crate::engine::radio::{Field, RadioKind, UNKNOWN};
+use crate::engine::radio::{Field, UNKNOWN};
 
 /// What a [`Metrics`] stands for, which decides how its counts are typed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -210,16 +210,6 @@ fn in_kind_units(r: &RadioSeries, key: &str) -> Option<f64> {
     })
 }
 
-fn kind_label(kind: RadioKind) -> &'static str {
-    match kind {
-        RadioKind::Sik => "sik",
-        RadioKind::Mlrs => "mlrs",
-        RadioKind::Elrs => "elrs",
-        RadioKind::Esp => "esp",
-        RadioKind::Unknown => "unknown",
-    }
-}
-
 /// A link's requests, whoever answered them (a run's and a continuous
 /// link's; a `/probe` has `mavping_probe_requests`)...
 const REQUESTS: Family = Family::counter(
@@ -296,7 +286,7 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
             .flat_map(|m| m.radios.iter().map(move |(id, r)| (m.radio_labels(*id), r)))
     };
     let (info, figures) = RADIO.split_first().expect("the info family");
-    let kind = |l, r: &RadioSeries| (format!("{l},kind=\"{}\"", kind_label(r.kind)), 1);
+    let kind = |l, r: &RadioSeries| (format!("{l},kind=\"{}\"", r.kind.key()), 1);
     out.family(&info.family, radios().map(|(l, r)| kind(l, r)));
     out.figures(figures, radios);
     write_link_nodes(out, links);
@@ -489,7 +479,7 @@ mod tests {
     use super::*;
     use crate::engine::matcher::MatchEvent;
     use crate::engine::observe::Observer;
-    use crate::engine::radio::RadioReport;
+    use crate::engine::radio::{RadioKind, RadioReport};
     use crate::engine::summary::ProbeName;
     use crate::frame::SysComp;
     use crate::output::{Event, StartInfo};
