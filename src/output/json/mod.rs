@@ -3,15 +3,15 @@
 //! [`SCHEMA_VERSION`](lines::SCHEMA_VERSION) on any
 //! change that could break a consumer.
 //!
-//! Every line is a [`Line`]: a struct per `type`, whose members are written
-//! in the order they are declared, so that order is the output's: keep it.
-//! The figures in a line are the engine's own types, named and ordered by
-//! their serde attributes (a change there is a change here); a line's
-//! struct adds only what the line says itself (`type`, times, the link,
-//! the verdict) and borrows or flattens the rest.
-//! The echo probes' lines are in [`echo`], the command probe's in
-//! [`command`], a sweep's in [`sweep`]; `tests` checks one of each against
-//! the schema.
+//! Every line is a `Serialize` value whose members are written in the
+//! order they are declared, so that order is the output's: keep it. The
+//! figures in a line are the engine's own types, named and ordered by
+//! their serde attributes (a change there is a change here; the command
+//! probe's events are their lines); a line's struct adds only what the
+//! line says itself (`type`, times, the link, the verdict) and borrows or
+//! flattens the rest. The echo probes' lines are in [`echo`], the command
+//! probe's summary in [`command`], a sweep's in [`sweep`]; `tests` holds
+//! every line the runs write to the schema.
 //!
 //! This file declares and re-exports, and hands each [`Reporter`] call to
 //! the file that makes its line; every line is written through [`Lines`]
