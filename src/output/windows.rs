@@ -1,9 +1,9 @@
 //! A passive run's sources window by window: the engine tells the table
-//! of sources cumulatively, once a second ([`Event::Sources`]); the
-//! samples, the plot and the live view want what each source did in each
-//! window. Pure: a window is the difference of two tables.
+//! of sources cumulatively, once a second ([`SourcesNow`]); the samples,
+//! the plot and the live view want what each source did in each window.
+//! Pure: a window is the difference of two tables.
 //!
-//! [`Event::Sources`]: crate::engine::observe::Event::Sources
+//! [`SourcesNow`]: crate::engine::probe::passive::SourcesNow
 
 use std::collections::BTreeMap;
 
