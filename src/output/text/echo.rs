@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use super::format::{counted, ms, ms_each, ms_us, per_second, rate, who};
+use super::format::{counted, if_any, ms, ms_each, ms_us, per_second, rate, who};
 use super::summary::{write_failures, write_histogram, write_rtt, write_sent, write_signing};
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
@@ -102,15 +102,10 @@ impl<W: Write> TextReporter<W> {
         }
         for r in &figures.responders {
             self.interim_head(figures.at)?;
-            write!(self.out, "{}: {}", r.id, counts(r))?;
-            match &r.rtt {
-                Some(t) => writeln!(
-                    self.out,
-                    "; rtt p50/p99 = {} ms",
-                    ms_each(&[t.p50_us, t.p99_us])
-                )?,
-                None => writeln!(self.out)?,
-            }
+            let rtt = r.rtt.as_ref().map_or_else(String::new, |t| {
+                format!("; rtt p50/p99 = {} ms", ms_each(&[t.p50_us, t.p99_us]))
+            });
+            writeln!(self.out, "{}: {}{rtt}", r.id, counts(r))?;
         }
         self.out.flush()
     }
@@ -187,17 +182,18 @@ fn counts(r: &ResponderSummary) -> String {
 
 fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()> {
     let c = &r.counts;
-    let mut who = who(r.id, r.identity.as_ref());
-    if let Some(probe) = r.probe {
-        who = format!("{who} via {}", probe.as_str().to_uppercase());
-    }
-    write!(out, "{who}: {}, {} out of order", counts(r), c.out_of_order)?;
-    if c.stale > 0 {
-        write!(out, ", {} stale", c.stale)?;
-    }
-    if c.in_flight > 0 {
-        write!(out, ", {} in flight", c.in_flight)?;
-    }
+    let who = who(r.id, r.identity.as_ref());
+    let via = r.probe.map_or_else(String::new, |p| {
+        format!(" via {}", p.as_str().to_uppercase())
+    });
+    let stale = if_any(c.stale, |n| format!(", {n} stale"));
+    let in_flight = if_any(c.in_flight, |n| format!(", {n} in flight"));
+    write!(
+        out,
+        "{who}{via}: {}, {} out of order{stale}{in_flight}",
+        counts(r),
+        c.out_of_order
+    )?;
     // Said, so that the requests add up: not charged + sent + in flight.
     if c.not_charged > 0 {
         let (earlier, why) = if c.sent + c.in_flight == 0 {

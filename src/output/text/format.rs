@@ -48,6 +48,16 @@ pub(super) fn counted(n: u64, what: &str) -> String {
     format!("{n} {what}{}", if n == 1 { "" } else { "s" })
 }
 
+/// A line's optional part: `text` of the count where there is any,
+/// nothing where there is none.
+pub(super) fn if_any(n: u64, text: impl FnOnce(u64) -> String) -> String {
+    if n == 0 {
+        String::new()
+    } else {
+        text(n)
+    }
+}
+
 /// A rate with one decimal, or three significant digits below 0.1/s (a
 /// PING every 30 s is 0.0333/s, not "0.0/s").
 pub(super) fn per_second(hz: f64) -> String {

@@ -4,7 +4,7 @@
 
 use std::io::{self, Write};
 
-use crate::engine::link_node::{LinkNodeSummary, UplinkComparison, DISAGREE_SIGMAS};
+use crate::engine::link_node::{LinkNodeSummary, DISAGREE_SIGMAS};
 
 /// 2103 → "2,103".
 fn grouped(n: u64) -> String {
@@ -60,33 +60,30 @@ pub(super) fn write_link_nodes(out: &mut impl Write, nodes: &[LinkNodeSummary]) 
             k => writeln!(out, "; it rebooted {k} times")?,
         }
         if let Some(c) = &n.compared {
-            write_comparison(out, c)?;
+            let (estimate, stderr) = (percent_2dp(c.estimate), percent_2dp(c.estimate_stderr));
+            let (verdict, beyond) = if c.agrees {
+                ("agrees", String::new())
+            } else {
+                (
+                    "DISAGREES",
+                    format!(", more than {DISAGREE_SIGMAS}: see the hint"),
+                )
+            };
+            writeln!(
+                out,
+                "  beside mavping's up ~{estimate} ± {stderr} for {}: {verdict} ({:.1} standard \
+                 errors apart{beyond})",
+                c.responder, c.sigmas
+            )?;
         }
     }
     Ok(())
 }
 
-fn write_comparison(out: &mut impl Write, c: &UplinkComparison) -> io::Result<()> {
-    writeln!(
-        out,
-        "  beside mavping's up ~{} ± {} for {}: {} ({:.1} standard errors apart{})",
-        percent_2dp(c.estimate),
-        percent_2dp(c.estimate_stderr),
-        c.responder,
-        if c.agrees { "agrees" } else { "DISAGREES" },
-        c.sigmas,
-        if c.agrees {
-            String::new()
-        } else {
-            format!(", more than {DISAGREE_SIGMAS}: see the hint")
-        }
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::link_node::{LinkNodeReport, LinkNodes};
+    use crate::engine::link_node::{LinkNodeReport, LinkNodes, UplinkComparison};
     use crate::frame::SysComp;
 
     #[test]

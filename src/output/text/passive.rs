@@ -5,7 +5,7 @@
 
 use std::io::{self, Write};
 
-use super::format::{identity, per_second, percent_or_dash, whole_or};
+use super::format::{identity, if_any, per_second, percent_or_dash, whole_or};
 use super::summary::write_failures;
 use super::TextReporter;
 use crate::engine::observe::StartInfo;
@@ -51,10 +51,7 @@ impl<W: Write> TextReporter<W> {
                 (_, true) => " (the ground station's own)",
                 _ => "",
             };
-            let damaged = match r.counts.damaged {
-                0 => String::new(),
-                n => format!("{n} damaged, "),
-            };
+            let damaged = if_any(r.counts.damaged, |n| format!("{n} damaged, "));
             let [received, lost, loss, duplicate, reordered, silences, per_s, _] =
                 source_figures(r);
             writeln!(
@@ -381,14 +378,10 @@ pub(super) fn write_summary(
 /// station's own.
 fn write_link_line(out: &mut impl Write, t: &LinkTotals) -> io::Result<()> {
     let c = &t.counts;
-    let damaged = match c.damaged {
-        0 => String::new(),
-        n => format!(", {n} damaged"),
-    };
-    let wrapped = match t.silence_frames_estimated {
-        0 => String::new(),
-        n => format!(", ~{n} more likely lost in silences the 8-bit counter wrapped in"),
-    };
+    let damaged = if_any(c.damaged, |n| format!(", {n} damaged"));
+    let wrapped = if_any(t.silence_frames_estimated, |n| {
+        format!(", ~{n} more likely lost in silences the 8-bit counter wrapped in")
+    });
     writeln!(
         out,
         "link: {} received, {} lost ({}), {} duplicate, {} reordered{damaged}{wrapped}; pymavlink's figure: {} lost ({:.2}%)",

@@ -52,22 +52,16 @@ pub(super) fn write_round_trips(
 fn write_pair(out: &mut impl Write, p: &PairSummary) -> io::Result<()> {
     let c = &p.counts;
     let mut parts = vec![format!("{} matched", c.matched)];
-    if c.after_retransmission > 0 {
-        parts.push(format!(
-            "{} of them after a retransmission (measured from the last attempt)",
-            c.after_retransmission
-        ));
-    }
+    parts.extend(any_of(&[(
+        c.after_retransmission,
+        "of them after a retransmission (measured from the last attempt)",
+    )]));
     parts.push(format!("{} unanswered", c.unanswered));
-    for (n, what) in [
+    parts.extend(any_of(&[
         (c.late, "late"),
         (c.duplicate, "duplicate"),
         (c.no_request, "with no request in the log"),
-    ] {
-        if n > 0 {
-            parts.push(format!("{n} {what}"));
-        }
-    }
+    ]));
     let rtt = p.rtt.map_or_else(String::new, |r| {
         let figures = ms_each(&[r.min_us, r.p50_us, r.p90_us, r.p99_us, r.max_us]);
         format!("; rtt n={} min/p50/p90/p99/max = {figures} ms", c.matched)
@@ -82,6 +76,12 @@ fn write_pair(out: &mut impl Write, p: &PairSummary) -> io::Result<()> {
     )
 }
 
+/// `3 late`: each count with what it counts, where there are any.
+fn any_of(counts: &[(u64, &str)]) -> Vec<String> {
+    let any = counts.iter().filter(|(n, _)| *n > 0);
+    any.map(|(n, what)| format!("{n} {what}")).collect()
+}
+
 /// The ids, or `unnamed` for 0/0: the log named none.
 fn named(id: SysComp, unnamed: &str) -> String {
     if id == SysComp::new(0, 0) {
@@ -94,23 +94,16 @@ fn named(id: SysComp, unnamed: &str) -> String {
 /// `requests: timesync from 255/190: 100 (1 logged again)`.
 fn write_requests(out: &mut impl Write, r: &RequesterSummary) -> io::Result<()> {
     let c = &r.counts;
-    let mut extra = Vec::new();
-    if c.repeats > 0 {
-        extra.push(if r.kind.as_str() == "command" {
-            format!("{} retransmissions", c.repeats)
-        } else {
-            format!("{} logged again", c.repeats)
-        });
-    }
-    if c.evicted > 0 {
-        extra.push(format!("{} pushed out of the table in flight", c.evicted));
-    }
-    if c.in_flight_at_end > 0 {
-        extra.push(format!(
-            "{} in flight when the log ended",
-            c.in_flight_at_end
-        ));
-    }
+    let repeats = if r.kind.as_str() == "command" {
+        "retransmissions"
+    } else {
+        "logged again"
+    };
+    let extra = any_of(&[
+        (c.repeats, repeats),
+        (c.evicted, "pushed out of the table in flight"),
+        (c.in_flight_at_end, "in flight when the log ended"),
+    ]);
     let extra = if extra.is_empty() {
         String::new()
     } else {

@@ -3,7 +3,7 @@
 
 use std::io::{self, Write};
 
-use super::format::{ms_each, ms_us};
+use super::format::{if_any, ms_each, ms_us};
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::frame::signing::SigningSummary;
 use crate::verdict::{Check, Verdict};
@@ -15,11 +15,10 @@ pub(super) fn write_sent(
     duration_s: f64,
     in_flight: u64,
 ) -> io::Result<()> {
-    write!(out, "{what} sent in {duration_s:.3} s")?;
-    if in_flight > 0 {
-        write!(out, ", {in_flight} still in flight (not counted)")?;
-    }
-    writeln!(out)
+    let still = if_any(in_flight, |n| {
+        format!(", {n} still in flight (not counted)")
+    });
+    writeln!(out, "{what} sent in {duration_s:.3} s{still}")
 }
 
 /// `  rtt min/mean/max/stddev = …` and the percentiles under it (the

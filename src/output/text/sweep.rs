@@ -23,9 +23,12 @@ fn hz(v: f64) -> String {
     }
 }
 
-/// What the `--load` streams send, e.g. `ATTITUDE@50/s + BYTES@1000 B/s
-/// (3000 B/s on the wire)`.
+/// What the `--load` streams send, e.g. `; load ATTITUDE@50/s +
+/// BYTES@1000 B/s (3000 B/s on the wire)`; nothing without a load.
 fn load_line(c: &SweepConfig) -> String {
+    if c.load.is_empty() {
+        return String::new();
+    }
     let streams: Vec<String> = c
         .load
         .iter()
@@ -35,7 +38,7 @@ fn load_line(c: &SweepConfig) -> String {
         })
         .collect();
     format!(
-        "{} ({:.0} B/s on the wire)",
+        "; load {} ({:.0} B/s on the wire)",
         streams.join(" + "),
         c.load_bytes_per_s
     )
@@ -82,6 +85,7 @@ impl<W: Write> TextReporter<W> {
     pub(super) fn sweep_start(&mut self, info: &StartInfo, c: &SweepConfig) -> io::Result<()> {
         let step = humantime::format_duration(c.step);
         let probe = info.probe.as_str().to_uppercase();
+        let loaded = !c.load.is_empty();
         let what = match c.plan {
             PlanKind::Sweep {
                 first_hz,
@@ -99,16 +103,14 @@ impl<W: Write> TextReporter<W> {
                         " (the default for links without a baud rate; --sweep-max to change)".into()
                     }
                 };
-                let baseline = if c.load.is_empty() {
-                    String::new()
-                } else {
-                    format!(", first {step} at {}/s without the load", hz(first_hz))
-                };
+                let baseline = loaded
+                    .then(|| format!(", first {step} at {}/s without the load", hz(first_hz)));
                 format!(
-                    "{probe} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {:.0}% loss{baseline}",
+                    "{probe} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {:.0}% loss{}",
                     hz(first_hz),
                     hz(max_hz),
                     loss_limit * 100.0,
+                    baseline.unwrap_or_default()
                 )
             }
             PlanKind::Load { rate_hz } => format!(
@@ -116,11 +118,7 @@ impl<W: Write> TextReporter<W> {
                 hz(rate_hz)
             ),
         };
-        let load = if c.load.is_empty() {
-            String::new()
-        } else {
-            format!("; load {}", load_line(c))
-        };
+        let load = load_line(c);
         let timeout = humantime::format_duration(info.timeout);
         self.start_line(info, format_args!("{what}{load}, timeout {timeout}"))
     }
