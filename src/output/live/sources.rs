@@ -7,9 +7,10 @@
 
 use std::collections::BTreeMap;
 
-use super::state::RECENT;
+use super::state::{Cells, RowView, Strip, RECENT};
+use super::view::figure;
 use crate::engine::roster::Identity;
-use crate::engine::summary::passive::{SeqCounts, TableSummary};
+use crate::engine::summary::passive::TableSummary;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::output::windows::Windows;
@@ -35,8 +36,8 @@ pub(super) fn heard_as(identity: &Identity) -> String {
 #[derive(Debug, Clone, Default)]
 pub(super) struct Sources {
     windows: Windows,
-    /// Each source's row, but for who it is (filled in when drawn).
-    sources: BTreeMap<SysComp, SourceRow>,
+    /// Each source's figures; who it is is filled in when drawn.
+    sources: BTreeMap<SysComp, Source>,
     /// `vehicle autopilot` from each system's first HEARTBEAT.
     heard: BTreeMap<SysComp, String>,
 }
@@ -52,11 +53,17 @@ impl Sources {
     pub(super) fn table(&mut self, at: Nanos, table: &TableSummary) {
         for (w, s) in self.windows.next(at, table).iter().zip(&table.sources) {
             let t = self.sources.entry(s.source).or_default();
+            let c = &s.counts;
             t.radio = s.radio;
-            t.counts = s.counts;
-            t.loss_pct = s.loss_pct;
-            t.silences = s.silence_count;
-            t.rate = w.frames_per_s();
+            t.figures = vec![
+                (c.received.to_string(), false),
+                (c.lost.to_string(), c.lost > 0),
+                (figure(s.loss_pct, 1), c.lost > 0),
+                (c.duplicate.to_string(), false),
+                (c.reordered.to_string(), false),
+                (s.silence_count.to_string(), s.silence_count > 0),
+                (figure(w.frames_per_s(), 1), false),
+            ];
             if t.recent.len() == RECENT {
                 t.recent.remove(0);
             }
@@ -67,34 +74,31 @@ impl Sources {
         }
     }
 
-    /// The rows to draw, by source.
-    pub(super) fn rows(&self) -> Vec<SourceRow> {
+    /// The rows to draw, by source: who it is, then its figures.
+    pub(super) fn rows(&self) -> Vec<RowView> {
         self.sources
             .iter()
-            .map(|(id, s)| SourceRow {
-                id: id.to_string(),
-                identity: self
-                    .heard
-                    .get(id)
-                    .cloned()
-                    .or_else(|| s.radio.then(|| "radio".to_string())),
-                ..s.clone()
+            .map(|(id, s)| {
+                let unheard = if s.radio { "radio" } else { "-" };
+                let identity = self.heard.get(id).map_or(unheard, String::as_str);
+                let mut cells = vec![(id.to_string(), false), (identity.to_string(), false)];
+                cells.extend(s.figures.iter().cloned());
+                RowView {
+                    cells,
+                    strip: Strip::Seconds(s.recent.clone()),
+                    quiet: s.radio,
+                }
             })
             .collect()
     }
 }
 
-/// One source's row.
+/// What is kept of a source between tables.
 #[derive(Debug, Clone, Default)]
-pub(crate) struct SourceRow {
-    pub(crate) id: String,
-    /// What its HEARTBEAT said it is; `radio` for the SiK radio's own.
-    pub(crate) identity: Option<String>,
-    pub(crate) radio: bool,
-    pub(crate) counts: SeqCounts,
-    pub(crate) loss_pct: Option<f64>,
-    pub(crate) silences: u64,
-    /// Frames a second in the latest second.
-    pub(crate) rate: Option<f64>,
-    pub(crate) recent: Vec<Second>,
+struct Source {
+    /// The SiK radio's own reports, `radio` when no HEARTBEAT said more.
+    radio: bool,
+    /// Its figures after who it is, as of the latest table.
+    figures: Cells,
+    recent: Vec<Second>,
 }

@@ -6,12 +6,13 @@
 use std::collections::{BTreeMap, VecDeque};
 use std::io;
 
-use super::sources::{heard_as, SourceRow, Sources};
+use super::sources::{heard_as, Second, Sources};
+use super::view::{figure, Spec, ECHO, PASSIVE};
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::probe::passive::PassivePlan;
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
-use crate::engine::summary::passive::TableSummary;
+use crate::engine::summary::passive::{percent, TableSummary};
 use crate::engine::summary::ProbeName;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -140,85 +141,93 @@ impl LiveState {
     /// The figures to draw, computed while the state is locked so the
     /// drawing itself runs without the lock.
     pub(crate) fn screen(&self) -> Screen {
+        let (kind, rows) = match &self.sources {
+            Some(sources) => (&PASSIVE, sources.rows()),
+            None => (&ECHO, self.echo_rows()),
+        };
+        let status = match (&self.failed, &self.sources) {
+            (Some(error), _) => format!(": failed: {error}"),
+            (None, None) if self.waiting => ": waiting for a peer".to_string(),
+            (None, Some(_)) if rows.is_empty() => ": nothing heard yet".to_string(),
+            _ => String::new(),
+        };
         Screen {
             link: self.link.clone(),
             probe: self.probe,
             now: self.now,
-            waiting: self.waiting,
-            failed: self.failed.clone(),
-            rows: match &self.sources {
-                Some(sources) => Rows::Passive(sources.rows()),
-                None => Rows::Echo(self.echo_rows()),
-            },
+            status,
+            kind,
+            rows,
         }
     }
 
+    /// A responder's row: its figures, then its recent outcomes, or what
+    /// was heard from it if it never answered.
     fn echo_rows(&self) -> Vec<RowView> {
+        let ms = |v: Option<f64>| (figure(v, 2), false);
         self.tracks
             .iter()
             .map(|(id, t)| {
-                let s = t.rtt.summary();
+                let (c, s) = (&t.counts, t.rtt.summary());
+                let loss = percent(c.lost, c.sent).unwrap_or(0.0);
                 RowView {
-                    id: id.to_string(),
-                    heard_as: t.heard_as.clone(),
-                    counts: t.counts,
-                    last_ms: t.rtt.last().map(|ns| ns as f64 / 1e6),
-                    p50_ms: s.map(|s| s.p50_us / 1e3),
-                    p99_ms: s.map(|s| s.p99_us / 1e3),
-                    jitter_ms: s.map(|s| s.jitter_us / 1e3),
-                    recent: t.recent.iter().copied().collect(),
+                    cells: vec![
+                        (id.to_string(), false),
+                        (c.sent.to_string(), false),
+                        (c.received.to_string(), false),
+                        (format!("{loss:.1}"), c.lost > 0),
+                        (c.late.to_string(), c.late > 0),
+                        (c.duplicate.to_string(), false),
+                        ms(t.rtt.last().map(|ns| ns as f64 / 1e6)),
+                        ms(s.map(|s| s.p50_us / 1e3)),
+                        ms(s.map(|s| s.p99_us / 1e3)),
+                        ms(s.map(|s| s.jitter_us / 1e3)),
+                    ],
+                    strip: match (&t.heard_as, c.received) {
+                        (Some(heard), 0) => Strip::Heard(heard.clone()),
+                        _ => Strip::Marks(t.recent.iter().copied().collect()),
+                    },
+                    quiet: false,
                 }
             })
             .collect()
     }
 }
 
-/// A section's rows, by the kind of run.
-#[derive(Debug, Clone)]
-pub(crate) enum Rows {
-    /// A responder's each (PING, TIMESYNC, commands).
-    Echo(Vec<RowView>),
-    /// A source's each (`--passive`).
-    Passive(Vec<SourceRow>),
-}
+/// A row's figures, each with whether it is bad news.
+pub(crate) type Cells = Vec<(String, bool)>;
 
-impl Rows {
-    pub(crate) fn len(&self) -> usize {
-        match self {
-            Rows::Echo(r) => r.len(),
-            Rows::Passive(r) => r.len(),
-        }
-    }
-
-    pub(crate) fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-}
-
-/// One responder's row.
-#[derive(Debug, Clone)]
+/// One row of a section: a responder's, or in a passive run a source's.
 pub(crate) struct RowView {
-    pub(crate) id: String,
-    pub(crate) heard_as: Option<String>,
-    pub(crate) counts: Counts,
-    pub(crate) last_ms: Option<f64>,
-    pub(crate) p50_ms: Option<f64>,
-    pub(crate) p99_ms: Option<f64>,
-    pub(crate) jitter_ms: Option<f64>,
-    pub(crate) recent: Vec<Mark>,
+    /// In the order of its kind's headers.
+    pub(crate) cells: Cells,
+    pub(crate) strip: Strip,
+    /// The radio's own row is not the link's: shown, but dimmed.
+    pub(crate) quiet: bool,
+}
+
+/// What a row's strip shows.
+pub(crate) enum Strip {
+    /// A responder's recent outcomes.
+    Marks(Vec<Mark>),
+    /// What a responder that never answered was heard as.
+    Heard(String),
+    /// A source's recent seconds.
+    Seconds(Vec<Second>),
 }
 
 /// Everything one frame shows.
-#[derive(Debug, Clone)]
 pub(crate) struct Screen {
     pub(crate) link: String,
     pub(crate) probe: Option<ProbeName>,
     /// Session time of the latest event.
     pub(crate) now: Nanos,
-    pub(crate) waiting: bool,
-    /// Why the link failed, if it did.
-    pub(crate) failed: Option<String>,
-    pub(crate) rows: Rows,
+    /// After the link in its section's title: why it failed, or that it
+    /// waits.
+    pub(crate) status: String,
+    /// Its rows' kind, whose columns they fill.
+    pub(super) kind: &'static Spec,
+    pub(crate) rows: Vec<RowView>,
 }
 
 #[cfg(test)]
@@ -437,17 +446,21 @@ mod tests {
             at: 1_000_000_000,
             table: table.summary(1_000_000_000),
         }));
-        assert!(matches!(s.screen().rows, Rows::Echo(ref r) if r.len() == 2));
+        let screen = s.screen();
+        assert!(std::ptr::eq(screen.kind, &view::ECHO));
+        assert_eq!(screen.rows.len(), 2);
     }
 
     #[test]
     fn a_sources_seconds_are_bounded() {
         let s = passive(RECENT as u64 + 60);
-        let Rows::Passive(rows) = s.screen().rows else {
-            panic!("not a passive screen");
-        };
-        assert!(rows.iter().all(|r| r.recent.len() == RECENT));
-        assert_eq!(rows[1].counts.received, 10 * (RECENT as u64 + 60) + 1);
+        let rows = s.screen().rows;
+        assert!(rows
+            .iter()
+            .all(|r| matches!(&r.strip, Strip::Seconds(s) if s.len() == RECENT)));
+        // 2/1's recv.
+        let received = 10 * (RECENT as u64 + 60) + 1;
+        assert_eq!(rows[1].cells[2].0, received.to_string());
     }
 
     #[test]

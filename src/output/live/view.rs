@@ -15,8 +15,8 @@ use ratatui::text::{Line, Span};
 use ratatui::widgets::{Block, Cell, Paragraph, Row, Table};
 use ratatui::Frame;
 
-use super::sources::{Second, SourceRow};
-use super::state::{Mark, RowView, Rows, Screen};
+use super::sources::Second;
+use super::state::{Cells, Mark, Screen, Strip};
 use crate::engine::summary::ProbeName;
 
 const BARS: [char; 8] = ['▁', '▂', '▃', '▄', '▅', '▆', '▇', '█'];
@@ -34,7 +34,8 @@ const SPACING: u16 = 1;
 const SECTION_FRAME: u16 = 3;
 
 /// What a kind of row shows: its figure columns in display order, then
-/// the strip.
+/// the strip. Each kind is a `static`, so sections are told alike by its
+/// address.
 pub(super) struct Spec {
     pub(crate) headers: &'static [&'static str],
     /// Room for the usual figures, so columns do not shift as the figures
@@ -53,7 +54,7 @@ pub(super) struct Spec {
 }
 
 /// A responder's row: who, how much is lost and how long it takes stay.
-pub(super) const ECHO: Spec = Spec {
+pub(super) static ECHO: Spec = Spec {
     headers: &[
         "responder",
         "sent",
@@ -76,7 +77,7 @@ pub(super) const ECHO: Spec = Spec {
 
 /// A source's row in a passive run: who and how much it loses stay; its
 /// identity goes first, then the rarer counts.
-pub(super) const PASSIVE: Spec = Spec {
+pub(super) static PASSIVE: Spec = Spec {
     headers: &[
         "source", "identity", "recv", "lost", "loss%", "dup", "reord", "sil", "fr/s",
     ],
@@ -87,23 +88,6 @@ pub(super) const PASSIVE: Spec = Spec {
     keys: PASSIVE_KEYS,
     rows_are: "sources",
 };
-
-fn spec(rows: &Rows) -> &'static Spec {
-    match rows {
-        Rows::Echo(_) => &ECHO,
-        Rows::Passive(_) => &PASSIVE,
-    }
-}
-
-/// A row's figures, each with whether it is bad news.
-type Cells = Vec<(String, bool)>;
-
-fn cells(rows: &Rows) -> Vec<Cells> {
-    match rows {
-        Rows::Echo(rows) => rows.iter().map(figures).collect(),
-        Rows::Passive(rows) => rows.iter().map(source_figures).collect(),
-    }
-}
 
 /// Draws every link's section under one title line, with the keys below.
 pub(super) fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
@@ -123,26 +107,24 @@ pub(super) fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
         .collect();
     let heights = section_heights(body.height, &needs);
     let areas = Layout::vertical(heights.iter().map(|&h| Constraint::Length(h))).split(body);
-    let cells: Vec<Vec<Cells>> = screens.iter().map(|s| cells(&s.rows)).collect();
-    for (i, (screen, area)) in screens.iter().zip(areas.iter()).enumerate() {
+    for (screen, area) in screens.iter().zip(areas.iter()) {
         if area.height < SECTION_FRAME {
             continue;
         }
         // One set of columns for every section of a kind, so they line up.
-        let kind = spec(&screen.rows);
+        let kind = screen.kind;
         let alike = screens
             .iter()
-            .zip(&cells)
-            .filter(|(s, _)| std::ptr::eq(spec(&s.rows), kind))
-            .flat_map(|(_, c)| c);
+            .filter(|s| std::ptr::eq(s.kind, kind))
+            .flat_map(|s| s.rows.iter().map(|r| &r.cells));
         let columns = fit(
             &widths(kind, alike),
             kind.give_up,
             body.width.saturating_sub(2),
         );
-        section(frame, *area, screen, &cells[i], &columns);
+        section(frame, *area, screen, &columns);
     }
-    let keys = screens.first().map_or(KEYS, |s| spec(&s.rows).keys);
+    let keys = screens.first().map_or(KEYS, |s| s.kind.keys);
     frame.render_widget(
         Paragraph::new(keys).style(Style::new().fg(Color::DarkGray)),
         foot,
@@ -201,8 +183,8 @@ fn section_heights(available: u16, needs: &[u16]) -> Vec<u16> {
 }
 
 /// One link: its rows as a table, titled with the link.
-fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, cells: &[Cells], columns: &Columns) {
-    let kind = spec(&screen.rows);
+fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, columns: &Columns) {
+    let kind = screen.kind;
     let inner = area.width.saturating_sub(2);
     let Columns {
         shown,
@@ -213,13 +195,7 @@ fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, cells: &[Cells], 
 
     let slots = usize::from(area.height.saturating_sub(SECTION_FRAME));
     let hidden = screen.rows.len().saturating_sub(slots);
-    let failed = screen.failed.as_ref().map(|e| format!(": failed: {e}"));
-    let status = match (&screen.rows, &failed) {
-        (_, Some(failed)) => failed.as_str(),
-        (Rows::Echo(_), None) if screen.waiting => ": waiting for a peer",
-        (rows @ Rows::Passive(_), None) if rows.is_empty() => ": nothing heard yet",
-        _ => "",
-    };
+    let status = screen.status.as_str();
     let mut block = Block::bordered().title(format!(
         " {}{status} ",
         ellipsis(
@@ -232,11 +208,11 @@ fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, cells: &[Cells], 
     }
 
     let alarm = Style::new().fg(Color::Red).add_modifier(Modifier::BOLD);
-    let rows = cells.iter().enumerate().take(slots).map(|(i, cells)| {
+    let rows = screen.rows.iter().take(slots).map(|r| {
         let mut row: Vec<Cell<'_>> = shown
             .iter()
             .map(|&c| {
-                let (text, bad) = &cells[c];
+                let (text, bad) = &r.cells[c];
                 let cell = Cell::from(aligned(kind, c, text.clone()));
                 if *bad {
                     cell.style(alarm)
@@ -245,17 +221,14 @@ fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, cells: &[Cells], 
                 }
             })
             .collect();
-        let (strip, quiet) = match &screen.rows {
-            Rows::Echo(rows) => (recent(&rows[i], strip_width), false),
-            Rows::Passive(rows) => (
-                Cell::from(seconds(&rows[i].recent, usize::from(strip_width))),
-                rows[i].radio,
-            ),
-        };
-        row.push(strip);
-        // The radio's own row is not the link's: shown, but dimmed.
+        let width = usize::from(strip_width);
+        row.push(match &r.strip {
+            Strip::Marks(marks) => Cell::from(strip(marks, width)),
+            Strip::Heard(heard) => Cell::from(no_reply(heard, width)),
+            Strip::Seconds(recent) => Cell::from(seconds(recent, width)),
+        });
         let row = Row::new(row);
-        if quiet {
+        if r.quiet {
             row.style(Style::new().fg(Color::DarkGray))
         } else {
             row
@@ -290,47 +263,9 @@ fn aligned(kind: &Spec, column: usize, text: String) -> Line<'static> {
     }
 }
 
-/// A responder's figures, each with whether it is bad news.
-fn figures(r: &RowView) -> Cells {
-    let c = &r.counts;
-    let loss = if c.sent == 0 {
-        0.0
-    } else {
-        100.0 * c.lost as f64 / c.sent as f64
-    };
-    vec![
-        (r.id.clone(), false),
-        (c.sent.to_string(), false),
-        (c.received.to_string(), false),
-        (format!("{loss:.1}"), c.lost > 0),
-        (c.late.to_string(), c.late > 0),
-        (c.duplicate.to_string(), false),
-        (ms(r.last_ms), false),
-        (ms(r.p50_ms), false),
-        (ms(r.p99_ms), false),
-        (ms(r.jitter_ms), false),
-    ]
-}
-
-/// A source's figures, each with whether it is bad news.
-fn source_figures(r: &SourceRow) -> Cells {
-    let one = |v: Option<f64>| v.map_or_else(|| "-".into(), |v| format!("{v:.1}"));
-    let c = &r.counts;
-    vec![
-        (r.id.clone(), false),
-        (r.identity.clone().unwrap_or_else(|| "-".into()), false),
-        (c.received.to_string(), false),
-        (c.lost.to_string(), c.lost > 0),
-        (one(r.loss_pct), c.lost > 0),
-        (c.duplicate.to_string(), false),
-        (c.reordered.to_string(), false),
-        (r.silences.to_string(), r.silences > 0),
-        (one(r.rate), false),
-    ]
-}
-
-fn ms(v: Option<f64>) -> String {
-    v.map_or_else(|| "-".into(), |v| format!("{v:.2}"))
+/// `v` to `places` decimals, `-` when there is none yet.
+pub(super) fn figure(v: Option<f64>, places: usize) -> String {
+    v.map_or_else(|| "-".into(), |v| format!("{v:.places$}"))
 }
 
 fn width(text: &str) -> u16 {
@@ -386,20 +321,14 @@ fn ellipsis(text: &str, max: usize) -> String {
     format!("{kept}…")
 }
 
-/// The strip of recent outcomes, or what was heard from a responder that
-/// never answered.
-fn recent(r: &RowView, width: u16) -> Cell<'static> {
-    match (&r.heard_as, r.counts.received) {
-        (Some(heard), 0) => {
-            let long = format!("heard ({heard}), no reply");
-            let text = if long.chars().count() <= usize::from(width) {
-                long
-            } else {
-                "heard, no reply".to_string()
-            };
-            Cell::from(text)
-        }
-        _ => Cell::from(strip(&r.recent, usize::from(width))),
+/// What a responder that never answered was heard as, in place of its
+/// strip.
+fn no_reply(heard: &str, width: usize) -> String {
+    let long = format!("heard ({heard}), no reply");
+    if long.chars().count() <= width {
+        long
+    } else {
+        "heard, no reply".to_string()
     }
 }
 
