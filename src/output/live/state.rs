@@ -447,7 +447,7 @@ mod tests {
             table: table.summary(1_000_000_000),
         }));
         let screen = s.screen();
-        assert!(std::ptr::eq(screen.kind, &view::ECHO));
+        assert!(*screen.kind == view::ECHO);
         assert_eq!(screen.rows.len(), 2);
     }
 

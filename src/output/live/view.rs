@@ -34,8 +34,8 @@ const SPACING: u16 = 1;
 const SECTION_FRAME: u16 = 3;
 
 /// What a kind of row shows: its figure columns in display order, then
-/// the strip. Each kind is a `static`, so sections are told alike by its
-/// address.
+/// the strip. Sections of the same kind are sized alike.
+#[derive(PartialEq)]
 pub(super) struct Spec {
     pub(crate) headers: &'static [&'static str],
     /// Room for the usual figures, so columns do not shift as the figures
@@ -54,7 +54,7 @@ pub(super) struct Spec {
 }
 
 /// A responder's row: who, how much is lost and how long it takes stay.
-pub(super) static ECHO: Spec = Spec {
+pub(super) const ECHO: Spec = Spec {
     headers: &[
         "responder",
         "sent",
@@ -77,7 +77,7 @@ pub(super) static ECHO: Spec = Spec {
 
 /// A source's row in a passive run: who and how much it loses stay; its
 /// identity goes first, then the rarer counts.
-pub(super) static PASSIVE: Spec = Spec {
+pub(super) const PASSIVE: Spec = Spec {
     headers: &[
         "source", "identity", "recv", "lost", "loss%", "dup", "reord", "sil", "fr/s",
     ],
@@ -115,7 +115,7 @@ pub(super) fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
         let kind = screen.kind;
         let alike = screens
             .iter()
-            .filter(|s| std::ptr::eq(s.kind, kind))
+            .filter(|s| s.kind == kind)
             .flat_map(|s| s.rows.iter().map(|r| &r.cells));
         let columns = fit(
             &widths(kind, alike),
