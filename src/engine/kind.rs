@@ -19,10 +19,3 @@ impl dyn KindValue {
         (self as &dyn Any).downcast_ref()
     }
 }
-
-impl dyn KindValue + Send + Sync {
-    /// The value, if it is a `T`.
-    pub fn get<T: KindValue>(&self) -> Option<&T> {
-        (self as &dyn Any).downcast_ref()
-    }
-}

@@ -34,7 +34,8 @@ pub struct StartInfo {
 impl StartInfo {
     /// The plan, if this run's is a `T`.
     pub fn plan<T: KindValue>(&self) -> Option<&T> {
-        self.plan.as_deref()?.get()
+        let plan: &dyn KindValue = self.plan.as_deref()?;
+        plan.get()
     }
 }
 
@@ -167,13 +168,7 @@ pub(crate) fn tell_each<'a>(
     observer: &mut dyn Observer,
     events: impl Iterator<Item = Event<'a>>,
 ) -> io::Result<()> {
-    let mut result = Ok(());
-    for event in events {
-        if result.is_ok() {
-            result = observer.event(&event);
-        }
-    }
-    result
+    tell_as(observer, events, |event| *event)
 }
 
 /// Tells `observer` each of a kind's own events in order, as
@@ -182,10 +177,18 @@ pub(crate) fn tell_kind<T: KindValue>(
     observer: &mut dyn Observer,
     events: impl Iterator<Item = T>,
 ) -> io::Result<()> {
+    tell_as(observer, events, |event| Event::Kind(event))
+}
+
+fn tell_as<T>(
+    observer: &mut dyn Observer,
+    events: impl Iterator<Item = T>,
+    as_event: impl Fn(&T) -> Event<'_>,
+) -> io::Result<()> {
     let mut result = Ok(());
     for event in events {
         if result.is_ok() {
-            result = observer.event(&Event::Kind(&event));
+            result = observer.event(&as_event(&event));
         }
     }
     result
