@@ -8,10 +8,16 @@
 use std::any::Any;
 use std::fmt::Debug;
 
-/// A value of one kind's own type, carried without naming it.
-pub trait KindValue: Any + Debug {}
-
-impl<T: Any + Debug> KindValue for T {}
+/// A value of one kind's own type, carried without naming it. Each type
+/// says it is one (`impl KindValue for ...`), and one that is written
+/// whole as it serialises (the command probe's events are their JSON
+/// lines) says so, so a format can write a kind it has no code for.
+pub trait KindValue: Any + Debug {
+    /// The value as it is written whole, if it is.
+    fn serialized(&self) -> Option<&dyn erased_serde::Serialize> {
+        None
+    }
+}
 
 impl dyn KindValue {
     /// The value, if it is a `T`.

@@ -88,6 +88,8 @@ pub enum MatchEvent {
     },
 }
 
+impl crate::engine::kind::KindValue for MatchEvent {}
+
 impl MatchEvent {
     /// When it was decided (session time).
     pub(crate) fn at(&self) -> Nanos {

@@ -62,3 +62,5 @@ pub struct CommandSpec {
     /// Re-sends after the first transmission.
     pub(crate) retries: u8,
 }
+
+impl crate::engine::kind::KindValue for CommandSpec {}

@@ -57,6 +57,8 @@ pub struct SweepConfig {
     pub(crate) load_bytes_per_s: f64,
 }
 
+impl crate::engine::kind::KindValue for SweepConfig {}
+
 fn seconds<S: Serializer>(d: &Duration, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_f64(d.as_secs_f64())
 }
@@ -159,6 +161,8 @@ pub(crate) struct StepFigures {
     /// row, and this step decides.
     pub(crate) retry: bool,
 }
+
+impl crate::engine::kind::KindValue for StepFigures {}
 
 /// The highest rate the link carried cleanly: the step with the highest
 /// offered rate that passed the knee test.

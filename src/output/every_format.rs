@@ -8,11 +8,12 @@ use super::json::JsonReporter;
 use super::live::LiveState;
 use super::plot::Plot;
 use super::prometheus::Metrics;
-use super::runs::{Borrowed, Run, Told, RUNS};
+use super::runs::{kind, Borrowed, Run, Told, RUNS};
 use super::samples::SampleLog;
 use super::text::TextReporter;
 use super::{Reporter, StartInfo, WallClock};
 use crate::engine::clock_offset::ClockSummary;
+use crate::engine::kind::KindValue;
 use crate::engine::link_node::LinkNodeReport;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
@@ -21,7 +22,9 @@ use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::probe::passive::SourcesNow;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{PassiveSummary, TableSummary};
-use crate::engine::summary::{CommandSummary, EchoInterim, EchoSummary, PassiveInterim};
+use crate::engine::summary::{
+    CommandSummary, EchoInterim, EchoSummary, KindSummary, LinkSummary, PassiveInterim,
+};
 use crate::engine::sweep_report::StepFigures;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -245,4 +248,82 @@ fn the_live_view_has_a_row_for_every_run_that_hears_someone() {
             "{run:?}"
         );
     }
+}
+
+/// A kind no format has code for, as a new kind is before its formats
+/// show it: an event and a summary written whole.
+#[derive(Debug, serde::Serialize)]
+#[serde(tag = "type", rename = "novel")]
+struct Novel {
+    n: u64,
+}
+
+impl KindValue for Novel {
+    fn serialized(&self) -> Option<&dyn erased_serde::Serialize> {
+        Some(self)
+    }
+}
+
+#[derive(Debug, serde::Serialize)]
+struct NovelSummary {
+    #[serde(skip)]
+    link: String,
+    seen: u64,
+}
+
+impl KindSummary for NovelSummary {
+    fn link(&self) -> &str {
+        &self.link
+    }
+    fn link_error(&self) -> Option<&str> {
+        None
+    }
+    fn serialized(&self) -> Option<(&'static str, &dyn erased_serde::Serialize)> {
+        Some(("novel_summary", self))
+    }
+}
+
+/// A new kind costs the JSON format nothing: its events and summary are
+/// written as they serialise, with the link and the verdict's exit code,
+/// and every other format takes them and shows nothing of them.
+#[test]
+fn a_kind_no_format_knows_is_written_whole_by_json_and_passed_over_by_the_rest() {
+    let summary = LinkSummary::new(NovelSummary {
+        link: "sim:".into(),
+        seen: 3,
+    });
+    // Until the verdict judges it, a new kind's run fails.
+    let verdict = crate::verdict::judge_link(&summary, &super::runs::thresholds());
+    assert_eq!(verdict.exit_code(), crate::exit::ERROR);
+    let run = [
+        Told::Event(kind(Novel { n: 7 })),
+        Told::Summary(summary, verdict),
+    ];
+    let mut json = JsonReporter::new(Vec::new(), false, WallClock::starting(true));
+    let mut text = TextReporter::new(Vec::new(), false);
+    let mut metrics = Metrics::default();
+    let mut state = LiveState::default();
+    for out in [
+        &mut json as &mut dyn Reporter,
+        &mut text,
+        &mut metrics,
+        &mut state,
+    ] {
+        for told in &run {
+            match told {
+                Told::Event(event) => out.tell(event),
+                Told::Summary(summary, verdict) => out.summary(summary, verdict),
+                _ => unreachable!(),
+            }
+            .unwrap();
+        }
+    }
+    let lines = String::from_utf8(json.into_inner()).unwrap();
+    assert_eq!(
+        lines,
+        "{\"type\":\"novel\",\"n\":7}\n\
+         {\"link\":\"sim:\",\"seen\":3,\"type\":\"novel_summary\",\"schema_version\":2,\"exit_code\":2}\n"
+    );
+    assert!(text.into_inner().is_empty());
+    assert!(state.screen().rows.is_empty());
 }

@@ -1,11 +1,12 @@
 //! What an output format is: a follower of a session that takes the
 //! events of the kinds it shows and leaves the rest. Each kind of event
-//! and each kind of summary has a method here whose default does nothing
-//! (as ripgrep's `Sink`), so a format implements what it shows and a new
-//! kind costs a method here and the formats that show it, not an "ignore"
-//! arm in every format. That every format takes every event and summary
-//! of every kind without failing is a test (`json/tests.rs`), not an
-//! exhaustive match.
+//! and each kind of summary has a method here whose default hands it to
+//! [`Reporter::other_event`] or [`Reporter::other_summary`] (as ripgrep's
+//! `Sink`), where JSON writes any kind's value whole as it serialises and
+//! every other format does nothing. So a format implements what it shows,
+//! and a new kind costs no "ignore" arm in any format and no JSON code.
+//! That every format takes every event and summary of every kind without
+//! failing is a test (`every_format.rs`), not an exhaustive match.
 
 use std::io;
 
@@ -20,7 +21,9 @@ use crate::engine::probe::passive::SourcesNow;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::{PassiveSummary, TableSummary};
 use crate::engine::summary::EchoSummary;
-use crate::engine::summary::{CommandSummary, EchoInterim, Interim, LinkSummary, PassiveInterim};
+use crate::engine::summary::{
+    CommandSummary, EchoInterim, Interim, KindSummary, LinkSummary, PassiveInterim,
+};
 use crate::engine::sweep_report::StepFigures;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -37,12 +40,12 @@ pub(crate) trait Reporter {
 
     /// An echo probe's reply, loss, late, duplicate or stale reply.
     fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
-        Ok(())
+        self.other_event(event)
     }
 
     /// A command's transmission, acknowledgement or failure.
     fn command(&mut self, event: &CommandEvent) -> io::Result<()> {
-        Ok(())
+        self.other_event(event)
     }
 
     /// A system's first HEARTBEAT.
@@ -83,7 +86,7 @@ pub(crate) trait Reporter {
 
     /// A step of a run in steps ended.
     fn step(&mut self, step: &StepFigures) -> io::Result<()> {
-        Ok(())
+        self.other_event(step)
     }
 
     /// Every source's sequence figures so far, once a second.
@@ -93,6 +96,14 @@ pub(crate) trait Reporter {
 
     /// A telemetry log's timeline: a window, a silence or a burst.
     fn flight(&mut self, event: &FlightEvent) -> io::Result<()> {
+        self.other_event(event)
+    }
+
+    /// A kind's own event that this format has no method for: written
+    /// whole by a format that writes every kind's (JSON, where the value
+    /// is [`KindValue::serialized`]), shown by no other. A kind's event
+    /// methods above come here unless a format takes them.
+    fn other_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
         Ok(())
     }
 
@@ -118,16 +129,23 @@ pub(crate) trait Reporter {
 
     /// An echo run's summary (PING, TIMESYNC, a run in steps).
     fn echo_summary(&mut self, summary: &EchoSummary, verdict: &Verdict) -> io::Result<()> {
-        Ok(())
+        self.other_summary(summary, verdict)
     }
 
     /// A command run's summary.
     fn command_summary(&mut self, summary: &CommandSummary, verdict: &Verdict) -> io::Result<()> {
-        Ok(())
+        self.other_summary(summary, verdict)
     }
 
     /// A passive run's (or a telemetry log's) summary.
     fn passive_summary(&mut self, summary: &PassiveSummary, verdict: &Verdict) -> io::Result<()> {
+        self.other_summary(summary, verdict)
+    }
+
+    /// A kind's summary that this format has no method for: as
+    /// [`Reporter::other_event`], written whole where the summary is
+    /// [`KindSummary::serialized`].
+    fn other_summary(&mut self, summary: &dyn KindSummary, verdict: &Verdict) -> io::Result<()> {
         Ok(())
     }
 
@@ -165,7 +183,7 @@ pub(crate) trait Reporter {
         } else if let Some(e) = value.get::<FlightEvent>() {
             self.flight(e)
         } else {
-            Ok(())
+            self.other_event(value)
         }
     }
 
@@ -189,7 +207,7 @@ pub(crate) trait Reporter {
         } else if let Some(passive) = summary.get::<PassiveSummary>() {
             self.passive_summary(passive, verdict)
         } else {
-            Ok(())
+            self.other_summary(summary.kind(), verdict)
         }
     }
 }

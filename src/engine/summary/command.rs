@@ -89,4 +89,7 @@ impl super::KindSummary for CommandSummary {
     fn requests(&self) -> (u64, u64) {
         (self.commands(), self.in_flight)
     }
+    fn serialized(&self) -> Option<(&'static str, &dyn erased_serde::Serialize)> {
+        Some(("command_summary", self))
+    }
 }

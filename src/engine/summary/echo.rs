@@ -260,6 +260,8 @@ pub struct EchoInterim {
     pub(crate) responders: Vec<ResponderSummary>,
 }
 
+impl crate::engine::kind::KindValue for EchoInterim {}
+
 #[cfg(test)]
 impl EchoSummary {
     /// A run of `requests` PINGs on `link` with nothing in it, for tests

@@ -23,6 +23,12 @@ pub trait KindSummary: Any + Debug + Send + Sync {
     /// The serial link's wire budget, judged against the finished figures
     /// by a kind whose figures it explains.
     fn apply_wire(&mut self, _budget: WireBudget) {}
+    /// The summary as it is written whole, and the name it goes by there
+    /// (the command probe's: its JSON `command_summary` line's figures),
+    /// so a format can write a kind it has no code for.
+    fn serialized(&self) -> Option<(&'static str, &dyn erased_serde::Serialize)> {
+        None
+    }
 }
 
 /// The end of one link's run, of whichever kind.
@@ -41,6 +47,11 @@ impl LinkSummary {
 
     pub(crate) fn get_mut<T: KindSummary>(&mut self) -> Option<&mut T> {
         (&mut *self.0 as &mut dyn Any).downcast_mut()
+    }
+
+    /// The summary as every kind's is.
+    pub(crate) fn kind(&self) -> &dyn KindSummary {
+        &*self.0
     }
 
     pub(crate) fn link(&self) -> &str {

@@ -358,6 +358,8 @@ pub struct PassiveInterim {
     pub(crate) identities: Vec<(SysComp, Identity)>,
 }
 
+impl crate::engine::kind::KindValue for PassiveInterim {}
+
 #[cfg(test)]
 mod tests {
     use crate::engine::probe::passive::tracker::SourceTable;

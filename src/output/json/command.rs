@@ -2,12 +2,9 @@
 
 use serde::Serialize;
 
-use super::lines::SCHEMA_VERSION;
-use crate::engine::summary::CommandSummary;
 use crate::engine::CommandSpec;
 use crate::frame::codec;
 use crate::frame::SysComp;
-use crate::verdict::Verdict;
 
 /// The start line's `command`: what is sent, and how.
 #[derive(Serialize)]
@@ -30,30 +27,6 @@ impl Spec {
             params: spec.params.map(f64::from),
             retry_interval_s: spec.retry_interval.as_secs_f64(),
             retries: spec.retries,
-        }
-    }
-}
-
-/// The `command_summary` line: the run's figures as the engine
-/// serialises them, after the link as named.
-#[derive(Serialize)]
-pub(super) struct Summary<'a> {
-    link: &'a str,
-    #[serde(flatten)]
-    figures: &'a CommandSummary,
-    r#type: &'static str,
-    schema_version: u32,
-    exit_code: u8,
-}
-
-impl<'a> Summary<'a> {
-    pub(super) fn of(s: &'a CommandSummary, verdict: &Verdict, link: &'a str) -> Self {
-        Summary {
-            link,
-            figures: s,
-            r#type: "command_summary",
-            schema_version: SCHEMA_VERSION,
-            exit_code: verdict.exit_code(),
         }
     }
 }

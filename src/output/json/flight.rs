@@ -136,12 +136,12 @@ impl<W: Write> JsonReporter<W> {
     /// The line of a window closed, or of a silence or burst ended.
     pub(super) fn flight_line(&mut self, e: &FlightEvent) -> io::Result<()> {
         match e {
-            FlightEvent::Window(w) => self.event_line(Some(self.lines.flight_window(w)), false),
+            FlightEvent::Window(w) => self.event_line(Some(self.lines.flight_window(w))),
             FlightEvent::Silence(s) => {
-                self.event_line(Some(self.lines.flight_span("flight_silence", s)), false)
+                self.event_line(Some(self.lines.flight_span("flight_silence", s)))
             }
             FlightEvent::Burst(b) => {
-                self.event_line(Some(self.lines.flight_span("flight_burst", b)), false)
+                self.event_line(Some(self.lines.flight_span("flight_burst", b)))
             }
         }
     }

@@ -14,6 +14,7 @@ use crate::engine::CommandSpec;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::output::{StartInfo, WallClock};
+use crate::verdict::Verdict;
 
 pub(crate) const SCHEMA_VERSION: u32 = 2;
 
@@ -24,6 +25,36 @@ struct Linked<'a, T> {
     line: &'a T,
     #[serde(skip_serializing_if = "Option::is_none")]
     link: Option<&'a str>,
+}
+
+/// The summary line of a kind that is written whole (the command
+/// probe's `command_summary`): the link as named, the kind's figures as
+/// they serialise, then what the line says itself.
+#[derive(Serialize)]
+pub(super) struct Whole<'a> {
+    link: &'a str,
+    #[serde(flatten)]
+    figures: &'a dyn erased_serde::Serialize,
+    r#type: &'static str,
+    schema_version: u32,
+    exit_code: u8,
+}
+
+impl<'a> Whole<'a> {
+    pub(super) fn of(
+        name: &'static str,
+        figures: &'a dyn erased_serde::Serialize,
+        verdict: &Verdict,
+        link: &'a str,
+    ) -> Self {
+        Whole {
+            link,
+            figures,
+            r#type: name,
+            schema_version: SCHEMA_VERSION,
+            exit_code: verdict.exit_code(),
+        }
+    }
 }
 
 /// The `start` line: what the run is about to do.

@@ -32,15 +32,15 @@ mod units;
 
 use std::io::{self, Write};
 
-use self::lines::Lines;
+use self::lines::{Lines, Whole};
 use super::Reporter;
+use crate::engine::kind::KindValue;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
-use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
-use crate::engine::summary::{CommandSummary, EchoInterim, EchoSummary, PassiveInterim};
+use crate::engine::summary::{EchoInterim, EchoSummary, KindSummary, PassiveInterim};
 use crate::engine::sweep_report::StepFigures;
 use crate::frame::SysComp;
 use crate::output::StartInfo;
@@ -57,31 +57,34 @@ impl<W: Write> Reporter for JsonReporter<W> {
     }
 
     fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
-        self.event_line(Some(self.lines.match_line(event)), false)
-    }
-
-    fn command(&mut self, event: &CommandEvent) -> io::Result<()> {
-        self.event_line(event.is_line().then_some(event), true)
+        self.event_line(Some(self.lines.match_line(event)))
     }
 
     fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
-        self.event_line(Some(self.lines.heard_line(id, identity)), false)
+        self.event_line(Some(self.lines.heard_line(id, identity)))
     }
 
     fn radio(&mut self, radio: &RadioHeard<'_>) -> io::Result<()> {
-        self.event_line(self.lines.radio_line(radio), false)
+        self.event_line(self.lines.radio_line(radio))
     }
 
     fn waiting_for_peer(&mut self) -> io::Result<()> {
-        self.event_line(Some(Lines::waiting_line()), false)
+        self.event_line(Some(Lines::waiting_line()))
     }
 
     fn step(&mut self, step: &StepFigures) -> io::Result<()> {
-        self.event_line(Some(self.lines.step(step)), false)
+        self.event_line(Some(self.lines.step(step)))
     }
 
     fn flight(&mut self, event: &FlightEvent) -> io::Result<()> {
         self.flight_line(event)
+    }
+
+    /// A kind's event written whole, as the command probe's are.
+    fn other_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
+        value
+            .serialized()
+            .map_or(Ok(()), |line| self.own_line(line))
     }
 
     fn flush(&mut self) -> io::Result<()> {
@@ -103,11 +106,6 @@ impl<W: Write> Reporter for JsonReporter<W> {
         Self::summary_line(&mut self.out, &line)
     }
 
-    fn command_summary(&mut self, s: &CommandSummary, verdict: &Verdict) -> io::Result<()> {
-        let line = command::Summary::of(s, verdict, self.lines.link_or(&s.link));
-        Self::summary_line(&mut self.out, &line)
-    }
-
     /// A log's last, partial, window ends with the log: told here.
     fn passive_summary(&mut self, s: &PassiveSummary, verdict: &Verdict) -> io::Result<()> {
         if let Some(f) = s.flight.as_ref() {
@@ -115,5 +113,16 @@ impl<W: Write> Reporter for JsonReporter<W> {
         }
         let line = passive::Summary::of(s, verdict, self.lines.link_or(&s.link), &self.lines);
         Self::summary_line(&mut self.out, &line)
+    }
+
+    /// A kind's summary written whole, as the command probe's is.
+    fn other_summary(&mut self, s: &dyn KindSummary, verdict: &Verdict) -> io::Result<()> {
+        match s.serialized() {
+            Some((name, figures)) => {
+                let line = Whole::of(name, figures, verdict, self.lines.link_or(s.link()));
+                Self::summary_line(&mut self.out, &line)
+            }
+            None => Ok(()),
+        }
     }
 }

@@ -55,18 +55,21 @@ impl<W: Write> JsonReporter<W> {
         self.out.flush()
     }
 
-    /// Writes an event's line: not in quiet mode, and in a command run
-    /// only the command's own (`command`).
-    pub(super) fn event_line(
-        &mut self,
-        line: Option<impl Serialize>,
-        command: bool,
-    ) -> io::Result<()> {
+    /// Writes an event's line, except in quiet mode and in a command run,
+    /// which writes only its own kind's lines ([`Self::own_line`]).
+    pub(super) fn event_line(&mut self, line: Option<impl Serialize>) -> io::Result<()> {
         match line {
-            Some(line) if !self.quiet && command == self.lines.command => {
-                self.lines.write(&mut self.out, &line)
-            }
+            Some(line) if !self.lines.command => self.own_line(line),
             _ => Ok(()),
         }
+    }
+
+    /// Writes the line of a kind's event written whole, except in quiet
+    /// mode.
+    pub(super) fn own_line(&mut self, line: impl Serialize) -> io::Result<()> {
+        if self.quiet {
+            return Ok(());
+        }
+        self.lines.write(&mut self.out, &line)
     }
 }

@@ -6,6 +6,7 @@
 use serde::ser::SerializeMap;
 use serde::{Serialize, Serializer};
 
+use crate::engine::kind::KindValue;
 use crate::engine::Nanos;
 use crate::frame::{codec, SysComp};
 
@@ -64,6 +65,13 @@ impl CommandEvent {
     /// Whether it is a line of its own (every event but a transmission).
     pub(crate) fn is_line(&self) -> bool {
         !matches!(self, CommandEvent::Send { .. })
+    }
+}
+
+/// Every event but `Send` is written whole, as its JSON line.
+impl KindValue for CommandEvent {
+    fn serialized(&self) -> Option<&dyn erased_serde::Serialize> {
+        self.is_line().then_some(self)
     }
 }
 

@@ -210,6 +210,8 @@ pub(crate) enum FlightEvent {
     Burst(Span),
 }
 
+impl crate::engine::kind::KindValue for FlightEvent {}
+
 /// The link's totals as the source table has them (the radio left out).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub(crate) struct Totals {

@@ -13,6 +13,8 @@ pub struct PassivePlan {
     pub(crate) log: bool,
 }
 
+impl crate::engine::kind::KindValue for PassivePlan {}
+
 /// Every source's packet-sequence figures so far (cumulative), told once
 /// a second of session time: passive runs, and echo runs for the
 /// direction split.
@@ -21,3 +23,5 @@ pub struct SourcesNow {
     pub(crate) at: Nanos,
     pub(crate) table: TableSummary,
 }
+
+impl crate::engine::kind::KindValue for SourcesNow {}
