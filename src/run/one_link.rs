@@ -118,6 +118,15 @@ pub(super) async fn measure_recorded(
                 t.up.requests_duplicated
             );
         }
+        let queues = sim.queue_truth();
+        if !queues.up.is_zero() || !queues.down.is_zero() {
+            tracing::info!(
+                link = %config.name,
+                "sim truth queues: up_max_ms={:.3} down_max_ms={:.3}",
+                queues.up.as_secs_f64() * 1e3,
+                queues.down.as_secs_f64() * 1e3
+            );
+        }
     }
     outcome
 }

@@ -87,7 +87,7 @@ impl SimLink {
             r.truth.dropped(r.replied);
             return;
         }
-        let up = self.one_way();
+        let up = self.one_way() + self.queued_up(now);
         let version = request.version;
         let mut draws = [None, None];
         let mut replies = [None, None];
@@ -139,7 +139,7 @@ impl SimLink {
     /// Where a reply that has left the wire (or radios) at `reply_done`
     /// arrives, or `None`: lost on the way down.
     fn draw_reply(&mut self, reply_done: Instant) -> Option<ReplyDraw> {
-        let mut at = reply_done + self.one_way();
+        let mut at = reply_done + self.queued_down(reply_done) + self.one_way();
         // Drawn only when asked for, so seeds keep their faults.
         let spiked = self.chance(self.params.spike);
         if spiked {

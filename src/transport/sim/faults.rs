@@ -11,7 +11,7 @@ use tokio::time::Instant;
 
 use super::deliveries::Payload;
 use super::link::SimLink;
-use super::params::SimParams;
+use super::params::{Queue, SimParams};
 
 /// `delay=` plus a draw of `jitter=`.
 fn one_way(params: &SimParams, rng: &mut SmallRng) -> Duration {
@@ -32,6 +32,28 @@ impl SimLink {
     /// A one-way delay drawn for the responders' own frames.
     pub(super) fn vehicle_one_way(&mut self) -> Duration {
         one_way(&self.params, &mut self.vehicle_rng)
+    }
+
+    /// The delay the uplink's queue (`queue_up=`) adds to a frame
+    /// entering it at `t`.
+    pub(super) fn queued_up(&mut self, t: Instant) -> Duration {
+        let delay = self.queued(self.params.queue_up, t);
+        self.queue_truth.up = self.queue_truth.up.max(delay);
+        delay
+    }
+
+    /// The delay the downlink's queue (`queue_down=`) adds to a frame
+    /// entering it at `t`; the largest so far is the truth `-v` shows.
+    pub(super) fn queued_down(&mut self, t: Instant) -> Duration {
+        let delay = self.queued(self.params.queue_down, t);
+        self.queue_truth.down = self.queue_truth.down.max(delay);
+        delay
+    }
+
+    fn queued(&self, queue: Option<Queue>, t: Instant) -> Duration {
+        queue.map_or(Duration::ZERO, |q| {
+            q.delay_at(t.saturating_duration_since(self.started))
+        })
     }
 
     /// True while an `outage=` window is on (`outage_every=` repeats it).

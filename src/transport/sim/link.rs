@@ -15,7 +15,7 @@ use super::outgoing::{Outgoing, Sends};
 use super::params::SimParams;
 use super::radio::RadioPair;
 use super::responder::SimResponder;
-use super::truth::SimTruth;
+use super::truth::{QueueTruth, SimTruth};
 use super::wire::Wire;
 use crate::answering::ResponderCore;
 use crate::frame::{ScanStats, SysComp};
@@ -53,6 +53,8 @@ pub struct SimLink {
     pub(super) outgoing_order: u64,
     /// Draws for telemetry and the per-direction faults.
     pub(super) vehicle_rng: SmallRng,
+    /// The most each queue (`queue_up=`, `queue_down=`) delayed a frame.
+    pub(super) queue_truth: QueueTruth,
 }
 
 impl SimLink {
@@ -104,6 +106,7 @@ impl SimLink {
             outgoing: BinaryHeap::new(),
             outgoing_order: 0,
             vehicle_rng,
+            queue_truth: QueueTruth::default(),
         };
         for i in 0..link.responders.len() {
             if let Some(first) = link.responders[i].heartbeat.map(|s| s.due_ns()) {
@@ -123,6 +126,11 @@ impl SimLink {
             .iter()
             .map(|r| (r.core.id, r.truth))
             .collect()
+    }
+
+    /// The most each queue delayed a frame, the truth of `-v`.
+    pub fn queue_truth(&self) -> QueueTruth {
+        self.queue_truth
     }
 
     /// When the link must next act on its own: a frame arriving, a

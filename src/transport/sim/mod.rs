@@ -37,4 +37,4 @@ mod wire;
 
 pub use link::SimLink;
 pub use params::{SimParams, DEFAULT_BUFFER_BYTES, SIM_KEYS};
-pub use truth::SimTruth;
+pub use truth::{QueueTruth, SimTruth};

@@ -126,7 +126,7 @@ impl SimLink {
             header,
             &heartbeat(self.params.answer_ping),
         );
-        let at = sent + self.params.delay;
+        let at = sent + self.queued_down(sent) + self.params.delay;
         self.send_down(i, index, bytes, at);
     }
 
@@ -135,7 +135,12 @@ impl SimLink {
     fn send_telemetry(&mut self, i: usize, k: usize, sent: Instant) {
         let kind = self.responders[i].streams[k].0;
         let (header, index) = self.responders[i].header();
-        let time_boot_ms = (self.ns(sent) / 1_000_000) as u32;
+        // Stamped by the vehicle's clock (`offset=`, `drift=`), which
+        // counts since it booted, as a u32 of milliseconds does: wrapping.
+        let time_boot_ms = self
+            .clock_ns(sent)
+            .div_euclid(1_000_000)
+            .rem_euclid(1 << 32) as u32;
         let mut bytes = Vec::new();
         frame::encode(
             &mut bytes,
@@ -151,7 +156,7 @@ impl SimLink {
             self.responders[i].truth.down.dropped += 1;
             return;
         };
-        let at = done + self.vehicle_one_way();
+        let at = done + self.queued_down(done) + self.vehicle_one_way();
         self.send_down(i, index, bytes, at);
     }
 }

@@ -83,6 +83,62 @@ pub struct SimParams {
     /// request heard twice is answered twice; each responder draws its
     /// own).
     pub(crate) dup_up: f64,
+    /// A queue on the way to the responders (`queue_up=`) or back
+    /// (`queue_down=`): the delay a relay or modem buffer adds, growing
+    /// and draining, with no frame lost.
+    pub(crate) queue_up: Option<Queue>,
+    pub(crate) queue_down: Option<Queue>,
+}
+
+/// A queue that grows from nothing to `peak` over `rise` from the link's
+/// opening, then drains as fast: a one-way delay that changes while the
+/// link loses nothing, the truth an age or a direction split is held to.
+/// Its delay changes by less than its own length per second (`peak` <
+/// `rise`), so it keeps the frames in order, as a queue does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Queue {
+    pub(crate) peak: Duration,
+    pub(crate) rise: Duration,
+}
+
+impl Queue {
+    /// The delay it adds to a frame entering it `since` the link opened.
+    pub(crate) fn delay_at(&self, since: Duration) -> Duration {
+        let rise = self.rise.as_secs_f64();
+        let t = since.as_secs_f64();
+        let share = if t <= rise {
+            t / rise
+        } else {
+            (2.0 - t / rise).max(0.0)
+        };
+        self.peak.mul_f64(share)
+    }
+
+    /// `PEAK@RISE`, e.g. `1.5s@8s`.
+    fn parse(key: &str, value: &str) -> Result<Self, Problem> {
+        let expected = "PEAK@RISE, a peak shorter than its rise, e.g. 1.5s@8s";
+        let (peak, rise) = value
+            .split_once('@')
+            .ok_or_else(|| Problem::expected(key, value, expected))?;
+        let part = |p| duration(key, p).map_err(|_| Problem::expected(key, value, expected));
+        let (peak, rise) = (part(peak)?, part(rise)?);
+        if rise.is_zero() || peak >= rise {
+            return Err(Problem::expected(key, value, expected));
+        }
+        Ok(Queue { peak, rise })
+    }
+}
+
+impl fmt::Display for Queue {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        // Seconds as numbers: humantime's "1s 500ms" has a space.
+        write!(
+            f,
+            "{}s@{}s",
+            self.peak.as_secs_f64(),
+            self.rise.as_secs_f64()
+        )
+    }
 }
 
 impl Default for SimParams {
@@ -117,6 +173,8 @@ impl Default for SimParams {
             reorder_down: 0.0,
             loss_up: 0.0,
             dup_up: 0.0,
+            queue_up: None,
+            queue_down: None,
         }
     }
 }
@@ -127,7 +185,8 @@ jitter=DURATION, loss=PCT, dup=PCT, reorder=PCT, hold=DURATION, seed=N, clock=re
 ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|off, \
 buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, \
 outage_every=DURATION, spike=PCT, spike_delay=DURATION, stream=MSG@HZ[,MSG@HZ...], \
-loss_down=PCT, dup_down=PCT, reorder_down=PCT, loss_up=PCT, dup_up=PCT";
+loss_down=PCT, dup_down=PCT, reorder_down=PCT, loss_up=PCT, dup_up=PCT, queue_up=PEAK@RISE, \
+queue_down=PEAK@RISE";
 
 /// What is wrong with a `sim:` query: which key, and why (or which keys
 /// go together).
@@ -394,6 +453,8 @@ impl SimParams {
             "reorder_down" => self.reorder_down = percent(key, value)?,
             "loss_up" => self.loss_up = percent(key, value)?,
             "dup_up" => self.dup_up = percent(key, value)?,
+            "queue_up" => self.queue_up = Some(Queue::parse(key, value)?),
+            "queue_down" => self.queue_down = Some(Queue::parse(key, value)?),
             "clock" | "offset" | "drift" => self.set_clock(key, value)?,
             "baud" | "radio" | "buffer" | "air" | "duty" | "ecc" | "tdm" => {
                 self.set_radio(key, value, air)?
@@ -600,6 +661,11 @@ impl fmt::Display for SimParams {
                 write!(f, "&{key}={}%", share * 100.0)?;
             }
         }
+        for (key, queue) in [("queue_up", self.queue_up), ("queue_down", self.queue_down)] {
+            if let Some(queue) = queue {
+                write!(f, "&{key}={queue}")?;
+            }
+        }
         Ok(())
     }
 }
@@ -607,6 +673,36 @@ impl fmt::Display for SimParams {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_queue_grows_to_its_peak_then_drains_as_fast() {
+        let p = SimParams::parse("?queue_down=1.5s@8s&queue_up=20ms@1s").unwrap();
+        let q = p.queue_down.unwrap();
+        let at = |s: f64| q.delay_at(Duration::from_secs_f64(s)).as_secs_f64();
+        for (t, delay) in [
+            (0.0, 0.0),
+            (4.0, 0.75),
+            (8.0, 1.5),
+            (12.0, 0.75),
+            (16.0, 0.0),
+        ] {
+            assert!((at(t) - delay).abs() < 1e-9, "{t}: {}", at(t));
+        }
+        assert_eq!(at(100.0), 0.0);
+        assert_eq!(p.queue_up.unwrap().peak, Duration::from_millis(20));
+        let named = p.to_string();
+        assert!(
+            named.ends_with("&queue_up=0.02s@1s&queue_down=1.5s@8s"),
+            "{named}"
+        );
+        for bad in ["1.5s", "9s@8s", "1s@0s", "x@8s"] {
+            let e = SimParams::parse(&format!("?queue_down={bad}")).unwrap_err();
+            assert!(
+                e.to_string().starts_with(&format!("queue_down={bad}")),
+                "{e}"
+            );
+        }
+    }
 
     #[test]
     fn parses_every_key() {

@@ -78,6 +78,14 @@ pub(crate) struct UpTruth {
     pub(crate) requests_duplicated: u64,
 }
 
+/// The most the link's queues (`queue_up=`, `queue_down=`) delayed a
+/// frame: the growth an age or a direction split must find.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct QueueTruth {
+    pub up: std::time::Duration,
+    pub down: std::time::Duration,
+}
+
 impl SimTruth {
     pub(super) fn dropped(&mut self, replied: bool) {
         self.dropped += 1;
