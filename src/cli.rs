@@ -397,6 +397,11 @@ pub(crate) struct PingArgs {
     #[arg(help_heading = "What to send", long)]
     pub(crate) no_heartbeat: bool,
 
+    /// Do not answer the vehicle's TIMESYNC and PING requests (answered by default, one reply
+    /// each, as a ground station does: ArduPilot and PX4 time the link by them)
+    #[arg(help_heading = "What to send", long)]
+    pub(crate) no_answer: bool,
+
     /// Sequence number of the first request (to test wrap-around)
     #[arg(
         help_heading = "What to send",

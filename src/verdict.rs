@@ -582,6 +582,7 @@ mod tests {
             interrupted: false,
             link_error: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
+            answered: crate::engine::answers::AnswerSummary::default(),
             link_node: vec![],
             log: None,
             per_link: None,

@@ -515,6 +515,7 @@ fn session(
         },
         // A log is read: nothing is sent on it.
         heartbeat: !cli.no_heartbeat && !links.iter().any(LinkSpec::is_log),
+        answer: !cli.no_answer && !links.iter().any(LinkSpec::is_log),
         capacity: pending_capacity(interval, cli.timeout)?,
         // A run streams: a responder that joins it late is not blamed
         // for the time before.

@@ -255,6 +255,7 @@ mod tests {
                 timeout: Duration::from_secs(2),
                 version: Version::V2,
                 heartbeat: true,
+                answer: true,
                 capacity: 64,
                 window: crate::engine::matcher::Window::FirstAnswer,
                 first_seq: 0,

@@ -15,6 +15,7 @@ use std::sync::Arc;
 
 use tokio::sync::Notify;
 
+use super::answers::{AnswerSummary, Answers};
 use super::link_io::{admitted, Clock, Heartbeat, Sender, WallAtZero};
 use super::link_node::LinkNodes;
 use super::observe::{Event, Observer, OutputFate, RadioHeard, StartInfo};
@@ -67,6 +68,8 @@ pub(crate) struct SessionEnd<'a> {
     /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view).
     pub(crate) link_nodes: LinkNodes,
     pub(crate) gate: Gate,
+    /// The vehicle's requests we answered.
+    pub(crate) answered: AnswerSummary,
 }
 
 /// What one probe kind does inside the session loop.
@@ -151,6 +154,7 @@ struct Heard {
     radios: Radios,
     link_nodes: LinkNodes,
     gate: Gate,
+    answers: Answers,
 }
 
 impl Heard {
@@ -186,6 +190,7 @@ impl Heard {
                 continue;
             }
             self.roster.frame(frame.source, frame.version, frame.signed);
+            self.answers.take(&frame, path, at);
             driver.on_received(&frame, path, at);
             match frame.msg {
                 Msg::Heartbeat {
@@ -419,6 +424,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
                 radios: Radios::new(cfg.radio_type),
                 link_nodes: LinkNodes::default(),
                 gate: Gate::new(cfg.signing),
+                answers: Answers::new(cfg.ours, cfg.answer),
             },
             schedule: None,
             timers: Timers::new(cfg),
@@ -460,6 +466,8 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         // their messages (MAVSDK) knows us before our first request.
         let beat = self.heartbeat.send_if_due(self.link, &mut self.sender, now);
         beat.await.map_err(Stop::LinkFailed)?;
+        let answers = self.heard.answers.send(self.link, &mut self.sender);
+        answers.await.map_err(Stop::LinkFailed)?;
         self.schedule_once_a_peer_is_known(now)?;
         self.send_due().await?;
         self.decide();
@@ -689,6 +697,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             radios: self.heard.radios,
             link_nodes: self.heard.link_nodes,
             gate: self.heard.gate,
+            answered: self.heard.answers.summary(),
         });
         // Last, as it judges the finished figures (a sweep's included).
         if let Some(wire) = self.cfg.wire {

@@ -27,6 +27,9 @@ pub struct SessionConfig {
     pub version: Version,
     /// Send our own HEARTBEAT at 1 Hz (MAVSDK and routers need it).
     pub heartbeat: bool,
+    /// Answer the vehicle's TIMESYNC and PING requests, as a ground
+    /// station does (`--no-answer`: not).
+    pub answer: bool,
     /// Request slots in the matcher's ring.
     pub capacity: usize,
     /// Where each responder's accounting window opens: at its first answer

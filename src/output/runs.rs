@@ -7,6 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use crate::engine::answers::AnswerSummary;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::kind::KindValue;
@@ -39,6 +40,19 @@ use crate::verdict::{self, Thresholds, Verdict};
 /// long as the test run.
 pub(crate) fn kind<T: KindValue>(value: T) -> Event<'static> {
     Event::Kind(Box::leak(Box::new(value)))
+}
+
+/// The vehicle's requests a run answered: a PX4's PINGs and an
+/// ArduPilot's TIMESYNCs, a few of them in a flood.
+pub(crate) fn answered() -> AnswerSummary {
+    AnswerSummary {
+        counts: crate::answering::ResponderCounts {
+            ping_requests: 4,
+            timesync_requests: 12,
+            ..Default::default()
+        },
+        unanswered: 1,
+    }
 }
 
 /// The probe a test names.
@@ -556,6 +570,7 @@ pub(crate) fn command_summary() -> CommandSummary {
         interrupted: true,
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
+        answered: answered(),
         link_node: link_nodes(false),
     }
 }
@@ -658,6 +673,7 @@ pub(crate) fn passive_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
         interrupted: false,
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
+        answered: answered(),
         link_node: link_nodes(false),
         log: None,
         per_link: None,
@@ -730,6 +746,7 @@ pub(crate) fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
         interrupted: false,
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
+        answered: answered(),
         link_node: vec![],
         flight: Some(borrowed.flight.1.clone()),
         log: Some(LogFacts {

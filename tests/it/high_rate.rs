@@ -34,6 +34,7 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         timeout: Duration::from_millis(200),
         version: Version::V2,
         heartbeat: true,
+        answer: true,
         capacity: 8192,
         window: Window::FirstAnswer,
         first_seq: u32::MAX - 10_000, // and the sequence wraps on the way

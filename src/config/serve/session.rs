@@ -67,6 +67,8 @@ pub(super) fn session(
         timeout,
         version: c.version,
         heartbeat: c.heartbeat,
+        // A system that says it is a ground station answers as one.
+        answer: c.heartbeat,
         capacity: count.map_or(pending, |count| {
             pending.max((count as usize).next_power_of_two())
         }),

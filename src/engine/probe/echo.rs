@@ -385,6 +385,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             link_node,
             wire: None,
             signing,
+            answered: ended.answered,
             sweep: None,
         };
         // Moved, not copied: a thousand responders' histograms are tens

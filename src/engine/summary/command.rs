@@ -4,6 +4,7 @@
 
 use serde::Serialize;
 
+use crate::engine::answers::AnswerSummary;
 use crate::engine::hint::Hint;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::roster::Identity;
@@ -63,6 +64,9 @@ pub struct CommandSummary {
     /// What the signing gate accepted and refused, or, without a key, what
     /// came signed unchecked.
     pub(crate) signing: SigningSummary,
+    /// The vehicle's TIMESYNC and PING requests answered.
+    #[serde(skip_serializing_if = "AnswerSummary::is_none")]
+    pub(crate) answered: AnswerSummary,
     /// Nodes heard by their LINK_NODE_STATUS (the vehicle's own view of
     /// the link).
     pub(crate) link_node: Vec<LinkNodeSummary>,

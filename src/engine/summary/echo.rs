@@ -8,6 +8,7 @@ use serde::{Serialize, Serializer};
 
 use super::direction::Direction;
 use super::probe_name::ProbeName;
+use crate::engine::answers::AnswerSummary;
 use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
@@ -129,6 +130,9 @@ pub struct EchoSummary {
     /// What the signing gate accepted and refused, or, without a key, what
     /// came signed unchecked.
     pub(crate) signing: SigningSummary,
+    /// The vehicle's TIMESYNC and PING requests answered.
+    #[serde(skip_serializing_if = "AnswerSummary::is_none")]
+    pub(crate) answered: AnswerSummary,
     #[serde(skip)]
     pub responders: Vec<ResponderSummary>,
     /// `--sweep` or `--load`: the steps and what they say.
@@ -290,6 +294,7 @@ impl EchoSummary {
             link_node: vec![],
             wire: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
+            answered: AnswerSummary::default(),
             sweep: None,
         }
     }

@@ -3,6 +3,7 @@
 //! pymavlink's figure beside ours, and the link's totals. Built by the
 //! passive probe's tracker; every report format renders it.
 
+use crate::engine::answers::AnswerSummary;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::probe::passive::flight::FlightSummary;
 use crate::engine::probe::passive::round_trips::RoundTripSummary;
@@ -35,6 +36,8 @@ pub(crate) struct PassiveSummary {
     pub(crate) interrupted: bool,
     pub(crate) link_error: Option<String>,
     pub(crate) signing: SigningSummary,
+    /// The vehicle's TIMESYNC and PING requests answered.
+    pub(crate) answered: AnswerSummary,
     /// Read from a telemetry log: what the log held (set by the run, from
     /// the link).
     pub(crate) log: Option<LogFacts>,

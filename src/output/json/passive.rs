@@ -7,6 +7,7 @@ use serde::Serialize;
 use super::lines::{Lines, SCHEMA_VERSION};
 use super::round_trips::RoundTrips;
 use super::units::seconds;
+use crate::engine::answers::AnswerSummary;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
@@ -123,6 +124,8 @@ pub(super) struct Summary<'a> {
     radios: &'a [RadioSummary],
     link_node: &'a [LinkNodeSummary],
     signing: SigningSummary,
+    #[serde(skip_serializing_if = "AnswerSummary::is_none")]
+    answered: AnswerSummary,
     /// A telemetry log's records and stamps.
     #[serde(skip_serializing_if = "Option::is_none")]
     log: Option<&'a LogFacts>,
@@ -165,6 +168,7 @@ impl<'a> Summary<'a> {
             radios: &s.radios,
             link_node: &s.link_node,
             signing: s.signing,
+            answered: s.answered,
             log: s.log.as_ref(),
             per_link: s.per_link.as_ref().map(|p| Links::of(s, p)),
             round_trips: s

@@ -328,6 +328,7 @@ mod tests {
                 link_id: None,
                 counts: crate::frame::signing::SigningCounts::default(),
             },
+            answered: crate::engine::answers::AnswerSummary::default(),
             log: None,
             per_link: None,
             round_trips: None,

@@ -204,6 +204,7 @@ impl Driver for CommandDriver {
             interrupted: ended.interrupted,
             link_error: ended.link_error,
             signing: ended.gate.summary(),
+            answered: ended.answered,
             link_node: ended.link_nodes.summaries(),
         };
         let histograms = self

@@ -358,6 +358,7 @@ impl Driver for PassiveDriver {
             interrupted: end.interrupted,
             link_error: end.link_error,
             signing: end.gate.summary(),
+            answered: end.answered,
             log: None,
             per_link,
             round_trips: self.round_trips.as_mut().map(|rt| rt.summary(at)),
