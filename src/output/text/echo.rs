@@ -7,11 +7,12 @@ use super::summary::{write_failures, write_histogram, write_rtt, write_sent, wri
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
 use crate::engine::hint::HintCode;
-use crate::engine::matcher::MatchEvent;
+use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::summary::{
     Direction, EchoInterim, EchoSummary, ProbeName, ResponderSummary, ScheduleSummary,
 };
 use crate::engine::Nanos;
+use crate::output::prometheus::Outcome;
 use crate::output::StartInfo;
 use crate::verdict::Verdict;
 
@@ -22,10 +23,8 @@ const PROGRESS_EVERY_NS: Nanos = 1_000_000_000;
 #[derive(Default)]
 pub(super) struct Progress {
     window_start: Nanos,
-    replies: u64,
-    lost: u64,
-    late: u64,
-    duplicate: u64,
+    /// The window's events, counted as the exporter counts them.
+    counts: Counts,
     last_rtt: Option<Nanos>,
 }
 
@@ -115,28 +114,23 @@ impl<W: Write> TextReporter<W> {
         let Some(p) = self.progress.as_mut() else {
             return Ok(());
         };
-        match *e {
-            MatchEvent::Reply { rtt, .. } => {
-                p.replies += 1;
-                p.last_rtt = Some(rtt);
-            }
-            MatchEvent::Lost { .. } => p.lost += 1,
-            MatchEvent::Late { .. } => p.late += 1,
-            MatchEvent::Duplicate { .. } => p.duplicate += 1,
-            MatchEvent::Stale { .. } => {}
+        if let Some((_, outcome)) = Outcome::of_match(e) {
+            outcome.count(&mut p.counts);
+        }
+        if let MatchEvent::Reply { rtt, .. } = *e {
+            p.last_rtt = Some(rtt);
         }
         let at = e.at();
-        if at.saturating_sub(p.window_start) < PROGRESS_EVERY_NS {
+        let window = at.saturating_sub(p.window_start);
+        if window < PROGRESS_EVERY_NS {
             return Ok(());
         }
+        let (c, window_s) = (&p.counts, window as f64 / 1e9);
+        let last_rtt = p.last_rtt.map_or("-".into(), ms);
         let line = format!(
-            "{} replies, {} lost, {} late, {} duplicate in the last {:.1} s; last rtt {} ms",
-            p.replies,
-            p.lost,
-            p.late,
-            p.duplicate,
-            at.saturating_sub(p.window_start) as f64 / 1e9,
-            p.last_rtt.map_or("-".into(), ms)
+            "{} replies, {} lost, {} late, {} duplicate in the last {window_s:.1} s; last rtt \
+             {last_rtt} ms",
+            c.received, c.lost, c.late, c.duplicate
         );
         *p = Progress {
             window_start: at,
@@ -168,15 +162,10 @@ fn percent(ratio: f64) -> String {
 /// `120 sent, 118 received, 2 lost (1.67%), 0 late, 0 duplicate`: a
 /// responder's counts, in its interim line and its summary alike.
 fn counts(r: &ResponderSummary) -> String {
-    let c = &r.counts;
+    let (c, loss) = (&r.counts, percent(r.loss_ratio));
     format!(
-        "{} sent, {} received, {} lost ({}), {} late, {} duplicate",
-        c.sent,
-        c.received,
-        c.lost,
-        percent(r.loss_ratio),
-        c.late,
-        c.duplicate
+        "{} sent, {} received, {} lost ({loss}), {} late, {} duplicate",
+        c.sent, c.received, c.lost, c.late, c.duplicate
     )
 }
 
@@ -224,11 +213,10 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
             Some((lower, upper)) => format!("between {} and {}", offset(lower), offset(upper)),
             None => "its causal bounds do not intersect".to_string(),
         };
+        let (offset, spread) = (offset(clock.offset_ns), ms_us(clock.spread_ns / 1e3));
         writeln!(
             out,
-            "  clock offset {} ({bounds}), spread {} ms, drift {drift} ({} samples)",
-            offset(clock.offset_ns),
-            ms_us(clock.spread_ns / 1e3),
+            "  clock offset {offset} ({bounds}), spread {spread} ms, drift {drift} ({} samples)",
             clock.samples
         )?;
     }
@@ -237,11 +225,10 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
 
 /// Which way the responder's losses were.
 fn write_direction(out: &mut impl Write, d: &Direction) -> io::Result<()> {
+    let down = percent(d.downlink_loss);
     let down = format!(
-        "down {} ({} of {} of its frames, by its sequence)",
-        percent(d.downlink_loss),
-        d.downlink_lost,
-        d.downlink_frames
+        "down {down} ({} of {} of its frames, by its sequence)",
+        d.downlink_lost, d.downlink_frames
     );
     let round_trip = percent(d.round_trip_loss);
     match (d.uplink_loss, d.uplink_stderr) {
@@ -316,23 +303,17 @@ fn write_wire(out: &mut impl Write, s: &EchoSummary, w: &WireBudget) -> io::Resu
         .ignorer
         .map(|device| format!(" (unproven on {device})"))
         .unwrap_or_default();
+    let (carries, floor) = (w.max_rate_hz.floor(), ms_us(w.floor_us));
     write!(
         out,
-        "wire{unproven}: {} baud carries ~{:.0} {}s/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
-        w.baud,
-        w.max_rate_hz.floor(),
-        w.message,
-        ms_us(w.floor_us),
-        w.request_bytes,
-        w.reply_bytes
+        "wire{unproven}: {} baud carries ~{carries:.0} {}s/s; serialisation floor {floor} ms per \
+         round trip (request {} B + reply {} B)",
+        w.baud, w.message, w.request_bytes, w.reply_bytes
     )?;
     // The rest of the RTT is the radio's and the autopilot's.
     if let Some(p50) = s.smallest_p50_us() {
-        write!(
-            out,
-            ", {} ms of the rtt p50 is beyond the wire",
-            ms_us((p50 - w.floor_us).max(0.0))
-        )?;
+        let beyond = ms_us((p50 - w.floor_us).max(0.0));
+        write!(out, ", {beyond} ms of the rtt p50 is beyond the wire")?;
     }
     writeln!(out)
 }
@@ -377,10 +358,10 @@ fn write_schedule(out: &mut impl Write, s: &EchoSummary, p: &ScheduleSummary) ->
             "the link took {achieved}/s of {requested}/s ({n} requests not sent: it is not reading)"
         ),
     };
+    let lateness = ms_each(&[p.lateness_p50_us, p.lateness_p99_us, p.lateness_max_us]);
     writeln!(
         out,
-        "schedule: {rate}, send lateness p50/p99/max = {} ms; {}",
-        ms_each(&[p.lateness_p50_us, p.lateness_p99_us, p.lateness_max_us]),
+        "schedule: {rate}, send lateness p50/p99/max = {lateness} ms; {}",
         s.rx_clock
     )
 }

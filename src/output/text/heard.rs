@@ -84,12 +84,8 @@ fn in_unit(v: f64, unit: &str) -> String {
 /// as SiK users know them.
 fn radio_figures(kind: RadioKind, r: &RadioReport) -> String {
     if matches!(kind, RadioKind::Sik | RadioKind::Unknown) {
-        return format!(
-            "rssi={} remrssi={} txbuf={}%",
-            raw(r.rssi),
-            raw(r.remrssi),
-            raw(r.txbuf)
-        );
+        let [rssi, remrssi, txbuf] = [r.rssi, r.remrssi, r.txbuf].map(raw);
+        return format!("rssi={rssi} remrssi={remrssi} txbuf={txbuf}%");
     }
     Field::ALL
         .into_iter()
@@ -104,21 +100,14 @@ fn radio_figures(kind: RadioKind, r: &RadioReport) -> String {
 
 /// A radio's first report (or the one its kind changed with) in full.
 fn radio_heard(kind: RadioKind, r: &RadioReport) -> String {
+    let figures = radio_figures(kind, r);
     match kind {
-        RadioKind::Sik | RadioKind::Unknown => format!(
-            "{}, noise={} remnoise={}",
-            radio_figures(kind, r),
-            raw(r.noise),
-            raw(r.remnoise)
-        ),
-        RadioKind::Esp => format!(
-            "{}, ground msgs lost {}%",
-            radio_figures(kind, r),
-            r.rxerrors
-        ),
-        RadioKind::Mlrs | RadioKind::Elrs => {
-            format!("{}, txbuf {}%", radio_figures(kind, r), raw(r.txbuf))
+        RadioKind::Sik | RadioKind::Unknown => {
+            let [noise, remnoise] = [r.noise, r.remnoise].map(raw);
+            format!("{figures}, noise={noise} remnoise={remnoise}")
         }
+        RadioKind::Esp => format!("{figures}, ground msgs lost {}%", r.rxerrors),
+        RadioKind::Mlrs | RadioKind::Elrs => format!("{figures}, txbuf {}%", raw(r.txbuf)),
     }
 }
 

@@ -103,14 +103,15 @@ impl<W: Write> TextReporter<W> {
                         " (the default for links without a baud rate; --sweep-max to change)".into()
                     }
                 };
-                let baseline = loaded
-                    .then(|| format!(", first {step} at {}/s without the load", hz(first_hz)));
+                let (first, max, limit) = (hz(first_hz), hz(max_hz), loss_limit * 100.0);
+                let baseline = if loaded {
+                    format!(", first {step} at {first}/s without the load")
+                } else {
+                    String::new()
+                };
                 format!(
-                    "{probe} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {:.0}% loss{}",
-                    hz(first_hz),
-                    hz(max_hz),
-                    loss_limit * 100.0,
-                    baseline.unwrap_or_default()
+                    "{probe} sweep from {first}/s up to {max}/s{why}, {step} a step, stopping past \
+                     {limit:.0}% loss{baseline}"
                 )
             }
             PlanKind::Load { rate_hz } => format!(
@@ -175,14 +176,12 @@ fn row(s: &StepFigures) -> String {
         knee_mark(s),
     );
     if let Some(r) = &s.radio {
+        let min = r.txbuf_min.map_or("?".into(), |v| v.to_string());
+        let [mean, rssi, remrssi] =
+            [r.txbuf_mean, r.rssi_mean, r.remrssi_mean].map(|v| whole_or(v, "?"));
         line.push_str(&format!(
-            "  radio {} txbuf min {}% mean {}%, rssi {} remrssi {}, rxerrors +{}",
-            r.id,
-            r.txbuf_min.map_or("?".into(), |v| v.to_string()),
-            whole_or(r.txbuf_mean, "?"),
-            whole_or(r.rssi_mean, "?"),
-            whole_or(r.remrssi_mean, "?"),
-            r.rxerrors_delta
+            "  radio {} txbuf min {min}% mean {mean}%, rssi {rssi} remrssi {remrssi}, rxerrors +{}",
+            r.id, r.rxerrors_delta
         ));
     }
     line
@@ -225,14 +224,11 @@ pub(super) fn write_summary(
         }
     }
     for l in &s.load {
+        let rate = hz(l.rate);
         writeln!(
             out,
-            "load {}@{}: {} frames of {} B, {} B sent",
-            l.message,
-            hz(l.rate),
-            l.frames,
-            l.frame_bytes,
-            l.bytes
+            "load {}@{rate}: {} frames of {} B, {} B sent",
+            l.message, l.frames, l.frame_bytes, l.bytes
         )?;
     }
     if let Some(e) = &s.load_effect {
@@ -265,17 +261,12 @@ fn write_knee(out: &mut impl Write, s: &SweepSummary, probe: &str, baud: &str) -
         Some(f) => format!("; {}/s failed", hz(f)),
         None => "; every rate tried passed, so the link carries more: raise --sweep-max".into(),
     };
+    let (rate, loss, p99) = (hz(k.rate_hz), k.loss_ratio * 100.0, ms_us(k.p99_us));
     writeln!(
         out,
-        "knee: {} {probe}s/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, loss \
-         {:.2}%, p99 {} ms{above}{baud}",
-        hz(k.rate_hz),
-        k.bytes_per_s,
-        k.tx_bytes_per_s,
-        k.rx_bytes_per_s,
-        k.step,
-        k.loss_ratio * 100.0,
-        ms_us(k.p99_us),
+        "knee: {rate} {probe}s/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, loss \
+         {loss:.2}%, p99 {p99} ms{above}{baud}",
+        k.bytes_per_s, k.tx_bytes_per_s, k.rx_bytes_per_s, k.step
     )
 }
 
