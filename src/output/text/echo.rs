@@ -6,6 +6,7 @@ use super::format::{counted, if_any, ms, ms_each, ms_us, per_second, rate, who};
 use super::summary::{write_failures, write_histogram, write_rtt, write_sent, write_signing};
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
+use crate::engine::clock_offset::MIN_DRIFT_SPAN_S;
 use crate::engine::hint::HintCode;
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::summary::{
@@ -41,13 +42,11 @@ impl<W: Write> TextReporter<W> {
             ProbeName::Auto => ("PING".to_string(), " (TIMESYNC where PING is not answered)"),
             p => (p.as_str().to_uppercase(), ""),
         };
+        let rate = rate(info.interval);
+        let timeout = humantime::format_duration(info.timeout);
         self.start_line(
             info,
-            format_args!(
-                "{probe} {}{also}, timeout {}{lines}",
-                rate(info.interval),
-                humantime::format_duration(info.timeout)
-            ),
+            format_args!("{probe} {rate}{also}, timeout {timeout}{lines}"),
         )
     }
 
@@ -62,11 +61,9 @@ impl<W: Write> TextReporter<W> {
         // Replies in time, late and again share a line, told apart by its
         // head and tail.
         let (head, tail) = match *e {
-            MatchEvent::Reply {
-                out_of_order, at, ..
-            } => {
+            MatchEvent::Reply { out_of_order, .. } => {
                 let order = if out_of_order { " (out of order)" } else { "" };
-                ("", format!("{order}{}", self.radio_note(at)))
+                ("", format!("{order}{}", self.radio_note(e.at())))
             }
             MatchEvent::Late { .. } => ("late ", " (after the timeout)".into()),
             MatchEvent::Duplicate { .. } => ("", " (DUP!)".into()),
@@ -152,11 +149,8 @@ fn offset(ns: i128) -> String {
 
 fn percent(ratio: f64) -> String {
     let p = ratio * 100.0;
-    if p == 0.0 || p == 100.0 || p >= 10.0 {
-        format!("{p:.1}%")
-    } else {
-        format!("{p:.2}%")
-    }
+    let places = if p > 0.0 && p < 10.0 { 2 } else { 1 };
+    format!("{p:.places$}%")
 }
 
 /// `120 sent, 118 received, 2 lost (1.67%), 0 late, 0 duplicate`: a
@@ -204,10 +198,7 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
     if let Some(clock) = &r.clock {
         let drift = match (clock.drift_ppm, clock.drift_stderr_ppm) {
             (Some(d), Some(e)) => format!("{d:+.2} ± {e:.2} ppm"),
-            _ => format!(
-                "not measured (needs {} s of exchanges)",
-                crate::engine::clock_offset::MIN_DRIFT_SPAN_S
-            ),
+            _ => format!("not measured (needs {MIN_DRIFT_SPAN_S} s of exchanges)"),
         };
         let bounds = match clock.bounds_ns {
             Some((lower, upper)) => format!("between {} and {}", offset(lower), offset(upper)),
@@ -289,8 +280,7 @@ fn write_requests(out: &mut impl Write, s: &EchoSummary) -> io::Result<()> {
     write_sent(out, &requests, s.duration_s, s.in_flight)?;
     // A listening link that gave up says so in its own words (the hint);
     // "no replies" would hide that nothing was ever heard.
-    let no_peer = s.hints.iter().find(|h| h.code == HintCode::NoPeerHeard);
-    match no_peer {
+    match s.hints.iter().find(|h| h.code == HintCode::NoPeerHeard) {
         Some(hint) => writeln!(out, "{}", hint.text),
         None if s.responders.is_empty() => writeln!(out, "no replies"),
         None => Ok(()),

@@ -25,19 +25,11 @@ impl LogClock {
     /// `120.0-130.0 s (10:15:20Z-10:15:30Z)`: since the log began, and on
     /// its clock.
     fn span(self, start: Nanos, end: Nanos) -> String {
-        let wall = |t| {
-            let full = self.at(t);
-            // The date once, from the start.
-            full.split_once('T')
-                .map_or(full.clone(), |(_, time)| time.to_string())
-        };
-        format!(
-            "{:.1}-{:.1} s ({} to {})",
-            start as f64 / 1e9,
-            end as f64 / 1e9,
-            self.at(start),
-            wall(end)
-        )
+        let (from, to) = (self.at(start), self.at(end));
+        // The date once, from the start.
+        let to = to.split_once('T').map_or(to.as_str(), |(_, time)| time);
+        let (start_s, end_s) = (start as f64 / 1e9, end as f64 / 1e9);
+        format!("{start_s:.1}-{end_s:.1} s ({from} to {to})")
     }
 }
 

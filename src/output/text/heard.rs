@@ -25,12 +25,11 @@ impl<W: Write> TextReporter<W> {
         }
         self.stamp(heard.at)?;
         let what = heard.judgement.describe();
-        let kind_changed = heard.kind_changed;
-        let heard = radio_heard(kind, &heard.report);
-        if kind_changed {
-            return writeln!(self.out, "radio {id} is {what}: {heard}");
+        let figures = radio_heard(kind, &heard.report);
+        if heard.kind_changed {
+            return writeln!(self.out, "radio {id} is {what}: {figures}");
         }
-        writeln!(self.out, "heard radio {id}: {heard} — {what}")
+        writeln!(self.out, "heard radio {id}: {figures} — {what}")
     }
 
     pub(super) fn heard_line(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
@@ -61,22 +60,15 @@ impl<W: Write> TextReporter<W> {
 }
 
 fn raw(v: u8) -> String {
-    if v == radio::UNKNOWN {
-        "?".into()
-    } else {
-        v.to_string()
-    }
+    format::whole_or((v != radio::UNKNOWN).then_some(f64::from(v)), "?")
 }
 
 /// A figure in its kind's unit: whole numbers as such (mLRS's and
 /// ExpressLRS's are whole dB), others to a tenth.
 fn in_unit(v: f64, unit: &str) -> String {
     let sep = if unit == "%" { "" } else { " " };
-    if v.fract() == 0.0 {
-        format!("{v:.0}{sep}{unit}")
-    } else {
-        format!("{v:.1}{sep}{unit}")
-    }
+    let places = usize::from(v.fract() != 0.0);
+    format!("{v:.places$}{sep}{unit}")
 }
 
 /// The figures a kind gives a meaning to, in its units: `rssi -85 dBm,

@@ -9,6 +9,7 @@ use super::format::{identity, if_any, per_second, percent_or_dash, whole_or};
 use super::summary::write_failures;
 use super::TextReporter;
 use crate::engine::observe::StartInfo;
+use crate::engine::probe::passive::PassivePlan;
 use crate::engine::summary::passive::{
     LinkTotals, MsgCount, PassiveSummary, PerLink, Silence, SourceSummary,
 };
@@ -21,15 +22,10 @@ use crate::verdict::Verdict;
 const TOP_MSG_IDS: usize = 4;
 
 impl<W: Write> TextReporter<W> {
-    pub(super) fn passive_start(
-        &mut self,
-        info: &StartInfo,
-        heartbeat: bool,
-        log: bool,
-    ) -> io::Result<()> {
-        let sent = if log {
+    pub(super) fn passive_start(&mut self, info: &StartInfo, plan: &PassivePlan) -> io::Result<()> {
+        let sent = if plan.log {
             "a telemetry log, read on its own clock (--passive implied); nothing sent"
-        } else if heartbeat {
+        } else if plan.heartbeat {
             "our HEARTBEAT at 1 Hz (--no-heartbeat for none)"
         } else {
             "nothing sent (--no-heartbeat)"

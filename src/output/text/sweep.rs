@@ -16,11 +16,8 @@ use crate::output::StartInfo;
 
 /// A rate as people write it: `2`, `12.5`, `153.8`.
 fn hz(v: f64) -> String {
-    if (v - v.round()).abs() < 0.05 {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.1}")
-    }
+    let places = usize::from((v - v.round()).abs() >= 0.05);
+    format!("{v:.places$}")
 }
 
 /// What the `--load` streams send, e.g. `; load ATTITUDE@50/s +
@@ -71,9 +68,7 @@ fn columns(values: [&str; 13], knee: &str) -> String {
             _ => line.push_str(&format!("{value:>width$}")),
         }
     }
-    line.push_str("  ");
-    line.push_str(knee);
-    line
+    line + "  " + knee
 }
 
 fn header() -> String {
@@ -232,17 +227,15 @@ pub(super) fn write_summary(
         )?;
     }
     if let Some(e) = &s.load_effect {
+        let went = if e.p99_rise_us >= 0.0 { "rose" } else { "fell" };
+        let (rate, rise_pct) = (hz(e.rate_hz), (e.p99_ratio - 1.0) * 100.0);
+        let [p99_before, p99_after] = [e.unloaded_p99_us, e.loaded_p99_us].map(ms_us);
+        let [p50_before, p50_after] = [e.unloaded_p50_us, e.loaded_p50_us].map(ms_us);
         writeln!(
             out,
-            "under load: {probe} p99 at {}/s {} from {} ms to {} ms: {:+.3} ms ({:+.0}%); p50 {} -> {} ms",
-            hz(e.rate_hz),
-            if e.p99_rise_us >= 0.0 { "rose" } else { "fell" },
-            ms_us(e.unloaded_p99_us),
-            ms_us(e.loaded_p99_us),
-            e.p99_rise_us / 1e3,
-            (e.p99_ratio - 1.0) * 100.0,
-            ms_us(e.unloaded_p50_us),
-            ms_us(e.loaded_p50_us)
+            "under load: {probe} p99 at {rate}/s {went} from {p99_before} ms to {p99_after} ms: \
+             {:+.3} ms ({rise_pct:+.0}%); p50 {p50_before} -> {p50_after} ms",
+            e.p99_rise_us / 1e3
         )?;
     }
     Ok(())
