@@ -95,10 +95,7 @@ impl Reporter for LiveState {
     fn heard(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
         match self.sources.as_mut() {
             Some(sources) => sources.heard(id, identity),
-            None => {
-                let track = self.tracks.entry(id).or_default();
-                track.heard_as = Some(heard_as(identity));
-            }
+            None => self.tracks.entry(id).or_default().heard_as = Some(heard_as(identity)),
         }
         Ok(())
     }

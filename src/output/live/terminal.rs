@@ -31,11 +31,6 @@ impl Drop for Restore {
     }
 }
 
-struct Ui {
-    done: Arc<AtomicBool>,
-    thread: JoinHandle<io::Result<()>>,
-}
-
 /// Draws a frame with `draw` a few times a second until `done`.
 fn ui_loop(
     mut terminal: ratatui::DefaultTerminal,
@@ -65,7 +60,9 @@ fn ui_loop(
 /// once every session ended, then prints the summaries.
 pub(crate) struct LiveView {
     states: Arc<Mutex<Vec<LiveState>>>,
-    ui: Option<Ui>,
+    /// Tells the UI thread to end; the thread, until it is joined.
+    done: Arc<AtomicBool>,
+    thread: Option<JoinHandle<io::Result<()>>>,
 }
 
 impl LiveView {
@@ -87,7 +84,8 @@ impl LiveView {
             .inspect_err(|_| ratatui::restore())?;
         Ok(LiveView {
             states,
-            ui: Some(Ui { done, thread }),
+            done,
+            thread: Some(thread),
         })
     }
 
@@ -110,11 +108,11 @@ impl LiveView {
 
     /// Gives the terminal back.
     pub(crate) fn close(&mut self) -> io::Result<()> {
-        let Some(ui) = self.ui.take() else {
+        let Some(thread) = self.thread.take() else {
             return Ok(());
         };
-        ui.done.store(true, Ordering::Relaxed);
-        ui.thread
+        self.done.store(true, Ordering::Relaxed);
+        thread
             .join()
             .unwrap_or_else(|_| Err(io::Error::other("the live view failed")))
     }

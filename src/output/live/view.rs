@@ -117,11 +117,8 @@ pub(super) fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
             .iter()
             .filter(|s| s.kind == kind)
             .flat_map(|s| s.rows.iter().map(|r| &r.cells));
-        let columns = fit(
-            &widths(kind, alike),
-            kind.give_up,
-            body.width.saturating_sub(2),
-        );
+        let widths = widths(kind, alike);
+        let columns = fit(&widths, kind.give_up, body.width.saturating_sub(2));
         section(frame, *area, screen, &columns);
     }
     let keys = screens.first().map_or(KEYS, |s| s.kind.keys);
@@ -186,53 +183,38 @@ fn section_heights(available: u16, needs: &[u16]) -> Vec<u16> {
 fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, columns: &Columns) {
     let kind = screen.kind;
     let inner = area.width.saturating_sub(2);
-    let Columns {
-        shown,
-        widths,
-        strip: strip_width,
-    } = columns;
-    let strip_width = *strip_width;
+    let shown = &columns.shown;
 
     let slots = usize::from(area.height.saturating_sub(SECTION_FRAME));
     let hidden = screen.rows.len().saturating_sub(slots);
     let status = screen.status.as_str();
-    let mut block = Block::bordered().title(format!(
-        " {}{status} ",
-        ellipsis(
-            &screen.link,
-            usize::from(inner.saturating_sub(4 + width(status)))
-        )
-    ));
+    let link = ellipsis(
+        &screen.link,
+        usize::from(inner.saturating_sub(4 + width(status))),
+    );
+    let mut block = Block::bordered().title(format!(" {link}{status} "));
     if hidden > 0 {
         block = block.title_bottom(format!(" {hidden} more {} ", kind.rows_are));
     }
 
     let alarm = Style::new().fg(Color::Red).add_modifier(Modifier::BOLD);
+    let dimmed = Style::new().fg(Color::DarkGray);
     let rows = screen.rows.iter().take(slots).map(|r| {
         let mut row: Vec<Cell<'_>> = shown
             .iter()
             .map(|&c| {
                 let (text, bad) = &r.cells[c];
-                let cell = Cell::from(aligned(kind, c, text.clone()));
-                if *bad {
-                    cell.style(alarm)
-                } else {
-                    cell
-                }
+                let style = if *bad { alarm } else { Style::new() };
+                Cell::from(aligned(kind, c, text.clone())).style(style)
             })
             .collect();
-        let width = usize::from(strip_width);
-        row.push(match &r.strip {
-            Strip::Marks(marks) => Cell::from(strip(marks, width)),
-            Strip::Heard(heard) => Cell::from(no_reply(heard, width)),
-            Strip::Seconds(recent) => Cell::from(seconds(recent, width)),
-        });
-        let row = Row::new(row);
-        if r.quiet {
-            row.style(Style::new().fg(Color::DarkGray))
-        } else {
-            row
-        }
+        let width = usize::from(columns.strip);
+        row.push(Cell::from(match &r.strip {
+            Strip::Marks(marks) => strip(marks, width),
+            Strip::Heard(heard) => no_reply(heard, width).into(),
+            Strip::Seconds(recent) => seconds(recent, width),
+        }));
+        Row::new(row).style(if r.quiet { dimmed } else { Style::new() })
     });
     let header = Row::new(
         shown
@@ -243,8 +225,8 @@ fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, columns: &Columns
     .style(Style::new().add_modifier(Modifier::UNDERLINED));
     let constraints = shown
         .iter()
-        .map(|&c| Constraint::Length(widths[c]))
-        .chain([Constraint::Length(strip_width)]);
+        .map(|&c| Constraint::Length(columns.widths[c]))
+        .chain([Constraint::Length(columns.strip)]);
     let table = Table::new(rows, constraints)
         .header(header)
         .column_spacing(SPACING)
@@ -286,29 +268,21 @@ struct Columns {
 /// width: columns are given up (in falling order of `give_up`) until the
 /// strip has [`STRIP_MIN`].
 fn fit(widths: &[u16], give_up: &[u8], inner: u16) -> Columns {
+    // Each column is followed by a gap: the last one's is the strip's.
+    let strip =
+        |shown: &[usize]| inner.saturating_sub(shown.iter().map(|&c| widths[c] + SPACING).sum());
     let mut shown: Vec<usize> = (0..widths.len()).collect();
-    loop {
-        // Each column is followed by a gap: the last one's is the strip's.
-        let used: u16 = shown.iter().map(|&c| widths[c] + SPACING).sum();
-        let strip = inner.saturating_sub(used);
-        let next = shown
-            .iter()
-            .enumerate()
-            .filter(|(_, &c)| give_up[c] > 0)
-            .max_by_key(|(_, &c)| give_up[c])
-            .map(|(i, _)| i);
-        match next {
-            Some(i) if strip < STRIP_MIN => {
-                shown.remove(i);
-            }
-            _ => {
-                return Columns {
-                    shown,
-                    widths: widths.to_vec(),
-                    strip,
-                }
-            }
-        }
+    while strip(&shown) < STRIP_MIN {
+        let next = (0..shown.len())
+            .filter(|&i| give_up[shown[i]] > 0)
+            .max_by_key(|&i| give_up[shown[i]]);
+        let Some(i) = next else { break };
+        shown.remove(i);
+    }
+    Columns {
+        strip: strip(&shown),
+        shown,
+        widths: widths.to_vec(),
     }
 }
 

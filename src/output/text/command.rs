@@ -71,11 +71,8 @@ impl<W: Write> TextReporter<W> {
 }
 
 pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Result<()> {
-    let sent = format!(
-        "{} {} commands",
-        s.commands(),
-        s.command_name.to_uppercase()
-    );
+    let name = s.command_name.to_uppercase();
+    let sent = format!("{} {name} commands", s.commands());
     write_sent(out, &sent, s.duration_s, s.in_flight)?;
     for t in &s.targets {
         let who = who(t.id, t.identity.as_ref());

@@ -6,12 +6,14 @@ use super::format::{counted, if_any, ms, ms_each, ms_us, per_second, rate, who};
 use super::summary::{write_failures, write_histogram, write_rtt, write_sent, write_signing};
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
+use crate::engine::clock_offset::MIN_DRIFT_SPAN_S;
 use crate::engine::hint::HintCode;
-use crate::engine::matcher::MatchEvent;
+use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::summary::{
     Direction, EchoInterim, EchoSummary, ProbeName, ResponderSummary, ScheduleSummary,
 };
 use crate::engine::Nanos;
+use crate::output::prometheus::Outcome;
 use crate::output::StartInfo;
 use crate::verdict::Verdict;
 
@@ -22,10 +24,8 @@ const PROGRESS_EVERY_NS: Nanos = 1_000_000_000;
 #[derive(Default)]
 pub(super) struct Progress {
     window_start: Nanos,
-    replies: u64,
-    lost: u64,
-    late: u64,
-    duplicate: u64,
+    /// The window's events, counted as the exporter counts them.
+    counts: Counts,
     last_rtt: Option<Nanos>,
 }
 
@@ -42,13 +42,11 @@ impl<W: Write> TextReporter<W> {
             ProbeName::Auto => ("PING".to_string(), " (TIMESYNC where PING is not answered)"),
             p => (p.as_str().to_uppercase(), ""),
         };
+        let rate = rate(info.interval);
+        let timeout = humantime::format_duration(info.timeout);
         self.start_line(
             info,
-            format_args!(
-                "{probe} {}{also}, timeout {}{lines}",
-                rate(info.interval),
-                humantime::format_duration(info.timeout)
-            ),
+            format_args!("{probe} {rate}{also}, timeout {timeout}{lines}"),
         )
     }
 
@@ -63,11 +61,9 @@ impl<W: Write> TextReporter<W> {
         // Replies in time, late and again share a line, told apart by its
         // head and tail.
         let (head, tail) = match *e {
-            MatchEvent::Reply {
-                out_of_order, at, ..
-            } => {
+            MatchEvent::Reply { out_of_order, .. } => {
                 let order = if out_of_order { " (out of order)" } else { "" };
-                ("", format!("{order}{}", self.radio_note(at)))
+                ("", format!("{order}{}", self.radio_note(e.at())))
             }
             MatchEvent::Late { .. } => ("late ", " (after the timeout)".into()),
             MatchEvent::Duplicate { .. } => ("", " (DUP!)".into()),
@@ -115,28 +111,23 @@ impl<W: Write> TextReporter<W> {
         let Some(p) = self.progress.as_mut() else {
             return Ok(());
         };
-        match *e {
-            MatchEvent::Reply { rtt, .. } => {
-                p.replies += 1;
-                p.last_rtt = Some(rtt);
-            }
-            MatchEvent::Lost { .. } => p.lost += 1,
-            MatchEvent::Late { .. } => p.late += 1,
-            MatchEvent::Duplicate { .. } => p.duplicate += 1,
-            MatchEvent::Stale { .. } => {}
+        if let Some((_, outcome)) = Outcome::of_match(e) {
+            outcome.count(&mut p.counts);
+        }
+        if let MatchEvent::Reply { rtt, .. } = *e {
+            p.last_rtt = Some(rtt);
         }
         let at = e.at();
-        if at.saturating_sub(p.window_start) < PROGRESS_EVERY_NS {
+        let window = at.saturating_sub(p.window_start);
+        if window < PROGRESS_EVERY_NS {
             return Ok(());
         }
+        let (c, window_s) = (&p.counts, window as f64 / 1e9);
+        let last_rtt = p.last_rtt.map_or("-".into(), ms);
         let line = format!(
-            "{} replies, {} lost, {} late, {} duplicate in the last {:.1} s; last rtt {} ms",
-            p.replies,
-            p.lost,
-            p.late,
-            p.duplicate,
-            at.saturating_sub(p.window_start) as f64 / 1e9,
-            p.last_rtt.map_or("-".into(), ms)
+            "{} replies, {} lost, {} late, {} duplicate in the last {window_s:.1} s; last rtt \
+             {last_rtt} ms",
+            c.received, c.lost, c.late, c.duplicate
         );
         *p = Progress {
             window_start: at,
@@ -158,25 +149,17 @@ fn offset(ns: i128) -> String {
 
 fn percent(ratio: f64) -> String {
     let p = ratio * 100.0;
-    if p == 0.0 || p == 100.0 || p >= 10.0 {
-        format!("{p:.1}%")
-    } else {
-        format!("{p:.2}%")
-    }
+    let places = if p > 0.0 && p < 10.0 { 2 } else { 1 };
+    format!("{p:.places$}%")
 }
 
 /// `120 sent, 118 received, 2 lost (1.67%), 0 late, 0 duplicate`: a
 /// responder's counts, in its interim line and its summary alike.
 fn counts(r: &ResponderSummary) -> String {
-    let c = &r.counts;
+    let (c, loss) = (&r.counts, percent(r.loss_ratio));
     format!(
-        "{} sent, {} received, {} lost ({}), {} late, {} duplicate",
-        c.sent,
-        c.received,
-        c.lost,
-        percent(r.loss_ratio),
-        c.late,
-        c.duplicate
+        "{} sent, {} received, {} lost ({loss}), {} late, {} duplicate",
+        c.sent, c.received, c.lost, c.late, c.duplicate
     )
 }
 
@@ -215,20 +198,16 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
     if let Some(clock) = &r.clock {
         let drift = match (clock.drift_ppm, clock.drift_stderr_ppm) {
             (Some(d), Some(e)) => format!("{d:+.2} ± {e:.2} ppm"),
-            _ => format!(
-                "not measured (needs {} s of exchanges)",
-                crate::engine::clock_offset::MIN_DRIFT_SPAN_S
-            ),
+            _ => format!("not measured (needs {MIN_DRIFT_SPAN_S} s of exchanges)"),
         };
         let bounds = match clock.bounds_ns {
             Some((lower, upper)) => format!("between {} and {}", offset(lower), offset(upper)),
             None => "its causal bounds do not intersect".to_string(),
         };
+        let (offset, spread) = (offset(clock.offset_ns), ms_us(clock.spread_ns / 1e3));
         writeln!(
             out,
-            "  clock offset {} ({bounds}), spread {} ms, drift {drift} ({} samples)",
-            offset(clock.offset_ns),
-            ms_us(clock.spread_ns / 1e3),
+            "  clock offset {offset} ({bounds}), spread {spread} ms, drift {drift} ({} samples)",
             clock.samples
         )?;
     }
@@ -237,11 +216,10 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
 
 /// Which way the responder's losses were.
 fn write_direction(out: &mut impl Write, d: &Direction) -> io::Result<()> {
+    let down = percent(d.downlink_loss);
     let down = format!(
-        "down {} ({} of {} of its frames, by its sequence)",
-        percent(d.downlink_loss),
-        d.downlink_lost,
-        d.downlink_frames
+        "down {down} ({} of {} of its frames, by its sequence)",
+        d.downlink_lost, d.downlink_frames
     );
     let round_trip = percent(d.round_trip_loss);
     match (d.uplink_loss, d.uplink_stderr) {
@@ -302,8 +280,7 @@ fn write_requests(out: &mut impl Write, s: &EchoSummary) -> io::Result<()> {
     write_sent(out, &requests, s.duration_s, s.in_flight)?;
     // A listening link that gave up says so in its own words (the hint);
     // "no replies" would hide that nothing was ever heard.
-    let no_peer = s.hints.iter().find(|h| h.code == HintCode::NoPeerHeard);
-    match no_peer {
+    match s.hints.iter().find(|h| h.code == HintCode::NoPeerHeard) {
         Some(hint) => writeln!(out, "{}", hint.text),
         None if s.responders.is_empty() => writeln!(out, "no replies"),
         None => Ok(()),
@@ -316,23 +293,17 @@ fn write_wire(out: &mut impl Write, s: &EchoSummary, w: &WireBudget) -> io::Resu
         .ignorer
         .map(|device| format!(" (unproven on {device})"))
         .unwrap_or_default();
+    let (carries, floor) = (w.max_rate_hz.floor(), ms_us(w.floor_us));
     write!(
         out,
-        "wire{unproven}: {} baud carries ~{:.0} {}s/s; serialisation floor {} ms per round trip (request {} B + reply {} B)",
-        w.baud,
-        w.max_rate_hz.floor(),
-        w.message,
-        ms_us(w.floor_us),
-        w.request_bytes,
-        w.reply_bytes
+        "wire{unproven}: {} baud carries ~{carries:.0} {}s/s; serialisation floor {floor} ms per \
+         round trip (request {} B + reply {} B)",
+        w.baud, w.message, w.request_bytes, w.reply_bytes
     )?;
     // The rest of the RTT is the radio's and the autopilot's.
     if let Some(p50) = s.smallest_p50_us() {
-        write!(
-            out,
-            ", {} ms of the rtt p50 is beyond the wire",
-            ms_us((p50 - w.floor_us).max(0.0))
-        )?;
+        let beyond = ms_us((p50 - w.floor_us).max(0.0));
+        write!(out, ", {beyond} ms of the rtt p50 is beyond the wire")?;
     }
     writeln!(out)
 }
@@ -377,10 +348,10 @@ fn write_schedule(out: &mut impl Write, s: &EchoSummary, p: &ScheduleSummary) ->
             "the link took {achieved}/s of {requested}/s ({n} requests not sent: it is not reading)"
         ),
     };
+    let lateness = ms_each(&[p.lateness_p50_us, p.lateness_p99_us, p.lateness_max_us]);
     writeln!(
         out,
-        "schedule: {rate}, send lateness p50/p99/max = {} ms; {}",
-        ms_each(&[p.lateness_p50_us, p.lateness_p99_us, p.lateness_max_us]),
+        "schedule: {rate}, send lateness p50/p99/max = {lateness} ms; {}",
         s.rx_clock
     )
 }

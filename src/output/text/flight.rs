@@ -25,19 +25,11 @@ impl LogClock {
     /// `120.0-130.0 s (10:15:20Z-10:15:30Z)`: since the log began, and on
     /// its clock.
     fn span(self, start: Nanos, end: Nanos) -> String {
-        let wall = |t| {
-            let full = self.at(t);
-            // The date once, from the start.
-            full.split_once('T')
-                .map_or(full.clone(), |(_, time)| time.to_string())
-        };
-        format!(
-            "{:.1}-{:.1} s ({} to {})",
-            start as f64 / 1e9,
-            end as f64 / 1e9,
-            self.at(start),
-            wall(end)
-        )
+        let (from, to) = (self.at(start), self.at(end));
+        // The date once, from the start.
+        let to = to.split_once('T').map_or(to.as_str(), |(_, time)| time);
+        let (start_s, end_s) = (start as f64 / 1e9, end as f64 / 1e9);
+        format!("{start_s:.1}-{end_s:.1} s ({from} to {to})")
     }
 }
 
@@ -46,24 +38,18 @@ pub(super) fn write_flight(
     f: &FlightSummary,
     clock: LogClock,
 ) -> io::Result<()> {
+    let (window_s, silence_s) = (f.window_ns as f64 / 1e9, f.silence_ns as f64 / 1e9);
+    let silences = counted(f.silence_count, "silence");
+    let bursts = counted(f.burst_count, "loss burst");
     writeln!(
         out,
-        "flight: {} windows of {:.0} s; {} (nothing but the radio for {:.1} s or more), {} \
-         (windows losing {:.0}% or more in a row)",
-        f.windows,
-        f.window_ns as f64 / 1e9,
-        counted(f.silence_count, "silence"),
-        f.silence_ns as f64 / 1e9,
-        counted(f.burst_count, "loss burst"),
-        f.burst_loss_pct,
+        "flight: {} windows of {window_s:.0} s; {silences} (nothing but the radio for \
+         {silence_s:.1} s or more), {bursts} (windows losing {:.0}% or more in a row)",
+        f.windows, f.burst_loss_pct,
     )?;
     if let (Some(id), Some(kind)) = (f.radio, f.radio_kind) {
-        writeln!(
-            out,
-            "flight radio {id}: {} ({})",
-            kind.name(),
-            f.radio_evidence.join("; ")
-        )?;
+        let (kind, evidence) = (kind.name(), f.radio_evidence.join("; "));
+        writeln!(out, "flight radio {id}: {kind} ({evidence})")?;
     }
     write_range(out, f, clock)?;
     for w in &f.worst {
@@ -94,18 +80,14 @@ fn write_range(out: &mut impl Write, f: &FlightSummary, clock: LogClock) -> io::
     let Some(o) = &f.origin else {
         return writeln!(out, "flight: no position in the log, no distances");
     };
+    let origin = match o.kind {
+        OriginKind::FirstFix => "first fix",
+        OriginKind::Home => "HOME_POSITION",
+    };
     writeln!(
         out,
-        "flight: {} positions of {}; distances from its {} ({:.7}, {:.7}, {:.1} m)",
-        f.positions,
-        o.vehicle,
-        match o.kind {
-            OriginKind::FirstFix => "first fix",
-            OriginKind::Home => "HOME_POSITION",
-        },
-        o.lat_deg,
-        o.lon_deg,
-        o.alt_m
+        "flight: {} positions of {}; distances from its {origin} ({:.7}, {:.7}, {:.1} m)",
+        f.positions, o.vehicle, o.lat_deg, o.lon_deg, o.alt_m
     )?;
     if let Some(w) = &f.farthest {
         writeln!(out, "flight farthest: {}", window(w, clock))?;
@@ -119,12 +101,10 @@ fn window(w: &FlightWindow, clock: LogClock) -> String {
     let span = clock.span(w.start, w.end);
     let mut line = format!("{span}: {}", received_lost(w.received, w.lost, w.loss_pct));
     if let Some(r) = &w.radio {
+        let [rssi, remrssi, noise, remnoise] =
+            [r.rssi, r.remrssi, r.noise, r.remnoise].map(|v| whole_or(v, "-"));
         line += &format!(
-            "; rssi {}/{} noise {}/{} rxerrors +{}",
-            whole_or(r.rssi, "-"),
-            whole_or(r.remrssi, "-"),
-            whole_or(r.noise, "-"),
-            whole_or(r.remnoise, "-"),
+            "; rssi {rssi}/{remrssi} noise {noise}/{remnoise} rxerrors +{}",
             r.rxerrors
         );
     }
@@ -146,11 +126,8 @@ fn received_lost(received: u64, lost: impl std::fmt::Display, loss_pct: Option<f
 }
 
 fn span(s: &Span, clock: LogClock, burst: bool) -> String {
-    let mut line = format!(
-        "{}, {:.1} s",
-        clock.span(s.start, s.end),
-        s.length_ns() as f64 / 1e9
-    );
+    let (span, length_s) = (clock.span(s.start, s.end), s.length_ns() as f64 / 1e9);
+    let mut line = format!("{span}, {length_s:.1} s");
     if burst {
         line += &format!(": {}", received_lost(s.received, s.lost, s.loss_pct()));
     }
@@ -184,13 +161,11 @@ fn write_silence_radio(out: &mut impl Write, s: &Span) -> io::Result<()> {
         .flatten()
         .map(silence_figure)
         .collect();
+    let (kind, figures) = (r.kind.name(), figures.join(", "));
     writeln!(
         out,
-        "  radio {} ({}), {} reports, min/mean: {}",
-        r.id,
-        r.kind.name(),
-        r.reports,
-        figures.join(", ")
+        "  radio {} ({kind}), {} reports, min/mean: {figures}",
+        r.id, r.reports
     )?;
     if let Some(text) = diagnosis_text(s) {
         writeln!(out, "  diagnosis: {text}")?;

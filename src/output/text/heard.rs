@@ -25,12 +25,11 @@ impl<W: Write> TextReporter<W> {
         }
         self.stamp(heard.at)?;
         let what = heard.judgement.describe();
-        let kind_changed = heard.kind_changed;
-        let heard = radio_heard(kind, &heard.report);
-        if kind_changed {
-            return writeln!(self.out, "radio {id} is {what}: {heard}");
+        let figures = radio_heard(kind, &heard.report);
+        if heard.kind_changed {
+            return writeln!(self.out, "radio {id} is {what}: {figures}");
         }
-        writeln!(self.out, "heard radio {id}: {heard} — {what}")
+        writeln!(self.out, "heard radio {id}: {figures} — {what}")
     }
 
     pub(super) fn heard_line(&mut self, id: SysComp, identity: &Identity) -> io::Result<()> {
@@ -61,22 +60,15 @@ impl<W: Write> TextReporter<W> {
 }
 
 fn raw(v: u8) -> String {
-    if v == radio::UNKNOWN {
-        "?".into()
-    } else {
-        v.to_string()
-    }
+    format::whole_or((v != radio::UNKNOWN).then_some(f64::from(v)), "?")
 }
 
 /// A figure in its kind's unit: whole numbers as such (mLRS's and
 /// ExpressLRS's are whole dB), others to a tenth.
 fn in_unit(v: f64, unit: &str) -> String {
     let sep = if unit == "%" { "" } else { " " };
-    if v.fract() == 0.0 {
-        format!("{v:.0}{sep}{unit}")
-    } else {
-        format!("{v:.1}{sep}{unit}")
-    }
+    let places = usize::from(v.fract() != 0.0);
+    format!("{v:.places$}{sep}{unit}")
 }
 
 /// The figures a kind gives a meaning to, in its units: `rssi -85 dBm,
@@ -84,12 +76,8 @@ fn in_unit(v: f64, unit: &str) -> String {
 /// as SiK users know them.
 fn radio_figures(kind: RadioKind, r: &RadioReport) -> String {
     if matches!(kind, RadioKind::Sik | RadioKind::Unknown) {
-        return format!(
-            "rssi={} remrssi={} txbuf={}%",
-            raw(r.rssi),
-            raw(r.remrssi),
-            raw(r.txbuf)
-        );
+        let [rssi, remrssi, txbuf] = [r.rssi, r.remrssi, r.txbuf].map(raw);
+        return format!("rssi={rssi} remrssi={remrssi} txbuf={txbuf}%");
     }
     Field::ALL
         .into_iter()
@@ -104,21 +92,14 @@ fn radio_figures(kind: RadioKind, r: &RadioReport) -> String {
 
 /// A radio's first report (or the one its kind changed with) in full.
 fn radio_heard(kind: RadioKind, r: &RadioReport) -> String {
+    let figures = radio_figures(kind, r);
     match kind {
-        RadioKind::Sik | RadioKind::Unknown => format!(
-            "{}, noise={} remnoise={}",
-            radio_figures(kind, r),
-            raw(r.noise),
-            raw(r.remnoise)
-        ),
-        RadioKind::Esp => format!(
-            "{}, ground msgs lost {}%",
-            radio_figures(kind, r),
-            r.rxerrors
-        ),
-        RadioKind::Mlrs | RadioKind::Elrs => {
-            format!("{}, txbuf {}%", radio_figures(kind, r), raw(r.txbuf))
+        RadioKind::Sik | RadioKind::Unknown => {
+            let [noise, remnoise] = [r.noise, r.remnoise].map(raw);
+            format!("{figures}, noise={noise} remnoise={remnoise}")
         }
+        RadioKind::Esp => format!("{figures}, ground msgs lost {}%", r.rxerrors),
+        RadioKind::Mlrs | RadioKind::Elrs => format!("{figures}, txbuf {}%", raw(r.txbuf)),
     }
 }
 

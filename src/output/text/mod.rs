@@ -48,7 +48,7 @@ impl<W: Write> Reporter for TextReporter<W> {
         } else if let Some(spec) = info.plan::<CommandSpec>() {
             self.command_start(info, spec)
         } else if let Some(plan) = info.plan::<PassivePlan>() {
-            self.passive_start(info, plan.heartbeat, plan.log)
+            self.passive_start(info, plan)
         } else {
             self.echo_start(info)
         }

@@ -9,6 +9,7 @@ use super::format::{identity, if_any, per_second, percent_or_dash, whole_or};
 use super::summary::write_failures;
 use super::TextReporter;
 use crate::engine::observe::StartInfo;
+use crate::engine::probe::passive::PassivePlan;
 use crate::engine::summary::passive::{
     LinkTotals, MsgCount, PassiveSummary, PerLink, Silence, SourceSummary,
 };
@@ -21,15 +22,10 @@ use crate::verdict::Verdict;
 const TOP_MSG_IDS: usize = 4;
 
 impl<W: Write> TextReporter<W> {
-    pub(super) fn passive_start(
-        &mut self,
-        info: &StartInfo,
-        heartbeat: bool,
-        log: bool,
-    ) -> io::Result<()> {
-        let sent = if log {
+    pub(super) fn passive_start(&mut self, info: &StartInfo, plan: &PassivePlan) -> io::Result<()> {
+        let sent = if plan.log {
             "a telemetry log, read on its own clock (--passive implied); nothing sent"
-        } else if heartbeat {
+        } else if plan.heartbeat {
             "our HEARTBEAT at 1 Hz (--no-heartbeat for none)"
         } else {
             "nothing sent (--no-heartbeat)"
@@ -153,13 +149,12 @@ fn write_damaged(out: &mut impl Write, r: &SourceSummary) -> io::Result<()> {
     if r.counts.damaged == 0 {
         return Ok(());
     }
+    let ids = name_counts(&r.damaged_ids);
     writeln!(
         out,
-        "damaged: {} {} frames whose CRC failed ({}): they arrived, so their numbers are not \
+        "damaged: {} {} frames whose CRC failed ({ids}): they arrived, so their numbers are not \
          lost (damage on the way, or a dialect whose CRC differs)",
-        r.source,
-        r.counts.damaged,
-        name_counts(&r.damaged_ids)
+        r.source, r.counts.damaged
     )
 }
 
@@ -169,13 +164,12 @@ fn write_silence(out: &mut impl Write, r: &SourceSummary, silence: &Silence) -> 
     } else {
         ""
     };
+    let (length, from) = (seconds(silence.length_ns), seconds(silence.start));
+    let figures = silence_figures(silence);
     writeln!(
         out,
-        "silence: {} heard nothing for {} from {}{still}: {}",
-        r.source,
-        seconds(silence.length_ns),
-        seconds(silence.start),
-        silence_figures(silence)
+        "silence: {} heard nothing for {length} from {from}{still}: {figures}",
+        r.source
     )
 }
 
@@ -222,12 +216,11 @@ fn write_log(out: &mut impl Write, log: &LogFacts) -> io::Result<()> {
     } else {
         "stopped before its end"
     };
+    let (from, to) = (wall(st.first_us), wall(st.latest_us));
     writeln!(
         out,
-        "log: {} records from {} to {} (stamps {stamps}), {end}",
-        r.records,
-        wall(st.first_us),
-        wall(st.latest_us),
+        "log: {} records from {from} to {to} (stamps {stamps}), {end}",
+        r.records
     )?;
     let notes = [
         (
@@ -311,19 +304,18 @@ pub(super) fn write_summary(
     } else {
         "listened"
     };
+    let others = match (t.radio_received, t.ground_received) {
+        (0, 0) => String::new(),
+        (r, 0) => format!(" (and {r} from the radio)"),
+        (0, g) => format!(" (and {g} the ground station logged as it sent them)"),
+        (r, g) => {
+            format!(" (and {r} from the radio, {g} the ground station logged as it sent them)")
+        }
+    };
     writeln!(
         out,
-        "{:.1} s {how}, {} sources heard, {} frames{}",
-        s.duration_s,
-        t.sources,
-        t.counts.received,
-        match (t.radio_received, t.ground_received) {
-            (0, 0) => String::new(),
-            (r, 0) => format!(" (and {r} from the radio)"),
-            (0, g) => format!(" (and {g} the ground station logged as it sent them)"),
-            (r, g) =>
-                format!(" (and {r} from the radio, {g} the ground station logged as it sent them)"),
-        }
+        "{:.1} s {how}, {} sources heard, {} frames{others}",
+        s.duration_s, t.sources, t.counts.received
     )?;
     if s.table.sources.iter().all(|r| r.ground) {
         writeln!(out, "nothing heard")?;
@@ -377,21 +369,16 @@ pub(super) fn write_summary(
 /// `link:`, the totals of every source but the radio's and the ground
 /// station's own.
 fn write_link_line(out: &mut impl Write, t: &LinkTotals) -> io::Result<()> {
-    let c = &t.counts;
+    let (c, loss) = (&t.counts, percent_or_dash(t.loss_pct));
     let damaged = if_any(c.damaged, |n| format!(", {n} damaged"));
     let wrapped = if_any(t.silence_frames_estimated, |n| {
         format!(", ~{n} more likely lost in silences the 8-bit counter wrapped in")
     });
     writeln!(
         out,
-        "link: {} received, {} lost ({}), {} duplicate, {} reordered{damaged}{wrapped}; pymavlink's figure: {} lost ({:.2}%)",
-        c.received,
-        c.lost,
-        percent_or_dash(t.loss_pct),
-        c.duplicate,
-        c.reordered,
-        t.pymav.loss,
-        t.pymav.loss_pct
+        "link: {} received, {} lost ({loss}), {} duplicate, {} reordered{damaged}{wrapped}; \
+         pymavlink's figure: {} lost ({:.2}%)",
+        c.received, c.lost, c.duplicate, c.reordered, t.pymav.loss, t.pymav.loss_pct
     )
 }
 
@@ -415,15 +402,15 @@ fn write_second_counter(out: &mut impl Write, r: &SourceSummary) -> io::Result<(
     let Some(c) = &r.second_counter else {
         return Ok(());
     };
-    writeln!(
-        out,
-        "two senders behind {}: a second counter numbered {} of its frames ({}), counted on its \
-         own: {} lost, {} restarts of its count",
-        r.source,
+    let (numbered, ids) = (
         c.counts.received + c.counts.damaged,
         name_counts(&c.msg_ids),
-        c.counts.lost,
-        c.counts.resyncs
+    );
+    writeln!(
+        out,
+        "two senders behind {}: a second counter numbered {numbered} of its frames ({ids}), \
+         counted on its own: {} lost, {} restarts of its count",
+        r.source, c.counts.lost, c.counts.resyncs
     )
 }
 

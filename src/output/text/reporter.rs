@@ -2,6 +2,7 @@
 //! summary under its own header), and which it shows (`-q`, `-D`,
 //! `--every-reply`, what kind of run it is).
 
+use std::fmt::Arguments;
 use std::io::{self, Write};
 
 use super::echo;
@@ -69,12 +70,8 @@ impl<W: Write> TextReporter<W> {
             .at(at)
             .duration_since(std::time::UNIX_EPOCH)
             .unwrap_or_default();
-        write!(
-            self.out,
-            "[{}.{:06}] ",
-            since.as_secs(),
-            since.subsec_micros()
-        )
+        let (secs, micros) = (since.as_secs(), since.subsec_micros());
+        write!(self.out, "[{secs}.{micros:06}] ")
     }
 
     /// `[12.0 s] ` after the `-D` stamp: how interim and status lines
@@ -85,11 +82,7 @@ impl<W: Write> TextReporter<W> {
     }
 
     /// The first line, as ping's: `MAVPING LINK from OURS: ` and `what`.
-    pub(super) fn start_line(
-        &mut self,
-        info: &StartInfo,
-        what: std::fmt::Arguments<'_>,
-    ) -> io::Result<()> {
+    pub(super) fn start_line(&mut self, info: &StartInfo, what: Arguments<'_>) -> io::Result<()> {
         writeln!(self.out, "MAVPING {} from {}: {what}", info.link, info.ours)
     }
 
@@ -109,9 +102,7 @@ impl<W: Write> TextReporter<W> {
     pub(crate) fn into_inner(self) -> W {
         self.out.into_inner()
     }
-}
 
-impl<W: Write> TextReporter<W> {
     /// The summary, under its header as ping's; written unprefixed.
     pub(super) fn summary_block(
         &mut self,

@@ -68,12 +68,8 @@ fn write_pair(out: &mut impl Write, p: &PairSummary) -> io::Result<()> {
     });
     let responder = named(p.responder, "any (none heard answering)");
     let requester = named(p.requester, "(no requester named)");
-    writeln!(
-        out,
-        "  {} {requester} -> {responder}: {}{rtt}",
-        p.kind.as_str(),
-        parts.join(", ")
-    )
+    let (kind, parts) = (p.kind.as_str(), parts.join(", "));
+    writeln!(out, "  {kind} {requester} -> {responder}: {parts}{rtt}")
 }
 
 /// `3 late`: each count with what it counts, where there are any.
@@ -93,8 +89,8 @@ fn named(id: SysComp, unnamed: &str) -> String {
 
 /// `requests: timesync from 255/190: 100 (1 logged again)`.
 fn write_requests(out: &mut impl Write, r: &RequesterSummary) -> io::Result<()> {
-    let c = &r.counts;
-    let repeats = if r.kind.as_str() == "command" {
+    let (c, kind) = (&r.counts, r.kind.as_str());
+    let repeats = if kind == "command" {
         "retransmissions"
     } else {
         "logged again"
@@ -111,10 +107,8 @@ fn write_requests(out: &mut impl Write, r: &RequesterSummary) -> io::Result<()> 
     };
     writeln!(
         out,
-        "  requests: {} from {}: {}{extra}",
-        r.kind.as_str(),
-        r.requester,
-        c.requests
+        "  requests: {kind} from {}: {}{extra}",
+        r.requester, c.requests
     )
 }
 

@@ -29,16 +29,10 @@ pub(super) fn write_rtt(
     t: &RttSummary,
     jitter: bool,
 ) -> io::Result<()> {
-    writeln!(
-        out,
-        "  {what} min/mean/max/stddev = {} ms",
-        ms_each(&[t.min_us, t.mean_us, t.max_us, t.stddev_us])
-    )?;
-    write!(
-        out,
-        "  {what} p50/p90/p99/p99.9   = {} ms",
-        ms_each(&[t.p50_us, t.p90_us, t.p99_us, t.p999_us])
-    )?;
+    let spread = ms_each(&[t.min_us, t.mean_us, t.max_us, t.stddev_us]);
+    let percentiles = ms_each(&[t.p50_us, t.p90_us, t.p99_us, t.p999_us]);
+    writeln!(out, "  {what} min/mean/max/stddev = {spread} ms")?;
+    write!(out, "  {what} p50/p90/p99/p99.9   = {percentiles} ms")?;
     if jitter {
         write!(out, ", jitter {} ms", ms_us(t.jitter_us))?;
     }
@@ -50,14 +44,9 @@ pub(super) fn write_histogram(out: &mut impl Write, histogram: &[Bucket]) -> io:
     let most = histogram.iter().map(|b| b.count).max().unwrap_or(0).max(1);
     for b in histogram {
         const WIDTH: u64 = 40;
-        let bar = (b.count * WIDTH).div_ceil(most) as usize;
-        writeln!(
-            out,
-            "  {:>9} ms |{:<40}| {}",
-            ms_us(b.low_us),
-            "#".repeat(bar),
-            b.count
-        )?;
+        let bar = "#".repeat((b.count * WIDTH).div_ceil(most) as usize);
+        let low = ms_us(b.low_us);
+        writeln!(out, "  {low:>9} ms |{bar:<40}| {}", b.count)?;
     }
     Ok(())
 }
@@ -67,16 +56,14 @@ pub(super) fn write_histogram(out: &mut impl Write, histogram: &[Bucket]) -> io:
 /// frames came (their signatures could not be checked).
 pub(super) fn write_signing(out: &mut impl Write, s: &SigningSummary) -> io::Result<()> {
     match s.link_id {
-        Some(link_id) => writeln!(
-            out,
-            "signing (link id {link_id}, {}): {}",
-            if s.required {
+        Some(link_id) => {
+            let gate = if s.required {
                 "signatures required"
             } else {
                 "unsigned accepted"
-            },
-            s.counts
-        ),
+            };
+            writeln!(out, "signing (link id {link_id}, {gate}): {}", s.counts)
+        }
         None if s.counts.signed_unchecked > 0 => writeln!(
             out,
             "signing (no key): {} signed frames accepted unchecked, {} unsigned",

@@ -16,11 +16,8 @@ use crate::output::StartInfo;
 
 /// A rate as people write it: `2`, `12.5`, `153.8`.
 fn hz(v: f64) -> String {
-    if (v - v.round()).abs() < 0.05 {
-        format!("{v:.0}")
-    } else {
-        format!("{v:.1}")
-    }
+    let places = usize::from((v - v.round()).abs() >= 0.05);
+    format!("{v:.places$}")
 }
 
 /// What the `--load` streams send, e.g. `; load ATTITUDE@50/s +
@@ -71,9 +68,7 @@ fn columns(values: [&str; 13], knee: &str) -> String {
             _ => line.push_str(&format!("{value:>width$}")),
         }
     }
-    line.push_str("  ");
-    line.push_str(knee);
-    line
+    line + "  " + knee
 }
 
 fn header() -> String {
@@ -103,14 +98,15 @@ impl<W: Write> TextReporter<W> {
                         " (the default for links without a baud rate; --sweep-max to change)".into()
                     }
                 };
-                let baseline = loaded
-                    .then(|| format!(", first {step} at {}/s without the load", hz(first_hz)));
+                let (first, max, limit) = (hz(first_hz), hz(max_hz), loss_limit * 100.0);
+                let baseline = if loaded {
+                    format!(", first {step} at {first}/s without the load")
+                } else {
+                    String::new()
+                };
                 format!(
-                    "{probe} sweep from {}/s up to {}/s{why}, {step} a step, stopping past {:.0}% loss{}",
-                    hz(first_hz),
-                    hz(max_hz),
-                    loss_limit * 100.0,
-                    baseline.unwrap_or_default()
+                    "{probe} sweep from {first}/s up to {max}/s{why}, {step} a step, stopping past \
+                     {limit:.0}% loss{baseline}"
                 )
             }
             PlanKind::Load { rate_hz } => format!(
@@ -175,14 +171,12 @@ fn row(s: &StepFigures) -> String {
         knee_mark(s),
     );
     if let Some(r) = &s.radio {
+        let min = r.txbuf_min.map_or("?".into(), |v| v.to_string());
+        let [mean, rssi, remrssi] =
+            [r.txbuf_mean, r.rssi_mean, r.remrssi_mean].map(|v| whole_or(v, "?"));
         line.push_str(&format!(
-            "  radio {} txbuf min {}% mean {}%, rssi {} remrssi {}, rxerrors +{}",
-            r.id,
-            r.txbuf_min.map_or("?".into(), |v| v.to_string()),
-            whole_or(r.txbuf_mean, "?"),
-            whole_or(r.rssi_mean, "?"),
-            whole_or(r.remrssi_mean, "?"),
-            r.rxerrors_delta
+            "  radio {} txbuf min {min}% mean {mean}%, rssi {rssi} remrssi {remrssi}, rxerrors +{}",
+            r.id, r.rxerrors_delta
         ));
     }
     line
@@ -225,28 +219,23 @@ pub(super) fn write_summary(
         }
     }
     for l in &s.load {
+        let rate = hz(l.rate);
         writeln!(
             out,
-            "load {}@{}: {} frames of {} B, {} B sent",
-            l.message,
-            hz(l.rate),
-            l.frames,
-            l.frame_bytes,
-            l.bytes
+            "load {}@{rate}: {} frames of {} B, {} B sent",
+            l.message, l.frames, l.frame_bytes, l.bytes
         )?;
     }
     if let Some(e) = &s.load_effect {
+        let went = if e.p99_rise_us >= 0.0 { "rose" } else { "fell" };
+        let (rate, rise_pct) = (hz(e.rate_hz), (e.p99_ratio - 1.0) * 100.0);
+        let [p99_before, p99_after] = [e.unloaded_p99_us, e.loaded_p99_us].map(ms_us);
+        let [p50_before, p50_after] = [e.unloaded_p50_us, e.loaded_p50_us].map(ms_us);
         writeln!(
             out,
-            "under load: {probe} p99 at {}/s {} from {} ms to {} ms: {:+.3} ms ({:+.0}%); p50 {} -> {} ms",
-            hz(e.rate_hz),
-            if e.p99_rise_us >= 0.0 { "rose" } else { "fell" },
-            ms_us(e.unloaded_p99_us),
-            ms_us(e.loaded_p99_us),
-            e.p99_rise_us / 1e3,
-            (e.p99_ratio - 1.0) * 100.0,
-            ms_us(e.unloaded_p50_us),
-            ms_us(e.loaded_p50_us)
+            "under load: {probe} p99 at {rate}/s {went} from {p99_before} ms to {p99_after} ms: \
+             {:+.3} ms ({rise_pct:+.0}%); p50 {p50_before} -> {p50_after} ms",
+            e.p99_rise_us / 1e3
         )?;
     }
     Ok(())
@@ -265,17 +254,12 @@ fn write_knee(out: &mut impl Write, s: &SweepSummary, probe: &str, baud: &str) -
         Some(f) => format!("; {}/s failed", hz(f)),
         None => "; every rate tried passed, so the link carries more: raise --sweep-max".into(),
     };
+    let (rate, loss, p99) = (hz(k.rate_hz), k.loss_ratio * 100.0, ms_us(k.p99_us));
     writeln!(
         out,
-        "knee: {} {probe}s/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, loss \
-         {:.2}%, p99 {} ms{above}{baud}",
-        hz(k.rate_hz),
-        k.bytes_per_s,
-        k.tx_bytes_per_s,
-        k.rx_bytes_per_s,
-        k.step,
-        k.loss_ratio * 100.0,
-        ms_us(k.p99_us),
+        "knee: {rate} {probe}s/s ({:.0} B/s on the wire: {:.0} out, {:.0} in) at step {}, loss \
+         {loss:.2}%, p99 {p99} ms{above}{baud}",
+        k.bytes_per_s, k.tx_bytes_per_s, k.rx_bytes_per_s, k.step
     )
 }
 
