@@ -3,7 +3,7 @@
 use std::io::{self, Write};
 
 use super::format::{ms, rate, who};
-use super::summary::{write_histogram, write_rtt, write_sent, write_signing};
+use super::summary::{write_answered, write_histogram, write_rtt, write_sent, write_signing};
 use super::TextReporter;
 use crate::engine::probe::command::CommandEvent;
 use crate::engine::summary::CommandSummary;
@@ -113,6 +113,7 @@ pub(super) fn write_summary(out: &mut impl Write, s: &CommandSummary) -> io::Res
         )?;
     }
     write_signing(out, &s.signing)?;
+    write_answered(out, &s.answered)?;
     for hint in &s.hints {
         writeln!(out, "hint: {}", hint.text)?;
     }

@@ -3,7 +3,9 @@
 use std::io::{self, Write};
 
 use super::format::{counted, if_any, ms, ms_each, ms_us, per_second, rate, who};
-use super::summary::{write_failures, write_histogram, write_rtt, write_sent, write_signing};
+use super::summary::{
+    write_answered, write_failures, write_histogram, write_rtt, write_sent, write_signing,
+};
 use super::TextReporter;
 use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::MIN_DRIFT_SPAN_S;
@@ -265,6 +267,7 @@ pub(super) fn write_summary(
     }
     write_link_faults(out, s)?;
     write_signing(out, &s.signing)?;
+    write_answered(out, &s.answered)?;
     if let Some(p) = &s.schedule {
         write_schedule(out, s, p)?;
     }

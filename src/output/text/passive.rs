@@ -329,6 +329,7 @@ pub(super) fn write_summary(
         write_links(out, s, per)?;
     }
     super::link_node::write_link_nodes(out, &s.link_node)?;
+    super::summary::write_answered(out, &s.answered)?;
     if let Some(rt) = &s.round_trips {
         super::round_trips::write_round_trips(out, rt, s.log.as_ref())?;
     }

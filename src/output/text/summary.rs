@@ -1,9 +1,11 @@
 //! The lines several kinds' summaries share: what was sent, the RTT
-//! figures and their histogram, the signing gate, the failed thresholds.
+//! figures and their histogram, the signing gate, the requests answered,
+//! the failed thresholds.
 
 use std::io::{self, Write};
 
 use super::format::{if_any, ms_each, ms_us};
+use crate::engine::answers::AnswerSummary;
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::frame::signing::SigningSummary;
 use crate::verdict::{Check, Verdict};
@@ -71,6 +73,22 @@ pub(super) fn write_signing(out: &mut impl Write, s: &SigningSummary) -> io::Res
         ),
         None => Ok(()),
     }
+}
+
+/// One line, when the vehicle asked us anything: the requests we
+/// answered as a ground station does.
+pub(super) fn write_answered(out: &mut impl Write, a: &AnswerSummary) -> io::Result<()> {
+    if a.is_none() {
+        return Ok(());
+    }
+    let (timesync, ping) = (a.counts.timesync_requests, a.counts.ping_requests);
+    let flood = if_any(a.unanswered, |n| {
+        format!(", {n} of them not answered (more than 64 at once)")
+    });
+    writeln!(
+        out,
+        "answered the vehicle's requests: {timesync} TIMESYNC, {ping} PING{flood}"
+    )
 }
 
 /// The thresholds that failed; "no reply at all" is already plain above.
