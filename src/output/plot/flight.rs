@@ -29,8 +29,8 @@ const NUMBER_W: i32 = 110;
 /// The flight of one log, window by window.
 #[derive(Debug, Clone)]
 pub(super) struct FlightTrack {
-    time: Bins<Sums>,
-    distance: Bins<Sums>,
+    time: Bins,
+    distance: Bins,
     summary: Option<FlightSummary>,
 }
 
@@ -219,7 +219,7 @@ mod tests {
         }
         assert!(t.distance.bins.len() <= DISTANCE_BINS);
         assert!(t.time.bins.len() <= SPANS);
-        let sum = |b: &Bins<Sums>| b.bins.iter().map(|s| s.received).sum::<u64>();
+        let sum = |b: &Bins| b.bins.iter().map(|s| s.received).sum::<u64>();
         assert_eq!(sum(&t.distance), 500 * n);
         assert_eq!(sum(&t.time), 500 * n);
         // 25 m doubled to 400 m: 10 km in 26 bins; the losses only in the

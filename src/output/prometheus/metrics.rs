@@ -37,21 +37,11 @@ pub(crate) struct Metrics {
     /// Open now, and (a continuous link of `mavping serve`) how often it
     /// was reopened after breaking; `None` before a session starts.
     pub(super) state: Option<LinkState>,
-    pub(super) requests: Requests,
-}
-
-/// Requests the link put on the wire, whoever answered them: in the
-/// sessions before (a continuous link reopened), and in this one so far.
-#[derive(Debug, Default, Clone, Copy)]
-pub(super) struct Requests {
-    earlier: u64,
-    pub(super) session: u64,
-}
-
-impl Requests {
-    pub(super) fn total(self) -> u64 {
-        self.earlier + self.session
-    }
+    /// Requests the link put on the wire, whoever answered them: in the
+    /// sessions before (a continuous link reopened)...
+    pub(super) earlier_requests: u64,
+    /// ...and in this one so far.
+    pub(super) session_requests: u64,
 }
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -101,6 +91,11 @@ impl Metrics {
         self.probe.is_some_and(|p| p != ProbeName::Passive)
     }
 
+    /// Requests the link put on the wire, its earlier sessions' included.
+    pub(super) fn requests(&self) -> u64 {
+        self.earlier_requests + self.session_requests
+    }
+
     /// Responders that answered in the link's current session.
     pub(super) fn answering(&self) -> usize {
         self.responders.values().filter(|s| s.answering).count()
@@ -134,7 +129,7 @@ impl Reporter for Metrics {
         // A continuous link's new session: its sequences start afresh,
         // its counters go on.
         self.sources.carry();
-        self.requests.earlier += std::mem::take(&mut self.requests.session);
+        self.earlier_requests += std::mem::take(&mut self.session_requests);
         for s in self.responders.values_mut() {
             s.split = Split::Live;
             s.answering = false;
@@ -206,14 +201,14 @@ impl Reporter for Metrics {
     }
 
     fn progress(&mut self, _: Nanos, requests: u64) -> io::Result<()> {
-        self.requests.session = requests;
+        self.session_requests = requests;
         Ok(())
     }
 
     /// The figures known only at the end (percentiles from the HDR
     /// histogram), so a last scrape or a `/probe` has them.
     fn echo_summary(&mut self, summary: &EchoSummary, _: &Verdict) -> io::Result<()> {
-        self.requests.session = summary.requests;
+        self.session_requests = summary.requests;
         for r in &summary.responders {
             let s = self.responders.entry(r.id).or_default();
             // The live figure, when there is one, is the later.
@@ -239,7 +234,7 @@ impl Reporter for Metrics {
     }
 
     fn command_summary(&mut self, summary: &CommandSummary, _: &Verdict) -> io::Result<()> {
-        self.requests.session = summary.commands();
+        self.session_requests = summary.commands();
         Ok(())
     }
 }

@@ -231,7 +231,7 @@ fn write_senders(out: &mut Exposition, links: &[&Metrics]) {
             .filter(|m| m.sends())
             .map(|m| (m.probe_labels(), *m))
     };
-    out.family(&REQUESTS, senders().map(|(l, m)| (l, m.requests.total())));
+    out.family(&REQUESTS, senders().map(|(l, m)| (l, m.requests())));
     out.family(&RESPONDERS, senders().map(|(l, m)| (l, m.answering())));
 }
 
@@ -355,58 +355,54 @@ pub(crate) struct Health {
     pub(crate) last_reload_ok: bool,
 }
 
-/// One of the server's own figures.
-type HealthFigure = Figure<fn(&Health) -> u64>;
-
-const HEALTH: [HealthFigure; 8] = [
+/// The server's own figures (counts below 2^53, exact as `f64`).
+const HEALTH: [SeriesFigure<Health>; 8] = [
     Figure::counter(
         "mavping_exporter_probes_total",
         "/probe requests that ran a probe.",
-        |h| h.probes,
+        |h| Some(h.probes as f64),
     ),
     Figure::counter(
         "mavping_exporter_probes_failed_total",
         "Probes that ran and failed (mavping_probe_success 0).",
-        |h| h.probes_failed,
+        |h| Some(h.probes_failed as f64),
     ),
     Figure::counter(
         "mavping_exporter_probes_refused_total",
         "/probe requests refused: bad or forbidden (400) or too many at once (503).",
-        |h| h.probes_refused,
+        |h| Some(h.probes_refused as f64),
     ),
     Figure::gauge(
         "mavping_exporter_probes_running",
         "Probes running now.",
-        |h| h.probes_running,
+        |h| Some(h.probes_running as f64),
     ),
     Figure::gauge(
         "mavping_exporter_open_links",
         "Links open now: continuous links that are up and the links of running probes.",
-        |h| h.open_links,
+        |h| Some(h.open_links as f64),
     ),
     Figure::counter(
         "mavping_exporter_config_reloads_total",
         "Configuration reloads asked for (SIGHUP, POST /-/reload).",
-        |h| h.reloads,
+        |h| Some(h.reloads as f64),
     ),
     Figure::counter(
         "mavping_exporter_config_reloads_failed_total",
         "Reloads refused because the new configuration was invalid (the old one stays).",
-        |h| h.reloads_failed,
+        |h| Some(h.reloads_failed as f64),
     ),
     Figure::gauge(
         "mavping_exporter_config_last_reload_successful",
         "1 when the configuration in use is the one last read from the file.",
-        |h| u64::from(h.last_reload_ok),
+        |h| Some(f64::from(u8::from(h.last_reload_ok))),
     ),
 ];
 
 /// `mavping serve`'s `/metrics`: its health, then its continuous links.
 pub(crate) fn render_serve(links: &[&Metrics], health: &Health) -> String {
     let mut out = Exposition::default();
-    for Figure { family, value } in &HEALTH {
-        out.family(family, [(String::new(), value(health))]);
-    }
+    out.figures(&HEALTH, || std::iter::once((String::new(), health)));
     write_link_states(&mut out, links, &SERVE_LINK_UP, Some(&LINK_RESTARTS));
     write_links(&mut out, links, Scope::Run);
     out.0

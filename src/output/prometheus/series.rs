@@ -107,11 +107,8 @@ pub(super) enum Split {
 impl Series {
     fn observe(&mut self, rtt: Nanos) {
         let s = rtt as f64 / 1e9;
-        let i = BUCKETS_S
-            .iter()
-            .position(|&b| s <= b)
-            .unwrap_or(BUCKETS_S.len());
-        self.buckets[i] += 1;
+        // The first bucket whose bound is not below it, else +Inf.
+        self.buckets[BUCKETS_S.partition_point(|&b| b < s)] += 1;
         self.rtt_sum_s += s;
         self.last_rtt_s = Some(s);
     }
