@@ -15,12 +15,8 @@ impl Metrics {
     /// so a sum over a link's sources can leave it out, as the link's
     /// totals do.
     fn source_labels(&self, id: SysComp, s: &SourceSeries) -> String {
-        let labels = self.radio_labels(id);
-        if s.radio {
-            labels + ",radio=\"true\""
-        } else {
-            labels
-        }
+        let radio = if s.radio { ",radio=\"true\"" } else { "" };
+        format!("{}{radio}", self.radio_labels(id))
     }
 }
 

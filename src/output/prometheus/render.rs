@@ -118,13 +118,13 @@ const GAUGES: [SeriesFigure<Series>; 5] = [
     ),
 ];
 
-const RADIO: [SeriesFigure<RadioSeries>; 15] = [
-    // Written apart, with its extra label.
-    Figure::gauge(
-        "mavping_radio_info",
-        "1 for each radio, its kind (sik, mlrs, elrs, esp, unknown) in a label: from what it sends, or --radio-type.",
-        |_| None,
-    ),
+/// A radio's kind, in a label of its own.
+const RADIO_INFO: Family = Family::gauge(
+    "mavping_radio_info",
+    "1 for each radio, its kind (sik, mlrs, elrs, esp, unknown) in a label: from what it sends, or --radio-type.",
+);
+
+const RADIO: [SeriesFigure<RadioSeries>; 14] = [
     Figure::gauge(
         "mavping_radio_rssi",
         "Local signal strength, raw RADIO_STATUS units (255, unknown, left out).",
@@ -259,25 +259,20 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
         );
     }
     let histogram = rtt_histogram(scope);
-    let name = histogram.name;
     if series().next().is_some() {
         out.header(&histogram);
     }
+    let name = |part| format!("{}_{part}", histogram.name);
     for (labels, s) in series() {
         let mut cumulative = 0;
         for (i, count) in s.buckets.iter().enumerate() {
             cumulative += count;
-            let le = BUCKETS_S
-                .get(i)
-                .map_or_else(|| "+Inf".to_string(), |b| b.to_string());
-            out.sample(
-                &format!("{name}_bucket"),
-                &format!("{labels},le=\"{le}\""),
-                cumulative,
-            );
+            let le = BUCKETS_S.get(i).map_or("+Inf".into(), f64::to_string);
+            let bucket = format!("{labels},le=\"{le}\"");
+            out.sample(&name("bucket"), &bucket, cumulative);
         }
-        out.sample(&format!("{name}_sum"), &labels, s.rtt_sum_s);
-        out.sample(&format!("{name}_count"), &labels, s.counts.received);
+        out.sample(&name("sum"), &labels, s.rtt_sum_s);
+        out.sample(&name("count"), &labels, s.counts.received);
     }
     out.figures(&GAUGES, series);
     let radios = || {
@@ -285,10 +280,9 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
             .iter()
             .flat_map(|m| m.radios.iter().map(move |(id, r)| (m.radio_labels(*id), r)))
     };
-    let (info, figures) = RADIO.split_first().expect("the info family");
     let kind = |l, r: &RadioSeries| (format!("{l},kind=\"{}\"", r.kind.key()), 1);
-    out.family(&info.family, radios().map(|(l, r)| kind(l, r)));
-    out.figures(figures, radios);
+    out.family(&RADIO_INFO, radios().map(|(l, r)| kind(l, r)));
+    out.figures(&RADIO, radios);
     write_link_nodes(out, links);
     write_directions(out, links);
     write_sources(out, links);
