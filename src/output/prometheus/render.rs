@@ -24,55 +24,36 @@ enum Scope {
     Probe,
 }
 
-/// A per-responder count: a counter in a run, a gauge of one probe under
-/// a name of its own (see [`Scope`]).
-struct Count {
-    run: &'static str,
-    probe: &'static str,
-    help: &'static str,
-    value: fn(&Series) -> u64,
-}
-
-impl Count {
-    fn family(&self, scope: Scope) -> Family {
-        match scope {
-            Scope::Run => Family::counter(self.run, self.help),
-            Scope::Probe => Family::gauge(self.probe, self.help),
-        }
-    }
-}
+/// A per-responder count: a counter in a run; a gauge of one probe under
+/// the name of its own beside its value (see [`Scope`]).
+type Count = Figure<(&'static str, fn(&Series) -> u64)>;
 
 const COUNTS: [Count; 5] = [
-    Count {
-        run: "mavping_sent_total",
-        probe: "mavping_probe_sent",
-        help: "Requests in the responder's window whose fate is decided (received + lost).",
-        value: |s| s.counts.sent,
-    },
-    Count {
-        run: "mavping_received_total",
-        probe: "mavping_probe_received",
-        help: "Replies received within the timeout.",
-        value: |s| s.counts.received,
-    },
-    Count {
-        run: "mavping_lost_total",
-        probe: "mavping_probe_lost",
-        help: "Requests not answered within the timeout.",
-        value: |s| s.counts.lost,
-    },
-    Count {
-        run: "mavping_late_total",
-        probe: "mavping_probe_late",
-        help: "First replies after the timeout (each also counted lost).",
-        value: |s| s.counts.late,
-    },
-    Count {
-        run: "mavping_duplicate_total",
-        probe: "mavping_probe_duplicate",
-        help: "Second and later replies to the same request.",
-        value: |s| s.counts.duplicate,
-    },
+    Figure::counter(
+        "mavping_sent_total",
+        "Requests in the responder's window whose fate is decided (received + lost).",
+        ("mavping_probe_sent", |s| s.counts.sent),
+    ),
+    Figure::counter(
+        "mavping_received_total",
+        "Replies received within the timeout.",
+        ("mavping_probe_received", |s| s.counts.received),
+    ),
+    Figure::counter(
+        "mavping_lost_total",
+        "Requests not answered within the timeout.",
+        ("mavping_probe_lost", |s| s.counts.lost),
+    ),
+    Figure::counter(
+        "mavping_late_total",
+        "First replies after the timeout (each also counted lost).",
+        ("mavping_probe_late", |s| s.counts.late),
+    ),
+    Figure::counter(
+        "mavping_duplicate_total",
+        "Second and later replies to the same request.",
+        ("mavping_probe_duplicate", |s| s.counts.duplicate),
+    ),
 ];
 
 /// Only `/probe` has it: a run's loss ratio is the counters' arithmetic.
@@ -246,11 +227,13 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
             .iter()
             .flat_map(|m| m.responders.iter().map(move |(id, s)| (m.labels(*id), s)))
     };
-    for count in &COUNTS {
-        out.family(
-            &count.family(scope),
-            series().map(|(l, s)| (l, (count.value)(s))),
-        );
+    for Figure { family, value } in &COUNTS {
+        let (probe, count) = value;
+        let family = match scope {
+            Scope::Run => *family,
+            Scope::Probe => Family::gauge(probe, family.help),
+        };
+        out.family(&family, series().map(|(l, s)| (l, count(s))));
     }
     if scope == Scope::Probe {
         out.family(
