@@ -123,10 +123,8 @@ fn loss_chart(entries: &Sweeps<'_>, area: &Area<'_>, (from, to): (f64, f64)) -> 
             .iter()
             .map(|s| (s.offered_hz, s.loss_ratio * 100.0))
             .collect();
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            e.look.color.stroke_width(2),
-        ))?;
+        let solid = e.look.color.stroke_width(2);
+        chart.draw_series(LineSeries::new(line.iter().copied(), solid))?;
         for &p in &line {
             chart.plotting_area().draw(&e.look.marker(p, 4))?;
         }

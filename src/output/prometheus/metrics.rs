@@ -71,8 +71,7 @@ impl Metrics {
 
     /// A link opened (`true`) or broke (`false`).
     pub(crate) fn set_up(&mut self, up: bool) {
-        let state = self.state.get_or_insert_with(LinkState::default);
-        state.up = up;
+        self.state.get_or_insert_default().up = up;
     }
 
     /// Whether a continuous link is open now.
@@ -82,7 +81,7 @@ impl Metrics {
 
     /// A continuous link is being reopened after it broke.
     pub(crate) fn restarted(&mut self) {
-        self.state.get_or_insert_with(LinkState::default).restarts += 1;
+        self.state.get_or_insert_default().restarts += 1;
     }
 
     /// Whether the link sends requests (a passive one does not); `None`

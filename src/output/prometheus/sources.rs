@@ -77,15 +77,6 @@ impl Figures {
             pymav_loss: f(self.pymav_loss, o.pymav_loss),
         }
     }
-
-    /// The same figures with every pending loss settled: what a session
-    /// that has ended proved.
-    fn settled(self) -> Figures {
-        Figures {
-            lost_settled: self.seq.lost,
-            ..self
-        }
-    }
 }
 
 /// The latest table's figures that are not counters.
@@ -127,7 +118,12 @@ impl SourceSeries {
     /// A new session: this one's figures become history.
     fn carry(&mut self) {
         let last = self.latest.map_or(Figures::default(), |l| l.figures);
-        self.carried = self.carried.plus(self.shown.max(last.settled()));
+        // Every pending loss settled: what a session that has ended proved.
+        let settled = Figures {
+            lost_settled: last.seq.lost,
+            ..last
+        };
+        self.carried = self.carried.plus(self.shown.max(settled));
         self.shown = Figures::default();
         self.latest = None;
     }
