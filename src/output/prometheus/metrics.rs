@@ -214,10 +214,7 @@ impl Reporter for Metrics {
             if let (None, Some(c)) = (s.clock_offset_s, &r.clock) {
                 s.clock_offset_s = Some(c.offset_ns as f64 / 1e9);
             }
-            if let Some(rtt) = &r.rtt {
-                s.p50_s = Some(rtt.p50_us / 1e6);
-                s.p99_s = Some(rtt.p99_us / 1e6);
-            }
+            s.rtt = r.rtt.or(s.rtt);
             s.split = Split::AtEnd(r.direction);
             if let Some(p) = r.probe {
                 s.via_timesync = Some(u8::from(p == ProbeName::Timesync));

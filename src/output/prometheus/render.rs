@@ -80,12 +80,12 @@ const GAUGES: [SeriesFigure<Series>; 5] = [
     Figure::gauge(
         "mavping_rtt_p50_seconds",
         "Median round-trip time (HDR histogram; at the end of a run or probe).",
-        |s| s.p50_s,
+        |s| Some(s.rtt?.p50_us / 1e6),
     ),
     Figure::gauge(
         "mavping_rtt_p99_seconds",
         "99th percentile round-trip time (HDR histogram; at the end of a run or probe).",
-        |s| s.p99_s,
+        |s| Some(s.rtt?.p99_us / 1e6),
     ),
     Figure::gauge(
         "mavping_clock_offset_seconds",

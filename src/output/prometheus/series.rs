@@ -5,6 +5,7 @@
 use super::sources::SourceSeries;
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::probe::command::CommandEvent;
+use crate::engine::stats::RttSummary;
 use crate::engine::summary::Direction;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -83,8 +84,7 @@ pub(super) struct Series {
     pub(super) rtt_sum_s: f64,
     pub(super) last_rtt_s: Option<f64>,
     /// From the summary at the end (the HDR histogram's figures).
-    pub(super) p50_s: Option<f64>,
-    pub(super) p99_s: Option<f64>,
+    pub(super) rtt: Option<RttSummary>,
     pub(super) clock_offset_s: Option<f64>,
     /// `--probe auto`: whether it is measured by TIMESYNC (else PING).
     pub(super) via_timesync: Option<u8>,
