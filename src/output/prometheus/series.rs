@@ -59,18 +59,15 @@ impl Outcome {
     }
 
     pub(crate) fn count(self, counts: &mut Counts) {
-        match self {
-            Outcome::Received(_) => {
-                counts.sent += 1;
-                counts.received += 1;
-            }
-            Outcome::Lost => {
-                counts.sent += 1;
-                counts.lost += 1;
-            }
-            Outcome::Late => counts.late += 1,
-            Outcome::Duplicate => counts.duplicate += 1,
-        }
+        // A request received or lost is decided: `sent` counts it.
+        let (count, decided) = match self {
+            Outcome::Received(_) => (&mut counts.received, 1),
+            Outcome::Lost => (&mut counts.lost, 1),
+            Outcome::Late => (&mut counts.late, 0),
+            Outcome::Duplicate => (&mut counts.duplicate, 0),
+        };
+        *count += 1;
+        counts.sent += decided;
     }
 }
 
