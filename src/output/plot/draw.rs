@@ -246,11 +246,9 @@ fn losses(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResu
     // The rows' name, where the other charts have their y axis title.
     let (xs, ys) = chart.plotting_area().get_pixel_range();
     let (ox, oy) = area.get_base_pixel();
-    area.draw(&Text::new(
-        "lost",
-        (xs.start - ox - 12, ys.start.midpoint(ys.end) - oy),
-        axis_font().pos(Pos::new(HPos::Right, VPos::Center)),
-    ))?;
+    let at = (xs.start - ox - 12, ys.start.midpoint(ys.end) - oy);
+    let font = axis_font().pos(Pos::new(HPos::Right, VPos::Center));
+    area.draw(&Text::new("lost", at, font))?;
     Ok(())
 }
 
