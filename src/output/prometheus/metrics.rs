@@ -211,14 +211,12 @@ impl Reporter for Metrics {
         for r in &summary.responders {
             let s = self.responders.entry(r.id).or_default();
             // The live figure, when there is one, is the later.
-            if let (None, Some(c)) = (s.clock_offset_s, &r.clock) {
-                s.clock_offset_s = Some(c.offset_ns as f64 / 1e9);
-            }
+            let at_end = r.clock.as_ref().map(|c| c.offset_ns as f64 / 1e9);
+            s.clock_offset_s = s.clock_offset_s.or(at_end);
             s.rtt = r.rtt.or(s.rtt);
             s.split = Split::AtEnd(r.direction);
-            if let Some(p) = r.probe {
-                s.via_timesync = Some(u8::from(p == ProbeName::Timesync));
-            }
+            let timesync = r.probe.map(|p| u8::from(p == ProbeName::Timesync));
+            s.via_timesync = timesync.or(s.via_timesync);
         }
         Ok(())
     }
