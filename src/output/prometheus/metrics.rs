@@ -6,7 +6,7 @@ use std::io;
 
 use super::radio_series::RadioSeries;
 use super::series::{Outcome, Series, Split};
-use super::sources;
+use super::sources::{self, SourceSeries};
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::link_node::{LinkNodeReport, LinkNodes};
 use crate::engine::matcher::MatchEvent;
@@ -127,7 +127,7 @@ impl Reporter for Metrics {
         self.set_up(true);
         // A continuous link's new session: its sequences start afresh,
         // its counters go on.
-        self.sources.carry();
+        self.sources.values_mut().for_each(SourceSeries::carry);
         self.earlier_requests += std::mem::take(&mut self.session_requests);
         for s in self.responders.values_mut() {
             s.split = Split::Live;
@@ -195,7 +195,7 @@ impl Reporter for Metrics {
 
     /// The table of sources, as told while the session goes on.
     fn sources(&mut self, _: Nanos, table: &TableSummary) -> io::Result<()> {
-        self.sources.update(table, false);
+        sources::update(&mut self.sources, table, false);
         Ok(())
     }
 
@@ -223,7 +223,7 @@ impl Reporter for Metrics {
 
     /// The table of sources as the session's summary has it.
     fn passive_summary(&mut self, summary: &PassiveSummary, _: &Verdict) -> io::Result<()> {
-        self.sources.update(&summary.table, true);
+        sources::update(&mut self.sources, &summary.table, true);
         Ok(())
     }
 

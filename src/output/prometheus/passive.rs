@@ -143,7 +143,7 @@ pub(super) fn write_directions(out: &mut Exposition, links: &[&Metrics]) {
     let splits = || {
         links.iter().flat_map(|m| {
             m.responders.iter().filter_map(move |(id, s)| {
-                let d = s.direction(m.sources.get(*id))?;
+                let d = s.direction(m.sources.get(id))?;
                 Some((m.labels(*id), d))
             })
         })
