@@ -43,17 +43,6 @@ impl Track {
             summary: None,
         }
     }
-
-    fn reply(&mut self, sent_at: Nanos, rtt: Nanos) {
-        let s = self.spans.at(sent_at as f64);
-        s.rtt_ns.0 += rtt as f64;
-        s.rtt_ns.1 += 1;
-        self.bins[bin(rtt)] += 1;
-    }
-
-    fn lost(&mut self, sent_at: Nanos) {
-        self.spans.at(sent_at as f64).lost += 1;
-    }
 }
 
 pub(super) fn bin(rtt: Nanos) -> usize {
@@ -90,8 +79,13 @@ impl PlotData {
             .entry((link, responder))
             .or_insert_with(Track::new);
         match *e {
-            MatchEvent::Reply { sent_at, rtt, .. } => track.reply(sent_at, rtt),
-            MatchEvent::Lost { sent_at, .. } => track.lost(sent_at),
+            MatchEvent::Reply { sent_at, rtt, .. } => {
+                let span = track.spans.at(sent_at as f64);
+                span.rtt_ns.0 += rtt as f64;
+                span.rtt_ns.1 += 1;
+                track.bins[bin(rtt)] += 1;
+            }
+            MatchEvent::Lost { sent_at, .. } => track.spans.at(sent_at as f64).lost += 1,
             _ => {}
         }
     }

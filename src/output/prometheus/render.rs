@@ -57,10 +57,11 @@ const COUNTS: [Count; 5] = [
 ];
 
 /// Only `/probe` has it: a run's loss ratio is the counters' arithmetic.
-const PROBE_LOSS_RATIO: Family = Family::gauge(
+const PROBE_LOSS_RATIO: [SeriesFigure<Series>; 1] = [Figure::gauge(
     "mavping_probe_loss_ratio",
     "Lost over sent in this probe (0 to 1).",
-);
+    Series::loss_ratio,
+)];
 
 /// The RTT histogram, under a run's name or a probe's.
 fn rtt_histogram(scope: Scope) -> Family {
@@ -236,10 +237,7 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
         out.family(&family, series().map(|(l, s)| (l, count(s))));
     }
     if scope == Scope::Probe {
-        out.family(
-            &PROBE_LOSS_RATIO,
-            series().filter_map(|(l, s)| Some((l, s.loss_ratio()?))),
-        );
+        out.figures(&PROBE_LOSS_RATIO, series);
     }
     let histogram = rtt_histogram(scope);
     if series().next().is_some() {
