@@ -130,12 +130,9 @@ const DIRECTION_CONSISTENT: Family = Family::gauge(
     "1 when the split holds; 0 when the downlink alone loses more than the round trip by over two standard errors: the responder's sequence does not number just what it sends us on this link (a router re-sequencing, or merged links), so no up figure is shown.",
 );
 
-/// The uplink's figures, only where the split holds.
-fn uplink(d: &Direction) -> Option<(f64, Option<f64>)> {
-    d.consistent
-        .then_some(d.uplink_loss)
-        .flatten()
-        .map(|up| (up, d.uplink_stderr))
+/// The uplink's loss, only where the split holds.
+fn uplink(d: &Direction) -> Option<f64> {
+    d.uplink_loss.filter(|_| d.consistent)
 }
 
 /// Every echo responder's loss by direction.
@@ -152,7 +149,7 @@ pub(super) fn write_directions(out: &mut Exposition, links: &[&Metrics]) {
     out.family(
         &DIRECTION_LOSS,
         splits().flat_map(|(l, d)| {
-            let up = uplink(&d).map(|(up, _)| (with(&l, "up"), up));
+            let up = uplink(&d).map(|up| (with(&l, "up"), up));
             [
                 Some((with(&l, "round_trip"), d.round_trip_loss)),
                 Some((with(&l, "down"), d.downlink_loss)),
@@ -164,7 +161,7 @@ pub(super) fn write_directions(out: &mut Exposition, links: &[&Metrics]) {
     );
     out.family(
         &DIRECTION_STDERR,
-        splits().filter_map(|(l, d)| Some((with(&l, "up"), uplink(&d)?.1?))),
+        splits().filter_map(|(l, d)| Some((with(&l, "up"), uplink(&d).and(d.uplink_stderr)?))),
     );
     out.family(
         &DIRECTION_CONSISTENT,

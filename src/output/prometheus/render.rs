@@ -430,13 +430,11 @@ pub(crate) fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
     }
     let one = |v: f64| [(String::new(), v)];
     out.family(&PROBE_SUCCESS, one(f64::from(u8::from(result.success))));
-    out.family(
-        &PROBE_FAILURE,
-        result
-            .reasons
-            .iter()
-            .map(|r| (format!("reason=\"{r}\""), 1)),
-    );
+    let reasons = result
+        .reasons
+        .iter()
+        .map(|r| (format!("reason=\"{r}\""), 1));
+    out.family(&PROBE_FAILURE, reasons);
     out.family(&PROBE_DURATION, one(result.duration_s));
     out.family(&PROBE_REQUESTS, one(result.requests as f64));
     out.family(&PROBE_IN_FLIGHT, one(result.in_flight as f64));

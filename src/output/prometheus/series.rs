@@ -102,19 +102,15 @@ pub(super) enum Split {
 }
 
 impl Series {
-    fn observe(&mut self, rtt: Nanos) {
-        let s = rtt as f64 / 1e9;
-        // The first bucket whose bound is not below it, else +Inf.
-        self.buckets[BUCKETS_S.partition_point(|&b| b < s)] += 1;
-        self.rtt_sum_s += s;
-        self.last_rtt_s = Some(s);
-    }
-
     pub(super) fn record(&mut self, outcome: Outcome) {
         outcome.count(&mut self.counts);
         self.answering |= outcome != Outcome::Lost;
         if let Outcome::Received(rtt) = outcome {
-            self.observe(rtt);
+            let s = rtt as f64 / 1e9;
+            // The first bucket whose bound is not below it, else +Inf.
+            self.buckets[BUCKETS_S.partition_point(|&b| b < s)] += 1;
+            self.rtt_sum_s += s;
+            self.last_rtt_s = Some(s);
         }
     }
 
