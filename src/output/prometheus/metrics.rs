@@ -100,7 +100,11 @@ impl Metrics {
         self.responders.values().filter(|s| s.answering).count()
     }
 
-    fn record(&mut self, id: SysComp, outcome: Outcome) {
+    /// What an event told of a responder's requests, if anything.
+    fn record(&mut self, told: Option<(SysComp, Outcome)>) {
+        let Some((id, outcome)) = told else {
+            return;
+        };
         let auto = self.probe == Some(ProbeName::Auto);
         let s = self.responders.entry(id).or_default();
         s.record(outcome);
@@ -137,16 +141,12 @@ impl Reporter for Metrics {
     }
 
     fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
-        if let Some((id, outcome)) = Outcome::of_match(e) {
-            self.record(id, outcome);
-        }
+        self.record(Outcome::of_match(e));
         Ok(())
     }
 
     fn command(&mut self, e: &CommandEvent) -> io::Result<()> {
-        if let Some((id, outcome)) = Outcome::of_command(e) {
-            self.record(id, outcome);
-        }
+        self.record(Outcome::of_command(e));
         Ok(())
     }
 
