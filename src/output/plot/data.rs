@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use super::flight::{self, FlightTrack};
 use super::frame::{self, PlotError};
 use super::passive::{self, SourceTrack};
-use super::spans::{Bins, Merge};
+use super::spans::Bins;
 use super::{draw, sweep};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::passive::TableSummary;
@@ -26,33 +26,9 @@ pub(super) const BINS_PER_DECADE: usize = 60;
 const LOWEST_US: f64 = 10.0;
 const BINS: usize = 7 * BINS_PER_DECADE;
 
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct Span {
-    pub(super) replies: u64,
-    pub(super) rtt_sum: Nanos,
-    pub(super) lost: u64,
-}
-
-impl Merge for Span {
-    fn merge(self, other: Span) -> Span {
-        Span {
-            replies: self.replies + other.replies,
-            rtt_sum: self.rtt_sum + other.rtt_sum,
-            lost: self.lost + other.lost,
-        }
-    }
-}
-
-impl Span {
-    /// The mean RTT in it, ms; `None` without replies.
-    pub(super) fn mean_ms(&self) -> Option<f64> {
-        (self.replies > 0).then(|| self.rtt_sum as f64 / self.replies as f64 / 1e6)
-    }
-}
-
 #[derive(Debug, Clone)]
 pub(super) struct Track {
-    pub(super) spans: Bins<Span>,
+    pub(super) spans: Bins,
     pub(super) bins: [u64; BINS],
     /// The run's own figures for it, for the legend: known once the
     /// link's summary came.
@@ -66,17 +42,6 @@ impl Track {
             bins: [0; BINS],
             summary: None,
         }
-    }
-
-    fn reply(&mut self, sent_at: Nanos, rtt: Nanos) {
-        let s = self.spans.at(sent_at as f64);
-        s.replies += 1;
-        s.rtt_sum += rtt;
-        self.bins[bin(rtt)] += 1;
-    }
-
-    fn lost(&mut self, sent_at: Nanos) {
-        self.spans.at(sent_at as f64).lost += 1;
     }
 }
 
@@ -114,8 +79,13 @@ impl PlotData {
             .entry((link, responder))
             .or_insert_with(Track::new);
         match *e {
-            MatchEvent::Reply { sent_at, rtt, .. } => track.reply(sent_at, rtt),
-            MatchEvent::Lost { sent_at, .. } => track.lost(sent_at),
+            MatchEvent::Reply { sent_at, rtt, .. } => {
+                let span = track.spans.at(sent_at as f64);
+                span.rtt_ns.0 += rtt as f64;
+                span.rtt_ns.1 += 1;
+                track.bins[bin(rtt)] += 1;
+            }
+            MatchEvent::Lost { sent_at, .. } => track.spans.at(sent_at as f64).lost += 1,
             _ => {}
         }
     }
@@ -238,8 +208,11 @@ mod tests {
         }
         let t = &d.tracks[&(0, r)];
         assert!(t.spans.bins.len() <= SPANS);
-        assert_eq!(t.spans.bins.iter().map(|s| s.replies).sum::<u64>(), 324_000);
-        assert_eq!(t.spans.bins.iter().map(|s| s.lost).sum::<u64>(), 36_000);
+        assert_eq!(
+            t.spans.bins.iter().map(|s| s.rtt_ns.1).sum::<u64>(),
+            324_000
+        );
+        assert_eq!(t.spans.bins.iter().map(|s| s.lost).sum::<i64>(), 36_000);
         assert_eq!(t.bins.iter().sum::<u64>(), 324_000);
         assert_eq!(bin(20_000_000), bin(20_400_000));
         assert_ne!(bin(20_000_000), bin(21_000_000));

@@ -10,8 +10,9 @@ use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::data::{bin, bin_low_ms, Span, Track, BINS_PER_DECADE};
+use super::data::{bin, bin_low_ms, Track, BINS_PER_DECADE};
 use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT, MARGIN};
+use super::spans::Sums;
 use super::style::Look;
 use crate::engine::Nanos;
 
@@ -102,7 +103,7 @@ pub(super) fn svg(title: &str, entries: &[Entry<'_, Track>]) -> Result<String, P
     })
 }
 
-fn axis_font() -> TextStyle<'static> {
+pub(super) fn axis_font() -> TextStyle<'static> {
     (FONT, 15).into()
 }
 
@@ -112,7 +113,7 @@ pub(super) fn caption_font() -> TextStyle<'static> {
 
 /// Each responder's mean RTT per span, one line each.
 fn over_time(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResult {
-    let lines = lines(entries, |t| t.spans.points(Span::mean_ms));
+    let lines = lines(entries, |t| t.spans.points(Sums::mean_rtt_ms));
     let rtt_max = lines.iter().flatten().map(|p| p.1).reduce(f64::max);
     let rtt_max = rtt_max.unwrap_or(1.0);
     let (x, y) = (0f64..t_max, 0f64..rtt_max * 1.08);
@@ -127,7 +128,7 @@ fn over_time(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawR
 /// A chart on `area` with `caption`, its grid and axes drawn, the axes
 /// named `x_desc` and `y_desc`. Without an `x_desc` it has no x labels
 /// and sits on the chart below it, whose time axis it shares.
-pub(super) fn chart<'a, X: AsRangedCoord, Y: AsRangedCoord>(
+pub(super) fn chart<'a, X, Y>(
     area: &Area<'a>,
     caption: &str,
     (x_desc, y_desc): (Option<&str>, &str),
@@ -135,8 +136,8 @@ pub(super) fn chart<'a, X: AsRangedCoord, Y: AsRangedCoord>(
     y: Y,
 ) -> Result<Chart<'a, X::CoordDescType, Y::CoordDescType>, Box<dyn std::error::Error>>
 where
-    X::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
-    Y::CoordDescType: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    X: AsRangedCoord<CoordDescType: Axis>,
+    Y: AsRangedCoord<CoordDescType: Axis>,
 {
     let mut builder = ChartBuilder::on(area);
     builder
@@ -161,6 +162,11 @@ pub(super) type Points = Vec<(f64, f64)>;
 
 pub(super) type Chart<'a, X, Y> = ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>;
 
+/// An axis of every chart: of `f64`s, with labels.
+pub(super) trait Axis: Ranged<ValueType = f64> + ValueFormatter<f64> {}
+
+impl<T: Ranged<ValueType = f64> + ValueFormatter<f64>> Axis for T {}
+
 /// Each entry's line, by `points`.
 pub(super) fn lines<T>(entries: &[Entry<'_, T>], points: impl Fn(&T) -> Points) -> Vec<Points> {
     entries.iter().map(|e| points(e.track)).collect()
@@ -176,16 +182,12 @@ pub(super) enum Marks {
 }
 
 /// `points` as a line in `look`'s colour, with its markers at `marks`.
-pub(super) fn line<X, Y>(
+pub(super) fn line<X: Axis, Y: Axis>(
     chart: &mut Chart<'_, X, Y>,
     look: &Look,
     points: &[(f64, f64)],
     marks: Marks,
-) -> DrawResult
-where
-    X: Ranged<ValueType = f64>,
-    Y: Ranged<ValueType = f64>,
-{
+) -> DrawResult {
     let style = look.color.mix(0.85).stroke_width(2);
     chart.draw_series(LineSeries::new(points.iter().copied(), style))?;
     let marked: Vec<(f64, f64)> = match marks {
@@ -204,13 +206,9 @@ where
 
 /// The grid and axes every chart shares: its fonts, round tick labels, few
 /// and faint minor lines.
-pub(super) fn mesh<'a, 'b, X, Y>(
-    chart: &'b mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, Y>>,
-) -> MeshStyle<'a, 'b, X, Y, SVGBackend<'a>>
-where
-    X: Ranged<ValueType = f64> + ValueFormatter<f64>,
-    Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
-{
+fn mesh<'a, 'b, X: Axis, Y: Axis>(
+    chart: &'b mut Chart<'a, X, Y>,
+) -> MeshStyle<'a, 'b, X, Y, SVGBackend<'a>> {
     let mut mesh = chart.configure_mesh();
     mesh.label_style(axis_font())
         .x_label_formatter(&tick)
@@ -248,11 +246,9 @@ fn losses(entries: &[Entry<'_, Track>], area: &Area<'_>, t_max: f64) -> DrawResu
     // The rows' name, where the other charts have their y axis title.
     let (xs, ys) = chart.plotting_area().get_pixel_range();
     let (ox, oy) = area.get_base_pixel();
-    area.draw(&Text::new(
-        "lost",
-        (xs.start - ox - 12, ys.start.midpoint(ys.end) - oy),
-        axis_font().pos(Pos::new(HPos::Right, VPos::Center)),
-    ))?;
+    let at = (xs.start - ox - 12, ys.start.midpoint(ys.end) - oy);
+    let font = axis_font().pos(Pos::new(HPos::Right, VPos::Center));
+    area.draw(&Text::new("lost", at, font))?;
     Ok(())
 }
 

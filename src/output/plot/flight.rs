@@ -29,8 +29,8 @@ const NUMBER_W: i32 = 110;
 /// The flight of one log, window by window.
 #[derive(Debug, Clone)]
 pub(super) struct FlightTrack {
-    time: Bins<Sums>,
-    distance: Bins<Sums>,
+    time: Bins,
+    distance: Bins,
     summary: Option<FlightSummary>,
 }
 
@@ -70,25 +70,22 @@ impl FlightTrack {
 /// and the lowest and highest of its spans.
 pub(super) fn svg(title: &str, track: &FlightTrack) -> Result<String, PlotError> {
     let total = merged(&track.time.bins);
-    let row =
-        |n: usize, label: &'static str, whole: Option<f64>, f: &dyn Fn(&Sums) -> Option<f64>| {
-            let spans: Vec<f64> = track.time.bins.iter().filter_map(f).collect();
-            let low = spans.iter().copied().reduce(f64::min);
-            let high = spans.iter().copied().reduce(f64::max);
-            let decimals = if n == 0 { 2 } else { 0 };
-            let cell = |v: Option<f64>| v.map(|v| format!("{v:.decimals$}"));
-            LegendRow {
-                look: Look::nth(n),
-                label,
-                cells: vec![cell(whole), cell(low), cell(high)],
-            }
-        };
+    let row = |n: usize, label: &'static str, f: &dyn Fn(&Sums) -> Option<f64>| {
+        let spans: Vec<f64> = track.time.bins.iter().filter_map(f).collect();
+        let low = spans.iter().copied().reduce(f64::min);
+        let high = spans.iter().copied().reduce(f64::max);
+        let decimals = if n == 0 { 2 } else { 0 };
+        let cell = |v: Option<f64>| v.map(|v| format!("{v:.decimals$}"));
+        LegendRow {
+            look: Look::nth(n),
+            label,
+            cells: vec![cell(f(&total)), cell(low), cell(high)],
+        }
+    };
     let rows = vec![
-        row(0, "loss (%)", total.loss_pct(), &Sums::loss_pct),
-        row(1, "rssi", Sums::mean(total.rssi), &|s| Sums::mean(s.rssi)),
-        row(2, "remote rssi", Sums::mean(total.remrssi), &|s| {
-            Sums::mean(s.remrssi)
-        }),
+        row(0, "loss (%)", &Sums::loss_pct),
+        row(1, "rssi", &|s| Sums::mean(s.rssi)),
+        row(2, "remote rssi", &|s| Sums::mean(s.remrssi)),
     ];
     let legend = Legend {
         heads: ("", &["whole log", "lowest", "highest"]),
@@ -219,7 +216,7 @@ mod tests {
         }
         assert!(t.distance.bins.len() <= DISTANCE_BINS);
         assert!(t.time.bins.len() <= SPANS);
-        let sum = |b: &Bins<Sums>| b.bins.iter().map(|s| s.received).sum::<u64>();
+        let sum = |b: &Bins| b.bins.iter().map(|s| s.received).sum::<u64>();
         assert_eq!(sum(&t.distance), 500 * n);
         assert_eq!(sum(&t.time), 500 * n);
         // 25 m doubled to 400 m: 10 km in 26 bins; the losses only in the

@@ -151,34 +151,29 @@ fn legend_table(area: &Area<'_>, numbers_x: i32, legend: &Legend<'_>) -> DrawRes
     let bold = || legend_font().style(FontStyle::Bold);
     let row_y = |r: usize| ROW_H as i32 * r as i32 + ROW_H as i32 / 2 + 4;
     let column = |j: usize| numbers_x + legend.number_w * (j as i32 + 1);
-    area.draw(&Text::new(first, (70, row_y(0)), style(bold(), HPos::Left)))?;
+    let text = |s: &str, at, style| area.draw(&Text::new(s, at, style));
+    let path = |ends: [(i32, i32); 2], style| area.draw(&PathElement::new(ends, style));
+    text(first, (70, row_y(0)), style(bold(), HPos::Left))?;
     for (j, name) in columns.iter().enumerate() {
-        area.draw(&Text::new(
-            *name,
-            (column(j), row_y(0)),
-            style(bold(), HPos::Right),
-        ))?;
+        text(name, (column(j), row_y(0)), style(bold(), HPos::Right))?;
     }
     let rule = row_y(0) + ROW_H as i32 / 2;
-    area.draw(&PathElement::new(
+    path(
         [(MARGIN as i32, rule), (column(columns.len() - 1), rule)],
         BLACK.stroke_width(1),
-    ))?;
+    )?;
     if legend.rows.is_empty() {
-        area.draw(&Text::new(legend.empty, (70, row_y(1)), left))?;
+        text(legend.empty, (70, row_y(1)), left)?;
         return Ok(());
     }
     for (r, row) in legend.rows.iter().enumerate() {
         let y = row_y(r + 1);
-        area.draw(&PathElement::new(
-            [(18, y), (58, y)],
-            row.look.color.stroke_width(2),
-        ))?;
+        path([(18, y), (58, y)], row.look.color.stroke_width(2))?;
         area.draw(&row.look.marker((38, y), 5))?;
-        area.draw(&Text::new(row.label, (70, y), left.clone()))?;
+        text(row.label, (70, y), left.clone())?;
         for (j, cell) in row.cells.iter().enumerate() {
-            let text = cell.clone().unwrap_or_else(|| "-".into());
-            area.draw(&Text::new(text, (column(j), y), right.clone()))?;
+            let cell = cell.as_deref().unwrap_or("-");
+            text(cell, (column(j), y), right.clone())?;
         }
     }
     Ok(())

@@ -25,7 +25,7 @@ const NUMBER_W: i32 = 100;
 /// One source of a passive run, span by span.
 #[derive(Debug, Clone)]
 pub(super) struct SourceTrack {
-    spans: Bins<Sums>,
+    spans: Bins,
     /// The SiK radio's own RADIO_STATUS source.
     pub(super) radio: bool,
     /// The run's own figures for it, for the legend: known once the

@@ -7,28 +7,23 @@ use crate::engine::probe::passive::flight::FlightWindow;
 use crate::engine::Nanos;
 use crate::output::windows::Window;
 
-/// What a bin holds: figures that add up.
-pub(super) trait Merge: Copy + Default {
-    fn merge(self, other: Self) -> Self;
-}
-
 /// `bins` summed into one.
-pub(super) fn merged<T: Merge>(bins: &[T]) -> T {
-    bins.iter().fold(T::default(), |a, &b| a.merge(b))
+pub(super) fn merged(bins: &[Sums]) -> Sums {
+    bins.iter().fold(Sums::default(), |a, &b| a.merge(b))
 }
 
 /// At most `max` bins, the first `width` wide, drawn in `unit`s (a time
 /// in ns drawn in seconds: 1e9). A time stays exact as an `f64` for 104
 /// days of ns.
 #[derive(Debug, Clone)]
-pub(super) struct Bins<T> {
+pub(super) struct Bins {
     pub(super) width: f64,
     unit: f64,
     max: usize,
-    pub(super) bins: Vec<T>,
+    pub(super) bins: Vec<Sums>,
 }
 
-impl<T: Merge> Bins<T> {
+impl Bins {
     pub(super) fn new(width: f64, unit: f64, max: usize) -> Self {
         Bins {
             width,
@@ -39,7 +34,7 @@ impl<T: Merge> Bins<T> {
     }
 
     /// The bin `x` falls in, the bins widened until it is one of them.
-    pub(super) fn at(&mut self, x: f64) -> &mut T {
+    pub(super) fn at(&mut self, x: f64) -> &mut Sums {
         let index = |width: f64| (x / width).max(0.0) as usize;
         while index(self.width) >= self.max {
             self.bins = self.bins.chunks(2).map(merged).collect();
@@ -47,19 +42,19 @@ impl<T: Merge> Bins<T> {
         }
         let i = index(self.width);
         if self.bins.len() <= i {
-            self.bins.resize(i + 1, T::default());
+            self.bins.resize(i + 1, Sums::default());
         }
         &mut self.bins[i]
     }
 
     /// Each bin's middle, in the drawn unit, and what it holds.
-    pub(super) fn each(&self) -> impl Iterator<Item = (f64, &T)> {
+    pub(super) fn each(&self) -> impl Iterator<Item = (f64, &Sums)> {
         let each = self.bins.iter().enumerate();
         each.map(|(i, s)| ((i as f64 + 0.5) * self.width / self.unit, s))
     }
 
     /// Points of `f` over the bins that have one, at their middle.
-    pub(super) fn points(&self, f: impl Fn(&T) -> Option<f64>) -> Vec<(f64, f64)> {
+    pub(super) fn points(&self, f: impl Fn(&Sums) -> Option<f64>) -> Vec<(f64, f64)> {
         self.each().filter_map(|(x, s)| Some((x, f(s)?))).collect()
     }
 
@@ -69,8 +64,9 @@ impl<T: Merge> Bins<T> {
     }
 }
 
-/// A sequence's windows summed (a passive source's, or a log's link), and
-/// the radio's figures in them.
+/// What a span or bin holds, summed: a sequence's windows (a passive
+/// source's, or a log's link) and the radio's figures in them, or a
+/// responder's replies and losses.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(super) struct Sums {
     /// Frames, duplicates included.
@@ -85,9 +81,13 @@ pub(super) struct Sums {
     /// how many.
     pub(super) rssi: (f64, u64),
     pub(super) remrssi: (f64, u64),
+    /// A responder's RTT in ns summed over its replies (exact as an `f64`
+    /// for 104 days of it), and how many.
+    pub(super) rtt_ns: (f64, u64),
 }
 
-impl Merge for Sums {
+impl Sums {
+    /// Both together: what two neighbouring bins hold once merged.
     fn merge(mut self, o: Sums) -> Sums {
         self.received += o.received;
         self.duplicate += o.duplicate;
@@ -95,11 +95,10 @@ impl Merge for Sums {
         self.covered_ns += o.covered_ns;
         self.rssi = (self.rssi.0 + o.rssi.0, self.rssi.1 + o.rssi.1);
         self.remrssi = (self.remrssi.0 + o.remrssi.0, self.remrssi.1 + o.remrssi.1);
+        self.rtt_ns = (self.rtt_ns.0 + o.rtt_ns.0, self.rtt_ns.1 + o.rtt_ns.1);
         self
     }
-}
 
-impl Sums {
     /// A passive source's window.
     pub(super) fn window(&mut self, w: &Window) {
         self.received += w.received;
@@ -137,5 +136,10 @@ impl Sums {
 
     pub(super) fn mean((sum, n): (f64, u64)) -> Option<f64> {
         (n > 0).then(|| sum / n as f64)
+    }
+
+    /// The mean RTT of its replies, ms; `None` without replies.
+    pub(super) fn mean_rtt_ms(&self) -> Option<f64> {
+        Sums::mean(self.rtt_ns).map(|ns| ns / 1e6)
     }
 }

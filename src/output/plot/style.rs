@@ -18,43 +18,23 @@ const PALETTE: [RGBColor; 7] = [
     RGBColor(0x00, 0x00, 0x00), // black
 ];
 
-/// Marker shapes; 8 of them against 7 colours, so the first 56 responders
-/// each get a pair of their own.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum Shape {
-    Cross,
-    TriangleUp,
-    Circle,
-    Square,
-    Diamond,
-    Plus,
-    TriangleDown,
-    Ring,
-}
-
-const SHAPES: [Shape; 8] = [
-    Shape::Cross,
-    Shape::TriangleUp,
-    Shape::Circle,
-    Shape::Square,
-    Shape::Diamond,
-    Shape::Plus,
-    Shape::TriangleDown,
-    Shape::Ring,
-];
+/// Marker shapes, drawn by [`Look::marker`]; 8 of them against 7
+/// colours, so the first 56 responders each get a pair of their own.
+const SHAPES: usize = 8;
 
 /// The `n`-th responder's colour and marker.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Look {
     pub(crate) color: RGBColor,
-    pub(crate) shape: Shape,
+    /// Which of the [`SHAPES`], in [`Look::marker`]'s order.
+    pub(crate) shape: usize,
 }
 
 impl Look {
     pub(super) fn nth(n: usize) -> Look {
         Look {
             color: PALETTE[n % PALETTE.len()],
-            shape: SHAPES[n % SHAPES.len()],
+            shape: n % SHAPES,
         }
     }
 
@@ -68,22 +48,22 @@ impl Look {
         let fill = ShapeStyle::from(self.color).filled();
         let e = EmptyElement::at(at);
         let d = r + 1;
+        // A cross, a triangle, a disc, a square, a diamond, a plus, a
+        // triangle pointing down, a ring.
         match self.shape {
-            Shape::Cross => (e + Cross::new((0, 0), r, line)).into_dyn(),
-            Shape::TriangleUp => (e + TriangleMarker::new((0, 0), d, fill)).into_dyn(),
-            Shape::Circle => (e + Circle::new((0, 0), r, fill)).into_dyn(),
-            Shape::Square => (e + Rectangle::new([(-r, -r), (r, r)], fill)).into_dyn(),
-            Shape::Diamond => {
-                (e + Polygon::new(vec![(0, -d), (d, 0), (0, d), (-d, 0)], fill)).into_dyn()
-            }
-            Shape::Plus => (e
+            0 => (e + Cross::new((0, 0), r, line)).into_dyn(),
+            1 => (e + TriangleMarker::new((0, 0), d, fill)).into_dyn(),
+            2 => (e + Circle::new((0, 0), r, fill)).into_dyn(),
+            3 => (e + Rectangle::new([(-r, -r), (r, r)], fill)).into_dyn(),
+            4 => (e + Polygon::new(vec![(0, -d), (d, 0), (0, d), (-d, 0)], fill)).into_dyn(),
+            5 => (e
                 + PathElement::new(vec![(-r, 0), (r, 0)], line)
                 + PathElement::new(vec![(0, -r), (0, r)], line))
             .into_dyn(),
-            Shape::TriangleDown => {
+            6 => {
                 (e + Polygon::new(vec![(-d, -d * 2 / 3), (d, -d * 2 / 3), (0, d)], fill)).into_dyn()
             }
-            Shape::Ring => (e + Circle::new((0, 0), r, line)).into_dyn(),
+            _ => (e + Circle::new((0, 0), r, line)).into_dyn(),
         }
     }
 }
@@ -94,7 +74,7 @@ mod tests {
 
     #[test]
     fn the_first_responders_each_get_their_own_colour_and_shape() {
-        let looks: Vec<Look> = (0..PALETTE.len() * SHAPES.len()).map(Look::nth).collect();
+        let looks: Vec<Look> = (0..PALETTE.len() * SHAPES).map(Look::nth).collect();
         for (i, a) in looks.iter().enumerate() {
             for b in &looks[i + 1..] {
                 assert_ne!(a, b);

@@ -6,8 +6,8 @@
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use super::draw::{chart, log_axis};
-use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError, FONT};
+use super::draw::{axis_font, chart, log_axis};
+use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError};
 use crate::engine::sweep::step::{StepFigures, StepRtt};
 use crate::engine::sweep::verdict::SweepSummary;
 
@@ -99,8 +99,7 @@ fn rtt_chart(entries: &Sweeps<'_>, area: &Area<'_>, (from, to): (f64, f64)) -> D
             chart.plotting_area().draw(&Text::new(
                 format!("knee {:.0}/s", k.rate_hz),
                 (k.rate_hz, high / 1.1),
-                (FONT, 15)
-                    .into_font()
+                axis_font()
                     .color(&e.look.color)
                     .pos(Pos::new(HPos::Right, VPos::Top)),
             ))?;
@@ -124,10 +123,8 @@ fn loss_chart(entries: &Sweeps<'_>, area: &Area<'_>, (from, to): (f64, f64)) -> 
             .iter()
             .map(|s| (s.offered_hz, s.loss_ratio * 100.0))
             .collect();
-        chart.draw_series(LineSeries::new(
-            line.iter().copied(),
-            e.look.color.stroke_width(2),
-        ))?;
+        let solid = e.look.color.stroke_width(2);
+        chart.draw_series(LineSeries::new(line.iter().copied(), solid))?;
         for &p in &line {
             chart.plotting_area().draw(&e.look.marker(p, 4))?;
         }

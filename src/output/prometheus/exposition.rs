@@ -35,46 +35,29 @@ fn with_id(labels: String, id: SysComp) -> String {
     format!("{labels},sysid=\"{}\",compid=\"{}\"", id.sysid, id.compid)
 }
 
-/// What a family's samples are, as its `TYPE` line says.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub(super) enum FamilyKind {
-    Gauge,
-    Counter,
-    Histogram,
-}
-
-impl FamilyKind {
-    fn name(self) -> &'static str {
-        match self {
-            FamilyKind::Gauge => "gauge",
-            FamilyKind::Counter => "counter",
-            FamilyKind::Histogram => "histogram",
-        }
-    }
-}
-
-/// A metric family: its name, its `HELP` text and its type.
+/// A metric family: its name, its `HELP` text and its type (the word
+/// its `TYPE` line says).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Family {
     pub(super) name: &'static str,
     pub(super) help: &'static str,
-    pub(super) kind: FamilyKind,
+    kind: &'static str,
 }
 
 impl Family {
     pub(super) const fn gauge(name: &'static str, help: &'static str) -> Self {
-        Family::of(FamilyKind::Gauge, name, help)
+        Family::of("gauge", name, help)
     }
 
     pub(super) const fn counter(name: &'static str, help: &'static str) -> Self {
-        Family::of(FamilyKind::Counter, name, help)
+        Family::of("counter", name, help)
     }
 
     pub(super) const fn histogram(name: &'static str, help: &'static str) -> Self {
-        Family::of(FamilyKind::Histogram, name, help)
+        Family::of("histogram", name, help)
     }
 
-    const fn of(kind: FamilyKind, name: &'static str, help: &'static str) -> Self {
+    const fn of(kind: &'static str, name: &'static str, help: &'static str) -> Self {
         Family { name, help, kind }
     }
 }
@@ -87,13 +70,17 @@ pub(super) struct Figure<V> {
 
 impl<V> Figure<V> {
     pub(super) const fn gauge(name: &'static str, help: &'static str, value: V) -> Self {
-        let family = Family::gauge(name, help);
-        Figure { family, value }
+        Figure {
+            family: Family::gauge(name, help),
+            value,
+        }
     }
 
     pub(super) const fn counter(name: &'static str, help: &'static str, value: V) -> Self {
-        let family = Family::counter(name, help);
-        Figure { family, value }
+        Figure {
+            family: Family::counter(name, help),
+            value,
+        }
     }
 }
 
@@ -109,7 +96,6 @@ pub(super) struct Exposition(pub(super) String);
 impl Exposition {
     pub(super) fn header(&mut self, family: &Family) {
         let Family { name, help, kind } = family;
-        let kind = kind.name();
         let _ = writeln!(self.0, "# HELP {name} {help}\n# TYPE {name} {kind}");
     }
 

@@ -67,16 +67,14 @@ const NODE: [SeriesFigure<LinkNodeSummary>; 10] = [
 /// Every link's nodes, each family once: the figures the engine's table
 /// of nodes sums up for a run's end, as they are now.
 pub(super) fn write_link_nodes(out: &mut Exposition, links: &[&Metrics]) {
-    let summaries: Vec<_> = links
+    let nodes: Vec<_> = links
         .iter()
-        .map(|m| (m, m.link_nodes.summaries()))
+        .flat_map(|m| {
+            let summaries = m.link_nodes.summaries().into_iter();
+            summaries.map(|n| (m.radio_labels(n.id), n))
+        })
         .collect();
-    let nodes = || {
-        summaries
-            .iter()
-            .flat_map(|(m, nodes)| nodes.iter().map(|n| (m.radio_labels(n.id), n)))
-    };
-    out.figures(&NODE, nodes);
+    out.figures(&NODE, || nodes.iter().map(|(l, n)| (l.clone(), n)));
 }
 
 #[cfg(test)]

@@ -6,7 +6,7 @@ use std::io;
 
 use super::radio_series::RadioSeries;
 use super::series::{Outcome, Series, Split};
-use super::sources;
+use super::sources::{self, SourceSeries};
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::link_node::{LinkNodeReport, LinkNodes};
 use crate::engine::matcher::MatchEvent;
@@ -37,21 +37,11 @@ pub(crate) struct Metrics {
     /// Open now, and (a continuous link of `mavping serve`) how often it
     /// was reopened after breaking; `None` before a session starts.
     pub(super) state: Option<LinkState>,
-    pub(super) requests: Requests,
-}
-
-/// Requests the link put on the wire, whoever answered them: in the
-/// sessions before (a continuous link reopened), and in this one so far.
-#[derive(Debug, Default, Clone, Copy)]
-pub(super) struct Requests {
-    earlier: u64,
-    pub(super) session: u64,
-}
-
-impl Requests {
-    pub(super) fn total(self) -> u64 {
-        self.earlier + self.session
-    }
+    /// Requests the link put on the wire, whoever answered them: in the
+    /// sessions before (a continuous link reopened)...
+    pub(super) earlier_requests: u64,
+    /// ...and in this one so far.
+    pub(super) session_requests: u64,
 }
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -81,8 +71,7 @@ impl Metrics {
 
     /// A link opened (`true`) or broke (`false`).
     pub(crate) fn set_up(&mut self, up: bool) {
-        let state = self.state.get_or_insert_with(LinkState::default);
-        state.up = up;
+        self.state.get_or_insert_default().up = up;
     }
 
     /// Whether a continuous link is open now.
@@ -92,7 +81,7 @@ impl Metrics {
 
     /// A continuous link is being reopened after it broke.
     pub(crate) fn restarted(&mut self) {
-        self.state.get_or_insert_with(LinkState::default).restarts += 1;
+        self.state.get_or_insert_default().restarts += 1;
     }
 
     /// Whether the link sends requests (a passive one does not); `None`
@@ -101,12 +90,21 @@ impl Metrics {
         self.probe.is_some_and(|p| p != ProbeName::Passive)
     }
 
+    /// Requests the link put on the wire, its earlier sessions' included.
+    pub(super) fn requests(&self) -> u64 {
+        self.earlier_requests + self.session_requests
+    }
+
     /// Responders that answered in the link's current session.
     pub(super) fn answering(&self) -> usize {
         self.responders.values().filter(|s| s.answering).count()
     }
 
-    fn record(&mut self, id: SysComp, outcome: Outcome) {
+    /// What an event told of a responder's requests, if anything.
+    fn record(&mut self, told: Option<(SysComp, Outcome)>) {
+        let Some((id, outcome)) = told else {
+            return;
+        };
         let auto = self.probe == Some(ProbeName::Auto);
         let s = self.responders.entry(id).or_default();
         s.record(outcome);
@@ -133,8 +131,8 @@ impl Reporter for Metrics {
         self.set_up(true);
         // A continuous link's new session: its sequences start afresh,
         // its counters go on.
-        self.sources.carry();
-        self.requests.earlier += std::mem::take(&mut self.requests.session);
+        self.sources.values_mut().for_each(SourceSeries::carry);
+        self.earlier_requests += std::mem::take(&mut self.session_requests);
         for s in self.responders.values_mut() {
             s.split = Split::Live;
             s.answering = false;
@@ -143,16 +141,12 @@ impl Reporter for Metrics {
     }
 
     fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
-        if let Some((id, outcome)) = Outcome::of_match(e) {
-            self.record(id, outcome);
-        }
+        self.record(Outcome::of_match(e));
         Ok(())
     }
 
     fn command(&mut self, e: &CommandEvent) -> io::Result<()> {
-        if let Some((id, outcome)) = Outcome::of_command(e) {
-            self.record(id, outcome);
-        }
+        self.record(Outcome::of_command(e));
         Ok(())
     }
 
@@ -201,45 +195,40 @@ impl Reporter for Metrics {
 
     /// The table of sources, as told while the session goes on.
     fn sources(&mut self, _: Nanos, table: &TableSummary) -> io::Result<()> {
-        self.sources.update(table, false);
+        sources::update(&mut self.sources, table, false);
         Ok(())
     }
 
     fn progress(&mut self, _: Nanos, requests: u64) -> io::Result<()> {
-        self.requests.session = requests;
+        self.session_requests = requests;
         Ok(())
     }
 
     /// The figures known only at the end (percentiles from the HDR
     /// histogram), so a last scrape or a `/probe` has them.
     fn echo_summary(&mut self, summary: &EchoSummary, _: &Verdict) -> io::Result<()> {
-        self.requests.session = summary.requests;
+        self.session_requests = summary.requests;
         for r in &summary.responders {
             let s = self.responders.entry(r.id).or_default();
             // The live figure, when there is one, is the later.
-            if let (None, Some(c)) = (s.clock_offset_s, &r.clock) {
-                s.clock_offset_s = Some(c.offset_ns as f64 / 1e9);
-            }
-            if let Some(rtt) = &r.rtt {
-                s.p50_s = Some(rtt.p50_us / 1e6);
-                s.p99_s = Some(rtt.p99_us / 1e6);
-            }
+            let at_end = r.clock.as_ref().map(|c| c.offset_ns as f64 / 1e9);
+            s.clock_offset_s = s.clock_offset_s.or(at_end);
+            s.rtt = r.rtt.or(s.rtt);
             s.split = Split::AtEnd(r.direction);
-            if let Some(p) = r.probe {
-                s.via_timesync = Some(u8::from(p == ProbeName::Timesync));
-            }
+            let timesync = r.probe.map(|p| u8::from(p == ProbeName::Timesync));
+            s.via_timesync = timesync.or(s.via_timesync);
         }
         Ok(())
     }
 
     /// The table of sources as the session's summary has it.
     fn passive_summary(&mut self, summary: &PassiveSummary, _: &Verdict) -> io::Result<()> {
-        self.sources.update(&summary.table, true);
+        sources::update(&mut self.sources, &summary.table, true);
         Ok(())
     }
 
     fn command_summary(&mut self, summary: &CommandSummary, _: &Verdict) -> io::Result<()> {
-        self.requests.session = summary.commands();
+        self.session_requests = summary.commands();
         Ok(())
     }
 }

@@ -5,7 +5,7 @@
 //! (`mavping_direction_*`), split by the summary's own formula.
 
 use super::exposition::{Exposition, Family, Figure, SeriesFigure};
-use super::sources::{Figures, SourceSeries};
+use super::sources::SourceSeries;
 use super::Metrics;
 use crate::engine::summary::{Direction, ProbeName};
 use crate::frame::SysComp;
@@ -15,72 +15,64 @@ impl Metrics {
     /// so a sum over a link's sources can leave it out, as the link's
     /// totals do.
     fn source_labels(&self, id: SysComp, s: &SourceSeries) -> String {
-        let labels = self.radio_labels(id);
-        if s.radio {
-            labels + ",radio=\"true\""
-        } else {
-            labels
-        }
+        let radio = if s.radio { ",radio=\"true\"" } else { "" };
+        format!("{}{radio}", self.radio_labels(id))
     }
 }
 
-/// A source's counter (counts below 2^53, exact as `f64`).
-type SourceCount = Figure<fn(&Figures) -> f64>;
-
-const SOURCE_COUNTS: [SourceCount; 10] = [
+/// A source's counters (counts below 2^53, exact as `f64`), then its
+/// gauges.
+const SOURCE: [SeriesFigure<SourceSeries>; 15] = [
     Figure::counter(
         "mavping_source_received_total",
         "Frames received from the source, duplicates included (--passive: its own packet sequence).",
-        |f| f.seq.received as f64,
+        |s| Some(s.counters().seq.received as f64),
     ),
     Figure::counter(
         "mavping_source_damaged_total",
         "Whole frames from the source whose CRC failed (damaged on the way, or a dialect whose CRC differs): they arrived, so their numbers are not lost; not in mavping_source_received_total.",
-        |f| f.seq.damaged as f64,
+        |s| Some(s.counters().seq.damaged as f64),
     ),
     Figure::counter(
         "mavping_source_lost_total",
         "Frames its packet sequence proves lost, counted once no late frame can fill the gap (128 behind its latest frame, in a silence, or at the run's end); mavping_source_lost_pending holds the rest.",
-        |f| f.lost_settled as f64,
+        |s| Some(s.counters().lost_settled as f64),
     ),
     Figure::counter(
         "mavping_source_duplicate_total",
         "Frames whose sequence number had been received already.",
-        |f| f.seq.duplicate as f64,
+        |s| Some(s.counters().seq.duplicate as f64),
     ),
     Figure::counter(
         "mavping_source_reordered_total",
         "Frames that came after a later one and filled their gap.",
-        |f| f.seq.reordered as f64,
+        |s| Some(s.counters().seq.reordered as f64),
     ),
     Figure::counter(
         "mavping_source_resyncs_total",
         "Times the count restarted on a frame the sequence could not place (after a long silence, or 128 away).",
-        |f| f.seq.resyncs as f64,
+        |s| Some(s.counters().seq.resyncs as f64),
     ),
     Figure::counter(
         "mavping_source_bytes_total",
         "Frame bytes received from the source, duplicates included.",
-        |f| f.bytes as f64,
+        |s| Some(s.counters().bytes as f64),
     ),
     Figure::counter(
         "mavping_source_silences_total",
         "Times the source was heard from nothing for longer than the gap (--gap), an ongoing silence included.",
-        |f| f.silences as f64,
+        |s| Some(s.counters().silences as f64),
     ),
     Figure::counter(
         "mavping_source_silence_seconds_total",
         "Time the source spent in silences, an ongoing one up to the latest count (once a second).",
-        |f| f.silence_ns as f64 / 1e9,
+        |s| Some(s.counters().silence_ns as f64 / 1e9),
     ),
     Figure::counter(
         "mavping_source_pymavlink_lost_total",
         "pymavlink's loss count for the same frames (mavutil: (seq - expected) % 256 at each mismatch, so a duplicate costs it 255), to compare with MAVProxy's link or mavloss.py; not mavping's.",
-        |f| f.pymav_loss as f64,
+        |s| Some(s.counters().pymav_loss as f64),
     ),
-];
-
-const SOURCE_GAUGES: [SeriesFigure<SourceSeries>; 5] = [
     Figure::gauge(
         "mavping_source_lost_pending",
         "Frames counted lost that may still arrive late and be reordered (within 127 of the latest frame, outside a silence): not in mavping_source_lost_total yet.",
@@ -120,10 +112,7 @@ pub(super) fn write_sources(out: &mut Exposition, links: &[&Metrics]) {
                     .map(move |(id, s)| (m.source_labels(*id, s), s))
             })
     };
-    for Figure { family, value } in &SOURCE_COUNTS {
-        out.family(family, series().map(|(l, s)| (l, value(&s.counters()))));
-    }
-    out.figures(&SOURCE_GAUGES, series);
+    out.figures(&SOURCE, series);
 }
 
 const DIRECTION_LOSS: Family = Family::gauge(
@@ -141,12 +130,9 @@ const DIRECTION_CONSISTENT: Family = Family::gauge(
     "1 when the split holds; 0 when the downlink alone loses more than the round trip by over two standard errors: the responder's sequence does not number just what it sends us on this link (a router re-sequencing, or merged links), so no up figure is shown.",
 );
 
-/// The uplink's figures, only where the split holds.
-fn uplink(d: &Direction) -> Option<(f64, Option<f64>)> {
-    d.consistent
-        .then_some(d.uplink_loss)
-        .flatten()
-        .map(|up| (up, d.uplink_stderr))
+/// The uplink's loss, only where the split holds.
+fn uplink(d: &Direction) -> Option<f64> {
+    d.uplink_loss.filter(|_| d.consistent)
 }
 
 /// Every echo responder's loss by direction.
@@ -154,7 +140,7 @@ pub(super) fn write_directions(out: &mut Exposition, links: &[&Metrics]) {
     let splits = || {
         links.iter().flat_map(|m| {
             m.responders.iter().filter_map(move |(id, s)| {
-                let d = s.direction(m.sources.get(*id))?;
+                let d = s.direction(m.sources.get(id))?;
                 Some((m.labels(*id), d))
             })
         })
@@ -163,7 +149,7 @@ pub(super) fn write_directions(out: &mut Exposition, links: &[&Metrics]) {
     out.family(
         &DIRECTION_LOSS,
         splits().flat_map(|(l, d)| {
-            let up = uplink(&d).map(|(up, _)| (with(&l, "up"), up));
+            let up = uplink(&d).map(|up| (with(&l, "up"), up));
             [
                 Some((with(&l, "round_trip"), d.round_trip_loss)),
                 Some((with(&l, "down"), d.downlink_loss)),
@@ -175,7 +161,7 @@ pub(super) fn write_directions(out: &mut Exposition, links: &[&Metrics]) {
     );
     out.family(
         &DIRECTION_STDERR,
-        splits().filter_map(|(l, d)| Some((with(&l, "up"), uplink(&d)?.1?))),
+        splits().filter_map(|(l, d)| Some((with(&l, "up"), uplink(&d).and(d.uplink_stderr)?))),
     );
     out.family(
         &DIRECTION_CONSISTENT,

@@ -24,62 +24,44 @@ enum Scope {
     Probe,
 }
 
-/// A per-responder count: a counter in a run, a gauge of one probe under
-/// a name of its own (see [`Scope`]).
-struct Count {
-    run: &'static str,
-    probe: &'static str,
-    help: &'static str,
-    value: fn(&Series) -> u64,
-}
-
-impl Count {
-    fn family(&self, scope: Scope) -> Family {
-        match scope {
-            Scope::Run => Family::counter(self.run, self.help),
-            Scope::Probe => Family::gauge(self.probe, self.help),
-        }
-    }
-}
+/// A per-responder count: a counter in a run; a gauge of one probe under
+/// the name of its own beside its value (see [`Scope`]).
+type Count = Figure<(&'static str, fn(&Series) -> u64)>;
 
 const COUNTS: [Count; 5] = [
-    Count {
-        run: "mavping_sent_total",
-        probe: "mavping_probe_sent",
-        help: "Requests in the responder's window whose fate is decided (received + lost).",
-        value: |s| s.counts.sent,
-    },
-    Count {
-        run: "mavping_received_total",
-        probe: "mavping_probe_received",
-        help: "Replies received within the timeout.",
-        value: |s| s.counts.received,
-    },
-    Count {
-        run: "mavping_lost_total",
-        probe: "mavping_probe_lost",
-        help: "Requests not answered within the timeout.",
-        value: |s| s.counts.lost,
-    },
-    Count {
-        run: "mavping_late_total",
-        probe: "mavping_probe_late",
-        help: "First replies after the timeout (each also counted lost).",
-        value: |s| s.counts.late,
-    },
-    Count {
-        run: "mavping_duplicate_total",
-        probe: "mavping_probe_duplicate",
-        help: "Second and later replies to the same request.",
-        value: |s| s.counts.duplicate,
-    },
+    Figure::counter(
+        "mavping_sent_total",
+        "Requests in the responder's window whose fate is decided (received + lost).",
+        ("mavping_probe_sent", |s| s.counts.sent),
+    ),
+    Figure::counter(
+        "mavping_received_total",
+        "Replies received within the timeout.",
+        ("mavping_probe_received", |s| s.counts.received),
+    ),
+    Figure::counter(
+        "mavping_lost_total",
+        "Requests not answered within the timeout.",
+        ("mavping_probe_lost", |s| s.counts.lost),
+    ),
+    Figure::counter(
+        "mavping_late_total",
+        "First replies after the timeout (each also counted lost).",
+        ("mavping_probe_late", |s| s.counts.late),
+    ),
+    Figure::counter(
+        "mavping_duplicate_total",
+        "Second and later replies to the same request.",
+        ("mavping_probe_duplicate", |s| s.counts.duplicate),
+    ),
 ];
 
 /// Only `/probe` has it: a run's loss ratio is the counters' arithmetic.
-const PROBE_LOSS_RATIO: Family = Family::gauge(
+const PROBE_LOSS_RATIO: [SeriesFigure<Series>; 1] = [Figure::gauge(
     "mavping_probe_loss_ratio",
     "Lost over sent in this probe (0 to 1).",
-);
+    Series::loss_ratio,
+)];
 
 /// The RTT histogram, under a run's name or a probe's.
 fn rtt_histogram(scope: Scope) -> Family {
@@ -99,12 +81,12 @@ const GAUGES: [SeriesFigure<Series>; 5] = [
     Figure::gauge(
         "mavping_rtt_p50_seconds",
         "Median round-trip time (HDR histogram; at the end of a run or probe).",
-        |s| s.p50_s,
+        |s| Some(s.rtt?.p50_us / 1e6),
     ),
     Figure::gauge(
         "mavping_rtt_p99_seconds",
         "99th percentile round-trip time (HDR histogram; at the end of a run or probe).",
-        |s| s.p99_s,
+        |s| Some(s.rtt?.p99_us / 1e6),
     ),
     Figure::gauge(
         "mavping_clock_offset_seconds",
@@ -118,13 +100,13 @@ const GAUGES: [SeriesFigure<Series>; 5] = [
     ),
 ];
 
-const RADIO: [SeriesFigure<RadioSeries>; 15] = [
-    // Written apart, with its extra label.
-    Figure::gauge(
-        "mavping_radio_info",
-        "1 for each radio, its kind (sik, mlrs, elrs, esp, unknown) in a label: from what it sends, or --radio-type.",
-        |_| None,
-    ),
+/// A radio's kind, in a label of its own.
+const RADIO_INFO: Family = Family::gauge(
+    "mavping_radio_info",
+    "1 for each radio, its kind (sik, mlrs, elrs, esp, unknown) in a label: from what it sends, or --radio-type.",
+);
+
+const RADIO: [SeriesFigure<RadioSeries>; 14] = [
     Figure::gauge(
         "mavping_radio_rssi",
         "Local signal strength, raw RADIO_STATUS units (255, unknown, left out).",
@@ -231,7 +213,7 @@ fn write_senders(out: &mut Exposition, links: &[&Metrics]) {
             .filter(|m| m.sends())
             .map(|m| (m.probe_labels(), *m))
     };
-    out.family(&REQUESTS, senders().map(|(l, m)| (l, m.requests.total())));
+    out.family(&REQUESTS, senders().map(|(l, m)| (l, m.requests())));
     out.family(&RESPONDERS, senders().map(|(l, m)| (l, m.answering())));
 }
 
@@ -246,38 +228,32 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
             .iter()
             .flat_map(|m| m.responders.iter().map(move |(id, s)| (m.labels(*id), s)))
     };
-    for count in &COUNTS {
-        out.family(
-            &count.family(scope),
-            series().map(|(l, s)| (l, (count.value)(s))),
-        );
+    for Figure { family, value } in &COUNTS {
+        let (probe, count) = value;
+        let family = match scope {
+            Scope::Run => *family,
+            Scope::Probe => Family::gauge(probe, family.help),
+        };
+        out.family(&family, series().map(|(l, s)| (l, count(s))));
     }
     if scope == Scope::Probe {
-        out.family(
-            &PROBE_LOSS_RATIO,
-            series().filter_map(|(l, s)| Some((l, s.loss_ratio()?))),
-        );
+        out.figures(&PROBE_LOSS_RATIO, series);
     }
     let histogram = rtt_histogram(scope);
-    let name = histogram.name;
     if series().next().is_some() {
         out.header(&histogram);
     }
+    let name = |part| format!("{}_{part}", histogram.name);
     for (labels, s) in series() {
         let mut cumulative = 0;
         for (i, count) in s.buckets.iter().enumerate() {
             cumulative += count;
-            let le = BUCKETS_S
-                .get(i)
-                .map_or_else(|| "+Inf".to_string(), |b| b.to_string());
-            out.sample(
-                &format!("{name}_bucket"),
-                &format!("{labels},le=\"{le}\""),
-                cumulative,
-            );
+            let le = BUCKETS_S.get(i).map_or("+Inf".into(), f64::to_string);
+            let bucket = format!("{labels},le=\"{le}\"");
+            out.sample(&name("bucket"), &bucket, cumulative);
         }
-        out.sample(&format!("{name}_sum"), &labels, s.rtt_sum_s);
-        out.sample(&format!("{name}_count"), &labels, s.counts.received);
+        out.sample(&name("sum"), &labels, s.rtt_sum_s);
+        out.sample(&name("count"), &labels, s.counts.received);
     }
     out.figures(&GAUGES, series);
     let radios = || {
@@ -285,10 +261,9 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
             .iter()
             .flat_map(|m| m.radios.iter().map(move |(id, r)| (m.radio_labels(*id), r)))
     };
-    let (info, figures) = RADIO.split_first().expect("the info family");
     let kind = |l, r: &RadioSeries| (format!("{l},kind=\"{}\"", r.kind.key()), 1);
-    out.family(&info.family, radios().map(|(l, r)| kind(l, r)));
-    out.figures(figures, radios);
+    out.family(&RADIO_INFO, radios().map(|(l, r)| kind(l, r)));
+    out.figures(&RADIO, radios);
     write_link_nodes(out, links);
     write_directions(out, links);
     write_sources(out, links);
@@ -355,58 +330,54 @@ pub(crate) struct Health {
     pub(crate) last_reload_ok: bool,
 }
 
-/// One of the server's own figures.
-type HealthFigure = Figure<fn(&Health) -> u64>;
-
-const HEALTH: [HealthFigure; 8] = [
+/// The server's own figures (counts below 2^53, exact as `f64`).
+const HEALTH: [SeriesFigure<Health>; 8] = [
     Figure::counter(
         "mavping_exporter_probes_total",
         "/probe requests that ran a probe.",
-        |h| h.probes,
+        |h| Some(h.probes as f64),
     ),
     Figure::counter(
         "mavping_exporter_probes_failed_total",
         "Probes that ran and failed (mavping_probe_success 0).",
-        |h| h.probes_failed,
+        |h| Some(h.probes_failed as f64),
     ),
     Figure::counter(
         "mavping_exporter_probes_refused_total",
         "/probe requests refused: bad or forbidden (400) or too many at once (503).",
-        |h| h.probes_refused,
+        |h| Some(h.probes_refused as f64),
     ),
     Figure::gauge(
         "mavping_exporter_probes_running",
         "Probes running now.",
-        |h| h.probes_running,
+        |h| Some(h.probes_running as f64),
     ),
     Figure::gauge(
         "mavping_exporter_open_links",
         "Links open now: continuous links that are up and the links of running probes.",
-        |h| h.open_links,
+        |h| Some(h.open_links as f64),
     ),
     Figure::counter(
         "mavping_exporter_config_reloads_total",
         "Configuration reloads asked for (SIGHUP, POST /-/reload).",
-        |h| h.reloads,
+        |h| Some(h.reloads as f64),
     ),
     Figure::counter(
         "mavping_exporter_config_reloads_failed_total",
         "Reloads refused because the new configuration was invalid (the old one stays).",
-        |h| h.reloads_failed,
+        |h| Some(h.reloads_failed as f64),
     ),
     Figure::gauge(
         "mavping_exporter_config_last_reload_successful",
         "1 when the configuration in use is the one last read from the file.",
-        |h| u64::from(h.last_reload_ok),
+        |h| Some(f64::from(u8::from(h.last_reload_ok))),
     ),
 ];
 
 /// `mavping serve`'s `/metrics`: its health, then its continuous links.
 pub(crate) fn render_serve(links: &[&Metrics], health: &Health) -> String {
     let mut out = Exposition::default();
-    for Figure { family, value } in &HEALTH {
-        out.family(family, [(String::new(), value(health))]);
-    }
+    out.figures(&HEALTH, || std::iter::once((String::new(), health)));
     write_link_states(&mut out, links, &SERVE_LINK_UP, Some(&LINK_RESTARTS));
     write_links(&mut out, links, Scope::Run);
     out.0
@@ -459,13 +430,11 @@ pub(crate) fn render_probe(metrics: &Metrics, result: &ProbeResult) -> String {
     }
     let one = |v: f64| [(String::new(), v)];
     out.family(&PROBE_SUCCESS, one(f64::from(u8::from(result.success))));
-    out.family(
-        &PROBE_FAILURE,
-        result
-            .reasons
-            .iter()
-            .map(|r| (format!("reason=\"{r}\""), 1)),
-    );
+    let reasons = result
+        .reasons
+        .iter()
+        .map(|r| (format!("reason=\"{r}\""), 1));
+    out.family(&PROBE_FAILURE, reasons);
     out.family(&PROBE_DURATION, one(result.duration_s));
     out.family(&PROBE_REQUESTS, one(result.requests as f64));
     out.family(&PROBE_IN_FLIGHT, one(result.in_flight as f64));

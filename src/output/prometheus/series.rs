@@ -5,6 +5,7 @@
 use super::sources::SourceSeries;
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::probe::command::CommandEvent;
+use crate::engine::stats::RttSummary;
 use crate::engine::summary::Direction;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -58,18 +59,15 @@ impl Outcome {
     }
 
     pub(crate) fn count(self, counts: &mut Counts) {
-        match self {
-            Outcome::Received(_) => {
-                counts.sent += 1;
-                counts.received += 1;
-            }
-            Outcome::Lost => {
-                counts.sent += 1;
-                counts.lost += 1;
-            }
-            Outcome::Late => counts.late += 1,
-            Outcome::Duplicate => counts.duplicate += 1,
-        }
+        // A request received or lost is decided: `sent` counts it.
+        let (count, decided) = match self {
+            Outcome::Received(_) => (&mut counts.received, 1),
+            Outcome::Lost => (&mut counts.lost, 1),
+            Outcome::Late => (&mut counts.late, 0),
+            Outcome::Duplicate => (&mut counts.duplicate, 0),
+        };
+        *count += 1;
+        counts.sent += decided;
     }
 }
 
@@ -83,8 +81,7 @@ pub(super) struct Series {
     pub(super) rtt_sum_s: f64,
     pub(super) last_rtt_s: Option<f64>,
     /// From the summary at the end (the HDR histogram's figures).
-    pub(super) p50_s: Option<f64>,
-    pub(super) p99_s: Option<f64>,
+    pub(super) rtt: Option<RttSummary>,
     pub(super) clock_offset_s: Option<f64>,
     /// `--probe auto`: whether it is measured by TIMESYNC (else PING).
     pub(super) via_timesync: Option<u8>,
@@ -105,22 +102,15 @@ pub(super) enum Split {
 }
 
 impl Series {
-    fn observe(&mut self, rtt: Nanos) {
-        let s = rtt as f64 / 1e9;
-        let i = BUCKETS_S
-            .iter()
-            .position(|&b| s <= b)
-            .unwrap_or(BUCKETS_S.len());
-        self.buckets[i] += 1;
-        self.rtt_sum_s += s;
-        self.last_rtt_s = Some(s);
-    }
-
     pub(super) fn record(&mut self, outcome: Outcome) {
         outcome.count(&mut self.counts);
         self.answering |= outcome != Outcome::Lost;
         if let Outcome::Received(rtt) = outcome {
-            self.observe(rtt);
+            let s = rtt as f64 / 1e9;
+            // The first bucket whose bound is not below it, else +Inf.
+            self.buckets[BUCKETS_S.partition_point(|&b| b < s)] += 1;
+            self.rtt_sum_s += s;
+            self.last_rtt_s = Some(s);
         }
     }
 

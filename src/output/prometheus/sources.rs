@@ -77,15 +77,6 @@ impl Figures {
             pymav_loss: f(self.pymav_loss, o.pymav_loss),
         }
     }
-
-    /// The same figures with every pending loss settled: what a session
-    /// that has ended proved.
-    fn settled(self) -> Figures {
-        Figures {
-            lost_settled: self.seq.lost,
-            ..self
-        }
-    }
 }
 
 /// The latest table's figures that are not counters.
@@ -125,9 +116,14 @@ impl SourceSeries {
     }
 
     /// A new session: this one's figures become history.
-    fn carry(&mut self) {
+    pub(super) fn carry(&mut self) {
         let last = self.latest.map_or(Figures::default(), |l| l.figures);
-        self.carried = self.carried.plus(self.shown.max(last.settled()));
+        // Every pending loss settled: what a session that has ended proved.
+        let settled = Figures {
+            lost_settled: last.seq.lost,
+            ..last
+        };
+        self.carried = self.carried.plus(self.shown.max(settled));
         self.shown = Figures::default();
         self.latest = None;
     }
@@ -178,31 +174,15 @@ impl SourceSeries {
 }
 
 /// Every source of one link.
-#[derive(Debug, Clone, Default)]
-pub(super) struct Sources(BTreeMap<SysComp, SourceSeries>);
+pub(super) type Sources = BTreeMap<SysComp, SourceSeries>;
 
-impl Sources {
-    /// The table as told at a tick (`ended` false) or at the end of the
-    /// session. Sources beyond [`MAX_SOURCES`] are left out.
-    pub(super) fn update(&mut self, table: &TableSummary, ended: bool) {
-        for s in &table.sources {
-            if self.0.len() < MAX_SOURCES || self.0.contains_key(&s.source) {
-                self.0.entry(s.source).or_default().update(s, ended);
-            }
+/// The table as told at a tick (`ended` false) or at the end of the
+/// session. Sources beyond [`MAX_SOURCES`] are left out.
+pub(super) fn update(sources: &mut Sources, table: &TableSummary, ended: bool) {
+    for s in &table.sources {
+        if sources.len() < MAX_SOURCES || sources.contains_key(&s.source) {
+            sources.entry(s.source).or_default().update(s, ended);
         }
-    }
-
-    /// A new session of the same link begins.
-    pub(super) fn carry(&mut self) {
-        self.0.values_mut().for_each(SourceSeries::carry);
-    }
-
-    pub(super) fn get(&self, id: SysComp) -> Option<&SourceSeries> {
-        self.0.get(&id)
-    }
-
-    pub(super) fn iter(&self) -> impl Iterator<Item = (&SysComp, &SourceSeries)> {
-        self.0.iter()
     }
 }
 
@@ -230,21 +210,21 @@ mod tests {
         let mut sources = Sources::default();
         // 3 and 4 skipped: counted lost, but either may still come.
         let at = feed(&mut table, &[0, 1, 2, 5, 6], 0);
-        sources.update(&table.summary(at), false);
-        let a = sources.get(A).unwrap();
+        update(&mut sources, &table.summary(at), false);
+        let a = sources.get(&A).unwrap();
         assert_eq!(a.seq().lost, 2);
         assert_eq!(a.counters().lost_settled, 0);
         assert_eq!(a.pending(), Some(2));
         assert_eq!(a.loss_ratio(), Some(2.0 / 7.0));
         // 3 comes late: reordered; the ratio drops, no counter does.
         let at = feed(&mut table, &[3], at + 5 * MS);
-        sources.update(&table.summary(at), false);
-        let a = sources.get(A).unwrap();
+        update(&mut sources, &table.summary(at), false);
+        let a = sources.get(&A).unwrap();
         assert_eq!((a.seq().lost, a.seq().reordered), (1, 1));
         assert_eq!(a.counters().lost_settled, 0);
         // The run ends: 4 is lost for good.
-        sources.update(&table.summary(at), true);
-        let a = sources.get(A).unwrap();
+        update(&mut sources, &table.summary(at), true);
+        let a = sources.get(&A).unwrap();
         assert_eq!(a.counters().lost_settled, 1);
         assert_eq!(a.counters().seq.received, 6);
         assert_eq!(a.pending(), Some(0));
@@ -255,18 +235,18 @@ mod tests {
         let mut sources = Sources::default();
         let mut first = SourceTable::new(None, 4);
         let at = feed(&mut first, &[0, 1, 3, 4], 0);
-        sources.update(&first.summary(at), false);
-        assert_eq!(sources.get(A).unwrap().counters().lost_settled, 0);
+        update(&mut sources, &first.summary(at), false);
+        assert_eq!(sources.get(&A).unwrap().counters().lost_settled, 0);
         // The link breaks and is reopened: the pending loss of the first
         // session is settled, and the second starts from there.
-        sources.carry();
-        let a = sources.get(A).unwrap();
+        sources.values_mut().for_each(SourceSeries::carry);
+        let a = sources.get(&A).unwrap();
         assert_eq!(a.counters().lost_settled, 1);
         assert_eq!((a.silent(), a.frames_per_s()), (None, None));
         let mut second = SourceTable::new(None, 4);
         let at = feed(&mut second, &[200, 202, 203], 0);
-        sources.update(&second.summary(at + 2_000 * MS), false);
-        let a = sources.get(A).unwrap();
+        update(&mut sources, &second.summary(at + 2_000 * MS), false);
+        let a = sources.get(&A).unwrap();
         assert_eq!(a.counters().seq.received, 7);
         // 201 is settled by the silence two seconds after 203.
         assert_eq!(a.counters().lost_settled, 2);
@@ -282,12 +262,12 @@ mod tests {
             table.on_frame(SysComp::new(sysid, 1), 0, 0, 20, 0);
         }
         let mut sources = Sources::default();
-        sources.update(&table.summary(0), false);
-        assert_eq!(sources.iter().count(), MAX_SOURCES);
+        update(&mut sources, &table.summary(0), false);
+        assert_eq!(sources.len(), MAX_SOURCES);
         // Those kept go on being updated.
         table.on_frame(SysComp::new(1, 1), 1, 0, 20, MS);
-        sources.update(&table.summary(MS), false);
-        let one = sources.get(SysComp::new(1, 1)).unwrap();
+        update(&mut sources, &table.summary(MS), false);
+        let one = sources.get(&SysComp::new(1, 1)).unwrap();
         assert_eq!(one.counters().seq.received, 2);
     }
 }

@@ -87,7 +87,7 @@ impl Metrics {
     /// false) or in its summary.
     pub(super) fn on_sources(&mut self, table: &TableSummary, ended: bool) {
         if ended {
-            self.sources.update(table, true);
+            super::sources::update(&mut self.sources, table, true);
         } else {
             self.sources(0, table).expect("metrics take every event");
         }
