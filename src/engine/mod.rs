@@ -3,6 +3,7 @@
 //! what it tells the world ([`observe`]) and depends on nothing above it:
 //! not on the command line, the configuration, the reports or the verdict.
 
+pub(crate) mod age;
 pub(crate) mod answers;
 pub(crate) mod capacity;
 pub(crate) mod clock_offset;

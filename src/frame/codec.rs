@@ -5,7 +5,9 @@ use mavlink::dialects::ardupilotmega as dialect;
 use mavlink::{MAVLinkV1MessageRaw, MAVLinkV2MessageRaw, MavHeader, MavlinkVersion, Message};
 use num_traits::FromPrimitive;
 
+use super::received::{Stamp, StampClock, StampMeaning, Stamps};
 use super::scanner::{header_len, Kind, IFLAG_SIGNED, STX_V1};
+use super::signing::signature_timestamp;
 use super::{ids, Fix, FixKind, Frame, LinkNodeStatus, Msg, RadioStatus, SysComp};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -295,9 +297,98 @@ pub fn decode_as(raw: &[u8], kind: Kind) -> Frame {
 pub fn decode(raw: &[u8]) -> Frame {
     let frame = header_of(raw);
     let payload = &raw[header_len(raw[0])..][..usize::from(raw[1])];
+    let signature = frame
+        .signed
+        .then(|| signature_timestamp(raw))
+        .flatten()
+        .map(|value| Stamp {
+            clock: StampClock::Signature,
+            meaning: StampMeaning::Sent,
+            value,
+        });
     Frame {
         msg: decode_payload(frame.version, frame.msgid, payload),
+        stamps: Stamps {
+            message: message_stamps(frame.msgid, payload),
+            signature,
+        },
         ..frame
+    }
+}
+
+/// Microseconds at least this large are Unix time (after 2001); a count
+/// since boot would need 31 years of uptime. MAVLink's `time_usec` fields
+/// leave the choice to the sender and the magnitude to the receiver.
+const UNIX_US_FROM: u64 = 1_000_000_000_000_000;
+
+/// The little-endian unsigned field of `width` bytes at `offset`: bytes
+/// past the end of a MAVLink 2 payload were trimmed zeros.
+fn field(payload: &[u8], offset: usize, width: usize) -> u64 {
+    let mut bytes = [0u8; 8];
+    let end = payload.len().min(offset + width);
+    if offset < end {
+        bytes[..end - offset].copy_from_slice(&payload[offset..end]);
+    }
+    u64::from_le_bytes(bytes)
+}
+
+/// A stamp of `value` on `clock`; none for 0, what senders put in a
+/// field whose clock they do not have (no GPS, no RTC).
+fn stamp(clock: StampClock, meaning: StampMeaning, value: u64) -> Option<Stamp> {
+    (value != 0).then_some(Stamp {
+        clock,
+        meaning,
+        value,
+    })
+}
+
+/// A `time_usec`: since boot or since 1970, told apart by magnitude.
+fn stamp_us(meaning: StampMeaning, value: u64) -> Option<Stamp> {
+    let clock = if value >= UNIX_US_FROM {
+        StampClock::UnixUs
+    } else {
+        StampClock::BootUs
+    };
+    stamp(clock, meaning, value)
+}
+
+/// The clock stamps in a good frame's payload, read at their offsets
+/// without decoding the message (the passive path meets 100k frames a
+/// second). MAVLink orders fields by size, so each stamp is its message's
+/// first field, SYSTEM_TIME's boot time the second (after the Unix time)
+/// and TIMESYNC's `ts1` the second; the tests check each offset against
+/// the `mavlink` crate's own serialisation.
+fn message_stamps(msgid: u32, payload: &[u8]) -> [Option<Stamp>; 2] {
+    use StampClock::{BootMs, TimesyncNs};
+    use StampMeaning::{Sampled, Sent};
+    let boot_ms = |meaning| stamp(BootMs, meaning, field(payload, 0, 4));
+    match msgid {
+        // SYSTEM_TIME: Unix time (0 until the sender has it), boot time.
+        2 => [
+            stamp(BootMs, Sent, field(payload, 8, 4)),
+            stamp_us(Sent, field(payload, 0, 8)),
+        ],
+        // PING: only a request (targets 0) carries the sender's own clock;
+        // a reply echoes the requester's.
+        4 if field(payload, 12, 2) == 0 => [stamp_us(Sent, field(payload, 0, 8)), None],
+        // TIMESYNC: a reply's tc1 is the responder's clock at reply, a
+        // request's ts1 (tc1 0) the requester's at send. Negative: junk.
+        111 => {
+            let tc1 = field(payload, 0, 8);
+            let own = if tc1 == 0 { field(payload, 8, 8) } else { tc1 };
+            let own = if own >> 63 == 0 { own } else { 0 };
+            [stamp(TimesyncNs, Sent, own), None]
+        }
+        // ATTITUDE, ATTITUDE_QUATERNION, SCALED_IMU/2/3, SCALED_PRESSURE/2/3,
+        // HIGH_LATENCY2.
+        30 | 31 | 26 | 116 | 129 | 29 | 137 | 143 | 235 => [boot_ms(Sent), None],
+        // RAW_IMU, HIGHRES_IMU.
+        27 | 105 => [stamp_us(Sent, field(payload, 0, 8)), None],
+        // GLOBAL_POSITION_INT, LOCAL_POSITION_NED.
+        33 | 32 => [boot_ms(Sampled), None],
+        // GPS_RAW_INT: the fix's time (boot or, in newer ArduPilot, GPS).
+        24 => [stamp_us(Sampled, field(payload, 0, 8)), None],
+        _ => [None, None],
     }
 }
 
@@ -331,6 +422,7 @@ fn header_of(raw: &[u8]) -> Frame {
         // A frame is at most 280 bytes.
         len: u16::try_from(raw.len()).unwrap_or(u16::MAX),
         msg: Msg::Other,
+        stamps: Stamps::default(),
     }
 }
 
@@ -665,6 +757,407 @@ mod tests {
                 assert_eq!(round_trip(version, Msg::Fix(fix)).msg, Msg::Fix(fix));
             }
         }
+    }
+
+    /// The one frame `message` makes, serialised by the `mavlink` crate
+    /// (not by mavping's encoder, so the offsets are checked against it).
+    fn crate_frame(version: Version, message: &dialect::MavMessage) -> Frame {
+        let header = MavHeader {
+            system_id: 1,
+            component_id: 1,
+            sequence: 0,
+        };
+        let bytes = match version {
+            Version::V1 => {
+                let mut raw = MAVLinkV1MessageRaw::new();
+                raw.serialize_message(header, message);
+                raw.raw_bytes().to_vec()
+            }
+            Version::V2 => {
+                let mut raw = MAVLinkV2MessageRaw::new();
+                raw.serialize_message(header, message);
+                raw.raw_bytes().to_vec()
+            }
+        };
+        let mut frames = Vec::new();
+        let mut stats = super::super::ScanStats::default();
+        super::super::scan_datagram(&bytes, &mut stats, &mut |f| frames.push(decode(f)));
+        assert_eq!(frames.len(), 1, "{message:?}");
+        frames[0]
+    }
+
+    fn stamps(version: Version, message: &dialect::MavMessage) -> Vec<Read> {
+        crate_frame(version, message)
+            .stamps
+            .iter()
+            .map(|s| (s.clock, s.meaning, s.value))
+            .collect()
+    }
+
+    /// A stamp's clock, meaning and value, as the tests compare them.
+    type Read = (StampClock, StampMeaning, u64);
+
+    const US_BOOT: u64 = 123_456_789_012;
+    const US_UNIX: u64 = 1_700_000_000_123_456;
+
+    /// Every stamped message, each field non-zero and distinct, so a wrong
+    /// offset reads another field's value.
+    #[allow(deprecated)] // PING
+    fn stamped_messages() -> Vec<(dialect::MavMessage, Vec<Read>)> {
+        use dialect::MavMessage as M;
+        use StampClock::{BootMs, BootUs, TimesyncNs, UnixUs};
+        use StampMeaning::{Sampled, Sent};
+        let ms = 0x0A0B_0C0D;
+        let imu = dialect::SCALED_IMU_DATA {
+            time_boot_ms: ms,
+            xacc: 1,
+            yacc: 2,
+            zacc: 3,
+            xgyro: 4,
+            ygyro: 5,
+            zgyro: 6,
+            xmag: 7,
+            ymag: 8,
+            zmag: 9,
+            temperature: 10,
+        };
+        let pressure = dialect::SCALED_PRESSURE_DATA {
+            time_boot_ms: ms,
+            press_abs: 1013.0,
+            press_diff: 1.5,
+            temperature: 2100,
+            temperature_press_diff: 7,
+        };
+        vec![
+            (
+                M::SYSTEM_TIME(dialect::SYSTEM_TIME_DATA {
+                    time_unix_usec: US_UNIX,
+                    time_boot_ms: ms,
+                }),
+                vec![(BootMs, Sent, u64::from(ms)), (UnixUs, Sent, US_UNIX)],
+            ),
+            (
+                M::SYSTEM_TIME(dialect::SYSTEM_TIME_DATA {
+                    time_unix_usec: 0,
+                    time_boot_ms: ms,
+                }),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::PING(dialect::PING_DATA {
+                    time_usec: US_BOOT,
+                    seq: 77,
+                    target_system: 0,
+                    target_component: 0,
+                }),
+                vec![(BootUs, Sent, US_BOOT)],
+            ),
+            (
+                M::PING(dialect::PING_DATA {
+                    time_usec: US_BOOT,
+                    seq: 77,
+                    target_system: 255,
+                    target_component: 190,
+                }),
+                vec![],
+            ),
+            (
+                M::TIMESYNC(dialect::TIMESYNC_DATA {
+                    tc1: 5_000_000_007,
+                    ts1: 9_000_000_011,
+                    target_system: 1,
+                    target_component: 2,
+                }),
+                vec![(TimesyncNs, Sent, 5_000_000_007)],
+            ),
+            (
+                M::TIMESYNC(dialect::TIMESYNC_DATA {
+                    tc1: 0,
+                    ts1: 9_000_000_011,
+                    target_system: 0,
+                    target_component: 0,
+                }),
+                vec![(TimesyncNs, Sent, 9_000_000_011)],
+            ),
+            (
+                M::ATTITUDE(dialect::ATTITUDE_DATA {
+                    time_boot_ms: ms,
+                    roll: 0.1,
+                    pitch: 0.2,
+                    yaw: 0.3,
+                    rollspeed: 0.4,
+                    pitchspeed: 0.5,
+                    yawspeed: 0.6,
+                }),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::ATTITUDE_QUATERNION(dialect::ATTITUDE_QUATERNION_DATA {
+                    time_boot_ms: ms,
+                    q1: 0.5,
+                    q2: 0.5,
+                    q3: 0.5,
+                    q4: 0.5,
+                    rollspeed: 0.1,
+                    pitchspeed: 0.2,
+                    yawspeed: 0.3,
+                    repr_offset_q: [0.1, 0.2, 0.3, 0.4],
+                }),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::SCALED_IMU(imu.clone()),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::SCALED_IMU2(dialect::SCALED_IMU2_DATA {
+                    time_boot_ms: ms,
+                    xacc: 1,
+                    yacc: 2,
+                    zacc: 3,
+                    xgyro: 4,
+                    ygyro: 5,
+                    zgyro: 6,
+                    xmag: 7,
+                    ymag: 8,
+                    zmag: 9,
+                    temperature: 10,
+                }),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::SCALED_IMU3(dialect::SCALED_IMU3_DATA {
+                    time_boot_ms: ms,
+                    xacc: 1,
+                    yacc: 2,
+                    zacc: 3,
+                    xgyro: 4,
+                    ygyro: 5,
+                    zgyro: 6,
+                    xmag: 7,
+                    ymag: 8,
+                    zmag: 9,
+                    temperature: 10,
+                }),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::RAW_IMU(dialect::RAW_IMU_DATA {
+                    time_usec: US_BOOT,
+                    xacc: 1,
+                    yacc: 2,
+                    zacc: 3,
+                    xgyro: 4,
+                    ygyro: 5,
+                    zgyro: 6,
+                    xmag: 7,
+                    ymag: 8,
+                    zmag: 9,
+                    id: 1,
+                    temperature: 10,
+                }),
+                vec![(BootUs, Sent, US_BOOT)],
+            ),
+            (
+                M::HIGHRES_IMU(dialect::HIGHRES_IMU_DATA {
+                    time_usec: US_UNIX,
+                    xacc: 1.0,
+                    yacc: 2.0,
+                    zacc: 3.0,
+                    xgyro: 4.0,
+                    ygyro: 5.0,
+                    zgyro: 6.0,
+                    xmag: 7.0,
+                    ymag: 8.0,
+                    zmag: 9.0,
+                    abs_pressure: 10.0,
+                    diff_pressure: 11.0,
+                    pressure_alt: 12.0,
+                    temperature: 13.0,
+                    fields_updated: dialect::HighresImuUpdatedFlags::all(),
+                    id: 1,
+                }),
+                vec![(UnixUs, Sent, US_UNIX)],
+            ),
+            (
+                M::SCALED_PRESSURE(pressure.clone()),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::SCALED_PRESSURE2(dialect::SCALED_PRESSURE2_DATA {
+                    time_boot_ms: ms,
+                    press_abs: 1013.0,
+                    press_diff: 1.5,
+                    temperature: 2100,
+                    temperature_press_diff: 7,
+                }),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::SCALED_PRESSURE3(dialect::SCALED_PRESSURE3_DATA {
+                    time_boot_ms: ms,
+                    press_abs: 1013.0,
+                    press_diff: 1.5,
+                    temperature: 2100,
+                    temperature_press_diff: 7,
+                }),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::HIGH_LATENCY2(dialect::HIGH_LATENCY2_DATA {
+                    timestamp: ms,
+                    latitude: 11,
+                    longitude: 12,
+                    custom_mode: 13,
+                    altitude: 14,
+                    target_altitude: 15,
+                    target_distance: 16,
+                    wp_num: 17,
+                    heading: 18,
+                    target_heading: 19,
+                    throttle: 20,
+                    airspeed: 21,
+                    airspeed_sp: 22,
+                    groundspeed: 23,
+                    windspeed: 24,
+                    wind_heading: 25,
+                    eph: 26,
+                    epv: 27,
+                    temperature_air: 28,
+                    climb_rate: 29,
+                    battery: 30,
+                    custom0: 31,
+                    custom1: 32,
+                    custom2: 33,
+                    ..Default::default()
+                }),
+                vec![(BootMs, Sent, u64::from(ms))],
+            ),
+            (
+                M::GLOBAL_POSITION_INT(dialect::GLOBAL_POSITION_INT_DATA {
+                    time_boot_ms: ms,
+                    lat: 1,
+                    lon: 2,
+                    alt: 3,
+                    relative_alt: 4,
+                    vx: 5,
+                    vy: 6,
+                    vz: 7,
+                    hdg: 8,
+                }),
+                vec![(BootMs, Sampled, u64::from(ms))],
+            ),
+            (
+                M::LOCAL_POSITION_NED(dialect::LOCAL_POSITION_NED_DATA {
+                    time_boot_ms: ms,
+                    x: 1.0,
+                    y: 2.0,
+                    z: 3.0,
+                    vx: 4.0,
+                    vy: 5.0,
+                    vz: 6.0,
+                }),
+                vec![(BootMs, Sampled, u64::from(ms))],
+            ),
+            (
+                M::GPS_RAW_INT(dialect::GPS_RAW_INT_DATA {
+                    time_usec: US_BOOT,
+                    lat: 1,
+                    lon: 2,
+                    alt: 3,
+                    eph: 4,
+                    epv: 5,
+                    vel: 6,
+                    cog: 7,
+                    satellites_visible: 8,
+                    ..Default::default()
+                }),
+                vec![(BootUs, Sampled, US_BOOT)],
+            ),
+        ]
+    }
+
+    #[test]
+    fn stamps_are_read_at_the_offsets_the_crate_writes_them() {
+        for (message, expected) in stamped_messages() {
+            for version in [Version::V1, Version::V2] {
+                assert_eq!(
+                    stamps(version, &message),
+                    expected,
+                    "{version:?} {message:?}"
+                );
+            }
+        }
+        // A message without a clock, and a stamp of 0 (no clock yet), carry none.
+        let attitude_at_0 = dialect::MavMessage::ATTITUDE(dialect::ATTITUDE_DATA::default());
+        assert_eq!(stamps(Version::V2, &attitude_at_0), vec![]);
+        let heartbeat = dialect::MavMessage::HEARTBEAT(dialect::HEARTBEAT_DATA::default());
+        assert_eq!(stamps(Version::V2, &heartbeat), vec![]);
+    }
+
+    /// MAVLink 2 trims a payload's trailing zeros: a stamp whose high bytes
+    /// are zero (or the whole later field) is read with them restored.
+    #[test]
+    fn stamps_survive_zero_trimmed_payloads() {
+        let message = dialect::MavMessage::SYSTEM_TIME(dialect::SYSTEM_TIME_DATA {
+            time_unix_usec: US_UNIX,
+            time_boot_ms: 5,
+        });
+        let frame = crate_frame(Version::V2, &message);
+        assert_eq!(frame.len, 12 + 9, "the boot time's 3 high bytes trimmed");
+        assert_eq!(
+            frame.stamps.message,
+            [
+                stamp(StampClock::BootMs, StampMeaning::Sent, 5),
+                stamp(StampClock::UnixUs, StampMeaning::Sent, US_UNIX),
+            ]
+        );
+        let attitude = dialect::MavMessage::ATTITUDE(dialect::ATTITUDE_DATA {
+            time_boot_ms: 0x0100,
+            ..Default::default()
+        });
+        let frame = crate_frame(Version::V2, &attitude);
+        assert_eq!(frame.len, 12 + 2);
+        assert_eq!(
+            frame.stamps.message[0],
+            stamp(StampClock::BootMs, StampMeaning::Sent, 0x0100)
+        );
+        // A negative TIMESYNC clock is junk, not a stamp.
+        let timesync = dialect::MavMessage::TIMESYNC(dialect::TIMESYNC_DATA {
+            tc1: -5,
+            ts1: 9,
+            target_system: 1,
+            target_component: 1,
+        });
+        assert_eq!(stamps(Version::V2, &timesync), vec![]);
+    }
+
+    /// A signed frame carries the signature's timestamp beside its
+    /// message's own stamp; a damaged one carries none.
+    #[test]
+    fn a_signature_is_a_stamp_of_its_own() {
+        let attitude = Msg::Attitude { time_boot_ms: 42 };
+        let mut bytes = Vec::new();
+        let header = Header {
+            sysid: 1,
+            compid: 1,
+            seq: 0,
+        };
+        encode(&mut bytes, Version::V2, header, &attitude);
+        let key = super::super::signing::SecretKey::from_bytes([7; 32]);
+        super::super::signing::Signer::new(key, 3).sign(&mut bytes, 0, 0x0102_0304_0506);
+        let frame = decode(&bytes);
+        assert!(frame.signed);
+        let got: Vec<_> = frame.stamps.iter().map(|s| (s.clock, s.value)).collect();
+        assert_eq!(
+            got,
+            vec![
+                (StampClock::BootMs, 42),
+                (StampClock::Signature, 0x0102_0304_0506)
+            ]
+        );
+        let damaged = decode_as(&bytes, Kind::Damaged);
+        assert_eq!(damaged.stamps, Stamps::default());
     }
 
     #[test]

@@ -18,8 +18,9 @@ pub(crate) use dialect::{
 };
 pub(crate) use msg::FixKind;
 pub use msg::{Fix, LinkNodeStatus, Msg, RadioStatus};
-#[cfg(test)]
-pub(crate) use received::test_frame;
 pub use received::Frame;
+#[cfg(test)]
+pub(crate) use received::{test_frame, Stamps};
+pub(crate) use received::{Stamp, StampClock, StampMeaning};
 pub use scanner::{scan_datagram, scan_datagram_all, Kind, ScanStats, StreamScanner};
 pub use sys_comp::SysComp;

@@ -100,6 +100,18 @@ pub(crate) fn timestamp_now() -> u64 {
     )
 }
 
+/// The signature's timestamp of one whole frame whose header says it is
+/// signed (10 µs units since 2015-01-01), unchecked: a clock reading for
+/// the frame's age, not a verdict on the signature.
+pub(crate) fn signature_timestamp(raw: &[u8]) -> Option<u64> {
+    let block = raw.len().checked_sub(SIGNATURE_LEN).map(|at| &raw[at..])?;
+    (raw.len() >= V2_HEADER + SIGNATURE_LEN && raw[0] == STX_V2).then(|| {
+        u64::from_le_bytes([
+            block[1], block[2], block[3], block[4], block[5], block[6], 0, 0,
+        ])
+    })
+}
+
 /// The whole bytes of a received signed MAVLink 2 frame, kept so its
 /// signature can be checked once a key is known.
 #[derive(Debug, Clone, PartialEq, Eq)]

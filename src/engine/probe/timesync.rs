@@ -155,6 +155,7 @@ mod tests {
                 target_system,
                 target_component,
             },
+            stamps: crate::frame::Stamps::default(),
         }
     }
 

@@ -129,6 +129,7 @@ mod tests {
             signed: false,
             len: 0,
             msg,
+            stamps: crate::frame::Stamps::default(),
         }
     }
 

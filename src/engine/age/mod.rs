@@ -1,0 +1,241 @@
+//! How old frames are when they arrive, from the senders' own clocks:
+//! pure, synchronous, time passed in, constant memory per clock.
+//!
+//! - [`AgeTracker`]: per source and stamp clock, each frame's age above
+//!   that clock's baseline (the floor of receive − stamp, its drift
+//!   fitted: [`envelope`]), live ([`AgeNow`]) and over the run
+//!   ([`SourceAge`]).
+//! - [`RoundTripSplit`]: a round trip's growth split into uplink and
+//!   downlink from the responder's stamp in its reply.
+//! - [`absolute_age`]: the absolute one-way age where the TIMESYNC clock
+//!   offset is known with bounds.
+//!
+//! Without a shared clock only the age above the baseline is known: the
+//! baseline is the least delay the link gave (plus whatever the sender
+//! spends between stamping and sending), so a link that is constantly
+//! 160 ms late reads 0 here; its growth is what shows.
+
+// The engine core of issue 40: the drivers, summaries and outputs take it
+// up in the next step; until then only its tests use it.
+#![allow(dead_code, unused_imports)]
+
+mod envelope;
+mod one_way;
+mod split;
+#[cfg(test)]
+mod tests;
+
+use std::collections::HashMap;
+
+use serde::Serialize;
+
+pub(crate) use split::{absolute_age, AbsoluteAge, RoundTripSplit, SplitNow, SplitSummary};
+
+use self::one_way::OneWay;
+use super::Nanos;
+use crate::frame::{Frame, Stamp, StampClock, StampMeaning, SysComp};
+
+/// Clocks tracked at most (source × clock × meaning): beyond, new ones
+/// are ignored, so a flood of spoofed sources cannot grow memory.
+pub(crate) const MAX_CLOCKS: usize = 256;
+
+/// One sender clock: a source's stamps on one clock with one meaning.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+struct Key {
+    source: SysComp,
+    clock: StampClock,
+    meaning: StampMeaning,
+}
+
+/// A 32-bit ms clock made monotonic across its wrap at 49.7 days.
+#[derive(Debug, Clone, Copy, Default)]
+struct Unwrap {
+    last: Option<u64>,
+    wraps: u64,
+}
+
+impl Unwrap {
+    /// A step back of more than half the range is a wrap; a smaller one
+    /// is a reboot or reorder, for the envelope to judge.
+    fn unwrap(&mut self, value: u64) -> u64 {
+        const RANGE: u64 = 1 << 32;
+        if let Some(last) = self.last {
+            if value < last && last - value > RANGE / 2 {
+                self.wraps += 1;
+            } else if value > last && value - last > RANGE / 2 && self.wraps > 0 {
+                // A straggler from before the wrap.
+                return (self.wraps - 1) * RANGE + value;
+            }
+        }
+        self.last = Some(value);
+        self.wraps * RANGE + value
+    }
+}
+
+#[derive(Debug, Clone, Default)]
+struct ClockAge {
+    unwrap: Unwrap,
+    one_way: OneWay,
+}
+
+/// Each source's frames' ages, per stamp clock.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct AgeTracker {
+    clocks: HashMap<Key, ClockAge>,
+}
+
+/// A source's newest age above baseline, on its headline clock.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub(crate) struct AgeNow {
+    pub(crate) clock: StampClock,
+    pub(crate) meaning: StampMeaning,
+    /// The newest stamped frame's age above the baseline known when it
+    /// arrived.
+    pub(crate) age_ms: f64,
+    /// When it arrived (ns of session time): a stale figure is old news.
+    #[serde(skip)]
+    pub(crate) at: Nanos,
+}
+
+/// One clock's figures over the run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub(crate) struct ClockAgeSummary {
+    pub(crate) clock: StampClock,
+    pub(crate) meaning: StampMeaning,
+    pub(crate) samples: u64,
+    /// Age above the baseline: percentiles (3 significant digits) and max.
+    pub(crate) p50_ms: f64,
+    pub(crate) p99_ms: f64,
+    pub(crate) max_ms: f64,
+    /// Their clock's rate against ours as the floor's slope (positive:
+    /// theirs runs slow); `None` until the stamps span 10 s.
+    pub(crate) drift_ppm: Option<f64>,
+    /// Baselines started again: the clock went back (a reboot) or jumped.
+    pub(crate) restarts: u32,
+    /// Stamps that fitted no baseline (a bad clock), left out.
+    pub(crate) rejected: u64,
+    /// How far the baselines the ages were measured against were from the
+    /// final one, at most (ms): the online answer's error.
+    pub(crate) baseline_error_ms: f64,
+}
+
+/// One source's ages: its headline clock's and every clock's.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct SourceAge {
+    pub(crate) source: SysComp,
+    pub(crate) headline: ClockAgeSummary,
+    pub(crate) clocks: Vec<ClockAgeSummary>,
+}
+
+/// Which clock speaks for a source, best first. Send stamps first: a
+/// sample stamp's age includes how old the data was when sent (a GPS
+/// fix at 5 Hz up to 200 ms), not the link's delay. Among them the boot
+/// clocks (ArduPilot stamps most telemetry with it at send, often), then
+/// TIMESYNC and Unix time; the signature last: ArduPilot advances it in
+/// whole seconds of GPS time and one unit a frame between, so its ages
+/// saw-tooth by up to a second. More samples break ties.
+fn rank(clock: StampClock, meaning: StampMeaning) -> u8 {
+    let by_clock = match clock {
+        StampClock::BootMs | StampClock::BootUs => 0,
+        StampClock::TimesyncNs => 1,
+        StampClock::UnixUs => 2,
+        StampClock::Signature => 3,
+    };
+    match meaning {
+        StampMeaning::Sent => by_clock,
+        StampMeaning::Sampled => 4 + by_clock,
+    }
+}
+
+impl AgeTracker {
+    /// Takes every stamp `frame` carries, received at `at`.
+    pub(crate) fn on_frame(&mut self, frame: &Frame, at: Nanos) {
+        for stamp in frame.stamps.iter() {
+            self.on_stamp(frame.source, stamp, at);
+        }
+    }
+
+    fn on_stamp(&mut self, source: SysComp, stamp: Stamp, at: Nanos) {
+        let key = Key {
+            source,
+            clock: stamp.clock,
+            meaning: stamp.meaning,
+        };
+        if !self.clocks.contains_key(&key) && self.clocks.len() >= MAX_CLOCKS {
+            return;
+        }
+        let entry = self.clocks.entry(key).or_default();
+        let value = match stamp.clock {
+            StampClock::BootMs => entry.unwrap.unwrap(stamp.value),
+            _ => stamp.value,
+        };
+        let ns = i128::from(value) * i128::from(stamp.clock.unit_ns());
+        entry.one_way.record(at, ns);
+    }
+
+    /// The headline clock of `source` among its keys with figures.
+    fn headline(&self, source: SysComp) -> Option<(&Key, &ClockAge)> {
+        self.clocks
+            .iter()
+            .filter(|(k, _)| k.source == source)
+            .min_by_key(|(k, c)| {
+                let samples = c.one_way.figures().map_or(0, |f| f.samples);
+                (rank(k.clock, k.meaning), std::cmp::Reverse(samples))
+            })
+    }
+
+    /// The newest age above baseline of `source`, on its headline clock.
+    pub(crate) fn now(&self, source: SysComp) -> Option<AgeNow> {
+        let (key, clock) = self.headline(source)?;
+        let (at, age_ns) = clock.one_way.now()?;
+        Some(AgeNow {
+            clock: key.clock,
+            meaning: key.meaning,
+            age_ms: age_ns / 1e6,
+            at,
+        })
+    }
+
+    /// Every source's figures, by source, its clocks best first.
+    pub(crate) fn summary(&self) -> Vec<SourceAge> {
+        let mut keys: Vec<&Key> = self.clocks.keys().collect();
+        keys.sort_by_key(|k| (k.source, rank(k.clock, k.meaning)));
+        let mut out: Vec<SourceAge> = Vec::new();
+        for key in keys {
+            let Some(s) = self.clocks[key].one_way.figures() else {
+                continue;
+            };
+            let figures = ClockAgeSummary {
+                clock: key.clock,
+                meaning: key.meaning,
+                samples: s.samples,
+                p50_ms: s.p50_ns / 1e6,
+                p99_ms: s.p99_ns / 1e6,
+                max_ms: s.max_ns / 1e6,
+                drift_ppm: s.drift_ppm,
+                restarts: s.restarts,
+                rejected: s.rejected,
+                baseline_error_ms: s.baseline_error_ns / 1e6,
+            };
+            match out.last_mut() {
+                Some(last) if last.source == key.source => last.clocks.push(figures),
+                _ => out.push(SourceAge {
+                    source: key.source,
+                    headline: figures,
+                    clocks: vec![figures],
+                }),
+            }
+        }
+        // The headline ranks first; among equal ranks, the most samples.
+        for source in &mut out {
+            if let Some(best) = source
+                .clocks
+                .iter()
+                .min_by_key(|c| (rank(c.clock, c.meaning), std::cmp::Reverse(c.samples)))
+            {
+                source.headline = *best;
+            }
+        }
+        out
+    }
+}
