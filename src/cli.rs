@@ -661,6 +661,11 @@ pub(crate) struct PingArgs {
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
     pub(crate) max_jitter: Option<Duration>,
 
+    /// Fail when the p99 age of a source's frames above its baseline (how much later than
+    /// its quickest they arrive, from their own clock stamps) is above DURATION
+    #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
+    pub(crate) max_age: Option<Duration>,
+
     /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
     /// LINK=SYSID[/COMPID] (on that one of several links); repeatable
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "[LINK=]SYSID[/COMPID]", value_parser = parse_expect_arg)]

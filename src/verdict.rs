@@ -7,6 +7,7 @@ use std::time::Duration;
 use serde::Serialize;
 use thiserror::Error;
 
+use crate::engine::age::SourceAge;
 use crate::engine::stats::RttSummary;
 use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::{CommandSummary, EchoSummary, LinkSummary, ResponderSummary};
@@ -107,6 +108,9 @@ pub(crate) struct Thresholds {
     pub(crate) max_loss: Option<f64>,
     pub(crate) max_rtt: Vec<RttLimit>,
     pub(crate) max_jitter: Option<Duration>,
+    /// Largest allowed p99 age above the baseline of a source's frames
+    /// (`--max-age`).
+    pub(crate) max_age: Option<Duration>,
     pub(crate) expect: Vec<Expected>,
     pub(crate) min_responders: Option<usize>,
 }
@@ -126,6 +130,7 @@ pub(crate) enum Check {
     MaxLoss,
     MaxRtt,
     MaxJitter,
+    MaxAge,
     Expect,
     MinResponders,
 }
@@ -139,6 +144,7 @@ impl Check {
             Check::MaxLoss => "max-loss",
             Check::MaxRtt => "max-rtt",
             Check::MaxJitter => "max-jitter",
+            Check::MaxAge => "max-age",
             Check::Expect => "expect",
             Check::MinResponders => "min-responders",
         }
@@ -307,6 +313,7 @@ pub(crate) fn judge(summary: &EchoSummary, t: &Thresholds) -> Verdict {
     for r in &answering {
         judge_responder(r, t, &mut failures);
     }
+    judge_ages(&summary.age, t, &mut failures);
     let ids: Vec<SysComp> = answering.iter().map(|r| r.id).collect();
     judge_who(&ids, t, Who::Responders, &mut failures);
     verdict(summary.link_error.is_some(), failures)
@@ -355,9 +362,31 @@ pub(crate) fn judge_passive(summary: &PassiveSummary, t: &Thresholds) -> Verdict
             }
         }
     }
+    judge_ages(&summary.age, t, &mut failures);
     let ids: Vec<SysComp> = heard.iter().map(|s| s.source).collect();
     judge_who(&ids, t, Who::Sources, &mut failures);
     verdict(summary.link_error.is_some(), failures)
+}
+
+/// `--max-age`: each source's p99 age above its baseline, on its headline
+/// clock, against the limit.
+fn judge_ages(ages: &[SourceAge], t: &Thresholds, failures: &mut Vec<Failure>) {
+    let Some(max) = t.max_age else {
+        return;
+    };
+    let limit_ms = max.as_secs_f64() * 1e3;
+    for a in ages.iter().filter(|a| a.headline.p99_ms > limit_ms) {
+        failures.push(Failure {
+            responder: Some(a.source),
+            check: Check::MaxAge,
+            message: format!(
+                "{}: p99 age above baseline {:.1} ms is above --max-age {}",
+                a.source,
+                a.headline.p99_ms,
+                humantime::format_duration(max)
+            ),
+        });
+    }
 }
 
 /// Judges any link's run; thresholds apply to echo probes and passive runs.
@@ -422,6 +451,7 @@ mod tests {
             probe: None,
             clock: None,
             direction: None,
+            split: None,
         }
     }
 
@@ -497,6 +527,7 @@ mod tests {
                 limit: Duration::from_millis(40),
             }],
             max_jitter: Some(Duration::from_millis(3)),
+            max_age: None,
             expect: vec![Expected {
                 sysid: 1,
                 compid: Some(1),
@@ -583,6 +614,8 @@ mod tests {
             link_error: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
             answered: crate::engine::answers::AnswerSummary::default(),
+            age: Vec::new(),
+            hints: Vec::new(),
             link_node: vec![],
             log: None,
             per_link: None,

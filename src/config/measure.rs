@@ -604,6 +604,7 @@ impl TryFrom<&PingArgs> for Config {
             max_loss: cli.max_loss,
             max_rtt: cli.max_rtt.clone(),
             max_jitter: cli.max_jitter,
+            max_age: cli.max_age,
             expect: cli
                 .expect
                 .iter()

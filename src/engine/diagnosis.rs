@@ -602,6 +602,7 @@ mod tests {
             probe: None,
             clock: None,
             direction: None,
+            split: None,
         }];
         let o = Observed {
             responders: &responders,
@@ -620,6 +621,7 @@ mod tests {
             identity: None,
             clock: None,
             direction: None,
+            split: None,
             probe: None,
         }
     }

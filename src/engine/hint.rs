@@ -67,6 +67,9 @@ pub(crate) enum HintCode {
     /// A vehicle's own count of what it lost on the way to it
     /// (LINK_NODE_STATUS) is outside mavping's uplink estimate for it.
     VehicleUplinkDisagrees,
+    /// A source's frames arrived ever later, by their own clock stamps,
+    /// while it lost next to none: a queue delays what it does not drop.
+    QueueBuilding,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]

@@ -47,6 +47,17 @@ pub(crate) enum StampClock {
 }
 
 impl StampClock {
+    /// The clock in words, as the text reports name it.
+    pub(crate) const fn words(self) -> &'static str {
+        match self {
+            StampClock::BootMs => "boot-time ms",
+            StampClock::BootUs => "boot-time µs",
+            StampClock::UnixUs => "Unix-time",
+            StampClock::TimesyncNs => "TIMESYNC",
+            StampClock::Signature => "signature",
+        }
+    }
+
     /// Nanoseconds in one unit of the clock.
     pub(crate) const fn unit_ns(self) -> u64 {
         match self {

@@ -7,6 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use crate::engine::age::{ClockAgeSummary, SourceAge, SplitSummary};
 use crate::engine::answers::AnswerSummary;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
@@ -31,7 +32,7 @@ use crate::engine::sweep::step::{Phase, StepFigures, StepRadio};
 use crate::engine::sweep::verdict::{self as sweep_verdict, SweepEnd, SweepSummary};
 use crate::engine::sweep::{MaxFrom, PlanKind, SweepConfig};
 use crate::engine::{capacity, CommandSpec};
-use crate::frame::{ScanStats, SysComp, Version};
+use crate::frame::{ScanStats, StampClock, StampMeaning, SysComp, Version};
 use crate::output::{Event, StartInfo};
 use crate::transport::RxClock;
 use crate::verdict::{self, Thresholds, Verdict};
@@ -53,6 +54,49 @@ pub(crate) fn answered() -> AnswerSummary {
         },
         unanswered: 1,
     }
+}
+
+/// A vehicle's frames held by a queue that grew to 1.5 s: its boot-time
+/// stamps at send, and a GPS fix's sample stamps older still.
+pub(crate) fn ages() -> Vec<SourceAge> {
+    let clock = |clock, meaning, p50_ms, p99_ms, max_ms| ClockAgeSummary {
+        clock,
+        meaning,
+        samples: 400,
+        p50_ms,
+        p90_ms: (p50_ms + p99_ms) / 2.0,
+        p99_ms,
+        max_ms,
+        drift_ppm: Some(21.5),
+        restarts: 0,
+        rejected: 0,
+        baseline_error_ms: 0.4,
+    };
+    let sent = clock(
+        StampClock::BootMs,
+        StampMeaning::Sent,
+        620.0,
+        1480.0,
+        1500.0,
+    );
+    let sampled = clock(
+        StampClock::BootMs,
+        StampMeaning::Sampled,
+        710.0,
+        1630.0,
+        1650.0,
+    );
+    vec![SourceAge {
+        source: SysComp::new(1, 1),
+        headline: sent,
+        clocks: vec![sent, sampled],
+    }]
+}
+
+/// The hint [`ages`] gives a source that lost nothing.
+pub(crate) fn queue_hints() -> Vec<crate::engine::hint::Hint> {
+    let age = &ages()[0];
+    vec![crate::engine::age::queue_building(age, 400, 0).expect("a queue")]
 }
 
 /// The probe a test names.
@@ -155,6 +199,17 @@ pub(crate) fn responder(id: SysComp, answered: bool) -> ResponderSummary {
         direction: answered
             .then(|| crate::engine::summary::Direction::split(0.2, 10, 40, 2))
             .flatten(),
+        // A downlink queue on the way back, by TIMESYNC's tc1.
+        split: answered.then_some(SplitSummary {
+            exchanges: 40,
+            uplink_p50_ms: 0.4,
+            uplink_p99_ms: 1.2,
+            uplink_max_ms: 1.5,
+            downlink_p50_ms: 610.0,
+            downlink_p99_ms: 1470.0,
+            downlink_max_ms: 1490.0,
+            drift_ppm: Some(-12.5),
+        }),
     }
 }
 
@@ -674,6 +729,8 @@ pub(crate) fn passive_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
         answered: answered(),
+        age: ages(),
+        hints: queue_hints(),
         link_node: link_nodes(false),
         log: None,
         per_link: None,
@@ -747,6 +804,8 @@ pub(crate) fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
         link_error: None,
         signing: crate::frame::signing::Gate::new(None).summary(),
         answered: answered(),
+        age: ages(),
+        hints: queue_hints(),
         link_node: vec![],
         flight: Some(borrowed.flight.1.clone()),
         log: Some(LogFacts {

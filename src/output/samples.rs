@@ -276,6 +276,8 @@ mod tests {
             link_error: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
             answered: crate::engine::answers::AnswerSummary::default(),
+            age: Vec::new(),
+            hints: Vec::new(),
             link_node: vec![],
             log: None,
             per_link: None,

@@ -5,6 +5,7 @@
 mod common;
 
 mod advice;
+mod age;
 mod answers;
 mod cli;
 mod completions;

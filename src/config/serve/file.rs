@@ -233,6 +233,8 @@ impl Table {
                 .as_ref()
                 .map(|d| d.get("max_jitter"))
                 .transpose()?,
+            // Ages are a listening run's; /probe runs are short probes.
+            max_age: None,
             expect: self
                 .expect
                 .iter()

@@ -15,10 +15,6 @@
 //! spends between stamping and sending), so a link that is constantly
 //! 160 ms late reads 0 here; its growth is what shows.
 
-// The engine core of issue 40: the drivers, summaries and outputs take it
-// up in the next step; until then only its tests use it.
-#![allow(dead_code, unused_imports)]
-
 mod envelope;
 mod one_way;
 mod split;
@@ -32,6 +28,7 @@ use serde::Serialize;
 pub(crate) use split::{absolute_age, AbsoluteAge, RoundTripSplit, SplitNow, SplitSummary};
 
 use self::one_way::OneWay;
+use super::hint::{Hint, HintCode};
 use super::Nanos;
 use crate::frame::{Frame, Stamp, StampClock, StampMeaning, SysComp};
 
@@ -105,6 +102,7 @@ pub(crate) struct ClockAgeSummary {
     pub(crate) samples: u64,
     /// Age above the baseline: percentiles (3 significant digits) and max.
     pub(crate) p50_ms: f64,
+    pub(crate) p90_ms: f64,
     pub(crate) p99_ms: f64,
     pub(crate) max_ms: f64,
     /// Their clock's rate against ours as the floor's slope (positive:
@@ -210,6 +208,7 @@ impl AgeTracker {
                 meaning: key.meaning,
                 samples: s.samples,
                 p50_ms: s.p50_ns / 1e6,
+                p90_ms: s.p90_ns / 1e6,
                 p99_ms: s.p99_ns / 1e6,
                 max_ms: s.max_ns / 1e6,
                 drift_ppm: s.drift_ppm,
@@ -238,4 +237,39 @@ impl AgeTracker {
         }
         out
     }
+}
+
+/// Above these (ms) a source's headline age is a queue, not jitter or a
+/// spike: one frame in ten late by 100 ms (a queue holds many frames in a
+/// row) and one at least by 250 ms.
+const QUEUE_P90_MS: f64 = 100.0;
+const QUEUE_MAX_MS: f64 = 250.0;
+
+/// The queue hint, when `age`'s headline send stamps show frames held
+/// ever later while the source lost at most 1 % of `received + lost`: a
+/// buffer between it and here (a modem, a relay, a WebSocket over TCP)
+/// delaying frames instead of dropping them.
+pub(crate) fn queue_building(age: &SourceAge, received: u64, lost: u64) -> Option<Hint> {
+    let h = &age.headline;
+    let queued = h.meaning == StampMeaning::Sent
+        && h.p90_ms >= QUEUE_P90_MS
+        && h.max_ms >= QUEUE_MAX_MS
+        && lost * 100 <= received + lost;
+    queued.then(|| {
+        Hint::new(
+            HintCode::QueueBuilding,
+            format!(
+                "{}'s frames arrived up to {:.2} s later than its quickest (p90 {:.0} ms, p99 \
+                 {:.0} ms above its baseline, by its {} stamps) while it lost {lost} of {}: a \
+                 queue is building between it and here (bufferbloat), delaying frames instead \
+                 of dropping them",
+                age.source,
+                h.max_ms / 1e3,
+                h.p90_ms,
+                h.p99_ms,
+                h.clock.words(),
+                received + lost
+            ),
+        )
+    })
 }

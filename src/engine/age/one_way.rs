@@ -121,6 +121,7 @@ impl Default for OneWay {
 pub(crate) struct OneWayFigures {
     pub(crate) samples: u64,
     pub(crate) p50_ns: f64,
+    pub(crate) p90_ns: f64,
     pub(crate) p99_ns: f64,
     pub(crate) max_ns: f64,
     /// `None` until the envelope spans long enough to fit drift.
@@ -236,6 +237,7 @@ impl OneWay {
         Some(OneWayFigures {
             samples: self.samples,
             p50_ns: q(0.5),
+            p90_ns: q(0.9),
             p99_ns: q(0.99),
             max_ns,
             drift_ppm: (span >= MIN_DRIFT_SPAN_NS).then(|| env.drift_ppm()),

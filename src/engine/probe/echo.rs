@@ -10,6 +10,7 @@ use super::passive::driver::{self as passive_driver, tell_sources};
 use super::passive::ticks::Ticks;
 use super::passive::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{Classified, EchoProbe};
+use crate::engine::age::{self, AgeTracker, RoundTripSplit, SourceAge};
 use crate::engine::diagnosis::{diagnose, Observed};
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::kind::KindValue;
@@ -23,11 +24,12 @@ use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
 use crate::engine::summary::{
-    responder_summaries, Direction, EchoInterim, EchoSummary, Interim, LinkSummary, ScheduleSummary,
+    responder_summaries, Direction, EchoInterim, EchoSummary, Interim, LinkSummary,
+    ResponderSummary, ScheduleSummary,
 };
 use crate::engine::Nanos;
 use crate::engine::SessionConfig;
-use crate::frame::{Frame, SysComp};
+use crate::frame::{Frame, StampClock, StampMeaning, SysComp};
 use crate::transport::{LinkError, Outbox, PathId, To, Transport};
 
 /// Most requests sent back to back before the session reads the link.
@@ -73,12 +75,52 @@ pub(crate) struct EchoDriver<P> {
     /// Every source's packet sequence: a responder's is its downlink loss.
     sequences: SourceTable,
     sequence_ticks: Ticks,
+    /// How old every source's frames are, from their own clock stamps.
+    age: AgeTracker,
+    /// Each responder's round trips split into up and down, where its
+    /// replies carry its clock (TIMESYNC's `tc1`, a signature).
+    splits: HashMap<SysComp, RoundTripSplit>,
 }
 
 /// A responder's clock offset is told at most this often.
 const CLOCK_TOLD_EVERY: Nanos = 1_000_000_000;
 
 impl<P: EchoProbe> EchoDriver<P> {
+    /// Records a reply's round trip split, when it carries the
+    /// responder's clock: TIMESYNC's `tc1`, else a signature's time.
+    fn split(&mut self, frame: &Frame, sent_at: Nanos, at: Nanos) {
+        let theirs = frame.stamps.iter().find(|s| {
+            s.meaning == StampMeaning::Sent
+                && matches!(s.clock, StampClock::TimesyncNs | StampClock::Signature)
+        });
+        let Some(stamp) = theirs else {
+            return;
+        };
+        if !self.splits.contains_key(&frame.source) && self.splits.len() >= MAX_RESPONDERS {
+            return;
+        }
+        let theirs_ns = i128::from(stamp.value) * i128::from(stamp.clock.unit_ns());
+        let split = self.splits.entry(frame.source).or_default();
+        split.record(sent_at, theirs_ns, at);
+    }
+
+    /// Every source's age, each responder's split, and the queue hint for
+    /// each source whose frames came ever later while it lost next to none.
+    fn ages(&self, responders: &mut [ResponderSummary]) -> (Vec<SourceAge>, Vec<Hint>) {
+        for r in responders.iter_mut() {
+            r.split = self.splits.get(&r.id).and_then(RoundTripSplit::summary);
+        }
+        let ages = self.age.summary();
+        let hints = ages
+            .iter()
+            .filter_map(|a| {
+                let c = self.sequences.source(a.source)?.counts();
+                age::queue_building(a, c.received, c.lost)
+            })
+            .collect();
+        (ages, hints)
+    }
+
     pub(crate) fn new(cfg: &SessionConfig, probe: P) -> Self {
         let timeout = cfg.timeout.as_nanos() as Nanos;
         EchoDriver {
@@ -98,6 +140,8 @@ impl<P: EchoProbe> EchoDriver<P> {
             burst: Vec::with_capacity(MAX_BURST),
             clocks_told: HashMap::new(),
             clocks_due: Vec::new(),
+            age: AgeTracker::default(),
+            splits: HashMap::new(),
         }
     }
 
@@ -135,6 +179,7 @@ impl<P: EchoProbe> EchoDriver<P> {
             {
                 if responder == frame.source {
                     self.probe.on_reply(frame, sent_at, at);
+                    self.split(frame, sent_at, at);
                     if self.probe.measures_clocks() {
                         self.clock_may_be_due(responder, at);
                     }
@@ -256,6 +301,9 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         // HEARTBEATs included: the auto probe chooses by them.
         self.probe.heard(frame, self.ours);
         passive_driver::take(&mut self.sequences, frame, at);
+        if frame.source != self.ours {
+            self.age.on_frame(frame, at);
+        }
     }
 
     fn on_frame(&mut self, frame: &Frame, path: PathId, at: Nanos) {
@@ -313,6 +361,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let undecided = self.matcher.undecided();
         let in_flight = self.matcher.finish();
         let mut responders = self.summaries(&ended.roster);
+        let (age, queue_hints) = self.ages(&mut responders);
         for r in &mut responders {
             r.clock = self.probe.clock(r.id);
             r.direction = self
@@ -348,6 +397,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             hints.insert(0, not_reading(&cfg.link_name, &p, self.matcher.issued()));
         }
         hints.extend(radio_hints(&radios, loss_by_txbuf));
+        hints.extend(queue_hints);
         let mut link_node = ended.link_nodes.summaries();
         hints.extend(compare_uplink(&mut link_node, &responders));
         hints.extend(responders.iter().filter_map(|r| {
@@ -386,6 +436,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             wire: None,
             signing,
             answered: ended.answered,
+            age,
             sweep: None,
         };
         // Moved, not copied: a thousand responders' histograms are tens

@@ -136,6 +136,7 @@ mod tests {
             probe: None,
             clock: None,
             direction,
+            split: None,
         }
     }
 

@@ -8,6 +8,7 @@ use serde::{Serialize, Serializer};
 
 use super::direction::Direction;
 use super::probe_name::ProbeName;
+use crate::engine::age::{SourceAge, SplitSummary};
 use crate::engine::answers::AnswerSummary;
 use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::ClockSummary;
@@ -51,6 +52,10 @@ pub struct ResponderSummary {
     /// own sequence numbers give the downlink.
     #[serde(skip)]
     pub(crate) direction: Option<Direction>,
+    /// The round trip split into uplink and downlink queues, from the
+    /// responder's clock in its replies (TIMESYNC).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) split: Option<SplitSummary>,
 }
 
 /// A responder's counts with its loss ratio, in the order the JSON has
@@ -133,6 +138,10 @@ pub struct EchoSummary {
     /// The vehicle's TIMESYNC and PING requests answered.
     #[serde(skip_serializing_if = "AnswerSummary::is_none")]
     pub(crate) answered: AnswerSummary,
+    /// How old each source's frames were when they arrived, above its
+    /// baseline, from their own clock stamps.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub(crate) age: Vec<SourceAge>,
     #[serde(skip)]
     pub responders: Vec<ResponderSummary>,
     /// `--sweep` or `--load`: the steps and what they say.
@@ -233,6 +242,7 @@ pub(crate) fn responder_summaries(matcher: &Matcher, roster: &Roster) -> Vec<Res
             probe: None,
             clock: None,
             direction: None,
+            split: None,
         })
         .collect();
     out.sort_by_key(|r| r.id);
@@ -295,6 +305,7 @@ impl EchoSummary {
             wire: None,
             signing: crate::frame::signing::Gate::new(None).summary(),
             answered: AnswerSummary::default(),
+            age: Vec::new(),
             sweep: None,
         }
     }
@@ -325,6 +336,7 @@ mod tests {
                 probe: None,
                 clock: None,
                 direction: None,
+                split: None,
             }],
             schedule: Some(ScheduleSummary {
                 requested_rate_hz,

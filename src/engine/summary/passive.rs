@@ -3,7 +3,9 @@
 //! pymavlink's figure beside ours, and the link's totals. Built by the
 //! passive probe's tracker; every report format renders it.
 
+use crate::engine::age::SourceAge;
 use crate::engine::answers::AnswerSummary;
+use crate::engine::hint::Hint;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::probe::passive::flight::FlightSummary;
 use crate::engine::probe::passive::round_trips::RoundTripSummary;
@@ -38,6 +40,11 @@ pub(crate) struct PassiveSummary {
     pub(crate) signing: SigningSummary,
     /// The vehicle's TIMESYNC and PING requests answered.
     pub(crate) answered: AnswerSummary,
+    /// How old each source's frames were when they arrived, above its
+    /// baseline, from their own clock stamps.
+    pub(crate) age: Vec<SourceAge>,
+    /// What the figures suggest (a queue building).
+    pub(crate) hints: Vec<Hint>,
     /// Read from a telemetry log: what the log held (set by the run, from
     /// the link).
     pub(crate) log: Option<LogFacts>,

@@ -7,7 +7,9 @@ use serde::Serialize;
 use super::lines::{Lines, SCHEMA_VERSION};
 use super::round_trips::RoundTrips;
 use super::units::seconds;
+use crate::engine::age::SourceAge;
 use crate::engine::answers::AnswerSummary;
+use crate::engine::hint::Hint;
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::radio::RadioSummary;
 use crate::engine::roster::Identity;
@@ -126,6 +128,11 @@ pub(super) struct Summary<'a> {
     signing: SigningSummary,
     #[serde(skip_serializing_if = "AnswerSummary::is_none")]
     answered: AnswerSummary,
+    /// Each source's frames' age above its baseline, from their stamps.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    age: &'a [SourceAge],
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    hints: &'a [Hint],
     /// A telemetry log's records and stamps.
     #[serde(skip_serializing_if = "Option::is_none")]
     log: Option<&'a LogFacts>,
@@ -169,6 +176,8 @@ impl<'a> Summary<'a> {
             link_node: &s.link_node,
             signing: s.signing,
             answered: s.answered,
+            age: &s.age,
+            hints: &s.hints,
             log: s.log.as_ref(),
             per_link: s.per_link.as_ref().map(|p| Links::of(s, p)),
             round_trips: s

@@ -284,6 +284,7 @@ mod tests {
             probe: None,
             clock: None,
             direction: None,
+            split: None,
         }
     }
 

@@ -315,6 +315,8 @@ mod tests {
                 counts: crate::frame::signing::SigningCounts::default(),
             },
             answered: crate::engine::answers::AnswerSummary::default(),
+            age: Vec::new(),
+            hints: Vec::new(),
             log: None,
             per_link: None,
             round_trips: None,
@@ -468,6 +470,7 @@ mod tests {
             probe: None,
             clock: None,
             direction,
+            split: None,
         };
         m.on_summary(&crate::engine::summary::EchoSummary {
             responders: vec![responder],

@@ -550,6 +550,7 @@ mod tests {
                 samples: 1,
             }),
             direction: None,
+            split: None,
         };
         b.on_summary(&crate::engine::summary::EchoSummary {
             responders: vec![responder],

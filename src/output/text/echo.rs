@@ -4,9 +4,11 @@ use std::io::{self, Write};
 
 use super::format::{counted, if_any, ms, ms_each, ms_us, per_second, rate, who};
 use super::summary::{
-    write_answered, write_failures, write_histogram, write_rtt, write_sent, write_signing,
+    write_ages, write_answered, write_failures, write_histogram, write_rtt, write_sent,
+    write_signing,
 };
 use super::TextReporter;
+use crate::engine::age::SplitSummary;
 use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::MIN_DRIFT_SPAN_S;
 use crate::engine::hint::HintCode;
@@ -213,7 +215,27 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
             clock.samples
         )?;
     }
+    if let Some(split) = &r.split {
+        write_split(out, split)?;
+    }
     write_histogram(out, &r.histogram)
+}
+
+/// Which way the round trip queued, by the responder's clock in its
+/// replies: each direction above its quickest.
+fn write_split(out: &mut impl Write, s: &SplitSummary) -> io::Result<()> {
+    let round_trip = s.uplink_max_ms.max(0.0) + s.downlink_max_ms.max(0.0);
+    writeln!(
+        out,
+        "  queues by its clock: round trip up to +{:.1} ms above its quickest: uplink p99 +{:.1} \
+         ms (max +{:.1}), downlink p99 +{:.1} ms (max +{:.1}) over {} exchanges",
+        round_trip,
+        s.uplink_p99_ms,
+        s.uplink_max_ms,
+        s.downlink_p99_ms,
+        s.downlink_max_ms,
+        s.exchanges
+    )
 }
 
 /// Which way the responder's losses were.
@@ -268,6 +290,7 @@ pub(super) fn write_summary(
     write_link_faults(out, s)?;
     write_signing(out, &s.signing)?;
     write_answered(out, &s.answered)?;
+    write_ages(out, &s.age)?;
     if let Some(p) = &s.schedule {
         write_schedule(out, s, p)?;
     }

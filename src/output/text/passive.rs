@@ -330,6 +330,7 @@ pub(super) fn write_summary(
     }
     super::link_node::write_link_nodes(out, &s.link_node)?;
     super::summary::write_answered(out, &s.answered)?;
+    super::summary::write_ages(out, &s.age)?;
     if let Some(rt) = &s.round_trips {
         super::round_trips::write_round_trips(out, rt, s.log.as_ref())?;
     }
@@ -364,6 +365,9 @@ pub(super) fn write_summary(
         )?;
     }
     writeln!(out, "receive times: {}", s.rx_clock)?;
+    for hint in &s.hints {
+        writeln!(out, "hint: {}", hint.text)?;
+    }
     write_failures(out, verdict)
 }
 

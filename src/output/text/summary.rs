@@ -5,9 +5,11 @@
 use std::io::{self, Write};
 
 use super::format::{if_any, ms_each, ms_us};
+use crate::engine::age::SourceAge;
 use crate::engine::answers::AnswerSummary;
 use crate::engine::stats::{Bucket, RttSummary};
 use crate::frame::signing::SigningSummary;
+use crate::frame::StampMeaning;
 use crate::verdict::{Check, Verdict};
 
 /// `30 requests sent in 0.640 s`, and how many were still in flight.
@@ -89,6 +91,42 @@ pub(super) fn write_answered(out: &mut impl Write, a: &AnswerSummary) -> io::Res
         out,
         "answered the vehicle's requests: {timesync} TIMESYNC, {ping} PING{flood}"
     )
+}
+
+/// Each source's age above its baseline, by its headline clock: how much
+/// later than its quickest its frames arrived.
+pub(super) fn write_ages(out: &mut impl Write, ages: &[SourceAge]) -> io::Result<()> {
+    if ages.is_empty() {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "age above baseline, from the frames' own clock stamps:"
+    )?;
+    for a in ages {
+        let h = &a.headline;
+        let when = match h.meaning {
+            StampMeaning::Sent => "at send",
+            StampMeaning::Sampled => "sample times",
+        };
+        let drift = h
+            .drift_ppm
+            .map_or(String::new(), |d| format!("; clock drift {d:+.1} ppm"));
+        let restarts = if_any(u64::from(h.restarts), |n| format!("; {n} restarts"));
+        writeln!(
+            out,
+            "  {} ({} {when}): p50 {:.1} ms, p90 {:.1} ms, p99 {:.1} ms, max {:.1} ms over {} \
+             frames{drift}{restarts}",
+            a.source,
+            h.clock.words(),
+            h.p50_ms,
+            h.p90_ms,
+            h.p99_ms,
+            h.max_ms,
+            h.samples
+        )?;
+    }
+    Ok(())
 }
 
 /// The thresholds that failed; "no reply at all" is already plain above.

@@ -250,6 +250,7 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
             Check::MaxLoss => "max_loss",
             Check::MaxRtt => "max_rtt",
             Check::MaxJitter => "max_jitter",
+            Check::MaxAge => "max_age",
             Check::Expect => "expect",
             Check::MinResponders => "min_responders",
         };

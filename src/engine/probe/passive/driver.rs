@@ -18,6 +18,8 @@ use super::round_trips::RoundTrips;
 use super::ticks::Ticks;
 use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{PassivePlan, SourcesNow};
+use crate::engine::age::{self, AgeTracker, SourceAge};
+use crate::engine::hint::Hint;
 use crate::engine::link_io::{Clock, Sender};
 use crate::engine::observe::{Event, Observer, StartInfo};
 use crate::engine::radio::Radios;
@@ -59,6 +61,8 @@ pub(crate) struct PassiveDriver {
     /// Reading a telemetry log: which sources are the recording ground
     /// station's own frames.
     ground: Option<GroundIds>,
+    /// How old each source's frames are, from their own clock stamps.
+    age: AgeTracker,
 }
 
 /// The ground station's own ids in a log, by evidence: a HEARTBEAT of
@@ -110,7 +114,16 @@ impl PassiveDriver {
             round_trips: None,
             flight: None,
             ground: None,
+            age: AgeTracker::default(),
         }
+    }
+
+    /// The ages of the sources that are not the ground station's own.
+    fn source_ages(&self, table: &TableSummary) -> Vec<SourceAge> {
+        let ground = |id: SysComp| table.sources.iter().any(|r| r.source == id && r.ground);
+        let mut ages = self.age.summary();
+        ages.retain(|a| !ground(a.source));
+        ages
     }
 
     /// A log's figures per MAVProxy link, when its stamps carry them.
@@ -187,6 +200,17 @@ impl PassiveDriver {
 
 /// Takes a frame into `table`: a damaged one fills its number only.
 #[inline]
+/// The queue hint for each source whose frames came ever later while it
+/// lost next to none (by its sequence numbers).
+fn queue_hints(ages: &[SourceAge], table: &TableSummary) -> Vec<Hint> {
+    ages.iter()
+        .filter_map(|a| {
+            let row = table.sources.iter().find(|r| r.source == a.source)?;
+            age::queue_building(a, row.counts.received, row.counts.lost)
+        })
+        .collect()
+}
+
 pub(crate) fn take(table: &mut SourceTable, frame: &Frame, at: Nanos) {
     let (seq, id, len) = (frame.packet_seq, frame.msgid, usize::from(frame.len));
     if matches!(frame.msg, Msg::Damaged) {
@@ -307,6 +331,7 @@ impl Driver for PassiveDriver {
             f.on_received(frame, at);
         }
         take(&mut self.table, frame, at);
+        self.age.on_frame(frame, at);
     }
 
     fn on_frame(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}
@@ -339,6 +364,13 @@ impl Driver for PassiveDriver {
             per_link = self.per_link(&table, at);
         }
         let identities = identities(&table, &end.roster);
+        let age = self.source_ages(&table);
+        // A log's stamps are when the logger wrote, in batches (FIELD-NOTES):
+        // a late frame there may be the logger's, so no hint says queue.
+        let hints = match self.paths {
+            None => queue_hints(&age, &table),
+            Some(_) => Vec::new(),
+        };
         let flight = self
             .flight
             .as_ref()
@@ -359,6 +391,8 @@ impl Driver for PassiveDriver {
             link_error: end.link_error,
             signing: end.gate.summary(),
             answered: end.answered,
+            age,
+            hints,
             log: None,
             per_link,
             round_trips: self.round_trips.as_mut().map(|rt| rt.summary(at)),
