@@ -21,7 +21,7 @@ use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::probe::passive::SourcesNow;
 use crate::engine::roster::Identity;
-use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::{
     CommandSummary, EchoInterim, EchoSummary, KindSummary, LinkSummary, PassiveInterim,
 };
@@ -103,7 +103,7 @@ impl Reporter for Reached {
     fn step(&mut self, _: &StepFigures) -> io::Result<()> {
         self.note("step")
     }
-    fn sources(&mut self, _: Nanos, _: &TableSummary) -> io::Result<()> {
+    fn sources(&mut self, _: &SourcesNow) -> io::Result<()> {
         self.note("sources")
     }
     fn flight(&mut self, _: &FlightEvent) -> io::Result<()> {
@@ -326,4 +326,16 @@ fn a_kind_no_format_knows_is_written_whole_by_json_and_passed_over_by_the_rest()
     );
     assert!(text.into_inner().is_empty());
     assert!(state.screen().rows.is_empty());
+}
+
+/// A passive run's live row shows each source's age now, marked as a
+/// problem past 100 ms (the run's fixture: 1/1's newest frame 240 ms late).
+#[test]
+fn the_live_view_shows_how_late_a_sources_newest_frame_came() {
+    let borrowed = Borrowed::new();
+    let mut state = LiveState::default();
+    tell_run(&mut state, Run::Passive, &borrowed);
+    let screen = state.screen();
+    let ages: Vec<_> = screen.rows.iter().map(|r| r.cells.last().cloned()).collect();
+    assert_eq!(ages, [Some(("240".to_string(), true))]);
 }

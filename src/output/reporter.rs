@@ -19,7 +19,7 @@ use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::probe::passive::SourcesNow;
 use crate::engine::roster::Identity;
-use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::EchoSummary;
 use crate::engine::summary::{
     CommandSummary, EchoInterim, Interim, KindSummary, LinkSummary, PassiveInterim,
@@ -90,7 +90,7 @@ pub(crate) trait Reporter {
     }
 
     /// Every source's sequence figures so far, once a second.
-    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
+    fn sources(&mut self, now: &SourcesNow) -> io::Result<()> {
         Ok(())
     }
 
@@ -177,7 +177,7 @@ pub(crate) trait Reporter {
         } else if let Some(e) = value.get::<CommandEvent>() {
             self.command(e)
         } else if let Some(s) = value.get::<SourcesNow>() {
-            self.sources(s.at, &s.table)
+            self.sources(s)
         } else if let Some(step) = value.get::<StepFigures>() {
             self.step(step)
         } else if let Some(e) = value.get::<FlightEvent>() {

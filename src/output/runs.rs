@@ -7,7 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::engine::age::{ClockAgeSummary, SourceAge, SplitSummary};
+use crate::engine::age::{AgeNow, ClockAgeSummary, SourceAge, SplitSummary};
 use crate::engine::answers::AnswerSummary;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
@@ -64,7 +64,7 @@ pub(crate) fn ages() -> Vec<SourceAge> {
         meaning,
         samples: 400,
         p50_ms,
-        p90_ms: (p50_ms + p99_ms) / 2.0,
+        p90_ms: f64::midpoint(p50_ms, p99_ms),
         p99_ms,
         max_ms,
         drift_ppm: Some(21.5),
@@ -352,6 +352,16 @@ impl Borrowed {
                 SourcesNow {
                     at: 1_000_000_000,
                     table: table.summary(1_000_000_000),
+                    // 1/1's newest frame a queue's 240 ms late.
+                    ages: vec![(
+                        SysComp::new(1, 1),
+                        AgeNow {
+                            clock: StampClock::BootMs,
+                            meaning: StampMeaning::Sent,
+                            age_ms: 240.0,
+                            at: 1_000_000_000,
+                        },
+                    )],
                 }
             },
         }

@@ -11,10 +11,10 @@ use super::{Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
 use crate::engine::probe::passive::PassivePlan;
+use crate::engine::probe::passive::SourcesNow;
 use crate::engine::radio::{self, RadioReport};
 use crate::engine::summary::passive::{PassiveSummary, TableSummary};
 use crate::engine::summary::LinkSummary;
-use crate::engine::Nanos;
 use crate::verdict::Verdict;
 
 /// The radio columns come last, so readers of the first six keep working.
@@ -151,8 +151,8 @@ impl<W: Write> Reporter for SampleLog<W> {
         Ok(())
     }
 
-    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
-        self.windows(at, table, false)
+    fn sources(&mut self, now: &SourcesNow) -> io::Result<()> {
+        self.windows(now.at, &now.table, false)
     }
 
     fn matched(&mut self, e: &MatchEvent) -> io::Result<()> {
@@ -306,6 +306,7 @@ mod tests {
         log.tell(&kind(SourcesNow {
             at: 1_000 * ms,
             table: first.clone(),
+            ages: Vec::new(),
         }))
         .unwrap();
         table.on_frame(a, 2, 30, 40, 1_100 * ms);
@@ -344,6 +345,7 @@ mod tests {
             l.tell(&kind(SourcesNow {
                 at: 1_000_000_000,
                 table: at_one.clone(),
+                ages: Vec::new(),
             }))
             .unwrap();
         }

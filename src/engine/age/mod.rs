@@ -25,7 +25,9 @@ use std::collections::HashMap;
 
 use serde::Serialize;
 
-pub(crate) use split::{absolute_age, AbsoluteAge, RoundTripSplit, SplitNow, SplitSummary};
+#[cfg(test)]
+use split::absolute_age;
+pub(crate) use split::{RoundTripSplit, SplitSummary};
 
 use self::one_way::OneWay;
 use super::hint::{Hint, HintCode};

@@ -206,7 +206,9 @@ impl RoundTripSplit {
         self.ring.push_back(ex);
     }
 
-    /// The newest exchange's split, against the floors known then.
+    /// The newest exchange's split, against the floors known then. Not in
+    /// the live view yet (issue 40's closing note).
+    #[cfg_attr(not(test), allow(dead_code))]
     pub(crate) fn now(&self) -> Option<SplitNow> {
         self.now
     }
@@ -251,7 +253,9 @@ fn above((b, a_up, a_down): (f64, f64, f64), ex: Exchange) -> (f64, f64) {
     (up.max(0.0) / 1e6, down.max(0.0) / 1e6)
 }
 
-/// A frame's absolute one-way age with bounds, ns.
+/// A frame's absolute one-way age with bounds, ns. Not in any report
+/// yet: issue 40's absolute age is still to be wired (its closing note).
+#[cfg_attr(not(test), allow(dead_code))]
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub(crate) struct AbsoluteAge {
     pub(crate) age_ns: i128,
@@ -269,6 +273,7 @@ pub(crate) struct AbsoluteAge {
 /// time 0, ours being `base_ns` + session time, as
 /// [`ClockOffset::record`](super::super::clock_offset::ClockOffset::record)
 /// takes it).
+#[cfg_attr(not(test), allow(dead_code))]
 pub(crate) fn absolute_age(
     at: Nanos,
     stamp_ns: i128,

@@ -331,7 +331,12 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
             })
         });
         let told = tell_each(observer, clocks);
-        let sources = tell_sources(&self.sequences, &mut self.sequence_ticks, observer);
+        let sources = tell_sources(
+            &self.sequences,
+            &self.age,
+            &mut self.sequence_ticks,
+            observer,
+        );
         matched.and(told).and(sources)
     }
 

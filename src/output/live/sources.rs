@@ -9,11 +9,13 @@ use std::collections::BTreeMap;
 
 use super::state::{Cells, RowView, Strip, RECENT};
 use super::view::figure;
+use crate::engine::probe::passive::SourcesNow;
 use crate::engine::roster::Identity;
-use crate::engine::summary::passive::TableSummary;
-use crate::engine::Nanos;
 use crate::frame::SysComp;
 use crate::output::windows::Windows;
+
+/// An age above baseline this high (ms) is shown as a problem: a queue.
+const AGE_SHOWN_MS: f64 = 100.0;
 
 /// Identities kept for sources not (yet) in the table: as many as it
 /// tracks, and some.
@@ -50,11 +52,15 @@ impl Sources {
     }
 
     /// The table as of `at`: each source's figures, and its latest second.
-    pub(super) fn table(&mut self, at: Nanos, table: &TableSummary) {
-        for (w, s) in self.windows.next(at, table).iter().zip(&table.sources) {
+    pub(super) fn table(&mut self, now: &SourcesNow) {
+        let table = &now.table;
+        for (w, s) in self.windows.next(now.at, table).iter().zip(&table.sources) {
             let t = self.sources.entry(s.source).or_default();
             let c = &s.counts;
             t.radio = s.radio;
+            // How much later than its quickest its newest stamped frame came.
+            let age = now.ages.iter().find(|(id, _)| *id == s.source);
+            let age_ms = age.map(|(_, a)| a.age_ms);
             t.figures = vec![
                 (c.received.to_string(), false),
                 (c.lost.to_string(), c.lost > 0),
@@ -63,6 +69,7 @@ impl Sources {
                 (c.reordered.to_string(), false),
                 (s.silence_count.to_string(), s.silence_count > 0),
                 (figure(w.frames_per_s(), 1), false),
+                (figure(age_ms, 0), age_ms.is_some_and(|a| a >= AGE_SHOWN_MS)),
             ];
             if t.recent.len() == RECENT {
                 t.recent.remove(0);

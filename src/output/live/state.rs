@@ -10,9 +10,10 @@ use super::sources::{heard_as, Second, Sources};
 use super::view::{figure, Spec, ECHO, PASSIVE};
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::probe::passive::PassivePlan;
+use crate::engine::probe::passive::SourcesNow;
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
-use crate::engine::summary::passive::{percent, TableSummary};
+use crate::engine::summary::passive::percent;
 use crate::engine::summary::ProbeName;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -101,10 +102,10 @@ impl Reporter for LiveState {
     }
 
     /// A passive run's table (an echo run's is for its direction split).
-    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
+    fn sources(&mut self, now: &SourcesNow) -> io::Result<()> {
         if let Some(sources) = self.sources.as_mut() {
-            sources.table(at, table);
-            self.now = self.now.max(at);
+            sources.table(now);
+            self.now = self.now.max(now.at);
             self.waiting = false;
         }
         Ok(())
@@ -394,6 +395,7 @@ mod tests {
             s.on_event(&kind(SourcesNow {
                 at,
                 table: table.summary(at),
+                ages: Vec::new(),
             }));
         }
         s
@@ -413,16 +415,17 @@ mod tests {
     #[test]
     fn a_second_that_lost_frames_is_red_and_a_silent_one_a_dot() {
         let screen = passive(12).screen();
-        let mut terminal = Terminal::new(TestBackend::new(80, 8)).unwrap();
+        let mut terminal = Terminal::new(TestBackend::new(90, 8)).unwrap();
         terminal.draw(|f| view::render(f, &[screen])).unwrap();
         let buffer = terminal.backend().buffer();
-        // 1/1's row: the strip follows its rate, newest last.
-        let row: Vec<_> = (0..80).map(|x| &buffer[(x, 3)]).collect();
+        // 1/1's row: the strip follows its rate and its age (none: no
+        // stamps), newest last.
+        let row: Vec<_> = (0..90).map(|x| &buffer[(x, 3)]).collect();
         let symbols: Vec<&str> = row.iter().map(|c| c.symbol()).collect();
-        let at = (0..76)
-            .find(|&x| symbols[x..x + 5].concat() == "49.0 ")
+        let at = (0..78)
+            .find(|&x| symbols[x..x + 12].concat() == "49.0      - ")
             .expect("1/1's rate");
-        let strip: Vec<_> = row[at + 5..at + 17].iter().collect();
+        let strip: Vec<_> = row[at + 12..at + 24].iter().collect();
         let colours: Vec<Color> = strip.iter().map(|c| c.fg).collect();
         let symbols: String = strip.iter().map(|c| c.symbol()).collect();
         assert_eq!(symbols, "███████·████", "{row:?}");
@@ -442,6 +445,7 @@ mod tests {
         s.on_event(&kind(SourcesNow {
             at: 1_000_000_000,
             table: table.summary(1_000_000_000),
+            ages: Vec::new(),
         }));
         let screen = s.screen();
         assert!(*screen.kind == view::ECHO);

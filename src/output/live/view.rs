@@ -79,10 +79,10 @@ pub(super) const ECHO: Spec = Spec {
 /// identity goes first, then the rarer counts.
 pub(super) const PASSIVE: Spec = Spec {
     headers: &[
-        "source", "identity", "recv", "lost", "loss%", "dup", "reord", "sil", "fr/s",
+        "source", "identity", "recv", "lost", "loss%", "dup", "reord", "sil", "fr/s", "age ms",
     ],
-    min_widths: &[7, 8, 6, 4, 5, 3, 5, 3, 5],
-    give_up: &[0, 9, 5, 0, 0, 8, 7, 6, 4],
+    min_widths: &[7, 8, 6, 4, 5, 3, 5, 3, 5, 6],
+    give_up: &[0, 9, 5, 0, 0, 8, 7, 6, 4, 3],
     left: 2,
     strip: "per second",
     keys: PASSIVE_KEYS,

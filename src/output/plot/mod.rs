@@ -31,7 +31,8 @@ use super::{Reporter, StartInfo};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::probe::passive::PassivePlan;
-use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::probe::passive::SourcesNow;
+use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::EchoSummary;
 use crate::engine::Nanos;
 use crate::verdict::Verdict;
@@ -50,8 +51,8 @@ impl Reporter for PlotLink {
         Ok(())
     }
 
-    fn sources(&mut self, at: Nanos, table: &TableSummary) -> io::Result<()> {
-        self.windows(at, table);
+    fn sources(&mut self, now: &SourcesNow) -> io::Result<()> {
+        self.windows(now.at, &now.table);
         Ok(())
     }
 

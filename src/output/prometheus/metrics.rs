@@ -12,8 +12,9 @@ use crate::engine::link_node::{LinkNodeReport, LinkNodes};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{RadioHeard, StartInfo};
 use crate::engine::probe::command::CommandEvent;
+use crate::engine::probe::passive::SourcesNow;
 use crate::engine::radio::MAX_RADIOS;
-use crate::engine::summary::passive::{PassiveSummary, TableSummary};
+use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::{CommandSummary, EchoSummary, ProbeName};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -194,8 +195,8 @@ impl Reporter for Metrics {
     }
 
     /// The table of sources, as told while the session goes on.
-    fn sources(&mut self, _: Nanos, table: &TableSummary) -> io::Result<()> {
-        sources::update(&mut self.sources, table, false);
+    fn sources(&mut self, now: &SourcesNow) -> io::Result<()> {
+        sources::update(&mut self.sources, &now.table, false);
         Ok(())
     }
 

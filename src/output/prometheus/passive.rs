@@ -227,6 +227,7 @@ mod tests {
         m.event(&kind(SourcesNow {
             at,
             table: table.summary(at),
+            ages: Vec::new(),
         }))
         .unwrap();
         let text = render(&[&m]);

@@ -8,6 +8,7 @@ use crate::engine::clock_offset::ClockSummary;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
 use crate::engine::probe::command::CommandEvent;
+use crate::engine::probe::passive::SourcesNow;
 use crate::engine::radio::{Judgement, RadioKind, RadioReport, RadioType};
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::{EchoSummary, ProbeName};
@@ -89,7 +90,12 @@ impl Metrics {
         if ended {
             super::sources::update(&mut self.sources, table, true);
         } else {
-            self.sources(0, table).expect("metrics take every event");
+            let now = SourcesNow {
+                at: 0,
+                table: table.clone(),
+                ages: Vec::new(),
+            };
+            self.sources(&now).expect("metrics take every event");
         }
     }
 }

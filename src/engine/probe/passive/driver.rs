@@ -250,16 +250,20 @@ fn tell_flight(flight: Option<&mut Flight>, observer: &mut dyn Observer) -> io::
 /// Tells `observer` the table, if a telling is due.
 pub(crate) fn tell_sources(
     table: &SourceTable,
+    age: &AgeTracker,
     ticks: &mut Ticks,
     observer: &mut dyn Observer,
 ) -> io::Result<()> {
-    match ticks.take() {
-        Some(at) => observer.event(&Event::Kind(&SourcesNow {
-            at,
-            table: table.summary(at),
-        })),
-        None => Ok(()),
-    }
+    let Some(at) = ticks.take() else {
+        return Ok(());
+    };
+    let table = table.summary(at);
+    let ages = table
+        .sources
+        .iter()
+        .filter_map(|s| Some((s.source, age.now(s.source)?)))
+        .collect();
+    observer.event(&Event::Kind(&SourcesNow { at, table, ages }))
 }
 
 /// What each source of `table` said it is, from its HEARTBEAT.
@@ -338,7 +342,12 @@ impl Driver for PassiveDriver {
 
     fn report(&mut self, _radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
         let flight = tell_flight(self.flight.as_mut(), observer);
-        flight.and(tell_sources(&self.table, &mut self.ticks, observer))
+        flight.and(tell_sources(
+            &self.table,
+            &self.age,
+            &mut self.ticks,
+            observer,
+        ))
     }
 
     fn next_deadline(&self) -> Option<Nanos> {

@@ -1,8 +1,10 @@
 //! What a passive run tells beside its summary: its plan at the start,
 //! and every source's figures so far, once a second.
 
+use crate::engine::age::AgeNow;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::Nanos;
+use crate::frame::SysComp;
 
 /// What a passive run listens to (`--passive`, or a telemetry log read).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -22,6 +24,9 @@ impl crate::engine::kind::KindValue for PassivePlan {}
 pub struct SourcesNow {
     pub(crate) at: Nanos,
     pub(crate) table: TableSummary,
+    /// Each source's newest age above its baseline, where its frames
+    /// carry a clock stamp.
+    pub(crate) ages: Vec<(SysComp, AgeNow)>,
 }
 
 impl crate::engine::kind::KindValue for SourcesNow {}
