@@ -339,3 +339,18 @@ fn the_live_view_shows_how_late_a_sources_newest_frame_came() {
     let ages: Vec<_> = screen.rows.iter().map(|r| r.cells.last().cloned()).collect();
     assert_eq!(ages, [Some(("240".to_string(), true))]);
 }
+
+/// The exporter gauges each source's age now (the fixture's 1/1: 240 ms).
+#[test]
+fn the_exporter_gauges_how_late_a_sources_newest_frame_came() {
+    let borrowed = Borrowed::new();
+    let mut metrics = Metrics::default();
+    tell_run(&mut metrics, Run::Passive, &borrowed);
+    let text = metrics.render();
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("mavping_source_age_seconds{"))
+        .unwrap_or_else(|| panic!("no age gauge in\n{text}"));
+    assert!(line.contains("sysid=\"1\"") && line.ends_with(" 0.24"), "{line}");
+    assert_eq!(text.matches("mavping_source_age_seconds{").count(), 1);
+}

@@ -22,7 +22,7 @@ impl Metrics {
 
 /// A source's counters (counts below 2^53, exact as `f64`), then its
 /// gauges.
-const SOURCE: [SeriesFigure<SourceSeries>; 15] = [
+const SOURCE: [SeriesFigure<SourceSeries>; 16] = [
     Figure::counter(
         "mavping_source_received_total",
         "Frames received from the source, duplicates included (--passive: its own packet sequence).",
@@ -92,6 +92,11 @@ const SOURCE: [SeriesFigure<SourceSeries>; 15] = [
         "mavping_source_frames_per_second",
         "Frames per second from the source's first frame to its latest, in this session of the link.",
         SourceSeries::frames_per_s,
+    ),
+    Figure::gauge(
+        "mavping_source_age_seconds",
+        "How much later than its quickest the source's newest stamped frame arrived: receive time minus the frame's own clock stamp, above that difference's lower envelope with the clocks' drift fitted (a queue's delay; absent without stamps).",
+        |s| s.age_s,
     ),
     Figure::gauge(
         "mavping_source_silent",

@@ -8,6 +8,7 @@
 
 use std::collections::BTreeMap;
 
+use crate::engine::age::AgeNow;
 use crate::engine::probe::passive::tracker::DEFAULT_MAX_SOURCES;
 use crate::engine::summary::passive::{SeqCounts, SourceSummary, TableSummary};
 use crate::engine::Nanos;
@@ -99,6 +100,9 @@ pub(super) struct SourceSeries {
     shown: Figures,
     /// This session's latest table, if the source was heard in it.
     latest: Option<Latest>,
+    /// How much later than its quickest its newest stamped frame came
+    /// (seconds), if its frames carry a clock stamp.
+    pub(crate) age_s: Option<f64>,
 }
 
 impl SourceSeries {
@@ -178,6 +182,15 @@ pub(super) type Sources = BTreeMap<SysComp, SourceSeries>;
 
 /// The table as told at a tick (`ended` false) or at the end of the
 /// session. Sources beyond [`MAX_SOURCES`] are left out.
+/// Each source's age now, as told with the table.
+pub(super) fn update_ages(sources: &mut Sources, ages: &[(SysComp, AgeNow)]) {
+    for (id, age) in ages {
+        if let Some(s) = sources.get_mut(id) {
+            s.age_s = Some(age.age_ms / 1e3);
+        }
+    }
+}
+
 pub(super) fn update(sources: &mut Sources, table: &TableSummary, ended: bool) {
     for s in &table.sources {
         if sources.len() < MAX_SOURCES || sources.contains_key(&s.source) {
