@@ -283,11 +283,12 @@ impl KindSummary for NovelSummary {
     }
 }
 
-/// A new kind costs the JSON format nothing: its events and summary are
-/// written as they serialise, with the link and the verdict's exit code,
+/// A new kind costs the JSON and text formats nothing: its events and
+/// summary are written as they serialise (JSON with the link and the
+/// verdict's exit code, text a line per event and a figure per line),
 /// and every other format takes them and shows nothing of them.
 #[test]
-fn a_kind_no_format_knows_is_written_whole_by_json_and_passed_over_by_the_rest() {
+fn a_kind_no_format_knows_is_written_whole_by_json_and_text_and_passed_over_by_the_rest() {
     let summary = LinkSummary::new(NovelSummary {
         link: "sim:".into(),
         seen: 3,
@@ -324,7 +325,10 @@ fn a_kind_no_format_knows_is_written_whole_by_json_and_passed_over_by_the_rest()
         "{\"type\":\"novel\",\"n\":7}\n\
          {\"link\":\"sim:\",\"seen\":3,\"type\":\"novel_summary\",\"schema_version\":2,\"exit_code\":2}\n"
     );
-    assert!(text.into_inner().is_empty());
+    assert_eq!(
+        String::from_utf8(text.into_inner()).unwrap(),
+        "novel: n=7\n\n--- sim: mavping statistics ---\nseen: 3\n"
+    );
     assert!(state.screen().rows.is_empty());
 }
 
@@ -336,7 +340,11 @@ fn the_live_view_shows_how_late_a_sources_newest_frame_came() {
     let mut state = LiveState::default();
     tell_run(&mut state, Run::Passive, &borrowed);
     let screen = state.screen();
-    let ages: Vec<_> = screen.rows.iter().map(|r| r.cells.last().cloned()).collect();
+    let ages: Vec<_> = screen
+        .rows
+        .iter()
+        .map(|r| r.cells.last().cloned())
+        .collect();
     assert_eq!(ages, [Some(("240".to_string(), true))]);
 }
 
@@ -351,6 +359,9 @@ fn the_exporter_gauges_how_late_a_sources_newest_frame_came() {
         .lines()
         .find(|l| l.starts_with("mavping_source_age_seconds{"))
         .unwrap_or_else(|| panic!("no age gauge in\n{text}"));
-    assert!(line.contains("sysid=\"1\"") && line.ends_with(" 0.24"), "{line}");
+    assert!(
+        line.contains("sysid=\"1\"") && line.ends_with(" 0.24"),
+        "{line}"
+    );
     assert_eq!(text.matches("mavping_source_age_seconds{").count(), 1);
 }

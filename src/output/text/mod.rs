@@ -18,17 +18,21 @@ mod reporter;
 mod round_trips;
 mod summary;
 mod sweep;
+mod whole;
 
 use std::io::{self, Write};
 
 use super::{Reporter, StartInfo};
+use crate::engine::kind::KindValue;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
 use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::PassivePlan;
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
-use crate::engine::summary::{CommandSummary, EchoInterim, EchoSummary, PassiveInterim};
+use crate::engine::summary::{
+    CommandSummary, EchoInterim, EchoSummary, KindSummary, PassiveInterim,
+};
 use crate::engine::sweep_report::{StepFigures, SweepConfig};
 use crate::engine::CommandSpec;
 use crate::frame::SysComp;
@@ -112,6 +116,25 @@ impl<W: Write> Reporter for TextReporter<W> {
 
     fn passive_summary(&mut self, s: &PassiveSummary, verdict: &Verdict) -> io::Result<()> {
         self.summary_block(&s.link, |out| passive::write_summary(out, s, verdict))
+    }
+
+    /// A kind with no lines of its own: its event's figures on a line.
+    fn other_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
+        match value.serialized().and_then(whole::event_line) {
+            Some(line) => self.if_shown(|t| writeln!(t.out.inner(), "{line}")),
+            None => Ok(()),
+        }
+    }
+
+    /// A kind with no summary of its own: its figures, one to a line.
+    fn other_summary(&mut self, s: &dyn KindSummary, verdict: &Verdict) -> io::Result<()> {
+        let Some((_, figures)) = s.serialized() else {
+            return Ok(());
+        };
+        self.summary_block(s.link(), |out| {
+            whole::write_figures(out, figures)?;
+            summary::write_failures(out, verdict)
+        })
     }
 }
 
