@@ -4,7 +4,7 @@
 
 use std::io::{self, Write};
 
-use super::format::{if_any, ms_each, ms_us};
+use super::format::{counted, if_any, ms_each, ms_us};
 use crate::engine::age::SourceAge;
 use crate::engine::answers::AnswerSummary;
 use crate::engine::stats::{Bucket, RttSummary};
@@ -112,7 +112,9 @@ pub(super) fn write_ages(out: &mut impl Write, ages: &[SourceAge]) -> io::Result
         let drift = h
             .drift_ppm
             .map_or(String::new(), |d| format!("; clock drift {d:+.1} ppm"));
-        let restarts = if_any(u64::from(h.restarts), |n| format!("; {n} restarts"));
+        let restarts = if_any(u64::from(h.restarts), |n| {
+            format!("; {}", counted(n, "restart"))
+        });
         writeln!(
             out,
             "  {} ({} {when}): p50 {:.1} ms, p90 {:.1} ms, p99 {:.1} ms, max {:.1} ms over {} \
