@@ -235,3 +235,31 @@ fn the_split_puts_a_relays_queue_on_the_direction_it_delays() {
         assert!(ms(split, &format!("{other}link_max_ms")) < 30.0, "{split}");
     }
 }
+
+/// A log whose frames were written late by a known queue, stamped by a
+/// vehicle clock 5 hours and 70 ppm off the logger's: its ages are the
+/// queue's, whatever the clocks; the hint stays off (a log's stamps are
+/// its logger's).
+#[test]
+fn a_log_written_with_known_delays_shows_them_as_age() {
+    let scratch = crate::tlog::Scratch::new("age-known");
+    let path = scratch.path("queued.tlog");
+    let plan = serde_json::json!({
+        "start_us": 1_764_500_000_000_000u64,
+        "sources": [{
+            "sysid": 1, "compid": 1, "rate": 50.0, "frames": 2500,
+            "clock": {"offset_ms": 18_000_000, "ppm": 70},
+            "queue": {"start_us": 10_000_000, "rise_us": 12_000_000, "peak_us": 800_000}
+        }]
+    });
+    crate::tlog::write_log(&path, &plan);
+    let (code, out, err) = run_mavping(&["--json", &format!("tlog:{}", path.display())]);
+    assert_eq!(code, 0, "{err}");
+    let summary = passive_summary(&out);
+    let h = headline(&summary, "1/1");
+    assert!(near(ms(h, "max_ms"), 800.0), "{h}");
+    assert!(near(ms(h, "p50_ms"), 0.0), "{h}");
+    let drift = ms(h, "drift_ppm");
+    assert!((drift + 70.0).abs() < 10.0, "{h}");
+    assert!(summary.get("hints").is_none(), "{summary}");
+}

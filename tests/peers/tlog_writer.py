@@ -19,6 +19,10 @@ The plan:
                  swap [n...]      held back, written after frame n+1
                  silence [[n,k]]  after frame n, k frames numbered and
                                   none written, in their time (a silence)
+               clock {"offset_ms", "ppm"}: ATTITUDE's time_boot_ms off
+                 the plan's time; queue {"start_us", "rise_us", "peak_us"}:
+                 each frame written that much after it was sent, growing
+                 to the peak over the rise and draining as fast
                links (mavproxy stamps): {"LINK": {"drop": [n...],
                  "delay_us": d}}: the frame is written once per link,
                  less that link's drops; plain: true stamps the source's
@@ -162,6 +166,25 @@ def link_node_truth(spec, written):
     return {"written": written, "reboots": reboots, **{k + "_grown": v for k, v in grown.items()}}
 
 
+def boot_ms(src, t):
+    """ATTITUDE's time_boot_ms of a frame sent at `t` (µs of the plan):
+    the vehicle's clock, `clock: {"offset_ms", "ppm"}` off ours."""
+    clock = src.get("clock", {})
+    ms = t * (1 + clock.get("ppm", 0) * 1e-6) / 1000 + clock.get("offset_ms", 0)
+    return int(ms) % 2**32
+
+
+def queued_us(src, t):
+    """How late a frame sent at `t` reaches the log: `queue: {"start_us",
+    "rise_us", "peak_us"}` grows from 0 to its peak over its rise from its
+    start, then drains as fast (the truth an age is held to)."""
+    q = src.get("queue")
+    if q is None or t <= q["start_us"]:
+        return 0
+    x = (t - q["start_us"]) / q["rise_us"]
+    return q["peak_us"] * (x if x <= 1 else max(0.0, 2 - x))
+
+
 def frames_of(src, mav):
     """(time_us, frame number, bytes, facts) of every frame the source
     numbers; facts: a position's (north_m, up_m) or a report's rxerrors."""
@@ -196,10 +219,10 @@ def frames_of(src, mav):
             msg, (north, up) = position_msg(mav, pos, t)
             facts = {"north_m": north, "up_m": up}
         else:
-            msg = mav.attitude_encode(int(t / 1000), 0.1, 0.2, 0.3, 0.01, 0.02, 0.03)
+            msg = mav.attitude_encode(boot_ms(src, t), 0.1, 0.2, 0.3, 0.01, 0.02, 0.03)
         data = msg.pack(mav, force_mavlink1=src.get("version", 2) == 1)
         mav.seq = (mav.seq + 1) % 256
-        yield int(t), n, bytes(data), facts
+        yield int(t + queued_us(src, t)), n, bytes(data), facts
         n += 1
         t += period
 
