@@ -722,6 +722,7 @@ pub(crate) fn passive_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
         at: 1_000 * ms,
         table: table.summary(1_000 * ms),
         identities: vec![(ONE, identity())],
+        ages: ages(),
     });
     table.on_frame(ONE, 10, 30, 39, 3_000 * ms);
     let summary = PassiveSummary {

@@ -366,6 +366,8 @@ pub struct PassiveInterim {
     pub(crate) table: TableSummary,
     /// What each source said it is, from its HEARTBEAT.
     pub(crate) identities: Vec<(SysComp, Identity)>,
+    /// Each source's age above its baseline so far.
+    pub(crate) ages: Vec<SourceAge>,
 }
 
 impl crate::engine::kind::KindValue for PassiveInterim {}

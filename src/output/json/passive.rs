@@ -56,6 +56,9 @@ pub(super) struct Interim<'a> {
     totals: &'a LinkTotals,
     sources: Vec<Source<'a>>,
     untracked: Untracked,
+    /// Each source's age above its baseline so far.
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    age: &'a [SourceAge],
 }
 
 impl Lines {
@@ -68,6 +71,7 @@ impl Lines {
             totals: &figures.table.totals,
             sources: sources(&figures.table, &figures.identities),
             untracked: figures.table.untracked,
+            age: &figures.ages,
         }
     }
 }

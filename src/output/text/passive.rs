@@ -50,9 +50,17 @@ impl<W: Write> TextReporter<W> {
             let damaged = if_any(r.counts.damaged, |n| format!("{n} damaged, "));
             let [received, lost, loss, duplicate, reordered, silences, per_s, _] =
                 source_figures(r);
+            let age = figures.ages.iter().find(|a| a.source == r.source);
+            let age = age.map_or(String::new(), |a| {
+                let h = &a.headline;
+                format!(
+                    ", age p99 {:.1} ms (max {:.1}) above baseline",
+                    h.p99_ms, h.max_ms
+                )
+            });
             writeln!(
                 self.out,
-                "{}{role}: {received} received, {damaged}{lost} lost ({loss}), {duplicate} duplicate, {reordered} reordered, {silences} silences, {per_s} frames/s",
+                "{}{role}: {received} received, {damaged}{lost} lost ({loss}), {duplicate} duplicate, {reordered} reordered, {silences} silences, {per_s} frames/s{age}",
                 r.source,
             )?;
         }
@@ -501,6 +509,7 @@ mod tests {
                 at,
                 table,
                 identities: vec![],
+                ages: vec![],
             }))
             .unwrap();
         }

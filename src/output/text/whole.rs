@@ -12,7 +12,8 @@ pub(super) fn event_line(value: &dyn erased_serde::Serialize) -> Option<String> 
     let Value::Object(mut fields) = serde_json::to_value(value).ok()? else {
         return None;
     };
-    let kind = match fields.remove("type") {
+    // shift_remove: the figures keep their order (remove would swap).
+    let kind = match fields.shift_remove("type") {
         Some(Value::String(kind)) => kind,
         _ => "event".to_string(),
     };

@@ -416,6 +416,7 @@ impl Driver for PassiveDriver {
         Some(Interim::new(PassiveInterim {
             at,
             identities: identities(&table, roster),
+            ages: self.source_ages(&table),
             table,
         }))
     }
