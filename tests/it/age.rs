@@ -262,4 +262,13 @@ fn a_log_written_with_known_delays_shows_them_as_age() {
     let drift = ms(h, "drift_ppm");
     assert!((drift + 70.0).abs() < 10.0, "{h}");
     assert!(summary.get("hints").is_none(), "{summary}");
+    // The timeline puts the queue where it grew: the peak at 22 s, in the
+    // third window; nothing in the first.
+    let windows: Vec<Value> = json_lines(&out)
+        .into_iter()
+        .filter(|l| l["type"] == "flight_window")
+        .collect();
+    let max_in = |k: usize| ms(&windows[k]["age"], "max_ms");
+    assert!(near(max_in(2), 800.0), "{}", windows[2]);
+    assert!(max_in(0) < 10.0, "{}", windows[0]);
 }

@@ -201,6 +201,7 @@ mod tests {
                 distance_m,
                 alt_m: 100.0,
             }),
+            age: None,
         }
     }
 

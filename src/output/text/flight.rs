@@ -114,6 +114,9 @@ fn window(w: &FlightWindow, clock: LogClock) -> String {
             r.distance_m, r.ground_m, r.alt_m
         );
     }
+    if let Some(a) = &w.age {
+        line += &format!("; age p99 {:.0} ms (max {:.0})", a.p99_ms, a.max_ms);
+    }
     line
 }
 

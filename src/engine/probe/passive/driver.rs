@@ -336,6 +336,12 @@ impl Driver for PassiveDriver {
         }
         take(&mut self.table, frame, at);
         self.age.on_frame(frame, at);
+        if let Some(f) = self.flight.as_mut().filter(|_| !ground) {
+            let now = self.age.now(frame.source).filter(|a| a.at == at);
+            if let Some(a) = now.filter(|_| frame.stamps.iter().next().is_some()) {
+                f.age(frame.source, a.age_ms);
+            }
+        }
     }
 
     fn on_frame(&mut self, _frame: &Frame, _path: PathId, _at: Nanos) {}

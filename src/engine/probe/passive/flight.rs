@@ -30,6 +30,7 @@
 //! - **A loss burst** is a run of consecutive windows each losing at least
 //!   [`BURST_LOSS_PCT`] of their frames.
 
+use hdrhistogram::Histogram;
 use std::collections::VecDeque;
 
 use serde::Serialize;
@@ -120,6 +121,17 @@ pub(crate) struct FlightWindow {
     pub(crate) radio: Option<RadioWindow>,
     /// At the window's last position.
     pub(crate) range: Option<Range>,
+    /// The vehicle's frames' age above its baseline in the window, by
+    /// their own clock stamps: a queue that grew there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) age: Option<WindowAge>,
+}
+
+/// Ages above the baseline in one window, ms.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub(crate) struct WindowAge {
+    pub(crate) p99_ms: f64,
+    pub(crate) max_ms: f64,
 }
 
 /// A silence or a loss burst, `start` to `end`.
@@ -292,6 +304,8 @@ struct Current {
     /// The radio's error counter's growth when it began.
     rxerrors_at_start: u64,
     range: Option<Range>,
+    /// The vehicle's frames' ages in it, µs (made at the first).
+    ages: Option<Histogram<u64>>,
 }
 
 #[derive(Debug, Clone)]
@@ -409,6 +423,19 @@ impl Flight {
         }
     }
 
+    /// The age above its baseline of a frame from `source` (its clock
+    /// stamps'): kept for the window when `source` is the vehicle.
+    pub(crate) fn age(&mut self, source: SysComp, age_ms: f64) {
+        if self.vehicle.is_some_and(|v| v != source) || is_radio_ids(source) {
+            return;
+        }
+        let ages = self.current.ages.get_or_insert_with(|| {
+            // µs to an hour, two significant digits: a window's p99.
+            Histogram::new_with_bounds(1, 3_600_000_000, 2).expect("valid bounds")
+        });
+        ages.saturating_record((age_ms * 1e3).max(1.0) as u64);
+    }
+
     /// The events closed since the last call, in order.
     pub(crate) fn drain(&mut self) -> impl Iterator<Item = FlightEvent> + '_ {
         self.pending.drain(..)
@@ -492,6 +519,10 @@ impl Flight {
                 rxerrors: self.rxerrors.grown() - c.rxerrors_at_start,
             }),
             range: c.range,
+            age: c.ages.as_ref().map(|h| WindowAge {
+                p99_ms: h.value_at_quantile(0.99) as f64 / 1e3,
+                max_ms: h.max() as f64 / 1e3,
+            }),
         }
     }
 
