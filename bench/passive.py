@@ -176,12 +176,39 @@ def rows(mavping, quick):
     return out
 
 
+def age_rows(mavping, before, quick):
+    """`--age-against BINARY`: CPU per received frame of `--passive` at
+    100k frames/s, this build (which reads every frame's clock stamp for
+    its age) beside BINARY (a build before it, which does not), taking
+    turns, three trials each, in the same run."""
+    seconds = 4 if quick else 10
+    per = {mavping: [], before: []}
+    for _ in range(3):
+        for binary in (mavping, before):
+            sent, src, cpu, wall, rss = mavping_passive(binary, RATE, seconds)
+            got = src["counts"]["received"] if src else 0
+            ages = bool(src) and binary == mavping
+            print(f"bench: age {os.path.basename(os.path.dirname(binary))}: sent {sent:,}, "
+                  f"received {got:,}, CPU {cpu:.3f} s, RSS {rss:,} KiB", flush=True)
+            per[binary].append((us(cpu, got), rss, ages))
+    with_age, without = median([t[0] for t in per[mavping]]), median([t[0] for t in per[before]])
+    return [("`--passive` at 100k frames/s: CPU per received frame, median (µs), with age "
+             "tracking vs the build before", f"{with_age:.2f}", f"{without:.2f}",
+             f"{with_age / without:.2f}x"),
+            ("peak RSS (KiB)", f"{max(t[1] for t in per[mavping]):,}",
+             f"{max(t[1] for t in per[before]):,}", "")]
+
+
 def main():
     args = sys.argv[1:]
     mavping = (os.path.abspath(args[args.index("--binary") + 1]) if "--binary" in args
                else os.path.join(ROOT, "target", "release", "mavping"))
     load = os.getloadavg()[0]
-    table = rows(mavping, "--quick" in args)
+    if "--age-against" in args:
+        before = os.path.abspath(args[args.index("--age-against") + 1])
+        table = age_rows(mavping, before, "--quick" in args)
+    else:
+        table = rows(mavping, "--quick" in args)
     print(f"\nload average at start {load:.2f}, at end {os.getloadavg()[0]:.2f} "
           f"(1-minute; {os.cpu_count()} CPUs)\n")
     print("| figure | mavping | baseline | ratio |")

@@ -32,7 +32,7 @@ mod linux {
     use std::os::fd::AsRawFd;
     use std::time::{Duration, Instant};
 
-    use mavping::frame::{self, Header, Msg, SysComp, Version};
+    use mavping::frame::{self, Header, Msg, Version};
     use nix::sys::resource::{getrusage, UsageWho};
     use nix::sys::socket::{self as nixsock, MsgFlags, MultiHeaders, SockaddrStorage};
     use nix::sys::time::TimeSpec;
@@ -48,30 +48,28 @@ mod linux {
         u.tv_sec() as f64 + s.tv_sec() as f64 + (u.tv_usec() + s.tv_usec()) as f64 / 1e6
     }
 
-    /// The 256 frames of the stream, one per packet sequence number.
-    fn frames() -> Vec<Vec<u8>> {
-        let source = SysComp::new(1, 1);
-        (0..=255u8)
-            .map(|seq| {
-                let mut bytes = Vec::new();
-                let header = Header {
-                    sysid: source.sysid,
-                    compid: source.compid,
-                    seq,
-                };
-                let msg = Msg::Attitude {
-                    time_boot_ms: u32::from(seq) * 10,
-                };
-                frame::encode(&mut bytes, Version::V2, header, &msg);
-                bytes
-            })
-            .collect()
+    /// A frame of the stream: its packet sequence number, and the sender's
+    /// clock (ms since the stream began) as a vehicle stamps ATTITUDE, so
+    /// a listener that reads ages has real stamps to read.
+    fn frame(seq: u8, time_boot_ms: u32) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        let header = Header {
+            sysid: 1,
+            compid: 1,
+            seq,
+        };
+        frame::encode(
+            &mut bytes,
+            Version::V2,
+            header,
+            &Msg::Attitude { time_boot_ms },
+        );
+        bytes
     }
 
     fn send(to: &str, rate: f64, seconds: f64) {
         let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
         socket.connect(to).unwrap();
-        let frames = frames();
         let fd = socket.as_raw_fd();
         let batch = ((rate * BATCH_S).round() as usize).clamp(1, MAX_BATCH);
         let every = Duration::from_secs_f64(batch as f64 / rate);
@@ -89,9 +87,11 @@ mod linux {
                 &due,
             );
             let count = batch.min((total - sent) as usize);
-            let iovs: Vec<[IoSlice<'_>; 1]> = (0..count)
-                .map(|k| [IoSlice::new(&frames[((sent + k as u64) % 256) as usize])])
+            let ms = (every * n).as_millis() as u32;
+            let frames: Vec<Vec<u8>> = (0..count)
+                .map(|k| frame(((sent + k as u64) % 256) as u8, ms))
                 .collect();
+            let iovs: Vec<[IoSlice<'_>; 1]> = frames.iter().map(|f| [IoSlice::new(f)]).collect();
             let addrs = vec![None; count];
             match nixsock::sendmmsg(fd, &mut headers, &iovs, &addrs, [], MsgFlags::empty()) {
                 Ok(done) => sent += done.count() as u64,

@@ -12,6 +12,9 @@
 #   bash scripts/bench.sh --passive  # only the passive rows (about 2 minutes):
 #                                  # --passive at 100,000 frames/s beside a
 #                                  # plain reader and pymavlink's mavutil
+#   bash scripts/bench.sh --passive --age-against OLD_BINARY  # --passive's CPU
+#                                  # per frame with age tracking beside a
+#                                  # build without it, same run (issue 40)
 # Not run by CI (it needs a quiet machine and minutes).
 # Micro-benchmarks of the parser, matcher and statistics: cargo bench --bench core
 set -euo pipefail

@@ -375,7 +375,8 @@ fn judge_ages(ages: &[SourceAge], t: &Thresholds, failures: &mut Vec<Failure>) {
         return;
     };
     let limit_ms = max.as_secs_f64() * 1e3;
-    for a in ages.iter().filter(|a| a.headline.p99_ms > limit_ms) {
+    let judged = ages.iter().filter(|a| a.headline.clock.keeps_time());
+    for a in judged.filter(|a| a.headline.p99_ms > limit_ms) {
         failures.push(Failure {
             responder: Some(a.source),
             check: Check::MaxAge,

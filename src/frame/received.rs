@@ -58,6 +58,13 @@ impl StampClock {
         }
     }
 
+    /// Whether the clock runs at the sender's real rate: a signature's
+    /// does not (pymavlink adds one unit a frame and ArduPilot steps it to
+    /// GPS time in whole seconds), so its ages are shown but judge nothing.
+    pub(crate) const fn keeps_time(self) -> bool {
+        !matches!(self, StampClock::Signature)
+    }
+
     /// Nanoseconds in one unit of the clock.
     pub(crate) const fn unit_ns(self) -> u64 {
         match self {

@@ -37,8 +37,8 @@ const ECHO: Kind = Kind {
 
 const PASSIVE: Kind = Kind {
     headers: &[
-        "source", "identity", "recv", "lost", "loss%", "dup", "reord", "sil", "fr/s", "per",
-        "second",
+        "source", "identity", "recv", "lost", "loss%", "dup", "reord", "sil", "fr/s", "age", "ms",
+        "per", "second",
     ],
     keys: "q or Ctrl-C: stop and print the summary · a bar a second: frames, red: lost",
 };
@@ -221,7 +221,7 @@ fn a_passive_run_has_a_row_per_source_with_its_seconds_at_80x24() {
         rows.len() == 2
             && rows.iter().all(|r| {
                 let w = words(r);
-                w.len() == 11 && w[4] != "0" && w[10].chars().count() >= 3
+                w.len() == 12 && w[4] != "0" && w[11].chars().count() >= 3
             })
     });
     assert_eq!(assert_fits_as(&PASSIVE, &screen, 80, 24), 1);
@@ -235,6 +235,10 @@ fn a_passive_run_has_a_row_per_source_with_its_seconds_at_80x24() {
             // 51 frames a second (50 ATTITUDE and a HEARTBEAT), less 10%.
             let rate: f64 = w[9].parse().unwrap();
             assert!((38.0..=56.0).contains(&rate), "{r}");
+            // Its newest ATTITUDE's age above its baseline: the sim's 2 ms
+            // of jitter and whole-ms stamps.
+            let age: f64 = w[10].parse().unwrap();
+            assert!((0.0..=5.0).contains(&age), "{r}");
             (w[0].to_string(), w[3].parse().unwrap())
         })
         .collect();

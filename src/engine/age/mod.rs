@@ -254,6 +254,7 @@ const QUEUE_MAX_MS: f64 = 250.0;
 pub(crate) fn queue_building(age: &SourceAge, received: u64, lost: u64) -> Option<Hint> {
     let h = &age.headline;
     let queued = h.meaning == StampMeaning::Sent
+        && h.clock.keeps_time()
         && h.p90_ms >= QUEUE_P90_MS
         && h.max_ms >= QUEUE_MAX_MS
         && lost * 100 <= received + lost;

@@ -457,3 +457,46 @@ fn absolute_age_carries_the_offset_bounds() {
     // 200 ppm over 10.08 s widens each side by about 2 ms.
     assert!(upper - lower < 11_000_000, "{a:?}");
 }
+
+/// The queue hint needs a send stamp on a clock that keeps time, frames
+/// held late many in a row, and next to no loss.
+#[test]
+fn the_queue_hint_takes_a_real_clock_a_sustained_delay_and_no_loss() {
+    let figures = |clock, meaning, p90_ms, max_ms| ClockAgeSummary {
+        clock,
+        meaning,
+        samples: 400,
+        p50_ms: 0.0,
+        p90_ms,
+        p99_ms: max_ms,
+        max_ms,
+        drift_ppm: None,
+        restarts: 0,
+        rejected: 0,
+        baseline_error_ms: 0.0,
+    };
+    let age = |h| SourceAge {
+        source: SysComp::new(1, 1),
+        headline: h,
+        clocks: vec![h],
+    };
+    let queue = age(figures(
+        StampClock::BootMs,
+        StampMeaning::Sent,
+        900.0,
+        1500.0,
+    ));
+    let hint = queue_building(&queue, 400, 4).expect("a queue");
+    assert_eq!(hint.code, HintCode::QueueBuilding);
+    assert!(hint.text.contains("up to 1.50 s") && hint.text.contains("lost 4 of 404"));
+    // More than 1 % lost: a link that drops, not only queues.
+    assert!(queue_building(&queue, 400, 5).is_none());
+    // A spike (one frame in ten not late), a sample time, a signature.
+    for other in [
+        figures(StampClock::BootMs, StampMeaning::Sent, 20.0, 1500.0),
+        figures(StampClock::BootMs, StampMeaning::Sampled, 900.0, 1500.0),
+        figures(StampClock::Signature, StampMeaning::Sent, 900.0, 1500.0),
+    ] {
+        assert!(queue_building(&age(other), 400, 0).is_none(), "{other:?}");
+    }
+}
