@@ -148,21 +148,32 @@ fn rank(clock: StampClock, meaning: StampMeaning) -> u8 {
 }
 
 impl AgeTracker {
-    /// Takes every stamp `frame` carries, received at `at`.
-    pub(crate) fn on_frame(&mut self, frame: &Frame, at: Nanos) {
+    /// Takes every stamp `frame` carries, received at `at`; the frame's
+    /// age above its baseline (ms) by its best-ranked stamp that keeps
+    /// time, if that stamp fitted its baseline.
+    pub(crate) fn on_frame(&mut self, frame: &Frame, at: Nanos) -> Option<f64> {
+        let mut best: Option<(u8, f64)> = None;
         for stamp in frame.stamps.iter() {
-            self.on_stamp(frame.source, stamp, at);
+            let age = self.on_stamp(frame.source, stamp, at);
+            let rank = rank(stamp.clock, stamp.meaning);
+            if let Some(age) = age.filter(|_| stamp.clock.keeps_time()) {
+                if best.is_none_or(|(r, _)| rank < r) {
+                    best = Some((rank, age));
+                }
+            }
         }
+        best.map(|(_, age)| age)
     }
 
-    fn on_stamp(&mut self, source: SysComp, stamp: Stamp, at: Nanos) {
+    /// Takes one stamp; its age (ms) if it fitted its baseline.
+    fn on_stamp(&mut self, source: SysComp, stamp: Stamp, at: Nanos) -> Option<f64> {
         let key = Key {
             source,
             clock: stamp.clock,
             meaning: stamp.meaning,
         };
         if !self.clocks.contains_key(&key) && self.clocks.len() >= MAX_CLOCKS {
-            return;
+            return None;
         }
         let entry = self.clocks.entry(key).or_default();
         let value = match stamp.clock {
@@ -171,6 +182,8 @@ impl AgeTracker {
         };
         let ns = i128::from(value) * i128::from(stamp.clock.unit_ns());
         entry.one_way.record(at, ns);
+        let (when, age_ns) = entry.one_way.now()?;
+        (when == at).then_some(age_ns / 1e6)
     }
 
     /// The headline clock of `source` among its keys with figures.
@@ -179,7 +192,7 @@ impl AgeTracker {
             .iter()
             .filter(|(k, _)| k.source == source)
             .min_by_key(|(k, c)| {
-                let samples = c.one_way.figures().map_or(0, |f| f.samples);
+                let samples = c.one_way.samples();
                 (rank(k.clock, k.meaning), std::cmp::Reverse(samples))
             })
     }

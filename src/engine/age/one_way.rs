@@ -217,6 +217,11 @@ impl OneWay {
         self.last_stamp = None;
     }
 
+    /// Stamps taken, fitting or not.
+    pub(crate) fn samples(&self) -> u64 {
+        self.samples
+    }
+
     /// The newest point's age above the floor known when it arrived, ns,
     /// and when it arrived.
     pub(crate) fn now(&self) -> Option<(Nanos, f64)> {

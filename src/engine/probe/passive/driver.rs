@@ -335,12 +335,9 @@ impl Driver for PassiveDriver {
             f.on_received(frame, at);
         }
         take(&mut self.table, frame, at);
-        self.age.on_frame(frame, at);
-        if let Some(f) = self.flight.as_mut().filter(|_| !ground) {
-            let now = self.age.now(frame.source).filter(|a| a.at == at);
-            if let Some(a) = now.filter(|_| frame.stamps.iter().next().is_some()) {
-                f.age(frame.source, a.age_ms);
-            }
+        let age = self.age.on_frame(frame, at);
+        if let (Some(f), Some(age)) = (self.flight.as_mut().filter(|_| !ground), age) {
+            f.age(frame.source, age);
         }
     }
 
