@@ -2,9 +2,9 @@
 //! events of the kinds it shows and leaves the rest. Each kind of event
 //! and each kind of summary has a method here whose default hands it to
 //! [`Reporter::other_event`] or [`Reporter::other_summary`] (as ripgrep's
-//! `Sink`), where JSON writes any kind's value whole as it serialises and
-//! every other format does nothing. So a format implements what it shows,
-//! and a new kind costs no "ignore" arm in any format and no JSON code.
+//! `Sink`), where JSON and text write any kind's value whole as it
+//! serialises and every other format does nothing. So a format implements
+//! what it shows, and a new kind costs no format any code.
 //! That every format takes every event and summary of every kind without
 //! failing is a test (`every_format.rs`), not an exhaustive match.
 
@@ -100,9 +100,9 @@ pub(crate) trait Reporter {
     }
 
     /// A kind's own event that this format has no method for: written
-    /// whole by a format that writes every kind's (JSON, where the value
-    /// is [`KindValue::serialized`]), shown by no other. A kind's event
-    /// methods above come here unless a format takes them.
+    /// whole by the formats that write every kind's (JSON and text, where
+    /// the value is [`KindValue::serialized`]), shown by no other. A
+    /// kind's event methods above come here unless a format takes them.
     fn other_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
         Ok(())
     }
