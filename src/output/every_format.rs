@@ -364,4 +364,23 @@ fn the_exporter_gauges_how_late_a_sources_newest_frame_came() {
         "{line}"
     );
     assert_eq!(text.matches("mavping_source_age_seconds{").count(), 1);
+    // And all its frames' ages so far, as a histogram (cumulative).
+    let sample = |suffix: &str, le: Option<&str>| {
+        text.lines()
+            .find(|l| {
+                l.starts_with(&format!("mavping_source_frame_age_seconds_{suffix}{{"))
+                    && le.is_none_or(|le| l.contains(&format!("le=\"{le}\"")))
+            })
+            .and_then(|l| l.rsplit(' ').next())
+            .unwrap_or_else(|| panic!("no {suffix} {le:?} in\n{text}"))
+            .to_string()
+    };
+    assert_eq!(sample("bucket", Some("0.001")), "30");
+    assert_eq!(sample("bucket", Some("0.1")), "30");
+    assert_eq!(sample("bucket", Some("0.25")), "38");
+    assert_eq!(sample("bucket", Some("0.5")), "40");
+    assert_eq!(sample("bucket", Some("+Inf")), "40");
+    assert_eq!(sample("sum", None), "3.5");
+    assert_eq!(sample("count", None), "40");
+    assert!(text.contains("# TYPE mavping_source_frame_age_seconds histogram"));
 }

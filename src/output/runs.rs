@@ -7,7 +7,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
-use crate::engine::age::{AgeNow, ClockAgeSummary, SourceAge, SplitSummary};
+use crate::engine::age::{AgeCounts, AgeNow, ClockAgeSummary, SourceAge, SplitSummary};
 use crate::engine::answers::AnswerSummary;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
@@ -360,6 +360,16 @@ impl Borrowed {
                             meaning: StampMeaning::Sent,
                             age_ms: 240.0,
                             at: 1_000_000_000,
+                        },
+                    )],
+                    // Its 40 frames so far: 30 at 1 ms or less, 8 under
+                    // 250 ms, 2 under 500 ms; 3.5 s in all.
+                    age_counts: vec![(
+                        SysComp::new(1, 1),
+                        AgeCounts {
+                            buckets: [30, 0, 0, 0, 0, 0, 8, 2, 0, 0, 0, 0, 0],
+                            sum_ms: 3500.0,
+                            count: 40,
                         },
                     )],
                 }

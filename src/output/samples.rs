@@ -307,6 +307,7 @@ mod tests {
             at: 1_000 * ms,
             table: first.clone(),
             ages: Vec::new(),
+            age_counts: Vec::new(),
         }))
         .unwrap();
         table.on_frame(a, 2, 30, 40, 1_100 * ms);
@@ -346,6 +347,7 @@ mod tests {
                 at: 1_000_000_000,
                 table: at_one.clone(),
                 ages: Vec::new(),
+                age_counts: Vec::new(),
             }))
             .unwrap();
         }

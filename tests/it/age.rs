@@ -272,3 +272,29 @@ fn a_log_written_with_known_delays_shows_them_as_age() {
     assert!(near(max_in(2), 800.0), "{}", windows[2]);
     assert!(max_in(0) < 10.0, "{}", windows[0]);
 }
+
+/// The exporter's histogram of a source's frames' ages counts every aged
+/// frame once, under the bounds the queue's peak (1.5 s) says, and
+/// promtool takes it.
+#[test]
+fn the_exporter_counts_every_aged_frame_under_its_bound() {
+    let scratch = crate::tlog::Scratch::new("age-prom");
+    let prom = scratch.path("age.prom");
+    let link = "sim:?clock=virtual&stream=ATTITUDE@20&queue_down=1.5s@8s&jitter=0ms";
+    let (_, summary, _) = passive(link, &["--prometheus-textfile", prom.to_str().unwrap()]);
+    let samples = headline(&summary, "1/1")["samples"].as_u64().unwrap();
+    let text = std::fs::read_to_string(&prom).unwrap();
+    assert_promtool_clean(&text);
+    let value = |name: &str, le: Option<&str>| -> u64 {
+        let labels: Vec<(&str, &str)> = le.map(|le| vec![("le", le)]).unwrap_or_default();
+        sample(&text, name, &labels).unwrap_or_else(|| panic!("no {name} {le:?}")) as u64
+    };
+    let bucket = "mavping_source_frame_age_seconds_bucket";
+    assert_eq!(
+        value("mavping_source_frame_age_seconds_count", None),
+        samples
+    );
+    assert_eq!(value(bucket, Some("+Inf")), samples);
+    assert_eq!(value(bucket, Some("2.5")), samples);
+    assert!(value(bucket, Some("1")) < samples);
+}

@@ -81,6 +81,32 @@ struct ClockAge {
 #[derive(Debug, Clone, Default)]
 pub(crate) struct AgeTracker {
     clocks: HashMap<Key, ClockAge>,
+    /// Each source's frames' ages so far, counted into [`AGE_BOUNDS_MS`].
+    counts: HashMap<SysComp, AgeCounts>,
+}
+
+/// The upper bounds (ms) a source's frames' ages are counted under: a
+/// histogram an exporter can show as it is.
+pub(crate) const AGE_BOUNDS_MS: [f64; 12] = [
+    1.0, 5.0, 10.0, 25.0, 50.0, 100.0, 250.0, 500.0, 1000.0, 2500.0, 5000.0, 10000.0,
+];
+
+/// A source's frames' ages above its baseline so far: how many fell at
+/// or under each of [`AGE_BOUNDS_MS`] and above the last (not cumulative),
+/// their sum and their number.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct AgeCounts {
+    pub(crate) buckets: [u64; AGE_BOUNDS_MS.len() + 1],
+    pub(crate) sum_ms: f64,
+    pub(crate) count: u64,
+}
+
+impl AgeCounts {
+    fn record(&mut self, age_ms: f64) {
+        self.buckets[AGE_BOUNDS_MS.partition_point(|&b| b < age_ms)] += 1;
+        self.sum_ms += age_ms;
+        self.count += 1;
+    }
 }
 
 /// A source's newest age above baseline, on its headline clock.
@@ -162,7 +188,17 @@ impl AgeTracker {
                 }
             }
         }
-        best.map(|(_, age)| age)
+        let age = best.map(|(_, age)| age)?;
+        let room = self.counts.len() < MAX_CLOCKS || self.counts.contains_key(&frame.source);
+        if room {
+            self.counts.entry(frame.source).or_default().record(age);
+        }
+        Some(age)
+    }
+
+    /// `source`'s frames' ages so far, counted.
+    pub(crate) fn counts(&self, source: SysComp) -> Option<AgeCounts> {
+        self.counts.get(&source).copied()
     }
 
     /// Takes one stamp; its age (ms) if it fitted its baseline.

@@ -500,3 +500,15 @@ fn the_queue_hint_takes_a_real_clock_a_sustained_delay_and_no_loss() {
         assert!(queue_building(&age(other), 400, 0).is_none(), "{other:?}");
     }
 }
+
+/// Each frame's age is counted once, under the first bound at or above
+/// it, for the source that sent it.
+#[test]
+fn frames_ages_are_counted_per_source_under_their_bounds() {
+    let mut counts = AgeCounts::default();
+    for age in [0.5, 1.0, 1.5, 300.0, 20_000.0] {
+        counts.record(age);
+    }
+    assert_eq!(counts.buckets, [2, 1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+    assert_eq!((counts.count, counts.sum_ms), (5, 20_303.0));
+}

@@ -396,6 +396,7 @@ mod tests {
                 at,
                 table: table.summary(at),
                 ages: Vec::new(),
+                age_counts: Vec::new(),
             }));
         }
         s
@@ -446,6 +447,7 @@ mod tests {
             at: 1_000_000_000,
             table: table.summary(1_000_000_000),
             ages: Vec::new(),
+            age_counts: Vec::new(),
         }));
         let screen = s.screen();
         assert!(*screen.kind == view::ECHO);

@@ -197,7 +197,7 @@ impl Reporter for Metrics {
     /// The table of sources, as told while the session goes on.
     fn sources(&mut self, now: &SourcesNow) -> io::Result<()> {
         sources::update(&mut self.sources, &now.table, false);
-        sources::update_ages(&mut self.sources, &now.ages);
+        sources::update_ages(&mut self.sources, now);
         Ok(())
     }
 

@@ -7,6 +7,7 @@
 use super::exposition::{Exposition, Family, Figure, SeriesFigure};
 use super::sources::SourceSeries;
 use super::Metrics;
+use crate::engine::age::AGE_BOUNDS_MS;
 use crate::engine::summary::{Direction, ProbeName};
 use crate::frame::SysComp;
 
@@ -118,6 +119,42 @@ pub(super) fn write_sources(out: &mut Exposition, links: &[&Metrics]) {
             })
     };
     out.figures(&SOURCE, series);
+    write_age_histogram(out, series);
+}
+
+const FRAME_AGE: Family = Family::histogram(
+    "mavping_source_frame_age_seconds",
+    "The source's frames' ages above its baseline, by their own clock stamps: how much later than its quickest each arrived (see mavping_source_age_seconds for the newest).",
+);
+
+/// Each source's frames' ages counted, as a histogram, for the sources
+/// whose frames carry a clock stamp.
+fn write_age_histogram<'a, I>(out: &mut Exposition, series: impl Fn() -> I)
+where
+    I: Iterator<Item = (String, &'a SourceSeries)>,
+{
+    let counted = || series().filter_map(|(l, s)| Some((l, s.age_counts?)));
+    if counted().next().is_none() {
+        return;
+    }
+    out.header(&FRAME_AGE);
+    let name = |part| format!("{}_{part}", FRAME_AGE.name);
+    for (labels, c) in counted() {
+        let mut cumulative = 0;
+        for (i, count) in c.buckets.iter().enumerate() {
+            cumulative += count;
+            let le = AGE_BOUNDS_MS
+                .get(i)
+                .map_or("+Inf".into(), |ms| (ms / 1e3).to_string());
+            out.sample(
+                &name("bucket"),
+                &format!("{labels},le=\"{le}\""),
+                cumulative,
+            );
+        }
+        out.sample(&name("sum"), &labels, c.sum_ms / 1e3);
+        out.sample(&name("count"), &labels, c.count);
+    }
 }
 
 const DIRECTION_LOSS: Family = Family::gauge(
@@ -233,6 +270,7 @@ mod tests {
             at,
             table: table.summary(at),
             ages: Vec::new(),
+            age_counts: Vec::new(),
         }))
         .unwrap();
         let text = render(&[&m]);

@@ -8,8 +8,9 @@
 
 use std::collections::BTreeMap;
 
-use crate::engine::age::AgeNow;
+use crate::engine::age::AgeCounts;
 use crate::engine::probe::passive::tracker::DEFAULT_MAX_SOURCES;
+use crate::engine::probe::passive::SourcesNow;
 use crate::engine::summary::passive::{SeqCounts, SourceSummary, TableSummary};
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -101,8 +102,10 @@ pub(super) struct SourceSeries {
     /// This session's latest table, if the source was heard in it.
     latest: Option<Latest>,
     /// How much later than its quickest its newest stamped frame came
-    /// (seconds), if its frames carry a clock stamp.
+    /// (seconds), if its frames carry a clock stamp...
     pub(crate) age_s: Option<f64>,
+    /// ...and all its frames' ages so far, counted.
+    pub(crate) age_counts: Option<AgeCounts>,
 }
 
 impl SourceSeries {
@@ -182,11 +185,16 @@ pub(super) type Sources = BTreeMap<SysComp, SourceSeries>;
 
 /// The table as told at a tick (`ended` false) or at the end of the
 /// session. Sources beyond [`MAX_SOURCES`] are left out.
-/// Each source's age now, as told with the table.
-pub(super) fn update_ages(sources: &mut Sources, ages: &[(SysComp, AgeNow)]) {
-    for (id, age) in ages {
+/// Each source's age now and its ages counted, as told with the table.
+pub(super) fn update_ages(sources: &mut Sources, now: &SourcesNow) {
+    for (id, age) in &now.ages {
         if let Some(s) = sources.get_mut(id) {
             s.age_s = Some(age.age_ms / 1e3);
+        }
+    }
+    for (id, counts) in &now.age_counts {
+        if let Some(s) = sources.get_mut(id) {
+            s.age_counts = Some(*counts);
         }
     }
 }

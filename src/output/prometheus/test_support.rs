@@ -94,6 +94,7 @@ impl Metrics {
                 at: 0,
                 table: table.clone(),
                 ages: Vec::new(),
+                age_counts: Vec::new(),
             };
             self.sources(&now).expect("metrics take every event");
         }

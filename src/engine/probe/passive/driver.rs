@@ -263,7 +263,17 @@ pub(crate) fn tell_sources(
         .iter()
         .filter_map(|s| Some((s.source, age.now(s.source)?)))
         .collect();
-    observer.event(&Event::Kind(&SourcesNow { at, table, ages }))
+    let age_counts = table
+        .sources
+        .iter()
+        .filter_map(|s| Some((s.source, age.counts(s.source)?)))
+        .collect();
+    observer.event(&Event::Kind(&SourcesNow {
+        at,
+        table,
+        ages,
+        age_counts,
+    }))
 }
 
 /// What each source of `table` said it is, from its HEARTBEAT.

@@ -1,7 +1,7 @@
 //! What a passive run tells beside its summary: its plan at the start,
 //! and every source's figures so far, once a second.
 
-use crate::engine::age::AgeNow;
+use crate::engine::age::{AgeCounts, AgeNow};
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -25,8 +25,10 @@ pub struct SourcesNow {
     pub(crate) at: Nanos,
     pub(crate) table: TableSummary,
     /// Each source's newest age above its baseline, where its frames
-    /// carry a clock stamp.
+    /// carry a clock stamp...
     pub(crate) ages: Vec<(SysComp, AgeNow)>,
+    /// ...and all its frames' ages so far, counted.
+    pub(crate) age_counts: Vec<(SysComp, AgeCounts)>,
 }
 
 impl crate::engine::kind::KindValue for SourcesNow {}
