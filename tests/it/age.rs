@@ -98,25 +98,15 @@ fn a_quiet_link_reads_near_zero_passes_max_age_and_gets_no_hint() {
     assert!(summary.get("hints").is_none(), "{summary}");
 }
 
-/// A pymavlink vehicle behind the relay, the queue in `direction`.
-fn through_relay(direction: &str) -> (Value, Value) {
+/// A pymavlink vehicle (`clock_vehicle.py` with `vehicle_args`) behind
+/// the relay, whose queue in `direction` grows to 1.5 s over 6 s from 3 s
+/// and drains: the two peers and the port the relay listens on.
+fn vehicle_behind_relay(direction: &str, vehicle_args: &[&str]) -> (Peer, Peer, String) {
     let vehicle_port = free_udp_port();
-    let vehicle = Peer::start(
-        "clock_vehicle.py",
-        &[
-            &format!("udpin:127.0.0.1:{vehicle_port}"),
-            "--duration",
-            "30",
-            "--attitude-hz",
-            "20",
-            "--system-time-hz",
-            "1",
-            "--timesync-hz",
-            "0",
-            "--ping-hz",
-            "0",
-        ],
-    );
+    let listen = format!("udpin:127.0.0.1:{vehicle_port}");
+    let mut args = vec![listen.as_str(), "--duration", "30"];
+    args.extend(vehicle_args);
+    let vehicle = Peer::start("clock_vehicle.py", &args);
     let mut relay = Peer::start(
         "queue_relay.py",
         &[
@@ -129,6 +119,25 @@ fn through_relay(direction: &str) -> (Value, Value) {
         ],
     );
     let port = relay.read_line();
+    (vehicle, relay, port)
+}
+
+/// A pymavlink vehicle stamping ATTITUDE and SYSTEM_TIME behind the
+/// relay, the queue in `direction`, listened to.
+fn through_relay(direction: &str) -> (Value, Value) {
+    let (vehicle, relay, port) = vehicle_behind_relay(
+        direction,
+        &[
+            "--attitude-hz",
+            "20",
+            "--system-time-hz",
+            "1",
+            "--timesync-hz",
+            "0",
+            "--ping-hz",
+            "0",
+        ],
+    );
     let (code, out, err) = run_mavping(&[
         "--passive",
         "-w",
@@ -194,32 +203,9 @@ fn the_round_trip_split_puts_a_simulated_queue_on_its_own_direction() {
 #[test]
 fn the_split_puts_a_relays_queue_on_the_direction_it_delays() {
     for (direction, other) in [("down", "up"), ("up", "down")] {
-        let vehicle_port = free_udp_port();
         // ArduPilot-like: TIMESYNC answered, PING not.
-        let vehicle = Peer::start(
-            "clock_vehicle.py",
-            &[
-                &format!("udpin:127.0.0.1:{vehicle_port}"),
-                "--duration",
-                "30",
-                "--timesync-hz",
-                "0",
-                "--ping-hz",
-                "0",
-            ],
-        );
-        let mut relay = Peer::start(
-            "queue_relay.py",
-            &[
-                "--vehicle",
-                &format!("127.0.0.1:{vehicle_port}"),
-                &format!("--queue-{direction}"),
-                "1.5@6",
-                "--start",
-                "3",
-            ],
-        );
-        let port = relay.read_line();
+        let (vehicle, relay, port) =
+            vehicle_behind_relay(direction, &["--timesync-hz", "0", "--ping-hz", "0"]);
         let target = format!("udpout:127.0.0.1:{port}");
         let (code, out, err) = run_mavping(&[
             "--probe", "timesync", "-c", "90", "-i", "0.2", "-W", "3s", "--json", &target,

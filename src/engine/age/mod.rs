@@ -325,3 +325,17 @@ pub(crate) fn queue_building(age: &SourceAge, received: u64, lost: u64) -> Optio
         )
     })
 }
+
+/// The queue hint of each source in `ages` whose frames came ever later
+/// while it lost next to none, by `counts`: its frames received and lost.
+pub(crate) fn queue_hints(
+    ages: &[SourceAge],
+    counts: impl Fn(SysComp) -> Option<(u64, u64)>,
+) -> Vec<Hint> {
+    ages.iter()
+        .filter_map(|a| {
+            let (received, lost) = counts(a.source)?;
+            queue_building(a, received, lost)
+        })
+        .collect()
+}

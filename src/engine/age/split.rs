@@ -15,6 +15,8 @@
 
 use std::collections::VecDeque;
 
+use hdrhistogram::Histogram;
+
 use super::super::clock_offset::ClockSummary;
 use super::super::Nanos;
 use super::envelope::{lower_hull, Envelope, Point, MAX_DRIFT_PPM, MIN_DRIFT_SPAN_NS};
@@ -67,57 +69,36 @@ pub(crate) struct RoundTripSplit {
     now: Option<SplitNow>,
 }
 
-/// Queue delays, ms, as a bounded histogram (1 ms buckets to 10 s, then
-/// 100 ms to 10 min): enough for p50/p99 of a queue; the max is exact.
-#[derive(Debug, Clone, Default)]
+/// Queue delays as a histogram (µs, three significant digits, to an
+/// hour), as [`super::one_way`] keeps ages: enough for p50/p99 of a
+/// queue; the max is exact.
+#[derive(Debug, Clone)]
 struct Quantiles {
-    counts: Vec<u32>,
-    n: u64,
+    hist: Histogram<u32>,
     max_ms: f64,
 }
 
+impl Default for Quantiles {
+    fn default() -> Self {
+        Quantiles {
+            hist: Histogram::new_with_bounds(1, MAX_US, 3).expect("valid histogram bounds"),
+            max_ms: 0.0,
+        }
+    }
+}
+
+/// The longest queue delay the histogram tells apart: an hour.
+const MAX_US: u64 = 3_600_000_000;
+
 impl Quantiles {
-    const FINE: usize = 10_000;
-    const COARSE: usize = 5_900;
-
-    fn bin(ms: f64) -> usize {
-        let ms = ms.max(0.0);
-        if ms < Self::FINE as f64 {
-            ms as usize
-        } else {
-            (Self::FINE + ((ms - Self::FINE as f64) / 100.0) as usize)
-                .min(Self::FINE + Self::COARSE - 1)
-        }
-    }
-
-    fn value(bin: usize) -> f64 {
-        if bin < Self::FINE {
-            bin as f64 + 0.5
-        } else {
-            Self::FINE as f64 + (bin - Self::FINE) as f64 * 100.0 + 50.0
-        }
-    }
-
     fn record(&mut self, ms: f64) {
-        let bin = Self::bin(ms);
-        if self.counts.len() <= bin {
-            self.counts.resize(bin + 1, 0);
-        }
-        self.counts[bin] = self.counts[bin].saturating_add(1);
-        self.n += 1;
+        let us = ((ms.max(0.0) * 1e3).round() as u64).clamp(1, MAX_US);
+        self.hist.saturating_record(us);
         self.max_ms = self.max_ms.max(ms);
     }
 
     fn quantile(&self, q: f64) -> f64 {
-        let rank = ((q * self.n as f64).ceil() as u64).max(1);
-        let mut seen = 0;
-        for (bin, &c) in self.counts.iter().enumerate() {
-            seen += u64::from(c);
-            if seen >= rank {
-                return Self::value(bin).min(self.max_ms);
-            }
-        }
-        self.max_ms
+        (self.hist.value_at_quantile(q) as f64 / 1e3).min(self.max_ms)
     }
 }
 

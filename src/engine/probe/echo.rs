@@ -111,13 +111,10 @@ impl<P: EchoProbe> EchoDriver<P> {
             r.split = self.splits.get(&r.id).and_then(RoundTripSplit::summary);
         }
         let ages = self.age.summary();
-        let hints = ages
-            .iter()
-            .filter_map(|a| {
-                let c = self.sequences.source(a.source)?.counts();
-                age::queue_building(a, c.received, c.lost)
-            })
-            .collect();
+        let hints = age::queue_hints(&ages, |id| {
+            let c = self.sequences.source(id)?.counts();
+            Some((c.received, c.lost))
+        });
         (ages, hints)
     }
 

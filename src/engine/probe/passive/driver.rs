@@ -19,7 +19,6 @@ use super::ticks::Ticks;
 use super::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{PassivePlan, SourcesNow};
 use crate::engine::age::{self, AgeTracker, SourceAge};
-use crate::engine::hint::Hint;
 use crate::engine::link_io::{Clock, Sender};
 use crate::engine::observe::{Event, Observer, StartInfo};
 use crate::engine::radio::Radios;
@@ -200,17 +199,6 @@ impl PassiveDriver {
 
 /// Takes a frame into `table`: a damaged one fills its number only.
 #[inline]
-/// The queue hint for each source whose frames came ever later while it
-/// lost next to none (by its sequence numbers).
-fn queue_hints(ages: &[SourceAge], table: &TableSummary) -> Vec<Hint> {
-    ages.iter()
-        .filter_map(|a| {
-            let row = table.sources.iter().find(|r| r.source == a.source)?;
-            age::queue_building(a, row.counts.received, row.counts.lost)
-        })
-        .collect()
-}
-
 pub(crate) fn take(table: &mut SourceTable, frame: &Frame, at: Nanos) {
     let (seq, id, len) = (frame.packet_seq, frame.msgid, usize::from(frame.len));
     if matches!(frame.msg, Msg::Damaged) {
@@ -390,7 +378,10 @@ impl Driver for PassiveDriver {
         // A log's stamps are when the logger wrote, in batches (FIELD-NOTES):
         // a late frame there may be the logger's, so no hint says queue.
         let hints = match self.paths {
-            None => queue_hints(&age, &table),
+            None => age::queue_hints(&age, |id| {
+                let row = table.sources.iter().find(|r| r.source == id)?;
+                Some((row.counts.received, row.counts.lost))
+            }),
             Some(_) => Vec::new(),
         };
         let flight = self
