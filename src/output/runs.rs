@@ -372,6 +372,8 @@ impl Borrowed {
                             count: 40,
                         },
                     )],
+                    // The oldest of them since the last telling.
+                    age_max: vec![(SysComp::new(1, 1), 310.0)],
                 }
             },
         }

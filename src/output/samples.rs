@@ -308,6 +308,7 @@ mod tests {
             table: first.clone(),
             ages: Vec::new(),
             age_counts: Vec::new(),
+            age_max: Vec::new(),
         }))
         .unwrap();
         table.on_frame(a, 2, 30, 40, 1_100 * ms);
@@ -348,6 +349,7 @@ mod tests {
                 table: at_one.clone(),
                 ages: Vec::new(),
                 age_counts: Vec::new(),
+                age_max: Vec::new(),
             }))
             .unwrap();
         }

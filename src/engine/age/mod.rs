@@ -83,6 +83,10 @@ pub(crate) struct AgeTracker {
     clocks: HashMap<Key, ClockAge>,
     /// Each source's frames' ages so far, counted into [`AGE_BOUNDS_MS`].
     counts: HashMap<SysComp, AgeCounts>,
+    /// Each source's oldest frame since the last [`AgeTracker::take_window_max`]
+    /// (ms): a queue's peak between two tellings, which the newest age
+    /// alone misses.
+    window_max: HashMap<SysComp, f64>,
 }
 
 /// The upper bounds (ms) a source's frames' ages are counted under: a
@@ -192,8 +196,18 @@ impl AgeTracker {
         let room = self.counts.len() < MAX_CLOCKS || self.counts.contains_key(&frame.source);
         if room {
             self.counts.entry(frame.source).or_default().record(age);
+            let max = self.window_max.entry(frame.source).or_insert(age);
+            *max = max.max(age);
         }
         Some(age)
+    }
+
+    /// Each source's oldest frame's age (ms) since the last call, by
+    /// source; the window starts afresh.
+    pub(crate) fn take_window_max(&mut self) -> Vec<(SysComp, f64)> {
+        let mut out: Vec<(SysComp, f64)> = self.window_max.drain().collect();
+        out.sort_by_key(|&(source, _)| source);
+        out
     }
 
     /// `source`'s frames' ages so far, counted.

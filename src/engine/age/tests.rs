@@ -512,3 +512,33 @@ fn frames_ages_are_counted_per_source_under_their_bounds() {
     assert_eq!(counts.buckets, [2, 1, 0, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
     assert_eq!((counts.count, counts.sum_ms), (5, 20_303.0));
 }
+
+/// The window's max is its oldest frame's age, and the next window
+/// starts afresh: a queue's peak between two tellings shows even when
+/// the newest frame is quick again.
+#[test]
+fn the_window_max_is_the_oldest_frame_since_the_last_telling() {
+    let source = SysComp::new(1, 1);
+    let mut tracker = AgeTracker::default();
+    let frame = |k: u64| {
+        stamped(
+            source,
+            Msg::Other,
+            StampClock::BootMs,
+            StampMeaning::Sent,
+            k * 20,
+        )
+    };
+    // 50 frames on time, one held 300 ms, 50 more on time.
+    for k in 0..101u64 {
+        let held = if k == 50 { 300_000_000 } else { 0 };
+        tracker.on_frame(&frame(k), k * 20_000_000 + held);
+    }
+    let window = tracker.take_window_max();
+    assert_eq!(window.len(), 1);
+    assert!((window[0].1 - 300.0).abs() < 1.0, "{window:?}");
+    assert!(tracker.now(source).unwrap().age_ms < 1.0);
+    assert!(tracker.take_window_max().is_empty());
+    tracker.on_frame(&frame(101), 101 * 20_000_000);
+    assert!(tracker.take_window_max()[0].1 < 1.0);
+}

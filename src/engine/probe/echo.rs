@@ -330,7 +330,7 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let told = tell_each(observer, clocks);
         let sources = tell_sources(
             &self.sequences,
-            &self.age,
+            &mut self.age,
             &mut self.sequence_ticks,
             observer,
         );

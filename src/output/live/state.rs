@@ -397,6 +397,7 @@ mod tests {
                 table: table.summary(at),
                 ages: Vec::new(),
                 age_counts: Vec::new(),
+                age_max: Vec::new(),
             }));
         }
         s
@@ -448,6 +449,7 @@ mod tests {
             table: table.summary(1_000_000_000),
             ages: Vec::new(),
             age_counts: Vec::new(),
+            age_max: Vec::new(),
         }));
         let screen = s.screen();
         assert!(*screen.kind == view::ECHO);

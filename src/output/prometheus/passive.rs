@@ -271,6 +271,7 @@ mod tests {
             table: table.summary(at),
             ages: Vec::new(),
             age_counts: Vec::new(),
+            age_max: Vec::new(),
         }))
         .unwrap();
         let text = render(&[&m]);

@@ -95,6 +95,7 @@ impl Metrics {
                 table: table.clone(),
                 ages: Vec::new(),
                 age_counts: Vec::new(),
+                age_max: Vec::new(),
             };
             self.sources(&now).expect("metrics take every event");
         }

@@ -238,7 +238,7 @@ fn tell_flight(flight: Option<&mut Flight>, observer: &mut dyn Observer) -> io::
 /// Tells `observer` the table, if a telling is due.
 pub(crate) fn tell_sources(
     table: &SourceTable,
-    age: &AgeTracker,
+    age: &mut AgeTracker,
     ticks: &mut Ticks,
     observer: &mut dyn Observer,
 ) -> io::Result<()> {
@@ -261,6 +261,7 @@ pub(crate) fn tell_sources(
         table,
         ages,
         age_counts,
+        age_max: age.take_window_max(),
     }))
 }
 
@@ -345,7 +346,7 @@ impl Driver for PassiveDriver {
         let flight = tell_flight(self.flight.as_mut(), observer);
         flight.and(tell_sources(
             &self.table,
-            &self.age,
+            &mut self.age,
             &mut self.ticks,
             observer,
         ))
