@@ -90,7 +90,24 @@ pub(crate) fn ages() -> Vec<SourceAge> {
         source: SysComp::new(1, 1),
         headline: sent,
         clocks: vec![sent, sampled],
+        absolute: None,
     }]
+}
+
+/// [`ages`] where the source answered TIMESYNC: its baseline 12 ms one
+/// way, between 1 and 23 ms by its clock offset's bounds.
+pub(crate) fn ages_by_timesync() -> Vec<SourceAge> {
+    let mut ages = ages();
+    let h = ages[0].headline;
+    ages[0].absolute = Some(crate::engine::age::AbsoluteAgeSummary {
+        baseline_ms: 12.0,
+        baseline_lower_ms: 1.0,
+        baseline_upper_ms: 23.0,
+        p50_ms: 12.0 + h.p50_ms,
+        p99_ms: 12.0 + h.p99_ms,
+        max_ms: 12.0 + h.max_ms,
+    });
+    ages
 }
 
 /// The hint [`ages`] gives a source that lost nothing.
@@ -297,6 +314,11 @@ pub(crate) fn echo_summary(probe: &'static str) -> EchoSummary {
         radios: radios(),
         wire: Some(capacity::budget(57_600, Version::V2, 99, 2)),
         link_node: link_nodes(true),
+        age: if probe == "timesync" {
+            ages_by_timesync()
+        } else {
+            Vec::new()
+        },
         ..EchoSummary::empty("sim:?seed=1", 8)
     }
 }

@@ -23,14 +23,17 @@ fn passive_summary(out: &str) -> Value {
     crate::passive_peers::json_line(out, "passive_summary")
 }
 
+/// The age figures of `source`.
+fn source_age<'a>(summary: &'a Value, source: &str) -> &'a Value {
+    let ages = summary["age"].as_array().expect("an age section");
+    ages.iter()
+        .find(|a| format!("{}/{}", a["source"]["sysid"], a["source"]["compid"]) == source)
+        .unwrap_or_else(|| panic!("no age for {source} in {summary}"))
+}
+
 /// The headline age figures of `source`.
 fn headline<'a>(summary: &'a Value, source: &str) -> &'a Value {
-    let ages = summary["age"].as_array().expect("an age section");
-    let age = ages
-        .iter()
-        .find(|a| format!("{}/{}", a["source"]["sysid"], a["source"]["compid"]) == source)
-        .unwrap_or_else(|| panic!("no age for {source} in {summary}"));
-    &age["headline"]
+    &source_age(summary, source)["headline"]
 }
 
 fn ms(v: &Value, key: &str) -> f64 {
@@ -197,7 +200,27 @@ fn the_round_trip_split_puts_a_simulated_queue_on_its_own_direction() {
         let queued = ms(split, &format!("{direction}link_max_ms"));
         assert!(near(queued, truth), "{direction}: {split} vs {truth}");
         assert!(ms(split, &format!("{other}link_max_ms")) < 10.0, "{split}");
+        // The sim's downlink is 10 ± 2 ms, its queue on top.
+        let down_queue = if direction == "down" { truth } else { 0.0 };
+        one_way_within(&checked_summary(&out), (8.0, 12.0), down_queue);
     }
+}
+
+/// The summary's absolute one-way age of 1/1 (by its TIMESYNC clock
+/// offset): its baseline's bounds take in the link's true floor, which
+/// lies in `floor` (ms), and are tight enough to mean something; its max
+/// is the floor plus `queue_ms`, within 10 ms or 5 %.
+fn one_way_within(summary: &Value, floor: (f64, f64), queue_ms: f64) {
+    let abs = &source_age(summary, "1/1")["absolute"];
+    let (lower, upper) = (ms(abs, "baseline_lower_ms"), ms(abs, "baseline_upper_ms"));
+    assert!(lower <= floor.1 && floor.0 <= upper, "{abs}");
+    assert!(upper - lower < 40.0, "{abs}");
+    let baseline = ms(abs, "baseline_ms");
+    assert!(lower <= baseline && baseline <= upper, "{abs}");
+    assert!(
+        near(ms(abs, "max_ms") - baseline, queue_ms),
+        "{abs} vs {queue_ms}"
+    );
 }
 
 #[test]
@@ -219,6 +242,9 @@ fn the_split_puts_a_relays_queue_on_the_direction_it_delays() {
         let queued = ms(split, &format!("{direction}link_max_ms"));
         assert!(near(queued, delayed), "{direction}: {split} vs {truth}");
         assert!(ms(split, &format!("{other}link_max_ms")) < 30.0, "{split}");
+        // Loopback: the floor is under a millisecond.
+        let down_queue = if direction == "down" { delayed } else { 0.0 };
+        one_way_within(&checked_summary(&out), (0.0, 1.0), down_queue);
     }
 }
 

@@ -30,6 +30,8 @@ const ECHO: Kind = Kind {
         "p50",
         "p99",
         "jitter",
+        "age",
+        "ms",
         "recent",
     ],
     keys: "q or Ctrl-C: stop and print the summary · RTT in ms · × lost · ! late",
@@ -131,9 +133,9 @@ fn quit_as(kind: &Kind, tmux: &Tmux, links: &[&str]) -> String {
 #[test]
 fn one_link_fits_80x24_and_a_wider_terminal_shows_more() {
     let link = "sim:?responders=2&loss=20%&delay=2ms&seed=5";
-    // The figure columns take 62 characters (and 2 the borders); the strip
-    // of recent outcomes has the rest: 16 of 80, 56 of 120.
-    for (width, height, full) in [(80u16, 24u16, 16usize), (120, 40, 56)] {
+    // The figure columns take 69 characters (and 2 the borders); the strip
+    // of recent outcomes has the rest: 9 of 80, 49 of 120.
+    for (width, height, full) in [(80u16, 24u16, 9usize), (120, 40, 49)] {
         let tmux = live(&format!("one-{width}"), &format!("'{link}'"), width, height);
         // Both rows, a loss shown, and enough outcomes to fill the strip.
         let screen = tmux.wait_for_screen("two full rows with a loss", |s| {
@@ -148,6 +150,28 @@ fn one_link_fits_80x24_and_a_wider_terminal_shows_more() {
         }
         quit(&tmux, &["sim:?responders=2&"]);
     }
+}
+
+/// A responder's `age ms` follows a growing downlink queue: with
+/// TIMESYNC its replies carry its clock, and the sim's queue grows to
+/// 600 ms over 6 s. The cell (the one before the strip) passes 300 ms
+/// while the run goes on; before the queue it read near 0.
+#[test]
+fn a_responders_age_follows_a_growing_queue() {
+    let link = "sim:?delay=5ms&jitter=0ms&queue_down=600ms@6s";
+    let tmux = live("age", &format!("--probe timesync '{link}'"), 120, 40);
+    let age_of = |s: &str| -> Option<f64> {
+        let row = rows(s).first().copied()?;
+        let cells: Vec<&str> = row.split_whitespace().collect();
+        cells.get(cells.len().checked_sub(2)?)?.parse().ok()
+    };
+    let early = tmux.wait_for_screen("an age", |s| age_of(s).is_some());
+    assert!(age_of(&early).unwrap() < 150.0, "{early}");
+    let queued = tmux.wait_for_screen("an age past 300 ms", |s| {
+        age_of(s).is_some_and(|a| a > 300.0)
+    });
+    assert_fits(&queued, 120, 40);
+    quit(&tmux, &["sim:?responders=1&delay=5ms&"]);
 }
 
 #[test]

@@ -176,6 +176,13 @@ impl Envelope {
         }
     }
 
+    /// Our time at the first point, and the floor's raw delay (receive −
+    /// stamp, ns) then.
+    pub(crate) fn floor_at_start(&self) -> (Nanos, i128) {
+        let (at, d) = self.origin;
+        (at, d + self.current_line().a.round() as i128)
+    }
+
     /// Drift of their clock against ours, ppm (positive: theirs is slow,
     /// the raw delay grows).
     pub(crate) fn drift_ppm(&self) -> f64 {

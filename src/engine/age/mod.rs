@@ -25,11 +25,11 @@ use std::collections::HashMap;
 
 use serde::Serialize;
 
-#[cfg(test)]
 use split::absolute_age;
 pub(crate) use split::{RoundTripSplit, SplitSummary};
 
 use self::one_way::OneWay;
+use super::clock_offset::ClockSummary;
 use super::hint::{Hint, HintCode};
 use super::Nanos;
 use crate::frame::{Frame, Stamp, StampClock, StampMeaning, SysComp};
@@ -155,7 +155,35 @@ pub(crate) struct SourceAge {
     pub(crate) source: SysComp,
     pub(crate) headline: ClockAgeSummary,
     pub(crate) clocks: Vec<ClockAgeSummary>,
+    /// The headline's ages as absolute one-way delays, where the source
+    /// answered TIMESYNC and its clock offset has bounds.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) absolute: Option<AbsoluteAgeSummary>,
 }
+
+/// A source's headline ages as absolute one-way delays (ms): its
+/// baseline placed by its TIMESYNC clock offset, whose causal bounds
+/// (widened by the drift they allow) bound the baseline and so every
+/// age above it alike.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub(crate) struct AbsoluteAgeSummary {
+    /// The quickest frames' one-way delay: the baseline's.
+    pub(crate) baseline_ms: f64,
+    pub(crate) baseline_lower_ms: f64,
+    pub(crate) baseline_upper_ms: f64,
+    /// The headline's p50, p99 and max above the baseline, plus it.
+    pub(crate) p50_ms: f64,
+    pub(crate) p99_ms: f64,
+    pub(crate) max_ms: f64,
+}
+
+/// The longest one-way delay a baseline can be: a bound beyond it says
+/// the stamps are on another clock than TIMESYNC's (a Unix time where
+/// `tc1` counts from boot), not that the link is a minute long.
+const MAX_BASELINE_NS: i128 = 60_000_000_000;
+/// A baseline's upper bound below zero by more than this says the same:
+/// ms stamps read up to 1 ms early, so a little below is rounding.
+const BASELINE_SLACK_NS: i128 = 1_000_000;
 
 /// Which clock speaks for a source, best first. Send stamps first: a
 /// sample stamp's age includes how old the data was when sent (a GPS
@@ -259,6 +287,44 @@ impl AgeTracker {
         })
     }
 
+    /// `age`'s headline as absolute one-way delays, given its source's
+    /// TIMESYNC clock offset (`clock`, against our clock reading
+    /// `base_ns` at time 0): when the offset has bounds and the baseline
+    /// they place is a delay a link can have, else `None` (the stamps
+    /// are on another clock than `tc1`'s).
+    pub(crate) fn absolute(
+        &self,
+        age: &SourceAge,
+        clock: &ClockSummary,
+        base_ns: i128,
+    ) -> Option<AbsoluteAgeSummary> {
+        let h = &age.headline;
+        let key = Key {
+            source: age.source,
+            clock: h.clock,
+            meaning: h.meaning,
+        };
+        // At the baseline's start: the offset's bounds hold at our time 0
+        // and widen with time by the drift they allow.
+        let (at, floor) = self.clocks.get(&key)?.one_way.floor_at_start()?;
+        // A frame on the floor, received at `at`, was stamped at `at − floor`.
+        let on_floor = absolute_age(at, i128::from(at) - floor, clock, base_ns);
+        let (lower, upper) = (on_floor.lower_ns?, on_floor.upper_ns?);
+        if !h.clock.keeps_time() || upper < -BASELINE_SLACK_NS || lower > MAX_BASELINE_NS {
+            return None;
+        }
+        let baseline_ms = on_floor.age_ns as f64 / 1e6;
+        Some(AbsoluteAgeSummary {
+            baseline_ms,
+            // No frame arrives before it was sent: below 0 is ms rounding.
+            baseline_lower_ms: lower.max(0) as f64 / 1e6,
+            baseline_upper_ms: upper as f64 / 1e6,
+            p50_ms: baseline_ms + h.p50_ms,
+            p99_ms: baseline_ms + h.p99_ms,
+            max_ms: baseline_ms + h.max_ms,
+        })
+    }
+
     /// Every source's figures, by source, its clocks best first.
     pub(crate) fn summary(&self) -> Vec<SourceAge> {
         let mut keys: Vec<&Key> = self.clocks.keys().collect();
@@ -287,6 +353,7 @@ impl AgeTracker {
                     source: key.source,
                     headline: figures,
                     clocks: vec![figures],
+                    absolute: None,
                 }),
             }
         }

@@ -228,6 +228,12 @@ impl OneWay {
         self.now
     }
 
+    /// The current baseline's first point's time, and the floor's raw
+    /// delay (receive − stamp, ns) then.
+    pub(crate) fn floor_at_start(&self) -> Option<(Nanos, i128)> {
+        self.envelope.as_ref().map(Envelope::floor_at_start)
+    }
+
     /// The figures, the held points measured against the final floor.
     pub(crate) fn figures(&self) -> Option<OneWayFigures> {
         let env = self.envelope.as_ref()?;

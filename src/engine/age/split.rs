@@ -234,9 +234,7 @@ fn above((b, a_up, a_down): (f64, f64, f64), ex: Exchange) -> (f64, f64) {
     (up.max(0.0) / 1e6, down.max(0.0) / 1e6)
 }
 
-/// A frame's absolute one-way age with bounds, ns. Not in any report
-/// yet: issue 40's absolute age is still to be wired (its closing note).
-#[cfg_attr(not(test), allow(dead_code))]
+/// A frame's absolute one-way age with bounds, ns.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub(crate) struct AbsoluteAge {
     pub(crate) age_ns: i128,
@@ -254,7 +252,6 @@ pub(crate) struct AbsoluteAge {
 /// time 0, ours being `base_ns` + session time, as
 /// [`ClockOffset::record`](super::super::clock_offset::ClockOffset::record)
 /// takes it).
-#[cfg_attr(not(test), allow(dead_code))]
 pub(crate) fn absolute_age(
     at: Nanos,
     stamp_ns: i128,

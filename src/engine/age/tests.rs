@@ -479,6 +479,7 @@ fn the_queue_hint_takes_a_real_clock_a_sustained_delay_and_no_loss() {
         source: SysComp::new(1, 1),
         headline: h,
         clocks: vec![h],
+        absolute: None,
     };
     let queue = age(figures(
         StampClock::BootMs,
@@ -541,4 +542,62 @@ fn the_window_max_is_the_oldest_frame_since_the_last_telling() {
     assert!(tracker.take_window_max().is_empty());
     tracker.on_frame(&frame(101), 101 * 20_000_000);
     assert!(tracker.take_window_max()[0].1 < 1.0);
+}
+
+/// The baseline placed by the TIMESYNC offset is the link's one-way
+/// delay, within the offset's bounds; stamps on another clock than
+/// `tc1`'s place it nowhere a link can be, and get no absolute figures.
+#[test]
+fn the_absolute_age_is_the_baseline_placed_by_the_clock_offset() {
+    let source = SysComp::new(1, 1);
+    // Their boot clock reads our session time + 1 h; the link
+    // is 20 ms one way, and a queue of up to 300 ms builds at 10 s.
+    let base = 1_700_000_000 * S as i128;
+    let offset = -base + 3600 * S as i128;
+    let clock = ClockSummary {
+        offset_ns: offset + 2_000_000,
+        uncertainty_ns: 20_000_000,
+        bounds_ns: Some((offset - 18_000_000, offset + 22_000_000)),
+        bounds_drift_limit_ppm: 200,
+        spread_ns: 0.0,
+        drift_ppm: None,
+        drift_stderr_ppm: None,
+        samples: 20,
+    };
+    let mut boot = AgeTracker::default();
+    let mut unix = AgeTracker::default();
+    for k in 0..1000u64 {
+        let sent = 1_000_000_000 + k * 20_000_000;
+        let queue = if (500..600).contains(&k) {
+            300_000_000
+        } else {
+            0
+        };
+        let at = sent + 20_000_000 + queue;
+        let ms = ((i128::from(sent) + base + offset) / 1_000_000) as u64;
+        let stamp = |clock, value| stamped(source, Msg::Other, clock, StampMeaning::Sent, value);
+        boot.on_frame(&stamp(StampClock::BootMs, ms), at);
+        unix.on_frame(
+            &stamp(StampClock::UnixUs, (sent / 1_000) + 1_600_000_000_000_000),
+            at,
+        );
+    }
+    let age = &boot.summary()[0];
+    let abs = boot.absolute(age, &clock, base).expect("on tc1's clock");
+    // ms stamps read up to 1 ms early: the baseline is 20 to 21 ms.
+    assert!((abs.baseline_ms - 22.0).abs() <= 1.0, "{abs:?}");
+    assert!(
+        abs.baseline_lower_ms <= 20.0 && 21.0 <= abs.baseline_upper_ms,
+        "{abs:?}"
+    );
+    assert!((abs.max_ms - 322.0).abs() <= 2.0, "{abs:?}");
+    let json = serde_json::to_value(abs).unwrap();
+    assert!(json["baseline_upper_ms"].is_number());
+    let other = &unix.summary()[0];
+    assert_eq!(unix.absolute(other, &clock, base), None);
+    let unbounded = ClockSummary {
+        bounds_ns: None,
+        ..clock
+    };
+    assert_eq!(boot.absolute(age, &unbounded, base), None);
 }

@@ -230,6 +230,10 @@ impl EchoProbe for AutoProbe {
         self.timesync.clock(responder)
     }
 
+    fn clock_base_ns(&self) -> i128 {
+        self.timesync.clock_base_ns()
+    }
+
     fn used_by(&self, responder: SysComp) -> Option<ProbeName> {
         Some(match self.choice(responder) {
             Some(Choice::Timesync) => ProbeName::Timesync,

@@ -110,7 +110,12 @@ impl<P: EchoProbe> EchoDriver<P> {
         for r in responders.iter_mut() {
             r.split = self.splits.get(&r.id).and_then(RoundTripSplit::summary);
         }
-        let ages = self.age.summary();
+        let mut ages = self.age.summary();
+        let base_ns = self.probe.clock_base_ns();
+        for a in &mut ages {
+            let clock = self.probe.clock(a.source);
+            a.absolute = clock.and_then(|c| self.age.absolute(a, &c, base_ns));
+        }
         let hints = age::queue_hints(&ages, |id| {
             let c = self.sequences.source(id)?.counts();
             Some((c.received, c.lost))

@@ -60,4 +60,10 @@ pub trait EchoProbe {
     fn clock(&self, _responder: SysComp) -> Option<ClockSummary> {
         None
     }
+
+    /// What our clock read at session time 0 in the clock offsets'
+    /// terms (ns): their clock minus this plus session time is the offset.
+    fn clock_base_ns(&self) -> i128 {
+        0
+    }
 }

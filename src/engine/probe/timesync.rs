@@ -132,6 +132,10 @@ impl EchoProbe for TimesyncProbe {
     fn clock(&self, responder: SysComp) -> Option<ClockSummary> {
         self.clocks.get(&responder).and_then(ClockOffset::summary)
     }
+
+    fn clock_base_ns(&self) -> i128 {
+        self.base_ns
+    }
 }
 
 #[cfg(test)]

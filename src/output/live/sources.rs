@@ -15,7 +15,7 @@ use crate::frame::SysComp;
 use crate::output::windows::Windows;
 
 /// An age above baseline this high (ms) is shown as a problem: a queue.
-const AGE_SHOWN_MS: f64 = 100.0;
+pub(super) const AGE_SHOWN_MS: f64 = 100.0;
 
 /// Identities kept for sources not (yet) in the table: as many as it
 /// tracks, and some.

@@ -6,7 +6,7 @@
 use std::collections::{BTreeMap, VecDeque};
 use std::io;
 
-use super::sources::{heard_as, Second, Sources};
+use super::sources::{heard_as, Second, Sources, AGE_SHOWN_MS};
 use super::view::{figure, Spec, ECHO, PASSIVE};
 use crate::engine::matcher::{Counts, MatchEvent};
 use crate::engine::probe::passive::PassivePlan;
@@ -38,6 +38,9 @@ struct Track {
     rtt: RttStats,
     recent: VecDeque<Mark>,
     heard_as: Option<String>,
+    /// Its newest stamped frame's age above its baseline (ms), from the
+    /// table an echo run tells for its direction split.
+    age_ms: Option<f64>,
 }
 
 impl Track {
@@ -101,12 +104,21 @@ impl Reporter for LiveState {
         Ok(())
     }
 
-    /// A passive run's table (an echo run's is for its direction split).
+    /// A passive run's table; an echo run's gives its responders' ages.
     fn sources(&mut self, now: &SourcesNow) -> io::Result<()> {
-        if let Some(sources) = self.sources.as_mut() {
-            sources.table(now);
-            self.now = self.now.max(now.at);
-            self.waiting = false;
+        match self.sources.as_mut() {
+            Some(sources) => {
+                sources.table(now);
+                self.now = self.now.max(now.at);
+                self.waiting = false;
+            }
+            None => {
+                for (id, age) in &now.ages {
+                    if let Some(t) = self.tracks.get_mut(id) {
+                        t.age_ms = Some(age.age_ms);
+                    }
+                }
+            }
         }
         Ok(())
     }
@@ -180,6 +192,10 @@ impl LiveState {
                         ms(s.map(|s| s.p50_us / 1e3)),
                         ms(s.map(|s| s.p99_us / 1e3)),
                         ms(s.map(|s| s.jitter_us / 1e3)),
+                        (
+                            figure(t.age_ms, 0),
+                            t.age_ms.is_some_and(|a| a >= AGE_SHOWN_MS),
+                        ),
                     ],
                     strip: match (&t.heard_as, c.received) {
                         (Some(heard), 0) => Strip::Heard(heard.clone()),
@@ -453,6 +469,39 @@ mod tests {
         }));
         let screen = s.screen();
         assert!(*screen.kind == view::ECHO);
+        assert_eq!(screen.rows.len(), 2);
+    }
+
+    /// A probe run's table carries its responders' ages: a responder's
+    /// row shows its newest, marked past 100 ms; a source that is no
+    /// responder gets no row.
+    #[test]
+    fn a_responders_row_shows_its_frames_age() {
+        use crate::engine::age::AgeNow;
+        use crate::engine::probe::passive::tracker::SourceTable;
+        use crate::frame::{StampClock, StampMeaning};
+        let mut s = state();
+        let age = |age_ms| AgeNow {
+            clock: StampClock::TimesyncNs,
+            meaning: StampMeaning::Sent,
+            age_ms,
+            at: 1_000_000_000,
+        };
+        s.on_event(&kind(SourcesNow {
+            at: 1_000_000_000,
+            table: SourceTable::new(None, 32).summary(1_000_000_000),
+            ages: vec![
+                (SysComp::new(1, 1), age(240.4)),
+                (SysComp::new(2, 1), age(3.0)),
+                (SysComp::new(9, 9), age(1.0)),
+            ],
+            age_counts: Vec::new(),
+            age_max: Vec::new(),
+        }));
+        let screen = s.screen();
+        let last = |row: &RowView| row.cells.last().cloned().unwrap();
+        assert_eq!(last(&screen.rows[0]), ("240".to_string(), true));
+        assert_eq!(last(&screen.rows[1]), ("3".to_string(), false));
         assert_eq!(screen.rows.len(), 2);
     }
 

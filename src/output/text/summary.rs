@@ -127,6 +127,20 @@ pub(super) fn write_ages(out: &mut impl Write, ages: &[SourceAge]) -> io::Result
             h.max_ms,
             h.samples
         )?;
+        if let Some(abs) = &a.absolute {
+            writeln!(
+                out,
+                "    one way, by its TIMESYNC clock offset: baseline {:.1} ms (between {:.1} and \
+                 {:.1} ms), p50 {:.1} ms, p99 {:.1} ms, max {:.1} ms (each as uncertain as the \
+                 baseline)",
+                abs.baseline_ms,
+                abs.baseline_lower_ms,
+                abs.baseline_upper_ms,
+                abs.p50_ms,
+                abs.p99_ms,
+                abs.max_ms
+            )?;
+        }
     }
     Ok(())
 }
