@@ -310,3 +310,34 @@ fn the_exporter_counts_every_aged_frame_under_its_bound() {
     assert_eq!(value(bucket, Some("2.5")), samples);
     assert!(value(bucket, Some("1")) < samples);
 }
+
+/// Replies held by a queue past the timeout are late, not lost: the
+/// direction split leaves them out instead of charging them to the
+/// uplink. A 600 ms downlink queue behind a 300 ms timeout, and 5 % of
+/// the requests dropped on the way up: the uplink reads exactly the
+/// requests the sim dropped (before, it read every late reply as well).
+#[test]
+fn late_replies_from_a_queue_are_not_uplink_loss() {
+    let link = "sim:?clock=virtual&delay=5ms&jitter=0ms&queue_down=600ms@6s&loss_up=5%&seed=3";
+    let (code, out, err) = run_mavping(&[
+        "--probe", "timesync", "-c", "300", "-i", "0.1", "-W", "300ms", "--json", "-v", link,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let dropped: f64 = err
+        .split("up_requests_dropped=")
+        .nth(1)
+        .and_then(|v| v.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    let r = timesync_responder(&out);
+    let (sent, late) = (r["sent"].as_f64().unwrap(), r["late"].as_f64().unwrap());
+    assert!(late >= 20.0 && dropped > 0.0, "{r}");
+    let d = &r["direction"];
+    assert!((ms(d, "late_share") - late / sent).abs() < 1e-9, "{d}");
+    assert!(
+        (ms(d, "uplink_loss") - dropped / sent).abs() < 1e-9,
+        "{d} vs {dropped}"
+    );
+    assert_eq!(d["downlink_lost"], 0, "{d}");
+}

@@ -371,10 +371,9 @@ impl<P: EchoProbe> Driver for EchoDriver<P> {
         let (age, queue_hints) = self.ages(&mut responders);
         for r in &mut responders {
             r.clock = self.probe.clock(r.id);
-            r.direction = self
-                .sequences
-                .source(r.id)
-                .and_then(|s| Direction::of_sequence(r.loss_ratio, r.counts.sent, &s.counts()));
+            r.direction = self.sequences.source(r.id).and_then(|s| {
+                Direction::of_sequence(r.loss_ratio, r.counts.sent, r.counts.late, &s.counts())
+            });
         }
         let loss_by_txbuf = ended.radios.loss_by_txbuf();
         let radios = ended.radios.summaries();

@@ -14,6 +14,10 @@ use super::passive;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub(crate) struct Direction {
     pub(crate) round_trip_loss: f64,
+    /// Of the round trip's loss, the share whose replies came back after
+    /// the timeout: lost to neither direction (a queue), so left out of
+    /// the split.
+    pub(crate) late_share: f64,
     /// Frames of the responder's the sequence counted, and of them lost.
     pub(crate) downlink_frames: u64,
     pub(crate) downlink_lost: u64,
@@ -32,12 +36,19 @@ impl Direction {
     /// The split for a responder with `round_trip` loss over `requests`,
     /// whose own frames' sequence counted `seq`: every front end's one
     /// way in (the summary at the end, Prometheus while a run goes on).
+    /// `late` of the requests were answered after the timeout: counted
+    /// in the round trip's loss, but not lost on the way.
     pub(crate) fn of_sequence(
         round_trip: f64,
         requests: u64,
+        late: u64,
         seq: &passive::SeqCounts,
     ) -> Option<Self> {
-        Direction::split(round_trip, requests, seq.numbered(), seq.lost)
+        let late_share = (late as f64 / requests.max(1) as f64).min(round_trip);
+        let mut d = Direction::split(round_trip - late_share, requests, seq.numbered(), seq.lost)?;
+        d.round_trip_loss = round_trip;
+        d.late_share = late_share;
+        Some(d)
     }
 
     /// The split for a responder `round_trip` of whose `requests` were
@@ -65,6 +76,7 @@ impl Direction {
         };
         Some(Direction {
             round_trip_loss: round_trip,
+            late_share: 0.0,
             downlink_frames: frames,
             downlink_lost: lost,
             downlink_loss: down,
@@ -97,5 +109,22 @@ mod tests {
         // Every frame of its lost: no uplink figure.
         let d = Direction::split(1.0, 10, 5, 5).unwrap();
         assert_eq!((d.uplink_loss, d.consistent), (None, true));
+    }
+
+    /// Replies that came after the timeout were lost to neither
+    /// direction: a queue's late replies are no uplink loss.
+    #[test]
+    fn late_replies_are_left_out_of_the_split() {
+        let seq = passive::SeqCounts {
+            received: 1_000,
+            ..passive::SeqCounts::default()
+        };
+        // 24 % counted lost, 22 % of them late, nothing lost down.
+        let d = Direction::of_sequence(0.24, 1_000, 220, &seq).unwrap();
+        assert!((d.late_share - 0.22).abs() < 1e-12, "{d:?}");
+        assert!((d.uplink_loss.unwrap() - 0.02).abs() < 1e-9, "{d:?}");
+        assert!((d.round_trip_loss - 0.24).abs() < 1e-12);
+        // All of it late and nothing lost down: nothing to split.
+        assert_eq!(Direction::of_sequence(0.2, 1_000, 200, &seq), None);
     }
 }

@@ -124,7 +124,8 @@ impl Series {
         match self.split {
             Split::AtEnd(at_end) => at_end,
             Split::Live => {
-                Direction::of_sequence(self.loss_ratio()?, self.counts.sent, &downlink?.seq())
+                let c = &self.counts;
+                Direction::of_sequence(self.loss_ratio()?, c.sent, c.late, &downlink?.seq())
             }
         }
     }

@@ -253,6 +253,15 @@ fn write_direction(out: &mut impl Write, d: &Direction) -> io::Result<()> {
              not number just what it sends us on this link (a router re-sequencing or merging \
              links?), so no split"
         ),
+        (Some(up), Some(e)) if d.late_share > 0.0 => writeln!(
+            out,
+            "  direction: round trip {round_trip} lost, of which {} came back late (a queue, not \
+             loss): {} = up ~{} ± {} and {down}",
+            percent(d.late_share),
+            percent(d.round_trip_loss - d.late_share),
+            percent(up),
+            percent(e)
+        ),
         (Some(up), Some(e)) => writeln!(
             out,
             "  direction: round trip {round_trip} lost = up ~{} ± {} and {down}",
