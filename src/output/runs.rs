@@ -218,6 +218,7 @@ pub(crate) fn responder(id: SysComp, answered: bool) -> ResponderSummary {
             .flatten(),
         // A downlink queue on the way back, by TIMESYNC's tc1.
         split: answered.then_some(SplitSummary {
+            by: crate::engine::age::SplitBy::ReplyClock,
             exchanges: 40,
             uplink_p50_ms: 0.4,
             uplink_p99_ms: 1.2,

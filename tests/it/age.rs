@@ -45,13 +45,18 @@ fn near(measured: f64, truth: f64) -> bool {
     (measured - truth).abs() <= 10.0_f64.max(truth * 0.05)
 }
 
-/// The simulated queue's largest delay, from `-v`'s truth line.
+/// The simulated downlink queue's largest delay, from `-v`'s truth line.
 fn sim_queue_max_ms(stderr: &str) -> f64 {
+    sim_queue_max_ms_of(stderr, "down")
+}
+
+/// The simulated queue's largest delay in `direction` ("up", "down").
+fn sim_queue_max_ms_of(stderr: &str, direction: &str) -> f64 {
     let line = stderr
         .lines()
         .find(|l| l.contains("sim truth queues:"))
         .unwrap_or_else(|| panic!("no queue truth in {stderr}"));
-    let value = line.split("down_max_ms=").nth(1).unwrap();
+    let value = line.split(&format!("{direction}_max_ms=")).nth(1).unwrap();
     value.split_whitespace().next().unwrap().parse().unwrap()
 }
 
@@ -172,8 +177,8 @@ fn an_uplink_queue_leaves_the_downlink_age_alone() {
     assert!(ms(h, "max_ms") < 30.0, "{h}");
 }
 
-/// A TIMESYNC run's responder 1/1 in its summary line.
-fn timesync_responder(out: &str) -> Value {
+/// A probe run's responder 1/1 in its summary line.
+fn responder_1_1(out: &str) -> Value {
     let summary = checked_summary(out);
     responder(&summary, "1/1").clone()
 }
@@ -188,7 +193,7 @@ fn the_round_trip_split_puts_a_simulated_queue_on_its_own_direction() {
             "--probe", "timesync", "-c", "200", "-i", "0.2", "-W", "3s", "--json", "-v", &link,
         ]);
         assert_eq!(code, 0, "{err}");
-        let split = &timesync_responder(&out)["split"];
+        let split = &responder_1_1(&out)["split"];
         let key = format!("{direction}_max_ms=");
         let truth: f64 = err
             .split(&key)
@@ -236,7 +241,7 @@ fn the_split_puts_a_relays_queue_on_the_direction_it_delays() {
         assert_eq!(code, 0, "{err}");
         let truth = relay.finish();
         drop(vehicle);
-        let split = &timesync_responder(&out)["split"];
+        let split = &responder_1_1(&out)["split"];
         let delayed = truth[direction]["max_ms"].as_f64().unwrap();
         assert!(delayed > 1400.0, "{truth}");
         let queued = ms(split, &format!("{direction}link_max_ms"));
@@ -245,6 +250,60 @@ fn the_split_puts_a_relays_queue_on_the_direction_it_delays() {
         // Loopback: the floor is under a millisecond.
         let down_queue = if direction == "down" { delayed } else { 0.0 };
         one_way_within(&checked_summary(&out), (0.0, 1.0), down_queue);
+    }
+}
+
+/// PX4-like: a responder answering PING, whose replies carry no clock
+/// of its, but streaming ATTITUDE stamped at send. The split reads the
+/// downlink's queue from the telemetry's age as each reply came: the
+/// delayed direction within 10 ms or 5 % of the queue's truth, the other
+/// under 30 ms (the telemetry frame before a reply is up to 50 ms older
+/// on a growing queue). On the sim, and behind the relay.
+#[test]
+fn a_ping_responders_round_trip_is_split_by_its_telemetrys_age() {
+    for (direction, other) in [("down", "up"), ("up", "down")] {
+        let link = format!(
+            "sim:?clock=virtual&stream=ATTITUDE@20&queue_{direction}=1.5s@8s&offset=2h&drift=-40&seed=2"
+        );
+        let (code, out, err) = run_mavping(&[
+            "--probe", "ping", "-c", "200", "-i", "0.2", "-W", "3s", "--json", "-v", &link,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let truth = sim_queue_max_ms_of(&err, direction);
+        let split = &responder_1_1(&out)["split"];
+        assert_eq!(split["by"], "telemetry_age", "{split}");
+        let queued = ms(split, &format!("{direction}link_max_ms"));
+        assert!(near(queued, truth), "sim {direction}: {split} vs {truth}");
+        assert!(ms(split, &format!("{other}link_max_ms")) < 30.0, "{split}");
+
+        let (vehicle, relay, port) = vehicle_behind_relay(
+            direction,
+            &[
+                "--answer-ping",
+                "--attitude-hz",
+                "20",
+                "--timesync-hz",
+                "0",
+                "--ping-hz",
+                "0",
+            ],
+        );
+        let target = format!("udpout:127.0.0.1:{port}");
+        let (code, out, err) = run_mavping(&[
+            "--probe", "ping", "-c", "90", "-i", "0.2", "-W", "3s", "--json", &target,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let truth = relay.finish();
+        drop(vehicle);
+        let split = &responder_1_1(&out)["split"];
+        let delayed = truth[direction]["max_ms"].as_f64().unwrap();
+        assert!(delayed > 1400.0, "{truth}");
+        let queued = ms(split, &format!("{direction}link_max_ms"));
+        assert!(
+            near(queued, delayed),
+            "relay {direction}: {split} vs {truth}"
+        );
+        assert!(ms(split, &format!("{other}link_max_ms")) < 30.0, "{split}");
     }
 }
 
@@ -330,7 +389,7 @@ fn late_replies_from_a_queue_are_not_uplink_loss() {
         .unwrap()
         .parse()
         .unwrap();
-    let r = timesync_responder(&out);
+    let r = responder_1_1(&out);
     let (sent, late) = (r["sent"].as_f64().unwrap(), r["late"].as_f64().unwrap());
     assert!(late >= 20.0 && dropped > 0.0, "{r}");
     let d = &r["direction"];

@@ -26,7 +26,7 @@ use std::collections::HashMap;
 use serde::Serialize;
 
 use split::absolute_age;
-pub(crate) use split::{RoundTripSplit, SplitSummary};
+pub(crate) use split::{AgedSplit, RoundTripSplit, SplitBy, SplitSummary};
 
 use self::one_way::OneWay;
 use super::clock_offset::ClockSummary;

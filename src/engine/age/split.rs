@@ -42,10 +42,22 @@ pub(crate) struct SplitNow {
     pub(crate) downlink_ms: f64,
 }
 
+/// What the split read the responder's side from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub(crate) enum SplitBy {
+    /// Its clock in its replies (TIMESYNC's `tc1`, a signature).
+    #[default]
+    ReplyClock,
+    /// Its telemetry's age at each reply (replies without its clock: PING).
+    TelemetryAge,
+}
+
 /// The split's figures over the run: each direction's queue above its
 /// floor, p50/p99/max (ms), and the drift the floors share.
 #[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize)]
 pub(crate) struct SplitSummary {
+    pub(crate) by: SplitBy,
     pub(crate) exchanges: u64,
     pub(crate) uplink_p50_ms: f64,
     pub(crate) uplink_p99_ms: f64,
@@ -207,6 +219,7 @@ impl RoundTripSplit {
         }
         let span = up_env.span().min(down_env.span());
         Some(SplitSummary {
+            by: SplitBy::ReplyClock,
             exchanges: self.exchanges,
             uplink_p50_ms: up.quantile(0.5),
             uplink_p99_ms: up.quantile(0.99),
@@ -224,6 +237,67 @@ impl RoundTripSplit {
         self.envelopes
             .as_ref()
             .map_or(0, |(u, d)| u.stored_points() + d.stored_points())
+    }
+}
+
+/// The round trip split where the replies carry no clock of the
+/// responder's but its telemetry does (PX4 answers PING and streams
+/// ATTITUDE stamped at send): the downlink's queue is its newest frame's
+/// age above its baseline when the reply came, the uplink's the round
+/// trip above its quickest less that. Both ride one path down, so the
+/// reply queued as the telemetry beside it did. Memory is constant.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct AgedSplit {
+    min_rtt: Option<Nanos>,
+    /// (round trip ns, downlink queue ms), held until later exchanges
+    /// have found the quickest round trip.
+    ring: VecDeque<(Nanos, f64)>,
+    up_hist: Quantiles,
+    down_hist: Quantiles,
+    exchanges: u64,
+}
+
+impl AgedSplit {
+    /// One exchange: its round trip, and the responder's telemetry age
+    /// (ms above its baseline) as its reply came.
+    pub(crate) fn record(&mut self, rtt: Nanos, down_ms: f64) {
+        self.min_rtt = Some(self.min_rtt.map_or(rtt, |m| m.min(rtt)));
+        self.exchanges += 1;
+        if self.ring.len() == LOOKAHEAD {
+            if let Some((rtt, down)) = self.ring.pop_front() {
+                let up = self.up_ms(rtt, down);
+                self.up_hist.record(up);
+                self.down_hist.record(down);
+            }
+        }
+        self.ring.push_back((rtt, down_ms.max(0.0)));
+    }
+
+    fn up_ms(&self, rtt: Nanos, down_ms: f64) -> f64 {
+        let above = rtt.saturating_sub(self.min_rtt.unwrap_or(rtt)) as f64 / 1e6;
+        (above - down_ms).max(0.0)
+    }
+
+    pub(crate) fn summary(&self) -> Option<SplitSummary> {
+        if self.exchanges == 0 {
+            return None;
+        }
+        let (mut up, mut down) = (self.up_hist.clone(), self.down_hist.clone());
+        for &(rtt, d) in &self.ring {
+            up.record(self.up_ms(rtt, d));
+            down.record(d);
+        }
+        Some(SplitSummary {
+            by: SplitBy::TelemetryAge,
+            exchanges: self.exchanges,
+            uplink_p50_ms: up.quantile(0.5),
+            uplink_p99_ms: up.quantile(0.99),
+            uplink_max_ms: up.max_ms,
+            downlink_p50_ms: down.quantile(0.5),
+            downlink_p99_ms: down.quantile(0.99),
+            downlink_max_ms: down.max_ms,
+            drift_ppm: None,
+        })
     }
 }
 

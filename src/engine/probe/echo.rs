@@ -10,7 +10,7 @@ use super::passive::driver::{self as passive_driver, tell_sources};
 use super::passive::ticks::Ticks;
 use super::passive::tracker::{SourceTable, DEFAULT_MAX_SOURCES};
 use super::{Classified, EchoProbe};
-use crate::engine::age::{self, AgeTracker, RoundTripSplit, SourceAge};
+use crate::engine::age::{self, AgeTracker, AgedSplit, RoundTripSplit, SourceAge};
 use crate::engine::diagnosis::{diagnose, Observed};
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::kind::KindValue;
@@ -80,7 +80,14 @@ pub(crate) struct EchoDriver<P> {
     /// Each responder's round trips split into up and down, where its
     /// replies carry its clock (TIMESYNC's `tc1`, a signature).
     splits: HashMap<SysComp, RoundTripSplit>,
+    /// Where the replies carry no clock, each responder's round trips
+    /// split by its telemetry's age.
+    aged_splits: HashMap<SysComp, AgedSplit>,
 }
+
+/// A responder's telemetry age speaks for its reply only if its newest
+/// stamped frame came this close before it (ns): 5 frames a second.
+const AGE_FRESH_NS: Nanos = 200_000_000;
 
 /// A responder's clock offset is told at most this often.
 const CLOCK_TOLD_EVERY: Nanos = 1_000_000_000;
@@ -94,6 +101,7 @@ impl<P: EchoProbe> EchoDriver<P> {
                 && matches!(s.clock, StampClock::TimesyncNs | StampClock::Signature)
         });
         let Some(stamp) = theirs else {
+            self.aged_split(frame.source, sent_at, at);
             return;
         };
         if !self.splits.contains_key(&frame.source) && self.splits.len() >= MAX_RESPONDERS {
@@ -104,11 +112,29 @@ impl<P: EchoProbe> EchoDriver<P> {
         split.record(sent_at, theirs_ns, at);
     }
 
+    /// Records a reply without the responder's clock split by its
+    /// telemetry's age, when a send-stamped frame of its came just before.
+    fn aged_split(&mut self, source: SysComp, sent_at: Nanos, at: Nanos) {
+        let Some(now) = self.age.now(source) else {
+            return;
+        };
+        let fresh = now.meaning == StampMeaning::Sent
+            && now.clock.keeps_time()
+            && at.saturating_sub(now.at) <= AGE_FRESH_NS;
+        let room =
+            self.aged_splits.len() < MAX_RESPONDERS || self.aged_splits.contains_key(&source);
+        if fresh && room {
+            let split = self.aged_splits.entry(source).or_default();
+            split.record(at.saturating_sub(sent_at), now.age_ms);
+        }
+    }
+
     /// Every source's age, each responder's split, and the queue hint for
     /// each source whose frames came ever later while it lost next to none.
     fn ages(&self, responders: &mut [ResponderSummary]) -> (Vec<SourceAge>, Vec<Hint>) {
         for r in responders.iter_mut() {
-            r.split = self.splits.get(&r.id).and_then(RoundTripSplit::summary);
+            r.split = (self.splits.get(&r.id).and_then(RoundTripSplit::summary))
+                .or_else(|| self.aged_splits.get(&r.id).and_then(AgedSplit::summary));
         }
         let mut ages = self.age.summary();
         let base_ns = self.probe.clock_base_ns();
@@ -144,6 +170,7 @@ impl<P: EchoProbe> EchoDriver<P> {
             clocks_due: Vec::new(),
             age: AgeTracker::default(),
             splits: HashMap::new(),
+            aged_splits: HashMap::new(),
         }
     }
 

@@ -8,7 +8,7 @@ use super::summary::{
     write_signing,
 };
 use super::TextReporter;
-use crate::engine::age::SplitSummary;
+use crate::engine::age::{SplitBy, SplitSummary};
 use crate::engine::capacity::WireBudget;
 use crate::engine::clock_offset::MIN_DRIFT_SPAN_S;
 use crate::engine::hint::HintCode;
@@ -222,12 +222,16 @@ fn write_responder(out: &mut impl Write, r: &ResponderSummary) -> io::Result<()>
 }
 
 /// Which way the round trip queued, by the responder's clock in its
-/// replies: each direction above its quickest.
+/// replies or its telemetry's age: each direction above its quickest.
 fn write_split(out: &mut impl Write, s: &SplitSummary) -> io::Result<()> {
     let round_trip = s.uplink_max_ms.max(0.0) + s.downlink_max_ms.max(0.0);
+    let by = match s.by {
+        SplitBy::ReplyClock => "its clock",
+        SplitBy::TelemetryAge => "its telemetry's age",
+    };
     writeln!(
         out,
-        "  queues by its clock: round trip up to +{:.1} ms above its quickest: uplink p99 +{:.1} \
+        "  queues by {by}: round trip up to +{:.1} ms above its quickest: uplink p99 +{:.1} \
          ms (max +{:.1}), downlink p99 +{:.1} ms (max +{:.1}) over {} exchanges",
         round_trip,
         s.uplink_p99_ms,
