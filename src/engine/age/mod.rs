@@ -207,14 +207,17 @@ fn rank(clock: StampClock, meaning: StampMeaning) -> u8 {
 
 impl AgeTracker {
     /// Takes every stamp `frame` carries, received at `at`; the frame's
-    /// age above its baseline (ms) by its best-ranked stamp that keeps
-    /// time, if that stamp fitted its baseline.
+    /// age above its baseline (ms) by its best-ranked send stamp that
+    /// keeps time, if that stamp fitted its baseline.
     pub(crate) fn on_frame(&mut self, frame: &Frame, at: Nanos) -> Option<f64> {
         let mut best: Option<(u8, f64)> = None;
         for stamp in frame.stamps.iter() {
             let age = self.on_stamp(frame.source, stamp, at);
             let rank = rank(stamp.clock, stamp.meaning);
-            if let Some(age) = age.filter(|_| stamp.clock.keeps_time()) {
+            // A sample time's age includes how old the data was: not the
+            // link's, so it speaks for no frame.
+            let link_age = stamp.clock.keeps_time() && stamp.meaning == StampMeaning::Sent;
+            if let Some(age) = age.filter(|_| link_age) {
                 if best.is_none_or(|(r, _)| rank < r) {
                     best = Some((rank, age));
                 }
@@ -328,7 +331,9 @@ impl AgeTracker {
     /// Every source's figures, by source, its clocks best first.
     pub(crate) fn summary(&self) -> Vec<SourceAge> {
         let mut keys: Vec<&Key> = self.clocks.keys().collect();
-        keys.sort_by_key(|k| (k.source, rank(k.clock, k.meaning)));
+        // Whole keys break rank's ties (boot ms and µs rank alike), so the
+        // order is the same every run.
+        keys.sort_by_key(|k| (k.source, rank(k.clock, k.meaning), **k));
         let mut out: Vec<SourceAge> = Vec::new();
         for key in keys {
             let Some(s) = self.clocks[key].one_way.figures() else {

@@ -322,9 +322,11 @@ fn send_stamps_are_the_headline() {
             StampMeaning::Sent,
             5_000 + k * 20,
         );
-        tracker.on_frame(&position, at);
+        // A sample time's age is the data's, not the link's: no frame
+        // age (the window and histogram figures) from it.
+        assert_eq!(tracker.on_frame(&position, at), None);
         tracker.on_frame(&attitude, at);
-        tracker.on_frame(&position, at);
+        assert_eq!(tracker.on_frame(&position, at), None);
     }
     let summary = tracker.summary();
     assert_eq!(summary[0].headline.meaning, StampMeaning::Sent);
@@ -600,4 +602,39 @@ fn the_absolute_age_is_the_baseline_placed_by_the_clock_offset() {
         ..clock
     };
     assert_eq!(boot.absolute(age, &unbounded, base), None);
+}
+
+/// Clocks that rank alike (boot ms and boot µs) come in one order every
+/// run, not the hash map's.
+#[test]
+fn clocks_of_equal_rank_are_listed_in_one_order() {
+    let source = SysComp::new(1, 1);
+    for seed in 0..8u64 {
+        let mut tracker = AgeTracker::default();
+        for k in 0..20u64 {
+            let at = 1_000_000_000 + k * 20_000_000 + seed;
+            let ms = stamped(
+                source,
+                Msg::Other,
+                StampClock::BootMs,
+                StampMeaning::Sent,
+                k * 20,
+            );
+            let us = stamped(
+                source,
+                Msg::Other,
+                StampClock::BootUs,
+                StampMeaning::Sent,
+                k * 20_000,
+            );
+            tracker.on_frame(&us, at);
+            tracker.on_frame(&ms, at);
+        }
+        let clocks: Vec<StampClock> = tracker.summary()[0]
+            .clocks
+            .iter()
+            .map(|c| c.clock)
+            .collect();
+        assert_eq!(clocks, [StampClock::BootMs, StampClock::BootUs]);
+    }
 }
