@@ -20,8 +20,9 @@ pub(super) const FLOOR_MS: f64 = 1.0;
 /// the chart instead of filling it: 100 ms, where the live view marks an
 /// age and the queue hint starts to look.
 const LEAST_TOP_MS: f64 = 100.0;
-/// Past this many decades, a tick a decade: 1, 2, 5 in each of four or
-/// more would crowd the labels of a chart this high.
+/// Past this many decades, 1 and 3 in each: 1, 2, 5 in each of four or
+/// more would crowd the labels of a chart this high, and a tick a decade
+/// would leave a 5 s peak with no label above 1000.
 const DECADES_OF_FINE_TICKS: f64 = 3.0;
 
 /// `points` with every age below [`FLOOR_MS`] raised to it.
@@ -46,13 +47,14 @@ pub(super) fn axis(lines: &[Points]) -> WithKeyPoints<LogCoord<f64>> {
         .with_key_points(ticks(FLOOR_MS, top))
 }
 
-/// Round ticks from `from` to `to`: a decade each over a wide range.
+/// Round ticks from `from` to `to`: two a decade over a wide range.
 fn ticks(from: f64, to: f64) -> Vec<f64> {
     if (to / from).log10() < DECADES_OF_FINE_TICKS {
         return log_ticks(from, to);
     }
-    let decades = from.log10().ceil() as i32..=to.log10().floor() as i32;
-    decades.map(|e| 10f64.powi(e)).collect()
+    let decades = from.log10().floor() as i32..=to.log10().floor() as i32;
+    let each = decades.flat_map(|e| [1.0, 3.0].map(|m| m * 10f64.powi(e)));
+    each.filter(|v| (from..=to).contains(v)).collect()
 }
 
 /// Whether any of `lines` has a point: a chart of none is left out.
@@ -65,17 +67,15 @@ mod tests {
     use super::*;
 
     #[test]
-    fn a_quiet_link_gets_fine_ticks_and_a_queue_a_tick_a_decade() {
+    fn a_quiet_link_gets_fine_ticks_and_a_queue_two_a_decade() {
         // 4 ms of jitter: the axis still reaches past 100 ms.
         assert_eq!(
             ticks(FLOOR_MS, 130.0),
             [1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0]
         );
         // A 10 s queue.
-        assert_eq!(
-            ticks(FLOOR_MS, 13_000.0),
-            [1.0, 10.0, 100.0, 1000.0, 10_000.0]
-        );
+        let ten_s = [1.0, 3.0, 10.0, 30.0, 100.0, 300.0, 1000.0, 3000.0, 10_000.0];
+        assert_eq!(ticks(FLOOR_MS, 13_000.0), ten_s);
     }
 
     #[test]
