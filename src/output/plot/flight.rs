@@ -68,8 +68,16 @@ impl FlightTrack {
         if let Some(last) = &f.last {
             self.window(last);
         }
-        let vehicle = f.origin.as_ref().map(|o| o.vehicle);
-        let age = ages.iter().find(|a| Some(a.source) == vehicle);
+        let age = match &f.origin {
+            Some(o) => ages.iter().find(|a| a.source == o.vehicle),
+            // Without a position every source's frames went into the
+            // windows' ages: one source's figure stands for them only
+            // when it is the one stamped.
+            None => match ages {
+                [one] => Some(one),
+                _ => None,
+            },
+        };
         self.age_p99_ms = age.map(|a| a.headline.p99_ms);
         self.summary = Some(f.clone());
     }
@@ -346,6 +354,15 @@ mod tests {
         }
         // Loss, age, RSSI and remote RSSI.
         assert_eq!(svg.matches(r#"opacity="0.85""#).count(), 4, "{svg}");
+
+        // A log without positions: the one stamped source's p99 stands for
+        // the log, two sources' do not.
+        summary.origin = None;
+        t.on_summary(&summary, &ages);
+        assert_eq!(t.age_p99_ms, Some(1480.0));
+        let two = [ages.clone(), ages].concat();
+        t.on_summary(&summary, &two);
+        assert_eq!(t.age_p99_ms, None);
     }
 
     #[test]
