@@ -58,7 +58,7 @@ impl SourceTrack {
         self.spans.at(w.start as f64).window(w);
     }
 
-    /// The oldest frame's age (ms) in the telling `w` ends at.
+    /// The oldest frame's age (ms) between the two tellings `w` spans.
     pub(super) fn age(&mut self, w: &Window, ms: f64) {
         self.spans.at(w.start as f64).age(ms);
     }
@@ -68,9 +68,10 @@ impl SourceTrack {
     }
 }
 
-/// With an age chart, when a source's frames carry clock stamps: between
-/// the rate and the loss, so the loss chart keeps the time axis and a
-/// page without ages is drawn as it was.
+/// The rate chart, the age chart when a source's frames carry clock
+/// stamps, the loss chart and the legend. The ages go between the rate
+/// and the loss, so the loss chart keeps the time axis and a page
+/// without ages is drawn as it was.
 pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<String, PlotError> {
     let ages = lines(entries, SourceTrack::age_points);
     let aged = age::any(&ages) || entries.iter().any(|e| e.track.age_p99_ms.is_some());
