@@ -400,3 +400,71 @@ fn late_replies_from_a_queue_are_not_uplink_loss() {
     );
     assert_eq!(d["downlink_lost"], 0, "{d}");
 }
+
+/// `--plot` of a passive run draws each source's oldest frame per span on
+/// a log axis: read back through the axis's own tick labels, the line
+/// peaks at the simulated queue's 1 s and falls to a few ms once it has
+/// drained; the legend has the summary's p99.
+#[test]
+fn the_passive_plot_draws_the_queues_peak_as_age() {
+    /// Each whole `<text>` in `svg`: its `y` and what it says.
+    fn texts(svg: &str) -> Vec<(f64, &str)> {
+        let each = svg.split("<text").skip(1);
+        each.filter_map(|part| {
+            let y = part.split(" y=\"").nth(1)?;
+            let y = y[..y.find('"')?].parse().ok()?;
+            Some((y, part[part.find('>')? + 1..part.find("</text>")?].trim()))
+        })
+        .collect()
+    }
+    let scratch = crate::tlog::Scratch::new("age-plot");
+    let path = scratch.path("age.svg");
+    let link = "sim:?clock=virtual&stream=ATTITUDE@20&queue_down=1s@3s&seed=4";
+    let (code, summary, err) = passive(link, &["--plot", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let truth = sim_queue_max_ms(&err);
+    assert!((950.0..=1000.0).contains(&truth), "{truth}");
+    let svg = std::fs::read_to_string(&path).unwrap();
+    // The age chart: from its caption to the loss chart's.
+    let from = svg
+        .find("age above baseline, by source")
+        .unwrap_or_else(|| panic!("no age chart in {svg}"));
+    let to = from + svg[from..].find("sequence loss per span").unwrap();
+    let chart = &svg[from..to];
+    // Its y axis: the tick labels' heights, a straight line in log10.
+    let ticks: Vec<(f64, f64)> = texts(chart)
+        .into_iter()
+        .filter_map(|(y, text)| Some((text.parse::<f64>().ok()?.log10(), y)))
+        .collect();
+    let (low, high) = (ticks[0], ticks[ticks.len() - 1]);
+    assert!(high.0 - low.0 >= 2.0, "{ticks:?}");
+    let ms_at = |y: f64| 10f64.powf(low.0 + (y - low.1) * (high.0 - low.0) / (high.1 - low.1));
+    // Its one line (the markers are not polylines).
+    let line = chart
+        .split("<polyline")
+        .find(|p| p.contains(r#"opacity="0.85""#));
+    let points = line
+        .expect("an age line")
+        .split("points=\"")
+        .nth(1)
+        .unwrap();
+    let ages: Vec<f64> = points[..points.find('"').unwrap()]
+        .split_whitespace()
+        .map(|p| ms_at(p.split(',').nth(1).unwrap().parse().unwrap()))
+        .collect();
+    let peak = ages.iter().copied().fold(0.0, f64::max);
+    // A pixel is 3 % of a decade or so; the 20 Hz frames catch the peak
+    // within 50 ms of it.
+    assert!(
+        (truth * 0.9..=truth * 1.05).contains(&peak),
+        "{peak} vs {truth}: {ages:?}"
+    );
+    let quiet = ages.last().unwrap();
+    assert!(*quiet < 20.0, "{quiet}: {ages:?}");
+    // The legend's p99 is the summary's.
+    let p99 = ms(headline(&summary, "1/1"), "p99_ms");
+    assert!(
+        svg.contains(&format!("\n{p99:.1}\n")),
+        "{p99} not in the legend"
+    );
+}

@@ -9,6 +9,7 @@ use super::frame::{self, PlotError};
 use super::passive::{self, SourceTrack};
 use super::spans::Bins;
 use super::{draw, sweep};
+use crate::engine::age::SourceAge;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::ResponderSummary;
@@ -99,21 +100,32 @@ impl PlotData {
         }
     }
 
-    /// The windows of a passive link's sources.
-    pub(crate) fn on_windows(&mut self, link: usize, windows: &[Window]) {
+    /// The windows of a passive link's sources, and the oldest frame's age
+    /// (ms) of each source with stamped frames in them.
+    pub(crate) fn on_windows(&mut self, link: usize, windows: &[Window], ages: &[(SysComp, f64)]) {
         for w in windows {
-            self.sources
+            let track = self
+                .sources
                 .entry((link, w.source))
-                .or_insert_with(|| SourceTrack::new(w.radio))
-                .window(w);
+                .or_insert_with(|| SourceTrack::new(w.radio));
+            track.window(w);
+            if let Some(&(_, ms)) = ages.iter().find(|(s, _)| *s == w.source) {
+                track.age(w, ms);
+            }
         }
     }
 
-    /// The run's own figures for each source of a passive `link`.
-    pub(crate) fn on_sources(&mut self, link: usize, table: &TableSummary) {
+    /// The run's own figures for each source of a passive `link`: its
+    /// table's, and its headline ages'.
+    pub(crate) fn on_sources(&mut self, link: usize, table: &TableSummary, ages: &[SourceAge]) {
         for s in &table.sources {
             if let Some(t) = self.sources.get_mut(&(link, s.source)) {
                 t.summary = Some(s.clone());
+            }
+        }
+        for a in ages {
+            if let Some(t) = self.sources.get_mut(&(link, a.source)) {
+                t.age_p99_ms = Some(a.headline.p99_ms);
             }
         }
     }

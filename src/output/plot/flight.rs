@@ -1,20 +1,24 @@
 //! `--plot` of a telemetry log: a one-page flight report. The link's loss
-//! per time span, the radio's RSSI and remote RSSI over time, and the loss
-//! against the distance from the origin (the range test a radio user does
-//! by hand), with the flight's figures below.
+//! per time span, the vehicle's frame age p99 per time span (where its
+//! frames carry clock stamps), the radio's RSSI and remote RSSI over time,
+//! and the loss against the distance from the origin (the range test a
+//! radio user does by hand), with the flight's figures below.
 //!
 //! Memory is constant: [`SPANS`] time spans that double in width and merge
 //! when a window falls past the last (as the passive page's), and
 //! [`DISTANCE_BINS`] distance bins that do the same when a window is
-//! farther than the last bin; frames and losses are summed, never dropped.
+//! farther than the last bin; frames and losses are summed, never dropped,
+//! and a merged span keeps its windows' highest age p99.
 
 use plotters::prelude::*;
 
+use super::age;
 use super::data::SPANS;
 use super::draw::{caption_font, chart, line, Marks};
 use super::frame::{self, Area, DrawResult, Legend, LegendRow, PlotError};
 use super::spans::{merged, Bins, Sums};
 use super::style::Look;
+use crate::engine::age::SourceAge;
 use crate::engine::probe::passive::flight::{FlightSummary, FlightWindow, DEFAULT_WINDOW_NS};
 
 /// Distance bins at most.
@@ -23,6 +27,7 @@ pub(super) const DISTANCE_BINS: usize = 40;
 const FIRST_BIN_M: f64 = 25.0;
 const LOSS_H: u32 = 250;
 const RSSI_H: u32 = 250;
+const AGE_H: u32 = 250;
 const RANGE_H: u32 = 300;
 const NUMBER_W: i32 = 110;
 
@@ -32,6 +37,9 @@ pub(super) struct FlightTrack {
     time: Bins,
     distance: Bins,
     summary: Option<FlightSummary>,
+    /// The vehicle's headline p99 age over the whole log, ms, from the
+    /// run's summary.
+    age_p99_ms: Option<f64>,
 }
 
 impl Default for FlightTrack {
@@ -40,6 +48,7 @@ impl Default for FlightTrack {
             time: Bins::new(DEFAULT_WINDOW_NS as f64 / 1e9, 1.0, SPANS),
             distance: Bins::new(FIRST_BIN_M, 1.0, DISTANCE_BINS),
             summary: None,
+            age_p99_ms: None,
         }
     }
 }
@@ -52,12 +61,29 @@ impl FlightTrack {
         }
     }
 
-    /// The summary's figures, and its last window.
-    pub(super) fn on_summary(&mut self, f: &FlightSummary) {
+    /// The summary's figures, and its last window; of `ages`, the
+    /// vehicle's (whose positions are read: the windows' ages are its
+    /// frames').
+    pub(super) fn on_summary(&mut self, f: &FlightSummary, ages: &[SourceAge]) {
         if let Some(last) = &f.last {
             self.window(last);
         }
+        let age = match &f.origin {
+            Some(o) => ages.iter().find(|a| a.source == o.vehicle),
+            // Without a position every source's frames went into the
+            // windows' ages: one source's figure stands for them only
+            // when it is the one stamped.
+            None => match ages {
+                [one] => Some(one),
+                _ => None,
+            },
+        };
+        self.age_p99_ms = age.map(|a| a.headline.p99_ms);
         self.summary = Some(f.clone());
+    }
+
+    fn age_points(&self) -> Vec<(f64, f64)> {
+        age::floored(self.time.points(|s| s.age_ms))
     }
 
     pub(super) fn is_empty(&self) -> bool {
@@ -67,7 +93,8 @@ impl FlightTrack {
 }
 
 /// Three rows in the legend, a line each: its figure over the whole log,
-/// and the lowest and highest of its spans.
+/// and the lowest and highest of its spans; a fourth, and a chart under
+/// the loss sharing its time axis, for the age where the log has any.
 pub(super) fn svg(title: &str, track: &FlightTrack) -> Result<String, PlotError> {
     let total = merged(&track.time.bins);
     let row = |n: usize, label: &'static str, f: &dyn Fn(&Sums) -> Option<f64>| {
@@ -82,24 +109,44 @@ pub(super) fn svg(title: &str, track: &FlightTrack) -> Result<String, PlotError>
             cells: vec![cell(f(&total)), cell(low), cell(high)],
         }
     };
-    let rows = vec![
+    let mut rows = vec![
         row(0, "loss (%)", &Sums::loss_pct),
         row(1, "rssi", &|s| Sums::mean(s.rssi)),
         row(2, "remote rssi", &|s| Sums::mean(s.remrssi)),
     ];
+    let ages = track.age_points();
+    let mut heights = vec![LOSS_H, RSSI_H, RANGE_H];
+    if !ages.is_empty() {
+        let mut age = row(AGE_LOOK, "age p99 (ms)", &|s| s.age_ms);
+        // Merged, a span holds its windows' highest p99, not the log's.
+        age.cells[0] = track.age_p99_ms.map(|v| format!("{v:.0}"));
+        rows.push(age);
+        heights.insert(1, AGE_H);
+    }
     let legend = Legend {
         heads: ("", &["whole log", "lowest", "highest"]),
         number_w: NUMBER_W,
         rows,
         empty: "no window",
     };
-    frame::page(title, &legend, &[LOSS_H, RSSI_H, RANGE_H], |areas| {
+    frame::page(title, &legend, &heights, |areas| {
         let t_max = track.time.end().max(1.0);
-        loss_over_time(track, &areas[0], t_max)?;
-        rssi_over_time(track, &areas[1], t_max)?;
-        loss_against_distance(track, &areas[2])
+        let (loss, rest) = areas.split_first().expect("a loss chart");
+        loss_over_time(track, loss, t_max)?;
+        let rest = match rest {
+            [age, rest @ ..] if !ages.is_empty() => {
+                age_over_time(&ages, age, t_max)?;
+                rest
+            }
+            rest => rest,
+        };
+        rssi_over_time(track, &rest[0], t_max)?;
+        loss_against_distance(track, &rest[1])
     })
 }
+
+/// The age line's look: the legend's fourth row.
+const AGE_LOOK: usize = 3;
 
 fn loss_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
     let points = track.time.points(Sums::loss_pct);
@@ -108,6 +155,19 @@ fn loss_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResul
     let (x, y) = (0f64..t_max, 0f64..top * 1.1);
     let mut chart = chart(area, caption, (None, "lost (%)"), x, y)?;
     line(&mut chart, &Look::nth(0), &points, Marks::Lost)
+}
+
+/// The vehicle's frames' age p99 per span (a merged span's highest).
+fn age_over_time(points: &[(f64, f64)], area: &Area<'_>, t_max: f64) -> DrawResult {
+    let caption = "age above baseline over time (p99 per span)";
+    let y = age::axis(&[points.to_vec()]);
+    let mut chart = chart(area, caption, (None, "age (ms, log scale)"), 0f64..t_max, y)?;
+    line(
+        &mut chart,
+        &Look::nth(AGE_LOOK),
+        points,
+        Marks::Spread(0, 1),
+    )
 }
 
 fn rssi_over_time(track: &FlightTrack, area: &Area<'_>, t_max: f64) -> DrawResult {
@@ -177,7 +237,7 @@ pub(super) fn title(link: &str, track: &FlightTrack) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::engine::probe::passive::flight::{RadioWindow, Range};
+    use crate::engine::probe::passive::flight::{RadioWindow, Range, WindowAge};
 
     fn window(k: u64, received: u64, lost: i64, distance_m: f64) -> FlightWindow {
         FlightWindow {
@@ -253,5 +313,79 @@ mod tests {
         }
         // The loss line and the two RSSI lines.
         assert!(svg.matches("<polyline").count() >= 3);
+        // A log without clock stamps: no age chart, no age row.
+        assert!(!svg.contains("age"), "an age without ages");
+    }
+
+    /// A flight whose queue grows to `peak_ms` (window p99) at window 20
+    /// of 40, 12 ms before and after it.
+    fn queued(peak_ms: f64) -> FlightTrack {
+        let mut t = FlightTrack::default();
+        for k in 0..40u64 {
+            let p99_ms = if k == 20 { peak_ms } else { 12.0 };
+            t.window(&FlightWindow {
+                age: Some(WindowAge {
+                    p99_ms,
+                    max_ms: p99_ms * 1.1,
+                }),
+                ..window(k, 500, 0, 50.0 * k as f64)
+            });
+        }
+        t
+    }
+
+    #[test]
+    fn the_vehicles_age_is_drawn_under_the_loss_with_a_row_of_its_own() {
+        let mut t = queued(2_949.0);
+        let ages = crate::output::runs::ages();
+        let mut summary = crate::output::runs::flight().1;
+        summary.last = None;
+        t.on_summary(&summary, &ages);
+        let svg = svg("mavping tlog:vtol.tlog", &t).unwrap();
+        let at = |text: &str| svg.find(text).unwrap_or_else(|| panic!("{text} missing"));
+        // Between the loss and the RSSI, sharing their time axis.
+        assert!(at("sequence loss over time") < at("age above baseline over time"));
+        assert!(at("age above baseline over time") < at("radio RSSI over time"));
+        assert!(at("age (ms, log scale)") > 0);
+        // Its row: the vehicle's p99 over the log (the summary's), the
+        // quietest window's and the queue's.
+        for text in ["\nage p99 (ms)\n", "\n1480\n", "\n12\n", "\n2949\n"] {
+            assert!(svg.contains(text), "{text:?} missing");
+        }
+        // Loss, age, RSSI and remote RSSI.
+        assert_eq!(svg.matches(r#"opacity="0.85""#).count(), 4, "{svg}");
+
+        // A log without positions: the one stamped source's p99 stands for
+        // the log, two sources' do not.
+        summary.origin = None;
+        t.on_summary(&summary, &ages);
+        assert_eq!(t.age_p99_ms, Some(1480.0));
+        let two = [ages.clone(), ages].concat();
+        t.on_summary(&summary, &two);
+        assert_eq!(t.age_p99_ms, None);
+    }
+
+    #[test]
+    fn merged_time_spans_keep_the_highest_window_p99() {
+        let mut t = FlightTrack::default();
+        // 2 048 windows of 10 s: spans of 20 s hold two each.
+        for k in 0..2_048u64 {
+            let p99_ms = if k == 1_001 { 3_000.0 } else { k as f64 % 7.0 };
+            let age = Some(WindowAge {
+                p99_ms,
+                max_ms: p99_ms,
+            });
+            t.window(&FlightWindow {
+                age,
+                ..window(k, 500, 0, 0.0)
+            });
+        }
+        assert_eq!(t.time.width, 20.0);
+        let ages: Vec<f64> = t.time.bins.iter().filter_map(|s| s.age_ms).collect();
+        assert_eq!(ages.len(), 1_024);
+        assert_eq!(ages[500], 3_000.0);
+        // Windows 1 000 (6 ms) and 1 001 (the queue) in one span, 1 002
+        // (1 ms) and 1 003 (2 ms) in the next.
+        assert_eq!(ages[501], 2.0);
     }
 }

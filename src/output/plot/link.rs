@@ -7,6 +7,7 @@ use super::data::PlotData;
 use super::frame::PlotError;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::Nanos;
+use crate::frame::SysComp;
 use crate::output::windows::Windows;
 
 /// `--plot`: collects every link's samples during the run; the run draws
@@ -43,11 +44,12 @@ pub(crate) struct PlotLink {
 }
 
 impl PlotLink {
-    /// The windows ending at `at` of a passive run's sources.
-    pub(super) fn windows(&mut self, at: Nanos, table: &TableSummary) {
+    /// The windows ending at `at` of a passive run's sources, with each
+    /// source's oldest frame's age (ms) in them.
+    pub(super) fn windows(&mut self, at: Nanos, table: &TableSummary, ages: &[(SysComp, f64)]) {
         if let Some(windows) = self.windows.as_mut() {
             let next = windows.next(at, table);
-            self.data.borrow_mut().on_windows(self.index, &next);
+            self.data.borrow_mut().on_windows(self.index, &next, ages);
         }
     }
 }

@@ -1,7 +1,8 @@
 //! `--plot FILE.svg`: collects what the plot shows while the run goes on.
 //! The drawing is in `draw.rs`, colours and markers in `style.rs`; a
-//! sweep's in `sweep.rs`, a passive run's (each source's rate and loss
-//! over time) in `passive.rs`.
+//! sweep's in `sweep.rs`, a passive run's (each source's rate, frame age
+//! and loss over time) in `passive.rs`, a log's flight in `flight.rs`,
+//! the age axis they share in `age.rs`.
 //!
 //! Memory is constant: each responder keeps [`SPANS`](data::SPANS) time
 //! spans. When a sample falls past the last span, every span doubles in
@@ -14,6 +15,7 @@
 //! calls to the [`Plot`]'s data (`data.rs`) through its [`PlotLink`]
 //! (`link.rs`).
 
+mod age;
 mod data;
 mod draw;
 mod flight;
@@ -52,7 +54,7 @@ impl Reporter for PlotLink {
     }
 
     fn sources(&mut self, now: &SourcesNow) -> io::Result<()> {
-        self.windows(now.at, &now.table);
+        self.windows(now.at, &now.table, &now.age_max);
         Ok(())
     }
 
@@ -76,11 +78,16 @@ impl Reporter for PlotLink {
     /// The last, partial, window, and the figures for the legend. (The
     /// command probe sends no echo requests, so it has no lines.)
     fn passive_summary(&mut self, s: &PassiveSummary, _: &Verdict) -> io::Result<()> {
-        self.windows((s.duration_s * 1e9) as Nanos, &s.table);
+        // The ages since the last telling are not told: the last partial
+        // span has no age point (the legend's p99 covers the whole run).
+        self.windows((s.duration_s * 1e9) as Nanos, &s.table, &[]);
         let mut data = self.data.borrow_mut();
-        data.on_sources(self.index, &s.table);
+        data.on_sources(self.index, &s.table, &s.age);
         if let Some(f) = &s.flight {
-            data.flights.entry(self.index).or_default().on_summary(f);
+            data.flights
+                .entry(self.index)
+                .or_default()
+                .on_summary(f, &s.age);
         }
         Ok(())
     }

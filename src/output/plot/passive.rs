@@ -1,4 +1,5 @@
-//! `--plot` of a passive run: each source's frames a second and its
+//! `--plot` of a passive run: each source's frames a second, the age of
+//! its oldest frame (where its frames carry a clock stamp) and its
 //! sequence loss per time span, over time, and a legend of its figures
 //! from the run's summary.
 //!
@@ -6,8 +7,9 @@
 //! time spans, the first a second wide (the table is told once a second);
 //! when a window falls past the last span, every span doubles in width and
 //! neighbours merge, so a long run is drawn at a coarser resolution, its
-//! frames and losses summed, never dropped.
+//! frames and losses summed, never dropped, its oldest frame's age kept.
 
+use super::age;
 use super::data::SPANS;
 use super::draw::{chart, line, lines, Marks, Points};
 use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError};
@@ -20,6 +22,7 @@ use crate::output::windows::Window;
 const FIRST_SPAN_NS: Nanos = 1_000_000_000;
 const RATE_H: u32 = 300;
 const LOSS_H: u32 = 280;
+const AGE_H: u32 = 260;
 const NUMBER_W: i32 = 100;
 
 /// One source of a passive run, span by span.
@@ -31,6 +34,9 @@ pub(super) struct SourceTrack {
     /// The run's own figures for it, for the legend: known once the
     /// link's summary came.
     pub(super) summary: Option<SourceSummary>,
+    /// Its headline clock's p99 age above the baseline, ms, from the same
+    /// summary; `None` without stamped frames.
+    pub(super) age_p99_ms: Option<f64>,
 }
 
 impl SourceTrack {
@@ -39,6 +45,7 @@ impl SourceTrack {
             spans: Bins::new(FIRST_SPAN_NS as f64, 1e9, SPANS),
             radio,
             summary: None,
+            age_p99_ms: None,
         }
     }
 
@@ -50,37 +57,65 @@ impl SourceTrack {
         }
         self.spans.at(w.start as f64).window(w);
     }
+
+    /// The oldest frame's age (ms) between the two tellings `w` spans.
+    pub(super) fn age(&mut self, w: &Window, ms: f64) {
+        self.spans.at(w.start as f64).age(ms);
+    }
+
+    fn age_points(&self) -> Points {
+        age::floored(self.spans.points(|s| s.age_ms))
+    }
 }
 
+/// The rate chart, the age chart when a source's frames carry clock
+/// stamps, the loss chart and the legend. The ages go between the rate
+/// and the loss, so the loss chart keeps the time axis and a page
+/// without ages is drawn as it was.
 pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<String, PlotError> {
+    let ages = lines(entries, SourceTrack::age_points);
+    let aged = age::any(&ages) || entries.iter().any(|e| e.track.age_p99_ms.is_some());
     let rows = frame::rows(entries, |t| {
         let s = t.summary.as_ref();
         let count = |n: fn(&SeqCounts) -> u64| s.map(|s| n(&s.counts).to_string());
-        vec![
+        let mut cells = vec![
             count(|c| c.received),
             count(|c| c.lost),
             s.and_then(|s| s.loss_pct).map(|v| format!("{v:.2}")),
             count(|c| c.duplicate),
             count(|c| c.reordered),
             s.and_then(|s| s.frames_per_s).map(|v| format!("{v:.1}")),
-        ]
+        ];
+        if aged {
+            cells.push(t.age_p99_ms.map(|v| format!("{v:.1}")));
+        }
+        cells
     });
+    let mut heads = vec!["received", "lost", "loss %", "dup", "reordered", "frames/s"];
+    if aged {
+        heads.push("age p99 ms");
+    }
     let legend = Legend {
-        heads: (
-            "source",
-            &["received", "lost", "loss %", "dup", "reordered", "frames/s"],
-        ),
+        heads: ("source", &heads),
         number_w: NUMBER_W,
         rows,
         empty: "nothing heard",
     };
-    frame::page(title, &legend, &[RATE_H, LOSS_H], |areas| {
+    let heights: &[u32] = if age::any(&ages) {
+        &[RATE_H, AGE_H, LOSS_H]
+    } else {
+        &[RATE_H, LOSS_H]
+    };
+    frame::page(title, &legend, heights, |areas| {
         let t_max = entries
             .iter()
             .map(|e| e.track.spans.end())
             .fold(1.0, f64::max);
         rate_chart(entries, &areas[0], t_max)?;
-        loss_chart(entries, &areas[1], t_max)
+        if let [_, middle, _] = areas {
+            age_chart(entries, &ages, middle, t_max)?;
+        }
+        loss_chart(entries, areas.last().expect("a loss chart"), t_max)
     })
 }
 
@@ -102,6 +137,23 @@ fn rate_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -
     Ok(())
 }
 
+/// Each source's oldest frame's age per span, one line each; a source
+/// without stamped frames has none.
+fn age_chart(
+    entries: &[Entry<'_, SourceTrack>],
+    ages: &[Points],
+    area: &Area<'_>,
+    t_max: f64,
+) -> DrawResult {
+    let caption = "age above baseline, by source (oldest frame per span)";
+    let descs = (None, "age (ms, log scale)");
+    let mut chart = chart(area, caption, descs, 0f64..t_max, age::axis(ages))?;
+    for (k, (e, points)) in entries.iter().zip(ages).enumerate() {
+        line(&mut chart, &e.look, points, Marks::Spread(k, entries.len()))?;
+    }
+    Ok(())
+}
+
 /// Each source's sequence loss per span, a line each with its marker where
 /// a span lost frames; it carries the time axis.
 fn loss_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -> DrawResult {
@@ -118,6 +170,7 @@ fn loss_chart(entries: &[Entry<'_, SourceTrack>], area: &Area<'_>, t_max: f64) -
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::engine::probe::passive::tracker::SourceTable;
     use crate::frame::SysComp;
 
     fn second(n: u64, received: u64, lost: i64) -> Window {
@@ -160,7 +213,7 @@ mod tests {
 
     #[test]
     fn the_svg_has_a_line_per_source_and_the_summary_in_its_legend() {
-        use crate::engine::probe::passive::tracker::{SourceTable, RADIO_SOURCE};
+        use crate::engine::probe::passive::tracker::RADIO_SOURCE;
         use crate::output::windows::Windows;
         let plot = super::super::Plot::default();
         let mut link = plot.link();
@@ -189,7 +242,7 @@ mod tests {
                 (second * 1_000 + 500) * ms,
             );
             let at = (second + 1) * 1_000 * ms;
-            link.windows(at, &table.summary(at));
+            link.windows(at, &table.summary(at), &[]);
         }
         let svg = plot.svg().unwrap();
         for text in [
@@ -205,13 +258,123 @@ mod tests {
         assert!(svg.matches("<polyline").count() >= 4);
 
         let summary = table.summary(20_000 * ms);
-        plot.data.borrow_mut().on_sources(0, &summary);
+        plot.data.borrow_mut().on_sources(0, &summary, &[]);
         let svg = plot.svg().unwrap();
+        // Without stamped frames, no age chart and no age column.
+        assert!(!svg.contains("age"), "an age without ages");
         // 980 frames, 20 lost: 2.00 %; 979 in the 19.98 s after the first.
         for text in ["980", "20", "2.00", "49.0", "received", "reordered"] {
             assert!(svg.contains(&format!("\n{text}\n")), "{text} missing");
         }
         assert!(!svg.contains("\n-\n"), "a figure is missing");
+    }
+
+    /// A second's window of `source` and the oldest frame's age in it.
+    fn aged(data: &mut super::super::data::PlotData, source: SysComp, n: u64, age_ms: f64) {
+        let w = Window {
+            source,
+            ..second(n, 50, 0)
+        };
+        data.on_windows(0, &[w], &[(source, age_ms)]);
+    }
+
+    #[test]
+    fn a_queue_draws_an_age_line_per_stamped_source_and_its_p99_in_the_legend() {
+        let plot = super::super::Plot::default();
+        let mut link = plot.link();
+        plot.data.borrow_mut().links[0] = "sim:".into();
+        link.windows = Some(crate::output::windows::Windows::default());
+        let (one, two) = (SysComp::new(1, 1), SysComp::new(2, 1));
+        {
+            let mut data = plot.data.borrow_mut();
+            // 1/1 behind a queue that grows to 1.2 s over 12 s and drains;
+            // 2/1's frames carry no stamps.
+            for n in 0..24u64 {
+                let ms = 100.0 * (12 - (n as i64 - 12).abs()) as f64;
+                aged(&mut data, one, n, ms);
+                data.on_windows(
+                    0,
+                    &[Window {
+                        source: two,
+                        ..second(n, 50, 0)
+                    }],
+                    &[],
+                );
+            }
+        }
+        let svg = plot.svg().unwrap();
+        for text in [
+            "age above baseline, by source",
+            "age (ms, log scale)",
+            "1000",
+        ] {
+            assert!(svg.contains(text), "{text} missing");
+        }
+        // Rate and loss of both, the age of 1/1 only (axes and ticks are
+        // polylines too, opaque and thin).
+        let drawn = svg.matches(r#"opacity="0.85""#).count();
+        assert_eq!(drawn, 5, "{svg}");
+        // Before the summary, the p99 is unknown, not made up; after it,
+        // the summary's own, and `-` for the source without stamps.
+        assert!(
+            svg.contains(
+                "
+age p99 ms
+"
+            ),
+            "no age column"
+        );
+        let ages = crate::output::runs::ages();
+        let nobody = SourceTable::new(None, 32).summary(0);
+        plot.data.borrow_mut().on_sources(0, &nobody, &ages);
+        let svg = plot.svg().unwrap();
+        assert!(
+            svg.contains(
+                "
+1480.0
+"
+            ),
+            "the summary's p99 missing"
+        );
+        assert!(
+            svg.contains(
+                "
+-
+"
+            ),
+            "2/1's p99 made up"
+        );
+
+        // The age chart sits between the rate and the loss charts, so the
+        // loss chart keeps the time axis.
+        let at = |text: &str| svg.find(text).unwrap_or_else(|| panic!("{text}"));
+        assert!(at("frames a second") < at("age above baseline"));
+        assert!(at("age above baseline") < at("sequence loss per span"));
+        assert!(at("sequence loss per span") < at("time since start"));
+    }
+
+    #[test]
+    fn merged_spans_keep_the_oldest_frame_and_no_age_stays_no_age() {
+        let mut t = SourceTrack::new(false);
+        // A day: an 8 s spike at noon, ages of 3 ms elsewhere, the first
+        // hour without stamps.
+        let day = 86_400;
+        for n in 0..day {
+            let w = second(n, 50, 0);
+            t.window(&w);
+            match n {
+                0..3_600 => {}
+                43_200..43_208 => t.age(&w, 8_000.0),
+                _ => t.age(&w, 3.0),
+            }
+        }
+        assert!(t.spans.bins.len() <= SPANS);
+        let ages: Vec<Option<f64>> = t.spans.bins.iter().map(|s| s.age_ms).collect();
+        // 128 s spans: the first 28 without stamps.
+        assert_eq!(ages.iter().filter(|a| a.is_none()).count(), 28);
+        assert_eq!(ages.iter().filter(|&&a| a == Some(8_000.0)).count(), 1);
+        assert_eq!(ages[43_200 / 128], Some(8_000.0));
+        assert_eq!(ages[43_200 / 128 + 1], Some(3.0));
     }
 
     #[test]

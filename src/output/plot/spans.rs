@@ -84,6 +84,10 @@ pub(super) struct Sums {
     /// A responder's RTT in ns summed over its replies (exact as an `f64`
     /// for 104 days of it), and how many.
     pub(super) rtt_ns: (f64, u64),
+    /// The highest age above the baseline put in, ms: a passive source's
+    /// oldest frame of each telling, or a log window's p99. Merged bins
+    /// keep the higher, so a queue's peak survives any merging.
+    pub(super) age_ms: Option<f64>,
 }
 
 impl Sums {
@@ -96,7 +100,15 @@ impl Sums {
         self.rssi = (self.rssi.0 + o.rssi.0, self.rssi.1 + o.rssi.1);
         self.remrssi = (self.remrssi.0 + o.remrssi.0, self.remrssi.1 + o.remrssi.1);
         self.rtt_ns = (self.rtt_ns.0 + o.rtt_ns.0, self.rtt_ns.1 + o.rtt_ns.1);
+        if let Some(age) = o.age_ms {
+            self.age(age);
+        }
         self
+    }
+
+    /// An age above the baseline, ms: the bin keeps the highest.
+    pub(super) fn age(&mut self, ms: f64) {
+        self.age_ms = Some(self.age_ms.map_or(ms, |held| held.max(ms)));
     }
 
     /// A passive source's window.
@@ -120,6 +132,9 @@ impl Sums {
                     sum.1 += r.reports;
                 }
             }
+        }
+        if let Some(a) = &w.age {
+            self.age(a.p99_ms);
         }
     }
 

@@ -31,7 +31,6 @@ pub struct SourcesNow {
     pub(crate) age_counts: Vec<(SysComp, AgeCounts)>,
     /// Each source's oldest frame since the previous telling: its age
     /// above the baseline (ms), by the baseline known when it arrived.
-    #[allow(dead_code)] // until the plot draws it
     pub(crate) age_max: Vec<(SysComp, f64)>,
 }
 
