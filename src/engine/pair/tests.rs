@@ -513,3 +513,62 @@ fn the_sequence_count_fills_gaps_and_unwraps() {
     assert_eq!(count.head(), Some(first + 256 + 10));
     assert_eq!(count.line(200), first + 190, "76 behind the head");
 }
+
+/// Frames as the codec decodes them: the same bytes on two links are one
+/// frame; a HEARTBEAT's bytes do recur 256 frames later, which is why the
+/// sequence rule is there.
+#[test]
+fn decoded_frames_pair_by_their_wire_crc() {
+    use crate::frame::{decode, encode, Header, Version};
+    let wire = |i: usize, msg: &Msg| {
+        let mut bytes = Vec::new();
+        let header = Header {
+            sysid: 1,
+            compid: 1,
+            seq: i as u8,
+        };
+        encode(&mut bytes, Version::V2, header, msg);
+        decode(&bytes)
+    };
+    let heartbeat = Msg::Heartbeat {
+        mav_type: 2,
+        autopilot: 3,
+    };
+    let attitude = |i: usize| Msg::Attitude {
+        time_boot_ms: i as u32 * 10,
+    };
+    assert_eq!(wire(3, &heartbeat), wire(259, &heartbeat));
+    assert_ne!(wire(3, &attitude(3)).crc, wire(259, &attitude(259)).crc);
+    let mut tracker = PairTracker::new(2, PairConfig::default());
+    for i in 0..600 {
+        let msg = if i % 5 == 0 { heartbeat } else { attitude(i) };
+        let at = i as u64 * 10 * MS;
+        tracker.on_frame(0, &wire(i, &msg), at);
+        if i % 3 != 0 {
+            tracker.on_frame(1, &wire(i, &msg), at + 7 * MS);
+        }
+    }
+    let got = pair(&tracker, 7_000 * MS);
+    assert_eq!((got.distinct_frames, got.copies), (600, 400));
+    assert_eq!(
+        (got.links[0].only, got.links[1].lag_max_ms),
+        (200, Some(7.0))
+    );
+}
+
+/// The summary's JSON names carry their units.
+#[test]
+fn the_summary_serialises_with_units_in_its_names() {
+    let mut tracker = PairTracker::new(2, PairConfig::default());
+    tracker.on_frame(0, &vehicle_frame(1), 0);
+    tracker.on_frame(1, &vehicle_frame(1), 5 * MS);
+    let json = serde_json::to_value(tracker.summary(10 * MS)).unwrap();
+    assert_eq!(json["window_ms"], 5000.0);
+    let source = &json["sources"][0];
+    assert_eq!(source["source"]["sysid"], 1);
+    assert_eq!(source["dedup_window_p999_ms"], 5.0);
+    let link = &source["links"][1];
+    assert_eq!(link["lag_max_ms"], 5.0);
+    assert_eq!(link["first_pct"], 0.0);
+    assert_eq!(source["links"][0]["first_pct"], 100.0);
+}
