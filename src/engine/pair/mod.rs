@@ -79,8 +79,8 @@ pub(crate) const MAX_LINKS: usize = 64;
 /// Sources tracked unless told otherwise, as the passive table's cap.
 pub(crate) const DEFAULT_MAX_SOURCES: usize = 32;
 /// How long after its first copy a frame may still be copied: past the
-/// seconds a cellular link falls behind a radio, and beyond the sequence
-/// rule's reach for any source sending 26 frames a second or more.
+/// seconds a cellular link falls behind a radio. For a source sending 26
+/// frames a second or more the sequence rule (128 numbers) ends it sooner.
 pub(crate) const DEFAULT_WINDOW: Nanos = 5_000_000_000;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
