@@ -15,6 +15,7 @@ pub(crate) mod link_node;
 pub(crate) mod load;
 pub mod matcher;
 pub mod observe;
+pub(crate) mod pair;
 pub mod probe;
 pub mod radio;
 pub(crate) mod radio_kind;

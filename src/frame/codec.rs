@@ -413,6 +413,11 @@ fn header_of(raw: &[u8]) -> Frame {
             raw[2] & IFLAG_SIGNED != 0,
         )
     };
+    // The scanner hands over whole frames; a shorter slice reads 0.
+    let crc_at = header_len(raw[0]) + usize::from(raw[1]);
+    let crc = raw
+        .get(crc_at..crc_at + 2)
+        .map_or(0, |b| u16::from_le_bytes([b[0], b[1]]));
     Frame {
         version,
         source: SysComp::new(sysid, compid),
@@ -421,6 +426,7 @@ fn header_of(raw: &[u8]) -> Frame {
         signed,
         // A frame is at most 280 bytes.
         len: u16::try_from(raw.len()).unwrap_or(u16::MAX),
+        crc,
         msg: Msg::Other,
         stamps: Stamps::default(),
     }
@@ -1158,6 +1164,57 @@ mod tests {
         );
         let damaged = decode_as(&bytes, Kind::Damaged);
         assert_eq!(damaged.stamps, Stamps::default());
+    }
+
+    /// The CRC a frame carries, computed here as MAVLink defines it (over
+    /// the bytes after the start byte and the message's CRC_EXTRA), so a
+    /// wrong offset or byte order in the codec fails.
+    fn computed_crc(bytes: &[u8], msgid: u32) -> u16 {
+        let end = super::super::scanner::header_len(bytes[0]) + usize::from(bytes[1]);
+        let x25 = crc::Crc::<u16>::new(&crc::CRC_16_MCRF4XX);
+        let mut digest = x25.digest();
+        digest.update(&bytes[1..end]);
+        digest.update(&[super::super::scanner::extra_crc(msgid).expect("known id")]);
+        digest.finalize()
+    }
+
+    /// Every decode path carries the frame's checksum: MAVLink 1 and 2, a
+    /// signed frame (the CRC sits before the signature), a damaged frame
+    /// (its CRC as on the wire, not what the bytes would give) and an
+    /// unknown id's (header only).
+    #[test]
+    fn the_wire_crc_is_carried_on_every_path() {
+        let header = Header {
+            sysid: 1,
+            compid: 1,
+            seq: 9,
+        };
+        let msg = Msg::Attitude { time_boot_ms: 42 };
+        for version in [Version::V1, Version::V2] {
+            let mut bytes = Vec::new();
+            encode(&mut bytes, version, header, &msg);
+            let frame = decode(&bytes);
+            assert_eq!(frame.crc, computed_crc(&bytes, 30), "{version:?}");
+            assert_ne!(frame.crc, 0);
+            let unknown = decode_as(&bytes, Kind::Unknown);
+            assert_eq!(unknown.crc, frame.crc);
+            let mut damaged = bytes.clone();
+            damaged[12] ^= 0x40;
+            let damaged = decode_as(&damaged, Kind::Damaged);
+            assert_eq!((damaged.msg, damaged.crc), (Msg::Damaged, frame.crc));
+        }
+        let mut bytes = Vec::new();
+        encode(&mut bytes, Version::V2, header, &msg);
+        let unsigned = decode(&bytes).crc;
+        let key = super::super::signing::SecretKey::from_bytes([7; 32]);
+        super::super::signing::Signer::new(key, 3).sign(&mut bytes, 0, 5);
+        let signed = decode(&bytes);
+        assert!(signed.signed);
+        assert_eq!(signed.crc, computed_crc(&bytes, 30));
+        assert_ne!(
+            signed.crc, unsigned,
+            "signing sets the incompat flag the CRC covers"
+        );
     }
 
     #[test]

@@ -18,6 +18,10 @@ pub struct Frame {
     pub(crate) signed: bool,
     /// Bytes on the wire, header to signature.
     pub(crate) len: u16,
+    /// The frame's checksum as on the wire (little-endian bytes read as
+    /// sent), also of a damaged frame: with the source, sequence and id it
+    /// tells the same frame heard on two links from another.
+    pub(crate) crc: u16,
     pub msg: Msg,
     /// The sender's clock readings the frame carries, for its age.
     pub(crate) stamps: Stamps,
@@ -133,6 +137,7 @@ pub(crate) fn test_frame(source: SysComp, msg: Msg) -> Frame {
         msgid: 0,
         signed: false,
         len: 0,
+        crc: 0,
         msg,
         stamps: Stamps::default(),
     }

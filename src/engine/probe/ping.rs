@@ -76,6 +76,7 @@ mod tests {
             msgid: 4,
             signed: false,
             len: 0,
+            crc: 0,
             msg,
             stamps: crate::frame::Stamps::default(),
         }

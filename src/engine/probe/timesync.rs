@@ -153,6 +153,7 @@ mod tests {
             msgid: 111,
             signed: false,
             len: 0,
+            crc: 0,
             msg: Msg::Timesync {
                 tc1,
                 ts1,

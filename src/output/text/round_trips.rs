@@ -128,6 +128,7 @@ mod tests {
             msgid: 0,
             signed: false,
             len: 0,
+            crc: 0,
             msg,
             stamps: crate::frame::Stamps::default(),
         }
