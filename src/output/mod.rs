@@ -8,6 +8,7 @@ mod fanout;
 pub(crate) mod hgrm;
 pub(crate) mod json;
 pub(crate) mod live;
+pub(crate) mod pair;
 pub(crate) mod plot;
 pub mod prometheus;
 mod reporter;

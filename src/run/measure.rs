@@ -21,7 +21,8 @@ use futures_util::future::join_all;
 use tokio::sync::Notify;
 
 use super::exports::Exports;
-use super::one_link::measure_recorded;
+use super::one_link::{measure_recorded, Taps};
+use super::pair::Pairs;
 use crate::cli::Format;
 use crate::config::{Config, LinkConfig, OutputConfig, Probe};
 use crate::engine::observe::OutputFate;
@@ -32,7 +33,6 @@ use crate::output::live::LiveView;
 use crate::output::text::TextReporter;
 use crate::output::{Fanout, Reporter, Shared, WallClock};
 use crate::stderr;
-use crate::transport::recording::Tap;
 use crate::transport::Link;
 use crate::verdict;
 
@@ -74,8 +74,8 @@ struct LinkRun<'a> {
     /// only after the errors and warnings are printed).
     report: Fanout<'a>,
     controls: Controls,
-    /// Its way into the `--tlog` recording.
-    tap: Option<Tap>,
+    /// Its way into the `--tlog` recording and the pair report.
+    taps: Taps,
 }
 
 /// A link whose session ended.
@@ -209,6 +209,7 @@ fn attach<'a>(
     exports: &Exports,
     controls: &Controls,
     wall: WallClock,
+    pairs: Option<&Pairs>,
 ) -> Vec<LinkRun<'a>> {
     let several = config.links.len() > 1;
     let runs: Vec<LinkRun<'a>> = opened
@@ -237,7 +238,10 @@ fn attach<'a>(
                 wall,
                 report: Fanout::new(reporters),
                 controls: Controls::default(),
-                tap: exports.tap(place),
+                taps: Taps {
+                    tlog: exports.tap(place),
+                    watch: pairs.map(|p| p.watch(place)),
+                },
             }
         })
         .collect();
@@ -264,10 +268,10 @@ async fn measure_one<'a>(run: LinkRun<'a>, probe: &Probe, announce: bool) -> Fin
         wall,
         mut report,
         controls,
-        tap,
+        taps,
     } = run;
     let measurement =
-        measure_recorded(config, link, tap, probe, wall, &mut report, &controls).await;
+        measure_recorded(config, link, taps, probe, wall, &mut report, &controls).await;
     if let Some(e) = measurement.summary.link_error().filter(|_| announce) {
         stderr::error(&error_line(true, &config.name, e));
     }
@@ -317,7 +321,17 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
         Ok(screen) => screen,
         Err(ending) => return ending,
     };
-    let runs = attach(opened, config, &screen, &exports, &controls, wall);
+    // The same source on several links: matched across them as they run.
+    let pairs = several.then(|| Pairs::new(config.links.len()));
+    let runs = attach(
+        opened,
+        config,
+        &screen,
+        &exports,
+        &controls,
+        wall,
+        pairs.as_ref(),
+    );
     for (k, (name, error)) in unopened.iter().enumerate() {
         exports.unopened(runs.len() + k, name);
         if let Some(view) = &screen.view {
@@ -343,7 +357,11 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
     }
     let out = &config.output;
     let separate = out.format == Format::Text && (out.quiet || live);
-    let (mut links, output) = judge(&mut finished, &screen.stdout, separate);
+    let (mut links, mut output) = judge(&mut finished, &screen.stdout, separate);
+    if let Some(pairs) = &pairs {
+        let names: Vec<&str> = config.links.iter().map(|l| l.name.as_str()).collect();
+        output.note(&pairs.write(out.format, &names, &mut screen.stdout.clone()));
+    }
     if let OutputFate::Failed(e) = &output {
         stderr::error(&format!("cannot write the output: {e}"));
     }

@@ -9,6 +9,7 @@ pub(crate) mod generate;
 mod logging;
 mod measure;
 mod one_link;
+mod pair;
 mod respond;
 mod runtime;
 mod serve;

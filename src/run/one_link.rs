@@ -1,6 +1,8 @@
 //! One link's session, whatever the probe: the piece every run path
 //! shares (`mavping LINK...` and each link and probe of `mavping serve`).
 
+use std::rc::Rc;
+
 use crate::config::{LinkConfig, Probe};
 use crate::engine::observe::Observer;
 use crate::engine::probe::auto::AutoProbe;
@@ -14,7 +16,7 @@ use crate::engine::session::{self, Controls, Measurement};
 use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::{sweep, SessionConfig};
 use crate::output::WallClock;
-use crate::transport::recording::{Recorded, Tap};
+use crate::transport::recording::{Recorded, Tap, Watch};
 use crate::transport::{Link, LinkSpec};
 
 /// An echo probe's run, in steps when `--sweep` or `--load` asks.
@@ -40,21 +42,39 @@ pub(super) async fn measure(
     observer: &mut dyn Observer,
     controls: &Controls,
 ) -> Measurement {
-    measure_recorded(config, link, None, probe, wall, observer, controls).await
+    measure_recorded(
+        config,
+        link,
+        Taps::default(),
+        probe,
+        wall,
+        observer,
+        controls,
+    )
+    .await
 }
 
-/// [`measure`], recording what the link receives and sends through `tap`
-/// (`--tlog`) when there is one.
+/// What a run taps of one link besides its session.
+#[derive(Default)]
+pub(super) struct Taps {
+    /// Its way into the `--tlog` recording.
+    pub(super) tlog: Option<Tap>,
+    /// What the run watches of its frames across its links.
+    pub(super) watch: Option<Rc<dyn Watch>>,
+}
+
+/// [`measure`], recording what the link receives and sends (`--tlog`) and
+/// telling what it receives to the run's watch, when there are.
 pub(super) async fn measure_recorded(
     config: &LinkConfig,
     link: Link,
-    tap: Option<Tap>,
+    taps: Taps,
     probe: &Probe,
     wall: WallClock,
     observer: &mut dyn Observer,
     controls: &Controls,
 ) -> Measurement {
-    let mut link = Recorded::new(link, tap);
+    let mut link = Recorded::new(link, taps.tlog).watched(taps.watch);
     let session = &config.session;
     let mut outcome = match probe {
         Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,

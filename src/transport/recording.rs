@@ -1,6 +1,7 @@
 //! `--tlog FILE`: a link that records every frame it receives and sends to
-//! a telemetry log, forwarding every call to the link it wraps. The engine
-//! knows nothing of it; the batched sends (`send_all`) stay one system
+//! a telemetry log, forwarding every call to the link it wraps; and tells
+//! what it receives to whatever else the run watches across its links
+//! ([`Watch`]: the pair report). The engine knows nothing of it; the batched sends (`send_all`) stay one system
 //! call, and a run without `--tlog` only checks an `Option` per call.
 //!
 //! - A received frame is written with its receive time (the kernel's stamp
@@ -117,10 +118,21 @@ fn as_micros(d: Duration) -> u64 {
     d.as_micros() as u64
 }
 
-/// A link, recorded when it has a tap.
+/// What else a run watches of the frames every link receives, across its
+/// links (the pair report of several links): told each frame once, in
+/// the order received.
+pub(crate) trait Watch {
+    fn received(&self, inbound: &[Inbound]);
+}
+
+/// A link, recorded when it has a tap, watched when it has a watch.
 pub(crate) struct Recorded<T> {
     link: T,
     tap: Option<Tap>,
+    watch: Option<Rc<dyn Watch>>,
+    /// The frames of `out` the watch was told: the session drains `out`
+    /// between calls, but a cancelled `recv` leaves what it pushed.
+    watched: usize,
 }
 
 impl<T: Transport> Recorded<T> {
@@ -129,12 +141,42 @@ impl<T: Transport> Recorded<T> {
         if tap.is_some() {
             link.keep_raw();
         }
-        Recorded { link, tap }
+        Recorded {
+            link,
+            tap,
+            watch: None,
+            watched: 0,
+        }
+    }
+
+    /// The link, its received frames also told to `watch`.
+    pub(crate) fn watched(mut self, watch: Option<Rc<dyn Watch>>) -> Self {
+        self.watch = watch;
+        self
+    }
+
+    /// Tells the watch the frames of `out` it was not told yet.
+    fn watch(&mut self, out: &[Inbound]) {
+        let Some(watch) = &self.watch else { return };
+        if out.len() < self.watched {
+            self.watched = 0;
+        }
+        watch.received(&out[self.watched..]);
+        self.watched = out.len();
     }
 
     /// The link itself.
     pub(crate) fn inner(&self) -> &T {
         &self.link
+    }
+
+    /// Records and tells the watch what `out` holds that they have not
+    /// had.
+    fn take(&mut self, out: &mut [Inbound]) {
+        self.watch(out);
+        if let Some(tap) = &self.tap {
+            tap.received(out);
+        }
     }
 
     /// Records `frame` sent at `at` unless the link refused it.
@@ -183,20 +225,19 @@ impl<T: Transport> Transport for Recorded<T> {
     // Cancel-safe as the link's: frames a cancelled call left in `out`
     // still hold their bytes and are written on the next call.
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
-        let Some(tap) = &self.tap else {
+        if self.tap.is_none() && self.watch.is_none() {
             return self.link.recv(out).await;
-        };
-        tap.received(out);
+        }
+        self.take(out);
         let received = self.link.recv(out).await;
-        tap.received(out);
+        self.take(out);
         received
     }
 
     fn read_waiting(&mut self, out: &mut Vec<Inbound>) -> Result<bool, LinkError> {
+        self.take(out);
         let waiting = self.link.read_waiting(out);
-        if let Some(tap) = &self.tap {
-            tap.received(out);
-        }
+        self.take(out);
         waiting
     }
 

@@ -26,6 +26,7 @@ mod live;
 mod multilink;
 mod mutants;
 mod options;
+mod pair;
 mod passive;
 mod passive_outputs;
 mod passive_peers;

@@ -53,8 +53,6 @@
 //! A source heard on one link only has nothing to pair: it is listed
 //! apart ([`SingleLinkSource`]) with its link and frames.
 
-#![cfg_attr(not(test), allow(dead_code, unused_imports))] // the run wires it next (issue 41)
-
 mod lag;
 mod recent;
 mod seq;

@@ -45,6 +45,7 @@ use crate::engine::sweep_report::StepFigures;
 use crate::frame::SysComp;
 use crate::output::StartInfo;
 use crate::verdict::Verdict;
+pub(crate) use lines::SCHEMA_VERSION;
 pub(crate) use reporter::JsonReporter;
 
 impl<W: Write> Reporter for JsonReporter<W> {

@@ -1,0 +1,173 @@
+//! Two links to one vehicle (issue 41): a pymavlink vehicle
+//! (`tests/peers/two_link_vehicle.py`) writes the same packed frames to
+//! two or three UDP links with seeded per-link drops and delays and
+//! counts what it did; mavping listens on every link and its
+//! `pair_summary` must count the same, exactly.
+
+use serde_json::Value;
+
+use crate::common::*;
+use crate::passive_peers::json_line;
+
+fn count(v: &Value, key: &str) -> u64 {
+    v[key].as_u64().unwrap_or_else(|| panic!("no {key} in {v}"))
+}
+
+/// Runs the vehicle on `n` links with `faults` (its per-link arguments)
+/// and mavping listening on them for `listen_s`; the vehicle's truth and
+/// mavping's pair line for source 1/1, every line held to the schema.
+fn paired(n: usize, faults: &[&str], listen_s: &str) -> (Value, Value, String) {
+    let ports: Vec<u16> = (0..n).map(|_| free_udp_port()).collect();
+    let links: Vec<String> = ports.iter().map(|p| format!("udp:127.0.0.1:{p}")).collect();
+    let tos: Vec<String> = ports.iter().map(|p| format!("127.0.0.1:{p}")).collect();
+    let mut args: Vec<&str> = Vec::new();
+    for to in &tos {
+        args.extend(["--to", to.as_str()]);
+    }
+    args.extend(faults);
+    args.extend(["--duration", "4", "--start-after", "1", "--seed", "7"]);
+    let vehicle = Peer::start("two_link_vehicle.py", &args);
+    let mut mavping_args = vec!["--passive", "-q", "--json", "-w", listen_s];
+    mavping_args.extend(links.iter().map(String::as_str));
+    let (code, out, err) = run_mavping(&mavping_args);
+    assert_eq!(code, 0, "{err}");
+    let truth = vehicle.finish();
+    assert_schema(&json_lines(&out));
+    let pair = json_line(&out, "pair_summary");
+    assert_eq!(pair["links"].as_array().unwrap().len(), n, "{pair}");
+    let source = pair["sources"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|s| s["source"] == serde_json::json!({"sysid": 1, "compid": 1}))
+        .unwrap_or_else(|| panic!("no 1/1 in {pair}"))
+        .clone();
+    (truth, source, out)
+}
+
+/// Every count the vehicle kept, equal to mavping's: each link's
+/// deliveries, the frames it delivered first and only it delivered, its
+/// own loss (the drops between its first and last frame: its sequence
+/// cannot see the others); the frames lost on every link and the copies.
+fn assert_counts(truth: &Value, source: &Value) {
+    let frames = count(truth, "frames");
+    let lost_everywhere = count(truth, "lost_on_every_link");
+    assert_eq!(
+        count(source, "distinct_frames"),
+        frames - lost_everywhere,
+        "{source}"
+    );
+    let between = count(truth, "lost_on_every_link_between");
+    assert_eq!(count(source, "lost_on_every_link"), between, "{source}");
+    let links = source["links"].as_array().unwrap();
+    let told = truth["links"].as_array().unwrap();
+    assert_eq!(links.len(), told.len(), "{source}");
+    let mut copies = 0;
+    for (k, (got, t)) in links.iter().zip(told).enumerate() {
+        assert_eq!(count(got, "link"), k as u64);
+        assert_eq!(
+            count(got, "frames"),
+            count(t, "sent"),
+            "link {k}: {got} vs {t}"
+        );
+        assert_eq!(
+            count(got, "first"),
+            count(t, "first"),
+            "link {k}: {got} vs {t}"
+        );
+        assert_eq!(
+            count(got, "only"),
+            count(t, "only"),
+            "link {k}: {got} vs {t}"
+        );
+        assert_eq!(count(got, "only_undecided"), 0, "{got}");
+        let between = count(t, "dropped_between");
+        assert_eq!(count(got, "lost"), between, "link {k}: {got} vs {t}");
+        copies += count(t, "sent") - count(t, "first");
+    }
+    assert_eq!(count(source, "copies"), copies, "{source}");
+}
+
+fn ms(v: &Value, key: &str) -> f64 {
+    v[key].as_f64().unwrap_or_else(|| panic!("no {key} in {v}"))
+}
+
+/// Two links, one losing 10 % at 20 ms, the other 20 % at 100 ms: exact
+/// counts, the slower link's lag 80 ms within 5 ms, the faster never
+/// behind, and the de-duplication window that catches the copies.
+#[test]
+fn two_links_are_counted_as_the_vehicle_sent_them() {
+    let faults = [
+        "--drop",
+        "10",
+        "--delay-ms",
+        "20",
+        "--drop",
+        "20",
+        "--delay-ms",
+        "100",
+    ];
+    let (truth, source, out) = paired(2, &faults, "7");
+    assert!(count(&truth, "lost_on_every_link_between") > 0, "{truth}");
+    assert_counts(&truth, &source);
+    let (fast, slow) = (&source["links"][0], &source["links"][1]);
+    assert!(ms(fast, "lag_max_ms") < 5.0, "{fast}");
+    for key in ["lag_p50_ms", "lag_p99_ms"] {
+        assert!((ms(slow, key) - 80.0).abs() < 5.0, "{key}: {slow}");
+    }
+    let window = ms(&source, "dedup_window_p999_ms");
+    assert!((75.0..90.0).contains(&window), "{source}");
+    // Every frame the fast link lost and the slow one delivered came
+    // behind a newer one: the map jumps back even behind de-duplication.
+    assert_eq!(count(slow, "stale_first"), count(slow, "first"), "{slow}");
+    // Each link's own summary is there too, before the pair's line.
+    let passive = out.matches("\"type\":\"passive_summary\"").count();
+    assert_eq!(passive, 2, "{out}");
+}
+
+/// Three links, one with jitter that reorders its copies: still exact.
+#[test]
+fn three_links_with_a_reordering_one_are_counted_exactly() {
+    let faults = [
+        "--drop",
+        "30",
+        "--delay-ms",
+        "0",
+        "--jitter-ms",
+        "0",
+        "--drop",
+        "40",
+        "--delay-ms",
+        "30",
+        "--jitter-ms",
+        "40",
+        "--drop",
+        "20",
+        "--delay-ms",
+        "300",
+        "--jitter-ms",
+        "0",
+    ];
+    let (truth, source, _) = paired(3, &faults, "7");
+    assert!(
+        truth["links"][1]["reordered"].as_u64().unwrap() > 0,
+        "{truth}"
+    );
+    assert_counts(&truth, &source);
+}
+
+/// Different vehicles on two links are no pair: no pair line.
+#[test]
+fn links_to_different_vehicles_make_no_pair_line() {
+    let (code, out, err) = run_mavping(&[
+        "--passive",
+        "-q",
+        "--json",
+        "-w",
+        "2",
+        "sim:?clock=virtual&stream=ATTITUDE@20",
+        "sim:?clock=virtual&stream=ATTITUDE@20&sysid=2",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("pair_summary"), "{out}");
+}
