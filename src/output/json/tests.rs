@@ -108,7 +108,32 @@ fn the_schema_accepts_every_kind_of_line() {
             }
         }
     }
+    // The pair report is the run's, after its links' lines.
+    let mut pair = Vec::new();
+    crate::output::pair::write_json(&mut pair, &pair_summary(), &["a", "b"]).unwrap();
+    let value: Value = serde_json::from_slice(&pair).unwrap();
+    assert_valid(&validator, &value);
+    written.insert(value["type"].as_str().unwrap().to_string());
     assert_eq!(schema_types(&schema), written);
+}
+
+/// One source on two links, the second losing every third frame the
+/// first delivered and 30 ms behind it; a second source on one link.
+fn pair_summary() -> crate::engine::pair::PairSummary {
+    use crate::engine::pair::{PairConfig, PairTracker};
+    use crate::frame::{test_frame, Msg, SysComp};
+    let mut tracker = PairTracker::new(2, PairConfig::default());
+    for k in 0..40u8 {
+        let mut frame = test_frame(SysComp::new(1, 1), Msg::Other);
+        frame.packet_seq = k;
+        let at = u64::from(k) * 20_000_000;
+        tracker.on_frame(0, &frame, at);
+        if k % 3 != 0 {
+            tracker.on_frame(1, &frame, at + 30_000_000);
+        }
+        tracker.on_frame(1, &test_frame(SysComp::new(2, 1), Msg::Other), at);
+    }
+    tracker.summary(crate::engine::Nanos::MAX)
 }
 
 /// What the runs write through the reporter's `Observer` and `Reporter`
