@@ -48,6 +48,14 @@ pub(crate) fn write_text(out: &mut impl Write, s: &PairSummary, names: &[&str]) 
     for source in &s.sources {
         write_source(out, source, names)?;
     }
+    if !s.uncopied_sources.is_empty() {
+        let ids: Vec<String> = s.uncopied_sources.iter().map(|id| id.to_string()).collect();
+        writeln!(
+            out,
+            "heard on several links but no frame on two (split between them, not copied): {}",
+            ids.join(", ")
+        )?;
+    }
     if s.untracked_frames > 0 {
         writeln!(
             out,

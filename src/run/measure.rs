@@ -27,13 +27,14 @@ use crate::cli::Format;
 use crate::config::{Config, LinkConfig, OutputConfig, Probe};
 use crate::engine::observe::OutputFate;
 use crate::engine::session::{Controls, Measurement};
+use crate::engine::summary::passive::PassiveSummary;
 use crate::exit::{Ending, LinkEnd};
 use crate::output::json::JsonReporter;
 use crate::output::live::LiveView;
 use crate::output::text::TextReporter;
 use crate::output::{Fanout, Reporter, Shared, WallClock};
 use crate::stderr;
-use crate::transport::Link;
+use crate::transport::{Link, LinkSpec};
 use crate::verdict;
 
 /// Raises every one of `to` whenever `from` is raised (once, or each time
@@ -305,6 +306,25 @@ fn judge(
     (ends, output)
 }
 
+/// Whether each link's paths (by place) are ways a source's frames came
+/// of their own: a telemetry log's only when its stamps carried MAVProxy's
+/// link numbers (its summary's figures per link), every other link's
+/// always (a simulated vehicle's paths, a listening link's peers).
+fn paths_are_ways(config: &Config, finished: &[Finished<'_>]) -> Vec<bool> {
+    config
+        .links
+        .iter()
+        .map(|l| {
+            let done = finished.iter().find(|f| std::ptr::eq(f.config, l));
+            let log = done.and_then(|f| f.measurement.summary.get::<PassiveSummary>());
+            match (&l.spec, log) {
+                (LinkSpec::Tlog(_), Some(s)) => s.per_link.is_some(),
+                _ => true,
+            }
+        })
+        .collect()
+}
+
 /// Runs every link of `config` side by side; how it ended.
 pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
     let exports = match Exports::open(config) {
@@ -321,8 +341,8 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
         Ok(screen) => screen,
         Err(ending) => return ending,
     };
-    // The same source on several links: matched across them as they run.
-    let pairs = several.then(|| Pairs::new(config.links.len()));
+    // The same source heard several ways: matched across them as they run.
+    let pairs = Pairs::of(&config.links);
     let runs = attach(
         opened,
         config,
@@ -360,7 +380,8 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
     let (mut links, mut output) = judge(&mut finished, &screen.stdout, separate);
     if let Some(pairs) = &pairs {
         let names: Vec<&str> = config.links.iter().map(|l| l.name.as_str()).collect();
-        output.note(&pairs.write(out.format, &names, &mut screen.stdout.clone()));
+        let ways = paths_are_ways(config, &finished);
+        output.note(&pairs.write(out.format, &names, &ways, &mut screen.stdout.clone()));
     }
     if let OutputFate::Failed(e) = &output {
         stderr::error(&format!("cannot write the output: {e}"));

@@ -1,7 +1,10 @@
-//! The pair report of a run over several links (issue 41): every link's
-//! received frames go to one [`PairTracker`] on one clock as the links
-//! run, and its report follows the links' summaries. The run's links
-//! share one thread, so one tracker behind a `RefCell` serves them all.
+//! The pair report of a run (issue 41): every link's received frames go
+//! to one [`PairTracker`] on one clock as the links run, and its report
+//! follows the links' summaries. A tracker's "link" is one way frames
+//! came: a link of the command line, or one path of a link that tells
+//! several apart (a MAVProxy telemetry log's link numbers, a simulated
+//! vehicle's paths). The run's links share one thread, so one tracker
+//! behind a `RefCell` serves them all.
 
 use std::cell::RefCell;
 use std::io::{self, Write};
@@ -10,22 +13,54 @@ use std::rc::Rc;
 use tokio::time::Instant;
 
 use crate::cli::Format;
-use crate::engine::pair::{PairConfig, PairTracker};
+use crate::config::LinkConfig;
+use crate::engine::pair::{PairConfig, PairTracker, MAX_LINKS};
 use crate::engine::Nanos;
 use crate::output::pair as report;
 use crate::transport::recording::Watch;
-use crate::transport::Inbound;
+use crate::transport::{Inbound, LinkSpec, PathId};
+
+/// One way frames came: a link's place on the command line and a path.
+type Way = (usize, PathId);
+
+/// The trackers and what their links are.
+struct Shared {
+    /// Every way apart: a link's paths too.
+    by_way: PairTracker,
+    /// `by_way`'s links, in the order first heard.
+    ways: Vec<Way>,
+    /// The links of the command line, their paths together: for when a
+    /// link's paths turn out not to be ways (a telemetry log whose stamps'
+    /// low bits are a clock's, not MAVProxy's link numbers; known only
+    /// once the whole log is read).
+    by_link: PairTracker,
+}
+
+impl Shared {
+    /// The tracker's index of `way`, given one when first heard (none
+    /// beyond the tracker's links: their frames are counted untracked).
+    fn index(&mut self, way: Way) -> usize {
+        match self.ways.iter().position(|&w| w == way) {
+            Some(k) => k,
+            None if self.ways.len() < MAX_LINKS => {
+                self.ways.push(way);
+                self.ways.len() - 1
+            }
+            None => MAX_LINKS,
+        }
+    }
+}
 
 /// The run's tracker and the clock its links share.
 pub(super) struct Pairs {
-    tracker: Rc<RefCell<PairTracker>>,
+    shared: Rc<RefCell<Shared>>,
     origin: Instant,
 }
 
 /// One link's way into the tracker.
 struct LinkWatch {
-    tracker: Rc<RefCell<PairTracker>>,
-    link: usize,
+    shared: Rc<RefCell<Shared>>,
+    place: usize,
     origin: Instant,
 }
 
@@ -36,48 +71,107 @@ fn since(origin: Instant, at: Instant) -> Nanos {
 
 impl Watch for LinkWatch {
     fn received(&self, inbound: &[Inbound]) {
-        let mut tracker = self.tracker.borrow_mut();
+        let mut shared = self.shared.borrow_mut();
         for i in inbound {
-            tracker.on_frame(self.link, &i.frame, since(self.origin, i.at));
+            let at = since(self.origin, i.at);
+            let way = shared.index((self.place, i.path));
+            shared.by_way.on_frame(way, &i.frame, at);
+            shared.by_link.on_frame(self.place, &i.frame, at);
         }
     }
 }
 
 impl Pairs {
-    /// A tracker for the run's `links` links.
-    pub(super) fn new(links: usize) -> Self {
-        Pairs {
-            tracker: Rc::new(RefCell::new(PairTracker::new(links, PairConfig::default()))),
+    /// A tracker for a run over `links`, when frames of one source can
+    /// come more than one way: several links, or a link whose paths are
+    /// told apart (a telemetry log's MAVProxy link numbers, the simulated
+    /// link). One link of another kind has nothing to pair, and pays
+    /// nothing per frame.
+    pub(super) fn of(links: &[LinkConfig]) -> Option<Self> {
+        let ways = links.len() > 1
+            || links
+                .iter()
+                .any(|l| matches!(l.spec, LinkSpec::Tlog(_) | LinkSpec::Sim(_)));
+        ways.then(|| Pairs {
+            shared: Rc::new(RefCell::new(Shared {
+                by_way: PairTracker::new(MAX_LINKS, PairConfig::default()),
+                ways: Vec::new(),
+                by_link: PairTracker::new(links.len(), PairConfig::default()),
+            })),
             origin: Instant::now(),
-        }
+        })
     }
 
     /// What the link at `place` on the command line tells the tracker by.
     pub(super) fn watch(&self, place: usize) -> Rc<dyn Watch> {
         Rc::new(LinkWatch {
-            tracker: self.tracker.clone(),
-            link: place,
+            shared: self.shared.clone(),
+            place,
             origin: self.origin,
         })
     }
 
-    /// Writes the report in `format` when a source was heard on two links
-    /// or more (`names`: the links by place), and flushes.
+    /// Writes the report in `format` when a source was heard two ways or
+    /// more (`names`: the links by place; `paths_are_ways`: whether each
+    /// link's paths are ways of their own), and flushes.
     pub(super) fn write(
         &self,
         format: Format,
         names: &[&str],
+        paths_are_ways: &[bool],
         out: &mut impl Write,
     ) -> io::Result<()> {
+        let shared = self.shared.borrow();
+        let by_way = paths_are_ways.iter().all(|&w| w);
+        let (tracker, ways) = if by_way {
+            (&shared.by_way, way_names(&shared.ways, names))
+        } else {
+            let links = names.iter().map(|n| n.to_string()).collect();
+            (&shared.by_link, links)
+        };
         // The links have ended: no copy can come, every window is closed.
-        let summary = self.tracker.borrow().summary(Nanos::MAX);
+        let summary = tracker.summary(Nanos::MAX);
         if summary.sources.is_empty() {
             return Ok(());
         }
+        let ways: Vec<&str> = ways.iter().map(String::as_str).collect();
         match format {
-            Format::Json => report::write_json(out, &summary, names)?,
-            Format::Text => report::write_text(out, &summary, names)?,
+            Format::Json => report::write_json(out, &summary, &ways)?,
+            Format::Text => report::write_text(out, &summary, &ways)?,
         }
         out.flush()
+    }
+}
+
+/// Each way's name: its link's, with its path when that link came more
+/// than one way (`flight.tlog path 1`).
+fn way_names(ways: &[Way], names: &[&str]) -> Vec<String> {
+    ways.iter()
+        .map(|&(place, path)| {
+            let name = names.get(place).copied().unwrap_or("?");
+            if ways.iter().filter(|w| w.0 == place).count() > 1 {
+                format!("{name} path {path}")
+            } else {
+                name.to_string()
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ways_are_named_by_their_link_and_path_only_when_it_has_several() {
+        let ways = [(0, 0), (1, 0), (0, 1)];
+        assert_eq!(
+            way_names(&ways, &["flight.tlog", "udp:0.0.0.0:14550"]),
+            [
+                "flight.tlog path 0",
+                "udp:0.0.0.0:14550",
+                "flight.tlog path 1"
+            ]
+        );
     }
 }

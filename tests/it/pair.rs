@@ -171,3 +171,78 @@ fn links_to_different_vehicles_make_no_pair_line() {
     assert_eq!(code, 0, "{err}");
     assert!(!out.contains("pair_summary"), "{out}");
 }
+
+/// After the flight: a MAVProxy log (written by pymavlink with MAVProxy's
+/// link numbers in its stamps' low bits) of a vehicle on links 0 and 1,
+/// each losing frames of its own beside two both lost, link 1 300 µs
+/// behind. The pair report reads the log's links as ways: the frames only
+/// one link delivered are the other's drops, exactly.
+#[test]
+fn a_mavproxy_logs_links_make_the_pair_report() {
+    use crate::tlog::{mavproxy_plan, tlog, write_log, Scratch};
+    let dir = Scratch::new("pair-links");
+    let path = dir.path("links.tlog");
+    let t = write_log(&path, &mavproxy_plan());
+    let (code, out, err) = run_mavping(&["--json", "-q", &tlog(&path)]);
+    assert_eq!(code, 0, "{err}");
+    assert_schema(&json_lines(&out));
+    let pair = json_line(&out, "pair_summary");
+    let source = &pair["sources"][0];
+    assert_eq!(
+        source["source"],
+        serde_json::json!({"sysid": 1, "compid": 1})
+    );
+    let truth = &t["sources"]["1/1"];
+    let both = truth["dropped"].as_u64().unwrap();
+    assert_eq!(count(source, "lost_on_every_link"), both, "{source}");
+    let link = |n: u64| {
+        let name = format!("{} path {n}", tlog(&path));
+        let k = pair["links"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|l| *l == name.as_str())
+            .unwrap_or_else(|| panic!("no {name} in {pair}"));
+        source["links"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|l| count(l, "link") == k as u64)
+            .unwrap()
+            .clone()
+    };
+    let (zero, one) = (link(0), link(1));
+    let dropped = |n: &str| truth["links"][n]["dropped"].as_u64().unwrap();
+    assert_eq!(
+        count(&zero, "frames"),
+        truth["links"]["0"]["written"].as_u64().unwrap()
+    );
+    assert_eq!(
+        count(&one, "frames"),
+        truth["links"]["1"]["written"].as_u64().unwrap()
+    );
+    assert_eq!(count(&zero, "only"), dropped("1"), "{zero}");
+    assert_eq!(count(&one, "only"), dropped("0"), "{one}");
+    assert!((ms(&one, "lag_p50_ms") - 0.3).abs() < 0.01, "{one}");
+    // MAVProxy's own frames (link 3) came one way; the ground station's
+    // it forwarded, stamped with a clock, fell on links 1 and 3 by their
+    // stamps' bits, no frame on both: split, not copied.
+    assert_eq!(pair["sources"].as_array().unwrap().len(), 1, "{pair}");
+    let ids = |v: &Value| v.as_array().unwrap().len();
+    assert_eq!(ids(&pair["single_link_sources"]), 1, "{pair}");
+    assert_eq!(
+        pair["uncopied_sources"],
+        serde_json::json!([{"sysid": 255, "compid": 190}])
+    );
+}
+
+/// A real log whose stamps' low bits are a clock's, not MAVProxy's link
+/// numbers (flight_logs.tlog: they spread over 0 to 3, and splitting by
+/// them leaves each part 75 % lost): no ways, no pair report.
+#[test]
+fn a_log_without_link_numbers_makes_no_pair_report() {
+    let path = crate::field_logs::shared_tlog("flight_logs.tlog");
+    let (code, out, err) = run_mavping(&["--json", "-q", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.contains("pair_summary"), "{out}");
+}

@@ -380,7 +380,7 @@ fn pymavlink_loses_the_two_records_after_junk_mavping_none() {
 /// A vehicle on MAVProxy's links 0 and 1, each losing frames of its own
 /// beside two both lose; MAVProxy's own frames on link 3; a ground
 /// station's frames MAVProxy forwarded with plain stamps.
-fn mavproxy_plan() -> Value {
+pub(crate) fn mavproxy_plan() -> Value {
     json!({
         "start_us": 1_764_500_000_000_000u64,
         "stamps": "mavproxy",

@@ -152,9 +152,14 @@ impl PairTracker {
         ids.sort_unstable();
         let mut sources = Vec::new();
         let mut single_link_sources = Vec::new();
+        let mut uncopied_sources = Vec::new();
         for id in ids {
             let state = &self.sources[&id];
-            if state.links_heard() >= 2 {
+            // No frame on two links, even after the window: split, not copied.
+            let uncopied = state.copies == 0 && state.late == 0;
+            if state.links_heard() >= 2 && uncopied {
+                uncopied_sources.push(id);
+            } else if state.links_heard() >= 2 {
                 sources.push(SourcePair::new(id, state, at, self.config.window));
             } else if let Some(single) = SingleLinkSource::of(id, state) {
                 single_link_sources.push(single);
@@ -164,6 +169,7 @@ impl PairTracker {
             window_ms: summary::ms(self.config.window),
             sources,
             single_link_sources,
+            uncopied_sources,
             untracked_frames: self.untracked_frames,
         }
     }

@@ -22,6 +22,10 @@ pub(crate) struct PairSummary {
     pub(crate) sources: Vec<SourcePair>,
     /// Sources heard on one link only: nothing to pair.
     pub(crate) single_link_sources: Vec<SingleLinkSource>,
+    /// Sources heard on two links or more with no frame on two: their
+    /// frames were split between the links, not copied (a router that
+    /// balances; a log's stamps whose low bits are a clock's for them).
+    pub(crate) uncopied_sources: Vec<SysComp>,
     /// Frames of sources beyond the cap, and of links beyond the
     /// tracker's: not matched.
     pub(crate) untracked_frames: u64,

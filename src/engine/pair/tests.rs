@@ -572,3 +572,16 @@ fn the_summary_serialises_with_units_in_its_names() {
     assert_eq!(link["first_pct"], 0.0);
     assert_eq!(source["links"][0]["first_pct"], 100.0);
 }
+
+/// A source whose frames two links split between them, none on both (a
+/// router balancing; a log's clock bits read as links), is no pair.
+#[test]
+fn a_source_split_between_links_is_uncopied_not_a_pair() {
+    let mut tracker = PairTracker::new(2, PairConfig::default());
+    for i in 0..100 {
+        tracker.on_frame(i % 2, &vehicle_frame(i), i as u64 * 20 * MS);
+    }
+    let summary = tracker.summary(Nanos::MAX);
+    assert!(summary.sources.is_empty(), "{summary:?}");
+    assert_eq!(summary.uncopied_sources, [VEHICLE]);
+}
