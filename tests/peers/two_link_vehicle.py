@@ -62,6 +62,9 @@ counted as sent but as "abandoned".
                                  every frame sent on any link is "first" on
                                  exactly one link (sum = frames -
                                  lost_on_every_link);
+                       lag_p50_ms, lag_max_ms  its copies' lag behind
+                                 the first copy as really sent, over the
+                                 frames two links sent (0 where first)
                        reordered copies it sent after a copy of a later
                                  frame (0 without jitter);
                        abandoned, send_errors (0 normally)
@@ -183,6 +186,7 @@ def main():
     sent_on = []
     latest = [-1] * n  # per link, the latest frame index it has sent
     held = []  # (due, order, link, frame index, bytes)
+    sent_at = {}  # frame index -> {link: when its copy was really sent}
     order = 0
 
     signals = []
@@ -204,6 +208,7 @@ def main():
                 continue
             links[k]["sent"] += 1
             sent_on[f].add(k)
+            sent_at.setdefault(f, {})[k] = time.monotonic()
             if f < latest[k]:
                 links[k]["reordered"] += 1
             latest[k] = max(latest[k], f)
@@ -277,6 +282,18 @@ def main():
         # Least offset first; a tie goes to the lowest link index.
         links[min(sent, key=lambda k: (offsets[k], k))]["first"] += 1
 
+    # Each link's lag behind the first copy, as really sent (the schedule
+    # slips under load): over the frames two links sent, 0 where first.
+    lags = [[] for _ in links]
+    for when in sent_at.values():
+        if len(when) > 1:
+            first = min(when.values())
+            for k, t in when.items():
+                lags[k].append((t - first) * 1e3)
+    for k, link in enumerate(links):
+        got = sorted(lags[k])
+        pick = lambda q: got[min(len(got) - 1, int(q * len(got)))] if got else None
+        link["lag_p50_ms"], link["lag_max_ms"] = pick(0.5), (got[-1] if got else None)
     # As a link alone, the merged stream sees no loss before its first
     # frame or after its last.
     on_any = [f for f, sent in enumerate(sent_on) if sent]

@@ -190,6 +190,21 @@ impl Program {
     }
 }
 
+impl Program {
+    /// Stops it with SIGTERM, so it flushes what it writes (MAVProxy its
+    /// log), and waits for it: killed after 10 s.
+    pub fn terminate(mut self) {
+        signal(self.0.id(), "TERM");
+        let started = Instant::now();
+        while started.elapsed() < Duration::from_secs(10) {
+            if let Ok(Some(_)) = self.0.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+    }
+}
+
 impl Drop for Program {
     fn drop(&mut self) {
         let _ = self.0.kill();
