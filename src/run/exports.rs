@@ -159,6 +159,22 @@ impl Exports {
         reporters
     }
 
+    /// Whether an exporter shows the run's own figures (the pair report).
+    pub(super) fn exports_metrics(&self) -> bool {
+        self.prometheus.is_some() || self.textfile.is_some()
+    }
+
+    /// The run's own figures, as exposition text, for every exporter.
+    pub(super) fn run_figures(&self, text: &str) {
+        for p in self
+            .prometheus
+            .iter()
+            .chain(self.textfile.iter().map(|(_, p)| p))
+        {
+            p.set_run_figures(text.to_string());
+        }
+    }
+
     /// What the `index`-th link records through (`--tlog`).
     pub(super) fn tap(&self, index: usize) -> Option<Tap> {
         self.tlog.as_ref().map(|r| r.tap(index))

@@ -306,6 +306,26 @@ fn judge(
     (ends, output)
 }
 
+/// Runs `sessions`, telling the exporters the pair report every second
+/// and when they end.
+async fn with_pair_metrics<F: std::future::Future>(
+    sessions: F,
+    pairs: &Pairs,
+    exports: &Exports,
+    names: &[&str],
+) -> F::Output {
+    tokio::pin!(sessions);
+    let mut every = tokio::time::interval(std::time::Duration::from_secs(1));
+    let finished = loop {
+        tokio::select! {
+            finished = &mut sessions => break finished,
+            _ = every.tick() => exports.run_figures(&pairs.metrics(names)),
+        }
+    };
+    exports.run_figures(&pairs.metrics(names));
+    finished
+}
+
 /// Whether each link's paths (by place) are ways a source's frames came
 /// of their own: a telemetry log's only when its stamps carried MAVProxy's
 /// link numbers (its summary's figures per link), every other link's
@@ -366,7 +386,11 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
     let sessions = runs
         .into_iter()
         .map(|run| measure_one(run, &config.probe, announce));
-    let mut finished = join_all(sessions).await;
+    let names: Vec<&str> = config.links.iter().map(|l| l.name.as_str()).collect();
+    let mut finished = match pairs.as_ref().filter(|_| exports.exports_metrics()) {
+        Some(pairs) => with_pair_metrics(join_all(sessions), pairs, &exports, &names).await,
+        None => join_all(sessions).await,
+    };
     screen.close();
     if !announce {
         for f in &finished {
@@ -379,7 +403,6 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
     let separate = out.format == Format::Text && (out.quiet || live);
     let (mut links, mut output) = judge(&mut finished, &screen.stdout, separate);
     if let Some(pairs) = &pairs {
-        let names: Vec<&str> = config.links.iter().map(|l| l.name.as_str()).collect();
         let ways = paths_are_ways(config, &finished);
         output.note(&pairs.write(out.format, &names, &ways, &mut screen.stdout.clone()));
     }

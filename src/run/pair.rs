@@ -17,6 +17,7 @@ use crate::config::LinkConfig;
 use crate::engine::pair::{PairConfig, PairTracker, MAX_LINKS};
 use crate::engine::Nanos;
 use crate::output::pair as report;
+use crate::output::prometheus;
 use crate::transport::recording::Watch;
 use crate::transport::{Inbound, LinkSpec, PathId};
 
@@ -109,6 +110,16 @@ impl Pairs {
             place,
             origin: self.origin,
         })
+    }
+
+    /// The report so far as exposition text (`--prometheus`), every way
+    /// apart (a log's are known to be links only at its end).
+    pub(super) fn metrics(&self, names: &[&str]) -> String {
+        let shared = self.shared.borrow();
+        let summary = shared.by_way.summary(since(self.origin, Instant::now()));
+        let ways = way_names(&shared.ways, names);
+        let ways: Vec<&str> = ways.iter().map(String::as_str).collect();
+        prometheus::render_pair(&summary, &ways)
     }
 
     /// Writes the report in `format` when a source was heard two ways or

@@ -17,6 +17,16 @@ fn count(v: &Value, key: &str) -> u64 {
 /// and mavping listening on them for `listen_s`; the vehicle's truth and
 /// mavping's pair line for source 1/1, every line held to the schema.
 fn paired(n: usize, faults: &[&str], listen_s: &str) -> (Value, Value, String) {
+    paired_with(n, faults, listen_s, &[])
+}
+
+/// [`paired`], mavping given `extra` arguments too.
+fn paired_with(
+    n: usize,
+    faults: &[&str],
+    listen_s: &str,
+    extra: &[&str],
+) -> (Value, Value, String) {
     let ports: Vec<u16> = (0..n).map(|_| free_udp_port()).collect();
     let links: Vec<String> = ports.iter().map(|p| format!("udp:127.0.0.1:{p}")).collect();
     let tos: Vec<String> = ports.iter().map(|p| format!("127.0.0.1:{p}")).collect();
@@ -28,6 +38,7 @@ fn paired(n: usize, faults: &[&str], listen_s: &str) -> (Value, Value, String) {
     args.extend(["--duration", "4", "--start-after", "1", "--seed", "7"]);
     let vehicle = Peer::start("two_link_vehicle.py", &args);
     let mut mavping_args = vec!["--passive", "-q", "--json", "-w", listen_s];
+    mavping_args.extend(extra);
     mavping_args.extend(links.iter().map(String::as_str));
     let (code, out, err) = run_mavping(&mavping_args);
     assert_eq!(code, 0, "{err}");
@@ -337,4 +348,66 @@ fn a_mavproxy_session_on_two_links_is_read_back_as_a_pair() {
     assert_counts(&truth, source);
     let slow = &source["links"][1];
     assert!((ms(slow, "lag_p50_ms") - 80.0).abs() < 5.0, "{slow}");
+}
+
+/// The pair report as metrics: each link's part and the merged stream's,
+/// the same figures as the JSON line, and promtool finds nothing to say.
+#[test]
+fn the_pair_report_is_exported_as_metrics() {
+    let dir = crate::tlog::Scratch::new("pair-metrics");
+    let prom = dir.path("pair.prom");
+    let faults = [
+        "--drop",
+        "10",
+        "--delay-ms",
+        "20",
+        "--drop",
+        "20",
+        "--delay-ms",
+        "60",
+    ];
+    let extra = ["--prometheus-textfile", prom.to_str().unwrap()];
+    let (_, source, out) = paired_with(2, &faults, "7", &extra);
+    let text = std::fs::read_to_string(&prom).unwrap();
+    crate::common::http::assert_promtool_clean(&text);
+    let samples = crate::common::http::samples(&text);
+    let value = |name: &str, link: Option<&str>| {
+        samples
+            .iter()
+            .find(|s| {
+                s.name == name
+                    && s.labels.get("sysid").map(String::as_str) == Some("1")
+                    && s.labels.get("link").map(String::as_str) == link
+            })
+            .unwrap_or_else(|| panic!("no {name} {link:?} in {text}"))
+            .value
+    };
+    let pair = json_line(&out, "pair_summary");
+    let names = pair["links"].as_array().unwrap();
+    for l in source["links"].as_array().unwrap() {
+        let name = names[count(l, "link") as usize].as_str().unwrap();
+        for (metric, key) in [
+            ("mavping_pair_frames_total", "frames"),
+            ("mavping_pair_first_frames_total", "first"),
+            ("mavping_pair_only_frames_total", "only"),
+            ("mavping_pair_lost_total", "lost"),
+            ("mavping_pair_stale_frames_total", "stale"),
+        ] {
+            assert_eq!(
+                value(metric, Some(name)),
+                count(l, key) as f64,
+                "{metric} {name}"
+            );
+        }
+        let lag = value("mavping_pair_lag_p50_seconds", Some(name));
+        assert!((lag * 1e3 - ms(l, "lag_p50_ms")).abs() < 1e-6, "{name}");
+    }
+    assert_eq!(
+        value("mavping_pair_distinct_frames_total", None),
+        count(&source, "distinct_frames") as f64
+    );
+    assert_eq!(
+        value("mavping_pair_lost_on_every_link_total", None),
+        count(&source, "lost_on_every_link") as f64
+    );
 }

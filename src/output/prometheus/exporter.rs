@@ -54,17 +54,21 @@ pub(crate) fn borrow_all(links: &[SharedMetrics]) -> Vec<Ref<'_, Metrics>> {
     links.iter().map(SharedMetrics::get).collect()
 }
 
-/// The run's exposition of shared links, each borrowed while it is written.
-fn render_shared(links: &[SharedMetrics]) -> String {
+/// The run's exposition of shared links, each borrowed while it is
+/// written, and the run's own families after them.
+fn render_shared(links: &[SharedMetrics], run: &str) -> String {
     let all = borrow_all(links);
     let refs: Vec<&Metrics> = all.iter().map(|m| &**m).collect();
-    render(&refs)
+    render(&refs) + run
 }
 
 /// `--prometheus`: the run's links at `/metrics` while the run goes on.
 #[derive(Default)]
 pub struct PrometheusExporter {
     links: Rc<RefCell<Vec<SharedMetrics>>>,
+    /// The run's figures across its links (the pair report), rendered by
+    /// the run as they change.
+    run: Rc<RefCell<String>>,
 }
 
 impl PrometheusExporter {
@@ -80,10 +84,10 @@ impl PrometheusExporter {
     /// What answers each request: `/metrics` renders every link as it is
     /// now. Also the fuzz target's way in.
     pub fn handler(&self) -> impl Fn(Head) -> Replying + 'static {
-        let links = self.links.clone();
+        let (links, run) = (self.links.clone(), self.run.clone());
         move |head: Head| -> Replying {
             let reply = match head.uri.path() {
-                "/metrics" => Reply::metrics(render_shared(&links.borrow())),
+                "/metrics" => Reply::metrics(render_shared(&links.borrow(), &run.borrow())),
                 "/" => Reply::text(StatusCode::OK, "mavping: metrics at /metrics\n"),
                 _ => Reply::text(StatusCode::NOT_FOUND, "not found\n"),
             };
@@ -93,7 +97,12 @@ impl PrometheusExporter {
 
     /// Every link as it is now, as `/metrics` would show it.
     pub(crate) fn render_now(&self) -> String {
-        render_shared(&self.links.borrow())
+        render_shared(&self.links.borrow(), &self.run.borrow())
+    }
+
+    /// The run's own families (exposition text), served after the links'.
+    pub(crate) fn set_run_figures(&self, text: String) {
+        *self.run.borrow_mut() = text;
     }
 
     /// The reporter of the `index`-th link, served at the same address.
