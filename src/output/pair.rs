@@ -8,6 +8,7 @@ use std::io::{self, Write};
 use serde::Serialize;
 
 use super::json::SCHEMA_VERSION;
+use crate::engine::pair::matrix::{MatrixCell, MatrixSummary};
 use crate::engine::pair::{LinkPair, PairSummary, SourcePair};
 
 /// The JSON line: the links by place, then the figures.
@@ -117,5 +118,73 @@ fn write_link(out: &mut impl Write, l: &LinkPair, names: &[&str]) -> io::Result<
         figure(l.lag_max_ms, 1, " ms"),
         l.stale,
         l.stale_first,
+    )
+}
+
+/// The matrix's JSON line: the links by place, then the cells.
+#[derive(Serialize)]
+struct MatrixLine<'a> {
+    r#type: &'static str,
+    schema_version: u32,
+    links: &'a [&'a str],
+    #[serde(flatten)]
+    matrix: &'a MatrixSummary,
+}
+
+pub(crate) fn write_matrix_json(
+    out: &mut impl Write,
+    m: &MatrixSummary,
+    names: &[&str],
+) -> io::Result<()> {
+    let line = MatrixLine {
+        r#type: "link_matrix",
+        schema_version: SCHEMA_VERSION,
+        links: names,
+        matrix: m,
+    };
+    serde_json::to_writer(&mut *out, &line)?;
+    writeln!(out)
+}
+
+pub(crate) fn write_matrix_text(
+    out: &mut impl Write,
+    m: &MatrixSummary,
+    names: &[&str],
+) -> io::Result<()> {
+    let name = |k: usize| names.get(k).copied().unwrap_or("?");
+    writeln!(
+        out,
+        "\n--- TIMESYNC requests out on one link, replies heard on each ---"
+    )?;
+    for (out_link, &requests) in m.requests.iter().enumerate() {
+        writeln!(out, "out on [{}]: {requests} requests", name(out_link))?;
+        for c in m.cells.iter().filter(|c| c.out == out_link) {
+            write_cell(out, c, name(c.back))?;
+        }
+    }
+    if m.unknown_replies > 0 {
+        writeln!(
+            out,
+            "{} replies to no request of ours within its timeout (late, or another's)",
+            m.unknown_replies
+        )?;
+    }
+    Ok(())
+}
+
+fn write_cell(out: &mut impl Write, c: &MatrixCell, back: &str) -> io::Result<()> {
+    let duplicates = if c.duplicates > 0 {
+        format!(", {} duplicate", c.duplicates)
+    } else {
+        String::new()
+    };
+    writeln!(
+        out,
+        "  back on [{back}]: {} replies ({} lost){duplicates}, rtt p50 {}, p99 {}, max {}",
+        c.replies,
+        figure(c.lost_pct, 1, "%"),
+        figure(c.rtt_p50_ms, 1, " ms"),
+        figure(c.rtt_p99_ms, 1, " ms"),
+        figure(c.rtt_max_ms, 1, " ms"),
     )
 }

@@ -14,8 +14,10 @@ use tokio::time::Instant;
 
 use crate::cli::Format;
 use crate::config::LinkConfig;
+use crate::engine::pair::matrix::Matrix;
 use crate::engine::pair::{PairConfig, PairTracker, MAX_LINKS};
 use crate::engine::Nanos;
+use crate::frame::{self, Msg};
 use crate::output::pair as report;
 use crate::output::prometheus;
 use crate::transport::recording::Watch;
@@ -26,6 +28,8 @@ type Way = (usize, PathId);
 
 /// The trackers and what their links are.
 struct Shared {
+    /// TIMESYNC requests out on each link, replies heard on each.
+    matrix: Matrix,
     /// Every way apart: a link's paths too.
     by_way: PairTracker,
     /// `by_way`'s links, in the order first heard.
@@ -78,7 +82,38 @@ impl Watch for LinkWatch {
             let way = shared.index((self.place, i.path));
             shared.by_way.on_frame(way, &i.frame, at);
             shared.by_link.on_frame(self.place, &i.frame, at);
+            if let Msg::Timesync { tc1, ts1, .. } = i.frame.msg {
+                if tc1 != 0 {
+                    shared.matrix.on_reply(self.place, ts1 as u64, at);
+                }
+            }
         }
+    }
+
+    fn sent(&self, at: Instant, frame: &[u8]) {
+        // Our TIMESYNC requests only: decoding every frame we send would
+        // cost the PING runs for nothing.
+        if frame.len() < 10 || !is_timesync(frame) {
+            return;
+        }
+        if let Msg::Timesync { tc1: 0, ts1, .. } = frame::decode(frame).msg {
+            let at = since(self.origin, at);
+            self.shared
+                .borrow_mut()
+                .matrix
+                .on_request(self.place, ts1 as u64, at);
+        }
+    }
+}
+
+/// Whether `raw` is a TIMESYNC frame by its header's message id (MAVLink
+/// 1: one byte at 5; 2: three at 7).
+fn is_timesync(raw: &[u8]) -> bool {
+    const TIMESYNC: u32 = 111;
+    match raw[0] {
+        0xFE => u32::from(raw[5]) == TIMESYNC,
+        0xFD => u32::from_le_bytes([raw[7], raw[8], raw[9], 0]) == TIMESYNC,
+        _ => false,
     }
 }
 
@@ -89,12 +124,18 @@ impl Pairs {
     /// link). One link of another kind has nothing to pair, and pays
     /// nothing per frame.
     pub(super) fn of(links: &[LinkConfig]) -> Option<Self> {
+        let timeout = links
+            .iter()
+            .map(|l| l.session.timeout.as_nanos() as Nanos)
+            .max()
+            .unwrap_or(0);
         let ways = links.len() > 1
             || links
                 .iter()
                 .any(|l| matches!(l.spec, LinkSpec::Tlog(_) | LinkSpec::Sim(_)));
         ways.then(|| Pairs {
             shared: Rc::new(RefCell::new(Shared {
+                matrix: Matrix::new(timeout),
                 by_way: PairTracker::new(MAX_LINKS, PairConfig::default()),
                 ways: Vec::new(),
                 by_link: PairTracker::new(links.len(), PairConfig::default()),
@@ -124,7 +165,8 @@ impl Pairs {
 
     /// Writes the report in `format` when a source was heard two ways or
     /// more (`names`: the links by place; `paths_are_ways`: whether each
-    /// link's paths are ways of their own), and flushes.
+    /// link's paths are ways of their own), and the matrix when requests
+    /// went out on two links or more and came back; flushes.
     pub(super) fn write(
         &self,
         format: Format,
@@ -142,13 +184,20 @@ impl Pairs {
         };
         // The links have ended: no copy can come, every window is closed.
         let summary = tracker.summary(Nanos::MAX);
-        if summary.sources.is_empty() {
-            return Ok(());
-        }
         let ways: Vec<&str> = ways.iter().map(String::as_str).collect();
-        match format {
-            Format::Json => report::write_json(out, &summary, &ways)?,
-            Format::Text => report::write_text(out, &summary, &ways)?,
+        if !summary.sources.is_empty() {
+            match format {
+                Format::Json => report::write_json(out, &summary, &ways)?,
+                Format::Text => report::write_text(out, &summary, &ways)?,
+            }
+        }
+        // Requests went out on two links or more and came back.
+        let matrix = shared.matrix.summary();
+        if matrix.requests.len() >= 2 && !matrix.cells.is_empty() {
+            match format {
+                Format::Json => report::write_matrix_json(out, &matrix, names)?,
+                Format::Text => report::write_matrix_text(out, &matrix, names)?,
+            }
         }
         out.flush()
     }

@@ -123,6 +123,9 @@ fn as_micros(d: Duration) -> u64 {
 /// the order received.
 pub(crate) trait Watch {
     fn received(&self, inbound: &[Inbound]);
+
+    /// A frame the link wrote at `at` (as the recording has it).
+    fn sent(&self, at: Instant, frame: &[u8]);
 }
 
 /// A link, recorded when it has a tap, watched when it has a watch.
@@ -179,12 +182,21 @@ impl<T: Transport> Recorded<T> {
         }
     }
 
-    /// Records `frame` sent at `at` unless the link refused it.
+    /// Records `frame` sent at `at`, and tells the watch, unless the link
+    /// refused it.
     fn sent(&self, at: Instant, frame: &[u8], refused_before: u64) {
+        if self.link.refused() == refused_before {
+            self.written(at, frame);
+        }
+    }
+
+    /// Records a frame the link wrote, and tells the watch.
+    fn written(&self, at: Instant, frame: &[u8]) {
         if let Some(tap) = &self.tap {
-            if self.link.refused() == refused_before {
-                tap.sent(at, frame);
-            }
+            tap.sent(at, frame);
+        }
+        if let Some(watch) = &self.watch {
+            watch.sent(at, frame);
         }
     }
 }
@@ -209,13 +221,13 @@ impl<T: Transport> Transport for Recorded<T> {
     async fn send_all(&mut self, outbox: &Outbox) -> Result<Instant, LinkError> {
         let (peers, refused) = (self.link.has_peers(), self.link.refused());
         let at = self.link.send_all(outbox).await?;
-        if let Some(tap) = &self.tap {
+        if self.tap.is_some() || self.watch.is_some() {
             // What a byte stream refuses of a burst is always its tail.
             let refused = (self.link.refused() - refused) as usize;
             let written = outbox.len().saturating_sub(refused);
             for (frame, to) in outbox.frames().take(written) {
                 if peers || matches!(to, super::To::Path(_)) {
-                    tap.sent(at, frame);
+                    self.written(at, frame);
                 }
             }
         }

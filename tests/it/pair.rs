@@ -411,3 +411,81 @@ fn the_pair_report_is_exported_as_metrics() {
         count(&source, "lost_on_every_link") as f64
     );
 }
+
+/// The matrix: TIMESYNC requests out on each of two links to a vehicle
+/// that routes every reply to both (`two_link_responder.py`, with its own
+/// drops each way): each cell (out on A, back on B) counts the replies
+/// the vehicle sent on B to requests that came on A, exactly, and the
+/// slow link's replies come back later.
+#[test]
+fn the_matrix_counts_each_links_replies_to_each_links_requests() {
+    let (one, two) = (free_udp_port(), free_udp_port());
+    let listen: Vec<String> = [one, two]
+        .iter()
+        .map(|p| format!("127.0.0.1:{p}"))
+        .collect();
+    let responder = Peer::start(
+        "two_link_responder.py",
+        &[
+            "--listen",
+            &listen[0],
+            "--listen",
+            &listen[1],
+            "--drop-up",
+            "10",
+            "--drop-up",
+            "0",
+            "--drop-down",
+            "0",
+            "--drop-down",
+            "20",
+            "--delay-ms",
+            "0",
+            "--delay-ms",
+            "40",
+            "--seed",
+            "3",
+        ],
+    );
+    let links: Vec<String> = listen.iter().map(|l| format!("udpout:{l}")).collect();
+    let (code, out, err) = run_mavping(&[
+        "--probe", "timesync", "-c", "100", "-i", "0.02", "-W", "1s", "--json", "-q", &links[0],
+        &links[1],
+    ]);
+    let truth = responder.finish();
+    assert!(code <= 1, "{err}");
+    assert_schema(&json_lines(&out));
+    let matrix = json_line(&out, "link_matrix");
+    assert_eq!(
+        matrix["requests"],
+        serde_json::json!([100, 100]),
+        "{matrix}"
+    );
+    let cell = |a: usize, b: usize| {
+        matrix["cells"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| count(c, "out") == a as u64 && count(c, "back") == b as u64)
+            .unwrap_or_else(|| panic!("no cell {a} -> {b} in {matrix}"))
+            .clone()
+    };
+    for a in 0..2 {
+        let received = count(&truth["links"][a], "requests_received");
+        assert_eq!(received, 100, "{truth}");
+        for b in 0..2 {
+            let told = count(&truth["cells"][a][b], "replies");
+            assert_eq!(
+                count(&cell(a, b), "replies"),
+                told,
+                "{a} -> {b}: {matrix} vs {truth}"
+            );
+            assert_eq!(count(&cell(a, b), "duplicates"), 0);
+        }
+    }
+    // Link 1's copies leave the vehicle 40 ms after link 0's.
+    for a in 0..2 {
+        let (fast, slow) = (ms(&cell(a, 0), "rtt_p50_ms"), ms(&cell(a, 1), "rtt_p50_ms"));
+        assert!((slow - fast - 40.0).abs() < 10.0, "{a}: {fast} vs {slow}");
+    }
+}

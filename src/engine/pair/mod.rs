@@ -54,6 +54,7 @@
 //! apart ([`SingleLinkSource`]) with its link and frames.
 
 mod lag;
+pub(crate) mod matrix;
 mod recent;
 mod seq;
 mod side;
