@@ -16,6 +16,7 @@
 
 use std::io::{self, BufWriter, IsTerminal, Write};
 use std::sync::Arc;
+use std::time::{Duration, SystemTime};
 
 use futures_util::future::join_all;
 use tokio::sync::Notify;
@@ -213,6 +214,15 @@ fn attach<'a>(
     pairs: Option<&Pairs>,
 ) -> Vec<LinkRun<'a>> {
     let several = config.links.len() > 1;
+    // Logs read together are laid on one clock by their first stamps (a
+    // flight's logs from two ground stations), for the pair report.
+    let first_log = opened
+        .iter()
+        .filter_map(|(_, link)| match link {
+            Link::Tlog(log) => Some(log.started()),
+            _ => None,
+        })
+        .min();
     let runs: Vec<LinkRun<'a>> = opened
         .into_iter()
         .enumerate()
@@ -233,6 +243,7 @@ fn attach<'a>(
                 .iter()
                 .position(|l| std::ptr::eq(l, link_config))
                 .unwrap_or(index);
+            let watch = pairs.map(|p| p.watch(place, after(first_log, &link)));
             LinkRun {
                 config: link_config,
                 link,
@@ -241,7 +252,7 @@ fn attach<'a>(
                 controls: Controls::default(),
                 taps: Taps {
                     tlog: exports.tap(place),
-                    watch: pairs.map(|p| p.watch(place)),
+                    watch,
                 },
             }
         })
@@ -257,6 +268,16 @@ fn attach<'a>(
         true,
     );
     runs
+}
+
+/// How long after `first` (the earliest log's first stamp) `link`, a
+/// log, began: its frames' times in the run's pair report are shifted by
+/// it. Other links: 0.
+fn after(first: Option<SystemTime>, link: &Link) -> Duration {
+    match (first, link) {
+        (Some(first), Link::Tlog(log)) => log.started().duration_since(first).unwrap_or_default(),
+        _ => Duration::ZERO,
+    }
 }
 
 /// One link's session, from its open link to its measurement. With

@@ -67,6 +67,8 @@ struct LinkWatch {
     shared: Rc<RefCell<Shared>>,
     place: usize,
     origin: Instant,
+    /// Added to its frames' times: a log's start after the first log's.
+    shift: Nanos,
 }
 
 /// Nanoseconds from `origin` to `at` (0 before it).
@@ -78,7 +80,7 @@ impl Watch for LinkWatch {
     fn received(&self, inbound: &[Inbound]) {
         let mut shared = self.shared.borrow_mut();
         for i in inbound {
-            let at = since(self.origin, i.at);
+            let at = since(self.origin, i.at) + self.shift;
             let way = shared.index((self.place, i.path));
             shared.by_way.on_frame(way, &i.frame, at);
             shared.by_link.on_frame(self.place, &i.frame, at);
@@ -144,12 +146,15 @@ impl Pairs {
         })
     }
 
-    /// What the link at `place` on the command line tells the tracker by.
-    pub(super) fn watch(&self, place: usize) -> Rc<dyn Watch> {
+    /// What the link at `place` on the command line tells the tracker by,
+    /// its frames' times shifted by `shift` (a log that began later than
+    /// the run's first).
+    pub(super) fn watch(&self, place: usize, shift: std::time::Duration) -> Rc<dyn Watch> {
         Rc::new(LinkWatch {
             shared: self.shared.clone(),
             place,
             origin: self.origin,
+            shift: shift.as_nanos() as Nanos,
         })
     }
 

@@ -296,7 +296,15 @@ fn a_mavproxy_session_on_two_links_is_read_back_as_a_pair() {
     let logfile = format!("--logfile={}", log.display());
     let session = Program::start_on_udp(
         &mavproxy,
-        &[&masters[0], &masters[1], "--non-interactive", &logfile],
+        // Flushed on every frame, so that the log shows what MAVProxy has
+        // read so far.
+        &[
+            &masters[0],
+            &masters[1],
+            "--non-interactive",
+            "--cmd=set flushlogs 1",
+            &logfile,
+        ],
         log.parent().unwrap(),
         two,
     );
@@ -324,8 +332,13 @@ fn a_mavproxy_session_on_two_links_is_read_back_as_a_pair() {
     assert!(vehicle.status.success(), "{vehicle:?}");
     let stdout = String::from_utf8(vehicle.stdout).unwrap();
     let truth: Value = serde_json::from_str(stdout.lines().last().unwrap()).unwrap();
-    // The last copies reach MAVProxy 100 ms after the vehicle's last send.
-    std::thread::sleep(std::time::Duration::from_millis(500));
+    let sent: u64 = truth["links"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| count(l, "sent"))
+        .sum();
+    wait_until_logged(&log, sent);
     session.terminate();
     let (code, out, err) = run_mavping(&["--json", "-q", log.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
@@ -348,6 +361,40 @@ fn a_mavproxy_session_on_two_links_is_read_back_as_a_pair() {
     assert_counts(&truth, source);
     let slow = &source["links"][1];
     assert!((ms(slow, "lag_p50_ms") - 80.0).abs() < 5.0, "{slow}");
+}
+
+/// Waits (at most 30 s) until the tlog at `path` holds `frames` frames
+/// from the vehicle (1/1), as pymavlink reads it: MAVProxy, slow on a
+/// busy machine, has logged every copy it was sent.
+fn wait_until_logged(path: &std::path::Path, frames: u64) {
+    let script = r"
+import sys
+from pymavlink import mavutil
+log = mavutil.mavlink_connection(sys.argv[1])
+n = 0
+while True:
+    m = log.recv_match()
+    if m is None:
+        break
+    n += (m.get_srcSystem(), m.get_srcComponent()) == (1, 1)
+print(n)
+";
+    let started = std::time::Instant::now();
+    loop {
+        let out = std::process::Command::new(python())
+            .args(["-c", script])
+            .arg(path)
+            .output()
+            .unwrap();
+        let logged: u64 = String::from_utf8_lossy(&out.stdout)
+            .trim()
+            .parse()
+            .unwrap_or(0);
+        if logged >= frames || started.elapsed().as_secs() >= 30 {
+            return;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(250));
+    }
 }
 
 /// The pair report as metrics: each link's part and the merged stream's,
@@ -488,4 +535,52 @@ fn the_matrix_counts_each_links_replies_to_each_links_requests() {
         let (fast, slow) = (ms(&cell(a, 0), "rtt_p50_ms"), ms(&cell(a, 1), "rtt_p50_ms"));
         assert!((slow - fast - 40.0).abs() < 10.0, "{a}: {fast} vs {slow}");
     }
+}
+
+/// Two logs of one flight, one per ground station, read together: each
+/// lost frames of its own, the second's logger received every frame
+/// 30 ms later. The logs are laid on one clock by their stamps, so the
+/// pair report counts each log's part, the second's lag, and its frames
+/// behind newer ones, exactly.
+#[test]
+fn two_logs_of_one_flight_are_read_as_a_pair() {
+    use crate::tlog::{tlog, write_log, Scratch};
+    let dir = Scratch::new("pair-two-logs");
+    let drops = [vec![5u64, 6, 7, 100, 700, 701, 1200], vec![7, 8, 300, 700]];
+    let paths = [dir.path("a.tlog"), dir.path("b.tlog")];
+    for (k, (path, drop)) in paths.iter().zip(&drops).enumerate() {
+        let plan = serde_json::json!({
+            "start_us": 1_764_500_000_000_000u64 + 30_000 * k as u64,
+            "stamps": "us",
+            "sources": [{"sysid": 1, "compid": 1, "rate": 50, "frames": 1500, "drop": drop}],
+        });
+        write_log(path, &plan);
+    }
+    let links: Vec<String> = paths.iter().map(|p| tlog(p)).collect();
+    let (code, out, err) = run_mavping(&["--json", "-q", &links[0], &links[1]]);
+    assert_eq!(code, 0, "{err}");
+    assert_schema(&json_lines(&out));
+    let source = &json_line(&out, "pair_summary")["sources"][0];
+    let (a, b) = (&drops[0], &drops[1]);
+    let both = a.iter().filter(|n| b.contains(n)).count() as u64;
+    assert_eq!(count(source, "lost_on_every_link"), both, "{source}");
+    assert_eq!(count(source, "distinct_frames"), 1500 - both, "{source}");
+    let (one, two) = (&source["links"][0], &source["links"][1]);
+    assert_eq!(count(one, "frames"), 1500 - a.len() as u64);
+    assert_eq!(count(two, "frames"), 1500 - b.len() as u64);
+    let only =
+        |mine: &[u64], theirs: &[u64]| theirs.iter().filter(|n| !mine.contains(n)).count() as u64;
+    assert_eq!(count(one, "only"), only(a, b), "{one}");
+    assert_eq!(count(two, "only"), only(b, a), "{two}");
+    assert_eq!(count(one, "first"), 1500 - a.len() as u64, "{one}");
+    assert_eq!(count(two, "first"), only(b, a), "{two}");
+    assert!((ms(two, "lag_p50_ms") - 30.0).abs() < 0.01, "{two}");
+    // A frame every 20 ms, the second log's 30 ms late: its frame n came
+    // after the first log's n + 1, when that one was not lost. The logs
+    // are read a page at a time each, not in time order.
+    let behind = (0..1499)
+        .filter(|n| !b.contains(n) && !a.contains(&(n + 1)))
+        .count() as u64;
+    assert_eq!(count(two, "stale"), behind, "{two}");
+    assert_eq!(count(one, "stale"), 0, "{one}");
 }

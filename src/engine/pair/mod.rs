@@ -53,6 +53,7 @@
 //! A source heard on one link only has nothing to pair: it is listed
 //! apart ([`SingleLinkSource`]) with its link and frames.
 
+mod delivered;
 mod lag;
 pub(crate) mod matrix;
 mod recent;

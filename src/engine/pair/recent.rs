@@ -79,6 +79,12 @@ impl Recent {
             }
             let before = *entry;
             entry.links |= 1 << link;
+            // Links are read in turns (a log's batches, a socket's): a copy
+            // taken later may have come earlier, and then it is the first.
+            if at < entry.first_at {
+                entry.first_at = at;
+                entry.first_link = link;
+            }
             return Seen::Copy { before };
         }
         if same_number && entry.key == key {

@@ -1,6 +1,7 @@
 //! One link's share of one source: what it delivered, first, alone,
 //! late, and what it lost on its own.
 
+use super::delivered::Delivered;
 use super::lag::Lag;
 use super::seq::SeqCount;
 use crate::engine::Nanos;
@@ -24,8 +25,8 @@ pub(super) struct Side {
     pub(super) stale_first: u64,
     /// Its own sequence, as the link alone would count it.
     pub(super) own: SeqCount,
-    /// The newest number on the source's line it delivered.
-    pub(super) newest: Option<u64>,
+    /// The numbers on the source's line it delivered, and when.
+    pub(super) delivered: Delivered,
     /// Lag behind the first copy of each frame it delivered that another
     /// link delivered too (0 where it was first); made at its first lag.
     pub(super) lag: Option<Lag>,

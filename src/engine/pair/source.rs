@@ -28,7 +28,7 @@ impl SourceState {
         SourceState {
             recent: Recent::default(),
             merged: SeqCount::default(),
-            sides: vec![Side::default(); links],
+            sides: (0..links).map(|_| Side::default()).collect(),
             copy_lag: None,
             distinct: 0,
             copies: 0,
@@ -66,21 +66,35 @@ impl SourceState {
                 self.sides[l].first += 1;
                 self.sides[l].only += 1;
                 self.merged.take(seq);
-                self.newest(l, line, true);
+                self.newest(l, line, at, true);
             }
             Seen::Copy { before } => {
-                let lag = at.saturating_sub(before.first_at);
                 self.copies += 1;
+                let was_first = usize::from(before.first_link);
+                // Taken after the first copy, but came before it: the
+                // first is this one (exact with two links; with more, the
+                // copies taken in between kept their lag behind the old
+                // first).
+                let earlier = at < before.first_at;
+                let lag = at.abs_diff(before.first_at);
                 if before.links.is_power_of_two() {
-                    let first = &mut self.sides[usize::from(before.first_link)];
+                    let first = &mut self.sides[was_first];
                     first.only -= 1;
-                    first.record_lag(0, window);
+                    first.record_lag(if earlier { lag } else { 0 }, window);
                 }
-                self.sides[l].record_lag(lag, window);
+                if earlier {
+                    let was = &mut self.sides[was_first];
+                    was.first -= 1;
+                    if was.delivered.set_first(line, false) {
+                        was.stale_first -= 1;
+                    }
+                    self.sides[l].first += 1;
+                }
+                self.sides[l].record_lag(if earlier { 0 } else { lag }, window);
                 self.copy_lag
                     .get_or_insert_with(|| Lag::new(window))
                     .record(lag);
-                self.newest(l, line, false);
+                self.newest(l, line, at, earlier);
             }
             Seen::Again => self.sides[l].again += 1,
             Seen::Late => self.late += 1,
@@ -92,7 +106,9 @@ impl SourceState {
     #[cfg(test)]
     pub(super) fn bytes(&self) -> usize {
         let lags = self.sides.iter().filter_map(|s| s.lag.as_ref());
+        let delivered: usize = self.sides.iter().map(|s| s.delivered.bytes()).sum();
         self.recent.bytes()
+            + delivered
             + self.sides.capacity() * std::mem::size_of::<Side>()
             + lags
                 .chain(self.copy_lag.as_ref())
@@ -100,21 +116,23 @@ impl SourceState {
                 .sum::<usize>()
     }
 
-    /// Counts the frame at `line` stale on link `l` if another link had
-    /// delivered a newer number, and moves the link's newest on.
-    fn newest(&mut self, l: usize, line: u64, first: bool) {
-        let others = self
-            .sides
-            .iter()
-            .enumerate()
-            .filter(|&(i, _)| i != l)
-            .filter_map(|(_, s)| s.newest)
-            .max();
+    /// Counts the frame at `line`, come at `at`, stale on link `l` if
+    /// another link had delivered a newer number by the time it came, and
+    /// the other links' frames it finds stale (taken before it, come
+    /// after it).
+    fn newest(&mut self, l: usize, line: u64, at: Nanos, first: bool) {
+        let mut stale = false;
+        for (_, side) in self.sides.iter_mut().enumerate().filter(|&(i, _)| i != l) {
+            stale |= side.delivered.newest_by(at).is_some_and(|n| line < n);
+            let found = side.delivered.overtaken(line, at);
+            side.stale += found.frames;
+            side.stale_first += found.first;
+        }
         let side = &mut self.sides[l];
-        if others.is_some_and(|newest| line < newest) {
+        if stale {
             side.stale += 1;
             side.stale_first += u64::from(first);
         }
-        side.newest = Some(side.newest.map_or(line, |n| n.max(line)));
+        side.delivered.take(line, at, stale, first);
     }
 }

@@ -585,3 +585,32 @@ fn a_source_split_between_links_is_uncopied_not_a_pair() {
     assert!(summary.sources.is_empty(), "{summary:?}");
     assert_eq!(summary.uncopied_sources, [VEHICLE]);
 }
+
+/// Links are read in turns (two logs' batches): the slow link's frames
+/// may be taken before the fast link's earlier copies. The first copy is
+/// the one that came first, and the lags are measured from it, whatever
+/// the order they were taken in.
+#[test]
+fn the_first_copy_is_the_earliest_whatever_order_they_are_taken_in() {
+    let mut tracker = PairTracker::new(2, PairConfig::default());
+    // Batches of 10 frames, the slow link's (30 ms later) taken first.
+    for batch in 0..10 {
+        let frames = batch * 10..batch * 10 + 10;
+        for i in frames.clone() {
+            tracker.on_frame(1, &vehicle_frame(i), i as u64 * 20 * MS + 30 * MS);
+        }
+        for i in frames {
+            tracker.on_frame(0, &vehicle_frame(i), i as u64 * 20 * MS);
+        }
+    }
+    let got = pair(&tracker, Nanos::MAX);
+    let (fast, slow) = (&got.links[0], &got.links[1]);
+    assert_eq!((fast.first, slow.first), (100, 0), "{got:?}");
+    assert_eq!(fast.lag_max_ms, Some(0.0));
+    assert_eq!((slow.lag_p50_ms, slow.lag_max_ms), (Some(30.0), Some(30.0)));
+    // The slow link's frames came after the fast link's newer ones (30 ms
+    // behind, a frame every 20 ms), though taken before them; the fast
+    // link's never did.
+    assert_eq!(fast.stale, 0, "{got:?}");
+    assert_eq!(slow.stale, 99, "{got:?}");
+}
