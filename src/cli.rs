@@ -794,8 +794,12 @@ pub(crate) struct SigningArgs {
 #[derive(Debug, clap::Args)]
 pub struct RespondArgs {
     /// Where to answer: udpin:HOST:PORT (every peer), udpout:HOST:PORT, sim:...
-    #[arg(value_name = "CONNECTION")]
-    pub(crate) link: String,
+    ///
+    /// Several: one identity on each, as a vehicle with two links (the same
+    /// HEARTBEATs and streamed frames on every link, each answer on the
+    /// link its request came on)
+    #[arg(value_name = "CONNECTION", required = true, num_args = 1..)]
+    pub(crate) links: Vec<String>,
 
     /// Our MAVLink system id
     #[arg(

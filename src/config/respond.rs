@@ -1,6 +1,7 @@
 //! `mavping respond [OPTIONS] LINK` into a [`RespondConfig`].
 
 use super::error::ConfigError;
+use super::measure::validate_links;
 use super::signing::signing;
 use super::values::{validate_baud, validate_ids, MAX_TIMEOUT};
 use crate::cli::RespondArgs;
@@ -12,7 +13,8 @@ use crate::transport::LinkOptions;
 /// `mavping respond`, validated.
 #[derive(Debug, Clone)]
 pub(crate) struct RespondConfig {
-    pub(crate) link: LinkSpec,
+    /// Every link it answers on, one identity on all.
+    pub(crate) links: Vec<LinkSpec>,
     pub(crate) link_options: LinkOptions,
     pub(crate) settings: ResponderSettings,
     pub(crate) verbose: u8,
@@ -22,14 +24,19 @@ impl TryFrom<&RespondArgs> for RespondConfig {
     type Error = ConfigError;
 
     fn try_from(cli: &RespondArgs) -> Result<Self, ConfigError> {
-        let link: LinkSpec = cli.link.parse()?;
-        if link.is_log() {
+        let links = cli
+            .links
+            .iter()
+            .map(|l| l.parse::<LinkSpec>())
+            .collect::<Result<Vec<_>, _>>()?;
+        if let Some(log) = links.iter().find(|l| l.is_log()) {
             return Err(ConfigError::value(
                 "mavping respond",
-                &link,
+                log,
                 "a telemetry log is only read; answer on a live link",
             ));
         }
+        validate_links(&cli.links, &links)?;
         for (flag, d) in [("--delay", cli.delay), ("--jitter", cli.jitter)] {
             if d > MAX_TIMEOUT {
                 return Err(ConfigError::value(
@@ -48,7 +55,7 @@ impl TryFrom<&RespondArgs> for RespondConfig {
             });
         }
         Ok(RespondConfig {
-            link,
+            links,
             link_options: LinkOptions {
                 baud: validate_baud(cli.baud)?,
                 // A responder outlives its pingers: one that is not up yet
@@ -109,6 +116,17 @@ mod tests {
             .settings
             .signing
             .is_none());
+    }
+
+    #[test]
+    fn respond_on_several_links() {
+        let r = respond("udpin:0.0.0.0:14550 udpin:0.0.0.0:14551").unwrap();
+        assert_eq!(r.links.len(), 2);
+        let twice = respond("udpin:0.0.0.0:14550 udpin:0.0.0.0:14550").unwrap_err();
+        assert!(twice.contains("names the same link"), "{twice}");
+        let mixed = respond("sim:?clock=virtual udpin:0.0.0.0:14550").unwrap_err();
+        assert!(mixed.contains("virtual"), "{mixed}");
+        assert!(respond("").is_err());
     }
 
     #[test]

@@ -17,5 +17,6 @@ mod respond_loop;
 mod settings;
 mod streams;
 
+pub(crate) use counts::RespondCounts;
 pub(crate) use respond_loop::run;
 pub(crate) use settings::{describe, ResponderSettings};

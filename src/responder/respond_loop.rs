@@ -20,6 +20,7 @@ use crate::engine::link_io::{Clock, Heartbeat, Sender};
 use crate::frame::signing::{Gate, SigningConfig};
 use crate::frame::Version;
 use crate::telemetry::{Schedule, StreamKind};
+use crate::transport::several;
 use crate::transport::{Inbound, LinkError, Outbox, PathId, To, Transport};
 
 pub(super) struct Responder {
@@ -32,9 +33,10 @@ pub(super) struct Responder {
     pub(super) held: BinaryHeap<Reverse<Held>>,
     pub(super) order: u64,
     pub(super) counts: RespondCounts,
-    /// Paths (peers) greeted so far: links number new peers upwards and
-    /// never reuse a number, so the highest one seen is enough.
-    pub(super) greeted: Option<PathId>,
+    /// Paths (peers) greeted so far, on each link: links number new
+    /// peers upwards and never reuse a number, so the highest one seen is
+    /// enough.
+    pub(super) greeted: Vec<Option<PathId>>,
     /// With a signing key: refuses requests not signed with it (or
     /// replayed).
     pub(super) gate: Gate,
@@ -54,10 +56,17 @@ impl Responder {
     /// A new peer gets our HEARTBEAT at once rather than within a second:
     /// a GCS or router discovers systems by their HEARTBEAT.
     fn greet(&mut self, path: PathId) {
-        if path == PathId::MAX || self.greeted.is_some_and(|g| path <= g) {
+        if path == PathId::MAX {
             return;
         }
-        self.greeted = Some(path);
+        let link = several::link_of(path);
+        if self.greeted.len() <= link {
+            self.greeted.resize(link + 1, None);
+        }
+        if self.greeted[link].is_some_and(|g| path <= g) {
+            return;
+        }
+        self.greeted[link] = Some(path);
         let bytes = self.sender.frame_as(Version::V2, self.heartbeat.msg());
         self.outbox.push(bytes, To::Path(path));
     }
@@ -139,7 +148,7 @@ pub(crate) async fn run<T: Transport>(
         held: BinaryHeap::new(),
         order: 0,
         counts: RespondCounts::default(),
-        greeted: None,
+        greeted: Vec::new(),
         gate: Gate::new(settings.signing),
         outbox: Outbox::default(),
         replies_queued: 0,

@@ -26,6 +26,7 @@ use crate::cli::{Cli, Mode};
 use crate::config::{Config, RespondConfig, ServeConfig};
 use crate::exit::Ending;
 use crate::stderr;
+use crate::transport::LinkSpec;
 use logging::init_logging;
 use runtime::block_on;
 
@@ -44,7 +45,8 @@ pub fn main(cli: &Cli) -> Ending {
         Some(Mode::Respond(args)) => match RespondConfig::try_from(args) {
             Ok(config) => {
                 init_logging(config.verbose);
-                let paused = config.link.is_virtual();
+                // Several links share a virtual clock only if all are.
+                let paused = config.links.iter().all(LinkSpec::is_virtual);
                 block_on(
                     paused,
                     |stop| async move { respond::run(&config, stop).await },

@@ -18,6 +18,7 @@ pub(crate) mod recording;
 pub(crate) mod route;
 pub(crate) mod rx_time;
 pub(crate) mod serial;
+pub(crate) mod several;
 pub mod sim;
 #[cfg(mavping_portable)]
 mod single;

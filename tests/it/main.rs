@@ -36,6 +36,7 @@ mod prometheus_server;
 mod properties;
 mod radio;
 mod real_logs;
+mod respond_links;
 mod scripting;
 mod serial_pty;
 mod serve;

@@ -91,11 +91,8 @@ impl Respond {
 
     /// SIGTERM; returns its exit code and its counts: requests, ping,
     /// timesync, command, retransmissions, replies sent, dropped, duplicated.
-    pub fn finish(mut self) -> (i32, Vec<u64>) {
-        signal(self.child.id(), "TERM");
-        let mut rest = String::new();
-        self.stdout.read_to_string(&mut rest).unwrap();
-        let code = self.child.wait().unwrap().code().unwrap_or(-1);
+    pub fn finish(self) -> (i32, Vec<u64>) {
+        let (code, rest) = self.finish_text();
         let line = rest
             .lines()
             .find(|l| l.starts_with("respond "))
@@ -109,6 +106,18 @@ impl Respond {
             .map(|s| s.parse().unwrap())
             .collect();
         (code, counts)
+    }
+}
+
+impl Respond {
+    /// SIGTERM; returns its exit code and what it printed after its first
+    /// line.
+    pub fn finish_text(mut self) -> (i32, String) {
+        signal(self.child.id(), "TERM");
+        let mut rest = String::new();
+        self.stdout.read_to_string(&mut rest).unwrap();
+        let code = self.child.wait().unwrap().code().unwrap_or(-1);
+        (code, rest)
     }
 }
 
