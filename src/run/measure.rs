@@ -327,23 +327,32 @@ fn judge(
     (ends, output)
 }
 
-/// Runs `sessions`, telling the exporters the pair report every second
-/// and when they end.
-async fn with_pair_metrics<F: std::future::Future>(
+/// Runs `sessions`, telling the exporters and the live view the pair
+/// report every second and when they end.
+async fn with_pair_figures<F: std::future::Future>(
     sessions: F,
     pairs: &Pairs,
     exports: &Exports,
+    view: Option<&LiveView>,
     names: &[&str],
 ) -> F::Output {
+    let tell = || {
+        if exports.exports_metrics() {
+            exports.run_figures(&pairs.metrics(names));
+        }
+        if let Some(view) = view {
+            pairs.show(names, view);
+        }
+    };
     tokio::pin!(sessions);
     let mut every = tokio::time::interval(std::time::Duration::from_secs(1));
     let finished = loop {
         tokio::select! {
             finished = &mut sessions => break finished,
-            _ = every.tick() => exports.run_figures(&pairs.metrics(names)),
+            _ = every.tick() => tell(),
         }
     };
-    exports.run_figures(&pairs.metrics(names));
+    tell();
     finished
 }
 
@@ -408,8 +417,9 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
         .into_iter()
         .map(|run| measure_one(run, &config.probe, announce));
     let names: Vec<&str> = config.links.iter().map(|l| l.name.as_str()).collect();
-    let mut finished = match pairs.as_ref().filter(|_| exports.exports_metrics()) {
-        Some(pairs) => with_pair_metrics(join_all(sessions), pairs, &exports, &names).await,
+    let view = screen.view.as_ref();
+    let mut finished = match pairs.as_ref().filter(|_| exports.exports_metrics() || live) {
+        Some(pairs) => with_pair_figures(join_all(sessions), pairs, &exports, view, &names).await,
         None => join_all(sessions).await,
     };
     screen.close();

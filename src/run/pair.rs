@@ -18,6 +18,7 @@ use crate::engine::pair::matrix::Matrix;
 use crate::engine::pair::{PairConfig, PairTracker, MAX_LINKS};
 use crate::engine::Nanos;
 use crate::frame::{self, Msg};
+use crate::output::live::LiveView;
 use crate::output::pair as report;
 use crate::output::prometheus;
 use crate::transport::recording::Watch;
@@ -166,6 +167,16 @@ impl Pairs {
         let ways = way_names(&shared.ways, names);
         let ways: Vec<&str> = ways.iter().map(String::as_str).collect();
         prometheus::render_pair(&summary, &ways)
+    }
+
+    /// The report so far in the live view, every way apart.
+    pub(super) fn show(&self, names: &[&str], view: &LiveView) {
+        let shared = self.shared.borrow();
+        let now = since(self.origin, Instant::now());
+        let summary = shared.by_way.summary(now);
+        let ways = way_names(&shared.ways, names);
+        let ways: Vec<&str> = ways.iter().map(String::as_str).collect();
+        view.show_pair(&summary, &ways, now);
     }
 
     /// Writes the report in `format` when a source was heard two ways or

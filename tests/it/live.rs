@@ -329,3 +329,84 @@ fn a_link_that_failed_to_open_is_shown_in_the_view() {
         "{screen}"
     );
 }
+
+/// A vehicle heard on two links (`two_link_vehicle.py`: the second link
+/// 80 ms behind the first): the view gains the pair report's section,
+/// the merged stream's row over a row per link with its lag, and `q`
+/// leaves it for the summaries and the pair report.
+#[test]
+fn a_source_on_two_links_gets_the_pair_section() {
+    let ports = [
+        crate::common::free_udp_port(),
+        crate::common::free_udp_port(),
+    ];
+    let links: Vec<String> = ports
+        .iter()
+        .map(|p| format!("udpin:127.0.0.1:{p}"))
+        .collect();
+    let command = format!(
+        "{} --live --passive {} {}; echo exit=$?",
+        cargo_bin("mavping").display(),
+        links[0],
+        links[1]
+    );
+    let tmux = Tmux::start("pair", &command, 120, 30);
+    tmux.wait_for_screen("the view", |s| s.starts_with("mavping · 2 links"));
+    let tos: Vec<String> = ports.iter().map(|p| format!("127.0.0.1:{p}")).collect();
+    let mut vehicle = crate::common::Peer::start(
+        "two_link_vehicle.py",
+        &[
+            "--to",
+            &tos[0],
+            "--to",
+            &tos[1],
+            "--drop",
+            "10",
+            "--delay-ms",
+            "20",
+            "--drop",
+            "20",
+            "--delay-ms",
+            "100",
+            "--duration",
+            "60",
+            "--start-after",
+            "0.2",
+            "--seed",
+            "7",
+        ],
+    );
+    // A pair row: `│       udpin:...  frames first% only lost% p50 p99 behind │`.
+    let row = |screen: &str, link: &str| -> Option<Vec<f64>> {
+        let line = screen
+            .lines()
+            .find(|l| l.starts_with("│ ") && l.contains(link))?;
+        let w = words(line);
+        (w.len() == 8).then(|| w[1..].iter().map(|n| n.parse().unwrap()).collect())
+    };
+    let screen = tmux.wait_for_screen("the pair section with 100 frames", |s| {
+        s.contains("┌ the same sources on several links · lag in ms")
+            && row(s, &links[1]).is_some_and(|r| r[0] >= 100.0)
+    });
+    for line in screen.lines() {
+        assert!(line.chars().count() <= 120, "{line:?}");
+    }
+    let merged = screen
+        .lines()
+        .find(|l| l.starts_with("│1/1") && l.contains(" merged "))
+        .unwrap_or_else(|| panic!("no merged row:\n{screen}"));
+    assert!(merged.contains("de-dup window"), "{merged}");
+    let (fast, slow) = (
+        row(&screen, &links[0]).unwrap(),
+        row(&screen, &links[1]).unwrap(),
+    );
+    // lag p50: the first link's copies come first; the second's 80 ms later.
+    assert!(fast[4] < 5.0, "{screen}");
+    assert!((slow[4] - 80.0).abs() < 10.0, "{screen}");
+    let after = quit_as(&PASSIVE, &tmux, &[&links[0], &links[1]]);
+    assert!(
+        after.contains("--- the same sources on several links"),
+        "{after}"
+    );
+    vehicle.kill();
+}

@@ -8,12 +8,14 @@
 //! small state under a mutex, and a separate thread draws it a few times a
 //! second and reads the keyboard. When the run ends, the terminal is
 //! restored and the normal text summary printed (by the run, as text).
-//! The frame itself is drawn by `view.rs`.
+//! The frame itself is drawn by `view.rs`; the pair report's section,
+//! when a source is heard on several links, comes from `pair.rs`.
 //!
 //! This file declares and re-exports, and hands a link's [`Reporter`]
 //! calls to its `LiveState` (`state.rs`); the UI thread is in
 //! `terminal.rs`.
 
+mod pair;
 mod sources;
 mod state;
 mod terminal;

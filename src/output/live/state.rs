@@ -228,6 +228,8 @@ pub(crate) enum Strip {
     Heard(String),
     /// A source's recent seconds.
     Seconds(Vec<Second>),
+    /// Words: the pair report's merged figures.
+    Note(String),
 }
 
 /// Everything one frame shows.
@@ -326,7 +328,7 @@ mod tests {
     /// The frame drawn in a `width` x `height` terminal.
     fn frame(width: u16, height: u16, screens: &[Screen]) -> String {
         let mut terminal = Terminal::new(TestBackend::new(width, height)).unwrap();
-        terminal.draw(|f| view::render(f, screens)).unwrap();
+        terminal.draw(|f| view::render(f, screens, None)).unwrap();
         terminal.backend().to_string()
     }
 
@@ -434,7 +436,7 @@ mod tests {
     fn a_second_that_lost_frames_is_red_and_a_silent_one_a_dot() {
         let screen = passive(12).screen();
         let mut terminal = Terminal::new(TestBackend::new(90, 8)).unwrap();
-        terminal.draw(|f| view::render(f, &[screen])).unwrap();
+        terminal.draw(|f| view::render(f, &[screen], None)).unwrap();
         let buffer = terminal.backend().buffer();
         // 1/1's row: the strip follows its rate and its age (none: no
         // stamps), newest last.

@@ -12,8 +12,11 @@ use crossterm::event::{self, KeyCode, KeyEventKind, KeyModifiers};
 use ratatui::Frame;
 use tokio::sync::Notify;
 
+use super::pair::pair_screen;
 use super::state::{LiveState, Screen};
 use super::view;
+use crate::engine::pair::PairSummary;
+use crate::engine::Nanos;
 
 /// Redraw period: a few times a second is enough to watch a link.
 const REFRESH: Duration = Duration::from_millis(200);
@@ -60,6 +63,8 @@ fn ui_loop(
 /// once every session ended, then prints the summaries.
 pub(crate) struct LiveView {
     states: Arc<Mutex<Vec<LiveState>>>,
+    /// The pair report's section, once a source is heard on two links.
+    pair: Arc<Mutex<Option<Screen>>>,
     /// Tells the UI thread to end; the thread, until it is joined.
     done: Arc<AtomicBool>,
     thread: Option<JoinHandle<io::Result<()>>>,
@@ -69,14 +74,15 @@ impl LiveView {
     /// Takes the terminal and starts drawing; `stop` is raised by `q`.
     pub(crate) fn start(stop: Arc<Notify>) -> io::Result<Self> {
         let states: Arc<Mutex<Vec<LiveState>>> = Arc::default();
+        let pair: Arc<Mutex<Option<Screen>>> = Arc::default();
         // Also sets a panic hook that restores the terminal first.
         let terminal = ratatui::try_init()?;
         let done = Arc::new(AtomicBool::new(false));
-        let (shown, flag) = (states.clone(), done.clone());
+        let (shown, paired, flag) = (states.clone(), pair.clone(), done.clone());
         // The state is locked only while the figures are computed.
         let draw = move |f: &mut Frame<'_>| {
             let screens: Vec<Screen> = lock(&shown).iter().map(LiveState::screen).collect();
-            view::render(f, &screens);
+            view::render(f, &screens, lock(&paired).as_ref());
         };
         let thread = std::thread::Builder::new()
             .name("live view".into())
@@ -84,6 +90,7 @@ impl LiveView {
             .inspect_err(|_| ratatui::restore())?;
         Ok(LiveView {
             states,
+            pair,
             done,
             thread: Some(thread),
         })
@@ -104,6 +111,11 @@ impl LiveView {
     /// the screen is hidden while it shows).
     pub(crate) fn unopened(&self, link: &str, error: &str) {
         lock(&self.states).push(LiveState::unopened(link, error));
+    }
+
+    /// The pair report so far, its links named by `ways`, at `now`.
+    pub(crate) fn show_pair(&self, summary: &PairSummary, ways: &[&str], now: Nanos) {
+        *lock(&self.pair) = pair_screen(summary, ways, now);
     }
 
     /// Gives the terminal back.

@@ -90,8 +90,23 @@ pub(super) const PASSIVE: Spec = Spec {
     rows_are: "sources",
 };
 
+/// The pair report's row: a source's link, what it brings and how late,
+/// under the merged stream's (whose strip is the de-duplication window).
+pub(crate) const PAIR: Spec = Spec {
+    headers: &[
+        "source", "link", "frames", "first%", "only", "lost%", "lag p50", "lag p99", "behind",
+    ],
+    min_widths: &[6, 8, 6, 6, 4, 5, 7, 7, 6],
+    give_up: &[0, 0, 4, 3, 0, 0, 2, 0, 1],
+    left: 2,
+    strip: "",
+    keys: PASSIVE_KEYS,
+    rows_are: "links",
+};
+
 /// Draws every link's section under one title line, with the keys below.
-pub(super) fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
+/// The pair report's section (`pair`), when there is one, goes last.
+pub(super) fn render(frame: &mut Frame<'_>, screens: &[Screen], pair: Option<&Screen>) {
     let [head, body, foot] = Layout::vertical([
         Constraint::Length(1),
         Constraint::Min(0),
@@ -102,19 +117,20 @@ pub(super) fn render(frame: &mut Frame<'_>, screens: &[Screen]) {
         Paragraph::new(title(screens)).style(Style::new().add_modifier(Modifier::BOLD)),
         head,
     );
-    let needs: Vec<u16> = screens
+    let sections: Vec<&Screen> = screens.iter().chain(pair).collect();
+    let needs: Vec<u16> = sections
         .iter()
         .map(|s| SECTION_FRAME + s.rows.len().max(1) as u16)
         .collect();
     let heights = section_heights(body.height, &needs);
     let areas = Layout::vertical(heights.iter().map(|&h| Constraint::Length(h))).split(body);
-    for (screen, area) in screens.iter().zip(areas.iter()) {
+    for (&screen, area) in sections.iter().zip(areas.iter()) {
         if area.height < SECTION_FRAME {
             continue;
         }
         // One set of columns for every section of a kind, so they line up.
         let kind = screen.kind;
-        let alike = screens
+        let alike = sections
             .iter()
             .filter(|s| s.kind == kind)
             .flat_map(|s| s.rows.iter().map(|r| &r.cells));
@@ -214,6 +230,7 @@ fn section(frame: &mut Frame<'_>, area: Rect, screen: &Screen, columns: &Columns
             Strip::Marks(marks) => strip(marks, width),
             Strip::Heard(heard) => no_reply(heard, width).into(),
             Strip::Seconds(recent) => seconds(recent, width),
+            Strip::Note(note) => ellipsis(note, width).into(),
         }));
         Row::new(row).style(if r.quiet { dimmed } else { Style::new() })
     });
