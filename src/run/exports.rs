@@ -13,7 +13,9 @@ use std::path::{Path, PathBuf};
 use thiserror::Error;
 
 use crate::config::Config;
+use crate::engine::pair::PairSummary;
 use crate::engine::session::Measurement;
+use crate::engine::Nanos;
 use crate::output::hgrm;
 use crate::output::plot::{Plot, PlotError};
 use crate::output::prometheus::{Metrics, PrometheusExporter};
@@ -162,6 +164,18 @@ impl Exports {
     /// Whether an exporter shows the run's own figures (the pair report).
     pub(super) fn exports_metrics(&self) -> bool {
         self.prometheus.is_some() || self.textfile.is_some()
+    }
+
+    /// Whether the run is drawn (`--plot`).
+    pub(super) fn plots(&self) -> bool {
+        self.plot.is_some()
+    }
+
+    /// The pair report so far, by link, at `at`, for the plot.
+    pub(super) fn pair_by_link(&self, at: Nanos, summary: &PairSummary) {
+        if let Some((plot, _, _)) = &self.plot {
+            plot.on_pair(at, summary);
+        }
     }
 
     /// The run's own figures, as exposition text, for every exporter.

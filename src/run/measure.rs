@@ -327,8 +327,8 @@ fn judge(
     (ends, output)
 }
 
-/// Runs `sessions`, telling the exporters and the live view the pair
-/// report every second and when they end.
+/// Runs `sessions`, telling the exporters, the plot and the live view
+/// the pair report every second and when they end.
 async fn with_pair_figures<F: std::future::Future>(
     sessions: F,
     pairs: &Pairs,
@@ -342,6 +342,10 @@ async fn with_pair_figures<F: std::future::Future>(
         }
         if let Some(view) = view {
             pairs.show(names, view);
+        }
+        if exports.plots() {
+            let (at, summary) = pairs.by_link_now();
+            exports.pair_by_link(at, &summary);
         }
     };
     tokio::pin!(sessions);
@@ -418,7 +422,8 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
         .map(|run| measure_one(run, &config.probe, announce));
     let names: Vec<&str> = config.links.iter().map(|l| l.name.as_str()).collect();
     let view = screen.view.as_ref();
-    let mut finished = match pairs.as_ref().filter(|_| exports.exports_metrics() || live) {
+    let told = exports.exports_metrics() || exports.plots() || live;
+    let mut finished = match pairs.as_ref().filter(|_| told) {
         Some(pairs) => with_pair_figures(join_all(sessions), pairs, &exports, view, &names).await,
         None => join_all(sessions).await,
     };

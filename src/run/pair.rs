@@ -15,7 +15,7 @@ use tokio::time::Instant;
 use crate::cli::Format;
 use crate::config::LinkConfig;
 use crate::engine::pair::matrix::Matrix;
-use crate::engine::pair::{PairConfig, PairTracker, MAX_LINKS};
+use crate::engine::pair::{PairConfig, PairSummary, PairTracker, MAX_LINKS};
 use crate::engine::Nanos;
 use crate::frame::{self, Msg};
 use crate::output::live::LiveView;
@@ -167,6 +167,12 @@ impl Pairs {
         let ways = way_names(&shared.ways, names);
         let ways: Vec<&str> = ways.iter().map(String::as_str).collect();
         prometheus::render_pair(&summary, &ways)
+    }
+
+    /// The report so far, a link's paths together, and when.
+    pub(super) fn by_link_now(&self) -> (Nanos, PairSummary) {
+        let now = since(self.origin, Instant::now());
+        (now, self.shared.borrow().by_link.summary(now))
     }
 
     /// The report so far in the live view, every way apart.

@@ -584,3 +584,34 @@ fn two_logs_of_one_flight_are_read_as_a_pair() {
     assert_eq!(count(two, "stale"), behind, "{two}");
     assert_eq!(count(one, "stale"), 0, "{one}");
 }
+
+/// `--plot` of a run on two links: the lag chart, and each link's first
+/// share and lag p50 in the legend, as the pair report has them.
+#[test]
+fn the_plot_draws_each_links_lag() {
+    let dir = crate::tlog::Scratch::new("pair-plot");
+    let svg = dir.path("pair.svg");
+    let faults = [
+        "--drop",
+        "10",
+        "--delay-ms",
+        "20",
+        "--drop",
+        "20",
+        "--delay-ms",
+        "100",
+    ];
+    let extra = ["--plot", svg.to_str().unwrap()];
+    let (_, source, _) = paired_with(2, &faults, "7", &extra);
+    let svg = std::fs::read_to_string(&svg).unwrap();
+    assert!(
+        svg.contains("lag behind the first copy, by link"),
+        "no lag chart"
+    );
+    for link in source["links"].as_array().unwrap() {
+        for key in ["first_pct", "lag_p50_ms"] {
+            let figure = format!("\n{:.1}\n", ms(link, key));
+            assert!(svg.contains(&figure), "{key} {figure:?} of {link} missing");
+        }
+    }
+}

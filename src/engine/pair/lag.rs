@@ -11,6 +11,10 @@ use crate::engine::Nanos;
 pub(super) struct Lag {
     hist: Histogram<u32>,
     max_ns: Nanos,
+    /// Every lag recorded, summed (exact as an `f64` for 104 days of
+    /// ns), and how many: what a plot's span means.
+    sum_ns: f64,
+    count: u64,
 }
 
 impl Lag {
@@ -19,12 +23,21 @@ impl Lag {
         Lag {
             hist: Histogram::new_with_bounds(1, high, 3).expect("valid histogram bounds"),
             max_ns: 0,
+            sum_ns: 0.0,
+            count: 0,
         }
     }
 
     pub(super) fn record(&mut self, ns: Nanos) {
         self.hist.saturating_record((ns + 500) / 1_000);
         self.max_ns = self.max_ns.max(ns);
+        self.sum_ns += ns as f64;
+        self.count += 1;
+    }
+
+    /// The lags summed, ns, and how many.
+    pub(super) fn sum(&self) -> (f64, u64) {
+        (self.sum_ns, self.count)
     }
 
     /// The `q` quantile in ms, never above the max; none before a lag.

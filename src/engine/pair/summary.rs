@@ -89,6 +89,10 @@ pub(crate) struct LinkPair {
     pub(crate) stale: u64,
     /// Of those, first copies: they jump back even behind de-duplication.
     pub(crate) stale_first: u64,
+    /// Its lags summed (ns) and how many, so far: a plot's spans take
+    /// their means from the difference between two tellings.
+    #[serde(skip)]
+    pub(crate) lag_sum: (f64, u64),
 }
 
 /// A source heard on one link only.
@@ -159,6 +163,7 @@ impl LinkPair {
             lag_max_ms: lag.and_then(Lag::max),
             stale: side.stale,
             stale_first: side.stale_first,
+            lag_sum: lag.map_or((0.0, 0), Lag::sum),
         }
     }
 }

@@ -109,6 +109,7 @@ mod tests {
             lag_max_ms: Some(lag + 2.0),
             stale: 3,
             stale_first: 1,
+            lag_sum: (0.0, 0),
         }
     }
 

@@ -11,6 +11,7 @@ use super::spans::Bins;
 use super::{draw, sweep};
 use crate::engine::age::SourceAge;
 use crate::engine::matcher::MatchEvent;
+use crate::engine::pair::PairSummary;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::summary::ResponderSummary;
 use crate::engine::sweep::verdict::SweepSummary;
@@ -111,6 +112,19 @@ impl PlotData {
             track.window(w);
             if let Some(&(_, ms)) = ages.iter().find(|(s, _)| *s == w.source) {
                 track.age(w, ms);
+            }
+        }
+    }
+
+    /// The pair report told at `at` (its links by place on the command
+    /// line): each link's part in each source heard on several.
+    pub(crate) fn on_pair(&mut self, at: Nanos, summary: &PairSummary) {
+        for source in &summary.sources {
+            for link in &source.links {
+                self.sources
+                    .entry((link.link, source.source))
+                    .or_insert_with(|| SourceTrack::new(false))
+                    .paired(at, link);
             }
         }
     }

@@ -5,6 +5,7 @@ use std::rc::Rc;
 
 use super::data::PlotData;
 use super::frame::PlotError;
+use crate::engine::pair::PairSummary;
 use crate::engine::summary::passive::TableSummary;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -27,6 +28,11 @@ impl Plot {
             index: data.links.len() - 1,
             windows: None,
         }
+    }
+
+    /// The pair report so far, at `at`, its links by place.
+    pub(crate) fn on_pair(&self, at: Nanos, summary: &PairSummary) {
+        self.data.borrow_mut().on_pair(at, summary);
     }
 
     /// Draws the SVG document.

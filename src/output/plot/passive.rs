@@ -14,6 +14,7 @@ use super::data::SPANS;
 use super::draw::{chart, line, lines, Marks, Points};
 use super::frame::{self, Area, DrawResult, Entry, Legend, PlotError};
 use super::spans::{Bins, Sums};
+use crate::engine::pair::LinkPair;
 use crate::engine::summary::passive::{SeqCounts, SourceSummary};
 use crate::engine::Nanos;
 use crate::output::windows::Window;
@@ -23,6 +24,7 @@ const FIRST_SPAN_NS: Nanos = 1_000_000_000;
 const RATE_H: u32 = 300;
 const LOSS_H: u32 = 280;
 const AGE_H: u32 = 260;
+const LAG_H: u32 = 260;
 const NUMBER_W: i32 = 100;
 
 /// One source of a passive run, span by span.
@@ -37,6 +39,20 @@ pub(super) struct SourceTrack {
     /// Its headline clock's p99 age above the baseline, ms, from the same
     /// summary; `None` without stamped frames.
     pub(super) age_p99_ms: Option<f64>,
+    /// Heard on several links: its part in the pair report as last told.
+    pair: Option<PairTold>,
+}
+
+/// A link's part in a source's pair report, as told at `at`: counts so
+/// far, whose differences between tellings fill the spans.
+#[derive(Debug, Clone, Copy, Default)]
+struct PairTold {
+    at: Nanos,
+    frames: u64,
+    first: u64,
+    lag: (f64, u64),
+    first_pct: Option<f64>,
+    lag_p50_ms: Option<f64>,
 }
 
 impl SourceTrack {
@@ -46,7 +62,27 @@ impl SourceTrack {
             radio,
             summary: None,
             age_p99_ms: None,
+            pair: None,
         }
+    }
+
+    /// Its part in the pair report told at `at`: what came since the last
+    /// telling goes in the span where that one was.
+    pub(super) fn paired(&mut self, at: Nanos, link: &LinkPair) {
+        let was = self.pair.unwrap_or_default();
+        let span = self.spans.at(was.at as f64);
+        span.paired += link.frames.saturating_sub(was.frames);
+        span.first += link.first.saturating_sub(was.first);
+        span.lag_ns.0 += (link.lag_sum.0 - was.lag.0).max(0.0);
+        span.lag_ns.1 += link.lag_sum.1.saturating_sub(was.lag.1);
+        self.pair = Some(PairTold {
+            at,
+            frames: link.frames,
+            first: link.first,
+            lag: link.lag_sum,
+            first_pct: link.first_pct,
+            lag_p50_ms: link.lag_p50_ms,
+        });
     }
 
     /// Adds a window, in the span where it starts.
@@ -75,6 +111,7 @@ impl SourceTrack {
 pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<String, PlotError> {
     let ages = lines(entries, SourceTrack::age_points);
     let aged = age::any(&ages) || entries.iter().any(|e| e.track.age_p99_ms.is_some());
+    let paired = entries.iter().any(|e| e.track.pair.is_some());
     let rows = frame::rows(entries, |t| {
         let s = t.summary.as_ref();
         let count = |n: fn(&SeqCounts) -> u64| s.map(|s| n(&s.counts).to_string());
@@ -89,11 +126,19 @@ pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<Str
         if aged {
             cells.push(t.age_p99_ms.map(|v| format!("{v:.1}")));
         }
+        if paired {
+            let pair = t.pair.as_ref();
+            cells.push(pair.and_then(|p| p.first_pct).map(|v| format!("{v:.1}")));
+            cells.push(pair.and_then(|p| p.lag_p50_ms).map(|v| format!("{v:.1}")));
+        }
         cells
     });
     let mut heads = vec!["received", "lost", "loss %", "dup", "reordered", "frames/s"];
     if aged {
         heads.push("age p99 ms");
+    }
+    if paired {
+        heads.extend(["first %", "lag p50 ms"]);
     }
     let legend = Legend {
         heads: ("source", &heads),
@@ -101,22 +146,47 @@ pub(super) fn svg(title: &str, entries: &[Entry<'_, SourceTrack>]) -> Result<Str
         rows,
         empty: "nothing heard",
     };
-    let heights: &[u32] = if age::any(&ages) {
-        &[RATE_H, AGE_H, LOSS_H]
-    } else {
-        &[RATE_H, LOSS_H]
-    };
-    frame::page(title, &legend, heights, |areas| {
+    let lags = lines(entries, |t| t.spans.points(Sums::mean_lag_ms));
+    let lagged = lags.iter().any(|l| !l.is_empty());
+    let mut heights = vec![RATE_H];
+    heights.extend(age::any(&ages).then_some(AGE_H));
+    heights.extend(lagged.then_some(LAG_H));
+    heights.push(LOSS_H);
+    frame::page(title, &legend, &heights, |areas| {
         let t_max = entries
             .iter()
             .map(|e| e.track.spans.end())
             .fold(1.0, f64::max);
-        rate_chart(entries, &areas[0], t_max)?;
-        if let [_, middle, _] = areas {
-            age_chart(entries, &ages, middle, t_max)?;
+        let (first, rest) = areas.split_first().expect("a rate chart");
+        let (last, middle) = rest.split_last().expect("a loss chart");
+        rate_chart(entries, first, t_max)?;
+        let mut middle = middle.iter();
+        if age::any(&ages) {
+            age_chart(entries, &ages, middle.next().expect("an age chart"), t_max)?;
         }
-        loss_chart(entries, areas.last().expect("a loss chart"), t_max)
+        if lagged {
+            lag_chart(entries, &lags, middle.next().expect("a lag chart"), t_max)?;
+        }
+        loss_chart(entries, last, t_max)
     })
+}
+
+/// A source heard on several links: each link's mean lag behind the
+/// first copy per span, one line each (0 on the link that is first).
+fn lag_chart(
+    entries: &[Entry<'_, SourceTrack>],
+    lags: &[Points],
+    area: &Area<'_>,
+    t_max: f64,
+) -> DrawResult {
+    let caption = "lag behind the first copy, by link (mean per span)";
+    let descs = (None, "lag (ms)");
+    let y = 0f64..top(lags) * 1.08;
+    let mut chart = chart(area, caption, descs, 0f64..t_max, y)?;
+    for (k, (e, points)) in entries.iter().zip(lags).enumerate() {
+        line(&mut chart, &e.look, points, Marks::Spread(k, entries.len()))?;
+    }
+    Ok(())
 }
 
 /// The highest of `lines`, 1 at least.
@@ -351,6 +421,95 @@ age p99 ms
         assert!(at("frames a second") < at("age above baseline"));
         assert!(at("age above baseline") < at("sequence loss per span"));
         assert!(at("sequence loss per span") < at("time since start"));
+    }
+
+    /// A link's part in a source's pair report, as told: `frames` so far,
+    /// each `lag_ms` behind the first copy.
+    fn part(link: usize, frames: u64, lag_ms: f64) -> LinkPair {
+        LinkPair {
+            link,
+            frames,
+            damaged: 0,
+            duplicates: 0,
+            first: if lag_ms == 0.0 { frames } else { 0 },
+            first_pct: Some(if lag_ms == 0.0 { 100.0 } else { 0.0 }),
+            only: 0,
+            only_undecided: 0,
+            lost: 0,
+            lost_pct: Some(0.0),
+            lag_p50_ms: Some(lag_ms),
+            lag_p99_ms: Some(lag_ms),
+            lag_max_ms: Some(lag_ms),
+            stale: 0,
+            stale_first: 0,
+            lag_sum: (frames as f64 * lag_ms * 1e6, frames),
+        }
+    }
+
+    #[test]
+    fn each_links_lag_is_drawn_from_what_came_between_two_tellings() {
+        let mut t = SourceTrack::new(false);
+        // 50 frames a second; the lag 30 ms for 3 s, then 90 ms.
+        let mut frames = 0;
+        let mut sum = (0.0, 0);
+        for second in 1..=6u64 {
+            frames += 50;
+            let lag = if second <= 3 { 30.0 } else { 90.0 };
+            sum = (sum.0 + 50.0 * lag * 1e6, sum.1 + 50);
+            let mut told = part(1, frames, lag);
+            told.lag_sum = sum;
+            t.paired(second * FIRST_SPAN_NS, &told);
+        }
+        let lags: Vec<f64> = t
+            .spans
+            .points(Sums::mean_lag_ms)
+            .iter()
+            .map(|p| p.1)
+            .collect();
+        assert_eq!(lags, [30.0, 30.0, 30.0, 90.0, 90.0, 90.0]);
+        assert_eq!(t.spans.bins.iter().map(|s| s.paired).sum::<u64>(), 300);
+        assert_eq!(t.spans.bins.iter().map(|s| s.first).sum::<u64>(), 0);
+    }
+
+    #[test]
+    fn a_paired_source_gets_a_lag_chart_and_its_figures_in_the_legend() {
+        let plot = super::super::Plot::default();
+        let (_a, _b) = (plot.link(), plot.link());
+        let one = SysComp::new(1, 1);
+        for second in 1..=5u64 {
+            let summary = crate::engine::pair::PairSummary {
+                window_ms: 5000.0,
+                sources: vec![crate::engine::pair::SourcePair {
+                    source: one,
+                    distinct_frames: second * 50,
+                    lost_on_every_link: 0,
+                    lost_on_every_link_pct: Some(0.0),
+                    copies: second * 50,
+                    dedup_window_p999_ms: Some(80.0),
+                    copy_lag_max_ms: Some(80.0),
+                    late_beyond_window: 0,
+                    conflicts: 0,
+                    links: vec![part(0, second * 50, 0.0), part(1, second * 50, 80.0)],
+                }],
+                single_link_sources: Vec::new(),
+                uncopied_sources: Vec::new(),
+                untracked_frames: 0,
+            };
+            plot.on_pair(second * FIRST_SPAN_NS, &summary);
+        }
+        let svg = plot.svg().unwrap();
+        for text in [
+            "lag behind the first copy, by link",
+            "\nfirst %\n",
+            "\nlag p50 ms\n",
+            "\n100.0\n",
+            "\n80.0\n",
+        ] {
+            assert!(svg.contains(text), "{text:?} missing");
+        }
+        let at = |text: &str| svg.find(text).unwrap_or_else(|| panic!("{text}"));
+        assert!(at("frames a second") < at("lag behind the first copy"));
+        assert!(at("lag behind the first copy") < at("sequence loss per span"));
     }
 
     #[test]

@@ -88,6 +88,12 @@ pub(super) struct Sums {
     /// oldest frame of each telling, or a log window's p99. Merged bins
     /// keep the higher, so a queue's peak survives any merging.
     pub(super) age_ms: Option<f64>,
+    /// A source heard on several links, this link's part (the pair
+    /// report's): its lag behind the first copy in ns summed over its
+    /// frames, and how many; its frames, and those it delivered first.
+    pub(super) lag_ns: (f64, u64),
+    pub(super) paired: u64,
+    pub(super) first: u64,
 }
 
 impl Sums {
@@ -100,6 +106,9 @@ impl Sums {
         self.rssi = (self.rssi.0 + o.rssi.0, self.rssi.1 + o.rssi.1);
         self.remrssi = (self.remrssi.0 + o.remrssi.0, self.remrssi.1 + o.remrssi.1);
         self.rtt_ns = (self.rtt_ns.0 + o.rtt_ns.0, self.rtt_ns.1 + o.rtt_ns.1);
+        self.lag_ns = (self.lag_ns.0 + o.lag_ns.0, self.lag_ns.1 + o.lag_ns.1);
+        self.paired += o.paired;
+        self.first += o.first;
         if let Some(age) = o.age_ms {
             self.age(age);
         }
@@ -151,6 +160,11 @@ impl Sums {
 
     pub(super) fn mean((sum, n): (f64, u64)) -> Option<f64> {
         (n > 0).then(|| sum / n as f64)
+    }
+
+    /// The mean lag behind the first copy, ms; `None` without copies.
+    pub(super) fn mean_lag_ms(&self) -> Option<f64> {
+        Sums::mean(self.lag_ns).map(|ns| ns / 1e6)
     }
 
     /// The mean RTT of its replies, ms; `None` without replies.
