@@ -243,7 +243,8 @@ fn attach<'a>(
                 .iter()
                 .position(|l| std::ptr::eq(l, link_config))
                 .unwrap_or(index);
-            let watch = pairs.map(|p| p.watch(place, after(first_log, &link)));
+            let log = matches!(link, Link::Tlog(_));
+            let watch = pairs.map(|p| p.watch(place, after(first_log, &link), log));
             LinkRun {
                 config: link_config,
                 link,
@@ -253,6 +254,9 @@ fn attach<'a>(
                 taps: Taps {
                     tlog: exports.tap(place),
                     watch,
+                    out_link: u8::try_from(place)
+                        .ok()
+                        .filter(|&p| several && p < OUT_LINKS),
                 },
             }
         })
@@ -269,6 +273,9 @@ fn attach<'a>(
     );
     runs
 }
+
+/// Links numbered in TIMESYNC tokens: MAVProxy's four bits.
+const OUT_LINKS: u8 = 16;
 
 /// How long after `first` (the earliest log's first stamp) `link`, a
 /// log, began: its frames' times in the run's pair report are shifted by

@@ -61,6 +61,9 @@ pub(super) struct Taps {
     pub(super) tlog: Option<Tap>,
     /// What the run watches of its frames across its links.
     pub(super) watch: Option<Rc<dyn Watch>>,
+    /// Its number among several links, put in its TIMESYNC tokens' low
+    /// four bits as MAVProxy's `ping` puts its out-link there.
+    pub(super) out_link: Option<u8>,
 }
 
 /// [`measure`], recording what the link receives and sends (`--tlog`) and
@@ -74,6 +77,7 @@ pub(super) async fn measure_recorded(
     observer: &mut dyn Observer,
     controls: &Controls,
 ) -> Measurement {
+    let out_link = taps.out_link;
     let mut link = Recorded::new(link, taps.tlog).watched(taps.watch);
     let session = &config.session;
     let mut outcome = match probe {
@@ -88,7 +92,10 @@ pub(super) async fn measure_recorded(
             // The simulated link has no wall clock: its responders count
             // from its start, and so do we there (reproducible output).
             let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
-            let probe = TimesyncProbe::new(*target, wall_clock);
+            let mut probe = TimesyncProbe::new(*target, wall_clock);
+            if let Some(out) = out_link {
+                probe = probe.with_out_link(out);
+            }
             echo_or_steps(session, &mut link, probe, observer, controls).await
         }
         Probe::Auto => {

@@ -7,6 +7,7 @@
 //! behind a `RefCell` serves them all.
 
 use std::cell::RefCell;
+use std::collections::BTreeMap;
 use std::io::{self, Write};
 use std::rc::Rc;
 
@@ -22,6 +23,7 @@ use crate::output::live::LiveView;
 use crate::output::pair as report;
 use crate::output::prometheus;
 use crate::transport::recording::Watch;
+use crate::transport::tlog::writer::SENT;
 use crate::transport::{Inbound, LinkSpec, PathId};
 
 /// One way frames came: a link's place on the command line and a path.
@@ -31,6 +33,12 @@ type Way = (usize, PathId);
 struct Shared {
     /// TIMESYNC requests out on each link, replies heard on each.
     matrix: Matrix,
+    /// The same from each telemetry log (by its place) whose logger sent
+    /// TIMESYNC requests, as MAVProxy's `ping` does: its links are its
+    /// paths, each request's out-link in its `ts1`'s low four bits.
+    log_matrices: BTreeMap<usize, Matrix>,
+    /// The timeout of a request, for the logs' matrices.
+    timeout: Nanos,
     /// Every way apart: a link's paths too.
     by_way: PairTracker,
     /// `by_way`'s links, in the order first heard.
@@ -70,6 +78,30 @@ struct LinkWatch {
     origin: Instant,
     /// Added to its frames' times: a log's start after the first log's.
     shift: Nanos,
+    /// A telemetry log: what its logger sent is among its frames.
+    log: bool,
+}
+
+/// The path MAVProxy (and mavping's `--tlog`) logs its own frames on.
+const LOGGER_PATH: PathId = SENT as PathId;
+
+impl LinkWatch {
+    /// A TIMESYNC in a log: the logger's request (on its own path; its
+    /// out-link in the low four bits of `ts1`, as MAVProxy's `ping` puts
+    /// it), or a reply heard on one of the log's links.
+    fn logged_timesync(&self, shared: &mut Shared, path: PathId, tc1: i64, ts1: i64, at: Nanos) {
+        let timeout = shared.timeout;
+        let matrix = shared
+            .log_matrices
+            .entry(self.place)
+            .or_insert_with(|| Matrix::new(timeout));
+        match (path == LOGGER_PATH, tc1 == 0) {
+            (true, true) => matrix.on_request((ts1 & 0xF) as usize, ts1 as u64, at),
+            (false, false) => matrix.on_reply(path as usize, ts1 as u64, at),
+            // Its answers to the vehicle's requests, and those requests.
+            _ => {}
+        }
+    }
 }
 
 /// Nanoseconds from `origin` to `at` (0 before it).
@@ -86,7 +118,9 @@ impl Watch for LinkWatch {
             shared.by_way.on_frame(way, &i.frame, at);
             shared.by_link.on_frame(self.place, &i.frame, at);
             if let Msg::Timesync { tc1, ts1, .. } = i.frame.msg {
-                if tc1 != 0 {
+                if self.log {
+                    self.logged_timesync(&mut shared, i.path, tc1, ts1, at);
+                } else if tc1 != 0 {
                     shared.matrix.on_reply(self.place, ts1 as u64, at);
                 }
             }
@@ -139,6 +173,8 @@ impl Pairs {
         ways.then(|| Pairs {
             shared: Rc::new(RefCell::new(Shared {
                 matrix: Matrix::new(timeout),
+                log_matrices: BTreeMap::new(),
+                timeout,
                 by_way: PairTracker::new(MAX_LINKS, PairConfig::default()),
                 ways: Vec::new(),
                 by_link: PairTracker::new(links.len(), PairConfig::default()),
@@ -149,13 +185,19 @@ impl Pairs {
 
     /// What the link at `place` on the command line tells the tracker by,
     /// its frames' times shifted by `shift` (a log that began later than
-    /// the run's first).
-    pub(super) fn watch(&self, place: usize, shift: std::time::Duration) -> Rc<dyn Watch> {
+    /// the run's first); `log` when it is a telemetry log.
+    pub(super) fn watch(
+        &self,
+        place: usize,
+        shift: std::time::Duration,
+        log: bool,
+    ) -> Rc<dyn Watch> {
         Rc::new(LinkWatch {
             shared: self.shared.clone(),
             place,
             origin: self.origin,
             shift: shift.as_nanos() as Nanos,
+            log,
         })
     }
 
@@ -213,15 +255,36 @@ impl Pairs {
                 Format::Text => report::write_text(out, &summary, &ways)?,
             }
         }
-        // Requests went out on two links or more and came back.
-        let matrix = shared.matrix.summary();
-        if matrix.requests.len() >= 2 && !matrix.cells.is_empty() {
-            match format {
-                Format::Json => report::write_matrix_json(out, &matrix, names)?,
-                Format::Text => report::write_matrix_text(out, &matrix, names)?,
+        write_matrix(format, &shared.matrix, names, out)?;
+        // A log's, when its paths are MAVProxy's links.
+        for (&place, matrix) in &shared.log_matrices {
+            if !paths_are_ways.get(place).copied().unwrap_or(false) {
+                continue;
             }
+            let name = names.get(place).copied().unwrap_or("?");
+            let paths: Vec<String> = (0..MAX_LINKS).map(|k| format!("{name} path {k}")).collect();
+            let paths: Vec<&str> = paths.iter().map(String::as_str).collect();
+            write_matrix(format, matrix, &paths, out)?;
         }
         out.flush()
+    }
+}
+
+/// Writes `matrix` in `format`, its links named by `names`, when requests
+/// went out on two links or more and came back.
+fn write_matrix(
+    format: Format,
+    matrix: &Matrix,
+    names: &[&str],
+    out: &mut impl Write,
+) -> io::Result<()> {
+    let matrix = matrix.summary();
+    if matrix.requests.len() < 2 || matrix.cells.is_empty() {
+        return Ok(());
+    }
+    match format {
+        Format::Json => report::write_matrix_json(out, &matrix, names),
+        Format::Text => report::write_matrix_text(out, &matrix, names),
     }
 }
 

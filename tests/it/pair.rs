@@ -495,8 +495,22 @@ fn the_matrix_counts_each_links_replies_to_each_links_requests() {
         ],
     );
     let links: Vec<String> = listen.iter().map(|l| format!("udpout:{l}")).collect();
+    let dir = crate::tlog::Scratch::new("pair-matrix");
+    let recording = dir.path("matrix.tlog");
     let (code, out, err) = run_mavping(&[
-        "--probe", "timesync", "-c", "100", "-i", "0.02", "-W", "1s", "--json", "-q", &links[0],
+        "--probe",
+        "timesync",
+        "-c",
+        "100",
+        "-i",
+        "0.02",
+        "-W",
+        "1s",
+        "--json",
+        "-q",
+        "--tlog",
+        recording.to_str().unwrap(),
+        &links[0],
         &links[1],
     ]);
     let truth = responder.finish();
@@ -520,6 +534,13 @@ fn the_matrix_counts_each_links_replies_to_each_links_requests() {
     for a in 0..2 {
         let received = count(&truth["links"][a], "requests_received");
         assert_eq!(received, 100, "{truth}");
+        // Each request carries its out-link in its low bits, as
+        // MAVProxy's `ping` does.
+        assert_eq!(
+            truth["links"][a]["ts1_low_bits"],
+            serde_json::json!({a.to_string(): 100}),
+            "{truth}"
+        );
         for b in 0..2 {
             let told = count(&truth["cells"][a][b], "replies");
             assert_eq!(
@@ -534,6 +555,24 @@ fn the_matrix_counts_each_links_replies_to_each_links_requests() {
     for a in 0..2 {
         let (fast, slow) = (ms(&cell(a, 0), "rtt_p50_ms"), ms(&cell(a, 1), "rtt_p50_ms"));
         assert!((slow - fast - 40.0).abs() < 10.0, "{a}: {fast} vs {slow}");
+    }
+    // The recording, read back, is MAVProxy's log of the same: our sends
+    // on its own link 3, the replies on the links they came on, and each
+    // request's out-link in its token. The same cells.
+    let (code, out, err) = run_mavping(&["--json", "-q", recording.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let read = json_line(&out, "link_matrix");
+    assert_eq!(read["requests"], matrix["requests"], "{read}");
+    assert_eq!(read["cells"].as_array().unwrap().len(), 4, "{read}");
+    for (got, live) in read["cells"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(matrix["cells"].as_array().unwrap())
+    {
+        for key in ["out", "back", "replies", "duplicates"] {
+            assert_eq!(got[key], live[key], "{read} vs {matrix}");
+        }
     }
 }
 
@@ -612,6 +651,115 @@ fn the_plot_draws_each_links_lag() {
         for key in ["first_pct", "lag_p50_ms"] {
             let figure = format!("\n{:.1}\n", ms(link, key));
             assert!(svg.contains(&figure), "{key} {figure:?} of {link} missing");
+        }
+    }
+}
+
+/// MAVProxy's own `ping` (repeated), on two masters to the two-link
+/// responder, logged into its tlog: mavping reads the matrix back from
+/// the log (the requests MAVProxy logged on its own link 3, each one's
+/// out-link in its `ts1`'s low bits; the replies on the links they came
+/// back on), every cell the count of MAVProxy's own "ping response ...
+/// in-link=B out-link=A" lines and of the responder's replies.
+#[test]
+fn a_mavproxy_ping_session_is_read_back_as_its_matrix() {
+    let (one, two) = (free_udp_port(), free_udp_port());
+    let listen = [format!("127.0.0.1:{one}"), format!("127.0.0.1:{two}")];
+    let responder = Peer::start(
+        "two_link_responder.py",
+        &[
+            "--listen",
+            &listen[0],
+            "--listen",
+            &listen[1],
+            "--drop-up",
+            "10",
+            "--drop-up",
+            "0",
+            "--drop-down",
+            "0",
+            "--drop-down",
+            "20",
+            "--delay-ms",
+            "0",
+            "--delay-ms",
+            "40",
+            "--seed",
+            "3",
+        ],
+    );
+    let dir = crate::tlog::Scratch::new("pair-mavproxy-ping");
+    let log = dir.path("ping.tlog");
+    let printed = dir.path("mavproxy.out");
+    let mavproxy = std::process::Command::new(venv_program("mavproxy.py"))
+        .args([
+            &format!("--master=udpout:{}", listen[0]),
+            &format!("--master=udpout:{}", listen[1]),
+            "--non-interactive",
+            "--cmd=set flushlogs 1; repeat add 0.2 ping",
+            &format!("--logfile={}", log.display()),
+        ])
+        .current_dir(log.parent().unwrap())
+        .stdin(std::process::Stdio::null())
+        .stdout(std::fs::File::create(&printed).unwrap())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let session = Program::from(mavproxy);
+    let responses = || {
+        let text = std::fs::read_to_string(&printed).unwrap_or_default();
+        let mut cells = std::collections::BTreeMap::new();
+        for line in text.lines().filter(|l| l.starts_with("ping response")) {
+            let link = |key: &str| -> u64 {
+                let at = line.find(key).unwrap() + key.len();
+                line[at..=at].parse().unwrap()
+            };
+            *cells
+                .entry((link("out-link="), link("in-link=")))
+                .or_insert(0u64) += 1;
+        }
+        cells
+    };
+    let started = std::time::Instant::now();
+    while responses().values().sum::<u64>() < 60 {
+        assert!(
+            started.elapsed().as_secs() < 60,
+            "MAVProxy printed {:?}",
+            responses()
+        );
+        std::thread::sleep(std::time::Duration::from_millis(200));
+    }
+    // No reply after the responder stops: MAVProxy logs what it printed.
+    let truth = responder.finish();
+    std::thread::sleep(std::time::Duration::from_secs(1));
+    session.terminate();
+    let (code, out, err) = run_mavping(&["--json", "-q", log.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert_schema(&json_lines(&out));
+    let matrix = json_line(&out, "link_matrix");
+    let name = |k: usize| format!("{} path {k}", log.display());
+    assert_eq!(matrix["links"][0], name(0), "{matrix}");
+    let printed = responses();
+    for a in 0..2 {
+        let requests = matrix["requests"][a].as_u64().unwrap();
+        assert!(
+            requests >= count(&truth["links"][a], "requests_received"),
+            "{matrix} vs {truth}"
+        );
+        for b in 0..2 {
+            let cell = matrix["cells"]
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|c| count(c, "out") == a as u64 && count(c, "back") == b as u64)
+                .unwrap_or_else(|| panic!("no cell {a} -> {b} in {matrix}"));
+            let replies = count(cell, "replies");
+            assert_eq!(
+                replies,
+                printed[&(a as u64, b as u64)],
+                "{a} -> {b}: {printed:?}"
+            );
+            assert_eq!(replies, count(&truth["cells"][a][b], "replies"), "{truth}");
         }
     }
 }

@@ -61,7 +61,10 @@ only "ready", once its sockets are open; logs go to stderr) and exits 0:
              no_peer            reply copies not sent: no peer known yet;
              abandoned          copies still held at the signal;
              send_errors        copies whose sendto failed (not sent);
-             heartbeats_sent, ignored (frames that were not requests)
+             heartbeats_sent, ignored (frames that were not requests);
+             ts1_low_bits       the requests by their ts1's low four bits
+                                (MAVProxy's `ping` puts its out-link
+                                there), {"BITS": count}
   cells[a][b]  requests: requests that arrived on link a and were
              answered (the same for every b); replies: of their reply
              copies, those really sent on link b
@@ -150,7 +153,7 @@ def main():
               "drop_down_pct": drop_down[k], "delay_ms": delay[k],
               "requests_received": 0, "requests_dropped": 0, "replies_sent": 0,
               "replies_dropped": 0, "no_peer": 0, "abandoned": 0, "send_errors": 0,
-              "heartbeats_sent": 0, "ignored": 0} for k in range(n)]
+              "heartbeats_sent": 0, "ignored": 0, "ts1_low_bits": {}} for k in range(n)]
     cells = [[{"requests": 0, "replies": 0} for _ in range(n)] for _ in range(n)]
     answered_ts1 = set()
     counts = {"answered": 0, "repeats": 0}
@@ -193,6 +196,8 @@ def main():
         link = links[a]
         rng = random.Random(f"{args.seed}/{a}/{link['requests_received']}")
         link["requests_received"] += 1
+        bits = str(msg.ts1 & 0xF)
+        link["ts1_low_bits"][bits] = link["ts1_low_bits"].get(bits, 0) + 1
         if rng.random() < drop_up[a] / 100.0:
             link["requests_dropped"] += 1
             return

@@ -24,6 +24,9 @@ pub(crate) struct TimesyncProbe {
     wall: bool,
     target: SysComp,
     last_token: u64,
+    /// Put in every token's low four bits: the link's number among
+    /// several, as MAVProxy's `ping` tells its out-link (0-15).
+    out_link: Option<u8>,
     clocks: HashMap<SysComp, ClockOffset>,
 }
 
@@ -37,8 +40,16 @@ impl TimesyncProbe {
             wall,
             target,
             last_token: 0,
+            out_link: None,
             clocks: HashMap::new(),
         }
+    }
+
+    /// Tokens carrying `link` (below 16) in their low four bits; our
+    /// clock in them is then 16 ns coarser.
+    pub(crate) fn with_out_link(mut self, link: u8) -> Self {
+        self.out_link = (link < 16).then_some(link);
+        self
     }
 }
 
@@ -67,7 +78,25 @@ impl EchoProbe for TimesyncProbe {
 
     fn token(&mut self, now_ns: u64) -> u64 {
         // Strictly rising (the matcher binary-searches tokens) and never 0.
-        let token = (self.base_ns as u64 + now_ns).max(self.last_token + 1);
+        let clock = self.base_ns as u64 + now_ns;
+        let token = match self.out_link {
+            None => clock.max(self.last_token + 1),
+            Some(link) => {
+                let token = (clock & !0xF) | u64::from(link);
+                // The next with the same low bits, when the clock has not
+                // moved on by 16 ns.
+                let token = if token > self.last_token {
+                    token
+                } else {
+                    (self.last_token & !0xF) + 16 + u64::from(link)
+                };
+                if token == 0 {
+                    16
+                } else {
+                    token
+                }
+            }
+        };
         self.last_token = token;
         token
     }
@@ -189,6 +218,22 @@ mod tests {
         );
         // tc1 = 0 is someone's request, not a reply.
         assert_eq!(p.classify(&reply(0, 42, 0, 0), US), Classified::NotAReply);
+    }
+
+    #[test]
+    fn an_out_link_is_in_every_tokens_low_four_bits() {
+        let mut p = TimesyncProbe::new(SysComp::new(0, 0), false).with_out_link(3);
+        let tokens: Vec<u64> = [0, 0, 5, 1_000, 1_001, 1_000_007]
+            .iter()
+            .map(|&t| p.token(t))
+            .collect();
+        assert_eq!(tokens, [3, 19, 35, 995, 1_011, 1_000_003]);
+        let mut zero = TimesyncProbe::new(SysComp::new(0, 0), false).with_out_link(0);
+        assert_eq!(zero.token(0), 16);
+        assert!(TimesyncProbe::new(SysComp::new(0, 0), false)
+            .with_out_link(16)
+            .out_link
+            .is_none());
     }
 
     #[test]

@@ -159,6 +159,14 @@ pub fn venv_program(name: &str) -> PathBuf {
 /// A third-party program run for a test; killed when dropped.
 pub struct Program(Child);
 
+/// A program started by the caller, stopped by [`Program::terminate`]
+/// or killed when dropped.
+impl From<Child> for Program {
+    fn from(child: Child) -> Self {
+        Program(child)
+    }
+}
+
 impl Program {
     /// Starts `program` with `args` in `dir`, its output discarded, and
     /// waits until a socket of it is bound to UDP `port` on 127.0.0.1 (its
