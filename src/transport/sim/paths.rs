@@ -1,0 +1,75 @@
+//! A vehicle heard on several paths (`paths=`), as a radio and an LTE
+//! modem both forwarding to one ground port: each frame a responder
+//! sends, once through the link's own faults, is copied onto every path,
+//! the same bytes on each. A path loses its copy by its own seeded draw
+//! (`path_loss=`) or while its outage is on (`path_outage=`), and delays
+//! it by its own `path_delay=` on top of what the link gave it; mavping
+//! gets each copy with the path's index as its
+//! [`PathId`](crate::transport::link::PathId). Without `paths=` the one
+//! path is 0 and nothing is drawn, so the link is as it was.
+
+use std::time::Duration;
+
+use rand::rngs::SmallRng;
+use rand::{Rng, SeedableRng};
+use tokio::time::Instant;
+
+use super::deliveries::Copies;
+use super::link::SimLink;
+use super::params::{PathParams, SimParams};
+
+/// Seeds each path's draws beside `seed=` and the responders' own, with
+/// the path's index: a path's plan is the same whatever the others'.
+const PATH_SEED: u64 = 0x9a75_5eed_0000_0041;
+
+/// One path and its own draws.
+pub(super) struct SimPath {
+    params: PathParams,
+    rng: SmallRng,
+}
+
+impl SimPath {
+    /// The link's paths, none without `paths=`.
+    pub(super) fn all(params: &SimParams) -> Vec<SimPath> {
+        (0u64..)
+            .zip(&params.paths)
+            .map(|(k, path)| SimPath {
+                params: *path,
+                rng: SmallRng::seed_from_u64((params.seed ^ PATH_SEED).wrapping_add(k)),
+            })
+            .collect()
+    }
+
+    /// Whether it loses a copy the responder sends `since` the link
+    /// opened. The loss is drawn even in the outage, so an outage leaves
+    /// the rest of the plan where it was.
+    fn loses(&mut self, since: Duration) -> bool {
+        let lost = self.params.loss > 0.0 && self.rng.gen::<f64>() < self.params.loss;
+        let out = self
+            .params
+            .outage
+            .is_some_and(|(start, length)| since.checked_sub(start).is_some_and(|t| t < length));
+        lost || out
+    }
+}
+
+impl SimLink {
+    /// The link's copies of a frame a responder sends at `sent`, spread
+    /// onto the paths: one copy on each path that does not lose it, later
+    /// by its delay (none left when every path lost every copy).
+    pub(super) fn on_paths(&mut self, sent: Instant, link: &Copies) -> Copies {
+        if self.paths.is_empty() {
+            return *link;
+        }
+        let since = sent.saturating_duration_since(self.started);
+        let mut spread = link.emptied();
+        for copy in link.as_slice() {
+            for (k, path) in (0..).zip(self.paths.iter_mut()) {
+                if !path.loses(since) {
+                    spread.push(copy.at + path.params.delay, copy.payload, k);
+                }
+            }
+        }
+        spread
+    }
+}
