@@ -160,18 +160,24 @@ fn log_sim_truth(name: &str, sim: &SimLink) {
         for (k, p) in t.paths.iter().enumerate() {
             tracing::info!(
                 link = %name,
-                "sim truth path {k} {id}: sent={} dropped={} delivered={} only={} duplicates={}",
+                "sim truth path {k} {id}: sent={} dropped={} drawn={} outage={} \
+                 dropped_between={} delivered={} first={} only={} duplicates={}",
                 p.sent,
                 p.dropped,
+                p.drawn,
+                p.outage,
+                p.dropped_between,
                 p.delivered,
+                p.first,
                 p.only,
                 p.duplicates
             );
         }
         tracing::info!(
             link = %name,
-            "sim truth paths {id}: lost_on_every_path={}",
-            t.lost_on_every_path
+            "sim truth paths {id}: lost_on_every_path={} lost_on_every_path_between={}",
+            t.lost_on_every_path,
+            t.lost_on_every_path_between
         );
     }
 }

@@ -153,7 +153,7 @@ impl SimLink {
             more => {
                 r.missed_on_paths(carried);
                 r.truth.down.duplicated += more as u64 - 1;
-                r.copies_due.insert(index, Due::new(more as u8, carried));
+                r.copies_due.insert(index, Due::new(more as u8));
             }
         }
     }

@@ -185,7 +185,7 @@ impl SimLink {
             if let Some(again) = d.again {
                 copies.push(again, Payload::Plain, 0);
             }
-            let copies = self.on_paths(sent[k], &copies);
+            let copies = self.on_paths(i, sent[k], &copies);
             out[k] = (!copies.as_slice().is_empty()).then_some(copies);
         }
         // On a tie the earlier reply's first copy: a reply's extra copy

@@ -104,7 +104,7 @@ impl SimLink {
             let again = at + self.vehicle_one_way();
             copies.push(again, Payload::Plain, 0);
         }
-        let copies = self.on_paths(sent, &copies);
+        let copies = self.on_paths(i, sent, &copies);
         self.put_on_way(i, index, bytes, &copies);
     }
 }

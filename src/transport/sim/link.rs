@@ -569,6 +569,30 @@ mod tests {
         out
     }
 
+    /// What a count of the sequence of `frames` (raw bytes) finds lost:
+    /// the numbers between the lowest and the highest never seen, each
+    /// unwrapped nearest the previous frame's.
+    fn passive_of(frames: &[(Vec<u8>, Instant)]) -> u64 {
+        let mut sorted: Vec<&(Vec<u8>, Instant)> = frames.iter().collect();
+        sorted.sort_by_key(|(_, at)| *at);
+        let mut seen = HashSet::new();
+        let mut latest: Option<i64> = None;
+        for (raw, _) in sorted {
+            // MAVLink 2: the sequence is the header's fifth byte.
+            let seq = i64::from(raw[4]);
+            let index = match latest {
+                None => seq,
+                Some(l) => l + i64::from((seq - l).rem_euclid(256) as u8 as i8),
+            };
+            seen.insert(index);
+            latest = Some(latest.map_or(index, |l| l.max(index)));
+        }
+        let (Some(low), Some(high)) = (seen.iter().min(), seen.iter().max()) else {
+            return 0;
+        };
+        (high - low + 1) as u64 - seen.len() as u64
+    }
+
     #[tokio::test(start_paused = true)]
     async fn each_path_delivers_the_same_bytes_as_its_truth_counts_them() {
         let delays = [20, 100, 0].map(Duration::from_millis);
@@ -588,13 +612,14 @@ mod tests {
         let paths = by_path(&frames, id, 3);
         // A frame's copies leave the link together and each path adds its
         // delay: the same frame is the same bytes at the same time less it.
-        // Which paths delivered each frame, by that key.
-        let mut delivered_by: HashMap<(Vec<u8>, Instant), u8> = HashMap::new();
+        // Which paths delivered each frame, and when, by that key.
+        let mut delivered_by: HashMap<(Vec<u8>, Instant), Vec<(Instant, usize)>> = HashMap::new();
         for (k, path) in paths.iter().enumerate() {
             for (raw, at) in path {
-                *delivered_by
+                delivered_by
                     .entry((raw.clone(), *at - delays[k]))
-                    .or_default() |= 1 << k;
+                    .or_default()
+                    .push((*at, k));
             }
         }
         let (_, t) = link.truth()[0];
@@ -605,10 +630,17 @@ mod tests {
         assert_eq!(delivered_by.len() as u64, t.down.delivered);
         for (k, path) in paths.iter().enumerate() {
             let p = &truth.paths[k];
-            let only = delivered_by.values().filter(|m| **m == 1 << k).count();
+            let only = delivered_by
+                .values()
+                .filter(|by| by.iter().all(|&(_, j)| j == k))
+                .count();
+            let first = delivered_by
+                .values()
+                .filter(|by| by.iter().min().is_some_and(|&(_, j)| j == k))
+                .count();
             assert_eq!(
-                (path.len() as u64, only as u64, 0),
-                (p.delivered, p.only, p.duplicates),
+                (path.len() as u64, first as u64, only as u64, 0),
+                (p.delivered, p.first, p.only, p.duplicates),
                 "path {k}: {p:?}"
             );
             assert_eq!(p.sent, t.down.sent);
@@ -619,7 +651,21 @@ mod tests {
             // path's outage is a tenth of the run.
             let expected = [0.127, 0.049, 0.389][k];
             assert!((lost - expected).abs() < 0.05, "path {k}: {p:?}");
+            // What its own sequence finds lost: the frames before its
+            // first and after its newest are not between.
+            let seen = passive_of(path);
+            assert_eq!(seen, p.dropped_between, "path {k}: {p:?}");
+            assert!(p.drawn + p.outage <= p.dropped, "path {k}: {p:?}");
+            assert_eq!(p.outage == 0, k != 2, "path {k}: {p:?}");
+            let share = p.drawn as f64 / (p.sent - p.outage) as f64;
+            let drawn = [0.1, 0.02, 0.3][k] * 0.97;
+            assert!((share - drawn).abs() < 0.04, "path {k}: {p:?}");
         }
+        // The third path's outage: a second of a 66-frame-a-second
+        // vehicle, less the 3 % lost before the split.
+        assert!((55..=70).contains(&truth.paths[2].outage), "{truth:?}");
+        let merged: Vec<(Vec<u8>, Instant)> = delivered_by.keys().cloned().collect();
+        assert_eq!(passive_of(&merged), truth.lost_on_every_path_between);
         // Lost on every path: in none of the paths' frames, and what a
         // passive count of the merged stream finds missing.
         assert_eq!(truth.lost_on_every_path, t.down.dropped);
@@ -661,7 +707,8 @@ mod tests {
 
     #[tokio::test(start_paused = true)]
     async fn a_paths_plan_is_its_own_and_one_path_is_the_link_as_it_was() {
-        async fn arrivals(query: &str) -> Vec<(PathId, Vec<u8>, Instant)> {
+        // Each run starts later on the paused clock: times from its start.
+        async fn arrivals(query: &str) -> Vec<(PathId, Vec<u8>, Duration)> {
             let mut link = sim(query);
             link.keep_raw();
             let frames = drive(
@@ -673,10 +720,10 @@ mod tests {
             .await;
             frames
                 .into_iter()
-                .map(|f| (f.path, f.raw.unwrap().to_vec(), f.at))
+                .map(|f| (f.path, f.raw.unwrap().to_vec(), f.at - link.started))
                 .collect()
         }
-        let on = |frames: &[(PathId, Vec<u8>, Instant)], k| {
+        let on = |frames: &[(PathId, Vec<u8>, Duration)], k| {
             let on_k: Vec<_> = frames.iter().filter(|f| f.0 == k).cloned().collect();
             on_k
         };

@@ -40,33 +40,50 @@ impl SimPath {
             .collect()
     }
 
-    /// Whether it loses a copy the responder sends `since` the link
-    /// opened. The loss is drawn even in the outage, so an outage leaves
-    /// the rest of the plan where it was.
-    fn loses(&mut self, since: Duration) -> bool {
-        let lost = self.params.loss > 0.0 && self.rng.gen::<f64>() < self.params.loss;
-        let out = self
-            .params
+    /// Whether its outage is on for a frame the responder sends `since`
+    /// the link opened.
+    fn out(&self, since: Duration) -> bool {
+        self.params
             .outage
-            .is_some_and(|(start, length)| since.checked_sub(start).is_some_and(|t| t < length));
-        lost || out
+            .is_some_and(|(start, length)| since.checked_sub(start).is_some_and(|t| t < length))
+    }
+
+    /// Whether its draw loses a copy. Drawn even in the outage, so an
+    /// outage leaves the rest of the plan where it was.
+    fn draws_loss(&mut self) -> bool {
+        self.params.loss > 0.0 && self.rng.gen::<f64>() < self.params.loss
     }
 }
 
 impl SimLink {
-    /// The link's copies of a frame a responder sends at `sent`, spread
+    /// The link's copies of a frame responder `i` sent at `sent`, spread
     /// onto the paths: one copy on each path that does not lose it, later
-    /// by its delay (none left when every path lost every copy).
-    pub(super) fn on_paths(&mut self, sent: Instant, link: &Copies) -> Copies {
+    /// by its delay (none left when every path lost every copy). A path
+    /// that loses every copy of the frame counts it lost to its outage
+    /// when that is on, else to its draw.
+    pub(super) fn on_paths(&mut self, i: usize, sent: Instant, link: &Copies) -> Copies {
         if self.paths.is_empty() {
             return *link;
         }
         let since = sent.saturating_duration_since(self.started);
         let mut spread = link.emptied();
+        let mut carried = 0u8;
         for copy in link.as_slice() {
             for (k, path) in (0..).zip(self.paths.iter_mut()) {
-                if !path.loses(since) {
+                let drawn = path.draws_loss();
+                if !drawn && !path.out(since) {
                     spread.push(copy.at + path.params.delay, copy.payload, k);
+                    carried |= 1 << k;
+                }
+            }
+        }
+        let counts = &mut self.responders[i].paths;
+        for (k, (path, counts)) in self.paths.iter().zip(counts.iter_mut()).enumerate() {
+            if carried & (1 << k) == 0 {
+                if path.out(since) {
+                    counts.outage += 1;
+                } else {
+                    counts.drawn += 1;
                 }
             }
         }

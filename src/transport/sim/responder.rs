@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use super::truth::{PathCounts, PathTruth, PathsTruth, SimTruth};
+use super::truth::{between, PathCounts, PathTruth, PathsTruth, SimTruth};
 use crate::answering::ResponderCore;
 use crate::frame::Header;
 use crate::telemetry::{Schedule, StreamKind};
@@ -36,20 +36,15 @@ pub(super) struct SimResponder {
 pub(super) struct Due {
     /// Copies still to arrive.
     left: u8,
-    /// One has arrived: the others are duplicates.
-    arrived: bool,
-    /// The paths that carry a copy, and those a copy arrived by, a bit
-    /// each.
-    carried: u8,
+    /// The paths a copy arrived by, a bit each: none yet, or the others
+    /// are duplicates.
     arrived_on: u8,
 }
 
 impl Due {
-    pub(super) fn new(copies: u8, carried: u8) -> Self {
+    pub(super) fn new(copies: u8) -> Self {
         Due {
             left: copies,
-            arrived: false,
-            carried,
             arrived_on: 0,
         }
     }
@@ -75,35 +70,51 @@ impl SimResponder {
     pub(super) fn arrived(&mut self, index: u64, path: PathId) {
         let bit = 1u8 << path;
         // A frame with one copy: the first, and its path's alone.
-        let (copy, first_on_path, only) = match self.copies_due.get_mut(&index) {
+        let before = match self.copies_due.get_mut(&index) {
             Some(due) => {
-                let seen = (due.arrived, due.arrived_on & bit != 0, due.carried == bit);
-                due.arrived = true;
+                let before = due.arrived_on;
                 due.arrived_on |= bit;
                 due.left -= 1;
                 if due.left == 0 {
                     self.copies_due.remove(&index);
                 }
-                (seen.0, !seen.1, seen.2)
+                before
             }
-            None => (false, true, true),
+            None => 0,
         };
-        if let Some(counts) = self.paths.get_mut(path as usize) {
-            if first_on_path {
-                counts.delivered += 1;
-                counts.only += u64::from(only);
-            } else {
-                counts.duplicates += 1;
-            }
-        }
+        self.arrived_by(index, path, before);
         let down = &mut self.truth.down;
-        if copy {
+        if before != 0 {
             down.duplicates_arrived += 1;
             return;
         }
         down.delivered += 1;
         down.reordered += u64::from(self.latest_arrived.is_some_and(|l| index < l));
         self.latest_arrived = Some(self.latest_arrived.map_or(index, |l| l.max(index)));
+    }
+
+    /// A copy of frame `index` came by `path`, and before it copies by
+    /// the paths in `before` (a bit each): its counts (`paths=`). "Only"
+    /// is as things arrived: a second path's copy takes the frame from
+    /// the first's.
+    fn arrived_by(&mut self, index: u64, path: PathId, before: u8) {
+        if self.paths.is_empty() {
+            return;
+        }
+        let k = path as usize;
+        if before & (1 << path) != 0 {
+            self.paths[k].duplicates += 1;
+            return;
+        }
+        let counts = &mut self.paths[k];
+        counts.delivered += 1;
+        counts.spans(index);
+        if before == 0 {
+            counts.first += 1;
+            counts.only += 1;
+        } else if before.count_ones() == 1 {
+            self.paths[before.trailing_zeros() as usize].only -= 1;
+        }
     }
 
     /// A frame put on its way by the paths in `carried` (a bit each): the
@@ -117,6 +128,11 @@ impl SimResponder {
     /// What each path did with its frames (`paths=`).
     pub(super) fn path_truth(&self) -> PathsTruth {
         let down = self.truth.down;
+        let span = self
+            .paths
+            .iter()
+            .filter_map(|c| c.span)
+            .reduce(|(low, high), (l, h)| (low.min(l), high.max(h)));
         PathsTruth {
             paths: self
                 .paths
@@ -124,12 +140,17 @@ impl SimResponder {
                 .map(|c| PathTruth {
                     sent: down.sent,
                     dropped: down.dropped + c.missed,
+                    drawn: c.drawn,
+                    outage: c.outage,
+                    dropped_between: between(c.span, c.delivered),
                     delivered: c.delivered,
+                    first: c.first,
                     only: c.only,
                     duplicates: c.duplicates,
                 })
                 .collect(),
             lost_on_every_path: down.dropped,
+            lost_on_every_path_between: between(span, down.delivered),
         }
     }
 }

@@ -88,11 +88,20 @@ pub(crate) struct PathTruth {
     pub(crate) sent: u64,
     /// ...that this path did not carry to mavping: lost before the frames
     /// split onto the paths (`loss_down=`, `outage=`, a full buffer) or on
-    /// it (`path_loss=`, `path_outage=`).
+    /// it...
     pub(crate) dropped: u64,
-    /// ...that arrived by it (their first copy on it).
+    /// ...by its own draw (`path_loss=`)...
+    pub(crate) drawn: u64,
+    /// ...or while its outage was on (`path_outage=`; drawn or not).
+    pub(crate) outage: u64,
+    /// Of `dropped`, those between the first and the newest frame it
+    /// delivered: what a count of its sequence alone finds lost.
+    pub(crate) dropped_between: u64,
+    /// Frames that arrived by it (their first copy on it)...
     pub(crate) delivered: u64,
-    /// ...of which no other path carried: only this one delivered them.
+    /// ...of which before any other path's copy...
+    pub(crate) first: u64,
+    /// ...and of which no other path delivered a copy: only this one.
     pub(crate) only: u64,
     /// Extra copies that arrived by it (`dup=`, `dup_down=`).
     pub(crate) duplicates: u64,
@@ -105,8 +114,11 @@ pub(crate) struct PathsTruth {
     pub(crate) paths: Vec<PathTruth>,
     /// Frames no path carried: the loss left once the paths' copies are
     /// merged (`down_dropped`: with paths a frame is lost when no path
-    /// carries it).
+    /// carries it)...
     pub(crate) lost_on_every_path: u64,
+    /// ...of which between the first and the newest frame any path
+    /// delivered: what a count of the merged sequence finds lost.
+    pub(crate) lost_on_every_path_between: u64,
 }
 
 /// A path's own counts, [`PathTruth`] once the responder's are added.
@@ -114,9 +126,29 @@ pub(crate) struct PathsTruth {
 pub(super) struct PathCounts {
     /// Frames put on their way by other paths, not by this one.
     pub(super) missed: u64,
+    pub(super) drawn: u64,
+    pub(super) outage: u64,
     pub(super) delivered: u64,
+    pub(super) first: u64,
     pub(super) only: u64,
     pub(super) duplicates: u64,
+    /// The lowest and the highest index of a frame that arrived by it.
+    pub(super) span: Option<(u64, u64)>,
+}
+
+impl PathCounts {
+    /// Frame `index` arrived by it.
+    pub(super) fn spans(&mut self, index: u64) {
+        self.span = Some(self.span.map_or((index, index), |(low, high)| {
+            (low.min(index), high.max(index))
+        }));
+    }
+}
+
+/// The frames between two indices, both in, less those that arrived: the
+/// numbers a count of the sequence finds lost.
+pub(super) fn between(span: Option<(u64, u64)>, arrived: u64) -> u64 {
+    span.map_or(0, |(low, high)| high - low + 1 - arrived)
 }
 
 /// The most the link's queues (`queue_up=`, `queue_down=`) delayed a
