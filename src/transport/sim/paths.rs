@@ -90,3 +90,49 @@ impl SimLink {
         spread
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn paths(query: &str) -> Vec<SimPath> {
+        SimPath::all(&SimParams::parse(query).unwrap())
+    }
+
+    #[test]
+    fn an_outage_is_on_from_its_start_for_its_length() {
+        let [path] = &paths("?paths=1&path_outage=30s+5s")[..] else {
+            panic!("one path");
+        };
+        let s = Duration::from_millis;
+        for (since, out) in [
+            (s(0), false),
+            (s(29_999), false),
+            (s(30_000), true),
+            (s(34_999), true),
+            (s(35_000), false),
+        ] {
+            assert_eq!(path.out(since), out, "{since:?}");
+        }
+        assert!(paths("?paths=2").iter().all(|p| !p.out(s(30_000))));
+    }
+
+    #[test]
+    fn each_path_draws_its_own_share_from_its_own_seed() {
+        let draws =
+            |p: &mut SimPath| -> Vec<bool> { (0..100_000).map(|_| p.draws_loss()).collect() };
+        let mut two = paths("?paths=2&path_loss=10%,2%&seed=4");
+        let mut three = paths("?paths=3&path_loss=10%,50%,0%&seed=4");
+        let first = draws(&mut two[0]);
+        let lost = first.iter().filter(|&&l| l).count();
+        assert!((9_500..10_500).contains(&lost), "{lost}");
+        let second = draws(&mut two[1]).iter().filter(|&&l| l).count();
+        assert!((1_800..2_200).contains(&second), "{second}");
+        // The same seed and index: the same plan, whatever the others.
+        assert_eq!(draws(&mut three[0]), first);
+        // No loss set: never lost.
+        assert!(draws(&mut three[2]).iter().all(|&l| !l));
+        let mut other_seed = paths("?paths=1&path_loss=10%&seed=5");
+        assert_ne!(draws(&mut other_seed[0]), first);
+    }
+}
