@@ -161,12 +161,12 @@ fn log_sim_truth(name: &str, sim: &SimLink) {
             tracing::info!(
                 link = %name,
                 "sim truth path {k} {id}: sent={} dropped={} drawn={} outage={} \
-                 dropped_between={} delivered={} first={} only={} duplicates={}",
+                 missing={} delivered={} first={} only={} duplicates={}",
                 p.sent,
                 p.dropped,
                 p.drawn,
                 p.outage,
-                p.dropped_between,
+                p.missing,
                 p.delivered,
                 p.first,
                 p.only,
@@ -175,9 +175,9 @@ fn log_sim_truth(name: &str, sim: &SimLink) {
         }
         tracing::info!(
             link = %name,
-            "sim truth paths {id}: lost_on_every_path={} lost_on_every_path_between={}",
+            "sim truth paths {id}: lost_on_every_path={} missing_on_every_path={}",
             t.lost_on_every_path,
-            t.lost_on_every_path_between
+            t.missing_on_every_path
         );
     }
 }

@@ -54,7 +54,7 @@ fn assert_counts(source: &Value, err: &str, paths: usize) {
     assert_eq!(count(source, "distinct_frames"), delivered, "{source}");
     assert_eq!(
         count(source, "lost_on_every_link"),
-        sim_truth(err, "paths 1/1", "lost_on_every_path_between"),
+        sim_truth(err, "paths 1/1", "missing_on_every_path"),
         "{source}"
     );
     let links = source["links"].as_array().unwrap();
@@ -67,7 +67,7 @@ fn assert_counts(source: &Value, err: &str, paths: usize) {
         for (key, truth) in [
             ("first", "first"),
             ("only", "only"),
-            ("lost", "dropped_between"),
+            ("lost", "missing"),
             ("duplicates", "duplicates"),
         ] {
             assert_eq!(

@@ -559,6 +559,9 @@ mod tests {
         assert_eq!(seen.delivered, t.down.delivered);
     }
 
+    /// A frame's copies: when each arrived, and by which path.
+    type Arrivals = Vec<(Instant, usize)>;
+
     /// Each path's frames: (raw bytes, arrival) by path index.
     fn by_path(frames: &[Inbound], source: SysComp, paths: usize) -> Vec<Vec<(Vec<u8>, Instant)>> {
         let mut out = vec![Vec::new(); paths];
@@ -613,7 +616,7 @@ mod tests {
         // A frame's copies leave the link together and each path adds its
         // delay: the same frame is the same bytes at the same time less it.
         // Which paths delivered each frame, and when, by that key.
-        let mut delivered_by: HashMap<(Vec<u8>, Instant), Vec<(Instant, usize)>> = HashMap::new();
+        let mut delivered_by: HashMap<(Vec<u8>, Instant), Arrivals> = HashMap::new();
         for (k, path) in paths.iter().enumerate() {
             for (raw, at) in path {
                 delivered_by
@@ -654,7 +657,7 @@ mod tests {
             // What its own sequence finds lost: the frames before its
             // first and after its newest are not between.
             let seen = passive_of(path);
-            assert_eq!(seen, p.dropped_between, "path {k}: {p:?}");
+            assert_eq!(seen, p.missing, "path {k}: {p:?}");
             assert!(p.drawn + p.outage <= p.dropped, "path {k}: {p:?}");
             assert_eq!(p.outage == 0, k != 2, "path {k}: {p:?}");
             let share = p.drawn as f64 / (p.sent - p.outage) as f64;
@@ -665,7 +668,7 @@ mod tests {
         // vehicle, less the 3 % lost before the split.
         assert!((55..=70).contains(&truth.paths[2].outage), "{truth:?}");
         let merged: Vec<(Vec<u8>, Instant)> = delivered_by.keys().cloned().collect();
-        assert_eq!(passive_of(&merged), truth.lost_on_every_path_between);
+        assert_eq!(passive_of(&merged), truth.missing_on_every_path);
         // Lost on every path: in none of the paths' frames, and what a
         // passive count of the merged stream finds missing.
         assert_eq!(truth.lost_on_every_path, t.down.dropped);

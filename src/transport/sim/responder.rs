@@ -112,7 +112,7 @@ impl SimResponder {
         if before == 0 {
             counts.first += 1;
             counts.only += 1;
-        } else if before.count_ones() == 1 {
+        } else if before.is_power_of_two() {
             self.paths[before.trailing_zeros() as usize].only -= 1;
         }
     }
@@ -142,7 +142,7 @@ impl SimResponder {
                     dropped: down.dropped + c.missed,
                     drawn: c.drawn,
                     outage: c.outage,
-                    dropped_between: between(c.span, c.delivered),
+                    missing: between(c.span, c.delivered),
                     delivered: c.delivered,
                     first: c.first,
                     only: c.only,
@@ -150,7 +150,7 @@ impl SimResponder {
                 })
                 .collect(),
             lost_on_every_path: down.dropped,
-            lost_on_every_path_between: between(span, down.delivered),
+            missing_on_every_path: between(span, down.delivered),
         }
     }
 }

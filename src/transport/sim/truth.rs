@@ -94,9 +94,10 @@ pub(crate) struct PathTruth {
     pub(crate) drawn: u64,
     /// ...or while its outage was on (`path_outage=`; drawn or not).
     pub(crate) outage: u64,
-    /// Of `dropped`, those between the first and the newest frame it
-    /// delivered: what a count of its sequence alone finds lost.
-    pub(crate) dropped_between: u64,
+    /// Frames between the first and the newest it delivered that did not
+    /// arrive by it: dropped, or on their way on it when the run ended.
+    /// What a count of its sequence alone finds lost.
+    pub(crate) missing: u64,
     /// Frames that arrived by it (their first copy on it)...
     pub(crate) delivered: u64,
     /// ...of which before any other path's copy...
@@ -114,11 +115,13 @@ pub(crate) struct PathsTruth {
     pub(crate) paths: Vec<PathTruth>,
     /// Frames no path carried: the loss left once the paths' copies are
     /// merged (`down_dropped`: with paths a frame is lost when no path
-    /// carries it)...
+    /// carries it).
     pub(crate) lost_on_every_path: u64,
-    /// ...of which between the first and the newest frame any path
-    /// delivered: what a count of the merged sequence finds lost.
-    pub(crate) lost_on_every_path_between: u64,
+    /// Frames between the first and the newest any path delivered that
+    /// arrived by none: lost on every path, or on their way on one (a
+    /// slower path's copy of a frame the faster lost) when the run ended.
+    /// What a count of the merged sequence finds lost.
+    pub(crate) missing_on_every_path: u64,
 }
 
 /// A path's own counts, [`PathTruth`] once the responder's are added.
