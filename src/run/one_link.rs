@@ -17,6 +17,7 @@ use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::{sweep, SessionConfig};
 use crate::output::WallClock;
 use crate::transport::recording::{Recorded, Tap, Watch};
+use crate::transport::sim::SimLink;
 use crate::transport::{Link, LinkSpec};
 
 /// An echo probe's run, in steps when `--sweep` or `--load` asks.
@@ -115,45 +116,75 @@ pub(super) async fn measure_recorded(
     }
     // The simulated link's ground truth, for soak scripts (`-v`).
     if let Link::Sim(sim) = link.inner() {
-        for (id, t) in sim.truth() {
-            tracing::info!(
-                link = %config.name,
-                "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
-                 duplicated={} duplicates_arrived={} outage={} spiked={} spiked_arrived={} \
-                 down_sent={} down_dropped={} down_duplicated={} down_duplicates_arrived={} \
-                 down_delivered={} down_reordered={} up_sent={} up_dropped={} \
-                 up_requests_dropped={} up_duplicated={} up_requests_duplicated={}",
-                t.answered,
-                t.dropped,
-                t.dropped_before_first,
-                t.delivered,
-                t.duplicated,
-                t.duplicates_arrived,
-                t.outage,
-                t.spiked,
-                t.spiked_arrived,
-                t.down.sent,
-                t.down.dropped,
-                t.down.duplicated,
-                t.down.duplicates_arrived,
-                t.down.delivered,
-                t.down.reordered,
-                t.up.sent,
-                t.up.dropped,
-                t.up.requests_dropped,
-                t.up.duplicated,
-                t.up.requests_duplicated
-            );
-        }
-        let queues = sim.queue_truth();
-        if !queues.up.is_zero() || !queues.down.is_zero() {
-            tracing::info!(
-                link = %config.name,
-                "sim truth queues: up_max_ms={:.3} down_max_ms={:.3}",
-                queues.up.as_secs_f64() * 1e3,
-                queues.down.as_secs_f64() * 1e3
-            );
-        }
+        log_sim_truth(&config.name, sim);
     }
     outcome
+}
+
+/// The simulated link's ground truth, logged with `-v`: each responder's,
+/// each path's (`paths=`) and the queues'.
+fn log_sim_truth(name: &str, sim: &SimLink) {
+    for (id, t) in sim.truth() {
+        tracing::info!(
+            link = %name,
+            "sim truth {id}: answered={} dropped={} dropped_before_first={} delivered={} \
+             duplicated={} duplicates_arrived={} outage={} spiked={} spiked_arrived={} \
+             down_sent={} down_dropped={} down_duplicated={} down_duplicates_arrived={} \
+             down_delivered={} down_reordered={} up_sent={} up_dropped={} \
+             up_requests_dropped={} up_duplicated={} up_requests_duplicated={}",
+            t.answered,
+            t.dropped,
+            t.dropped_before_first,
+            t.delivered,
+            t.duplicated,
+            t.duplicates_arrived,
+            t.outage,
+            t.spiked,
+            t.spiked_arrived,
+            t.down.sent,
+            t.down.dropped,
+            t.down.duplicated,
+            t.down.duplicates_arrived,
+            t.down.delivered,
+            t.down.reordered,
+            t.up.sent,
+            t.up.dropped,
+            t.up.requests_dropped,
+            t.up.duplicated,
+            t.up.requests_duplicated
+        );
+    }
+    let queues = sim.queue_truth();
+    if !queues.up.is_zero() || !queues.down.is_zero() {
+        tracing::info!(
+            link = %name,
+            "sim truth queues: up_max_ms={:.3} down_max_ms={:.3}",
+            queues.up.as_secs_f64() * 1e3,
+            queues.down.as_secs_f64() * 1e3
+        );
+    }
+    for (id, t) in sim.path_truth() {
+        for (k, p) in t.paths.iter().enumerate() {
+            tracing::info!(
+                link = %name,
+                "sim truth path {k} {id}: sent={} dropped={} drawn={} outage={} \
+                 missing={} delivered={} first={} only={} duplicates={}",
+                p.sent,
+                p.dropped,
+                p.drawn,
+                p.outage,
+                p.missing,
+                p.delivered,
+                p.first,
+                p.only,
+                p.duplicates
+            );
+        }
+        tracing::info!(
+            link = %name,
+            "sim truth paths {id}: lost_on_every_path={} missing_on_every_path={}",
+            t.lost_on_every_path,
+            t.missing_on_every_path
+        );
+    }
 }

@@ -42,6 +42,7 @@ mod serial_pty;
 mod serve;
 mod serve_secure;
 mod signing;
+mod sim_paths;
 mod sim_soak;
 mod stalled;
 mod streams;

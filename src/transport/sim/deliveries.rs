@@ -1,12 +1,16 @@
 //! Frames on their way to mavping: the deliveries waiting in the link,
 //! in time order, each copy of a responder's frame tagged for the ground
-//! truth of what arrived, and the cap that keeps the queue bounded.
+//! truth of what arrived (and by which path), and the cap that keeps the
+//! queue bounded.
 
 use std::cmp::Reverse;
 
 use tokio::time::Instant;
 
 use super::link::SimLink;
+use super::params::MAX_PATHS;
+use super::responder::Due;
+use crate::transport::link::PathId;
 
 /// Which responder's frame a delivery is, and which of its frames.
 #[derive(PartialEq, Eq, PartialOrd, Ord, Clone, Copy)]
@@ -26,10 +30,66 @@ pub(super) struct Delivery {
     pub(super) payload: Payload,
     /// A responder's frame (not RADIO_STATUS): for [`DownTruth`](super::truth::DownTruth).
     pub(super) frame: Option<Tag>,
+    /// The path it comes by (`paths=`; 0 without).
+    pub(super) path: PathId,
 }
 
-/// A frame's arrivals: its first copy and maybe an extra one.
-pub(super) type Copies = ([(Instant, Payload); 2], usize);
+/// One copy of a frame on its way: when it arrives, what it is for the
+/// ground truth, and by which path.
+#[derive(Clone, Copy)]
+pub(super) struct Arrival {
+    pub(super) at: Instant,
+    pub(super) payload: Payload,
+    pub(super) path: PathId,
+}
+
+/// The most copies of one frame: two (`dup=` or `dup_down=`) on each path.
+const MAX_COPIES: usize = 2 * MAX_PATHS;
+
+/// A frame's copies on their way: its first and maybe an extra one, on
+/// each path; none when every one was lost.
+#[derive(Clone, Copy)]
+pub(super) struct Copies {
+    /// Past `n`, filler.
+    list: [Arrival; MAX_COPIES],
+    n: usize,
+}
+
+impl Copies {
+    /// One copy, on path 0.
+    pub(super) fn one(at: Instant, payload: Payload) -> Self {
+        let arrival = Arrival {
+            at,
+            payload,
+            path: 0,
+        };
+        Copies {
+            list: [arrival; MAX_COPIES],
+            n: 1,
+        }
+    }
+
+    /// None yet, to push copies into.
+    pub(super) fn emptied(&self) -> Self {
+        Copies {
+            list: self.list,
+            n: 0,
+        }
+    }
+
+    pub(super) fn push(&mut self, at: Instant, payload: Payload, path: PathId) {
+        self.list[self.n] = Arrival { at, payload, path };
+        self.n += 1;
+    }
+
+    pub(super) fn as_slice(&self) -> &[Arrival] {
+        &self.list[..self.n]
+    }
+
+    pub(super) fn as_mut_slice(&mut self) -> &mut [Arrival] {
+        &mut self.list[..self.n]
+    }
+}
 
 /// What a delivery carries, for the ground truth.
 #[derive(PartialEq, Eq, PartialOrd, Ord, Clone, Copy)]
@@ -53,6 +113,7 @@ impl SimLink {
         at: Instant,
         bytes: Vec<u8>,
         payload: Payload,
+        path: PathId,
         frame: Option<Tag>,
     ) -> bool {
         if self.queue.len() >= MAX_QUEUED {
@@ -65,27 +126,34 @@ impl SimLink {
             bytes,
             payload,
             frame,
+            path,
         }));
         true
     }
 
     /// Queues the copies of frame `index` of responder `i`.
-    pub(super) fn put_on_way(&mut self, i: usize, index: u64, bytes: Vec<u8>, (copies, n): Copies) {
+    pub(super) fn put_on_way(&mut self, i: usize, index: u64, bytes: Vec<u8>, copies: &Copies) {
         let tag = Some(Tag {
             responder: i,
             index,
         });
-        let queued = copies[..n]
-            .iter()
-            .filter(|(at, payload)| self.enqueue(*at, bytes.clone(), *payload, tag))
-            .count();
-        let down = &mut self.responders[i].truth.down;
+        // The paths that carry a copy, a bit each.
+        let mut carried = 0u8;
+        let mut queued = 0;
+        for copy in copies.as_slice() {
+            if self.enqueue(copy.at, bytes.clone(), copy.payload, copy.path, tag) {
+                queued += 1;
+                carried |= 1 << copy.path;
+            }
+        }
+        let r = &mut self.responders[i];
         match queued {
-            0 => down.dropped += 1,
-            1 => {}
+            0 => r.truth.down.dropped += 1,
+            1 => r.missed_on_paths(carried),
             more => {
-                down.duplicated += more as u64 - 1;
-                self.responders[i].copies_due.insert(index, more as u8);
+                r.missed_on_paths(carried);
+                r.truth.down.duplicated += more as u64 - 1;
+                r.copies_due.insert(index, Due::new(more as u8));
             }
         }
     }

@@ -91,6 +91,8 @@ impl SimLink {
         let version = request.version;
         let mut draws = [None, None];
         let mut replies = [None, None];
+        // When the responder sends each reply: once it has the request.
+        let mut sends = [now; 2];
         let mut overflowed = false;
         for (k, extra) in [Some(Duration::ZERO), again].into_iter().enumerate() {
             let Some(extra) = extra else { continue };
@@ -108,9 +110,10 @@ impl SimLink {
                 None => overflowed = true,
             }
             // Sent (and numbered) once the responder has the request.
-            replies[k] = Some((msg, self.ns(sent_done + extra + up)));
+            sends[k] = sent_done + extra + up;
+            replies[k] = Some((msg, self.ns(sends[k])));
         }
-        let copies = self.reply_copies(i, draws, overflowed);
+        let copies = self.reply_copies(i, draws, sends, overflowed);
         for (reply, copies) in replies.into_iter().zip(copies) {
             if let Some((msg, ns)) = reply {
                 let reply = Reply {
@@ -165,48 +168,57 @@ impl SimLink {
     }
 
     /// The exchange's truth from the fates of its replies (two when the
-    /// request was heard twice): lost when none goes; else the first to
-    /// arrive is its reply, and every other copy on its way a duplicate.
+    /// request was heard twice), each sent at its `sent` and spread onto
+    /// the paths: lost when no copy goes; else the first copy to arrive is
+    /// its reply, and every other copy on its way a duplicate.
     fn reply_copies(
         &mut self,
         i: usize,
         draws: [Option<ReplyDraw>; 2],
+        sent: [Instant; 2],
         overflowed: bool,
     ) -> [Option<Copies>; 2] {
-        let r = &mut self.responders[i];
-        let first = draws
+        let mut out = [None, None];
+        for (k, draw) in draws.iter().enumerate() {
+            let Some(d) = draw else { continue };
+            let mut copies = Copies::one(d.at, Payload::Plain);
+            if let Some(again) = d.again {
+                copies.push(again, Payload::Plain, 0);
+            }
+            let copies = self.on_paths(i, sent[k], &copies);
+            out[k] = (!copies.as_slice().is_empty()).then_some(copies);
+        }
+        // On a tie the earlier reply's first copy: a reply's extra copy
+        // comes after it.
+        let first = out
             .iter()
             .enumerate()
-            .filter_map(|(k, d)| d.map(|d| (d.at, k)))
+            .filter_map(|(k, c)| c.as_ref().map(|c| (k, c)))
+            .flat_map(|(k, c)| (0..).zip(c.as_slice()).map(move |(j, a)| (a.at, k, j)))
             .min()
-            .map(|(_, k)| k);
+            .map(|(_, k, j)| (k, j));
+        let r = &mut self.responders[i];
         let Some(first) = first else {
             r.truth.dropped(r.replied);
             r.truth.overflowed += u64::from(overflowed);
             return [None, None];
         };
         r.replied = true;
-        let mut out = [None, None];
-        for (k, draw) in draws.iter().enumerate() {
-            let Some(d) = draw else { continue };
-            let payload = if k != first {
-                r.truth.duplicated += 1;
-                Payload::Duplicate(i)
-            } else if d.spiked {
-                r.truth.spiked += 1;
-                Payload::Spiked(i)
-            } else {
-                r.truth.delivered += 1;
-                Payload::Plain
-            };
-            let mut copies = [(d.at, payload); 2];
-            let mut n = 1;
-            if let Some(again) = d.again {
-                r.truth.duplicated += 1;
-                copies[1] = (again, Payload::Duplicate(i));
-                n = 2;
+        for (k, copies) in out.iter_mut().enumerate() {
+            let Some(copies) = copies else { continue };
+            let spiked = draws[k].is_some_and(|d| d.spiked);
+            for (j, copy) in (0..).zip(copies.as_mut_slice()) {
+                copy.payload = if (k, j) != first {
+                    r.truth.duplicated += 1;
+                    Payload::Duplicate(i)
+                } else if spiked {
+                    r.truth.spiked += 1;
+                    Payload::Spiked(i)
+                } else {
+                    r.truth.delivered += 1;
+                    Payload::Plain
+                };
             }
-            out[k] = Some((copies, n));
         }
         out
     }

@@ -9,7 +9,7 @@ use rand::rngs::SmallRng;
 use rand::Rng;
 use tokio::time::Instant;
 
-use super::deliveries::Payload;
+use super::deliveries::{Copies, Payload};
 use super::link::SimLink;
 use super::params::{Queue, SimParams};
 
@@ -82,8 +82,16 @@ impl SimLink {
         p > 0.0 && self.vehicle_rng.gen::<f64>() < p
     }
 
-    /// The per-direction faults on a frame of responder `i` due at `at`.
-    pub(super) fn send_down(&mut self, i: usize, index: u64, bytes: Vec<u8>, mut at: Instant) {
+    /// The per-direction faults on a frame of responder `i` sent at
+    /// `sent` and due at `at`, then its paths'.
+    pub(super) fn send_down(
+        &mut self,
+        i: usize,
+        index: u64,
+        bytes: Vec<u8>,
+        sent: Instant,
+        mut at: Instant,
+    ) {
         if self.vehicle_chance(self.params.loss_down) {
             self.responders[i].truth.down.dropped += 1;
             return;
@@ -91,12 +99,12 @@ impl SimLink {
         if self.vehicle_chance(self.params.reorder_down) {
             at += self.params.hold;
         }
-        let mut copies = [(at, Payload::Plain); 2];
-        let mut n = 1;
+        let mut copies = Copies::one(at, Payload::Plain);
         if self.vehicle_chance(self.params.dup_down) {
-            copies[1].0 = at + self.vehicle_one_way();
-            n = 2;
+            let again = at + self.vehicle_one_way();
+            copies.push(again, Payload::Plain, 0);
         }
-        self.put_on_way(i, index, bytes, (copies, n));
+        let copies = self.on_paths(i, sent, &copies);
+        self.put_on_way(i, index, bytes, &copies);
     }
 }

@@ -13,9 +13,10 @@ use tokio::time::{sleep_until, Instant};
 use super::deliveries::{Delivery, Payload};
 use super::outgoing::{Outgoing, Sends};
 use super::params::SimParams;
+use super::paths::SimPath;
 use super::radio::RadioPair;
 use super::responder::SimResponder;
-use super::truth::{QueueTruth, SimTruth};
+use super::truth::{PathCounts, PathsTruth, QueueTruth, SimTruth};
 use super::wire::Wire;
 use crate::answering::ResponderCore;
 use crate::frame::{ScanStats, SysComp};
@@ -55,6 +56,8 @@ pub struct SimLink {
     pub(super) vehicle_rng: SmallRng,
     /// The most each queue (`queue_up=`, `queue_down=`) delayed a frame.
     pub(super) queue_truth: QueueTruth,
+    /// The paths the responders' frames take (`paths=`; none without).
+    pub(super) paths: Vec<SimPath>,
 }
 
 impl SimLink {
@@ -82,6 +85,7 @@ impl SimLink {
                     numbered: 0,
                     latest_arrived: None,
                     copies_due: HashMap::new(),
+                    paths: vec![PathCounts::default(); params.paths.len()],
                 }
             })
             .collect();
@@ -90,6 +94,7 @@ impl SimLink {
             .zip(params.baud)
             .map(|(air, baud)| Box::new(RadioPair::new(baud, &air, params.buffer)));
         let mut link = SimLink {
+            paths: SimPath::all(&params),
             rng: SmallRng::seed_from_u64(params.seed),
             params: Box::new(params),
             responders,
@@ -125,6 +130,18 @@ impl SimLink {
         self.responders
             .iter()
             .map(|r| (r.core.id, r.truth))
+            .collect()
+    }
+
+    /// What each path did with each responder's frames, in responder
+    /// order; none without `paths=`.
+    pub(crate) fn path_truth(&self) -> Vec<(SysComp, PathsTruth)> {
+        if self.paths.is_empty() {
+            return Vec::new();
+        }
+        self.responders
+            .iter()
+            .map(|r| (r.core.id, r.path_truth()))
             .collect()
     }
 
@@ -181,7 +198,8 @@ impl Transport for SimLink {
         Ok(now)
     }
 
-    /// The simulated link has one path: every responder hears everything.
+    /// Every responder hears everything, whatever the path (`paths=`
+    /// shapes only what comes back).
     async fn send_to(&mut self, _path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
         self.send(frame).await
     }
@@ -206,11 +224,11 @@ impl Transport for SimLink {
                     Payload::Duplicate(i) => self.responders[i].truth.duplicates_arrived += 1,
                 }
                 if let Some(tag) = d.frame {
-                    self.responders[tag.responder].arrived(tag.index);
+                    self.responders[tag.responder].arrived(tag.index, d.path);
                 }
                 // Stamped with the simulated arrival time: the RTT is
                 // exactly the simulated delay, free of scheduler noise.
-                push_datagram(&d.bytes, d.at, 0, self.keep_raw, &mut self.stats, out);
+                push_datagram(&d.bytes, d.at, d.path, self.keep_raw, &mut self.stats, out);
             }
             if out.len() > before {
                 return Ok(());
@@ -539,5 +557,213 @@ mod tests {
         let tail = t.down.sent - (seen.delivered + seen.missing);
         assert_eq!(seen.missing + tail, t.down.dropped);
         assert_eq!(seen.delivered, t.down.delivered);
+    }
+
+    /// A frame's copies: when each arrived, and by which path.
+    type Arrivals = Vec<(Instant, usize)>;
+
+    /// Each path's frames: (raw bytes, arrival) by path index.
+    fn by_path(frames: &[Inbound], source: SysComp, paths: usize) -> Vec<Vec<(Vec<u8>, Instant)>> {
+        let mut out = vec![Vec::new(); paths];
+        for f in frames.iter().filter(|f| f.frame.source == source) {
+            let raw = f.raw.as_deref().expect("kept").to_vec();
+            out[f.path as usize].push((raw, f.at));
+        }
+        out
+    }
+
+    /// What a count of the sequence of `frames` (raw bytes) finds lost:
+    /// the numbers between the lowest and the highest never seen, each
+    /// unwrapped nearest the previous frame's.
+    fn passive_of(frames: &[(Vec<u8>, Instant)]) -> u64 {
+        let mut sorted: Vec<&(Vec<u8>, Instant)> = frames.iter().collect();
+        sorted.sort_by_key(|(_, at)| *at);
+        let mut seen = HashSet::new();
+        let mut latest: Option<i64> = None;
+        for (raw, _) in sorted {
+            // MAVLink 2: the sequence is the header's fifth byte.
+            let seq = i64::from(raw[4]);
+            let index = match latest {
+                None => seq,
+                Some(l) => l + i64::from((seq - l).rem_euclid(256) as u8 as i8),
+            };
+            seen.insert(index);
+            latest = Some(latest.map_or(index, |l| l.max(index)));
+        }
+        let (Some(low), Some(high)) = (seen.iter().min(), seen.iter().max()) else {
+            return 0;
+        };
+        (high - low + 1) as u64 - seen.len() as u64
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn each_path_delivers_the_same_bytes_as_its_truth_counts_them() {
+        let delays = [20, 100, 0].map(Duration::from_millis);
+        let mut link = sim(
+            "?stream=ATTITUDE@50,GLOBAL_POSITION_INT@5&loss_down=3%&reorder_down=2%&paths=3\
+             &path_loss=10%,2%,30%&path_delay=20ms,100ms,0s&path_outage=none,none,3s+1s&seed=5",
+        );
+        link.keep_raw();
+        let frames = drive(
+            &mut link,
+            Duration::from_secs(10),
+            Duration::from_millis(100),
+            50,
+        )
+        .await;
+        let id = SysComp::new(1, 1);
+        let paths = by_path(&frames, id, 3);
+        // A frame's copies leave the link together and each path adds its
+        // delay: the same frame is the same bytes at the same time less it.
+        // Which paths delivered each frame, and when, by that key.
+        let mut delivered_by: HashMap<(Vec<u8>, Instant), Arrivals> = HashMap::new();
+        for (k, path) in paths.iter().enumerate() {
+            for (raw, at) in path {
+                delivered_by
+                    .entry((raw.clone(), *at - delays[k]))
+                    .or_default()
+                    .push((*at, k));
+            }
+        }
+        let (_, t) = link.truth()[0];
+        let [(truth_id, truth)] = &link.path_truth()[..] else {
+            panic!("one responder");
+        };
+        assert_eq!(*truth_id, id);
+        assert_eq!(delivered_by.len() as u64, t.down.delivered);
+        for (k, path) in paths.iter().enumerate() {
+            let p = &truth.paths[k];
+            let only = delivered_by
+                .values()
+                .filter(|by| by.iter().all(|&(_, j)| j == k))
+                .count();
+            let first = delivered_by
+                .values()
+                .filter(|by| by.iter().min().is_some_and(|&(_, j)| j == k))
+                .count();
+            assert_eq!(
+                (path.len() as u64, first as u64, only as u64, 0),
+                (p.delivered, p.first, p.only, p.duplicates),
+                "path {k}: {p:?}"
+            );
+            assert_eq!(p.sent, t.down.sent);
+            let in_flight = p.sent - p.dropped - p.delivered;
+            assert!(in_flight <= 12, "path {k}: {p:?}");
+            let lost = p.dropped as f64 / p.sent as f64;
+            // 3 % before the split, then the path's own loss; the third
+            // path's outage is a tenth of the run.
+            let expected = [0.127, 0.049, 0.389][k];
+            assert!((lost - expected).abs() < 0.05, "path {k}: {p:?}");
+            // What its own sequence finds lost: the frames before its
+            // first and after its newest are not between.
+            let seen = passive_of(path);
+            assert_eq!(seen, p.missing, "path {k}: {p:?}");
+            assert!(p.drawn + p.outage <= p.dropped, "path {k}: {p:?}");
+            assert_eq!(p.outage == 0, k != 2, "path {k}: {p:?}");
+            let share = p.drawn as f64 / (p.sent - p.outage) as f64;
+            let drawn = [0.1, 0.02, 0.3][k] * 0.97;
+            assert!((share - drawn).abs() < 0.04, "path {k}: {p:?}");
+        }
+        // The third path's outage: a second of a 66-frame-a-second
+        // vehicle, less the 3 % lost before the split.
+        assert!((55..=70).contains(&truth.paths[2].outage), "{truth:?}");
+        let merged: Vec<(Vec<u8>, Instant)> = delivered_by.keys().cloned().collect();
+        assert_eq!(passive_of(&merged), truth.missing_on_every_path);
+        // Lost on every path: in none of the paths' frames, and what a
+        // passive count of the merged stream finds missing.
+        assert_eq!(truth.lost_on_every_path, t.down.dropped);
+        assert!(truth
+            .paths
+            .iter()
+            .all(|p| p.only > 0 && p.dropped > truth.lost_on_every_path));
+        let seen = passive(&frames, id);
+        assert_eq!(
+            (seen.delivered, seen.duplicates, seen.reordered),
+            (
+                t.down.delivered,
+                t.down.duplicates_arrived,
+                t.down.reordered
+            )
+        );
+        assert_eq!(
+            seen.duplicates,
+            truth.paths.iter().map(|p| p.delivered).sum::<u64>() - t.down.delivered
+        );
+        // The third path's outage: nothing by it from 3 s to 4 s (10 ms
+        // and the jitter on the way), the others go on.
+        let start = link.started;
+        let quiet = |k: usize| {
+            !paths[k].iter().any(|(_, at)| {
+                let t = *at - start;
+                t > Duration::from_millis(3_020) && t < Duration::from_secs(4)
+            })
+        };
+        assert!(quiet(2) && !quiet(0) && !quiet(1));
+        // Replies go by every path: the first to arrive is the reply, the
+        // others duplicates, as the pinger counts them.
+        assert_eq!(
+            of(&frames, id, ids::PING) as u64,
+            t.delivered + t.duplicates_arrived
+        );
+        assert!(t.duplicates_arrived > 50 && t.delivered > 45, "{t:?}");
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_paths_plan_is_its_own_and_one_path_is_the_link_as_it_was() {
+        // Each run starts later on the paused clock: times from its start.
+        async fn arrivals(query: &str) -> Vec<(PathId, Vec<u8>, Duration)> {
+            let mut link = sim(query);
+            link.keep_raw();
+            let frames = drive(
+                &mut link,
+                Duration::from_secs(6),
+                Duration::from_millis(100),
+                40,
+            )
+            .await;
+            frames
+                .into_iter()
+                .map(|f| (f.path, f.raw.unwrap().to_vec(), f.at - link.started))
+                .collect()
+        }
+        let on = |frames: &[(PathId, Vec<u8>, Duration)], k| {
+            let on_k: Vec<_> = frames.iter().filter(|f| f.0 == k).cloned().collect();
+            on_k
+        };
+        let base = "?stream=ATTITUDE@50&dup_down=5%&loss_down=5%&seed=8";
+        let two = arrivals(&format!("{base}&paths=2&path_loss=10%,2%")).await;
+        let three = arrivals(&format!(
+            "{base}&paths=3&path_loss=10%,40%,5%&path_delay=0s,1s,30ms&path_outage=none,2s+1s,none"
+        ))
+        .await;
+        assert!(on(&two, 0).len() > 200 && on(&two, 1).len() > on(&two, 0).len());
+        // Adding a path, or changing another's faults, leaves path 0's
+        // copies where they were.
+        assert_eq!(on(&two, 0), on(&three, 0));
+        assert_ne!(on(&two, 1), on(&three, 1));
+        // One faultless path is the link without paths.
+        let as_it_was = arrivals(base).await;
+        assert_eq!(arrivals(&format!("{base}&paths=1")).await, as_it_was);
+        // The link's own extra copies go by each path: duplicates on it.
+        let mut link = sim(&format!("{base}&paths=2&path_loss=10%,2%"));
+        let frames = drive(
+            &mut link,
+            Duration::from_secs(6),
+            Duration::from_millis(100),
+            40,
+        )
+        .await;
+        let truth = &link.path_truth()[0].1;
+        for (k, p) in truth.paths.iter().enumerate() {
+            let by_k = frames.iter().filter(|f| f.path == k as PathId).count() as u64;
+            assert_eq!(p.delivered + p.duplicates, by_k, "path {k}: {p:?}");
+            assert!(p.duplicates > 0, "path {k}: {p:?}");
+        }
+        let seen = passive(&frames, SysComp::new(1, 1));
+        let down = link.truth()[0].1.down;
+        assert_eq!(
+            (seen.delivered, seen.duplicates),
+            (down.delivered, down.duplicates_arrived)
+        );
     }
 }

@@ -19,7 +19,8 @@
 //! [`faults`], the [`clock`]s, the [`wire`] (or the [`radio`] pair), what
 //! the responders send ([`outgoing`]), what is on its way to mavping
 //! ([`deliveries`]), one request's [`exchange`], the near radio's
-//! [`radio_status`] and the ground [`truth`]; [`link`] holds them together
+//! [`radio_status`], the [`paths`] of a vehicle heard on several, and the
+//! ground [`truth`]; [`link`] holds them together
 //! as a [`Transport`](crate::transport::Transport).
 
 mod clock;
@@ -29,6 +30,7 @@ mod faults;
 mod link;
 mod outgoing;
 mod params;
+mod paths;
 pub(crate) mod radio;
 mod radio_status;
 mod responder;

@@ -30,7 +30,8 @@ pub(super) enum Sends {
 pub(super) struct Reply {
     pub(super) msg: Msg,
     pub(super) version: Version,
-    /// When its copies arrive, or `None`: lost on the way.
+    /// When (and by which paths) its copies arrive, or `None`: lost on
+    /// the way.
     pub(super) copies: Option<Copies>,
 }
 
@@ -106,7 +107,7 @@ impl SimLink {
                         Some(copies) => {
                             let mut bytes = Vec::new();
                             frame::encode(&mut bytes, reply.version, header, &reply.msg);
-                            self.put_on_way(i, index, bytes, copies);
+                            self.put_on_way(i, index, bytes, &copies);
                         }
                         None => self.responders[i].truth.down.dropped += 1,
                     }
@@ -127,7 +128,7 @@ impl SimLink {
             &heartbeat(self.params.answer_ping),
         );
         let at = sent + self.queued_down(sent) + self.params.delay;
-        self.send_down(i, index, bytes, at);
+        self.send_down(i, index, bytes, sent, at);
     }
 
     /// A telemetry frame sent at `sent`: through the outage, the wire or
@@ -157,6 +158,6 @@ impl SimLink {
             return;
         };
         let at = done + self.queued_down(done) + self.vehicle_one_way();
-        self.send_down(i, index, bytes, at);
+        self.send_down(i, index, bytes, sent, at);
     }
 }

@@ -88,7 +88,36 @@ pub struct SimParams {
     /// and draining, with no frame lost.
     pub(crate) queue_up: Option<Queue>,
     pub(crate) queue_down: Option<Queue>,
+    /// The paths a responder's frames reach mavping by (`paths=`), each
+    /// with its own faults after the link's; empty: the one path of a
+    /// link without the key.
+    pub(crate) paths: Vec<PathParams>,
 }
+
+/// The most paths one link has (`paths=`): a MAVProxy log numbers its
+/// links in a stamp's two low bits, so four is what one log can tell
+/// apart; the setups that need it (a radio and LTE, two modems) have two
+/// or three. It also bounds a frame's copies (two each with `dup_down=`).
+pub(crate) const MAX_PATHS: usize = 4;
+
+/// One path of a vehicle heard on several (`paths=`): what it does to its
+/// copy of each frame the responders send, after the link's own faults.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(crate) struct PathParams {
+    /// Share of its copies lost (`path_loss=`).
+    pub(crate) loss: f64,
+    /// Added to the delay the link gave the frame (`path_delay=`).
+    pub(crate) delay: Duration,
+    /// From `start` after the link opened, for `length`, the frames the
+    /// responders send are lost on this path (`path_outage=`).
+    pub(crate) outage: Option<Outage>,
+}
+
+/// An outage's start after the link opened, and its length.
+pub(crate) type Outage = (Duration, Duration);
+
+/// How a `path_` list shows one path's entry, `None` for its default.
+type PathEntry = fn(&PathParams) -> Option<String>;
 
 /// A queue that grows from nothing to `peak` over `rise` from the link's
 /// opening, then drains as fast: a one-way delay that changes while the
@@ -175,6 +204,7 @@ impl Default for SimParams {
             dup_up: 0.0,
             queue_up: None,
             queue_down: None,
+            paths: Vec::new(),
         }
     }
 }
@@ -186,7 +216,8 @@ ping=on|off, heartbeat=on|off, offset=[-]DURATION, drift=PPM, baud=N, radio=on|o
 buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+LENGTH, \
 outage_every=DURATION, spike=PCT, spike_delay=DURATION, stream=MSG@HZ[,MSG@HZ...], \
 loss_down=PCT, dup_down=PCT, reorder_down=PCT, loss_up=PCT, dup_up=PCT, queue_up=PEAK@RISE, \
-queue_down=PEAK@RISE";
+queue_down=PEAK@RISE, paths=N (1-4), path_loss=PCT[,PCT...], path_delay=DURATION[,DURATION...], \
+path_outage=none|START+LENGTH[,...]";
 
 /// What is wrong with a `sim:` query: which key, and why (or which keys
 /// go together).
@@ -241,6 +272,14 @@ enum Problem {
     OutageEvery { every: Duration, outage: Duration },
     #[error("too many responders for the sysid range")]
     TooManyResponders,
+    /// A `path_` list whose length is not `paths=`.
+    #[error("{key}={value}: {given} given for paths={paths}: give one per path")]
+    PathCount {
+        key: &'static str,
+        value: String,
+        given: usize,
+        paths: usize,
+    },
 }
 
 impl Problem {
@@ -348,6 +387,110 @@ impl AirKeys {
     }
 }
 
+/// The path keys, read in any order and checked together once the
+/// query is read: each list's length is `paths=`.
+#[derive(Default)]
+struct PathKeys {
+    paths: Option<usize>,
+    /// Each list with its value as given, for the error that counts it.
+    loss: Option<(String, Vec<f64>)>,
+    delay: Option<(String, Vec<Duration>)>,
+    outage: Option<(String, Vec<Option<Outage>>)>,
+}
+
+/// A `path_` list: one entry a path, comma-separated, each read by
+/// `entry`.
+fn list<T>(
+    value: &str,
+    entry: impl Fn(&str) -> Result<T, Problem>,
+) -> Result<(String, Vec<T>), Problem> {
+    let entries = value.split(',').map(entry).collect::<Result<_, _>>()?;
+    Ok((value.to_string(), entries))
+}
+
+/// `none` or `START+LENGTH`: one path's outage.
+fn path_outage(key: &str, value: &str, entry: &str) -> Result<Option<Outage>, Problem> {
+    if entry == "none" {
+        return Ok(None);
+    }
+    let expected = "none or START+LENGTH for each path, e.g. path_outage=none,30s+5s";
+    let (start, length) = entry
+        .split_once('+')
+        .ok_or_else(|| Problem::expected(key, value, expected))?;
+    let part = |p| duration(key, p).map_err(|_| Problem::expected(key, value, expected));
+    Ok(Some((part(start)?, part(length)?)))
+}
+
+impl PathKeys {
+    fn set(&mut self, key: &str, value: &str) -> Result<(), Problem> {
+        // An entry's problem names the whole list, as the user wrote it.
+        let whole = |p: Problem| match p {
+            Problem::Percent { key, source, .. } => Problem::Percent {
+                key,
+                value: value.to_string(),
+                source,
+            },
+            Problem::Duration { key, source, .. } => Problem::Duration {
+                key,
+                value: value.to_string(),
+                source,
+            },
+            other => other,
+        };
+        match key {
+            "paths" => {
+                let range = "1 to 4 (a MAVProxy log numbers four links)";
+                self.paths = Some(bounded(key, value, 1..=MAX_PATHS, range)?);
+            }
+            "path_loss" => self.loss = Some(list(value, |e| percent(key, e).map_err(whole))?),
+            "path_delay" => self.delay = Some(list(value, |e| duration(key, e).map_err(whole))?),
+            "path_outage" => self.outage = Some(list(value, |e| path_outage(key, value, e))?),
+            _ => return Err(Problem::UnknownKey(key.to_string())),
+        }
+        Ok(())
+    }
+
+    /// The paths, or none without `paths=` (then no `path_` key may be
+    /// given).
+    fn params(self) -> Result<Vec<PathParams>, Problem> {
+        let given = [
+            ("path_loss", self.loss.as_ref().map(|(v, l)| (v, l.len()))),
+            ("path_delay", self.delay.as_ref().map(|(v, l)| (v, l.len()))),
+            (
+                "path_outage",
+                self.outage.as_ref().map(|(v, l)| (v, l.len())),
+            ),
+        ];
+        let Some(paths) = self.paths else {
+            return match given.iter().find(|(_, list)| list.is_some()) {
+                Some((key, _)) => Err(Problem::Needs {
+                    key: format!("{key}="),
+                    needs:
+                        "paths=N: how many paths the frames take (e.g. paths=2&path_loss=10%,2%)",
+                }),
+                None => Ok(Vec::new()),
+            };
+        };
+        for (key, list) in given {
+            if let Some((value, given)) = list.filter(|(_, n)| *n != paths) {
+                return Err(Problem::PathCount {
+                    key,
+                    value: value.clone(),
+                    given,
+                    paths,
+                });
+            }
+        }
+        Ok((0..paths)
+            .map(|k| PathParams {
+                loss: self.loss.as_ref().map_or(0.0, |(_, l)| l[k]),
+                delay: self.delay.as_ref().map_or(Duration::ZERO, |(_, l)| l[k]),
+                outage: self.outage.as_ref().and_then(|(_, l)| l[k]),
+            })
+            .collect())
+    }
+}
+
 /// A signed duration up to ten years: `1.5s`, `-250ms`, `+2h`.
 fn offset_ns(key: &str, value: &str) -> Result<i64, Problem> {
     let (negative, magnitude) = match value.strip_prefix('-') {
@@ -390,6 +533,7 @@ impl SimParams {
     fn parse_query(query: &str) -> Result<Self, Problem> {
         let mut p = SimParams::default();
         let mut air = AirKeys::default();
+        let mut paths = PathKeys::default();
         let query = query.strip_prefix('?').unwrap_or(query);
         let mut seen: Vec<&str> = Vec::new();
         for pair in query.split('&').filter(|s| !s.is_empty()) {
@@ -401,9 +545,14 @@ impl SimParams {
                 return Err(Problem::Twice(key.to_string()));
             }
             seen.push(key);
-            p.set(key, value, &mut air)?;
+            if key == "paths" || key.starts_with("path_") {
+                paths.set(key, value)?;
+            } else {
+                p.set(key, value, &mut air)?;
+            }
         }
         p.air = air.params(p.baud)?;
+        p.paths = paths.params()?;
         p.check()?;
         Ok(p)
     }
@@ -650,6 +799,20 @@ impl fmt::Display for SimParams {
             let streams: Vec<String> = self.streams.iter().map(ToString::to_string).collect();
             write!(f, "&stream={}", streams.join(","))?;
         }
+        self.write_directions(f)?;
+        self.write_paths(f)
+    }
+}
+
+/// A duration as a `path_` list prints it: humantime's, without its
+/// spaces ("1s500ms"), so a link's name has none.
+fn compact(d: Duration) -> String {
+    humantime::format_duration(d).to_string().replace(' ', "")
+}
+
+impl SimParams {
+    /// The per-direction faults and queues, when set.
+    fn write_directions(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for (key, share) in [
             ("loss_down", self.loss_down),
             ("dup_down", self.dup_down),
@@ -664,6 +827,38 @@ impl fmt::Display for SimParams {
         for (key, queue) in [("queue_up", self.queue_up), ("queue_down", self.queue_down)] {
             if let Some(queue) = queue {
                 write!(f, "&{key}={queue}")?;
+            }
+        }
+        Ok(())
+    }
+
+    /// `paths=` and each `path_` list that is not all defaults.
+    fn write_paths(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.paths.is_empty() {
+            return Ok(());
+        }
+        write!(f, "&paths={}", self.paths.len())?;
+        // Each list with what a path without the fault shows.
+        let lists: [(&str, &str, PathEntry); 3] = [
+            ("path_loss", "0%", |p| {
+                (p.loss > 0.0).then(|| format!("{}%", p.loss * 100.0))
+            }),
+            ("path_delay", "0s", |p| {
+                (!p.delay.is_zero()).then(|| compact(p.delay))
+            }),
+            ("path_outage", "none", |p| {
+                p.outage
+                    .map(|(start, length)| format!("{}+{}", compact(start), compact(length)))
+            }),
+        ];
+        for (key, default, entry) in lists {
+            let entries: Vec<Option<String>> = self.paths.iter().map(entry).collect();
+            if entries.iter().any(Option::is_some) {
+                let shown: Vec<String> = entries
+                    .into_iter()
+                    .map(|e| e.unwrap_or_else(|| default.to_string()))
+                    .collect();
+                write!(f, "&{key}={}", shown.join(","))?;
             }
         }
         Ok(())
@@ -920,5 +1115,102 @@ mod tests {
             let err = SimParams::parse(q).unwrap_err().to_string();
             assert!(err.contains(needle), "{q}: {err}");
         }
+    }
+
+    #[test]
+    fn paths_parse_print_back_and_say_what_is_wrong() {
+        let p = SimParams::parse(
+            "?paths=2&path_loss=10%,2%&path_delay=20ms,100ms&path_outage=none,30s+5s",
+        )
+        .unwrap();
+        let ms = Duration::from_millis;
+        assert_eq!(
+            p.paths,
+            [
+                PathParams {
+                    loss: 0.1,
+                    delay: ms(20),
+                    outage: None
+                },
+                PathParams {
+                    loss: 0.02,
+                    delay: ms(100),
+                    outage: Some((ms(30_000), ms(5_000)))
+                },
+            ]
+        );
+        let printed = p.to_string();
+        assert!(
+            printed.ends_with(
+                "&paths=2&path_loss=10%,2%&path_delay=20ms,100ms&path_outage=none,30s+5s"
+            ),
+            "{printed}"
+        );
+        assert_eq!(SimParams::parse(&printed[4..]).unwrap(), p);
+        // Lists in any order, before paths=; all-default lists left out of
+        // the name, and no space in it.
+        let p = SimParams::parse("?path_delay=0,1.5s,20ms&paths=3").unwrap();
+        let printed = p.to_string();
+        assert!(
+            printed.ends_with("&paths=3&path_delay=0s,1s500ms,20ms"),
+            "{printed}"
+        );
+        assert_eq!(SimParams::parse(&printed[4..]).unwrap(), p);
+        assert_eq!(p.paths[2].loss, 0.0);
+        assert_eq!(
+            SimParams::parse("?paths=1").unwrap().paths,
+            [PathParams::default()]
+        );
+        assert!(SimParams::default().paths.is_empty());
+        for (q, message) in [
+            (
+                "?paths=5",
+                "paths=5: expected 1 to 4 (a MAVProxy log numbers four links)",
+            ),
+            (
+                "?paths=0",
+                "paths=0: expected 1 to 4 (a MAVProxy log numbers four links)",
+            ),
+            (
+                "?path_loss=10%",
+                "path_loss= needs paths=N: how many paths the frames take \
+                 (e.g. paths=2&path_loss=10%,2%)",
+            ),
+            (
+                "?paths=2&path_loss=10%",
+                "path_loss=10%: 1 given for paths=2: give one per path",
+            ),
+            (
+                "?path_delay=20ms,1s,2s&paths=2",
+                "path_delay=20ms,1s,2s: 3 given for paths=2: give one per path",
+            ),
+            (
+                "?paths=2&path_loss=10%,x",
+                "path_loss=10%,x: 'x' is not a percentage from 0 to 100",
+            ),
+            (
+                "?paths=2&path_delay=20ms,2h",
+                "path_delay=20ms,2h: '2h': at most 1h",
+            ),
+            (
+                "?paths=2&path_outage=none,30s",
+                "path_outage=none,30s: expected none or START+LENGTH for each path, \
+                 e.g. path_outage=none,30s+5s",
+            ),
+            (
+                "?paths=2&paths=3",
+                "paths= is given twice: give each key once",
+            ),
+        ] {
+            assert_eq!(SimParams::parse(q).unwrap_err().to_string(), message, "{q}");
+        }
+        let err = SimParams::parse("?paths=2&path_jitter=1ms")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("unknown key 'path_jitter'; keys: "),
+            "{err}"
+        );
+        assert!(err.contains("path_outage=none|START+LENGTH"), "{err}");
     }
 }

@@ -51,7 +51,8 @@ impl SimLink {
                 }),
             );
             // The radio is the near end: no link delay.
-            self.enqueue(sent, bytes, Payload::Plain, None);
+            // The near radio's own frame: on its path (0), once.
+            self.enqueue(sent, bytes, Payload::Plain, 0, None);
         }
     }
 }
