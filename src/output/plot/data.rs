@@ -118,13 +118,14 @@ impl PlotData {
 
     /// The pair report told at `at` (its links by place on the command
     /// line): each link's part in each source heard on several.
+    /// Only a passive run's sources are drawn: a probe run's page is its
+    /// responders'.
     pub(crate) fn on_pair(&mut self, at: Nanos, summary: &PairSummary) {
         for source in &summary.sources {
             for link in &source.links {
-                self.sources
-                    .entry((link.link, source.source))
-                    .or_insert_with(|| SourceTrack::new(false))
-                    .paired(at, link);
+                if let Some(track) = self.sources.get_mut(&(link.link, source.source)) {
+                    track.paired(at, link);
+                }
             }
         }
     }

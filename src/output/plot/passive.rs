@@ -471,6 +471,10 @@ age p99 ms
         assert_eq!(t.spans.bins.iter().map(|s| s.first).sum::<u64>(), 0);
     }
 
+    fn second_window(n: u64) -> Window {
+        second(n, 50, 0)
+    }
+
     #[test]
     fn a_paired_source_gets_a_lag_chart_and_its_figures_in_the_legend() {
         let plot = super::super::Plot::default();
@@ -495,6 +499,14 @@ age p99 ms
                 uncopied_sources: Vec::new(),
                 untracked_frames: 0,
             };
+            // A passive run's sources: drawn with their part in the pair.
+            for link in 0..2 {
+                let w = Window {
+                    source: one,
+                    ..second_window(second - 1)
+                };
+                plot.data.borrow_mut().on_windows(link, &[w], &[]);
+            }
             plot.on_pair(second * FIRST_SPAN_NS, &summary);
         }
         let svg = plot.svg().unwrap();
