@@ -20,8 +20,8 @@ pub(crate) enum InputError {
     #[error("{file}: empty; expected the JSON lines of `mavping --json ... > FILE`")]
     Empty { file: String },
     #[error(
-        "{file} line {line}: not mavping's JSON lines (save a run with `mavping --json ... > FILE`; \
-         a telemetry log with `mavping --json LOG.tlog > FILE`)"
+        "{file} line {line}: not a line of `mavping --json` (save a run with `mavping --json ... > \
+         FILE`, a telemetry log with `mavping --json LOG.tlog > FILE`)"
     )]
     NotJson { file: String, line: usize },
     #[error("{file} line {line}: schema_version {found}; this mavping reads {SCHEMA_VERSION}")]

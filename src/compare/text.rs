@@ -76,7 +76,9 @@ fn write_link(out: &mut dyn Write, link: &LinkComparison) -> io::Result<()> {
             writeln!(out, "  only in {side}: {}", unmatched(ids))?;
         }
     }
-    if let Some(totals) = &link.totals {
+    // With one source, the link as a whole is that source again.
+    let sources = link.rows.iter().filter(|r| r.role == Role::Source).count();
+    if let Some(totals) = link.totals.as_ref().filter(|_| sources != 1) {
         writeln!(
             out,
             "  the link as a whole (every source but the radio and the ground station)"
@@ -171,15 +173,15 @@ fn rtt_line(out: &mut dyn Write, s: &ShiftComparison) -> io::Result<()> {
 
 fn age_lines(out: &mut dyn Write, a: &AgeComparison) -> io::Result<()> {
     for (label, x, y, d) in [
-        ("frame age p50", a.a_p50_ms, a.b_p50_ms, a.p50_change_ms),
-        ("frame age p99", a.a_p99_ms, a.b_p99_ms, a.p99_change_ms),
+        ("age p50", a.a_p50_ms, a.b_p50_ms, a.p50_change_ms),
+        ("age p99", a.a_p99_ms, a.b_p99_ms, a.p99_change_ms),
     ] {
         writeln!(
             out,
-            "    {label}  {:<22}  {:<22}    {d:+.1} ms (no interval: a summary keeps only \
-             its percentiles)",
-            format!("A {x:.1} ms"),
-            format!("B {y:.1} ms"),
+            "    {label:<11} A {:<22} B {:<22} B-A {d:+.1} ms (no interval: a summary keeps \
+             only its percentiles)",
+            format!("{x:.1} ms"),
+            format!("{y:.1} ms"),
         )?;
     }
     Ok(())
@@ -200,13 +202,17 @@ fn write_bands(out: &mut dyn Write, bands: &Bands) -> io::Result<()> {
     )?;
     for band in &bands.bands {
         let c = &band.loss;
+        let difference = match (band.a_windows, band.b_windows) {
+            (0, _) => "A was never this far".to_string(),
+            (_, 0) => "B was never this far".to_string(),
+            _ => loss_difference(c),
+        };
         writeln!(
             out,
-            "    {:<11} A {:<22} B {:<22} B-A {}",
+            "    {:<11} A {:<22} B {:<22} B-A {difference}",
             format!("{}-{} m", band.from_m, band.to_m),
             loss_cell(c.a.lost, c.a.of, c.a.pct),
             loss_cell(c.b.lost, c.b.of, c.b.pct),
-            loss_difference(c)
         )?;
     }
     let no_position = bands.a_no_position + bands.b_no_position;
