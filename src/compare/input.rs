@@ -3,6 +3,7 @@
 //! passed over; anything that is not mavping's JSON is refused.
 
 use std::collections::BTreeMap;
+use std::io::{BufRead, Read};
 
 use serde::Deserialize;
 use serde_json::Value;
@@ -13,6 +14,11 @@ use crate::frame::SysComp;
 
 /// The `schema_version` this build writes and reads.
 pub(crate) const SCHEMA_VERSION: u64 = 2;
+
+/// The longest line read. A summary of many sources is tens of KiB; a
+/// file that is no JSON lines at all (a log, an image) must not be read
+/// whole in search of a newline.
+pub(crate) const MAX_LINE: u64 = 16 << 20;
 
 /// Why a file cannot be compared: one line, naming the file.
 #[derive(Debug, Error, PartialEq)]
@@ -37,6 +43,10 @@ pub(crate) enum InputError {
         kind: &'static str,
         problem: String,
     },
+    #[error("{file} line {line}: longer than {MAX_LINE} bytes, not a line of `mavping --json`")]
+    LineTooLong { file: String, line: usize },
+    #[error("{file}: cannot read it: {message}")]
+    Read { file: String, message: String },
     #[error(
         "{file}: no summary or passive_summary line (a run cut short, or a --probe command run, \
          which compare does not read)"
@@ -264,21 +274,37 @@ impl From<WindowLine> for Window {
     }
 }
 
-/// Reads one file's text (`name` is how errors and the report call it).
-pub(crate) fn parse(name: &str, bytes: &[u8]) -> Result<RunFile, InputError> {
+/// Reads one file's text (`name` is how errors and the report call it),
+/// a line at a time: memory holds one line and the figures kept, however
+/// many reply or interim lines the run wrote.
+pub(crate) fn parse(name: &str, mut reader: impl BufRead) -> Result<RunFile, InputError> {
     let file = || name.to_string();
     let mut runs = Vec::new();
     // Flight windows come before their summary; with several links each
     // names its link.
     let mut windows: BTreeMap<Option<String>, Vec<Window>> = BTreeMap::new();
     let mut any = false;
-    for (i, raw) in bytes.split(|&b| b == b'\n').enumerate() {
-        let line = i + 1;
+    let mut raw = Vec::new();
+    for line in 1.. {
+        raw.clear();
+        let read = (&mut reader)
+            .take(MAX_LINE + 1)
+            .read_until(b'\n', &mut raw)
+            .map_err(|e| InputError::Read {
+                file: file(),
+                message: e.to_string(),
+            })?;
+        if read == 0 {
+            break;
+        }
+        if raw.len() as u64 > MAX_LINE {
+            return Err(InputError::LineTooLong { file: file(), line });
+        }
         if raw.iter().all(u8::is_ascii_whitespace) {
             continue;
         }
         any = true;
-        let value: Value = match serde_json::from_slice(raw) {
+        let value: Value = match serde_json::from_slice(&raw) {
             Ok(v @ Value::Object(_)) => v,
             _ => return Err(InputError::NotJson { file: file(), line }),
         };
@@ -503,5 +529,27 @@ mod tests {
         );
         let message = err(b"garbage").to_string();
         assert!(!message.contains('\n'), "{message}");
+    }
+
+    /// A stream with no newline (a binary file, `/dev/zero`) is refused
+    /// after `MAX_LINE` bytes, not read on until memory runs out.
+    #[test]
+    fn a_line_without_end_is_refused_at_its_limit() {
+        let endless = std::io::BufReader::new(std::io::repeat(b'x'));
+        assert_eq!(
+            parse("zero", endless).unwrap_err(),
+            InputError::LineTooLong {
+                file: "zero".into(),
+                line: 1
+            }
+        );
+        // Lines up to the limit are read, however many.
+        let many = "{\"type\":\"reply\"}\n".repeat(10_000);
+        assert_eq!(
+            parse("many", many.as_bytes()).unwrap_err(),
+            InputError::NoSummary {
+                file: "many".into()
+            }
+        );
     }
 }

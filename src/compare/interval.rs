@@ -62,8 +62,9 @@ mod tests {
         assert!((got - want).abs() <= tol, "{got} is not {want} ± {tol}");
     }
 
-    /// Newcombe (1998), Table II, method 10, to the four places it
-    /// prints: the paper's examples are p1 - p2, ours b - a, so p1 is b.
+    /// Newcombe (1998), Table II, method 10, its eight examples (a) to
+    /// (h) to the four places it prints: the paper's examples are
+    /// p1 - p2, ours b - a, so p1 is b.
     #[test]
     fn newcombe_reproduces_the_published_examples() {
         for (xb, nb, xa, na, low, high) in [
@@ -72,7 +73,9 @@ mod tests {
             (6, 7, 2, 7, 0.0582, 0.8062),
             (5, 56, 0, 29, -0.0381, 0.1926),
             (0, 10, 0, 20, -0.1611, 0.2775),
+            (0, 10, 0, 10, -0.2775, 0.2775),
             (10, 10, 0, 20, 0.6791, 1.0000),
+            (10, 10, 0, 10, 0.6075, 1.0000),
         ] {
             let d = newcombe(xa, na, xb, nb).unwrap();
             close(d.low, low, 0.000_05);

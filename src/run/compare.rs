@@ -24,11 +24,11 @@ enum Refused {
 
 fn read(path: &Path) -> Result<RunFile, Refused> {
     let file = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| Refused::Unreadable {
+    let opened = std::fs::File::open(path).map_err(|source| Refused::Unreadable {
         file: file.clone(),
         source,
     })?;
-    Ok(compare::parse(&file, &bytes)?)
+    Ok(compare::parse(&file, io::BufReader::new(opened))?)
 }
 
 fn report(config: &CompareConfig) -> Result<Report, Refused> {
