@@ -15,7 +15,10 @@
 //!
 //! The random numbers are SplitMix64's (Steele, Lea and Flood, OOPSLA
 //! 2014), seeded with a constant: the same files always give the same
-//! interval, on every platform and whatever the `rand` crate's version.
+//! interval, whatever the `rand` crate's version. The draws go through
+//! `ln`, `cos` and `powf`, which each platform's math library may round
+//! differently in the last bit: another platform's interval can differ in
+//! its last binary digits.
 
 /// Resamples of each run.
 pub(crate) const RESAMPLES: usize = 2000;

@@ -176,6 +176,8 @@ fn age_lines(out: &mut dyn Write, a: &AgeComparison) -> io::Result<()> {
         ("age p50", a.a_p50_ms, a.b_p50_ms, a.p50_change_ms),
         ("age p99", a.a_p99_ms, a.b_p99_ms, a.p99_change_ms),
     ] {
+        // Not "-0.0": a change that rounds to nothing has no sign.
+        let d = if (d * 10.0).round() == 0.0 { 0.0 } else { d };
         writeln!(
             out,
             "    {label:<11} A {:<22} B {:<22} B-A {d:+.1} ms (no interval: a summary keeps \

@@ -155,6 +155,62 @@ fn fail_if_worse_fails_only_when_b_loses_more() {
     assert!(out.contains("B loses more"), "{out}");
 }
 
+/// Two passive runs of a vehicle streaming ATTITUDE at 50 Hz beside its
+/// radio, losing 2 % and 6 % of its frames on the way down: each source's
+/// counts are the sim's truth (frames lost of those that arrived or were
+/// lost), the radio a row of its own, the vehicle's loss higher in B.
+#[test]
+fn two_passive_runs_compare_each_source_against_the_sims_truth() {
+    let dir = Scratch::new("compare-passive");
+    let (a, b) = (dir.path("a.json"), dir.path("b.json"));
+    let link = |loss: u64, seed: u64| {
+        format!("sim:?stream=ATTITUDE@50&radio=on&loss_down={loss}%&seed={seed}&clock=virtual")
+    };
+    let args = ["--passive", "-w", "60s", "-q"];
+    let truth_a = save(&a, &args, &link(2, 3));
+    let truth_b = save(&b, &args, &link(6, 4));
+    let (code, report, err) = compare_json(&[path_str(&a), path_str(&b)]);
+    assert_eq!(code, 0, "{err}");
+    let link = &report["links"][0];
+    assert_eq!(
+        (&link["a_kind"], &link["b_kind"]),
+        (&json!("passive"), &json!("passive"))
+    );
+    let rows = link["rows"].as_array().unwrap();
+    let roles: Vec<&str> = rows.iter().map(|r| r["role"].as_str().unwrap()).collect();
+    assert_eq!(roles, ["source", "radio"], "{report}");
+    let loss = &rows[0]["loss"];
+    for (side, path, truth) in [("a", &a, &truth_a), ("b", &b, &truth_b)] {
+        let summary = json_lines(&std::fs::read_to_string(path).unwrap())
+            .into_iter()
+            .find(|l| l["type"] == "passive_summary")
+            .unwrap();
+        let counts = &summary["sources"][0]["counts"];
+        assert_eq!(
+            summary["sources"][0]["source"],
+            json!({"sysid": 1, "compid": 1})
+        );
+        let (lost, of) = (n(&loss[side], "lost"), n(&loss[side], "of"));
+        assert_eq!(lost, n(counts, "lost"), "{side}: {counts}");
+        // Every frame that arrived, once, and every gap proven.
+        let delivered = sim_truth(truth, "1/1", "down_delivered");
+        assert_eq!(of, delivered + lost, "{side}: {loss}");
+        // Frames lost after the last that arrived leave no gap.
+        let dropped = sim_truth(truth, "1/1", "down_dropped");
+        assert!(lost <= dropped, "{side}: {lost} of {dropped}");
+        if side == "a" {
+            assert_eq!(lost, dropped, "seed 3 loses none of its last frames");
+        }
+    }
+    assert_eq!(loss["finding"], "b_higher", "{loss}");
+    // The radio loses nothing in either.
+    assert_eq!(rows[1]["loss"]["finding"], "no_clear_difference");
+    assert_eq!(rows[1]["loss"]["a"]["lost"], 0);
+    assert!(rows[0]["rtt_p50"].is_null() && !rows[0]["age"].is_null());
+    assert!(!link["totals"].is_null());
+    assert_eq!(report["b_loses_more"], true);
+}
+
 /// A route north at `north_mps` for `seconds`, 50 frames a second (its
 /// position every tenth), the windows' losses planned: `per_window[k]`
 /// frames of window k (10 s), none of them a position.
