@@ -309,6 +309,8 @@ pub(crate) enum Generate {
     Man,
     /// mavping-respond(1)
     ManRespond,
+    /// mavping-compare(1)
+    ManCompare,
 }
 
 /// Modes other than measuring.
