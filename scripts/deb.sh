@@ -78,7 +78,7 @@ doc="$root/usr/share/doc/mavping"
 # Files, each with its mode: dpkg-deb packs what is on disk.
 put() { install -D -m "$1" "$2" "$root/$3"; }
 put 0755 "$binary" usr/bin/mavping
-for page in mavping.1 mavping-respond.1; do
+for page in mavping.1 mavping-respond.1 mavping-compare.1; do
   install -d -m 0755 "$root/usr/share/man/man1"
   gzip -9n < "completions/$page" > "$root/usr/share/man/man1/$page.gz"
 done

@@ -123,7 +123,7 @@ archive() {
   stage=$(mktemp -d)
   mkdir -p "$stage/$name/man" "$stage/$name/completions"
   cp "$(binary "$t")" "$stage/$name/mavping"
-  cp completions/mavping.1 completions/mavping-respond.1 "$stage/$name/man/"
+  cp completions/mavping.1 completions/mavping-respond.1 completions/mavping-compare.1 "$stage/$name/man/"
   cp completions/mavping.bash completions/_mavping completions/mavping.fish \
     completions/_mavping.ps1 completions/mavping.elv "$stage/$name/completions/"
   cp LICENSE README.md CHANGELOG.md "$stage/$name/"

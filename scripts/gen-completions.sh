@@ -13,4 +13,5 @@ mkdir -p completions
 "$bin" --generate complete-elvish > completions/mavping.elv
 "$bin" --generate man > completions/mavping.1
 "$bin" --generate man-respond > completions/mavping-respond.1
+"$bin" --generate man-compare > completions/mavping-compare.1
 echo "completions/ regenerated"

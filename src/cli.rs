@@ -309,6 +309,8 @@ pub(crate) enum Generate {
     Man,
     /// mavping-respond(1)
     ManRespond,
+    /// mavping-compare(1)
+    ManCompare,
 }
 
 /// Modes other than measuring.
@@ -331,6 +333,21 @@ pub enum Mode {
             Prometheus scrape configuration."
     )]
     Serve(ServeArgs),
+    /// Compare two saved runs (mavping --json ... > FILE): loss and median RTT differences with
+    /// 95 % intervals
+    #[command(
+        long_about = "Compare two saved runs: the same link on two days, radio A against radio B.\n\n\
+            Reads two files of `mavping --json` lines (a probe run's summary, a passive run's or \
+            a telemetry log's passive_summary), pairs their links by name (or the only summary \
+            of each) and their responders or sources by SYSID/COMPID, and shows for each: loss \
+            in A and B and the difference B - A with its 95 % interval (Newcombe's hybrid score \
+            method); the median RTT shift B - A with a bootstrap interval from each run's RTT \
+            histogram; frame ages; and for two telemetry logs, loss by distance from their flight \
+            windows. Exit 0 when compared (a comparison is not a check; see --fail-if-worse), 2 \
+            when a file is not mavping's JSON or nothing is in both.",
+        after_help = "See docs/compare.md for the statistics and an example."
+    )]
+    Compare(CompareArgs),
 }
 
 /// What to send.
@@ -949,4 +966,34 @@ pub struct ServeArgs {
     /// More logs on stderr (-v info, -vv debug)
     #[arg(short = 'v', long, action = ArgAction::Count)]
     pub(crate) verbose: u8,
+}
+
+/// Options of `mavping compare`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct CompareArgs {
+    /// The reference run: a file of `mavping --json` lines
+    #[arg(value_name = "A.json")]
+    pub(crate) a: PathBuf,
+
+    /// The run compared with it
+    #[arg(value_name = "B.json")]
+    pub(crate) b: PathBuf,
+
+    /// Write one JSON line (type compare) instead of text
+    #[arg(long)]
+    pub(crate) json: bool,
+
+    /// Compare only this responder or source: SYSID/COMPID, or SYSID for every component
+    #[arg(long, value_name = "SYSID[/COMPID]")]
+    pub(crate) source: Option<String>,
+
+    /// Width of the distance bands of two telemetry logs, in metres [default: 10, 20, 50,
+    /// 100 ... whichever gives at most 8 bands]
+    #[arg(allow_negative_numbers = true, long, value_name = "METRES")]
+    pub(crate) band_m: Option<f64>,
+
+    /// Exit 1 when B loses more than A: a responder's, source's or passive link's loss
+    /// difference whose 95 % interval is above 0
+    #[arg(long)]
+    pub(crate) fail_if_worse: bool,
 }

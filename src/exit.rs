@@ -43,6 +43,14 @@ pub enum Ending {
     },
     /// `mavping respond` could not open its link, or lost it.
     LinkFailed,
+    /// `mavping compare` compared two runs: a comparison is not a check,
+    /// unless `--fail-if-worse` asked for one.
+    Compared {
+        /// `--fail-if-worse`, and B lost more than A.
+        worse: bool,
+        /// The report could not be written.
+        output_failed: bool,
+    },
     /// A second Ctrl-C or SIGTERM left before the run could end.
     InterruptedTwice,
 }
@@ -63,8 +71,21 @@ pub(crate) fn of_link(end: LinkEnd) -> u8 {
 /// error. A closed stdout changes nothing: a failed check stays failed.
 pub fn code(ending: &Ending) -> u8 {
     match ending {
-        Ending::Done => OK,
-        Ending::Refused | Ending::LinkFailed => ERROR,
+        Ending::Done
+        | Ending::Compared {
+            worse: false,
+            output_failed: false,
+        } => OK,
+        Ending::Refused
+        | Ending::LinkFailed
+        | Ending::Compared {
+            output_failed: true,
+            ..
+        } => ERROR,
+        Ending::Compared {
+            worse: true,
+            output_failed: false,
+        } => FAILED,
         Ending::InterruptedTwice => INTERRUPTED_TWICE,
         Ending::Measured {
             links,
@@ -142,5 +163,19 @@ mod tests {
         assert_eq!(code(&Ending::Refused), ERROR);
         assert_eq!(code(&Ending::LinkFailed), ERROR);
         assert_eq!(code(&Ending::InterruptedTwice), 130);
+    }
+
+    #[test]
+    fn a_comparison_fails_only_when_asked_and_b_is_worse() {
+        let compared = |worse, output_failed| {
+            code(&Ending::Compared {
+                worse,
+                output_failed,
+            })
+        };
+        assert_eq!(compared(false, false), OK);
+        assert_eq!(compared(true, false), FAILED);
+        assert_eq!(compared(true, true), ERROR);
+        assert_eq!(compared(false, true), ERROR);
     }
 }

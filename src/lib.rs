@@ -16,6 +16,7 @@
 
 pub(crate) mod answering;
 pub mod cli;
+pub(crate) mod compare;
 pub mod config;
 pub mod engine;
 pub mod exit;

@@ -5,6 +5,7 @@
 //! - `measure.rs`: `mavping [OPTIONS] LINK...` into a `Config`, with
 //!   `sweep.rs` for a run in steps;
 //! - `respond.rs`: `mavping respond` into a `RespondConfig`;
+//! - `compare.rs`: `mavping compare` into a `CompareConfig`;
 //! - `serve/`: `mavping serve`, its file and each `/probe` request;
 //! - what they share: `link.rs`, `probe.rs`, `signing.rs`, `values.rs`
 //!   (checks every front end makes alike), `keys.rs` (how errors name a
@@ -15,6 +16,7 @@
 //! [`LinkSpec`]: crate::transport::address::LinkSpec
 //! [`ResponderSettings`]: crate::responder::ResponderSettings
 
+mod compare;
 mod error;
 mod keys;
 mod link;
@@ -26,6 +28,7 @@ mod signing;
 mod sweep;
 mod values;
 
+pub(crate) use compare::CompareConfig;
 pub use error::ConfigError;
 pub(crate) use link::LinkConfig;
 pub(crate) use measure::{Config, OutputConfig};

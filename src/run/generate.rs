@@ -24,6 +24,7 @@ pub(crate) fn generate(kind: Generate, out: &mut dyn Write) -> io::Result<()> {
         Generate::CompleteElvish => &Elvish,
         Generate::Man => return man_mavping(out),
         Generate::ManRespond => return man_respond(out),
+        Generate::ManCompare => return man_compare(out),
     };
     shell.write_registration(COMPLETE_VAR, "mavping", "mavping", "mavping", out)
 }
@@ -158,7 +159,11 @@ fn man_mavping(out: &mut dyn Write) -> io::Result<()> {
         "mavping",
         "mavping",
         cli::EXAMPLES,
-        &[connections, exit, see_also("mavping-respond(1)")],
+        &[
+            connections,
+            exit,
+            see_also("mavping-respond(1), mavping-compare(1)"),
+        ],
         out,
     )
 }
@@ -204,6 +209,60 @@ fn man_respond(out: &mut dyn Write) -> io::Result<()> {
             (
                 "mavping respond --stream ATTITUDE@50,GLOBAL_POSITION_INT@5 --stream-drop 2% udpout:127.0.0.1:14550",
                 "a vehicle's telemetry, every frame numbered, 2% of it lost",
+            ),
+        ],
+        &[exit, see_also("mavping(1)")],
+        out,
+    )
+}
+
+fn man_compare(out: &mut dyn Write) -> io::Result<()> {
+    let mut cmd = cli::command();
+    cmd.build();
+    let compare = cmd
+        .find_subcommand("compare")
+        .cloned()
+        .expect("the compare subcommand");
+    let exit = items(
+        "EXIT STATUS",
+        &[
+            ("0", "compared (a comparison is not a check)"),
+            (
+                "1",
+                "--fail-if-worse, and a responder's, source's or passive link's loss is higher \
+                 in B, its 95 % interval above 0",
+            ),
+            (
+                "2",
+                "usage error, a file missing or not mavping's JSON lines, nothing in both \
+                 files, or the report could not be written",
+            ),
+        ],
+    );
+    page(
+        compare,
+        "mavping-compare",
+        "mavping compare",
+        &[
+            (
+                "mavping --json -c 3000 -q udpout:10.0.0.2:14550 > monday.json",
+                "save a run (the same again on Tuesday, as tuesday.json)",
+            ),
+            (
+                "mavping compare monday.json tuesday.json",
+                "loss and median RTT differences with their 95 % intervals",
+            ),
+            (
+                "mavping --json tlog:rfd900.tlog > rfd900.json",
+                "save a telemetry log's summary and flight windows",
+            ),
+            (
+                "mavping compare --band-m 200 rfd900.json sik.json",
+                "two flights: loss by distance in bands of 200 m",
+            ),
+            (
+                "mavping compare --fail-if-worse --source 1/1 before.json after.json",
+                "exit 1 when 1/1 loses more in after.json",
             ),
         ],
         &[exit, see_also("mavping(1)")],

@@ -1,8 +1,9 @@
 //! From parsed arguments to how the run ended: validation, logging, the
 //! runtime, signals, then a measurement ([`measure`]), a responder
-//! ([`respond`]) or the Prometheus exporter ([`serve`]). `main` turns the
-//! [`Ending`] into the exit code.
+//! ([`respond`]), the Prometheus exporter ([`serve`]) or two saved runs
+//! compared ([`compare`]). `main` turns the [`Ending`] into the exit code.
 
+mod compare;
 mod completion;
 mod exports;
 pub(crate) mod generate;
@@ -23,7 +24,7 @@ pub use usage::usage_error;
 use std::io;
 
 use crate::cli::{Cli, Mode};
-use crate::config::{Config, RespondConfig, ServeConfig};
+use crate::config::{CompareConfig, Config, RespondConfig, ServeConfig};
 use crate::exit::Ending;
 use crate::stderr;
 use crate::transport::LinkSpec;
@@ -66,6 +67,13 @@ pub fn main(cli: &Cli) -> Ending {
                     serve::run(config, controls).await
                 })
             }
+            Err(e) => {
+                stderr::error(&e);
+                Ending::Refused
+            }
+        },
+        Some(Mode::Compare(args)) => match CompareConfig::try_from(args) {
+            Ok(config) => compare::run(&config),
             Err(e) => {
                 stderr::error(&e);
                 Ending::Refused

@@ -23,6 +23,7 @@ fn committed_completions_and_man_pages_are_current() {
         ("complete-elvish", "mavping.elv"),
         ("man", "mavping.1"),
         ("man-respond", "mavping-respond.1"),
+        ("man-compare", "mavping-compare.1"),
     ] {
         let (code, fresh, err) = run_mavping(&["--generate", kind]);
         assert_eq!(code, 0, "{err}");
@@ -82,6 +83,20 @@ fn man_pages_render_with_synopsis_examples_and_exit_status() {
         assert!(
             page.contains(text),
             "{text:?} not in mavping-respond(1):\n{page}"
+        );
+    }
+    let page = man("mavping-compare.1");
+    for text in [
+        "mavping compare [--json] [--source SYSID[/COMPID]]",
+        "A.json B.json",
+        "EXAMPLES",
+        "mavping compare monday.json tuesday.json",
+        "EXIT STATUS",
+        "mavping(1)",
+    ] {
+        assert!(
+            page.contains(text),
+            "{text:?} not in mavping-compare(1):\n{page}"
         );
     }
 }

@@ -41,6 +41,7 @@ const FILES: &[&str] = &[
     "/usr/share/doc/mavping/examples/prometheus.yml",
     "/usr/share/doc/mavping/service.md",
     "/usr/share/fish/vendor_completions.d/mavping.fish",
+    "/usr/share/man/man1/mavping-compare.1.gz",
     "/usr/share/man/man1/mavping-respond.1.gz",
     "/usr/share/man/man1/mavping.1.gz",
     "/usr/share/zsh/vendor-completions/_mavping",
@@ -271,6 +272,10 @@ fn assert_files_installed() {
         (
             "mavping-respond",
             "/usr/share/man/man1/mavping-respond.1.gz",
+        ),
+        (
+            "mavping-compare",
+            "/usr/share/man/man1/mavping-compare.1.gz",
         ),
     ] {
         let found = run("man", &["-w", page]);

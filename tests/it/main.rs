@@ -8,6 +8,7 @@ mod advice;
 mod age;
 mod answers;
 mod cli;
+mod compare;
 mod completions;
 mod contrib;
 mod damaged;

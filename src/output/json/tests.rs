@@ -122,7 +122,47 @@ fn the_schema_accepts_every_kind_of_line() {
     let value: Value = serde_json::from_slice(&line).unwrap();
     assert_valid(&validator, &value);
     written.insert(value["type"].as_str().unwrap().to_string());
+    // `mavping compare`'s one line, its every optional part filled.
+    let value: Value = serde_json::from_slice(&compare_line()).unwrap();
+    assert_valid(&validator, &value);
+    written.insert(value["type"].as_str().unwrap().to_string());
     assert_eq!(schema_types(&schema), written);
+}
+
+/// Two files, each a probe run (RTTs and frame ages), a telemetry log
+/// (windows with and without a position) and a live passive run, A with
+/// a link more, compared.
+fn compare_line() -> Vec<u8> {
+    let file = |loss: u64, base: f64, more: &str| {
+        format!(
+            r#"{{"type":"summary","schema_version":2,"link":"sim:","responders":[{{"responder":{{"sysid":1,"compid":1}},"sent":500,"lost":{loss},"rtt_us":{{"p50":{p50}}},"histogram":[{{"low_us":{base},"high_us":{high},"count":300}},{{"low_us":{high},"high_us":{top},"count":200}}]}}],"age":[{{"source":{{"sysid":1,"compid":1}},"headline":{{"p50_ms":1.5,"p99_ms":4.0}}}}]}}
+{{"type":"flight_window","link":"tlog:f","received":100,"duplicate":0,"lost":{loss},"range":{{"distance_m":12.5}}}}
+{{"type":"flight_window","link":"tlog:f","received":100,"duplicate":0,"lost":0,"range":null}}
+{{"type":"passive_summary","schema_version":2,"link":"tlog:f","totals":{{"counts":{{"received":200,"damaged":0,"lost":{loss},"duplicate":0}}}},"sources":[{{"source":{{"sysid":1,"compid":1}},"radio":false,"ground":false,"counts":{{"received":200,"damaged":0,"lost":{loss},"duplicate":0}}}},{{"source":{{"sysid":51,"compid":68}},"radio":true,"ground":false,"counts":{{"received":20,"damaged":0,"lost":0,"duplicate":0}}}}],"flight":{{}}}}
+{{"type":"passive_summary","schema_version":2,"link":"udp:14550","totals":{{"counts":{{"received":90,"damaged":0,"lost":{loss},"duplicate":0}}}},"sources":[{{"source":{{"sysid":1,"compid":1}},"radio":false,"ground":false,"counts":{{"received":90,"damaged":0,"lost":{loss},"duplicate":0}}}}]}}
+{more}"#,
+            p50 = base + 500.0,
+            high = base + 600.0,
+            top = base + 1000.0,
+        )
+    };
+    let a = file(
+        5,
+        20_000.0,
+        r#"{"type":"summary","schema_version":2,"link":"udp:9","responders":[]}"#,
+    );
+    let b = file(40, 30_000.0, "");
+    let parse = |name: &str, text: &str| crate::compare::parse(name, text.as_bytes()).unwrap();
+    let report = crate::compare::compare(
+        &parse("a.json", &a),
+        &parse("b.json", &b),
+        &crate::compare::Options::default(),
+    )
+    .unwrap();
+    assert_eq!(report.links.len(), 3);
+    let mut line = Vec::new();
+    crate::compare::write_json(&mut line, &report, 0).unwrap();
+    line
 }
 
 /// One source on two links, the second losing every third frame the
