@@ -126,6 +126,8 @@ fn write_link(out: &mut impl Write, l: &LinkPair, names: &[&str]) -> io::Result<
 struct MatrixLine<'a> {
     r#type: &'static str,
     schema_version: u32,
+    /// The requests' message: TIMESYNC or PING.
+    message: &'a str,
     links: &'a [&'a str],
     #[serde(flatten)]
     matrix: &'a MatrixSummary,
@@ -133,12 +135,14 @@ struct MatrixLine<'a> {
 
 pub(crate) fn write_matrix_json(
     out: &mut impl Write,
+    message: &str,
     m: &MatrixSummary,
     names: &[&str],
 ) -> io::Result<()> {
     let line = MatrixLine {
         r#type: "link_matrix",
         schema_version: SCHEMA_VERSION,
+        message,
         links: names,
         matrix: m,
     };
@@ -148,13 +152,14 @@ pub(crate) fn write_matrix_json(
 
 pub(crate) fn write_matrix_text(
     out: &mut impl Write,
+    message: &str,
     m: &MatrixSummary,
     names: &[&str],
 ) -> io::Result<()> {
     let name = |k: usize| names.get(k).copied().unwrap_or("?");
     writeln!(
         out,
-        "\n--- TIMESYNC requests out on one link, replies heard on each ---"
+        "\n--- {message} requests out on one link, replies heard on each ---"
     )?;
     for (out_link, &requests) in m.requests.iter().enumerate() {
         writeln!(out, "out on [{}]: {requests} requests", name(out_link))?;

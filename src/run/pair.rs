@@ -33,6 +33,8 @@ type Way = (usize, PathId);
 struct Shared {
     /// TIMESYNC requests out on each link, replies heard on each.
     matrix: Matrix,
+    /// The same of PING requests, for a vehicle that answers them.
+    ping_matrix: Matrix,
     /// The same from each telemetry log (by its place) whose logger sent
     /// TIMESYNC requests, as MAVProxy's `ping` does: its links are its
     /// paths, each request's out-link in its `ts1`'s low four bits.
@@ -69,6 +71,9 @@ impl Shared {
 pub(super) struct Pairs {
     shared: Rc<RefCell<Shared>>,
     origin: Instant,
+    /// Several links: requests may go out on one and come back on
+    /// another (one link's requests come back on it: nothing to match).
+    several: bool,
 }
 
 /// One link's way into the tracker.
@@ -80,6 +85,8 @@ struct LinkWatch {
     shift: Nanos,
     /// A telemetry log: what its logger sent is among its frames.
     log: bool,
+    /// Whether our requests and their replies are matched across links.
+    matrix: bool,
 }
 
 /// The path MAVProxy (and mavping's `--tlog`) logs its own frames on.
@@ -117,41 +124,71 @@ impl Watch for LinkWatch {
             let way = shared.index((self.place, i.path));
             shared.by_way.on_frame(way, &i.frame, at);
             shared.by_link.on_frame(self.place, &i.frame, at);
-            if let Msg::Timesync { tc1, ts1, .. } = i.frame.msg {
-                if self.log {
+            match i.frame.msg {
+                Msg::Timesync { tc1, ts1, .. } if self.log => {
                     self.logged_timesync(&mut shared, i.path, tc1, ts1, at);
-                } else if tc1 != 0 {
+                }
+                Msg::Timesync { tc1, ts1, .. } if self.matrix && tc1 != 0 => {
                     shared.matrix.on_reply(self.place, ts1 as u64, at);
                 }
+                // A reply names the requester; a request names no one.
+                Msg::Ping {
+                    time_usec,
+                    seq,
+                    target_system,
+                    target_component,
+                } if self.matrix && (target_system, target_component) != (0, 0) => {
+                    let key = ping_key(time_usec, seq);
+                    shared.ping_matrix.on_reply(self.place, key, at);
+                }
+                _ => {}
             }
         }
     }
 
     fn sent(&self, at: Instant, frame: &[u8]) {
-        // Our TIMESYNC requests only: decoding every frame we send would
-        // cost the PING runs for nothing.
-        if frame.len() < 10 || !is_timesync(frame) {
+        // Our TIMESYNC and PING requests only: decoding every frame we
+        // send would cost the runs for nothing.
+        if !self.matrix || frame.len() < 10 || !is_request(frame) {
             return;
         }
-        if let Msg::Timesync { tc1: 0, ts1, .. } = frame::decode(frame).msg {
-            let at = since(self.origin, at);
-            self.shared
-                .borrow_mut()
-                .matrix
-                .on_request(self.place, ts1 as u64, at);
+        let at = since(self.origin, at);
+        let mut shared = self.shared.borrow_mut();
+        match frame::decode(frame).msg {
+            Msg::Timesync { tc1: 0, ts1, .. } => {
+                shared.matrix.on_request(self.place, ts1 as u64, at);
+            }
+            Msg::Ping {
+                time_usec,
+                seq,
+                target_system: 0,
+                target_component: 0,
+            } => {
+                let key = ping_key(time_usec, seq);
+                shared.ping_matrix.on_request(self.place, key, at);
+            }
+            _ => {}
         }
     }
 }
 
-/// Whether `raw` is a TIMESYNC frame by its header's message id (MAVLink
-/// 1: one byte at 5; 2: three at 7).
-fn is_timesync(raw: &[u8]) -> bool {
+/// A PING exchange's key: its `time_usec` (a µs clock, below 2^56 for
+/// two millennia) and `seq`, both echoed by the reply.
+fn ping_key(time_usec: u64, seq: u32) -> u64 {
+    time_usec.wrapping_shl(8) ^ u64::from(seq & 0xFF)
+}
+
+/// Whether `raw` is a TIMESYNC or PING frame by its header's message id
+/// (MAVLink 1: one byte at 5; 2: three at 7).
+fn is_request(raw: &[u8]) -> bool {
     const TIMESYNC: u32 = 111;
-    match raw[0] {
-        0xFE => u32::from(raw[5]) == TIMESYNC,
-        0xFD => u32::from_le_bytes([raw[7], raw[8], raw[9], 0]) == TIMESYNC,
-        _ => false,
-    }
+    const PING: u32 = 4;
+    let id = match raw[0] {
+        0xFE => u32::from(raw[5]),
+        0xFD => u32::from_le_bytes([raw[7], raw[8], raw[9], 0]),
+        _ => return false,
+    };
+    id == TIMESYNC || id == PING
 }
 
 impl Pairs {
@@ -173,6 +210,7 @@ impl Pairs {
         ways.then(|| Pairs {
             shared: Rc::new(RefCell::new(Shared {
                 matrix: Matrix::new(timeout),
+                ping_matrix: Matrix::new(timeout),
                 log_matrices: BTreeMap::new(),
                 timeout,
                 by_way: PairTracker::new(MAX_LINKS, PairConfig::default()),
@@ -180,6 +218,7 @@ impl Pairs {
                 by_link: PairTracker::new(links.len(), PairConfig::default()),
             })),
             origin: Instant::now(),
+            several: links.len() > 1,
         })
     }
 
@@ -198,6 +237,7 @@ impl Pairs {
             origin: self.origin,
             shift: shift.as_nanos() as Nanos,
             log,
+            matrix: self.several,
         })
     }
 
@@ -255,7 +295,8 @@ impl Pairs {
                 Format::Text => report::write_text(out, &summary, &ways)?,
             }
         }
-        write_matrix(format, &shared.matrix, names, out)?;
+        write_matrix(format, "TIMESYNC", &shared.matrix, names, out)?;
+        write_matrix(format, "PING", &shared.ping_matrix, names, out)?;
         // A log's, when its paths are MAVProxy's links.
         for (&place, matrix) in &shared.log_matrices {
             if !paths_are_ways.get(place).copied().unwrap_or(false) {
@@ -264,7 +305,7 @@ impl Pairs {
             let name = names.get(place).copied().unwrap_or("?");
             let paths: Vec<String> = (0..MAX_LINKS).map(|k| format!("{name} path {k}")).collect();
             let paths: Vec<&str> = paths.iter().map(String::as_str).collect();
-            write_matrix(format, matrix, &paths, out)?;
+            write_matrix(format, "TIMESYNC", matrix, &paths, out)?;
         }
         out.flush()
     }
@@ -274,6 +315,7 @@ impl Pairs {
 /// went out on two links or more and came back.
 fn write_matrix(
     format: Format,
+    message: &str,
     matrix: &Matrix,
     names: &[&str],
     out: &mut impl Write,
@@ -283,8 +325,8 @@ fn write_matrix(
         return Ok(());
     }
     match format {
-        Format::Json => report::write_matrix_json(out, &matrix, names),
-        Format::Text => report::write_matrix_text(out, &matrix, names),
+        Format::Json => report::write_matrix_json(out, message, &matrix, names),
+        Format::Text => report::write_matrix_text(out, message, &matrix, names),
     }
 }
 

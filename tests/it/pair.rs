@@ -763,3 +763,63 @@ fn a_mavproxy_ping_session_is_read_back_as_its_matrix() {
         }
     }
 }
+
+/// The same matrix of PING, for a vehicle that answers PING and routes
+/// its replies to every link: each cell the responder's own count.
+#[test]
+fn the_ping_matrix_counts_each_links_replies_to_each_links_requests() {
+    let listen = [
+        format!("127.0.0.1:{}", free_udp_port()),
+        format!("127.0.0.1:{}", free_udp_port()),
+    ];
+    let responder = Peer::start(
+        "two_link_responder.py",
+        &[
+            "--listen",
+            &listen[0],
+            "--listen",
+            &listen[1],
+            "--ping",
+            "--drop-up",
+            "0",
+            "--drop-up",
+            "15",
+            "--drop-down",
+            "25",
+            "--drop-down",
+            "0",
+            "--delay-ms",
+            "30",
+            "--delay-ms",
+            "0",
+            "--seed",
+            "5",
+        ],
+    );
+    let links: Vec<String> = listen.iter().map(|l| format!("udpout:{l}")).collect();
+    let (code, out, err) = run_mavping(&[
+        "--probe", "ping", "-c", "80", "-i", "0.02", "-W", "1s", "--json", "-q", &links[0],
+        &links[1],
+    ]);
+    let truth = responder.finish();
+    assert!(code <= 1, "{err}");
+    assert_schema(&json_lines(&out));
+    let matrix = json_line(&out, "link_matrix");
+    assert_eq!(matrix["message"], "PING", "{matrix}");
+    assert_eq!(matrix["requests"], serde_json::json!([80, 80]), "{matrix}");
+    let cells = matrix["cells"].as_array().unwrap();
+    assert_eq!(cells.len(), 4, "{matrix}");
+    for cell in cells {
+        let (a, b) = (count(cell, "out") as usize, count(cell, "back") as usize);
+        let told = count(&truth["cells"][a][b], "replies");
+        assert_eq!(
+            count(cell, "replies"),
+            told,
+            "{a} -> {b}: {matrix} vs {truth}"
+        );
+    }
+    assert!(
+        !out.contains("\"message\":\"TIMESYNC\""),
+        "no TIMESYNC was sent: {out}"
+    );
+}

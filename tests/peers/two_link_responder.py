@@ -23,6 +23,10 @@ replies heard on each link ... with RTT and loss per (out-link, in-link)").
                       times a second (default 1; 0 for none); heartbeats
                       are never dropped
   --boot-s S          its clock at start, seconds (default 100)
+  --ping              answer PING requests (targets 0/0) too: the reply
+                      (time_usec and seq echoed, targets the requester's
+                      ids) is routed, dropped and counted as a TIMESYNC
+                      reply is
 
 Each socket's peer is the address its last datagram came from (mavping's
 udpout socket). Every MAVLink frame arriving on a link is parsed by that
@@ -122,6 +126,8 @@ def main():
     ap.add_argument("--compid", type=int, default=1)
     ap.add_argument("--heartbeat-hz", type=float, default=1.0)
     ap.add_argument("--boot-s", type=float, default=100.0, help="its clock at start")
+    ap.add_argument("--ping", action="store_true",
+                    help="answer PING requests too, routed as TIMESYNC replies are")
     args = ap.parse_args()
 
     n = len(args.listen)
@@ -191,25 +197,34 @@ def main():
                 links[b]["replies_sent"] += 1
                 cells[a][b]["replies"] += 1
 
+    def reply_to(msg, link):
+        """The reply to a request on `link`, and what tells it from others."""
+        if msg.get_type() == "PING":
+            reply = m.MAVLink_ping_message(msg.time_usec, msg.seq,
+                                           msg.get_srcSystem(), msg.get_srcComponent())
+            return reply, ("ping", msg.time_usec, msg.seq)
+        bits = str(msg.ts1 & 0xF)
+        link["ts1_low_bits"][bits] = link["ts1_low_bits"].get(bits, 0) + 1
+        clock = time.monotonic_ns() - boot_ns
+        return m.MAVLink_timesync_message(clock, msg.ts1), ("timesync", msg.ts1)
+
     def request(a, msg, arrived):
         nonlocal order
         link = links[a]
         rng = random.Random(f"{args.seed}/{a}/{link['requests_received']}")
         link["requests_received"] += 1
-        bits = str(msg.ts1 & 0xF)
-        link["ts1_low_bits"][bits] = link["ts1_low_bits"].get(bits, 0) + 1
+        reply, key = reply_to(msg, link)
         if rng.random() < drop_up[a] / 100.0:
             link["requests_dropped"] += 1
             return
-        if msg.ts1 in answered_ts1:
+        if key in answered_ts1:
             counts["repeats"] += 1
             return
-        answered_ts1.add(msg.ts1)
+        answered_ts1.add(key)
         counts["answered"] += 1
         for b in range(n):
             cells[a][b]["requests"] += 1
-        clock = time.monotonic_ns() - boot_ns
-        buf = pack(m.MAVLink_timesync_message(clock, msg.ts1))
+        buf = pack(reply)
         for b in range(n):
             if rng.random() < drop_down[b] / 100.0:
                 links[b]["replies_dropped"] += 1
@@ -229,7 +244,10 @@ def main():
             arrived = time.monotonic()
             peers[a] = peer
             for msg in parsers[a].parse_buffer(data) or []:
-                if msg.get_type() == "TIMESYNC" and msg.tc1 == 0:
+                timesync = msg.get_type() == "TIMESYNC" and msg.tc1 == 0
+                ping = (args.ping and msg.get_type() == "PING"
+                        and msg.target_system == 0 and msg.target_component == 0)
+                if timesync or ping:
                     request(a, msg, arrived)
                 else:
                     links[a]["ignored"] += 1

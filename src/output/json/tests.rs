@@ -118,7 +118,8 @@ fn the_schema_accepts_every_kind_of_line() {
     matrix.on_request(0, 7, 0);
     matrix.on_reply(1, 7, 30_000_000);
     let mut line = Vec::new();
-    crate::output::pair::write_matrix_json(&mut line, &matrix.summary(), &["a", "b"]).unwrap();
+    crate::output::pair::write_matrix_json(&mut line, "TIMESYNC", &matrix.summary(), &["a", "b"])
+        .unwrap();
     let value: Value = serde_json::from_slice(&line).unwrap();
     assert_valid(&validator, &value);
     written.insert(value["type"].as_str().unwrap().to_string());
