@@ -15,6 +15,14 @@
 #   bash scripts/bench.sh --passive --age-against OLD_BINARY  # --passive's CPU
 #                                  # per frame with age tracking beside a
 #                                  # build without it, same run (issue 40)
+#   bash scripts/bench.sh --passive --pair  # one vehicle on two links (issue
+#                                  # 41): --passive's CPU per frame on one
+#                                  # link at 50,000 frames/s beside two links
+#                                  # fed the same frames, 50,000/s each, same
+#                                  # run, the pair report held to the sender
+#   bash scripts/bench.sh --passive --pair --pair-against OLD_BINARY  # and
+#                                  # a build without the pair tracker on the
+#                                  # same two links: the tracker's own cost
 # Not run by CI (it needs a quiet machine and minutes).
 # Micro-benchmarks of the parser, matcher and statistics: cargo bench --bench core
 set -euo pipefail
