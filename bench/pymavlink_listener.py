@@ -6,7 +6,11 @@ buffer mavping asks for. Ends 0.5 s after the stream stops, or DURATION
 after it started; prints one JSON line: frames parsed, pymavlink's loss
 figure, and its own CPU time from its first frame on.
 
-    pymavlink_listener.py PORT DURATION
+With several ports, one mavutil connection a port in one process, as
+MAVProxy holds one for each of its masters: the figures are their sums
+(mavutil matches no frame across them).
+
+    pymavlink_listener.py PORT[,PORT...] DURATION
 """
 import json
 import os
@@ -26,28 +30,36 @@ def cpu_s():
 
 
 def main():
-    port, duration = int(sys.argv[1]), float(sys.argv[2])
-    m = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}", source_system=255)
-    m.port.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+    ports, duration = [int(p) for p in sys.argv[1].split(",")], float(sys.argv[2])
+    conns = {}
+    for port in ports:
+        m = mavutil.mavlink_connection(f"udpin:127.0.0.1:{port}", source_system=255)
+        m.port.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
+        conns[m.port.fileno()] = m
     print("ready", flush=True)
-    fd = m.port.fileno()
     end = before = None
     while end is None or time.monotonic() < end:
-        if not select.select([fd], [], [], 0.5)[0]:
+        ready = select.select(list(conns), [], [], 0.5)[0]
+        if not ready:
             if end is not None:
                 break
             continue
-        # Drain what is waiting (at a high rate it never is drained: the
-        # deadline is checked as it goes).
-        while m.recv_msg() is not None:
-            if end is None:
-                before, end = cpu_s(), time.monotonic() + duration
-            elif time.monotonic() >= end:
-                break
-    print(json.dumps({"received": m.mav_count, "loss": m.mav_loss,
+        for fd in ready:
+            m = conns[fd]
+            # Drain what is waiting (at a high rate it never is drained: the
+            # deadline is checked as it goes); with several ports, at most
+            # a batch from each in turn, or the first would starve the rest.
+            taken = 0
+            while m.recv_msg() is not None:
+                taken += 1
+                if end is None:
+                    before, end = cpu_s(), time.monotonic() + duration
+                elif time.monotonic() >= end or (len(conns) > 1 and taken >= 64):
+                    break
+    print(json.dumps({"received": sum(m.mav_count for m in conns.values()),
+                      "loss": sum(m.mav_loss for m in conns.values()),
                       "cpu_s": cpu_s() - before if before is not None else 0.0}),
           flush=True)
-
 
 if __name__ == "__main__":
     main()

@@ -1,10 +1,13 @@
 //! BASELINE, not mavping: the two ends of `scripts/bench.sh`'s passive
 //! rows, measured in the same run as mavping.
 //!
-//! `stream_floor send HOST:PORT RATE SECONDS`: a vehicle's telemetry at
-//! RATE frames/s, one ATTITUDE frame (MAVLink 2, 1/1, its packet sequence
-//! counting up) a datagram, in batches of one `sendmmsg` every 0.5 ms on
-//! an absolute schedule (`clock_nanosleep`). Prints `{"sent": N}`.
+//! `stream_floor send HOST:PORT[,HOST:PORT...] RATE SECONDS`: a vehicle's
+//! telemetry at RATE frames/s, one ATTITUDE frame (MAVLink 2, 1/1, its
+//! packet sequence counting up) a datagram, in batches of one `sendmmsg`
+//! every 0.5 ms on an absolute schedule (`clock_nanosleep`). With several
+//! destinations, a vehicle on several links: each batch's same bytes go to
+//! every one, from a socket of its own, so a listener on all of them can
+//! match every frame's copies. Prints `{"sent": N}`, N frames to each.
 //!
 //! `stream_floor read PORT SECONDS`: the least a listener can do with the
 //! same stream: `recvmmsg` into 64 buffers (a 4 MiB receive buffer, as
@@ -67,10 +70,37 @@ mod linux {
         bytes
     }
 
+    /// Sends all of `iovs` on `fd`: a later destination gets every frame
+    /// the first one took, or the links would differ by more than the
+    /// kernel's drops.
+    fn send_all(fd: i32, headers: &mut MultiHeaders<SockaddrStorage>, iovs: &[[IoSlice<'_>; 1]]) {
+        let addrs = vec![None; iovs.len()];
+        let mut done = 0;
+        while done < iovs.len() {
+            match nixsock::sendmmsg(
+                fd,
+                headers,
+                &iovs[done..],
+                &addrs[done..],
+                [],
+                MsgFlags::empty(),
+            ) {
+                Ok(sent) => done += sent.count(),
+                Err(e) => panic!("sendmmsg: {e}"),
+            }
+        }
+    }
+
     fn send(to: &str, rate: f64, seconds: f64) {
-        let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
-        socket.connect(to).unwrap();
-        let fd = socket.as_raw_fd();
+        let sockets: Vec<UdpSocket> = to
+            .split(',')
+            .map(|dest| {
+                let socket = UdpSocket::bind("127.0.0.1:0").unwrap();
+                socket.connect(dest).unwrap();
+                socket
+            })
+            .collect();
+        let fd = sockets[0].as_raw_fd();
         let batch = ((rate * BATCH_S).round() as usize).clamp(1, MAX_BATCH);
         let every = Duration::from_secs_f64(batch as f64 / rate);
         let total = (rate * seconds) as u64;
@@ -93,10 +123,15 @@ mod linux {
                 .collect();
             let iovs: Vec<[IoSlice<'_>; 1]> = frames.iter().map(|f| [IoSlice::new(f)]).collect();
             let addrs = vec![None; count];
-            match nixsock::sendmmsg(fd, &mut headers, &iovs, &addrs, [], MsgFlags::empty()) {
-                Ok(done) => sent += done.count() as u64,
-                Err(e) => panic!("sendmmsg: {e}"),
+            let done =
+                match nixsock::sendmmsg(fd, &mut headers, &iovs, &addrs, [], MsgFlags::empty()) {
+                    Ok(done) => done.count(),
+                    Err(e) => panic!("sendmmsg: {e}"),
+                };
+            for socket in &sockets[1..] {
+                send_all(socket.as_raw_fd(), &mut headers, &iovs[..done]);
             }
+            sent += done as u64;
         }
         println!("{{\"sent\": {sent}}}");
     }
@@ -148,7 +183,7 @@ mod linux {
             Some("read") if args.len() == 3 => read(num(1) as u16, num(2)),
             _ => {
                 eprintln!(
-                "usage: stream_floor send HOST:PORT RATE SECONDS | stream_floor read PORT SECONDS"
+                "usage: stream_floor send HOST:PORT[,HOST:PORT...] RATE SECONDS | stream_floor read PORT SECONDS"
             );
                 std::process::exit(2);
             }
