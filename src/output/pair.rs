@@ -57,6 +57,18 @@ pub(crate) fn write_text(out: &mut impl Write, s: &PairSummary, names: &[&str]) 
             ids.join(", ")
         )?;
     }
+    if !s.conflicting_sources.is_empty() {
+        let ids: Vec<String> = s
+            .conflicting_sources
+            .iter()
+            .map(|id| id.to_string())
+            .collect();
+        writeln!(
+            out,
+            "heard on several links with other frames under the same numbers (two senders under one id, not copies): {}",
+            ids.join(", ")
+        )?;
+    }
     if s.untracked_frames > 0 {
         writeln!(
             out,

@@ -363,6 +363,7 @@ async fn with_pair_figures<F: std::future::Future>(
             _ = every.tick() => tell(),
         }
     };
+    pairs.finish();
     tell();
     finished
 }
@@ -403,7 +404,7 @@ pub(super) async fn run(config: &Config, controls: Controls) -> Ending {
         Err(ending) => return ending,
     };
     // The same source heard several ways: matched across them as they run.
-    let pairs = Pairs::of(&config.links);
+    let pairs = Pairs::of(&config.links, &config.probe);
     let runs = attach(
         opened,
         config,

@@ -106,7 +106,10 @@ pub(super) async fn measure_recorded(
             echo_or_steps(session, &mut link, probe, observer, controls).await
         }
         Probe::Ping => {
-            let probe = PingProbe::new(wall.micros_since_epoch());
+            let mut probe = PingProbe::new(wall.micros_since_epoch());
+            if let Some(out) = out_link {
+                probe = probe.with_out_link(out);
+            }
             echo_or_steps(session, &mut link, probe, observer, controls).await
         }
     };

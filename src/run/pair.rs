@@ -14,9 +14,10 @@ use std::rc::Rc;
 use tokio::time::Instant;
 
 use crate::cli::Format;
-use crate::config::LinkConfig;
+use crate::config::{LinkConfig, Probe};
 use crate::engine::pair::matrix::Matrix;
-use crate::engine::pair::{PairConfig, PairSummary, PairTracker, MAX_LINKS};
+use crate::engine::pair::merge::{TimeMerge, DEFAULT_CAP, DEFAULT_HOLD};
+use crate::engine::pair::{Heard, PairConfig, PairSummary, PairTracker, MAX_LINKS};
 use crate::engine::Nanos;
 use crate::frame::{self, Msg};
 use crate::output::live::LiveView;
@@ -48,11 +49,54 @@ struct Shared {
     /// The links of the command line, their paths together: for when a
     /// link's paths turn out not to be ways (a telemetry log whose stamps'
     /// low bits are a clock's, not MAVProxy's link numbers; known only
-    /// once the whole log is read).
-    by_link: PairTracker,
+    /// once the whole log is read), and a simulated link's paths drawn as
+    /// one. Kept only where a link's paths may be several.
+    by_link: Option<PairTracker>,
+    /// Each link's frames until they leave in the order they came (by
+    /// place; with their way).
+    merge: TimeMerge<(usize, Heard)>,
 }
 
 impl Shared {
+    /// Matches the frames that may leave the merge, in the order they
+    /// came; all of them when `all` (nothing more will come).
+    fn take(&mut self, all: bool) {
+        loop {
+            let next = if all {
+                self.merge.pop_any()
+            } else {
+                self.merge.pop_ready()
+            };
+            let Some((place, at, (way, heard))) = next else {
+                return;
+            };
+            self.by_way.on_heard(way, heard, at);
+            if let Some(by_link) = &mut self.by_link {
+                by_link.on_heard(place, heard, at);
+            }
+        }
+    }
+
+    /// The report so far with a link's paths together: `by_link`'s, or
+    /// `by_way`'s for the links with one way each (its ways by place).
+    fn by_link(&self, at: Nanos) -> PairSummary {
+        if let Some(by_link) = &self.by_link {
+            return by_link.summary(at);
+        }
+        let mut summary = self.by_way.summary(at);
+        let place = |way: usize| {
+            let (place, _) = self.ways[way];
+            let alone = self.ways.iter().filter(|w| w.0 == place).count() == 1;
+            alone.then_some(place)
+        };
+        for source in &mut summary.sources {
+            source
+                .links
+                .retain_mut(|l| place(l.link).map(|p| l.link = p).is_some());
+        }
+        summary
+    }
+
     /// The tracker's index of `way`, given one when first heard (none
     /// beyond the tracker's links: their frames are counted untracked).
     fn index(&mut self, way: Way) -> usize {
@@ -74,6 +118,9 @@ pub(super) struct Pairs {
     /// Several links: requests may go out on one and come back on
     /// another (one link's requests come back on it: nothing to match).
     several: bool,
+    /// Our PING requests carry their link in `time_usec` (`--probe ping`):
+    /// only then are they told apart across links.
+    ping: bool,
 }
 
 /// One link's way into the tracker.
@@ -87,6 +134,8 @@ struct LinkWatch {
     log: bool,
     /// Whether our requests and their replies are matched across links.
     matrix: bool,
+    /// Whether our PING requests are too.
+    ping: bool,
 }
 
 /// The path MAVProxy (and mavping's `--tlog`) logs its own frames on.
@@ -122,8 +171,9 @@ impl Watch for LinkWatch {
         for i in inbound {
             let at = since(self.origin, i.at) + self.shift;
             let way = shared.index((self.place, i.path));
-            shared.by_way.on_frame(way, &i.frame, at);
-            shared.by_link.on_frame(self.place, &i.frame, at);
+            shared
+                .merge
+                .push(self.place, at, (way, Heard::of(&i.frame)));
             match i.frame.msg {
                 Msg::Timesync { tc1, ts1, .. } if self.log => {
                     self.logged_timesync(&mut shared, i.path, tc1, ts1, at);
@@ -137,13 +187,14 @@ impl Watch for LinkWatch {
                     seq,
                     target_system,
                     target_component,
-                } if self.matrix && (target_system, target_component) != (0, 0) => {
+                } if self.ping && (target_system, target_component) != (0, 0) => {
                     let key = ping_key(time_usec, seq);
                     shared.ping_matrix.on_reply(self.place, key, at);
                 }
                 _ => {}
             }
         }
+        shared.take(false);
     }
 
     fn sent(&self, at: Instant, frame: &[u8]) {
@@ -163,7 +214,7 @@ impl Watch for LinkWatch {
                 seq,
                 target_system: 0,
                 target_component: 0,
-            } => {
+            } if self.ping => {
                 let key = ping_key(time_usec, seq);
                 shared.ping_matrix.on_request(self.place, key, at);
             }
@@ -197,16 +248,16 @@ impl Pairs {
     /// told apart (a telemetry log's MAVProxy link numbers, the simulated
     /// link). One link of another kind has nothing to pair, and pays
     /// nothing per frame.
-    pub(super) fn of(links: &[LinkConfig]) -> Option<Self> {
+    pub(super) fn of(links: &[LinkConfig], probe: &Probe) -> Option<Self> {
         let timeout = links
             .iter()
             .map(|l| l.session.timeout.as_nanos() as Nanos)
             .max()
             .unwrap_or(0);
-        let ways = links.len() > 1
-            || links
-                .iter()
-                .any(|l| matches!(l.spec, LinkSpec::Tlog(_) | LinkSpec::Sim(_)));
+        let paths = links
+            .iter()
+            .any(|l| matches!(l.spec, LinkSpec::Tlog(_) | LinkSpec::Sim(_)));
+        let ways = links.len() > 1 || paths;
         ways.then(|| Pairs {
             shared: Rc::new(RefCell::new(Shared {
                 matrix: Matrix::new(timeout),
@@ -215,10 +266,12 @@ impl Pairs {
                 timeout,
                 by_way: PairTracker::new(MAX_LINKS, PairConfig::default()),
                 ways: Vec::new(),
-                by_link: PairTracker::new(links.len(), PairConfig::default()),
+                by_link: paths.then(|| PairTracker::new(links.len(), PairConfig::default())),
+                merge: TimeMerge::new(DEFAULT_HOLD, DEFAULT_CAP),
             })),
             origin: Instant::now(),
             several: links.len() > 1,
+            ping: matches!(probe, Probe::Ping),
         })
     }
 
@@ -238,6 +291,7 @@ impl Pairs {
             shift: shift.as_nanos() as Nanos,
             log,
             matrix: self.several,
+            ping: self.several && self.ping,
         })
     }
 
@@ -254,7 +308,12 @@ impl Pairs {
     /// The report so far, a link's paths together, and when.
     pub(super) fn by_link_now(&self) -> (Nanos, PairSummary) {
         let now = since(self.origin, Instant::now());
-        (now, self.shared.borrow().by_link.summary(now))
+        (now, self.shared.borrow().by_link(now))
+    }
+
+    /// Matches every frame still held: the links have ended.
+    pub(super) fn finish(&self) {
+        self.shared.borrow_mut().take(true);
     }
 
     /// The report so far in the live view, every way apart.
@@ -278,13 +337,15 @@ impl Pairs {
         paths_are_ways: &[bool],
         out: &mut impl Write,
     ) -> io::Result<()> {
+        self.finish();
         let shared = self.shared.borrow();
         let by_way = paths_are_ways.iter().all(|&w| w);
-        let (tracker, ways) = if by_way {
-            (&shared.by_way, way_names(&shared.ways, names))
-        } else {
-            let links = names.iter().map(|n| n.to_string()).collect();
-            (&shared.by_link, links)
+        let (tracker, ways) = match &shared.by_link {
+            Some(by_link) if !by_way => {
+                let links = names.iter().map(|n| n.to_string()).collect();
+                (by_link, links)
+            }
+            _ => (&shared.by_way, way_names(&shared.ways, names)),
         };
         // The links have ended: no copy can come, every window is closed.
         let summary = tracker.summary(Nanos::MAX);
@@ -312,7 +373,7 @@ impl Pairs {
 }
 
 /// Writes `matrix` in `format`, its links named by `names`, when requests
-/// went out on two links or more and came back.
+/// went out on two links or more and a reply came back on another.
 fn write_matrix(
     format: Format,
     message: &str,
@@ -321,7 +382,9 @@ fn write_matrix(
     out: &mut impl Write,
 ) -> io::Result<()> {
     let matrix = matrix.summary();
-    if matrix.requests.len() < 2 || matrix.cells.is_empty() {
+    // A reply heard on another link than its request's: else each
+    // link's summary has said it all.
+    if matrix.requests.len() < 2 || matrix.cells.iter().all(|c| c.out == c.back) {
         return Ok(());
     }
     match format {

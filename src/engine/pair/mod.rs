@@ -56,6 +56,7 @@
 mod delivered;
 mod lag;
 pub(crate) mod matrix;
+pub(crate) mod merge;
 mod recent;
 mod seq;
 mod side;
@@ -71,7 +72,7 @@ pub(crate) use summary::{LinkPair, PairSummary, SingleLinkSource, SourcePair};
 use source::SourceState;
 
 use crate::engine::Nanos;
-use crate::frame::{Frame, SysComp};
+use crate::frame::{Frame, Msg, SysComp};
 
 /// The most links a tracker tells apart (a frame's links are bits of a
 /// `u64`).
@@ -82,6 +83,30 @@ pub(crate) const DEFAULT_MAX_SOURCES: usize = 32;
 /// seconds a cellular link falls behind a radio. For a source sending 26
 /// frames a second or more the sequence rule (128 numbers) ends it sooner.
 pub(crate) const DEFAULT_WINDOW: Nanos = 5_000_000_000;
+
+/// What the tracker reads of a frame: who sent it, under which number,
+/// and what tells it from another frame under that number.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Heard {
+    pub(crate) source: SysComp,
+    pub(crate) seq: u8,
+    pub(crate) msgid: u32,
+    pub(crate) crc: u16,
+    /// Its CRC failed: its number came, not which frame it was.
+    pub(crate) damaged: bool,
+}
+
+impl Heard {
+    pub(crate) fn of(frame: &Frame) -> Self {
+        Heard {
+            source: frame.source,
+            seq: frame.packet_seq,
+            msgid: frame.msgid,
+            crc: frame.crc,
+            damaged: frame.msg == Msg::Damaged,
+        }
+    }
+}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct PairConfig {
@@ -123,7 +148,13 @@ impl PairTracker {
 
     /// Takes `frame`, delivered by link `link` at `at` on the clock every
     /// link shares.
+    #[cfg(test)]
     pub(crate) fn on_frame(&mut self, link: usize, frame: &Frame, at: Nanos) {
+        self.on_heard(link, Heard::of(frame), at);
+    }
+
+    /// [`PairTracker::on_frame`] of what the tracker reads of a frame.
+    pub(crate) fn on_heard(&mut self, link: usize, frame: Heard, at: Nanos) {
         let Ok(index) = u8::try_from(link) else {
             self.untracked_frames += 1;
             return;
@@ -143,7 +174,7 @@ impl PairTracker {
                 return;
             }
         };
-        state.on_frame(index, frame, at, self.config.window);
+        state.on_frame(index, &frame, at, self.config.window);
     }
 
     /// The figures at `at`: the sources heard on two links or more, and
@@ -155,12 +186,17 @@ impl PairTracker {
         let mut sources = Vec::new();
         let mut single_link_sources = Vec::new();
         let mut uncopied_sources = Vec::new();
+        let mut conflicting_sources = Vec::new();
         for id in ids {
             let state = &self.sources[&id];
             // No frame on two links, even after the window: split, not copied.
             let uncopied = state.copies == 0 && state.late == 0;
+            // As many numbers taken by another frame as copies: two senders.
+            let conflicting = state.conflicts > 0 && state.conflicts >= state.copies;
             if state.links_heard() >= 2 && uncopied {
                 uncopied_sources.push(id);
+            } else if state.links_heard() >= 2 && conflicting {
+                conflicting_sources.push(id);
             } else if state.links_heard() >= 2 {
                 sources.push(SourcePair::new(id, state, at, self.config.window));
             } else if let Some(single) = SingleLinkSource::of(id, state) {
@@ -172,6 +208,7 @@ impl PairTracker {
             sources,
             single_link_sources,
             uncopied_sources,
+            conflicting_sources,
             untracked_frames: self.untracked_frames,
         }
     }

@@ -5,8 +5,8 @@ use super::lag::Lag;
 use super::recent::{Key, Recent, Seen};
 use super::seq::SeqCount;
 use super::side::Side;
+use super::Heard;
 use crate::engine::Nanos;
-use crate::frame::{Frame, Msg};
 
 #[derive(Debug, Clone)]
 pub(super) struct SourceState {
@@ -14,6 +14,10 @@ pub(super) struct SourceState {
     /// The merged stream: each frame's first copy, and damaged frames.
     pub(super) merged: SeqCount,
     pub(super) sides: Vec<Side>,
+    /// Bit `n`: side `n` delivered anything (most of a tracker's sides
+    /// never do: visiting only these keeps a frame's cost to the links
+    /// that carry the source).
+    heard: u64,
     /// Every later copy's lag behind the first: what a de-duplication
     /// period must cover.
     pub(super) copy_lag: Option<Lag>,
@@ -29,6 +33,7 @@ impl SourceState {
             recent: Recent::default(),
             merged: SeqCount::default(),
             sides: (0..links).map(|_| Side::default()).collect(),
+            heard: 0,
             copy_lag: None,
             distinct: 0,
             copies: 0,
@@ -39,15 +44,16 @@ impl SourceState {
 
     /// Links that delivered anything of the source.
     pub(super) fn links_heard(&self) -> usize {
-        self.sides.iter().filter(|s| s.heard()).count()
+        self.heard.count_ones() as usize
     }
 
-    pub(super) fn on_frame(&mut self, link: u8, frame: &Frame, at: Nanos, window: Nanos) {
+    pub(super) fn on_frame(&mut self, link: u8, frame: &Heard, at: Nanos, window: Nanos) {
         let l = usize::from(link);
-        let seq = frame.packet_seq;
+        let seq = frame.seq;
+        self.heard |= 1 << l;
         // A damaged frame's number arrived (it is not lost, on its link or
         // the pair's), but its bytes cannot say which frame it was.
-        if frame.msg == Msg::Damaged {
+        if frame.damaged {
             self.sides[l].damaged += 1;
             self.sides[l].own.take(seq);
             self.merged.take(seq);
@@ -122,7 +128,10 @@ impl SourceState {
     /// after it).
     fn newest(&mut self, l: usize, line: u64, at: Nanos, first: bool) {
         let mut stale = false;
-        for (_, side) in self.sides.iter_mut().enumerate().filter(|&(i, _)| i != l) {
+        let mut others = self.heard & !(1 << l);
+        while others != 0 {
+            let side = &mut self.sides[others.trailing_zeros() as usize];
+            others &= others - 1;
             stale |= side.delivered.newest_by(at).is_some_and(|n| line < n);
             let found = side.delivered.overtaken(line, at);
             side.stale += found.frames;

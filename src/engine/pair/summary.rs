@@ -26,6 +26,11 @@ pub(crate) struct PairSummary {
     /// frames were split between the links, not copied (a router that
     /// balances; a log's stamps whose low bits are a clock's for them).
     pub(crate) uncopied_sources: Vec<SysComp>,
+    /// Sources heard on two links or more under which as many other
+    /// frames came under a number in use as copies: two senders under one
+    /// id (two simulated vehicles, two responders started alike), whose
+    /// alike frames match by chance, not one vehicle on several links.
+    pub(crate) conflicting_sources: Vec<SysComp>,
     /// Frames of sources beyond the cap, and of links beyond the
     /// tracker's: not matched.
     pub(crate) untracked_frames: u64,

@@ -406,13 +406,37 @@ fn duplicates_conflicts_and_late_copies_are_neither_new_nor_copies() {
     tracker.on_frame(1, &frame(VEHICLE, 1, ATTITUDE, 8), 2 * MS);
     tracker.on_frame(0, &frame(VEHICLE, 2, ATTITUDE, 9), 10 * MS);
     tracker.on_frame(1, &frame(VEHICLE, 2, ATTITUDE, 9), 1_011 * MS);
-    let got = pair(&tracker, 2_000 * MS);
-    assert_eq!((got.distinct_frames, got.copies), (2, 0));
+    // Two copies: more than the conflicts, so one vehicle on two links.
+    for seq in [3, 4] {
+        let at = 1_100 * MS + u64::from(seq) * MS;
+        tracker.on_frame(0, &frame(VEHICLE, seq, ATTITUDE, 10), at);
+        tracker.on_frame(1, &frame(VEHICLE, seq, ATTITUDE, 10), at + MS);
+    }
+    let got = pair(&tracker, 3_000 * MS);
+    assert_eq!((got.distinct_frames, got.copies), (4, 2));
     assert_eq!((got.conflicts, got.late_beyond_window), (1, 1));
     let (a, b) = (&got.links[0], &got.links[1]);
-    assert_eq!((a.frames, a.duplicates, a.first, a.only), (3, 1, 2, 2));
-    assert_eq!((b.frames, b.first, b.only), (2, 0, 0));
-    assert_eq!(b.lag_max_ms, None);
+    assert_eq!((a.frames, a.duplicates, a.first, a.only), (5, 1, 4, 2));
+    assert_eq!((b.frames, b.first, b.only), (4, 0, 0));
+    assert_eq!(b.lag_max_ms, Some(1.0));
+}
+
+/// Two senders under one id, each on its own link, whose frames are
+/// alike now and then (two simulated vehicles): as many frames under a
+/// number in use as copies, so no pair, but a source said apart.
+#[test]
+fn as_many_conflicts_as_copies_are_two_senders_not_one_vehicle() {
+    let mut tracker = PairTracker::new(2, PairConfig::default());
+    for seq in 0..10u8 {
+        let at = u64::from(seq) * 20 * MS;
+        // Their HEARTBEATs alike, every fifth frame; the rest differ.
+        let (a, b) = if seq % 5 == 0 { (1, 1) } else { (2, 3) };
+        tracker.on_frame(0, &frame(VEHICLE, seq, ATTITUDE, a), at);
+        tracker.on_frame(1, &frame(VEHICLE, seq, ATTITUDE, b), at + MS);
+    }
+    let summary = tracker.summary(Nanos::MAX);
+    assert!(summary.sources.is_empty(), "{summary:?}");
+    assert_eq!(summary.conflicting_sources, [VEHICLE]);
 }
 
 /// Frames one link alone delivered stay undecided while a copy may still

@@ -10,11 +10,25 @@ pub struct PingProbe {
     /// peer's logs make sense, but advanced by the monotonic session clock
     /// so a clock step cannot make two requests share a token.
     wall_start_us: u64,
+    /// Put in every token's low four bits: the link's number among
+    /// several, so that two links' requests sent in the same µs differ
+    /// (as TIMESYNC's carry it, after MAVProxy's `ping`).
+    out_link: Option<u8>,
 }
 
 impl PingProbe {
     pub fn new(wall_start_us: u64) -> Self {
-        PingProbe { wall_start_us }
+        PingProbe {
+            wall_start_us,
+            out_link: None,
+        }
+    }
+
+    /// Tokens carrying `link` (below 16) in their low four bits; the
+    /// `time_usec` sent is then 16 µs coarser.
+    pub(crate) fn with_out_link(mut self, link: u8) -> Self {
+        self.out_link = (link < 16).then_some(link);
+        self
     }
 }
 
@@ -24,7 +38,11 @@ impl EchoProbe for PingProbe {
     }
 
     fn token(&mut self, now_ns: u64) -> u64 {
-        self.wall_start_us + now_ns / 1_000
+        let us = self.wall_start_us + now_ns / 1_000;
+        match self.out_link {
+            Some(link) => (us & !0xF) | u64::from(link),
+            None => us,
+        }
     }
 
     fn request(&self, seq: u32, token: u64) -> Msg {

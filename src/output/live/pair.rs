@@ -130,6 +130,7 @@ mod tests {
             }],
             single_link_sources: Vec::new(),
             uncopied_sources: Vec::new(),
+            conflicting_sources: Vec::new(),
             untracked_frames: 0,
         }
     }

@@ -497,6 +497,7 @@ age p99 ms
                 }],
                 single_link_sources: Vec::new(),
                 uncopied_sources: Vec::new(),
+                conflicting_sources: Vec::new(),
                 untracked_frames: 0,
             };
             // A passive run's sources: drawn with their part in the pair.
