@@ -194,8 +194,11 @@ def main():
                     intended.add((at + whole, at + whole + len(frame)))
                 at += len(data)
             return all(f in intended for f in valid_frames(buf, len(before)))
+        # A datagram meant to hold no whole frame (whole is None) is clean
+        # only if none passes as one.
         return all(
-            all(f == (whole, whole + len(frame)) for f in valid_frames(data, 0))
+            all(whole is not None and f == (whole, whole + len(frame))
+                for f in valid_frames(data, 0))
             for data, whole, _ in pieces
         )
 
