@@ -274,7 +274,7 @@ fn attach<'a>(
     runs
 }
 
-/// Links numbered in TIMESYNC tokens: MAVProxy's four bits.
+/// Links numbered in TIMESYNC and PING tokens: MAVProxy's four bits.
 const OUT_LINKS: u8 = 16;
 
 /// How long after `first` (the earliest log's first stamp) `link`, a
