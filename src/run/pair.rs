@@ -267,7 +267,7 @@ impl Pairs {
                 by_way: PairTracker::new(MAX_LINKS, PairConfig::default()),
                 ways: Vec::new(),
                 by_link: paths.then(|| PairTracker::new(links.len(), PairConfig::default())),
-                merge: TimeMerge::new(DEFAULT_HOLD, DEFAULT_CAP),
+                merge: TimeMerge::new(links.len(), DEFAULT_HOLD, DEFAULT_CAP),
             })),
             origin: Instant::now(),
             several: links.len() > 1,

@@ -5,7 +5,9 @@
 //! order taken, a copy would fall more than half the 8-bit sequence
 //! behind and count as a new frame. So each link's frames wait in its
 //! queue, and leave in time order once every link that is sending has
-//! taken frames as late as them. Pure, time passed in.
+//! taken frames as late as them (a link that has taken none yet holds
+//! them too: its first batch may be read after another's). Pure, time
+//! passed in.
 //!
 //! A link that falls silent holds the others back [`TimeMerge::hold`] at
 //! most; memory is bounded by [`TimeMerge::cap`] frames in all.
@@ -32,10 +34,12 @@ pub(crate) struct TimeMerge<T> {
 }
 
 impl<T> TimeMerge<T> {
-    pub(crate) fn new(hold: Nanos, cap: usize) -> Self {
+    /// A merge of `links` links (more are taken as they come): frames
+    /// wait for each of them, until it takes a frame or `hold` passes.
+    pub(crate) fn new(links: usize, hold: Nanos, cap: usize) -> Self {
         TimeMerge {
-            queues: Vec::new(),
-            latest: Vec::new(),
+            queues: (0..links).map(|_| VecDeque::new()).collect(),
+            latest: vec![None; links],
             held: 0,
             hold,
             cap,
@@ -61,9 +65,13 @@ impl<T> TimeMerge<T> {
     /// it, or more than `cap` are held.
     pub(crate) fn pop_ready(&mut self) -> Option<(usize, Nanos, T)> {
         let (link, at) = self.earliest()?;
-        let taken = self.latest.iter().flatten();
-        let every = taken.clone().min().copied().unwrap_or(0);
-        let newest = taken.max().copied().unwrap_or(0);
+        // A link yet to take a frame may still bring earlier ones: its
+        // first batch, read after another link's.
+        let every = match self.latest.iter().copied().collect::<Option<Vec<_>>>() {
+            Some(latest) => latest.into_iter().min().unwrap_or(0),
+            None => 0,
+        };
+        let newest = self.latest.iter().flatten().max().copied().unwrap_or(0);
         let ready = at <= every || at.saturating_add(self.hold) <= newest || self.held > self.cap;
         ready.then(|| self.pop(link))?
     }
@@ -107,13 +115,16 @@ mod tests {
 
     #[test]
     fn frames_leave_in_time_order_once_every_link_caught_up() {
-        let mut m = TimeMerge::new(1_000, 100);
-        // Link 0's batch taken whole before link 1's.
+        let mut m = TimeMerge::new(2, 1_000, 100);
+        // Link 0's batch taken whole before link 1's first.
         for (i, at) in [10, 20, 30, 40].into_iter().enumerate() {
             m.push(0, at, i as u32);
         }
-        // Only link 0 has taken frames: it alone is the watermark.
-        assert_eq!(drain(&mut m).len(), 4);
+        // Link 1 has taken nothing yet: its first may come earlier.
+        assert!(drain(&mut m).is_empty());
+        m.push(1, 40, 30);
+        let left: Vec<u32> = drain(&mut m).iter().map(|f| f.2).collect();
+        assert_eq!(left, [0, 1, 2, 3, 30]);
         for (i, at) in [50, 60, 70].into_iter().enumerate() {
             m.push(0, at, 10 + i as u32);
         }
@@ -133,7 +144,7 @@ mod tests {
 
     #[test]
     fn a_silent_link_holds_the_others_for_the_hold_at_most() {
-        let mut m = TimeMerge::new(100, 1_000);
+        let mut m = TimeMerge::new(2, 100, 1_000);
         m.push(1, 0, 0);
         assert_eq!(drain(&mut m).len(), 1);
         // Link 1 falls silent at 0; link 0's frames wait 100 at most.
@@ -146,7 +157,7 @@ mod tests {
 
     #[test]
     fn beyond_the_cap_the_earliest_leave() {
-        let mut m = TimeMerge::new(Nanos::MAX, 3);
+        let mut m = TimeMerge::new(2, Nanos::MAX, 3);
         m.push(1, 0, 0);
         drain(&mut m);
         for at in 1..=5 {
@@ -158,7 +169,7 @@ mod tests {
 
     #[test]
     fn a_time_that_went_back_keeps_its_links_order() {
-        let mut m = TimeMerge::new(1_000, 100);
+        let mut m = TimeMerge::new(1, 1_000, 100);
         m.push(0, 50, 1);
         m.push(0, 40, 2);
         assert_eq!(m.pop_any(), Some((0, 50, 1)));
