@@ -466,34 +466,7 @@ fn the_pair_report_is_exported_as_metrics() {
 /// slow link's replies come back later.
 #[test]
 fn the_matrix_counts_each_links_replies_to_each_links_requests() {
-    let (one, two) = (free_udp_port(), free_udp_port());
-    let listen: Vec<String> = [one, two]
-        .iter()
-        .map(|p| format!("127.0.0.1:{p}"))
-        .collect();
-    let responder = Peer::start(
-        "two_link_responder.py",
-        &[
-            "--listen",
-            &listen[0],
-            "--listen",
-            &listen[1],
-            "--drop-up",
-            "10",
-            "--drop-up",
-            "0",
-            "--drop-down",
-            "0",
-            "--drop-down",
-            "20",
-            "--delay-ms",
-            "0",
-            "--delay-ms",
-            "40",
-            "--seed",
-            "3",
-        ],
-    );
+    let (listen, responder) = two_link_responder(&MATRIX_FAULTS);
     let links: Vec<String> = listen.iter().map(|l| format!("udpout:{l}")).collect();
     let dir = crate::tlog::Scratch::new("pair-matrix");
     let recording = dir.path("matrix.tlog");
@@ -574,6 +547,43 @@ fn the_matrix_counts_each_links_replies_to_each_links_requests() {
             assert_eq!(got[key], live[key], "{read} vs {matrix}");
         }
     }
+}
+
+/// The first link's requests lose 10 % on the way up, the second link's
+/// replies 20 % on the way down, 40 ms later.
+const MATRIX_FAULTS: [&str; 14] = [
+    "--drop-up",
+    "10",
+    "--drop-up",
+    "0",
+    "--drop-down",
+    "0",
+    "--drop-down",
+    "20",
+    "--delay-ms",
+    "0",
+    "--delay-ms",
+    "40",
+    "--seed",
+    "3",
+];
+
+/// `two_link_responder.py` listening on two free UDP ports with `faults`:
+/// its two HOST:PORT and the peer.
+fn two_link_responder(faults: &[&str]) -> ([String; 2], Peer) {
+    let listen = [
+        format!("127.0.0.1:{}", free_udp_port()),
+        format!("127.0.0.1:{}", free_udp_port()),
+    ];
+    let mut args = vec![
+        "--listen",
+        listen[0].as_str(),
+        "--listen",
+        listen[1].as_str(),
+    ];
+    args.extend(faults);
+    let responder = Peer::start("two_link_responder.py", &args);
+    (listen, responder)
 }
 
 /// Two logs of one flight, one per ground station, read together: each
@@ -663,31 +673,7 @@ fn the_plot_draws_each_links_lag() {
 /// in-link=B out-link=A" lines and of the responder's replies.
 #[test]
 fn a_mavproxy_ping_session_is_read_back_as_its_matrix() {
-    let (one, two) = (free_udp_port(), free_udp_port());
-    let listen = [format!("127.0.0.1:{one}"), format!("127.0.0.1:{two}")];
-    let responder = Peer::start(
-        "two_link_responder.py",
-        &[
-            "--listen",
-            &listen[0],
-            "--listen",
-            &listen[1],
-            "--drop-up",
-            "10",
-            "--drop-up",
-            "0",
-            "--drop-down",
-            "0",
-            "--drop-down",
-            "20",
-            "--delay-ms",
-            "0",
-            "--delay-ms",
-            "40",
-            "--seed",
-            "3",
-        ],
-    );
+    let (listen, responder) = two_link_responder(&MATRIX_FAULTS);
     let dir = crate::tlog::Scratch::new("pair-mavproxy-ping");
     let log = dir.path("ping.tlog");
     let printed = dir.path("mavproxy.out");
@@ -768,34 +754,23 @@ fn a_mavproxy_ping_session_is_read_back_as_its_matrix() {
 /// its replies to every link: each cell the responder's own count.
 #[test]
 fn the_ping_matrix_counts_each_links_replies_to_each_links_requests() {
-    let listen = [
-        format!("127.0.0.1:{}", free_udp_port()),
-        format!("127.0.0.1:{}", free_udp_port()),
-    ];
-    let responder = Peer::start(
-        "two_link_responder.py",
-        &[
-            "--listen",
-            &listen[0],
-            "--listen",
-            &listen[1],
-            "--ping",
-            "--drop-up",
-            "0",
-            "--drop-up",
-            "15",
-            "--drop-down",
-            "25",
-            "--drop-down",
-            "0",
-            "--delay-ms",
-            "30",
-            "--delay-ms",
-            "0",
-            "--seed",
-            "5",
-        ],
-    );
+    let (listen, responder) = two_link_responder(&[
+        "--ping",
+        "--drop-up",
+        "0",
+        "--drop-up",
+        "15",
+        "--drop-down",
+        "25",
+        "--drop-down",
+        "0",
+        "--delay-ms",
+        "30",
+        "--delay-ms",
+        "0",
+        "--seed",
+        "5",
+    ]);
     let links: Vec<String> = listen.iter().map(|l| format!("udpout:{l}")).collect();
     let (code, out, err) = run_mavping(&[
         "--probe", "ping", "-c", "80", "-i", "0.02", "-W", "1s", "--json", "-q", &links[0],
