@@ -185,6 +185,7 @@ fn to_mavlink(msg: &Msg) -> dialect::MavMessage {
         Msg::LinkNodeStatus(l) => M::LINK_NODE_STATUS(l.into()),
         Msg::Fix(f) => fix_message(f),
         Msg::Attitude { .. } | Msg::GlobalPositionInt { .. } | Msg::Filler { .. } => load(msg),
+        Msg::Transfer(t) => super::transfer_codec::to_mavlink(&t),
         Msg::Other | Msg::Damaged => unreachable!("{msg:?} is never sent"),
     }
 }
@@ -435,6 +436,10 @@ fn header_of(raw: &[u8]) -> Frame {
 #[allow(deprecated)] // PING: see to_mavlink
 fn decode_payload(version: Version, msgid: u32, payload: &[u8]) -> Msg {
     use dialect::MavMessage as M;
+    if super::transfer_codec::is_transfer(msgid) {
+        return super::transfer_codec::from_payload(msgid, payload)
+            .map_or(Msg::Other, Msg::Transfer);
+    }
     if !matches!(
         msgid,
         ids::HEARTBEAT

@@ -19,6 +19,17 @@ pub(crate) mod ids {
     pub(crate) const RADIO: u32 = 166;
     pub(crate) const TIMESYNC: u32 = 111;
     pub(crate) const HOME_POSITION: u32 = 242;
+    pub(crate) const PARAM_REQUEST_READ: u32 = 20;
+    pub(crate) const PARAM_REQUEST_LIST: u32 = 21;
+    pub(crate) const PARAM_VALUE: u32 = 22;
+    pub(crate) const MISSION_ITEM: u32 = 39;
+    pub(crate) const MISSION_REQUEST: u32 = 40;
+    pub(crate) const MISSION_REQUEST_LIST: u32 = 43;
+    pub(crate) const MISSION_COUNT: u32 = 44;
+    pub(crate) const MISSION_ACK: u32 = 47;
+    pub(crate) const MISSION_REQUEST_INT: u32 = 51;
+    pub(crate) const MISSION_ITEM_INT: u32 = 73;
+    pub(crate) const FILE_TRANSFER_PROTOCOL: u32 = 110;
 }
 
 /// MAV_TYPE values mavping treats specially.

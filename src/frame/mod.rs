@@ -11,6 +11,8 @@ mod received;
 pub mod scanner;
 pub(crate) mod signing;
 mod sys_comp;
+pub mod transfer;
+mod transfer_codec;
 
 pub use codec::{decode, decode_as, encode, Header, Version};
 pub(crate) use dialect::{
@@ -24,3 +26,4 @@ pub(crate) use received::{test_frame, Stamps};
 pub(crate) use received::{Stamp, StampClock, StampMeaning};
 pub use scanner::{scan_datagram, scan_datagram_all, Kind, ScanStats, StreamScanner};
 pub use sys_comp::SysComp;
+pub use transfer::Transfer;

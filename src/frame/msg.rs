@@ -57,6 +57,8 @@ pub enum Msg {
     Filler {
         len: u8,
     },
+    /// A parameter, mission or file transfer's message.
+    Transfer(super::Transfer),
     /// Any other message: valid frame, contents not needed (or an id the
     /// dialect does not know, lined up with what follows: see
     /// [`Kind::Unknown`](super::Kind::Unknown)).
