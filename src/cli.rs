@@ -361,6 +361,12 @@ pub(crate) enum ProbeKind {
     Timesync,
     /// COMMAND_LONG re-sent until its COMMAND_ACK arrives
     Command,
+    /// Download every parameter (PARAM_REQUEST_LIST, then what it missed by index)
+    Params,
+    /// Download the mission (MISSION_REQUEST_LIST, then each item), read-only
+    Mission,
+    /// Read a file over MAVLink FTP (--path), read-only
+    Ftp,
 }
 
 /// Options of a measurement run (the default command).
@@ -439,12 +445,12 @@ pub(crate) struct PingArgs {
     #[arg(help_heading = "What to send", long, value_name = "DURATION", value_parser = parse_duration)]
     pub(crate) gap: Option<Duration>,
 
-    /// What to send: ping, timesync (also ArduPilot; measures clock offset), command
+    /// What to send: ping, timesync (also ArduPilot; measures clock offset), command, or a download: params, mission, ftp
     #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_enum, value_name = "PROBE", default_value_t = ProbeKind::Auto,
           env = "MAVPING_PROBE")]
     pub(crate) probe: ProbeKind,
 
-    /// Address requests to SYS/COMP (timesync: default 0/0, everyone; command: default 1/1)
+    /// Address requests to SYS/COMP (timesync: default 0/0, everyone; command, params, mission, ftp: default 1/1)
     #[arg(
         help_heading = "What to send",
         allow_negative_numbers = true,
@@ -468,7 +474,16 @@ pub(crate) struct PingArgs {
     #[arg(help_heading = "What to send", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "100ms")]
     pub(crate) retry_interval: Duration,
 
-    /// --probe command: re-sends after the first before a command counts as failed
+    /// --probe ftp: the file to read (ArduPilot serves its parameters as @PARAM/param.pck)
+    #[arg(
+        help_heading = "What to send",
+        long,
+        value_name = "PATH",
+        default_value = "@PARAM/param.pck"
+    )]
+    pub(crate) path: String,
+
+    /// --probe command, params, mission, ftp: re-sends of a request before it counts as failed
     #[arg(
         help_heading = "What to send",
         allow_negative_numbers = true,
@@ -682,6 +697,10 @@ pub(crate) struct PingArgs {
     /// its quickest they arrive, from their own clock stamps) is above DURATION
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
     pub(crate) max_age: Option<Duration>,
+
+    /// --probe params, mission, ftp: fail when a download takes longer than DURATION to complete
+    #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
+    pub(crate) max_transfer_time: Option<Duration>,
 
     /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
     /// LINK=SYSID[/COMPID] (on that one of several links); repeatable

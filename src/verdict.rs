@@ -8,6 +8,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::engine::age::SourceAge;
+use crate::engine::probe::transfer::TransferSummary;
 use crate::engine::stats::RttSummary;
 use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::{CommandSummary, EchoSummary, LinkSummary, ResponderSummary};
@@ -111,6 +112,9 @@ pub(crate) struct Thresholds {
     /// Largest allowed p99 age above the baseline of a source's frames
     /// (`--max-age`).
     pub(crate) max_age: Option<Duration>,
+    /// Longest allowed time for a download to complete
+    /// (`--max-transfer-time`).
+    pub(crate) max_transfer_time: Option<Duration>,
     pub(crate) expect: Vec<Expected>,
     pub(crate) min_responders: Option<usize>,
 }
@@ -133,6 +137,9 @@ pub(crate) enum Check {
     MaxAge,
     Expect,
     MinResponders,
+    /// Every download completed.
+    Transfer,
+    MaxTransferTime,
 }
 
 impl Check {
@@ -147,6 +154,8 @@ impl Check {
             Check::MaxAge => "max-age",
             Check::Expect => "expect",
             Check::MinResponders => "min-responders",
+            Check::Transfer => "transfer",
+            Check::MaxTransferTime => "max-transfer-time",
         }
     }
 }
@@ -332,6 +341,46 @@ pub(crate) fn judge_command(summary: &CommandSummary) -> Verdict {
     verdict(summary.link_error.is_some(), failures)
 }
 
+/// Judges a download run: every download must complete, each within
+/// `--max-transfer-time` when given.
+pub(crate) fn judge_transfer(summary: &TransferSummary, t: &Thresholds) -> Verdict {
+    let mut failures = Vec::new();
+    if summary.attempts == 0 || summary.failed() > 0 {
+        let why = summary
+            .first_failed
+            .as_ref()
+            .or(summary.last.as_ref())
+            .map(|a| match &a.reason {
+                Some(reason) => format!(" ({reason})"),
+                None => String::new(),
+            })
+            .unwrap_or_default();
+        failures.push(Failure {
+            responder: summary.last.as_ref().and_then(|a| a.responder),
+            check: Check::Transfer,
+            message: format!(
+                "{} of {} downloads did not complete{why}",
+                summary.failed(),
+                summary.attempts
+            ),
+        });
+    }
+    let slowest = summary.time_to_complete.map(|t| t.max_ms);
+    if let (Some(max), Some(slowest)) = (t.max_transfer_time, slowest) {
+        if slowest > max.as_secs_f64() * 1e3 {
+            failures.push(Failure {
+                responder: summary.last.as_ref().and_then(|a| a.responder),
+                check: Check::MaxTransferTime,
+                message: format!(
+                    "the slowest download took {slowest:.0} ms, above --max-transfer-time {}",
+                    humantime::format_duration(max)
+                ),
+            });
+        }
+    }
+    verdict(summary.link_error.is_some(), failures)
+}
+
 /// Judges a passive run: some source must have been heard, and
 /// `--max-loss`, `--expect` and `--min-responders` hold for the sources'
 /// sequence loss (the radio's own frames aside).
@@ -398,6 +447,8 @@ pub(crate) fn judge_link(summary: &LinkSummary, t: &Thresholds) -> Verdict {
         judge_command(s)
     } else if let Some(s) = summary.get::<PassiveSummary>() {
         judge_passive(s, t)
+    } else if let Some(s) = summary.get::<TransferSummary>() {
+        judge_transfer(s, t)
     } else {
         // A kind with no judge here cannot pass: nothing checked it.
         verdict(true, Vec::new())
@@ -529,6 +580,7 @@ mod tests {
             }],
             max_jitter: Some(Duration::from_millis(3)),
             max_age: None,
+            max_transfer_time: None,
             expect: vec![Expected {
                 sysid: 1,
                 compid: Some(1),

@@ -217,6 +217,9 @@ fn refuse_probes_on_logs(cli: &PingArgs, links: &[LinkSpec]) -> Result<(), Confi
         ProbeKind::Auto | ProbeKind::Ping => None,
         ProbeKind::Timesync => Some("--probe timesync"),
         ProbeKind::Command => Some("--probe command"),
+        ProbeKind::Params => Some("--probe params"),
+        ProbeKind::Mission => Some("--probe mission"),
+        ProbeKind::Ftp => Some("--probe ftp"),
     };
     let given = probe.or_else(|| {
         [
@@ -300,7 +303,10 @@ fn validate_textfile(path: &Path) -> Result<PathBuf, ConfigError> {
 /// The live view, exporter, plot and sample log follow echo probes'
 /// replies; a command probe has none.
 fn validate_views(cli: &PingArgs) -> Result<(), ConfigError> {
-    if cli.probe == ProbeKind::Command {
+    if matches!(
+        cli.probe,
+        ProbeKind::Command | ProbeKind::Params | ProbeKind::Mission | ProbeKind::Ftp
+    ) {
         for (set, flag) in [
             (cli.live, "--live"),
             (cli.prometheus.is_some(), "--prometheus"),
@@ -461,6 +467,8 @@ fn validate_probe(cli: &PingArgs, links: &[LinkSpec]) -> Result<Probe, ConfigErr
             command: &cli.command,
             retry_interval: cli.retry_interval,
             retries: cli.retries,
+            timeout: cli.timeout,
+            path: &cli.path,
         },
     )
 }
@@ -497,12 +505,17 @@ fn session(
     }
     let ours = validate_ids(cli.sysid, cli.compid)?;
     let signing = validate_signing(cli)?;
-    let echo = !matches!(probe, Probe::Command(_));
+    let echo = !matches!(probe, Probe::Command(_) | Probe::Transfer(_));
+    // A download is made once unless -c asks for more.
+    let count = match probe {
+        Probe::Transfer(_) => cli.count.or(Some(1)),
+        _ => cli.count,
+    };
     Ok(SessionConfig {
         link_name: String::new(),
         ours,
         interval,
-        count: cli.count,
+        count,
         deadline: cli.deadline,
         // Each link sets its own: only listening links wait for a peer.
         wait: None,
@@ -605,6 +618,7 @@ impl TryFrom<&PingArgs> for Config {
             max_rtt: cli.max_rtt.clone(),
             max_jitter: cli.max_jitter,
             max_age: cli.max_age,
+            max_transfer_time: cli.max_transfer_time,
             expect: cli
                 .expect
                 .iter()

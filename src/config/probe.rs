@@ -9,15 +9,17 @@ use super::keys::Keys;
 use super::values::MAX_TIMEOUT;
 use crate::cli::ProbeKind;
 use crate::engine::capacity::{self, WireBudget};
+use crate::engine::probe::transfer::{TransferKind, TransferSpec};
 use crate::engine::summary::ProbeName;
 use crate::engine::CommandSpec;
 use crate::engine::SessionConfig;
+use crate::frame::transfer::FTP_DATA_MAX;
 use crate::frame::{codec, SysComp};
 use crate::transport::address::LinkSpec;
 
 /// Where the options that follow an echo's replies work (what `--live`,
 /// `--sweep`... are told).
-pub(super) const ECHO_PROBES: &str = "--probe ping and timesync, not command";
+pub(super) const ECHO_PROBES: &str = "--probe ping and timesync, not command or a download";
 
 /// Which probe, with what it needs.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,6 +31,8 @@ pub(crate) enum Probe {
         target: SysComp,
     },
     Command(CommandSpec),
+    /// A download (`--probe params`, `mission`, `ftp`).
+    Transfer(TransferSpec),
     /// No probes: sequence accounting of what every source sends
     /// (`--passive`), with its silence threshold if given.
     Passive {
@@ -44,6 +48,7 @@ impl Probe {
             Probe::Ping => ProbeName::Ping,
             Probe::Timesync { .. } => ProbeName::Timesync,
             Probe::Command(_) => ProbeName::Command,
+            Probe::Transfer(spec) => spec.kind.probe_name(),
             Probe::Passive { .. } => ProbeName::Passive,
         }
     }
@@ -59,7 +64,7 @@ pub(super) fn wire_budget(
     session: &SessionConfig,
 ) -> Option<WireBudget> {
     let exchange = match probe {
-        Probe::Command(_) | Probe::Passive { .. } => return None,
+        Probe::Command(_) | Probe::Transfer(_) | Probe::Passive { .. } => return None,
         // Auto sends a PING each slot (and a TIMESYNC only to those that
         // need it): the PING's sizes are the floor.
         Probe::Auto | Probe::Ping => capacity::Exchange::Ping,
@@ -138,7 +143,15 @@ pub(super) struct ProbeChoice<'a> {
     pub(crate) command: &'a str,
     pub(crate) retry_interval: Duration,
     pub(crate) retries: u8,
+    /// How long a download's request waits for its answer (the run's
+    /// reply timeout).
+    pub(crate) timeout: Duration,
+    /// The file `--probe ftp` reads.
+    pub(crate) path: &'a str,
 }
+
+/// Requests for missing pieces a download keeps in flight at once.
+const TRANSFER_WINDOW: u8 = 4;
 
 /// The probe a choice names; `key` names options or configuration keys in errors.
 pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, ConfigError> {
@@ -162,6 +175,7 @@ pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, Con
         ProbeKind::Timesync => Ok(Probe::Timesync {
             target: target.unwrap_or(SysComp::new(0, 0)),
         }),
+        ProbeKind::Params | ProbeKind::Mission | ProbeKind::Ftp => transfer_of(key, choice, target),
         ProbeKind::Command => {
             let target = target.unwrap_or(SysComp::new(1, 1));
             if target.sysid == 0 {
@@ -192,4 +206,45 @@ pub(super) fn probe_of(key: Keys, choice: &ProbeChoice<'_>) -> Result<Probe, Con
             }))
         }
     }
+}
+
+/// A download's plan: its target (1/1 unless named), its timeout and
+/// retries, and for FTP its path.
+fn transfer_of(
+    key: Keys,
+    choice: &ProbeChoice<'_>,
+    target: Option<SysComp>,
+) -> Result<Probe, ConfigError> {
+    let target = target.unwrap_or(SysComp::new(1, 1));
+    if target.sysid == 0 {
+        return Err(ConfigError::value(
+            key.name("target"),
+            0,
+            "a download needs one target system (e.g. 1/1)",
+        ));
+    }
+    let kind = match choice.kind {
+        ProbeKind::Params => TransferKind::Params,
+        ProbeKind::Mission => TransferKind::Mission,
+        _ => {
+            let path = choice.path.trim();
+            if path.is_empty() || path.len() > FTP_DATA_MAX {
+                return Err(ConfigError::value(
+                    key.name("path"),
+                    choice.path,
+                    format!("expected a path of 1 to {FTP_DATA_MAX} bytes"),
+                ));
+            }
+            TransferKind::Ftp {
+                path: path.to_string(),
+            }
+        }
+    };
+    Ok(Probe::Transfer(TransferSpec {
+        kind,
+        target,
+        timeout: choice.timeout,
+        retries: choice.retries,
+        window: TRANSFER_WINDOW,
+    }))
 }

@@ -56,7 +56,10 @@ pub(super) fn validate_flags(cli: &PingArgs) -> Result<(), ConfigError> {
         return Ok(());
     }
     let what = if cli.sweep { "--sweep" } else { "--load" };
-    if cli.probe == ProbeKind::Command {
+    if matches!(
+        cli.probe,
+        ProbeKind::Command | ProbeKind::Params | ProbeKind::Mission | ProbeKind::Ftp
+    ) {
         return Err(ConfigError::WorksWith {
             setting: what,
             with: ECHO_PROBES,

@@ -70,6 +70,12 @@ pub(crate) enum HintCode {
     /// A source's frames arrived ever later, by their own clock stamps,
     /// while it lost next to none: a queue delays what it does not drop.
     QueueBuilding,
+    /// A download's opening request was never answered.
+    TransferNoAnswer,
+    /// A download stopped coming and asking again did not finish it.
+    TransferStalled,
+    /// The vehicle refused a download (a NAK, a MISSION_ACK error).
+    TransferRefused,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]

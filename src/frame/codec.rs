@@ -565,6 +565,11 @@ pub(crate) fn result_name(value: u8) -> String {
     enum_name::<dialect::MavResult>(u32::from(value), "MAV_RESULT_")
 }
 
+/// A MAV_MISSION_RESULT's name ("denied"); unknown values as numbers.
+pub(crate) fn mission_result_name(value: u8) -> String {
+    enum_name::<dialect::MavMissionResult>(u32::from(value), "MAV_MISSION_")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

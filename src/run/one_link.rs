@@ -11,6 +11,7 @@ use crate::engine::probe::echo;
 use crate::engine::probe::passive::driver::{self as passive, PassiveDriver};
 use crate::engine::probe::ping::PingProbe;
 use crate::engine::probe::timesync::TimesyncProbe;
+use crate::engine::probe::transfer::driver as transfer;
 use crate::engine::probe::EchoProbe;
 use crate::engine::session::{self, Controls, Measurement};
 use crate::engine::summary::passive::PassiveSummary;
@@ -83,6 +84,10 @@ pub(super) async fn measure_recorded(
     let session = &config.session;
     let mut outcome = match probe {
         Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,
+        Probe::Transfer(spec) => {
+            let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
+            transfer::run(session, spec, &mut link, wall_clock, observer, controls).await
+        }
         // A log: a table per MAVProxy link too, and what the log held.
         Probe::Passive { gap } if matches!(link.inner(), Link::Tlog(_)) => {
             let driver = PassiveDriver::for_log(session, *gap);

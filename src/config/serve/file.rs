@@ -93,6 +93,7 @@ pub(super) struct Table {
     timeout: Option<FileDuration>,
     target: Option<String>,
     command: Option<String>,
+    path: Option<String>,
     retry_interval: Option<FileDuration>,
     retries: Option<u8>,
     sysid: Option<u8>,
@@ -141,6 +142,10 @@ impl Table {
             Some(d) => d.get("retry_interval")?,
             None => Duration::from_millis(100),
         };
+        let timeout = match &self.timeout {
+            Some(d) => validate_timeout("timeout", d.get("timeout")?, MAX_TIMEOUT)?,
+            None => default_timeout,
+        };
         let probe = probe_of(
             Keys::File,
             &ProbeChoice {
@@ -149,6 +154,8 @@ impl Table {
                 command: self.command.as_deref().unwrap_or("REQUEST_MESSAGE,0"),
                 retry_interval,
                 retries: self.retries.unwrap_or(3),
+                timeout,
+                path: self.path(),
             },
         )?;
         let version = match self.mavlink.unwrap_or(2) {
@@ -179,10 +186,6 @@ impl Table {
                 hint: "",
             });
         }
-        let timeout = match &self.timeout {
-            Some(d) => validate_timeout("timeout", d.get("timeout")?, MAX_TIMEOUT)?,
-            None => default_timeout,
-        };
         Ok(Common {
             probe,
             kind,
@@ -235,6 +238,7 @@ impl Table {
                 .transpose()?,
             // Ages are a listening run's; /probe runs are short probes.
             max_age: None,
+            max_transfer_time: None,
             expect: self
                 .expect
                 .iter()
@@ -260,6 +264,7 @@ impl Table {
                 .unwrap_or_else(|| "REQUEST_MESSAGE,0".into()),
             retry_interval: c.retry_interval,
             retries: self.retries.unwrap_or(3),
+            path: self.path().to_string(),
             count,
             interval,
             timeout: c.timeout,
@@ -273,6 +278,11 @@ impl Table {
         })
     }
 
+    /// The file an FTP download reads: ArduPilot's parameters unless named.
+    fn path(&self) -> &str {
+        self.path.as_deref().unwrap_or("@PARAM/param.pck")
+    }
+
     /// A key that says how to probe, set in a table that sends no probes.
     fn probing_key(&self) -> Option<&'static str> {
         [
@@ -282,6 +292,7 @@ impl Table {
             ("timeout", self.timeout.is_some()),
             ("target", self.target.is_some()),
             ("command", self.command.is_some()),
+            ("path", self.path.is_some()),
             ("retry_interval", self.retry_interval.is_some()),
             ("retries", self.retries.is_some()),
         ]

@@ -129,6 +129,8 @@ impl ServeSettings {
                 command: &module.command,
                 retry_interval: module.retry_interval,
                 retries: module.retries,
+                timeout,
+                path: &module.path,
             },
         )?;
         let common = Common {

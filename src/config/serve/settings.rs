@@ -84,6 +84,8 @@ pub(crate) struct Module {
     pub(crate) command: String,
     pub(crate) retry_interval: Duration,
     pub(crate) retries: u8,
+    /// The file a download module reads over FTP.
+    pub(crate) path: String,
     pub(crate) count: u64,
     pub(crate) interval: Duration,
     pub(crate) timeout: Duration,

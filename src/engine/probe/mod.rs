@@ -16,6 +16,7 @@ mod echo_probe;
 pub mod passive;
 pub mod ping;
 pub(crate) mod timesync;
+pub(crate) mod transfer;
 pub(crate) mod uplink_check;
 
 pub use echo_probe::{Classified, EchoProbe};

@@ -18,6 +18,10 @@ pub enum ProbeName {
     Command,
     /// No probes: the sequence numbers of what the link carries.
     Passive,
+    /// Downloads: every parameter, the mission, a file over FTP.
+    Params,
+    Mission,
+    Ftp,
 }
 
 impl ProbeName {
@@ -28,6 +32,9 @@ impl ProbeName {
             ProbeName::Auto => "auto",
             ProbeName::Command => "command",
             ProbeName::Passive => "passive",
+            ProbeName::Params => "params",
+            ProbeName::Mission => "mission",
+            ProbeName::Ftp => "ftp",
         }
     }
 }

@@ -253,6 +253,8 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
             Check::MaxAge => "max_age",
             Check::Expect => "expect",
             Check::MinResponders => "min_responders",
+            Check::Transfer => "transfer_incomplete",
+            Check::MaxTransferTime => "max_transfer_time",
         };
         if !reasons.contains(&reason) {
             reasons.push(reason);
