@@ -18,8 +18,10 @@ mod reporter;
 mod round_trips;
 mod summary;
 mod sweep;
+mod transfer;
 mod whole;
 
+use std::any::Any;
 use std::io::{self, Write};
 
 use super::{Reporter, StartInfo};
@@ -28,6 +30,9 @@ use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
 use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::PassivePlan;
+use crate::engine::probe::transfer::{
+    AttemptFigures, TransferProgress, TransferSpec, TransferSummary,
+};
 use crate::engine::roster::Identity;
 use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::{
@@ -51,6 +56,8 @@ impl<W: Write> Reporter for TextReporter<W> {
             self.sweep_start(info, plan)
         } else if let Some(spec) = info.plan::<CommandSpec>() {
             self.command_start(info, spec)
+        } else if let Some(spec) = info.plan::<TransferSpec>() {
+            self.transfer_start(info, spec)
         } else if let Some(plan) = info.plan::<PassivePlan>() {
             self.passive_start(info, plan)
         } else {
@@ -120,6 +127,13 @@ impl<W: Write> Reporter for TextReporter<W> {
 
     /// A kind with no lines of its own: its event's figures on a line.
     fn other_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
+        // A download's progress is for the plot and JSON; its end is a line.
+        if value.get::<TransferProgress>().is_some() {
+            return Ok(());
+        }
+        if let Some(a) = value.get::<AttemptFigures>() {
+            return self.if_shown(|t| t.transfer_line(a));
+        }
         match value.serialized().and_then(whole::event_line) {
             Some(line) => self.if_shown(|t| writeln!(t.out.inner(), "{line}")),
             None => Ok(()),
@@ -128,6 +142,12 @@ impl<W: Write> Reporter for TextReporter<W> {
 
     /// A kind with no summary of its own: its figures, one to a line.
     fn other_summary(&mut self, s: &dyn KindSummary, verdict: &Verdict) -> io::Result<()> {
+        if let Some(t) = (s as &dyn Any).downcast_ref::<TransferSummary>() {
+            return self.summary_block(&t.link, |out| {
+                transfer::write_summary(out, t)?;
+                summary::write_failures(out, verdict)
+            });
+        }
         let Some((_, figures)) = s.serialized() else {
             return Ok(());
         };

@@ -16,5 +16,7 @@ mod progress;
 mod spec;
 mod summary;
 
+pub(crate) use attempt::{AttemptFigures, Ending};
+pub(crate) use driver::TransferProgress;
 pub(crate) use spec::{TransferKind, TransferSpec};
 pub(crate) use summary::TransferSummary;
