@@ -303,10 +303,7 @@ fn validate_textfile(path: &Path) -> Result<PathBuf, ConfigError> {
 /// The live view, exporter, plot and sample log follow echo probes'
 /// replies; a command probe has none.
 fn validate_views(cli: &PingArgs) -> Result<(), ConfigError> {
-    if matches!(
-        cli.probe,
-        ProbeKind::Command | ProbeKind::Params | ProbeKind::Mission | ProbeKind::Ftp
-    ) {
+    if cli.probe == ProbeKind::Command {
         for (set, flag) in [
             (cli.live, "--live"),
             (cli.prometheus.is_some(), "--prometheus"),

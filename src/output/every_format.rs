@@ -202,6 +202,7 @@ fn prometheus_has_figures_of_every_run() {
         let family = match run {
             Run::Passive | Run::Log => "mavping_source_received_total",
             Run::Command => "mavping_requests_total",
+            Run::Transfer => "mavping_transfer_downloads_total",
             Run::Echo(_) | Run::Sweep(_) => "mavping_received_total",
         };
         assert!(text.contains(family), "{run:?}: {text}");

@@ -20,6 +20,7 @@ use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::flight::{Flight, FlightEvent, FlightSummary, Totals};
 use crate::engine::probe::passive::tracker::RADIO_SOURCE;
 use crate::engine::probe::passive::{PassivePlan, SourcesNow};
+use crate::engine::probe::transfer::{AttemptFigures, Ending, TransferProgress};
 use crate::engine::radio::{Judgement, RadioKind, RadioReport, RadioType, Radios, UNKNOWN};
 use crate::engine::roster::Identity;
 use crate::engine::stats::RttStats;
@@ -121,6 +122,7 @@ pub(crate) fn probe_name(probe: &str) -> ProbeName {
     match probe {
         "ping" => ProbeName::Ping,
         "timesync" => ProbeName::Timesync,
+        "params" => ProbeName::Params,
         _ => ProbeName::Command,
     }
 }
@@ -738,6 +740,122 @@ pub(crate) fn command_run() -> Vec<Told<'static>> {
     told
 }
 
+/// A download's figures: the first complete after re-reads, the second
+/// stalled.
+pub(crate) fn attempt(n: u32, complete: bool) -> AttemptFigures {
+    use crate::engine::probe::transfer::attempt::Counts as TransferCounts;
+    use crate::engine::probe::transfer::progress::ProgressFigures;
+    AttemptFigures {
+        attempt: n,
+        responder: Some(ONE),
+        ending: if complete { Ending::Complete } else { Ending::Stalled },
+        reason: (!complete).then(|| "2 of 10 missing after the list, 1 re-requests answered, 1 never arrived".into()),
+        unit: "parameters",
+        progress: ProgressFigures {
+            total: Some(10),
+            received: if complete { 10 } else { 9 },
+            time_to_first_ms: Some(12.5),
+            time_to_95_ms: complete.then_some(2_050.0),
+            time_to_100_ms: complete.then_some(2_060.0),
+            longest_stall_ms: 2_000.0,
+            stalled_at: 8,
+            frames: 11,
+            wire_bytes: 407,
+            per_s: complete.then_some(10.0 / 2.06),
+            wire_bytes_per_s: Some(197.6),
+        },
+        counts: TransferCounts {
+            requests: 3,
+            first_pass: 8,
+            re_requests: 2,
+            re_requests_answered: if complete { 2 } else { 1 },
+            duplicates: 1,
+            given_up: u64::from(!complete),
+        },
+        missing_first_pass: Some(2),
+        duration_ms: if complete { 2_060.0 } else { 8_000.0 },
+    }
+}
+
+/// A `--probe params -c 2` run: its progress, two downloads (one
+/// stalled), the TIMESYNC round trip beside them.
+pub(crate) fn transfer_run() -> Vec<Told<'static>> {
+    use crate::engine::probe::transfer::summary::{LatencyBeside, Tally};
+    use crate::engine::probe::transfer::{TransferKind, TransferSpec, TransferSummary};
+    let spec = TransferSpec {
+        kind: TransferKind::Params,
+        target: ONE,
+        timeout: Duration::from_secs(2),
+        retries: 3,
+        window: 4,
+    };
+    let mut told = vec![Told::Start(StartInfo {
+        plan: Some(Arc::new(spec.clone())),
+        ..start("params")
+    })];
+    let progress = TransferProgress {
+        attempt: 1,
+        elapsed_ms: 250.0,
+        received: 6,
+        total: Some(10),
+    };
+    told.push(Told::Event(kind(progress)));
+    let mut tally = Tally::default();
+    for a in [attempt(1, true), attempt(2, false)] {
+        tally.add(&a);
+        told.push(Told::Event(kind(a)));
+    }
+    let mut rtt = RttStats::new();
+    rtt.record(21_000_000);
+    let summary = TransferSummary {
+        link: "sim:?seed=1".into(),
+        ours: SysComp::new(250, 190),
+        plan: spec,
+        duration_s: 12.1,
+        attempts: tally.attempts,
+        complete: tally.complete,
+        time_to_complete: tally.times(),
+        missing_first_pass: tally.missing_first_pass,
+        requests: tally.requests,
+        re_requests: tally.re_requests,
+        given_up: tally.given_up,
+        last: tally.last.clone(),
+        first_failed: None,
+        latency: Some(LatencyBeside {
+            responder: ONE,
+            counts: Counts {
+                sent: 12,
+                received: 11,
+                lost: 1,
+                ..Counts::default()
+            },
+            rtt: rtt.summary(),
+        }),
+        hints: vec![Hint::new(
+            HintCode::TransferStalled,
+            "the parameter list stopped coming and asking again did not finish it",
+        )],
+        frames: ScanStats {
+            frames: 30,
+            ..ScanStats::default()
+        },
+        interrupted: false,
+        link_error: None,
+        signing: crate::frame::signing::Gate::new(None).summary(),
+        answered: answered(),
+        link_node: link_nodes(false),
+    };
+    let verdict = verdict::judge_transfer(
+        &summary,
+        &Thresholds {
+            max_transfer_time: Some(Duration::from_secs(2)),
+            ..Thresholds::default()
+        },
+    );
+    told.push(Told::Summary(LinkSummary::new(summary), verdict));
+    told
+}
+
 /// A `--passive` run: two sources with losses, a duplicate, a swap and a
 /// silence, the SiK radio apart, one source beyond a table of two.
 pub(crate) fn passive_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
@@ -907,9 +1025,10 @@ pub(crate) enum Run {
     Command,
     Passive,
     Log,
+    Transfer,
 }
 
-pub(crate) const RUNS: [Run; 9] = [
+pub(crate) const RUNS: [Run; 10] = [
     Run::Echo("ping"),
     Run::Echo("timesync"),
     Run::Sweep(PlanKind::Sweep {
@@ -937,6 +1056,7 @@ pub(crate) const RUNS: [Run; 9] = [
     Run::Command,
     Run::Passive,
     Run::Log,
+    Run::Transfer,
 ];
 
 impl Run {
@@ -947,6 +1067,7 @@ impl Run {
             Run::Command => command_run(),
             Run::Passive => passive_run(borrowed),
             Run::Log => log_run(borrowed),
+            Run::Transfer => transfer_run(),
         }
     }
 }

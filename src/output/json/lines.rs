@@ -10,6 +10,7 @@ use super::command;
 use super::units::seconds;
 use crate::engine::summary::ProbeName;
 use crate::engine::sweep_report::SweepConfig;
+use crate::engine::probe::transfer::TransferSpec;
 use crate::engine::CommandSpec;
 use crate::engine::Nanos;
 use crate::frame::SysComp;
@@ -75,6 +76,8 @@ pub(super) struct Start<'a> {
     command: Option<command::Spec>,
     #[serde(skip_serializing_if = "Option::is_none")]
     sweep: Option<&'a SweepConfig>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    transfer: Option<&'a TransferSpec>,
 }
 
 /// What every timed event of a responder starts with: its type, session
@@ -146,6 +149,7 @@ impl Lines {
             count: info.count,
             command: info.plan::<CommandSpec>().map(command::Spec::of),
             sweep: info.plan::<SweepConfig>(),
+            transfer: info.plan::<TransferSpec>(),
         }
     }
 

@@ -11,7 +11,9 @@ use crate::engine::clock_offset::ClockSummary;
 use crate::engine::link_node::{LinkNodeReport, LinkNodes};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{RadioHeard, StartInfo};
+use crate::engine::kind::KindValue;
 use crate::engine::probe::command::CommandEvent;
+use crate::engine::probe::transfer::AttemptFigures;
 use crate::engine::probe::passive::SourcesNow;
 use crate::engine::radio::MAX_RADIOS;
 use crate::engine::summary::passive::PassiveSummary;
@@ -43,6 +45,8 @@ pub(crate) struct Metrics {
     pub(super) earlier_requests: u64,
     /// ...and in this one so far.
     pub(super) session_requests: u64,
+    /// A download run's downloads.
+    pub(super) transfer: Option<super::transfer::TransferSeries>,
 }
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -231,6 +235,14 @@ impl Reporter for Metrics {
 
     fn command_summary(&mut self, summary: &CommandSummary, _: &Verdict) -> io::Result<()> {
         self.session_requests = summary.commands();
+        Ok(())
+    }
+
+    /// A download as it ends.
+    fn other_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
+        if let Some(a) = value.get::<AttemptFigures>() {
+            self.transfer.get_or_insert_default().add(a);
+        }
         Ok(())
     }
 }

@@ -13,8 +13,8 @@
 //!
 //! This file declares and re-exports; the link's `Metrics` takes its
 //! session's events in `metrics.rs`; a responder's series are in
-//! `series.rs`, a radio's in `radio_series.rs`, the exposition text in
-//! `render.rs`.
+//! `series.rs`, a radio's in `radio_series.rs`, a download run's in
+//! `transfer.rs`, the exposition text in `render.rs`.
 
 mod exporter;
 mod exposition;
@@ -28,6 +28,7 @@ mod series;
 mod sources;
 #[cfg(test)]
 mod test_support;
+mod transfer;
 
 pub(crate) use exporter::borrow_all;
 pub use exporter::{PrometheusExporter, SharedMetrics};

@@ -8,6 +8,7 @@ use std::fmt::Write as _;
 use super::exposition::{Exposition, Family, Figure, SeriesFigure};
 use super::link_node::write_link_nodes;
 use super::passive::{write_directions, write_sources};
+use super::transfer::write_transfers;
 use super::radio_series::RadioSeries;
 use super::series::{Series, BUCKETS_S};
 use super::Metrics;
@@ -267,6 +268,7 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
     write_link_nodes(out, links);
     write_directions(out, links);
     write_sources(out, links);
+    write_transfers(out, links, scope == Scope::Probe);
 }
 
 /// A link's state, as a run has it...

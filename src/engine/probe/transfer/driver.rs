@@ -19,8 +19,7 @@ use super::spec::{TransferKind, TransferSpec};
 use super::summary::{LatencyBeside, Tally, TransferSummary};
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::link_io::{Clock, Sender, WallAtZero};
-use crate::engine::matcher::MatchEvent;
-use crate::engine::observe::{tell_kind, Event, Observer, StartInfo};
+use crate::engine::observe::{tell_kind, Observer, StartInfo};
 use crate::engine::probe::echo::EchoDriver;
 use crate::engine::probe::timesync::TimesyncProbe;
 use crate::engine::radio::Radios;
@@ -28,7 +27,7 @@ use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
-use crate::engine::summary::{EchoSummary, Interim, LinkSummary};
+use crate::engine::summary::{EchoSummary, LinkSummary};
 use crate::engine::{Nanos, SessionConfig};
 use crate::frame::{Frame, Msg, ScanStats, SysComp, Transfer};
 use crate::transport::{LinkError, PathId, Transport};
@@ -259,28 +258,6 @@ impl TransferDriver {
     }
 }
 
-/// Passes on what the TIMESYNC probe tells, but its replies one by one:
-/// the transfer's own lines are the run's.
-struct Quiet<'a>(&'a mut dyn Observer);
-
-impl Observer for Quiet<'_> {
-    fn start(&mut self, info: &StartInfo) -> io::Result<()> {
-        self.0.start(info)
-    }
-    fn event(&mut self, event: &Event<'_>) -> io::Result<()> {
-        if event.kind::<MatchEvent>().is_some() {
-            return Ok(());
-        }
-        self.0.event(event)
-    }
-    fn flush(&mut self) -> io::Result<()> {
-        self.0.flush()
-    }
-    fn interim(&mut self, figures: &Interim) -> io::Result<()> {
-        self.0.interim(figures)
-    }
-}
-
 impl Driver for TransferDriver {
     fn start_info(&self, cfg: &SessionConfig) -> StartInfo {
         StartInfo {
@@ -345,7 +322,7 @@ impl Driver for TransferDriver {
     }
 
     fn report(&mut self, radios: &mut Radios, observer: &mut dyn Observer) -> io::Result<()> {
-        let beside = self.beside.report(radios, &mut Quiet(&mut *observer));
+        let beside = self.beside.report(radios, observer);
         let progress = tell_kind(observer, self.progress.drain(..));
         let ended = tell_kind(observer, self.ended.drain(..));
         beside.and(progress).and(ended)

@@ -12,9 +12,9 @@ pub(crate) mod driver;
 mod ftp;
 mod mission;
 mod params;
-mod progress;
+pub(crate) mod progress;
 mod spec;
-mod summary;
+pub(crate) mod summary;
 
 pub(crate) use attempt::{AttemptFigures, Ending};
 pub(crate) use driver::TransferProgress;
