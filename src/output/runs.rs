@@ -748,8 +748,14 @@ pub(crate) fn attempt(n: u32, complete: bool) -> AttemptFigures {
     AttemptFigures {
         attempt: n,
         responder: Some(ONE),
-        ending: if complete { Ending::Complete } else { Ending::Stalled },
-        reason: (!complete).then(|| "2 of 10 missing after the list, 1 re-requests answered, 1 never arrived".into()),
+        ending: if complete {
+            Ending::Complete
+        } else {
+            Ending::Stalled
+        },
+        reason: (!complete).then(|| {
+            "2 of 10 missing after the list, 1 re-requests answered, 1 never arrived".into()
+        }),
         unit: "parameters",
         progress: ProgressFigures {
             total: Some(10),

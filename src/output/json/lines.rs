@@ -8,9 +8,9 @@ use serde::Serialize;
 
 use super::command;
 use super::units::seconds;
+use crate::engine::probe::transfer::TransferSpec;
 use crate::engine::summary::ProbeName;
 use crate::engine::sweep_report::SweepConfig;
-use crate::engine::probe::transfer::TransferSpec;
 use crate::engine::CommandSpec;
 use crate::engine::Nanos;
 use crate::frame::SysComp;

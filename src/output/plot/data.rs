@@ -8,7 +8,7 @@ use super::flight::{self, FlightTrack};
 use super::frame::{self, PlotError};
 use super::passive::{self, SourceTrack};
 use super::spans::Bins;
-use super::{draw, sweep};
+use super::{draw, sweep, transfer};
 use crate::engine::age::SourceAge;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::pair::PairSummary;
@@ -69,6 +69,8 @@ pub(crate) struct PlotData {
     sources: BTreeMap<(usize, SysComp), SourceTrack>,
     /// A telemetry log's flight, window by window, per link.
     pub(super) flights: BTreeMap<usize, FlightTrack>,
+    /// A download run's downloads, per link.
+    pub(super) downloads: BTreeMap<usize, transfer::Downloads>,
 }
 
 impl PlotData {
@@ -160,6 +162,29 @@ impl PlotData {
         if let Some((&link, track)) = self.flights.iter().find(|(_, t)| !t.is_empty()) {
             let name = self.links.get(link).map_or("?", String::as_str);
             return flight::svg(&flight::title(name, track), track);
+        }
+        if !self.downloads.is_empty() {
+            let flat: BTreeMap<(usize, u32), &transfer::DownloadTrack> = self
+                .downloads
+                .iter()
+                .flat_map(|(&link, d)| d.iter().map(move |(&n, t)| ((link, n), t)))
+                .collect();
+            let entries = frame::entries(&flat, |(link, n), _| match self.links.len() {
+                1 => format!("download {n}"),
+                _ => format!(
+                    "{} download {n}",
+                    self.links.get(link).map_or("?", String::as_str)
+                ),
+            });
+            let entries: Vec<_> = entries
+                .into_iter()
+                .map(|e| frame::Entry {
+                    label: e.label,
+                    look: e.look,
+                    track: *e.track,
+                })
+                .collect();
+            return transfer::svg(&self.title(" downloads"), &entries);
         }
         if !self.sources.is_empty() {
             let entries = frame::entries(&self.sources, |(link, id), track| {

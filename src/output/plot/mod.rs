@@ -2,7 +2,8 @@
 //! The drawing is in `draw.rs`, colours and markers in `style.rs`; a
 //! sweep's in `sweep.rs`, a passive run's (each source's rate, frame age
 //! and loss over time) in `passive.rs`, a log's flight in `flight.rs`,
-//! the age axis they share in `age.rs`.
+//! the age axis they share in `age.rs`, a download run's progress in
+//! `transfer.rs`.
 //!
 //! Memory is constant: each responder keeps [`SPANS`](data::SPANS) time
 //! spans. When a sample falls past the last span, every span doubles in
@@ -25,15 +26,18 @@ mod passive;
 mod spans;
 mod style;
 mod sweep;
+mod transfer;
 
 use std::io;
 
 use super::windows::Windows;
 use super::{Reporter, StartInfo};
+use crate::engine::kind::KindValue;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
 use crate::engine::probe::passive::PassivePlan;
 use crate::engine::probe::passive::SourcesNow;
+use crate::engine::probe::transfer::{AttemptFigures, TransferProgress};
 use crate::engine::summary::passive::PassiveSummary;
 use crate::engine::summary::EchoSummary;
 use crate::engine::Nanos;
@@ -62,6 +66,17 @@ impl Reporter for PlotLink {
         if let FlightEvent::Window(w) = event {
             let mut data = self.data.borrow_mut();
             data.flights.entry(self.index).or_default().window(w);
+        }
+        Ok(())
+    }
+
+    /// A download's progress and its end.
+    fn other_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
+        let mut data = self.data.borrow_mut();
+        if let Some(p) = value.get::<TransferProgress>() {
+            transfer::progress(data.downloads.entry(self.index).or_default(), p);
+        } else if let Some(a) = value.get::<AttemptFigures>() {
+            transfer::ended(data.downloads.entry(self.index).or_default(), a);
         }
         Ok(())
     }

@@ -8,9 +8,9 @@ use std::fmt::Write as _;
 use super::exposition::{Exposition, Family, Figure, SeriesFigure};
 use super::link_node::write_link_nodes;
 use super::passive::{write_directions, write_sources};
-use super::transfer::write_transfers;
 use super::radio_series::RadioSeries;
 use super::series::{Series, BUCKETS_S};
+use super::transfer::write_transfers;
 use super::Metrics;
 use crate::engine::radio::{Field, UNKNOWN};
 

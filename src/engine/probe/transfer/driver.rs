@@ -137,6 +137,13 @@ impl TransferDriver {
     fn step(&mut self, now: Nanos) {
         if self.running.is_none() && !self.finished && self.next_start.is_some_and(|t| now >= t) {
             let attempt = self.tally.attempts + 1;
+            // Its line starts at 0.
+            self.progress.push(TransferProgress {
+                attempt,
+                elapsed_ms: 0.0,
+                received: 0,
+                total: None,
+            });
             self.running = Some(Running {
                 protocol: self.protocol(now),
                 attempt,
