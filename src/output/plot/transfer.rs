@@ -92,7 +92,7 @@ pub(super) fn svg(title: &str, entries: &[Entry<'_, DownloadTrack>]) -> Result<S
     frame::page(title, &legend, &[PROGRESS_H], |areas| {
         let end = entries
             .iter()
-            .flat_map(|e| e.track.points.last().map(|p| p.0))
+            .filter_map(|e| e.track.points.last().map(|p| p.0))
             .fold(1.0f64, f64::max);
         let descs = (Some("time since the download began (s)"), "received (%)");
         let mut chart = chart(
