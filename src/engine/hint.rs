@@ -76,6 +76,10 @@ pub(crate) enum HintCode {
     TransferStalled,
     /// The vehicle refused a download (a NAK, a MISSION_ACK error).
     TransferRefused,
+    /// A download's list stopped by itself before its end.
+    TransferListStopped,
+    /// The first passes lost far more than the re-requests.
+    TransferLoadLoss,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]

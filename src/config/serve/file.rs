@@ -205,7 +205,9 @@ impl Table {
 
     pub(super) fn module(&self) -> Result<Module, ConfigError> {
         let c = self.common(Duration::from_secs(1))?;
-        let count = self.count.unwrap_or(10);
+        // A download module makes one download a scrape unless told more.
+        let downloads = matches!(c.probe, Probe::Transfer(_));
+        let count = self.count.unwrap_or(if downloads { 1 } else { 10 });
         validate_count(count)?;
         let interval = match &self.interval {
             Some(d) => validate_probe_interval("interval", d.get("interval")?)?,

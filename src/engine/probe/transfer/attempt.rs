@@ -63,6 +63,11 @@ pub(crate) trait Protocol: std::fmt::Debug {
     /// Why it ended as it did, in words, when the protocol knows more
     /// than its ending says (a NAK's error, where the list stopped).
     fn reason(&self) -> Option<String>;
+    /// Where a list stopped coming by itself, when what should have
+    /// followed never came with it: the last unit it brought.
+    fn stopped_after(&self) -> Option<u64> {
+        None
+    }
     fn progress(&self) -> &Progress;
     fn counts(&self) -> Counts;
     /// Who answered.
@@ -82,6 +87,9 @@ pub(crate) struct AttemptFigures {
     pub(crate) ending: Ending,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) reason: Option<String>,
+    /// The list stopped after this index, the rest never coming with it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) stopped_after: Option<u64>,
     pub(crate) unit: &'static str,
     #[serde(flatten)]
     pub(crate) progress: ProgressFigures,
@@ -113,6 +121,7 @@ pub(crate) fn figures_of(
         responder: protocol.responder(),
         ending: protocol.ending().unwrap_or(Ending::Cut),
         reason: protocol.reason(),
+        stopped_after: protocol.stopped_after(),
         unit: "",
         missing_first_pass: progress.total.map(|t| t.saturating_sub(counts.first_pass)),
         progress,

@@ -217,52 +217,98 @@ fn latency(tally: &Tally, echo: &EchoSummary) -> Option<LatencyBeside> {
 }
 
 impl TransferDriver {
-    /// What the failed downloads showed, in words.
+    /// What the downloads showed, in words: why one failed, a list that
+    /// stopped by itself, loss that the transfer's own load makes.
     fn hints(&self, roster: &Roster) -> Vec<Hint> {
-        let Some(failed) = self.tally.first_failed.as_ref() else {
-            return Vec::new();
-        };
         let what = match self.spec.kind {
             TransferKind::Params => "the parameter list",
             TransferKind::Mission => "the mission",
             TransferKind::Ftp { .. } => "the file",
         };
-        let target = self.spec.target;
-        let heard = roster.iter().any(|(id, _)| id.sysid == target.sysid);
-        let (code, text) = match failed.ending {
-            Ending::NoAnswer if heard => (
-                HintCode::TransferNoAnswer,
-                format!(
-                    "system {} is heard on the link but never answered the request for {what} \
-                     ({} requests): it may not serve it on this component, or drops our frames",
-                    target.sysid, failed.counts.requests
-                ),
-            ),
-            Ending::NoAnswer => (
-                HintCode::TransferNoAnswer,
-                format!(
-                    "nothing of system {} was heard, and the request for {what} went unanswered",
-                    target.sysid
-                ),
-            ),
-            Ending::Stalled => (
-                HintCode::TransferStalled,
-                format!(
-                    "{what} stopped coming and asking again did not finish it: {}",
-                    failed.reason.as_deref().unwrap_or("no reason known")
-                ),
-            ),
-            Ending::Refused => (
-                HintCode::TransferRefused,
-                format!(
-                    "the vehicle refused {what}: {}",
-                    failed.reason.as_deref().unwrap_or("no reason given")
-                ),
-            ),
-            Ending::Complete | Ending::Cut => return Vec::new(),
-        };
-        vec![Hint::new(code, text)]
+        let tally = &self.tally;
+        let mut hints = Vec::new();
+        if let Some(failed) = tally.first_failed.as_ref() {
+            let target = self.spec.target;
+            let heard = roster.iter().any(|(id, _)| id.sysid == target.sysid);
+            hints.extend(failure_hint(failed, what, target, heard));
+        }
+        if let Some(a) = &tally.first_stopped {
+            hints.push(stopped_hint(a));
+        } else if let Some(h) = load_loss_hint(tally) {
+            hints.push(h);
+        }
+        hints
     }
+}
+
+/// Why download `failed` did not complete.
+fn failure_hint(failed: &AttemptFigures, what: &str, target: SysComp, heard: bool) -> Option<Hint> {
+    let reason = failed.reason.as_deref().unwrap_or("no reason known");
+    let (code, text) = match failed.ending {
+        Ending::NoAnswer if heard => (
+            HintCode::TransferNoAnswer,
+            format!(
+                "system {} is heard on the link but never answered the request for {what} \
+                 ({} requests): it may not serve it on this component, or drops our frames",
+                target.sysid, failed.counts.requests
+            ),
+        ),
+        Ending::NoAnswer => (
+            HintCode::TransferNoAnswer,
+            format!(
+                "nothing of system {} was heard, and the request for {what} went unanswered",
+                target.sysid
+            ),
+        ),
+        Ending::Stalled => (
+            HintCode::TransferStalled,
+            format!("{what} stopped coming and asking again did not finish it: {reason}"),
+        ),
+        Ending::Refused => (
+            HintCode::TransferRefused,
+            format!("the vehicle refused {what}: {reason}"),
+        ),
+        Ending::Complete | Ending::Cut => return None,
+    };
+    Some(Hint::new(code, text))
+}
+
+/// A list that stopped by itself: what followed its last never came
+/// with it, and what asking one by one then brought.
+fn stopped_hint(a: &AttemptFigures) -> Hint {
+    let total = a.progress.total.unwrap_or(0);
+    let after = a.stopped_after.unwrap_or(0);
+    let tail = total.saturating_sub(after + 1);
+    Hint::new(
+        HintCode::TransferListStopped,
+        format!(
+            "in download {}, the list stopped after index {after}: the {tail} after it never \
+             came with it; asked for one by one, {} re-requests were answered",
+            a.attempt, a.counts.re_requests_answered
+        ),
+    )
+}
+
+/// The first passes lost far more than the re-requests did: loss that
+/// comes with the transfer's own downlink load, not evenly.
+fn load_loss_hint(tally: &Tally) -> Option<Hint> {
+    if tally.units == 0 || tally.re_requests < 10 {
+        return None;
+    }
+    let first = tally.missing_first_pass as f64 / tally.units as f64;
+    let asked = 1.0 - tally.re_requests_answered as f64 / tally.re_requests as f64;
+    (first >= 0.05 && asked <= first / 2.0).then(|| {
+        Hint::new(
+            HintCode::TransferLoadLoss,
+            format!(
+                "the first passes missed {:.1} % of what they carried, while {:.1} % of the \
+                 re-requests went unanswered: frames are lost under the transfer's own \
+                 downlink load, not evenly",
+                first * 100.0,
+                asked * 100.0
+            ),
+        )
+    })
 }
 
 impl Driver for TransferDriver {

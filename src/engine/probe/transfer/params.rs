@@ -283,6 +283,11 @@ impl Protocol for ParamsDownload {
         })
     }
 
+    fn stopped_after(&self) -> Option<u64> {
+        self.list_tail?;
+        self.last_listed.map(|(_, last)| u64::from(last))
+    }
+
     fn progress(&self) -> &Progress {
         &self.progress
     }

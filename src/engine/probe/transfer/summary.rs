@@ -56,6 +56,11 @@ pub(crate) struct Tally {
     pub(crate) complete: u32,
     pub(crate) times: RttStats,
     pub(crate) requests: u64,
+    /// Units the targets said there were, over every download.
+    pub(crate) units: u64,
+    pub(crate) re_requests_answered: u64,
+    /// The first download whose list stopped by itself.
+    pub(crate) first_stopped: Option<AttemptFigures>,
     pub(crate) missing_first_pass: u64,
     pub(crate) re_requests: u64,
     pub(crate) given_up: u64,
@@ -77,6 +82,11 @@ impl Tally {
         }
         self.missing_first_pass += a.missing_first_pass.unwrap_or(0);
         self.requests += a.counts.requests;
+        self.units += a.progress.total.unwrap_or(0);
+        self.re_requests_answered += a.counts.re_requests_answered;
+        if a.stopped_after.is_some() && self.first_stopped.is_none() {
+            self.first_stopped = Some(a.clone());
+        }
         self.re_requests += a.counts.re_requests;
         self.given_up += a.counts.given_up;
         self.last = Some(a.clone());
