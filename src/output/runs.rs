@@ -756,6 +756,7 @@ pub(crate) fn attempt(n: u32, complete: bool) -> AttemptFigures {
         reason: (!complete).then(|| {
             "2 of 10 missing after the list, 1 re-requests answered, 1 never arrived".into()
         }),
+        stopped_after: (!complete).then_some(7),
         unit: "parameters",
         progress: ProgressFigures {
             total: Some(10),
