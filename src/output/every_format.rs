@@ -324,7 +324,8 @@ fn a_kind_no_format_knows_is_written_whole_by_json_and_text_and_passed_over_by_t
     assert_eq!(
         lines,
         "{\"type\":\"novel\",\"n\":7}\n\
-         {\"link\":\"sim:\",\"seen\":3,\"type\":\"novel_summary\",\"schema_version\":2,\"exit_code\":2}\n"
+         {\"link\":\"sim:\",\"seen\":3,\"type\":\"novel_summary\",\"schema_version\":2,\
+         \"verdict\":{\"ok\":false,\"exit_code\":2,\"failures\":[]},\"exit_code\":2}\n"
     );
     assert_eq!(
         String::from_utf8(text.into_inner()).unwrap(),

@@ -52,6 +52,7 @@ mod tcp_pymavlink;
 mod tlog;
 mod tlog_record;
 mod tlog_rtt;
+mod transfers;
 mod udp_bcast_ipv6;
 mod udp_pymavlink;
 mod views;

@@ -38,6 +38,7 @@ pub(super) struct Whole<'a> {
     figures: &'a dyn erased_serde::Serialize,
     r#type: &'static str,
     schema_version: u32,
+    verdict: &'a Verdict,
     exit_code: u8,
 }
 
@@ -45,7 +46,7 @@ impl<'a> Whole<'a> {
     pub(super) fn of(
         name: &'static str,
         figures: &'a dyn erased_serde::Serialize,
-        verdict: &Verdict,
+        verdict: &'a Verdict,
         link: &'a str,
     ) -> Self {
         Whole {
@@ -53,6 +54,7 @@ impl<'a> Whole<'a> {
             figures,
             r#type: name,
             schema_version: SCHEMA_VERSION,
+            verdict,
             exit_code: verdict.exit_code(),
         }
     }

@@ -77,7 +77,7 @@ const LAST: [SeriesFigure<AttemptFigures>; 6] = [
         |a| Some(a.progress.received as f64),
     ),
     Figure::gauge(
-        "mavping_transfer_last_total",
+        "mavping_transfer_last_size",
         "Units the target said the latest download has.",
         |a| a.progress.total.map(|t| t as f64),
     ),

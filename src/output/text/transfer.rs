@@ -89,7 +89,7 @@ pub(super) fn attempt_line(a: &AttemptFigures) -> String {
     if let Some(rate) = p.per_s {
         line += &format!(", {}", per_s(rate, a.unit));
     }
-    if let Some(wire) = p.wire_bytes_per_s.filter(|_| p.frames > 0) {
+    if let Some(wire) = p.wire_bytes_per_s.filter(|_| p.received > 0) {
         line += &format!(", {} on the wire", per_s(wire, "bytes"));
     }
     if let Some(missing) = a.missing_first_pass {
