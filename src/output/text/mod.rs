@@ -48,7 +48,8 @@ impl<W: Write> Reporter for TextReporter<W> {
     fn start(&mut self, info: &StartInfo) -> io::Result<()> {
         self.timeout = info.timeout;
         self.commands = info.plan::<CommandSpec>().is_some();
-        self.in_steps = info.plan::<SweepConfig>().is_some();
+        self.in_steps =
+            info.plan::<SweepConfig>().is_some() || info.plan::<TransferSpec>().is_some();
         if self.quiet {
             return Ok(());
         }
@@ -72,7 +73,8 @@ impl<W: Write> Reporter for TextReporter<W> {
         self.command_event(event)
     }
 
-    /// A run in steps shows each step, not each reply.
+    /// A run in steps shows each step, not each reply (a download run
+    /// each download).
     fn matched(&mut self, event: &MatchEvent) -> io::Result<()> {
         if self.in_steps {
             return Ok(());

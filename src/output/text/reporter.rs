@@ -19,7 +19,8 @@ pub(crate) struct TextReporter<W: Write> {
     pub(super) quiet: bool,
     /// A command run shows its commands' fate only.
     pub(super) commands: bool,
-    /// A run in steps shows each step, not each reply.
+    /// A run in steps shows each step, not each reply; a download run
+    /// each download (its TIMESYNC replies go to the summary).
     pub(super) in_steps: bool,
     pub(super) timeout: std::time::Duration,
     /// Print every reply even at high rates (`--every-reply`).
