@@ -40,10 +40,10 @@ fn enc(value: &str) -> String {
 }
 
 /// A config file in the temp directory, removed when dropped.
-struct TempFile(PathBuf);
+pub(crate) struct TempFile(PathBuf);
 
 impl TempFile {
-    fn new(name: &str, text: &str) -> Self {
+    pub(crate) fn new(name: &str, text: &str) -> Self {
         let path = std::env::temp_dir().join(format!("mavping-{}-{name}", std::process::id()));
         std::fs::write(&path, text).unwrap();
         TempFile(path)
@@ -53,7 +53,7 @@ impl TempFile {
         std::fs::write(&self.0, text).unwrap();
     }
 
-    fn path(&self) -> &str {
+    pub(crate) fn path(&self) -> &str {
         self.0.to_str().unwrap()
     }
 }

@@ -257,3 +257,34 @@ fn bad_download_options_are_one_line_and_exit_2() {
         assert!(err.contains(says), "{err}");
     }
 }
+
+#[test]
+fn a_serve_module_makes_one_download_a_scrape() {
+    let (peer, link) = vehicle(&["--params", "250", "--drop-list", "0.08", "--seed", "9"]);
+    let config = "allow = [\"udpout:127.0.0.1:*\"]\n\
+                  [module.params]\nprobe = \"params\"\ntimeout = \"500ms\"\n";
+    let file = crate::serve::TempFile::new("serve-transfers.toml", config);
+    let server = crate::common::serve::Server::start(&["--config", file.path()]);
+    let r = server.get(&format!("/probe?module=params&target={link}"));
+    let truth = peer.finish();
+    assert_eq!(r.status, 200, "{}", r.body);
+    let labels = [("probe", "params")];
+    assert_eq!(sample(&r.body, "mavping_probe_success", &[]), Some(1.0));
+    let missing = truth["list_dropped"].as_array().unwrap().len() as f64;
+    assert_eq!(
+        sample(&r.body, "mavping_transfer_last_missing_first_pass", &labels),
+        Some(missing),
+        "{}",
+        r.body
+    );
+    assert_eq!(
+        sample(&r.body, "mavping_transfer_last_received", &labels),
+        Some(250.0)
+    );
+    let ended = [("probe", "params"), ("ending", "complete")];
+    assert_eq!(
+        sample(&r.body, "mavping_probe_transfer_downloads", &ended),
+        Some(1.0)
+    );
+    assert_promtool_clean(&r.body);
+}

@@ -229,7 +229,8 @@ impl TransferDriver {
         let mut hints = Vec::new();
         if let Some(failed) = tally.first_failed.as_ref() {
             let target = self.spec.target;
-            let heard = roster.iter().any(|(id, _)| id.sysid == target.sysid);
+            // Any frame of the system: a HEARTBEAT, a TIMESYNC answer.
+            let heard = roster.sources().any(|(id, _)| id.sysid == target.sysid);
             hints.extend(failure_hint(failed, what, target, heard));
         }
         if let Some(a) = &tally.first_stopped {
