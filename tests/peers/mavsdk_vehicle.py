@@ -48,7 +48,15 @@ loopback; the probes are designed by these):
   again every 0.5 s until a MISSION_ACK (5 tries); so the peer uploads.
   With one: MISSION_COUNT (target = the requester), one MISSION_ITEM_INT
   per MISSION_REQUEST_INT (target the requester, mission_type 0, fields
-  as uploaded); 500 items in 0.05 s, one request at a time.
+  as uploaded); 500 items in 0.05 s, one request at a time. Its
+  download gives up (no more answers, "mission_request_int: retries
+  exceeded") once an item has cost 5: each send of it and each 0.5 s
+  without a request count. A client that re-requests after 0.5 s loses
+  the mission at 20 % item loss; after 0.1-0.3 s it gets it all (30 %
+  loss, 10 tries). Re-requests are answered with the same item.
+- PING: a request (target 0/0) is answered at once (target = the sender);
+  one targeted at 1/1 is not (it is a reply). TIMESYNC (tc1 0) is not
+  answered: latency beside a transfer against MAVSDK is PING's.
 - FTP: ResetSessions and OpenFileRO acked (session 0, data = the u32 file
   size; one session: a second open is acked again); a missing file is
   NAK FileNotFound (10). BurstReadFile is supported: 150 packets of 239
