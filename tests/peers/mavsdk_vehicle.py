@@ -54,6 +54,9 @@ loopback; the probes are designed by these):
   without a request count. A client that re-requests after 0.5 s loses
   the mission at 20 % item loss; after 0.1-0.3 s it gets it all (30 %
   loss, 10 tries). Re-requests are answered with the same item.
+- Two MAVSDKs both start listening on one UDP port (its bind shares
+  the port; seen, not read in its source): this peer
+  checks the port is free first.
 - PING: a request (target 0/0) is answered at once (target = the sender);
   one targeted at 1/1 is not (it is a reply). TIMESYNC (tc1 0) is not
   answered: latency beside a transfer against MAVSDK is PING's.
@@ -91,9 +94,14 @@ def load_mavsdk():
     return mavsdk, param_server, mission_raw_server, mission_raw, ftp_server
 
 
-def free_port():
+def free_port(port=0):
+    """A UDP port nobody holds: MAVSDK's bind shares a taken port, so a second
+    vehicle on a taken port would start without a word and share it."""
     s = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    s.bind(("127.0.0.1", 0))
+    try:
+        s.bind(("127.0.0.1", port))
+    except OSError as e:
+        raise SystemExit(f"mavsdk_vehicle.py: UDP port {port}: {e.strerror}") from None
     port = s.getsockname()[1]
     s.close()
     return port
@@ -125,7 +133,7 @@ class Vehicle:
         self.mavsdk = mavsdk
         # Its Warn line per PARAM_VALUE would drown the test's stderr.
         mavsdk.log_subscribe(self.log)
-        self.port = args.port or free_port()
+        self.port = free_port(args.port)
         cfg = mavsdk.Configuration.create_with_component_type(mavsdk.ComponentType.AUTOPILOT)
         self.sdk = mavsdk.Mavsdk(cfg)
         self.connect(f"udpin://127.0.0.1:{self.port}")
