@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # Runs the whole test suite on a fresh machine: puts the third-party MAVLink
 # peers the interop tests use in .venv — pymavlink (and pyserial, which it
-# needs to open a serial port), MAVProxy, and MAVSDK's mavsdk_server (the
-# static binary inside the mavsdk-grpc wheel) — installs the Prometheus
+# needs to open a serial port), MAVProxy, MAVSDK's mavsdk_server (the
+# static binary inside the mavsdk-grpc wheel) and MAVSDK's C++ library
+# with its Python binding (the mavsdk wheel) — installs the Prometheus
 # server and promtool, tmux, man, systemd's tools and the DejaVu fonts,
 # then runs cargo test.
 set -euo pipefail
@@ -12,6 +13,7 @@ PYMAVLINK_VERSION=2.4.50
 PYSERIAL_VERSION=3.5
 MAVPROXY_VERSION=1.8.75
 MAVSDK_GRPC_VERSION=4.0.5
+MAVSDK_VERSION=4.1.0
 if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pymavlink, serial" 2>/dev/null; then
   python3 -m venv .venv
   .venv/bin/python -m pip install --quiet --disable-pip-version-check \
@@ -20,13 +22,19 @@ fi
 # MAVProxy's console and map modules pull in OpenCV, wxPython and
 # matplotlib (over 1 GB); the router and its system_time module need only
 # pymavlink, so it is installed without its dependencies. mavsdk-grpc is
-# wanted for its mavsdk_server binary only.
+# wanted for its mavsdk_server binary only. mavsdk (4.x, a different
+# package: the ctypes binding around libcmavsdk.so, no Python dependencies,
+# its own top-level module beside mavsdk_grpc) drives MAVSDK's parameter,
+# mission and FTP servers in tests/peers/mavsdk_vehicle.py.
 site=$(.venv/bin/python -c "import sysconfig; print(sysconfig.get_paths()['purelib'])")
 if [ ! -x .venv/bin/mavproxy.py ]; then
   .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "MAVProxy==${MAVPROXY_VERSION}"
 fi
 if [ ! -x "$site/mavsdk_grpc/bin/mavsdk_server" ]; then
   .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "mavsdk-grpc==${MAVSDK_GRPC_VERSION}"
+fi
+if [ ! -f "$site/mavsdk/lib/libcmavsdk.so" ]; then
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "mavsdk==${MAVSDK_VERSION}"
 fi
 # Debian's prometheus package: the server scrapes `mavping serve` in an
 # integration test, and promtool checks expositions and unit-tests the

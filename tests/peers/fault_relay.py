@@ -8,7 +8,7 @@ requests and replies apart).
 
   fault_relay.py --vehicle 127.0.0.1:V1 [--vehicle 127.0.0.1:V2] \\
       --seed 7 --drop-up 0.1 --dup-up 0.03 --drop-down 0.05 --dup-down 0.03 \\
-      --reorder-down 0.02 [--requests N]
+      --reorder-down 0.02 [--requests N] [--down-ids 22,73,110]
 
 Prints "ready", then the UDP port it listens on for the ground side (it
 answers whoever sent last there, as a router's UDP server does). Every
@@ -25,6 +25,14 @@ downlink, held back with --reorder-down (it goes after the source's next
 frame, or after 200 ms); and a frame that goes is sent twice with
 --dup-*.
 
+--down-ids 22,73,110: the downlink plan (drop, dup, reorder) meets only
+frames of these message ids (here PARAM_VALUE, MISSION_ITEM_INT,
+FILE_TRANSFER_PROTOCOL); the others go down once, untouched, and take no
+draw, so the k-th PARAM_VALUE of a source meets the same fate however
+many HEARTBEATs came between. A source's index-based figures
+(distinct_forwarded, last_forwarded_index, dropped_after_last) then
+number its planned frames only; "untouched" counts the others.
+
 --requests N (a probe run): once N PING requests have come from the
 ground side and the vehicles have answered every copy forwarded to them,
 the downlink closes (nothing more forwarded or counted), so the counts
@@ -34,12 +42,22 @@ relay forwarded before that, and nothing after.
 On SIGTERM, one JSON line: per downlink source, frames from the vehicle,
 forwarded (copies included), dropped, dropped after the last forwarded
 frame (no later frame shows those gaps), duplicated, reordered, PING
-replies and how many of them were dropped; per vehicle on the uplink,
+replies and how many of them were dropped, frames and drops by message id
+("frames_by_msgid", "dropped_by_msgid": {"22": 9}) and which of a message
+id's frames were dropped, numbered from 0 among that id's frames from the
+source ("dropped_nth_by_msgid": {"22": [4, 10, ...]}: a vehicle that
+sends its parameter list in index order, once, as MAVSDK does, numbers
+the first pass's PARAM_VALUEs by param_index); per vehicle on the uplink,
 frames, dropped, duplicated, dropped after the last forwarded frame, and
 every PING request's fate: its copies forwarded, its replies forwarded
 and dropped ([seq, copies, replies forwarded, replies dropped], in the
 order the requests came), and the first replies that went down after the
-reply to a later request.
+reply to a later request. "kernel_dropped": datagrams the kernel
+dropped before the relay could read them (SO_RXQ_OVFL; a MAVSDK parameter
+list comes in one burst): the ground socket's, and each vehicle socket's.
+The kernel tells a drop with the next datagram it queues after it (a
+vehicle's 1 Hz HEARTBEAT brings it). Anything but 0 there means the counts
+above miss frames.
 """
 import argparse
 import json
@@ -52,6 +70,32 @@ import time
 
 PING = 4
 HOLD_S = 0.2
+# Linux: ancillary data on each datagram with the socket's count of
+# datagrams dropped for want of buffer space.
+SO_RXQ_OVFL = getattr(socket, "SO_RXQ_OVFL", 40)
+RCVBUF = 4 << 20
+
+
+def counted_socket():
+    """A UDP socket with a large buffer that reports the kernel's drops."""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, RCVBUF)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, SO_RXQ_OVFL, 1)
+    except OSError:
+        pass
+    sock.bind(("127.0.0.1", 0))
+    return sock
+
+
+def receive(sock):
+    """(data, addr, kernel drop count so far or None)."""
+    data, anc, _, addr = sock.recvmsg(65535, socket.CMSG_SPACE(4))
+    dropped = None
+    for level, kind, value in anc:
+        if level == socket.SOL_SOCKET and kind == SO_RXQ_OVFL and len(value) >= 4:
+            dropped = int.from_bytes(value[:4], sys.byteorder)
+    return data, addr, dropped
 
 
 def frames_of(data):
@@ -121,6 +165,9 @@ class DownSource:
         self.highest = -1
         self.held = None  # (index, data, doubled, release_at, reply)
         self.replies = self.replies_dropped = 0
+        self.untouched = 0
+        self.frames_by_msgid = {}
+        self.dropped_by_msgid = {}
 
     def truth(self):
         after_last = sum(1 for k in self.dropped if k > self.highest)
@@ -128,7 +175,11 @@ class DownSource:
                 "dropped": len(self.dropped), "dropped_after_last": after_last,
                 "duplicated": self.duplicated, "reordered": self.reordered,
                 "distinct_forwarded": len(self.seen), "last_forwarded_index": self.highest,
-                "replies": self.replies, "replies_dropped": self.replies_dropped}
+                "replies": self.replies, "replies_dropped": self.replies_dropped,
+                "untouched": self.untouched,
+                "frames_by_msgid": {str(k): v for k, v in sorted(self.frames_by_msgid.items())},
+                "dropped_by_msgid": {str(k): len(v) for k, v in sorted(self.dropped_by_msgid.items())},
+                "dropped_nth_by_msgid": {str(k): v for k, v in sorted(self.dropped_by_msgid.items())}}
 
 
 class Uplink:
@@ -137,8 +188,8 @@ class Uplink:
 
     def __init__(self, addr, plan):
         self.addr, self.plan = addr, plan
-        self.sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.sock.bind(("127.0.0.1", 0))
+        self.sock = counted_socket()
+        self.kernel_dropped = 0
         self.frames = self.dropped = self.duplicated = 0
         # Frame numbers dropped, and the last forwarded: a drop after it
         # leaves no gap the vehicle can see.
@@ -167,15 +218,16 @@ class Uplink:
                 "frames": self.frames, "dropped": self.dropped, "duplicated": self.duplicated,
                 "dropped_after_last": sum(1 for k in self.dropped_at if k > self.last_forwarded),
                 "requests": reqs, "unanswered_copies": self.outstanding,
-                "replies_out_of_order": self.replies_out_of_order}
+                "replies_out_of_order": self.replies_out_of_order,
+                "kernel_dropped": self.kernel_dropped}
 
 
 class Relay:
     def __init__(self, args):
         self.args = args
-        self.ground = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-        self.ground.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
-        self.ground.bind(("127.0.0.1", 0))
+        self.ground = counted_socket()
+        self.ground_kernel_dropped = 0
+        self.down_ids = args.down_ids
         self.peer = None
         self.ours = tuple(int(x) for x in args.ours.split("/"))
         self.up = []
@@ -248,15 +300,27 @@ class Relay:
                 a = self.args
                 src = self.down[key] = DownSource(Plan(a.seed, f"down/{key}", a.drop_down,
                                                        a.dup_down, a.reorder_down))
-            self.downlink(src, link, frame, reply)
+            self.downlink(src, link, frame, msgid, reply)
         self.maybe_close()
 
-    def downlink(self, src, link, frame, reply):
+    def downlink(self, src, link, frame, msgid, reply):
+        nth = src.frames_by_msgid.get(msgid, 0)
+        src.frames_by_msgid[msgid] = nth + 1
+        if self.down_ids is not None and msgid not in self.down_ids:
+            src.frames += 1
+            src.untouched += 1
+            src.replies += reply is not None
+            self.ground.sendto(frame, self.peer)
+            src.forwarded += 1
+            if reply is not None:
+                link.answered(reply)
+            return
         k, fate, doubled = src.plan.next()
         src.frames += 1
         src.replies += reply is not None
         if fate == "drop":
             src.dropped.append(k)
+            src.dropped_by_msgid.setdefault(msgid, []).append(nth)
             if reply is not None:
                 src.replies_dropped += 1
                 link.fate[reply][2] += 1
@@ -308,12 +372,15 @@ class Relay:
             except InterruptedError:
                 ready = []
             for sock in ready:
-                data, addr = sock.recvfrom(65535)
+                data, addr, dropped = receive(sock)
                 if sock is self.ground:
+                    self.ground_kernel_dropped = dropped or self.ground_kernel_dropped
                     self.peer = addr
                     self.from_ground(data)
                 else:
-                    self.from_vehicle(socks[sock], data)
+                    link = socks[sock]
+                    link.kernel_dropped = dropped or link.kernel_dropped
+                    self.from_vehicle(link, data)
             now = time.monotonic()
             for src in self.down.values():
                 if self.closed_at is None:
@@ -331,7 +398,9 @@ class Relay:
                 "requests_seen": self.requests_seen,
                 "closed": self.closed_at is not None, "close_forced": self.close_forced,
                 "after_close": self.after_close, "before_peer": self.no_peer,
-                "unparsed": self.unparsed}
+                "unparsed": self.unparsed,
+                "kernel_dropped": {"ground": self.ground_kernel_dropped,
+                                   "vehicles": [link.kernel_dropped for link in self.up]}}
 
 
 class UntilSignalled:
@@ -342,6 +411,14 @@ class UntilSignalled:
 
     def stop(self, *_):
         self.running = False
+
+
+def msgids(text):
+    try:
+        ids = {int(x) for x in text.split(",") if x.strip()}
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not message ids: {text!r}") from None
+    return ids or None
 
 
 def main():
@@ -356,6 +433,8 @@ def main():
     ap.add_argument("--requests", type=int, default=None,
                     help="close the downlink once this many PINGs are answered")
     ap.add_argument("--ours", default="250/190", help="the prober's sysid/compid")
+    ap.add_argument("--down-ids", type=msgids, default=None, metavar="ID,ID",
+                    help="message ids the downlink plan applies to (others pass untouched)")
     args = ap.parse_args()
     relay = Relay(args)
     until = UntilSignalled()
