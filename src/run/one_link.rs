@@ -86,7 +86,9 @@ pub(super) async fn measure_recorded(
         Probe::Command(spec) => command::run(session, spec, &mut link, observer, controls).await,
         Probe::Transfer(spec) => {
             let wall_clock = !matches!(config.spec, LinkSpec::Sim(_));
-            transfer::run(session, spec, &mut link, wall_clock, observer, controls).await
+            let timeout = session.timeout.as_nanos() as u64;
+            let beside = AutoProbe::new(wall.micros_since_epoch(), wall_clock, timeout);
+            transfer::run(session, spec, &mut link, beside, observer, controls).await
         }
         // A log: a table per MAVProxy link too, and what the log held.
         Probe::Passive { gap } if matches!(link.inner(), Link::Tlog(_)) => {

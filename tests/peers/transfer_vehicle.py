@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """A vehicle that serves a parameter list, a mission and a file with
 faults it plans and counts: the truth a download probe's figures are held
-against. pymavlink, MAVLink 2, system 1 component 1, answers TIMESYNC.
+against. pymavlink, MAVLink 2, system 1 component 1, answers PING and TIMESYNC.
 
   transfer_vehicle.py PORT [--params N] [--mission N] [--file-size B]
       [--seed S] [--drop-list P] [--stop-list-after I] [--drop-reads P]
@@ -106,6 +106,8 @@ def main():
         t = msg.get_type()
         if t == "TIMESYNC" and msg.tc1 == 0:
             m.mav.timesync_send(time.monotonic_ns(), msg.ts1)
+        elif t == "PING" and msg.target_system == 0:
+            m.mav.ping_send(msg.time_usec, msg.seq, msg.get_srcSystem(), msg.get_srcComponent())
         elif t == "PARAM_REQUEST_LIST" and "params" not in ignore:
             end = a.params if a.stop_list_after is None else min(a.params, a.stop_list_after + 1)
             for i in range(end):

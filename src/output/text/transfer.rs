@@ -43,7 +43,7 @@ impl<W: Write> TextReporter<W> {
         self.start_line(
             info,
             format_args!(
-                "{} from {}, asked again after {} up to {} times; TIMESYNC {} beside",
+                "{} from {}, asked again after {} up to {} times; PING or TIMESYNC {} beside",
                 what(&spec.kind),
                 spec.target,
                 humantime::format_duration(spec.timeout),
@@ -158,14 +158,14 @@ pub(super) fn write_summary(out: &mut impl Write, s: &TransferSummary) -> io::Re
             let c = &l.counts;
             writeln!(
                 out,
-                "TIMESYNC beside, {}: {} sent, {} received, {} lost",
+                "round trips beside, {}: {} sent, {} received, {} lost",
                 l.responder, c.sent, c.received, c.lost
             )?;
             if let Some(rtt) = &l.rtt {
                 write_rtt(out, "rtt", rtt, true)?;
             }
         }
-        None => writeln!(out, "TIMESYNC beside: no answer")?,
+        None => writeln!(out, "round trips beside: no answer")?,
     }
     super::link_node::write_link_nodes(out, &s.link_node)?;
     write_signing(out, &s.signing)?;

@@ -1,8 +1,10 @@
 //! A transfer probe in the session: downloads one after another (`-c`),
-//! each a [`Protocol`] fed the target's transfer frames, with TIMESYNC
-//! probes to the target beside them at the run's interval (the echo
-//! probe's own driver, wrapped as the sweep wraps it), so the round trip
-//! is measured under the downlink a download makes. A download begins
+//! each a [`Protocol`] fed the target's transfer frames, with echo probes
+//! beside them at the run's interval (`--probe auto`'s: PING, and
+//! TIMESYNC to a target that does not answer PING, as ArduPilot; MAVSDK
+//! answers PING and not TIMESYNC), the echo probe's own driver wrapped as
+//! the sweep wraps it, so the round trip is measured under the downlink a
+//! download makes. A download begins
 //! one timeout after the last ended, so its stragglers are not the next
 //! one's first pass.
 
@@ -21,7 +23,7 @@ use crate::engine::hint::{Hint, HintCode};
 use crate::engine::link_io::{Clock, Sender, WallAtZero};
 use crate::engine::observe::{tell_kind, Observer, StartInfo};
 use crate::engine::probe::echo::EchoDriver;
-use crate::engine::probe::timesync::TimesyncProbe;
+use crate::engine::probe::auto::AutoProbe;
 use crate::engine::radio::Radios;
 use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
@@ -57,11 +59,11 @@ pub(crate) async fn run<T: Transport>(
     cfg: &SessionConfig,
     spec: &TransferSpec,
     link: &mut T,
-    wall_clock: bool,
+    beside: AutoProbe,
     observer: &mut dyn Observer,
     controls: &Controls,
 ) -> Measurement {
-    let beside = EchoDriver::new(cfg, TimesyncProbe::new(spec.target, wall_clock));
+    let beside = EchoDriver::new(cfg, beside);
     let driver = TransferDriver::new(cfg, spec, beside);
     session::run(cfg, link, driver, observer, controls).await
 }
@@ -77,7 +79,7 @@ struct Running {
 
 pub(crate) struct TransferDriver {
     spec: TransferSpec,
-    beside: EchoDriver<TimesyncProbe>,
+    beside: EchoDriver<AutoProbe>,
     interval: Nanos,
     timeout: Nanos,
     /// Downloads to make (`-c`); none: until the run ends.
@@ -97,7 +99,7 @@ impl TransferDriver {
     pub(crate) fn new(
         cfg: &SessionConfig,
         spec: &TransferSpec,
-        beside: EchoDriver<TimesyncProbe>,
+        beside: EchoDriver<AutoProbe>,
     ) -> Self {
         TransferDriver {
             spec: spec.clone(),
@@ -201,7 +203,8 @@ impl TransferDriver {
     }
 }
 
-/// The TIMESYNC figures of the target (or of the first to answer).
+/// The round trips to the target beside the downloads (or to the first
+/// system to answer).
 fn latency(tally: &Tally, echo: &EchoSummary) -> Option<LatencyBeside> {
     let wanted = tally.last.as_ref().and_then(|a| a.responder);
     let r = echo
@@ -421,7 +424,7 @@ impl Driver for TransferDriver {
         let ours = ended.cfg.ours;
         let (echo, histograms) = self.beside.finish(ended);
         let Some(echo) = echo.get::<EchoSummary>() else {
-            unreachable!("the TIMESYNC probe ends with an echo summary");
+            unreachable!("the echo probe ends with an echo summary");
         };
         let tally = &self.tally;
         let summary = TransferSummary {

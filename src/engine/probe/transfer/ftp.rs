@@ -43,11 +43,14 @@ pub(crate) struct FtpDownload {
     size: u32,
     /// The byte ranges that arrived, sorted, merged.
     have: Vec<(u32, u32)>,
-    /// Still in the first burst: what arrives is the first pass.
-    first_burst: bool,
-    /// Bursts that were not the first, and packets seen out of order.
-    gaps: u64,
-    next_offset: u32,
+    /// The furthest byte a burst has reached (+ 1): what a burst brings
+    /// above it is the first pass.
+    extent: u32,
+    /// The last burst went quiet instead of completing: the next is a
+    /// re-request.
+    quiet: bool,
+    /// Bursts that went quiet.
+    quiet_bursts: u64,
     /// A NAK's error code, once refused.
     nak: Option<u8>,
     progress: Progress,
@@ -74,9 +77,9 @@ impl FtpDownload {
             session: 0,
             size: 0,
             have: Vec::new(),
-            first_burst: true,
-            gaps: 0,
-            next_offset: 0,
+            extent: 0,
+            quiet: false,
+            quiet_bursts: 0,
             nak: None,
             progress: Progress::new(now),
             counts: Counts::default(),
@@ -201,14 +204,12 @@ impl FtpDownload {
             return;
         }
         let end = f.offset.saturating_add(u32::from(f.size)).min(self.size);
-        if f.offset != self.next_offset && f.req_opcode == ftp_op::BURST_READ_FILE {
-            self.gaps += 1;
-        }
-        self.next_offset = end;
         let new = self.arrived(f.offset, end);
         self.counts.duplicates += u64::from(new == 0 && end > f.offset);
-        if self.first_burst {
-            self.counts.first_pass += new;
+        if f.req_opcode == ftp_op::BURST_READ_FILE {
+            // Bytes below the extent came again or late; above it, new.
+            self.counts.first_pass += u64::from(end.saturating_sub(f.offset.max(self.extent)));
+            self.extent = self.extent.max(end);
         }
         if f.req_opcode == ftp_op::READ_FILE && self.asks.answered(f.offset).is_some() && new > 0 {
             self.counts.re_requests_answered += 1;
@@ -232,7 +233,6 @@ impl FtpDownload {
     /// The burst ended (its last packet, EOF, or quiet): fill what it
     /// left out.
     fn burst_over(&mut self, now: Nanos, out: &mut Vec<Transfer>) {
-        self.first_burst = false;
         self.asks.answered(BURST);
         self.phase = Phase::Filling;
         self.fill(now, out);
@@ -250,9 +250,9 @@ impl FtpDownload {
             if offset >= reached {
                 if self.asks.in_flight() == 0 {
                     self.phase = Phase::Bursting;
-                    self.gaps += 1;
                     self.asks.ask(BURST, now);
-                    self.counts.re_requests += 1;
+                    // Going on after a complete burst asks for nothing again.
+                    self.counts.re_requests += u64::from(std::mem::take(&mut self.quiet));
                     let burst = self.burst(offset);
                     out.push(burst);
                 }
@@ -307,6 +307,8 @@ impl Protocol for FtpDownload {
                 (OPEN, Overdue::GiveUp) => self.end(Ending::NoAnswer, out),
                 // A quiet burst is over; not asked again as such.
                 (BURST, _) => {
+                    self.quiet = true;
+                    self.quiet_bursts += 1;
                     self.asks.answered(BURST);
                     self.burst_over(now, out);
                 }
@@ -369,10 +371,10 @@ impl Protocol for FtpDownload {
         match self.phase {
             Phase::Ended(Ending::Complete) | Phase::Opening => None,
             _ => Some(format!(
-                "{} of {} bytes arrived, {} bursts or gaps",
+                "{} of {} bytes arrived, {} bursts went quiet",
                 self.progress.done(),
                 self.size,
-                self.gaps
+                self.quiet_bursts
             )),
         }
     }
@@ -525,9 +527,28 @@ mod tests {
         d.on_message(VEHICLE, &reply(15, 1434, 66, true), 90, 522 * MS, &mut out);
         assert_eq!(d.ending(), Some(Ending::Complete));
         let c = d.counts();
-        assert_eq!(c.first_pass, 478);
+        // What the first burst brought, and all the second did: past the
+        // furthest byte the first was seen to send.
+        assert_eq!(c.first_pass, 478 + 544);
+        // The two reads, and the burst after the quiet one.
         assert_eq!((c.re_requests, c.re_requests_answered), (3, 2));
         assert_eq!(d.progress().done(), 1_500);
+    }
+
+    #[test]
+    fn a_burst_that_completes_is_followed_by_the_next_and_nothing_is_asked_again() {
+        // MAVSDK's bursts are 150 packets; here 2.
+        let (mut d, mut out) = started(1_000);
+        out.clear();
+        d.on_message(VEHICLE, &reply(15, 0, 239, false), 263, 2 * MS, &mut out);
+        d.on_message(VEHICLE, &reply(15, 239, 239, true), 263, 3 * MS, &mut out);
+        assert_eq!(ops(&out), [(ftp_op::BURST_READ_FILE, 478, 239)]);
+        d.on_message(VEHICLE, &reply(15, 478, 239, false), 263, 4 * MS, &mut out);
+        d.on_message(VEHICLE, &reply(15, 717, 239, true), 263, 5 * MS, &mut out);
+        d.on_message(VEHICLE, &reply(15, 956, 44, true), 68, 6 * MS, &mut out);
+        assert_eq!(d.ending(), Some(Ending::Complete));
+        let c = d.counts();
+        assert_eq!((c.first_pass, c.re_requests), (1_000, 0));
     }
 
     #[test]

@@ -38,8 +38,9 @@ impl CompletionTimes {
     }
 }
 
-/// TIMESYNC round trips to the target while the downloads ran: the
-/// latency under the heaviest downlink a ground station makes.
+/// Round trips to the target (PING, or TIMESYNC where PING goes
+/// unanswered) while the downloads ran: the latency under the heaviest
+/// downlink a ground station makes.
 #[derive(Debug, Clone, Serialize)]
 pub(crate) struct LatencyBeside {
     pub(crate) responder: SysComp,
