@@ -53,6 +53,7 @@ mod tlog;
 mod tlog_record;
 mod tlog_rtt;
 mod transfers;
+mod transfers_mavsdk;
 mod udp_bcast_ipv6;
 mod udp_pymavlink;
 mod views;
