@@ -127,7 +127,10 @@ pub(super) fn write_summary(out: &mut impl Write, s: &TransferSummary) -> io::Re
         out,
         "{} downloads ({}), {} complete, {} failed, {:.1} s",
         s.attempts,
-        what(&s.plan.kind).to_lowercase(),
+        match &s.plan.kind {
+            TransferKind::Ftp { path } => format!("ftp {path}"),
+            kind => what(kind).to_lowercase(),
+        },
         s.complete,
         s.failed(),
         s.duration_s
