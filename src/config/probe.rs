@@ -56,7 +56,8 @@ impl Probe {
 
 /// What the baud rate allows `spec` for `session`'s requests: set once
 /// here, so every front end reports the same. The command probe has none
-/// (its frames and retries vary), nor a link without a baud rate.
+/// (its frames and retries vary), nor a link without a baud rate; a
+/// download's is its PINGs', and its baud times the download's frames.
 pub(super) fn wire_budget(
     spec: &LinkSpec,
     default_baud: u32,
@@ -64,10 +65,11 @@ pub(super) fn wire_budget(
     session: &SessionConfig,
 ) -> Option<WireBudget> {
     let exchange = match probe {
-        Probe::Command(_) | Probe::Transfer(_) | Probe::Passive { .. } => return None,
+        Probe::Command(_) | Probe::Passive { .. } => return None,
         // Auto sends a PING each slot (and a TIMESYNC only to those that
-        // need it): the PING's sizes are the floor.
-        Probe::Auto | Probe::Ping => capacity::Exchange::Ping,
+        // need it): the PING's sizes are the floor. A download's probes
+        // beside it are auto's; its own frames are timed against the baud.
+        Probe::Auto | Probe::Ping | Probe::Transfer(_) => capacity::Exchange::Ping,
         Probe::Timesync { target } => capacity::Exchange::Timesync { target: *target },
     };
     // One responder on a real link unless the run shows more: the

@@ -92,6 +92,13 @@ pub(super) fn attempt_line(a: &AttemptFigures) -> String {
     if let Some(wire) = p.wire_bytes_per_s.filter(|_| p.received > 0) {
         line += &format!(", {} on the wire", per_s(wire, "bytes"));
     }
+    if let (Some(floor), Some(done)) = (a.wire_floor_ms, p.time_to_100_ms) {
+        line += &format!(
+            " (the wire's floor for its bytes {}, {:.0} %)",
+            secs(floor),
+            floor * 100.0 / done
+        );
+    }
     if let Some(missing) = a.missing_first_pass {
         let c = &a.counts;
         line += &format!(

@@ -97,6 +97,11 @@ pub(crate) struct AttemptFigures {
     pub(crate) counts: Counts,
     /// What the first pass left out (total less first pass).
     pub(crate) missing_first_pass: Option<u64>,
+    /// On a link with a baud rate (serial, `sim:?baud=`): the least time
+    /// the target's frames of the download take on the wire, start and
+    /// stop bits counted.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) wire_floor_ms: Option<f64>,
     pub(crate) duration_ms: f64,
 }
 
@@ -124,6 +129,7 @@ pub(crate) fn figures_of(
         stopped_after: protocol.stopped_after(),
         unit: "",
         missing_first_pass: progress.total.map(|t| t.saturating_sub(counts.first_pass)),
+        wire_floor_ms: None,
         progress,
         counts,
         duration_ms: now.saturating_sub(started) as f64 / 1e6,

@@ -19,6 +19,7 @@ use super::mission::MissionDownload;
 use super::params::ParamsDownload;
 use super::spec::{TransferKind, TransferSpec};
 use super::summary::{LatencyBeside, Tally, TransferSummary};
+use crate::engine::capacity;
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::link_io::{Clock, Sender, WallAtZero};
 use crate::engine::observe::{tell_kind, Observer, StartInfo};
@@ -82,6 +83,8 @@ pub(crate) struct TransferDriver {
     beside: EchoDriver<AutoProbe>,
     interval: Nanos,
     timeout: Nanos,
+    /// The link's baud rate, where it has one.
+    baud: Option<u32>,
     /// Downloads to make (`-c`); none: until the run ends.
     wanted: Option<u64>,
     running: Option<Running>,
@@ -106,6 +109,7 @@ impl TransferDriver {
             beside,
             interval: cfg.interval.as_nanos() as Nanos,
             timeout: spec.timeout.as_nanos() as Nanos,
+            baud: cfg.wire.map(|w| w.baud),
             wanted: cfg.count,
             running: None,
             next_start: None,
@@ -190,6 +194,10 @@ impl TransferDriver {
         }
         let mut figures = figures_of(run.protocol.as_ref(), run.attempt, run.started, now);
         figures.unit = self.spec.kind.unit();
+        figures.wire_floor_ms = self.baud.map(|baud| {
+            let bits = figures.progress.wire_bytes * capacity::BITS_PER_BYTE;
+            bits as f64 * 1e3 / f64::from(baud)
+        });
         self.tally.add(&figures);
         self.ended.push(figures);
         if self
