@@ -905,6 +905,50 @@ pub struct RespondArgs {
     #[arg(long)]
     pub(crate) no_ping: bool,
 
+    /// Parameters served, read-only: MAVPING_0000 upwards, all sent on PARAM_REQUEST_LIST,
+    /// one on PARAM_REQUEST_READ (0 serves none; at most 10000)
+    #[arg(
+        help_heading = "Transfers",
+        allow_negative_numbers = true,
+        long,
+        value_name = "N",
+        default_value_t = 500
+    )]
+    pub(crate) params: i64,
+
+    /// Mission items served, read-only: home, a takeoff, then waypoints (0 serves an empty
+    /// mission; at most 10000)
+    #[arg(
+        help_heading = "Transfers",
+        allow_negative_numbers = true,
+        long,
+        value_name = "N",
+        default_value_t = 20
+    )]
+    pub(crate) mission: i64,
+
+    /// Bytes of the file served by MAVLink FTP as /mavping.bin, read-only (at most 1 GiB)
+    #[arg(
+        help_heading = "Transfers",
+        allow_negative_numbers = true,
+        long,
+        value_name = "BYTES",
+        default_value_t = 65536
+    )]
+    pub(crate) file_size: i64,
+
+    /// Frames a second the transfers are sent at, at most: a parameter list, a burst of the
+    /// file, and the replies to re-requests share it. Each frame is then held, dropped or
+    /// doubled by --delay, --jitter, --drop and --dup as replies are
+    #[arg(
+        help_heading = "Transfers",
+        allow_negative_numbers = true,
+        long,
+        value_name = "HZ",
+        default_value_t = 1000.0
+    )]
+    pub(crate) transfer_rate: f64,
+
     /// Baud rate of a serial device whose connection string names none
     #[arg(allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD)]
     pub(crate) baud: u32,

@@ -259,7 +259,10 @@ mod tests {
     fn open_read_and_end_of_file() {
         let mut s = FtpServer::new(1000);
         let open = one(s.request(&req(ftp_op::OPEN_FILE_RO, 3, 0, b"/mavping.bin"), GCS, 0));
-        assert_eq!((open.opcode, open.size, open.seq, open.session), (128, 4, 11, 3));
+        assert_eq!(
+            (open.opcode, open.size, open.seq, open.session),
+            (128, 4, 11, 3)
+        );
         assert_eq!(&open.data.bytes(0, 4)[..4], &1000u32.to_le_bytes());
         let read = one(s.request(&req(ftp_op::READ_FILE, 3, 900, &[]), GCS, 1));
         assert_eq!((read.opcode, read.size, read.offset), (128, 100, 900));
@@ -287,7 +290,10 @@ mod tests {
         assert_eq!(error_of(&missing), (129, ftp_error::FILE_NOT_FOUND));
         assert_eq!(open(&mut s, 0, b"mavping.bin", 0).opcode, 128);
         // A retry of the open: ArduPilot's Fail; another session: none left.
-        assert_eq!(error_of(&open(&mut s, 0, b"/mavping.bin", 1)), (129, ftp_error::FAIL));
+        assert_eq!(
+            error_of(&open(&mut s, 0, b"/mavping.bin", 1)),
+            (129, ftp_error::FAIL)
+        );
         let busy = open(&mut s, 1, b"/mavping.bin", 2_999_999_999);
         assert_eq!(error_of(&busy), (129, ftp_error::NO_SESSIONS_AVAILABLE));
         // Idle past the timeout: the next client gets it.
@@ -297,7 +303,11 @@ mod tests {
         assert_eq!(open(&mut s, 2, b"/mavping.bin", 0).opcode, 128);
         for write in 6..=13 {
             let refused = one(s.request(&req(write, 2, 0, b"/x"), GCS, 0));
-            assert_eq!(error_of(&refused), (129, ftp_error::FILE_PROTECTED), "{write}");
+            assert_eq!(
+                error_of(&refused),
+                (129, ftp_error::FILE_PROTECTED),
+                "{write}"
+            );
         }
         let crc = one(s.request(&req(14, 2, 0, b"/mavping.bin"), GCS, 0));
         assert_eq!(error_of(&crc), (129, ftp_error::UNKNOWN_COMMAND));
@@ -344,7 +354,9 @@ mod tests {
         one(s.request(&req(ftp_op::OPEN_FILE_RO, 0, 0, b"/mavping.bin"), GCS, 0));
         let packets = burst(&mut s, 1000, 100);
         assert_eq!(packets.len(), 500);
-        assert!(packets[..499].iter().all(|p| p.burst_complete == 0 && p.size == 100));
+        assert!(packets[..499]
+            .iter()
+            .all(|p| p.burst_complete == 0 && p.size == 100));
         let last = packets[499];
         assert_eq!((last.burst_complete, last.offset), (1, 1000 + 499 * 100));
     }

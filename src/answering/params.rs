@@ -109,7 +109,13 @@ mod tests {
         assert_eq!(set.lookup(3, &none), Some(3));
         assert_eq!(set.lookup(20, &none), None);
         assert_eq!(set.lookup(-1, &ParamId::new("MAVPING_0019")), Some(19));
-        for bad in ["MAVPING_0020", "MAVPING_19", "SYSID_THISMAV", "MAVPING_+019", ""] {
+        for bad in [
+            "MAVPING_0020",
+            "MAVPING_19",
+            "SYSID_THISMAV",
+            "MAVPING_+019",
+            "",
+        ] {
             assert_eq!(set.lookup(-1, &ParamId::new(bad)), None, "{bad}");
         }
         // The index wins when there is one, as on ArduPilot.

@@ -78,20 +78,14 @@ impl KindCounts {
 
     /// "12 PARAM_VALUE, 3 FTP ACK": the kinds with frames.
     pub(crate) fn list(&self) -> String {
-        let each = [
+        some(&[
             (self.param_value, "PARAM_VALUE"),
             (self.mission_count, "MISSION_COUNT"),
             (self.mission_item, "MISSION_ITEM(_INT)"),
             (self.mission_ack, "MISSION_ACK"),
             (self.ftp_ack, "FTP ACK"),
             (self.ftp_nak, "FTP NAK"),
-        ];
-        let some: Vec<String> = each
-            .iter()
-            .filter(|(n, _)| *n > 0)
-            .map(|(n, name)| format!("{n} {name}"))
-            .collect();
-        some.join(", ")
+        ])
     }
 }
 
@@ -133,6 +127,8 @@ pub(crate) struct ServedCounts {
     pub(crate) requests: TransferRequests,
     pub(crate) sent: KindCounts,
     pub(crate) dropped: KindCounts,
+    /// Frames sent twice by the link emulation (`--dup`).
+    pub(crate) duplicated: u64,
     /// PARAM_REQUEST_LISTs that restarted a list still being sent.
     pub(crate) list_restarts: u64,
     /// Single replies dropped because [`MAX_QUEUED`] were waiting.
@@ -148,6 +144,54 @@ impl ServedCounts {
         } else {
             self.dropped.add(kind);
         }
+    }
+}
+
+/// "3 PARAM_VALUE, 1 FTP ACK": the named counts above 0, or "none".
+fn some(each: &[(u64, &str)]) -> String {
+    let some: Vec<String> = each
+        .iter()
+        .filter(|(n, _)| *n > 0)
+        .map(|(n, name)| format!("{n} {name}"))
+        .collect();
+    if some.is_empty() {
+        "none".into()
+    } else {
+        some.join(", ")
+    }
+}
+
+impl std::fmt::Display for ServedCounts {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let r = &self.requests;
+        let requests = some(&[
+            (r.param_lists, "PARAM_REQUEST_LIST"),
+            (r.param_reads, "PARAM_REQUEST_READ"),
+            (r.param_reads_unknown, "of them for no parameter"),
+            (r.mission_lists, "MISSION_REQUEST_LIST"),
+            (r.mission_requests, "MISSION_REQUEST(_INT)"),
+            (r.mission_requests_invalid, "of them past the end"),
+            (r.mission_acks, "MISSION_ACK"),
+            (r.mission_uploads_refused, "uploads refused"),
+            (r.ftp_requests, "FTP"),
+        ]);
+        write!(
+            f,
+            "transfers: {} requests ({requests}), {} frames sent ({}), {} dropped ({}), {} doubled",
+            r.total(),
+            self.sent.total(),
+            self.sent.list(),
+            self.dropped.total(),
+            self.dropped.list(),
+            self.duplicated
+        )?;
+        if self.list_restarts > 0 {
+            write!(f, ", {} lists restarted", self.list_restarts)?;
+        }
+        if self.overflow > 0 {
+            write!(f, ", {} replies dropped (queue full)", self.overflow)?;
+        }
+        Ok(())
     }
 }
 
@@ -236,7 +280,11 @@ impl<R: Copy> TransferServer<R> {
             }
             Transfer::ParamRequestRead { target, id, index } if ours(target) => {
                 r.param_reads += 1;
-                match self.params.lookup(index, &id).and_then(|i| self.params.get(i)) {
+                match self
+                    .params
+                    .lookup(index, &id)
+                    .and_then(|i| self.params.get(i))
+                {
                     Some(value) => self.queue(to, Transfer::ParamValue(value)),
                     None => self.counts.requests.param_reads_unknown += 1,
                 }
@@ -416,7 +464,10 @@ mod tests {
         // The read first, then the list; the unknown index unanswered.
         assert_eq!(indices, [3, 0, 1, 2, 3, 4]);
         let r = s.counts.requests;
-        assert_eq!((r.param_lists, r.param_reads, r.param_reads_unknown), (1, 2, 1));
+        assert_eq!(
+            (r.param_lists, r.param_reads, r.param_reads_unknown),
+            (1, 2, 1)
+        );
         assert!(!s.pending());
     }
 
@@ -497,7 +548,11 @@ mod tests {
         assert_eq!(sent[3..], [ack(13), ack(14)]);
         let r = s.counts.requests;
         assert_eq!(
-            (r.mission_lists, r.mission_requests, r.mission_requests_invalid),
+            (
+                r.mission_lists,
+                r.mission_requests,
+                r.mission_requests_invalid
+            ),
             (1, 3, 1)
         );
         assert_eq!((r.mission_acks, r.mission_uploads_refused), (1, 1));
@@ -521,7 +576,10 @@ mod tests {
     fn a_burst_and_the_list_take_turns_and_singles_go_first() {
         let mut s = server(3, 0, 600);
         ask(&mut s, ftp(ftp_op::OPEN_FILE_RO, 0, b"/mavping.bin"));
-        assert!(matches!(drain(&mut s)[..], [Transfer::Ftp(Ftp { opcode: 128, .. })]));
+        assert!(matches!(
+            drain(&mut s)[..],
+            [Transfer::Ftp(Ftp { opcode: 128, .. })]
+        ));
         ask(&mut s, ftp(ftp_op::BURST_READ_FILE, 0, &[]));
         ask(&mut s, Transfer::ParamRequestList { target: US });
         ask(&mut s, ftp(ftp_op::READ_FILE, 100, &[]));
