@@ -38,6 +38,7 @@ pub(crate) struct ServeSpec {
 pub(crate) enum Kind {
     ParamValue,
     MissionCount,
+    MissionItemInt,
     MissionItem,
     MissionAck,
     FtpAck,
@@ -49,6 +50,7 @@ pub(crate) enum Kind {
 pub(crate) struct KindCounts {
     pub(crate) param_value: u64,
     pub(crate) mission_count: u64,
+    pub(crate) mission_item_int: u64,
     pub(crate) mission_item: u64,
     pub(crate) mission_ack: u64,
     pub(crate) ftp_ack: u64,
@@ -60,6 +62,7 @@ impl KindCounts {
         *match kind {
             Kind::ParamValue => &mut self.param_value,
             Kind::MissionCount => &mut self.mission_count,
+            Kind::MissionItemInt => &mut self.mission_item_int,
             Kind::MissionItem => &mut self.mission_item,
             Kind::MissionAck => &mut self.mission_ack,
             Kind::FtpAck => &mut self.ftp_ack,
@@ -70,6 +73,7 @@ impl KindCounts {
     pub(crate) fn total(&self) -> u64 {
         self.param_value
             + self.mission_count
+            + self.mission_item_int
             + self.mission_item
             + self.mission_ack
             + self.ftp_ack
@@ -81,7 +85,8 @@ impl KindCounts {
         some(&[
             (self.param_value, "PARAM_VALUE"),
             (self.mission_count, "MISSION_COUNT"),
-            (self.mission_item, "MISSION_ITEM(_INT)"),
+            (self.mission_item_int, "MISSION_ITEM_INT"),
+            (self.mission_item, "MISSION_ITEM"),
             (self.mission_ack, "MISSION_ACK"),
             (self.ftp_ack, "FTP ACK"),
             (self.ftp_nak, "FTP NAK"),
@@ -97,7 +102,8 @@ pub(crate) struct TransferRequests {
     /// ...of which for no parameter of ours: not answered, as ArduPilot.
     pub(crate) param_reads_unknown: u64,
     pub(crate) mission_lists: u64,
-    /// MISSION_REQUEST_INT and MISSION_REQUEST...
+    /// MISSION_REQUEST_INT and the older MISSION_REQUEST...
+    pub(crate) mission_requests_int: u64,
     pub(crate) mission_requests: u64,
     /// ...of which past the end: a MISSION_ACK with an error.
     pub(crate) mission_requests_invalid: u64,
@@ -113,6 +119,7 @@ impl TransferRequests {
         self.param_lists
             + self.param_reads
             + self.mission_lists
+            + self.mission_requests_int
             + self.mission_requests
             + self.mission_acks
             + self.mission_uploads_refused
@@ -169,7 +176,8 @@ impl std::fmt::Display for ServedCounts {
             (r.param_reads, "PARAM_REQUEST_READ"),
             (r.param_reads_unknown, "of them for no parameter"),
             (r.mission_lists, "MISSION_REQUEST_LIST"),
-            (r.mission_requests, "MISSION_REQUEST(_INT)"),
+            (r.mission_requests_int, "MISSION_REQUEST_INT"),
+            (r.mission_requests, "MISSION_REQUEST"),
             (r.mission_requests_invalid, "of them past the end"),
             (r.mission_acks, "MISSION_ACK"),
             (r.mission_uploads_refused, "uploads refused"),
@@ -199,6 +207,7 @@ impl std::fmt::Display for ServedCounts {
 fn kind_of(t: &Transfer) -> Kind {
     match t {
         Transfer::MissionCount { .. } => Kind::MissionCount,
+        Transfer::MissionItem(item) if item.int => Kind::MissionItemInt,
         Transfer::MissionItem(_) => Kind::MissionItem,
         Transfer::MissionAck { .. } => Kind::MissionAck,
         Transfer::Ftp(f) if f.opcode == ftp_op::ACK => Kind::FtpAck,
@@ -308,7 +317,11 @@ impl<R: Copy> TransferServer<R> {
                 mission_type,
                 int,
             } if ours(target) => {
-                r.mission_requests += 1;
+                if int {
+                    r.mission_requests_int += 1;
+                } else {
+                    r.mission_requests += 1;
+                }
                 let reply = match self.mission.item(seq, mission_type, int, from) {
                     Some(item) => Transfer::MissionItem(item),
                     None => {
