@@ -326,3 +326,98 @@ fn mavproxy_wp_list_gets_every_item() {
         n(&s.requests, "MISSION_REQUEST")
     );
 }
+
+#[test]
+fn a_pymavlink_client_gets_each_answer_as_the_protocols_say() {
+    let dir = Scratch::new("serve-client");
+    let (responder, port) = respond(&["--file-size", "200000", "--mission", "20"]);
+    let file = dir.path("got.bin");
+    let out = Command::new(python())
+        .arg(peer_script("transfer_client.py"))
+        .arg(port.to_string())
+        .arg(&file)
+        .output()
+        .expect("python runs");
+    let (code, rest) = responder.finish_text();
+    assert_eq!(code, 0, "{rest}");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let p = &r["params"];
+    // By name (index -1) and by index; an unknown one draws nothing, as on
+    // ArduPilot.
+    assert_eq!(
+        p["by_name"],
+        serde_json::json!([["MAVPING_0042", -958.0, 4, 42, 500]])
+    );
+    assert_eq!(
+        p["by_index"],
+        serde_json::json!([["MAVPING_0041", -29000.0, 6, 41, 500]])
+    );
+    assert_eq!(p["unknown_name"], serde_json::json!([]));
+    assert_eq!(p["unknown_index"], serde_json::json!([]));
+    let m = &r["mission"];
+    assert_eq!(m["count"], serde_json::json!([20]));
+    assert_eq!(
+        m["item_2"],
+        serde_json::json!([[2, 16, 3, -353_622_621, 1_491_652_374, 50.0]])
+    );
+    // Past the end: MAV_MISSION_INVALID_SEQUENCE; no fence; an upload
+    // refused with MAV_MISSION_DENIED.
+    assert_eq!(m["past_end"], serde_json::json!([13]));
+    assert_eq!(m["fence_count"], serde_json::json!([0]));
+    assert_eq!(m["upload"], serde_json::json!([14]));
+    let f = &r["ftp"];
+    // NAKs: file not found, no sessions available, end of file, file
+    // protected; then invalid session once the session is terminated.
+    assert_eq!(f["missing"], serde_json::json!([[129, [10]]]));
+    assert_eq!(f["open"], serde_json::json!([[128, [0x40, 0x0d, 3, 0]]]));
+    assert_eq!(f["second_session"], serde_json::json!([[129, [5]]]));
+    assert_eq!(f["read_past_end"], serde_json::json!([[129, [6]]]));
+    assert_eq!(f["write"], serde_json::json!([[129, [9]]]));
+    assert_eq!(f["list"], serde_json::json!(["Fmavping.bin\t200000\u{0}"]));
+    assert_eq!(f["terminate"], serde_json::json!([[128, []]]));
+    assert_eq!(f["after_terminate"], serde_json::json!([[129, [4]]]));
+    // Two bursts: 500 packets, `burst_complete` on the last, then the
+    // other 337 and the end-of-file NAK.
+    assert_eq!(
+        f["file"],
+        serde_json::json!({"size": 200000, "bytes": 200000, "bursts": 2, "gaps": 0,
+                           "blob_hex_head": "009e3cda7817b553"})
+    );
+    assert!(std::fs::read(&file).unwrap() == pattern(200_000));
+    let s = served(&rest);
+    let want = |pairs: &[(&str, u64)]| -> HashMap<String, u64> {
+        pairs.iter().map(|(k, v)| (k.to_string(), *v)).collect()
+    };
+    assert_eq!(
+        s.requests,
+        want(&[
+            ("PARAM_REQUEST_READ", 4),
+            ("of them for no parameter", 2),
+            ("MISSION_REQUEST_LIST", 2),
+            ("MISSION_REQUEST_INT", 2),
+            ("of them past the end", 1),
+            ("MISSION_ACK", 1),
+            ("uploads refused", 1),
+            ("FTP", 10),
+        ])
+    );
+    // FTP ACKs: the open, the listing, 837 packets of data, the end of
+    // the session; NAKs: the six above and the burst's end of file.
+    assert_eq!(
+        s.sent,
+        want(&[
+            ("PARAM_VALUE", 2),
+            ("MISSION_COUNT", 2),
+            ("MISSION_ITEM_INT", 1),
+            ("MISSION_ACK", 2),
+            ("FTP ACK", 840),
+            ("FTP NAK", 6),
+        ])
+    );
+    assert!(s.dropped.is_empty());
+}
