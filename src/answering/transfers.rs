@@ -33,6 +33,17 @@ pub(crate) struct ServeSpec {
     pub(crate) file_size: u32,
 }
 
+/// What `mavping respond` and `sim:` serve unless told: a parameter set
+/// and a mission of a small vehicle's size, and a 64 KiB file.
+pub(crate) const DEFAULT_SERVE: ServeSpec = ServeSpec {
+    params: 500,
+    mission: 20,
+    file_size: 65_536,
+};
+/// Transfer frames a second at most unless told: a fast link's pace (a
+/// 500-parameter list in half a second); a slow one paces itself.
+pub(crate) const DEFAULT_TRANSFER_RATE: f64 = 1000.0;
+
 /// The frames a transfer sends, by message (FTP by ACK and NAK).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Kind {
@@ -203,6 +214,12 @@ impl std::fmt::Display for ServedCounts {
     }
 }
 
+/// Whether `target` is `id`'s: broadcast (0) or its own ids.
+fn ours(id: SysComp, target: Target) -> bool {
+    (target.system == 0 || target.system == id.sysid)
+        && (target.component == 0 || target.component == id.compid)
+}
+
 /// The kind of a frame the server sends.
 fn kind_of(t: &Transfer) -> Kind {
     match t {
@@ -272,23 +289,16 @@ impl<R: Copy> TransferServer<R> {
             system: frame.source.sysid,
             component: frame.source.compid,
         };
-        let id = self.id;
-        // Broadcast (0) or our own ids.
-        let ours = |target: Target| {
-            (target.system == 0 || target.system == id.sysid)
-                && (target.component == 0 || target.component == id.compid)
-        };
-        let r = &mut self.counts.requests;
         match t {
-            Transfer::ParamRequestList { target } if ours(target) => {
-                r.param_lists += 1;
+            Transfer::ParamRequestList { target } if ours(self.id, target) => {
+                self.counts.requests.param_lists += 1;
                 if self.params.count > 0 {
                     self.counts.list_restarts += u64::from(self.list.is_some());
                     self.list = Some((to, 0));
                 }
             }
-            Transfer::ParamRequestRead { target, id, index } if ours(target) => {
-                r.param_reads += 1;
+            Transfer::ParamRequestRead { target, id, index } if ours(self.id, target) => {
+                self.counts.requests.param_reads += 1;
                 match self
                     .params
                     .lookup(index, &id)
@@ -298,31 +308,47 @@ impl<R: Copy> TransferServer<R> {
                     None => self.counts.requests.param_reads_unknown += 1,
                 }
             }
+            Transfer::Ftp(f) if ours(self.id, f.target) => {
+                self.counts.requests.ftp_requests += 1;
+                match self.ftp.request(&f, from, now_ns) {
+                    FtpAnswer::One(reply) => self.queue(to, Transfer::Ftp(reply)),
+                    FtpAnswer::Burst(burst) => self.burst = Some((to, burst)),
+                    FtpAnswer::Nothing => {}
+                }
+            }
+            _ => return self.mission_request(&t, from, to),
+        }
+        true
+    }
+
+    /// The mission's part of [`TransferServer::request`].
+    fn mission_request(&mut self, t: &Transfer, from: Target, to: R) -> bool {
+        let id = self.id;
+        let r = &mut self.counts.requests;
+        let reply = match *t {
             Transfer::MissionRequestList {
                 target,
                 mission_type,
-            } if ours(target) => {
+            } if ours(id, target) => {
                 r.mission_lists += 1;
-                let count = self.mission.count_of(mission_type);
-                let reply = Transfer::MissionCount {
+                Transfer::MissionCount {
                     target: from,
-                    count,
+                    count: self.mission.count_of(mission_type),
                     mission_type,
-                };
-                self.queue(to, reply);
+                }
             }
             Transfer::MissionRequest {
                 target,
                 seq,
                 mission_type,
                 int,
-            } if ours(target) => {
-                if int {
-                    r.mission_requests_int += 1;
+            } if ours(id, target) => {
+                *if int {
+                    &mut r.mission_requests_int
                 } else {
-                    r.mission_requests += 1;
-                }
-                let reply = match self.mission.item(seq, mission_type, int, from) {
+                    &mut r.mission_requests
+                } += 1;
+                match self.mission.item(seq, mission_type, int, from) {
                     Some(item) => Transfer::MissionItem(item),
                     None => {
                         r.mission_requests_invalid += 1;
@@ -332,35 +358,28 @@ impl<R: Copy> TransferServer<R> {
                             mission_type,
                         }
                     }
-                };
-                self.queue(to, reply);
+                }
             }
-            Transfer::MissionAck { target, .. } if ours(target) => {
+            Transfer::MissionAck { target, .. } if ours(id, target) => {
                 r.mission_acks += 1;
+                return true;
             }
+            // An upload: refused, the mission is read-only.
             Transfer::MissionCount {
                 target,
                 mission_type,
                 ..
-            } if ours(target) => {
+            } if ours(id, target) => {
                 r.mission_uploads_refused += 1;
-                let reply = Transfer::MissionAck {
+                Transfer::MissionAck {
                     target: from,
                     result: result::DENIED,
                     mission_type,
-                };
-                self.queue(to, reply);
-            }
-            Transfer::Ftp(f) if ours(f.target) => {
-                r.ftp_requests += 1;
-                match self.ftp.request(&f, from, now_ns) {
-                    FtpAnswer::One(reply) => self.queue(to, Transfer::Ftp(reply)),
-                    FtpAnswer::Burst(burst) => self.burst = Some((to, burst)),
-                    FtpAnswer::Nothing => {}
                 }
             }
             _ => return false,
-        }
+        };
+        self.queue(to, reply);
         true
     }
 
@@ -563,10 +582,11 @@ mod tests {
         assert_eq!(
             (
                 r.mission_lists,
+                r.mission_requests_int,
                 r.mission_requests,
                 r.mission_requests_invalid
             ),
-            (1, 3, 1)
+            (1, 1, 2, 1)
         );
         assert_eq!((r.mission_acks, r.mission_uploads_refused), (1, 1));
     }

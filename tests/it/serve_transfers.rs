@@ -76,7 +76,10 @@ impl Console {
                         return line;
                     }
                 }
-                Err(_) => panic!("MAVProxy never printed {text:?}:\n{}", self.seen.join("\n")),
+                Err(e) => panic!(
+                    "MAVProxy never printed {text:?} ({e}):\n{}",
+                    self.seen.join("\n")
+                ),
             }
         }
     }
@@ -345,21 +348,21 @@ fn a_pymavlink_client_gets_each_answer_as_the_protocols_say() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let r: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let p = &r["params"];
+    let answers: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let params = &answers["params"];
     // By name (index -1) and by index; an unknown one draws nothing, as on
     // ArduPilot.
     assert_eq!(
-        p["by_name"],
+        params["by_name"],
         serde_json::json!([["MAVPING_0042", -958.0, 4, 42, 500]])
     );
     assert_eq!(
-        p["by_index"],
+        params["by_index"],
         serde_json::json!([["MAVPING_0041", -29000.0, 6, 41, 500]])
     );
-    assert_eq!(p["unknown_name"], serde_json::json!([]));
-    assert_eq!(p["unknown_index"], serde_json::json!([]));
-    let m = &r["mission"];
+    assert_eq!(params["unknown_name"], serde_json::json!([]));
+    assert_eq!(params["unknown_index"], serde_json::json!([]));
+    let m = &answers["mission"];
     assert_eq!(m["count"], serde_json::json!([20]));
     assert_eq!(
         m["item_2"],
@@ -370,7 +373,7 @@ fn a_pymavlink_client_gets_each_answer_as_the_protocols_say() {
     assert_eq!(m["past_end"], serde_json::json!([13]));
     assert_eq!(m["fence_count"], serde_json::json!([0]));
     assert_eq!(m["upload"], serde_json::json!([14]));
-    let f = &r["ftp"];
+    let f = &answers["ftp"];
     // NAKs: file not found, no sessions available, end of file, file
     // protected; then invalid session once the session is terminated.
     assert_eq!(f["missing"], serde_json::json!([[129, [10]]]));
