@@ -316,7 +316,8 @@ pub(crate) enum Generate {
 /// Modes other than measuring.
 #[derive(Debug, Subcommand)]
 pub enum Mode {
-    /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG
+    /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG and serves
+    /// parameters, a mission and a file, read-only
     Respond(RespondArgs),
     /// Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter
     /// pattern) and continuous links at /metrics
