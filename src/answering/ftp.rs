@@ -191,7 +191,7 @@ impl FtpServer {
         }
     }
 
-    /// ListDirectory of `/`: our one file, as "F<name>\t<size>".
+    /// ListDirectory of `/`: our one file, as `F<name>\t<size>`.
     fn list(&self, reply: Ftp, path: &[u8]) -> Ftp {
         let end = path.iter().position(|&b| b == 0).unwrap_or(path.len());
         if !matches!(&path[..end], b"/" | b"" | b".") {
