@@ -7,7 +7,9 @@
 //! wire or the radios, the outage, the per-direction faults and the
 //! paths, plus `loss=` on each (a transfer's frames are the legs of its
 //! exchange). A radio whose air is slower than its serial port still
-//! fills and drops, as a SiK radio without flow control does.
+//! fills and drops, as a SiK radio without flow control does. Their
+//! draws are the responders' own (as telemetry's), so a transfer leaves
+//! the faults a seed gives the probes' exchanges where they were.
 
 use std::time::Duration;
 
@@ -32,7 +34,7 @@ impl SimLink {
         if heard[0].is_none() || self.in_outage(now) {
             return;
         }
-        let up = self.one_way() + self.queued_up(now);
+        let up = self.vehicle_one_way() + self.queued_up(now);
         for extra in heard.into_iter().flatten() {
             let at = self.ns(sent_done + up + extra);
             self.schedule(at, i, Sends::TransferRequest(Box::new(*request)));
@@ -60,7 +62,7 @@ impl SimLink {
             self.responders[i].serving = false;
             return;
         };
-        let sent = if self.chance(self.params.loss) {
+        let sent = if self.vehicle_chance(self.params.loss) {
             // Not sent, so not numbered, as a lost exchange's reply.
             false
         } else {
@@ -266,5 +268,60 @@ mod tests {
             answered,
             t.served.dropped.param_value == s.dropped.param_value
         );
+    }
+
+    /// The PING replies (by seq) that arrived when `pings` PINGs are sent
+    /// 100 ms apart, with a parameter list asked for first or not.
+    async fn ping_replies(query: &str, with_list: bool) -> Vec<u32> {
+        let mut link = SimLink::new(SimParams::parse(query).unwrap());
+        if with_list {
+            link.send(&request(Transfer::ParamRequestList { target: US }))
+                .await
+                .unwrap();
+        }
+        let start = Instant::now();
+        let mut out: Vec<Inbound> = Vec::new();
+        for seq in 0..50u32 {
+            let mut bytes = Vec::new();
+            let header = Header {
+                sysid: 250,
+                compid: 190,
+                seq: seq as u8,
+            };
+            let ping = Msg::Ping {
+                time_usec: u64::from(seq) + 1,
+                seq,
+                target_system: 0,
+                target_component: 0,
+            };
+            frame::encode(&mut bytes, Version::V2, header, &ping);
+            link.send(&bytes).await.unwrap();
+            let next = start + Duration::from_millis(100 * (u64::from(seq) + 1));
+            loop {
+                tokio::select! {
+                    r = link.recv(&mut out) => r.unwrap(),
+                    () = sleep_until(next) => break,
+                }
+            }
+        }
+        out.iter()
+            .filter_map(|i| match i.frame.msg {
+                Msg::Ping { seq, .. } => Some(seq),
+                _ => None,
+            })
+            .collect()
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_transfer_leaves_the_probes_faults_where_they_were() {
+        // The exchanges' faults (loss=, dup=, the jitter) are the link's
+        // draws, the transfer's the responder's own. (The per-direction
+        // faults are the responder's draws: a transfer moves them, as
+        // telemetry does.)
+        let query = "?loss=20%&dup=10%&params=200&seed=4&heartbeat=off";
+        let alone = ping_replies(query, false).await;
+        let beside = ping_replies(query, true).await;
+        assert!(alone.len() < 55 && alone.len() > 35, "{alone:?}");
+        assert_eq!(alone, beside);
     }
 }
