@@ -837,7 +837,7 @@ pub struct RespondArgs {
     )]
     pub(crate) compid: u8,
 
-    /// Hold every reply this long (one-way link emulation)
+    /// Hold every reply (and transfer frame) this long (one-way link emulation)
     #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
     pub(crate) delay: Duration,
 
@@ -845,7 +845,7 @@ pub struct RespondArgs {
     #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
     pub(crate) jitter: Duration,
 
-    /// Drop this share of replies, e.g. 10 or 10% (replies only: streamed frames have
+    /// Drop this share of replies and transfer frames, e.g. 10 or 10% (streamed frames have
     /// --stream-drop)
     #[arg(
         allow_negative_numbers = true,
@@ -856,7 +856,7 @@ pub struct RespondArgs {
     )]
     pub(crate) drop: f64,
 
-    /// Send this share of replies twice (replies only, not streamed frames)
+    /// Send this share of replies and transfer frames twice (not streamed frames)
     #[arg(
         allow_negative_numbers = true,
         long,
