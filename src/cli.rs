@@ -316,7 +316,8 @@ pub(crate) enum Generate {
 /// Modes other than measuring.
 #[derive(Debug, Subcommand)]
 pub enum Mode {
-    /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG
+    /// Be a well-behaved MAVLink system that answers PING, TIMESYNC and COMMAND_LONG and serves
+    /// parameters, a mission and a file, read-only
     Respond(RespondArgs),
     /// Probe links for Prometheus: /probe?target=LINK on request (the multi-target exporter
     /// pattern) and continuous links at /metrics
@@ -855,7 +856,7 @@ pub struct RespondArgs {
     )]
     pub(crate) compid: u8,
 
-    /// Hold every reply this long (one-way link emulation)
+    /// Hold every reply (and transfer frame) this long (one-way link emulation)
     #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
     pub(crate) delay: Duration,
 
@@ -863,7 +864,7 @@ pub struct RespondArgs {
     #[arg(allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "0s")]
     pub(crate) jitter: Duration,
 
-    /// Drop this share of replies, e.g. 10 or 10% (replies only: streamed frames have
+    /// Drop this share of replies and transfer frames, e.g. 10 or 10% (streamed frames have
     /// --stream-drop)
     #[arg(
         allow_negative_numbers = true,
@@ -874,7 +875,7 @@ pub struct RespondArgs {
     )]
     pub(crate) drop: f64,
 
-    /// Send this share of replies twice (replies only, not streamed frames)
+    /// Send this share of replies and transfer frames twice (not streamed frames)
     #[arg(
         allow_negative_numbers = true,
         long,
@@ -923,6 +924,50 @@ pub struct RespondArgs {
     /// Answer only TIMESYNC and commands, not PING (like ArduPilot)
     #[arg(long)]
     pub(crate) no_ping: bool,
+
+    /// Parameters served, read-only: MAVPING_0000 upwards, all sent on PARAM_REQUEST_LIST,
+    /// one on PARAM_REQUEST_READ (0 serves none; at most 10000)
+    #[arg(
+        help_heading = "Transfers",
+        allow_negative_numbers = true,
+        long,
+        value_name = "N",
+        default_value_t = 500
+    )]
+    pub(crate) params: i64,
+
+    /// Mission items served, read-only: home, a takeoff, then waypoints (0 serves an empty
+    /// mission; at most 10000)
+    #[arg(
+        help_heading = "Transfers",
+        allow_negative_numbers = true,
+        long,
+        value_name = "N",
+        default_value_t = 20
+    )]
+    pub(crate) mission: i64,
+
+    /// Bytes of the file served by MAVLink FTP as /mavping.bin, read-only (at most 1 GiB)
+    #[arg(
+        help_heading = "Transfers",
+        allow_negative_numbers = true,
+        long,
+        value_name = "BYTES",
+        default_value_t = 65536
+    )]
+    pub(crate) file_size: i64,
+
+    /// Frames a second the transfers are sent at, at most: a parameter list, a burst of the
+    /// file, and the replies to re-requests share it. Each frame is then held, dropped or
+    /// doubled by --delay, --jitter, --drop and --dup as replies are
+    #[arg(
+        help_heading = "Transfers",
+        allow_negative_numbers = true,
+        long,
+        value_name = "HZ",
+        default_value_t = 1000.0
+    )]
+    pub(crate) transfer_rate: f64,
 
     /// Baud rate of a serial device whose connection string names none
     #[arg(allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD)]

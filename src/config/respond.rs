@@ -4,6 +4,10 @@ use super::error::ConfigError;
 use super::measure::validate_links;
 use super::signing::signing;
 use super::values::{validate_baud, validate_ids, MAX_TIMEOUT};
+use crate::answering::ftp::MAX_FILE_SIZE;
+use crate::answering::mission::MAX_ITEMS;
+use crate::answering::params::MAX_PARAMS;
+use crate::answering::transfers::ServeSpec;
 use crate::cli::RespondArgs;
 use crate::responder::ResponderSettings;
 use crate::transport::address::LinkSpec;
@@ -77,9 +81,46 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 signing: signing(&cli.signing, true)?,
                 streams: cli.stream.clone(),
                 stream_drop: cli.stream_drop,
+                serve: serve_spec(cli)?,
+                transfer_rate: transfer_rate(cli.transfer_rate)?,
             },
             verbose: cli.verbose,
         })
+    }
+}
+
+/// `--params`, `--mission` and `--file-size`, each in its range.
+fn serve_spec(cli: &RespondArgs) -> Result<ServeSpec, ConfigError> {
+    let within = |flag: &str, value: i64, max: u32, what: &str| {
+        u32::try_from(value)
+            .ok()
+            .filter(|v| *v <= max)
+            .ok_or_else(|| {
+                ConfigError::value(flag, value, format!("expected {what} from 0 to {max}"))
+            })
+    };
+    Ok(ServeSpec {
+        params: within("--params", cli.params, u32::from(MAX_PARAMS), "parameters")? as u16,
+        mission: within(
+            "--mission",
+            cli.mission,
+            u32::from(MAX_ITEMS),
+            "mission items",
+        )? as u16,
+        file_size: within("--file-size", cli.file_size, MAX_FILE_SIZE, "bytes")?,
+    })
+}
+
+/// Frames a second: above 0, at most a million (a frame a microsecond).
+fn transfer_rate(hz: f64) -> Result<f64, ConfigError> {
+    if hz.is_finite() && hz > 0.0 && hz <= 1e6 {
+        Ok(hz)
+    } else {
+        Err(ConfigError::value(
+            "--transfer-rate",
+            hz,
+            "expected frames a second above 0, at most 1000000",
+        ))
     }
 }
 
@@ -162,6 +203,20 @@ mod tests {
         );
         assert!((r.settings.drop - 0.1).abs() < 1e-12 && (r.settings.dup - 0.025).abs() < 1e-12);
         assert!(!r.settings.answer_ping);
+        let r = respond("--params 0 --mission 3 --file-size 7 --transfer-rate 50 sim:").unwrap();
+        let s = r.settings.serve;
+        assert_eq!((s.params, s.mission, s.file_size), (0, 3, 7));
+        assert_eq!(r.settings.transfer_rate, 50.0);
+        let s = respond("sim:").unwrap().settings;
+        assert_eq!(
+            (
+                s.serve.params,
+                s.serve.mission,
+                s.serve.file_size,
+                s.transfer_rate
+            ),
+            (500, 20, 65536, 1000.0)
+        );
         for (args, needle) in [
             ("--drop 150 sim:", "'150' for '--drop <PCT>'"),
             ("--dup x sim:", "'x' for '--dup <PCT>'"),
@@ -182,6 +237,24 @@ mod tests {
                 "--stream: ATTITUDE is streamed twice",
             ),
             ("--stream-drop 10 sim:", "--stream-drop needs --stream"),
+            (
+                "--params 10001 sim:",
+                "--params 10001: expected parameters from 0 to 10000",
+            ),
+            (
+                "--mission -1 sim:",
+                "--mission -1: expected mission items from 0 to 10000",
+            ),
+            (
+                "--file-size 1073741825 sim:",
+                "expected bytes from 0 to 1073741824",
+            ),
+            ("--file-size x sim:", "'x' for '--file-size <BYTES>'"),
+            ("--transfer-rate 0 sim:", "expected frames a second above 0"),
+            (
+                "--transfer-rate inf sim:",
+                "expected frames a second above 0",
+            ),
             (
                 "--stream ATTITUDE@5 --stream-drop 200 sim:",
                 "'200' for '--stream-drop <PCT>'",

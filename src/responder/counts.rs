@@ -4,6 +4,7 @@
 
 use serde::Serialize;
 
+use crate::answering::transfers::ServedCounts;
 use crate::answering::ResponderCounts;
 use crate::frame::signing::SigningCounts;
 
@@ -30,6 +31,8 @@ pub(crate) struct RespondCounts {
     pub(crate) signing: Option<SigningCounts>,
     /// With `--stream`: each stream's frames, in the order given.
     pub(crate) streamed: Vec<StreamCount>,
+    /// The transfers served: requests, frames sent and dropped by kind.
+    pub(crate) served: ServedCounts,
 }
 
 impl std::fmt::Display for RespondCounts {
@@ -64,6 +67,10 @@ impl std::fmt::Display for RespondCounts {
                 each.join(", "),
                 self.streamed.iter().map(|s| s.dropped).sum::<u64>()
             )?;
+        }
+        let served = &self.served;
+        if served.requests.total() > 0 {
+            write!(f, "; {served}")?;
         }
         if let Some(signing) = &self.signing {
             write!(f, "; signing: {signing}")?;

@@ -1,6 +1,7 @@
 //! Answering a request under the link emulation of `--delay`, `--jitter`,
 //! `--drop` and `--dup`: the reply queued at once, held back for later
-//! (bounded), dropped or doubled.
+//! (bounded), dropped or doubled; the transfers' frames
+//! ([`serving`](super::serving)) go through the same emulation.
 
 use std::cmp::Reverse;
 use std::time::Duration;
@@ -10,6 +11,7 @@ use tokio::time::Instant;
 
 use super::respond_loop::Responder;
 use crate::engine::link_io::admitted;
+use crate::frame::{Msg, Version};
 use crate::transport::{Inbound, PathId, To};
 
 /// Replies held back by `--delay` at once; past it they are dropped (and
@@ -22,6 +24,16 @@ pub(super) struct Held {
     pub(super) order: u64,
     pub(super) path: PathId,
     pub(super) bytes: Vec<u8>,
+    /// A reply to a probe (not a transfer's frame): counted as sent.
+    pub(super) reply: bool,
+}
+
+/// What the link emulation did with a frame.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Fate {
+    Sent,
+    Dropped,
+    Doubled,
 }
 
 impl Responder {
@@ -40,7 +52,8 @@ impl Responder {
     }
 
     /// Answers one inbound frame: queues the answer, holds it for later,
-    /// or drops it.
+    /// or drops it; a transfer request is taken by the transfer server,
+    /// whose frames go at their pace ([`Responder::serve_due`]).
     pub(super) fn handle(&mut self, inbound: &Inbound) {
         // Our clock for TIMESYNC: ns since we started (like an autopilot's
         // boot time), read when the request arrived.
@@ -48,39 +61,63 @@ impl Responder {
         if !admitted(&mut self.gate, &inbound.frame, inbound.signature.as_ref()) {
             return;
         }
-        let Some(reply) = self.core.answer(&inbound.frame, clock_ns) else {
-            return;
-        };
-        if self.chance(self.settings.drop) {
-            self.counts.dropped += 1;
-            return;
-        }
-        let copies = if self.chance(self.settings.dup) {
-            self.counts.duplicated += 1;
-            2
-        } else {
-            1
-        };
         // Answer in the version we were asked in: a MAVLink 1 stack may not
         // parse MAVLink 2.
-        self.sender.frame_as(inbound.frame.version, &reply);
-        for _ in 0..copies {
+        let version = inbound.frame.version;
+        let Some(reply) = self.core.answer(&inbound.frame, clock_ns) else {
+            let idle = !self.transfers.pending();
+            let to = (inbound.path, version);
+            if self.transfers.request(&inbound.frame, to, clock_ns as u64) && idle {
+                // After a pause the pace starts again now, not in a rush
+                // to catch up.
+                self.transfer_next = self.transfer_next.max(inbound.at);
+            }
+            return;
+        };
+        let fate = self.emit(&reply, version, inbound.path, inbound.at, true);
+        self.counts.dropped += u64::from(fate == Fate::Dropped);
+        self.counts.duplicated += u64::from(fate == Fate::Doubled);
+    }
+
+    /// Writes `msg` for `path` under `--delay`, `--jitter`, `--drop` and
+    /// `--dup`: queued at once, held until `at` plus the delay, dropped or
+    /// doubled. A `reply` counts in the replies sent once written.
+    pub(super) fn emit(
+        &mut self,
+        msg: &Msg,
+        version: Version,
+        path: PathId,
+        at: Instant,
+        reply: bool,
+    ) -> Fate {
+        if self.chance(self.settings.drop) {
+            return Fate::Dropped;
+        }
+        let fate = if self.chance(self.settings.dup) {
+            Fate::Doubled
+        } else {
+            Fate::Sent
+        };
+        self.sender.frame_as(version, msg);
+        for _ in 0..=u8::from(fate == Fate::Doubled) {
             let hold = self.hold_time();
             if hold.is_zero() {
-                self.outbox.push(self.sender.last(), To::Path(inbound.path));
-                self.replies_queued += 1;
+                self.outbox.push(self.sender.last(), To::Path(path));
+                self.replies_queued += u64::from(reply);
             } else if self.held.len() >= MAX_HELD {
                 self.counts.overflow += 1;
             } else {
                 self.order += 1;
                 self.held.push(Reverse(Held {
-                    due: inbound.at + hold,
+                    due: at + hold,
                     order: self.order,
-                    path: inbound.path,
+                    path,
                     bytes: self.sender.last().to_vec(),
+                    reply,
                 }));
             }
         }
+        fate
     }
 
     /// Queues the held replies that are due.
@@ -88,7 +125,7 @@ impl Responder {
         while self.held.peek().is_some_and(|h| h.0.due <= now) {
             let Reverse(h) = self.held.pop().expect("peeked");
             self.outbox.push(&h.bytes, To::Path(h.path));
-            self.replies_queued += 1;
+            self.replies_queued += u64::from(h.reply);
         }
     }
 }

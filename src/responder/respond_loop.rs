@@ -15,6 +15,7 @@ use super::counts::{RespondCounts, StreamCount};
 use super::replies::Held;
 use super::settings::ResponderSettings;
 use super::streams::{Stream, STREAM_SEED};
+use crate::answering::transfers::TransferServer;
 use crate::answering::ResponderCore;
 use crate::engine::link_io::{Clock, Heartbeat, Sender};
 use crate::frame::signing::{Gate, SigningConfig};
@@ -50,6 +51,11 @@ pub(super) struct Responder {
     pub(super) stream_rng: SmallRng,
     /// False when a HEARTBEAT stream sends our HEARTBEAT instead.
     pub(super) periodic_heartbeat: bool,
+    /// The parameters, mission and file served; each reply goes back by
+    /// the path (and in the version) its request came.
+    pub(super) transfers: TransferServer<(PathId, Version)>,
+    /// When the next transfer frame may go (`--transfer-rate`).
+    pub(super) transfer_next: Instant,
 }
 
 impl Responder {
@@ -99,7 +105,11 @@ impl Responder {
             .iter()
             .map(|s| self.clock.at(s.schedule.due_ns()));
         let held = self.held.peek().map(|h| h.0.due);
-        streams.chain(held).fold(heartbeat, Instant::min)
+        let transfer = self.transfers.pending().then_some(self.transfer_next);
+        streams
+            .chain(held)
+            .chain(transfer)
+            .fold(heartbeat, Instant::min)
     }
 }
 
@@ -155,6 +165,8 @@ pub(crate) async fn run<T: Transport>(
         streams,
         stream_rng,
         periodic_heartbeat,
+        transfers: TransferServer::new(settings.id, settings.serve),
+        transfer_next: Instant::now(),
     };
     let mut inbound: Vec<Inbound> = Vec::new();
     let error = loop {
@@ -168,6 +180,7 @@ pub(crate) async fn run<T: Transport>(
             break Some(e);
         }
         r.release_due(Instant::now());
+        r.serve_due(Instant::now());
         if let Err(e) = r.flush(link).await {
             break Some(e);
         }
@@ -182,6 +195,8 @@ pub(crate) async fn run<T: Transport>(
                     r.greet(i.path);
                     r.handle(&i);
                 }
+                // A single reply (a re-request's) goes with the batch.
+                r.serve_due(Instant::now());
                 // Answered together: one write for the whole batch.
                 if let Err(e) = r.flush(link).await {
                     break Some(e);
@@ -193,5 +208,6 @@ pub(crate) async fn run<T: Transport>(
     r.counts.requests = r.core.counts;
     r.counts.signing = settings.signing.map(|_| r.gate.counts());
     r.counts.streamed = r.streams.iter().map(|s| s.count).collect();
+    r.counts.served = r.transfers.counts;
     (r.counts, error)
 }

@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+use crate::answering::transfers::ServeSpec;
 use crate::frame::signing::SigningConfig;
 use crate::frame::SysComp;
 use crate::telemetry::StreamSpec;
@@ -27,6 +28,10 @@ pub(crate) struct ResponderSettings {
     /// Share of streamed frames numbered, then not sent: the gap a lost
     /// frame leaves in our sequence numbers.
     pub(crate) stream_drop: f64,
+    /// The parameters, mission and file served (`--params`, `--mission`,
+    /// `--file-size`), and the most transfer frames sent a second.
+    pub(crate) serve: ServeSpec,
+    pub(crate) transfer_rate: f64,
 }
 
 /// Who we are, for the first line.
@@ -48,5 +53,24 @@ pub(crate) fn describe(settings: &ResponderSettings, link_name: &str) -> String 
         let streams: Vec<String> = settings.streams.iter().map(ToString::to_string).collect();
         format!(", streaming {}", streams.join(", "))
     };
-    format!("mavping respond: {sysid}/{compid} on {link_name}, answering {what}{signed}{streaming}")
+    format!(
+        "mavping respond: {sysid}/{compid} on {link_name}, answering {what}{signed}{streaming}; \
+         serving {}",
+        serving(settings)
+    )
+}
+
+/// What the transfers serve, and how fast.
+fn serving(settings: &ResponderSettings) -> String {
+    let ServeSpec {
+        params,
+        mission,
+        file_size,
+    } = settings.serve;
+    format!(
+        "{params} parameters, a {mission}-item mission and {} ({file_size} bytes) by FTP, \
+         at up to {} frames/s",
+        crate::answering::ftp::SERVED_PATH,
+        settings.transfer_rate
+    )
 }

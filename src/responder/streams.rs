@@ -113,6 +113,12 @@ mod tests {
             signing: None,
             streams: crate::telemetry::parse_list("ATTITUDE@50,HEARTBEAT@2").unwrap(),
             stream_drop: 0.1,
+            serve: crate::answering::transfers::ServeSpec {
+                params: 0,
+                mission: 0,
+                file_size: 0,
+            },
+            transfer_rate: 1000.0,
         };
         let mut link = Capture::default();
         let stop = Notify::new();

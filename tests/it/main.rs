@@ -42,6 +42,7 @@ mod scripting;
 mod serial_pty;
 mod serve;
 mod serve_secure;
+mod serve_transfers;
 mod signing;
 mod sim_paths;
 mod sim_soak;

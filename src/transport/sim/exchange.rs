@@ -12,6 +12,16 @@ use super::link::SimLink;
 use super::outgoing::{Reply, Sends};
 use crate::frame::{self, Frame, Header, Msg};
 
+/// When the copies of a frame were heard, past the first's arrival:
+/// none, the first, or both.
+fn heard_at(heard: &Heard) -> [Option<Duration>; 2] {
+    match heard {
+        Heard::Lost => [None, None],
+        Heard::Once => [Some(Duration::ZERO), None],
+        Heard::Twice(later) => [Some(Duration::ZERO), Some(*later)],
+    }
+}
+
 /// How a frame we sent reached one responder.
 enum Heard {
     Lost,
@@ -57,6 +67,9 @@ impl SimLink {
     pub(super) fn exchange(&mut self, i: usize, request: &Frame, now: Instant, sent_done: Instant) {
         let heard = self.heard_by(i);
         let Some(reply) = self.responders[i].core.answer(request, 0) else {
+            if matches!(request.msg, Msg::Transfer(_)) {
+                self.transfer_heard(i, request, heard_at(&heard), now, sent_done);
+            }
             return;
         };
         let r = &mut self.responders[i];

@@ -18,6 +18,7 @@ use super::radio::RadioPair;
 use super::responder::SimResponder;
 use super::truth::{PathCounts, PathsTruth, QueueTruth, SimTruth};
 use super::wire::Wire;
+use crate::answering::transfers::TransferServer;
 use crate::answering::ResponderCore;
 use crate::frame::{ScanStats, SysComp};
 use crate::telemetry::{Schedule, StreamKind};
@@ -86,6 +87,8 @@ impl SimLink {
                     latest_arrived: None,
                     copies_due: HashMap::new(),
                     paths: vec![PathCounts::default(); params.paths.len()],
+                    transfers: TransferServer::new(params.responder_id(i), params.serve),
+                    serving: false,
                 }
             })
             .collect();
@@ -129,7 +132,11 @@ impl SimLink {
     pub fn truth(&self) -> Vec<(SysComp, SimTruth)> {
         self.responders
             .iter()
-            .map(|r| (r.core.id, r.truth))
+            .map(|r| {
+                let mut truth = r.truth;
+                truth.served = r.transfers.counts;
+                (r.core.id, truth)
+            })
             .collect()
     }
 

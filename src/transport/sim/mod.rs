@@ -18,7 +18,8 @@
 //! The model is in one file per concern: the [`responder`]s, the
 //! [`faults`], the [`clock`]s, the [`wire`] (or the [`radio`] pair), what
 //! the responders send ([`outgoing`]), what is on its way to mavping
-//! ([`deliveries`]), one request's [`exchange`], the near radio's
+//! ([`deliveries`]), one request's [`exchange`], the [`transfers`] they
+//! serve (parameters, mission, a file), the near radio's
 //! [`radio_status`], the [`paths`] of a vehicle heard on several, and the
 //! ground [`truth`]; [`link`] holds them together
 //! as a [`Transport`](crate::transport::Transport).
@@ -34,6 +35,7 @@ mod paths;
 pub(crate) mod radio;
 mod radio_status;
 mod responder;
+mod transfers;
 mod truth;
 mod wire;
 

@@ -9,7 +9,7 @@ use tokio::time::Instant;
 
 use super::deliveries::Copies;
 use super::link::SimLink;
-use crate::frame::{self, Msg, Version};
+use crate::frame::{self, Frame, Msg, Version};
 
 /// A frame a responder sends at `at`, numbered then.
 pub(super) struct Outgoing {
@@ -25,6 +25,10 @@ pub(super) enum Sends {
     Stream(usize),
     /// A reply, its fate drawn when its request was sent.
     Reply(Box<Reply>),
+    /// A transfer request reaches the responder ([`super::transfers`]).
+    TransferRequest(Box<Frame>),
+    /// The responder's next transfer frame.
+    Transfer,
 }
 
 pub(super) struct Reply {
@@ -112,6 +116,8 @@ impl SimLink {
                         None => self.responders[i].truth.down.dropped += 1,
                     }
                 }
+                Sends::TransferRequest(request) => self.take_transfer_request(i, &request, o.at),
+                Sends::Transfer => self.send_transfer(i, o.at),
             }
         }
     }

@@ -7,6 +7,10 @@ use std::time::Duration;
 use thiserror::Error;
 
 use super::radio::{AirParams, DEFAULT_TDM_ROUND};
+use crate::answering::ftp::MAX_FILE_SIZE;
+use crate::answering::mission::MAX_ITEMS;
+use crate::answering::params::MAX_PARAMS;
+use crate::answering::transfers::{ServeSpec, DEFAULT_SERVE, DEFAULT_TRANSFER_RATE};
 use crate::frame::SysComp;
 use crate::telemetry::{self, StreamSpec, StreamSpecError};
 use crate::units::{
@@ -92,6 +96,11 @@ pub struct SimParams {
     /// with its own faults after the link's; empty: the one path of a
     /// link without the key.
     pub(crate) paths: Vec<PathParams>,
+    /// The parameters, mission and file each responder serves
+    /// (`params=`, `mission=`, `file=`), and the most transfer frames it
+    /// sends a second (`transfer_rate=`); a slower wire paces them.
+    pub(crate) serve: ServeSpec,
+    pub(crate) transfer_rate: f64,
 }
 
 /// The most paths one link has (`paths=`): a MAVProxy log numbers its
@@ -205,6 +214,8 @@ impl Default for SimParams {
             queue_up: None,
             queue_down: None,
             paths: Vec::new(),
+            serve: DEFAULT_SERVE,
+            transfer_rate: DEFAULT_TRANSFER_RATE,
         }
     }
 }
@@ -217,7 +228,8 @@ buffer=BYTES, air=BITS_PER_S, duty=PCT, ecc=on|off, tdm=DURATION, outage=START+L
 outage_every=DURATION, spike=PCT, spike_delay=DURATION, stream=MSG@HZ[,MSG@HZ...], \
 loss_down=PCT, dup_down=PCT, reorder_down=PCT, loss_up=PCT, dup_up=PCT, queue_up=PEAK@RISE, \
 queue_down=PEAK@RISE, paths=N (1-4), path_loss=PCT[,PCT...], path_delay=DURATION[,DURATION...], \
-path_outage=none|START+LENGTH[,...]";
+path_outage=none|START+LENGTH[,...], params=N (0-10000), mission=N (0-10000), \
+file=BYTES (0-1073741824), transfer_rate=HZ";
 
 /// What is wrong with a `sim:` query: which key, and why (or which keys
 /// go together).
@@ -605,10 +617,32 @@ impl SimParams {
             "queue_up" => self.queue_up = Some(Queue::parse(key, value)?),
             "queue_down" => self.queue_down = Some(Queue::parse(key, value)?),
             "clock" | "offset" | "drift" => self.set_clock(key, value)?,
+            "params" | "mission" | "file" | "transfer_rate" => self.set_serve(key, value)?,
             "baud" | "radio" | "buffer" | "air" | "duty" | "ecc" | "tdm" => {
                 self.set_radio(key, value, air)?
             }
             _ => return Err(Problem::UnknownKey(key.to_string())),
+        }
+        Ok(())
+    }
+
+    /// What the responders serve: `params=`, `mission=`, `file=`,
+    /// `transfer_rate=`.
+    fn set_serve(&mut self, key: &str, value: &str) -> Result<(), Problem> {
+        match key {
+            "params" => self.serve.params = bounded(key, value, 0..=MAX_PARAMS, "0 to 10000")?,
+            "mission" => self.serve.mission = bounded(key, value, 0..=MAX_ITEMS, "0 to 10000")?,
+            "file" => {
+                let bytes = "0 to 1073741824 bytes";
+                self.serve.file_size = bounded(key, value, 0..=MAX_FILE_SIZE, bytes)?;
+            }
+            _ => {
+                let hz = "frames a second above 0, at most 1000000";
+                self.transfer_rate = number(key, value, hz)?;
+                if !(self.transfer_rate > 0.0 && self.transfer_rate <= 1e6) {
+                    return Err(Problem::expected(key, value, hz));
+                }
+            }
         }
         Ok(())
     }
@@ -800,7 +834,8 @@ impl fmt::Display for SimParams {
             write!(f, "&stream={}", streams.join(","))?;
         }
         self.write_directions(f)?;
-        self.write_paths(f)
+        self.write_paths(f)?;
+        self.write_serve(f)
     }
 }
 
@@ -811,6 +846,32 @@ fn compact(d: Duration) -> String {
 }
 
 impl SimParams {
+    /// What the responders serve, where not the defaults.
+    fn write_serve(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let ServeSpec {
+            params,
+            mission,
+            file_size,
+        } = self.serve;
+        for (key, value, default) in [
+            ("params", u32::from(params), u32::from(DEFAULT_SERVE.params)),
+            (
+                "mission",
+                u32::from(mission),
+                u32::from(DEFAULT_SERVE.mission),
+            ),
+            ("file", file_size, DEFAULT_SERVE.file_size),
+        ] {
+            if value != default {
+                write!(f, "&{key}={value}")?;
+            }
+        }
+        if self.transfer_rate != DEFAULT_TRANSFER_RATE {
+            write!(f, "&transfer_rate={}", self.transfer_rate)?;
+        }
+        Ok(())
+    }
+
     /// The per-direction faults and queues, when set.
     fn write_directions(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         for (key, share) in [
@@ -896,6 +957,53 @@ mod tests {
                 e.to_string().starts_with(&format!("queue_down={bad}")),
                 "{e}"
             );
+        }
+    }
+
+    #[test]
+    fn what_is_served_and_how_fast() {
+        let p = SimParams::parse("?params=1000&mission=0&file=100&transfer_rate=50").unwrap();
+        assert_eq!(
+            (
+                p.serve.params,
+                p.serve.mission,
+                p.serve.file_size,
+                p.transfer_rate
+            ),
+            (1000, 0, 100, 50.0)
+        );
+        assert!(p
+            .to_string()
+            .ends_with("&params=1000&mission=0&file=100&transfer_rate=50"));
+        let d = SimParams::default();
+        assert_eq!(
+            (
+                d.serve.params,
+                d.serve.mission,
+                d.serve.file_size,
+                d.transfer_rate
+            ),
+            (500, 20, 65536, 1000.0)
+        );
+        assert!(!d.to_string().contains("params="));
+        for (query, error) in [
+            ("?params=10001", "params=10001: expected 0 to 10000"),
+            ("?mission=-1", "mission=-1: expected 0 to 10000"),
+            (
+                "?file=1073741825",
+                "file=1073741825: expected 0 to 1073741824 bytes",
+            ),
+            (
+                "?transfer_rate=0",
+                "transfer_rate=0: expected frames a second above 0",
+            ),
+            (
+                "?transfer_rate=nan",
+                "transfer_rate=nan: expected frames a second above 0",
+            ),
+        ] {
+            let e = SimParams::parse(query).unwrap_err().to_string();
+            assert!(e.starts_with(error), "{query}: {e}");
         }
     }
 

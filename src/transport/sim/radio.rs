@@ -216,6 +216,13 @@ impl RadioPair {
         self.ground_uart_out.pass(t, bytes).ok_or(Dropped::Uart)
     }
 
+    /// When the remote radio's UART has taken everything written to it:
+    /// what a responder that waits for room in its serial port (as
+    /// ArduPilot streams parameters) paces itself by.
+    pub(crate) fn remote_uart_free_ns(&self) -> u64 {
+        self.remote_uart_in.free_at
+    }
+
     /// Share of the ground radio's buffer free at `at`, in percent (its
     /// RADIO_STATUS `txbuf`).
     pub(crate) fn ground_free_percent(&mut self, at: u64) -> u8 {

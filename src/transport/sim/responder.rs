@@ -6,8 +6,9 @@
 use std::collections::HashMap;
 
 use super::truth::{between, PathCounts, PathTruth, PathsTruth, SimTruth};
+use crate::answering::transfers::TransferServer;
 use crate::answering::ResponderCore;
-use crate::frame::Header;
+use crate::frame::{Header, Version};
 use crate::telemetry::{Schedule, StreamKind};
 use crate::transport::link::PathId;
 
@@ -30,6 +31,11 @@ pub(super) struct SimResponder {
     pub(super) copies_due: HashMap<u64, Due>,
     /// What each path did with its frames (`paths=`; none without).
     pub(super) paths: Vec<PathCounts>,
+    /// The parameters, mission and file it serves, each reply in the
+    /// version its request came in; and whether its next transfer frame
+    /// is scheduled.
+    pub(super) transfers: TransferServer<Version>,
+    pub(super) serving: bool,
 }
 
 /// A frame with more than one copy on its way.

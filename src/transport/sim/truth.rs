@@ -3,6 +3,8 @@
 //! apart from the simulation so tests can hold mavping's counts against
 //! it.
 
+use crate::answering::transfers::ServedCounts;
+
 /// What the simulated link did to one responder's exchanges: the ground
 /// truth tests hold mavping's counts against.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
@@ -36,6 +38,10 @@ pub struct SimTruth {
     pub(crate) down: DownTruth,
     /// Every frame mavping sent towards it.
     pub(crate) up: UpTruth,
+    /// The transfers it served: requests heard, frames put on their way
+    /// and frames lost (`loss=`, a full buffer, the outage, `loss_down=`),
+    /// by kind. Its frames are also in `down`.
+    pub(crate) served: ServedCounts,
 }
 
 /// What became of the frames a responder sent (HEARTBEAT, telemetry,

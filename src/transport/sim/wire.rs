@@ -48,6 +48,17 @@ impl SimLink {
         Some(done)
     }
 
+    /// When a responder's side of the link has sent what it was given by
+    /// `at`: the shared wire's, or the remote radio's serial port; `at`
+    /// without `baud=`.
+    pub(super) fn responder_free_at(&self, at: Instant) -> Instant {
+        let free = match self.pair.as_ref() {
+            Some(pair) => Some(self.instant(pair.remote_uart_free_ns())),
+            None => self.wire.free_at,
+        };
+        free.map_or(at, |t| t.max(at))
+    }
+
     /// A frame we send at `now`: when the responders have it, or `None`
     /// when a full buffer drops it.
     pub(super) fn uplink(&mut self, now: Instant, bytes: usize) -> Option<Instant> {

@@ -1,7 +1,16 @@
 //! How a well-behaved MAVLink system answers probes: the pure part, shared
 //! by the simulated link and by `mavping respond`.
 //!
-//! One reply per request, never more: a responder must not amplify.
+//! One reply per request, never more: a responder must not amplify. The
+//! transfers (the parameter list, the mission, a file) are the exception
+//! a ground station asks for: [`transfers`] queues what they draw, one
+//! bounded list or burst at a time, for the caller to send at its pace.
+//! Each protocol is in its own file: [`params`], [`mission`], [`ftp`].
+
+pub(crate) mod ftp;
+pub(crate) mod mission;
+pub(crate) mod params;
+pub(crate) mod transfers;
 
 use crate::frame::{Frame, Msg, SysComp};
 
