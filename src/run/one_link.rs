@@ -163,6 +163,9 @@ fn log_sim_truth(name: &str, sim: &SimLink) {
             t.up.duplicated,
             t.up.requests_duplicated
         );
+        if t.served.requests.total() > 0 {
+            tracing::info!(link = %name, "sim truth {id} {}", t.served);
+        }
     }
     let queues = sim.queue_truth();
     if !queues.up.is_zero() || !queues.down.is_zero() {

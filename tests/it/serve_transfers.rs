@@ -430,3 +430,52 @@ fn a_pymavlink_client_gets_each_answer_as_the_protocols_say() {
     );
     assert!(s.dropped.is_empty());
 }
+
+/// mavping's own download probe against respond: its JSON summary.
+fn probe(port: u16, args: &[&str]) -> serde_json::Value {
+    let link = format!("udpout:127.0.0.1:{port}");
+    let mut all = vec!["--json", "-q", "-W", "300ms", &link];
+    all.extend_from_slice(args);
+    let (code, out, err) = run_mavping(&all);
+    assert_eq!(code, 0, "{out}{err}");
+    let summary = json_lines(&out)
+        .into_iter()
+        .find(|l| l["type"] == "transfer_summary")
+        .unwrap_or_else(|| panic!("{out}"));
+    assert_schema(std::slice::from_ref(&summary));
+    summary
+}
+
+#[test]
+fn mavpings_probes_download_from_respond_what_it_did_not_drop_and_ask_again_for_the_rest() {
+    let (responder, port) = respond(&["--params", "1000", "--drop", "10", "--seed", "7"]);
+    let params = probe(port, &["--probe", "params", "--retries", "9"]);
+    let mission = probe(port, &["--probe", "mission", "--retries", "9"]);
+    let file = probe(
+        port,
+        &["--probe", "ftp", "--path", "/mavping.bin", "--retries", "9"],
+    );
+    let (_, rest) = responder.finish_text();
+    let s = served(&rest);
+    let last = |v: &serde_json::Value, key: &str| v["last"][key].as_u64().unwrap();
+    assert_eq!(last(&params, "received"), 1000);
+    // Every PARAM_VALUE it dropped is one the list missed or a read's
+    // answer; each read it heard is one mavping sent.
+    let unanswered = last(&params, "re_requests") - last(&params, "re_requests_answered");
+    assert_eq!(
+        n(&s.dropped, "PARAM_VALUE"),
+        last(&params, "missing_first_pass") + unanswered,
+        "{params}\n{s:?}"
+    );
+    assert_eq!(
+        n(&s.requests, "PARAM_REQUEST_READ"),
+        last(&params, "re_requests")
+    );
+    assert_eq!(last(&mission, "received"), 20);
+    assert_eq!(
+        n(&s.requests, "MISSION_REQUEST_INT"),
+        last(&mission, "requests") - 2,
+        "the list request and our ACK aside"
+    );
+    assert_eq!(last(&file, "received"), 65536);
+}

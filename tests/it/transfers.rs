@@ -288,3 +288,57 @@ fn a_serve_module_makes_one_download_a_scrape() {
     );
     assert_promtool_clean(&r.body);
 }
+
+/// The sim's truth line of what it served: "N dropped (N PARAM_VALUE...".
+fn dropped_param_values(stderr: &str) -> u64 {
+    let line = stderr
+        .lines()
+        .find(|l| l.contains("sim truth 1/1 transfers:"))
+        .unwrap_or_else(|| panic!("no transfers truth: {stderr}"));
+    let dropped = line.split(" dropped (").nth(1).unwrap();
+    let inside = dropped.split(')').next().unwrap();
+    inside
+        .split(", ")
+        .find_map(|s| s.strip_suffix(" PARAM_VALUE"))
+        .map_or(0, |n| n.parse().unwrap())
+}
+
+#[test]
+fn at_57600_baud_the_list_takes_the_wire_time_its_bytes_need_and_losses_are_the_sims() {
+    let (code, out, err) = run_mavping(&[
+        "--json",
+        "-v",
+        "-W",
+        "500ms",
+        "--probe",
+        "params",
+        "sim:?params=1000&baud=57600&loss_down=5%&seed=4",
+    ]);
+    assert_eq!(code, 0, "{out}{err}");
+    let lines = json_lines(&out);
+    assert_schema(&lines);
+    let s = lines
+        .iter()
+        .find(|l| l["type"] == "transfer_summary")
+        .unwrap();
+    let last = &s["last"];
+    // A PARAM_VALUE is 37 bytes: the list's floor at 5,760 bytes a second.
+    let wire_bytes = count(&last["wire_bytes"]);
+    assert_eq!(wire_bytes % 37, 0, "{last}");
+    let floor = last["wire_floor_ms"].as_f64().unwrap();
+    assert!(
+        (floor - wire_bytes as f64 * 10.0 / 57.6).abs() < 1e-6,
+        "{floor}"
+    );
+    let took = last["time_to_100_ms"].as_f64().unwrap();
+    assert!(took >= floor, "{took} under the wire's floor {floor}");
+    // What the sim dropped of the list is what its first pass missed, and
+    // no read's answer was lost (each asked once).
+    let missing = count(&last["missing_first_pass"]);
+    assert!(missing > 20, "{last}");
+    assert_eq!(
+        dropped_param_values(&err),
+        missing + count(&last["re_requests"]) - count(&last["re_requests_answered"])
+    );
+    assert_eq!(count(&last["received"]), 1000);
+}
