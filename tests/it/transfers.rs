@@ -342,3 +342,17 @@ fn at_57600_baud_the_list_takes_the_wire_time_its_bytes_need_and_losses_are_the_
     );
     assert_eq!(count(&last["received"]), 1000);
 }
+
+#[test]
+fn an_open_whose_ack_was_lost_resets_the_session_and_reads_the_file() {
+    let (peer, link) = vehicle(&["--file-size", "5000", "--lose-open-ack"]);
+    let (code, _, s) = download(&link, &["--probe", "ftp", "--path", "/vehicle.bin"]);
+    let truth = peer.finish();
+    assert_eq!(code, 0, "{s}\n{truth}");
+    // Open, open again (refused: the session is held), reset, open.
+    assert_eq!(count(&truth["opens"]), 3, "{truth}");
+    assert_eq!(count(&truth["opens_refused"]), 1);
+    assert_eq!(count(&truth["resets"]), 1);
+    assert_eq!(count(&s["last"]["received"]), 5000);
+    assert_eq!(count(&s["last"]["re_requests"]), 2);
+}

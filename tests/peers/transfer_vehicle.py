@@ -18,6 +18,9 @@ order the frames go:
                         with P (a request sent again is always answered)
   --drop-burst P        each packet of an FTP burst dropped with P
   --ignore KINDS        never answer these requests at all
+  --lose-open-ack       the first OpenFileRO's ACK is lost (the session
+                        is open all the same); an open while one is open
+                        gets NAK Fail, as ArduPilot's one session does
 The file at /vehicle.bin holds bytes (i * 7 + 3) % 251; other paths get
 NAK FileNotFound.
 
@@ -60,6 +63,7 @@ def main():
     ap.add_argument("--drop-items", type=float, default=0.0)
     ap.add_argument("--drop-burst", type=float, default=0.0)
     ap.add_argument("--ignore", default="")
+    ap.add_argument("--lose-open-ack", action="store_true")
     a = ap.parse_args()
     ignore = set(filter(None, a.ignore.split(",")))
     rng = random.Random(a.seed)
@@ -72,6 +76,7 @@ def main():
         "items_sent": 0, "items_dropped": 0, "items_requested": 0,
         "burst_packets": 0, "burst_dropped": 0, "burst_bytes_dropped": 0,
         "file_reads": 0, "terminated": 0, "mission_acks": 0,
+        "opens": 0, "open_acks_lost": 0, "opens_refused": 0, "resets": 0,
     }
     done = []
     signal.signal(signal.SIGTERM, lambda *_: done.append(1))
@@ -147,7 +152,15 @@ def main():
                 if path != PATH:
                     nak(seq + 1, OPEN_RO, FILE_NOT_FOUND)
                     continue
+                truth["opens"] += 1
+                if session_open and a.lose_open_ack:
+                    truth["opens_refused"] += 1
+                    nak(seq + 1, OPEN_RO, 1)  # Fail: the one session is held
+                    continue
                 session_open = True
+                if a.lose_open_ack and truth["open_acks_lost"] == 0:
+                    truth["open_acks_lost"] += 1
+                    continue
                 ftp(seq + 1, ACK, OPEN_RO, 4, 0, list(struct.pack("<I", a.file_size)))
             elif opcode == BURST and session_open:
                 at, n = offset, seq
@@ -171,7 +184,7 @@ def main():
                 else:
                     ftp(seq + 1, ACK, READ, len(data), offset, data[:size or CHUNK])
             elif opcode in (TERMINATE, RESET):
-                truth["terminated"] += 1
+                truth["terminated" if opcode == TERMINATE else "resets"] += 1
                 session_open = False
                 ftp(seq + 1, ACK, opcode, 0, 0, [])
             elif not session_open:

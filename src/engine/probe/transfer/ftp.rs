@@ -51,6 +51,10 @@ pub(crate) struct FtpDownload {
     quiet: bool,
     /// Bursts that went quiet.
     quiet_bursts: u64,
+    /// The open was sent again (its answer may have been lost), and the
+    /// sessions reset after that.
+    open_resent: bool,
+    reset_sent: bool,
     /// A NAK's error code, once refused.
     nak: Option<u8>,
     progress: Progress,
@@ -80,6 +84,8 @@ impl FtpDownload {
             extent: 0,
             quiet: false,
             quiet_bursts: 0,
+            open_resent: false,
+            reset_sent: false,
             nak: None,
             progress: Progress::new(now),
             counts: Counts::default(),
@@ -278,11 +284,43 @@ impl FtpDownload {
             }
             return;
         }
-        if f.req_opcode == ftp_op::TERMINATE_SESSION {
+        if matches!(
+            f.req_opcode,
+            ftp_op::TERMINATE_SESSION | ftp_op::RESET_SESSIONS
+        ) {
+            return;
+        }
+        if self.reopen_after_lost_ack(f.req_opcode, error, now, out) {
             return;
         }
         self.nak = Some(error);
         self.end(Ending::Refused, out);
+    }
+
+    /// An open sent again after its ACK was lost finds the session it
+    /// opened held (ArduPilot and `mavping respond` keep one): NAK Fail
+    /// or NoSessionsAvailable. Then, once, the sessions are reset and the
+    /// file opened again, as QGroundControl resets them. A first open
+    /// refused that way is someone else's session, and a refusal.
+    fn reopen_after_lost_ack(
+        &mut self,
+        req: u8,
+        error: u8,
+        now: Nanos,
+        out: &mut Vec<Transfer>,
+    ) -> bool {
+        let held = matches!(error, ftp_error::FAIL | ftp_error::NO_SESSIONS_AVAILABLE);
+        if req != ftp_op::OPEN_FILE_RO || !held || !self.open_resent || self.reset_sent {
+            return false;
+        }
+        self.reset_sent = true;
+        let reset = self.packet(ftp_op::RESET_SESSIONS, 0, 0, FtpData::head(&[]));
+        out.push(reset);
+        self.asks.ask(OPEN, now);
+        self.counts.re_requests += 1;
+        let open = self.open();
+        out.push(open);
+        true
     }
 }
 
@@ -300,6 +338,7 @@ impl Protocol for FtpDownload {
         for (key, fate) in due {
             match (key, fate) {
                 (OPEN, Overdue::Resend(_)) => {
+                    self.open_resent = true;
                     self.counts.re_requests += 1;
                     let open = self.open();
                     out.push(open);
@@ -588,6 +627,39 @@ mod tests {
         d.on_message(VEHICLE, &eof, 20, 3 * MS, &mut out);
         // The tail (239..300) asked for by a new burst.
         assert_eq!(ops(&out), [(ftp_op::BURST_READ_FILE, 239, 239)]);
+    }
+
+    #[test]
+    fn an_open_whose_ack_was_lost_resets_the_session_it_holds_once() {
+        let mut d = FtpDownload::new(SysComp::new(1, 1), "/mavping.bin", 500 * MS, 3, 2, 0);
+        let mut out = Vec::new();
+        d.poll(0, &mut out);
+        d.poll(500 * MS, &mut out);
+        let held = Transfer::Ftp(Ftp {
+            target: Target::default(),
+            seq: 0,
+            session: 0,
+            opcode: ftp_op::NAK,
+            size: 1,
+            req_opcode: ftp_op::OPEN_FILE_RO,
+            burst_complete: 0,
+            offset: 0,
+            data: FtpData::head(&[ftp_error::FAIL]),
+        });
+        out.clear();
+        d.on_message(VEHICLE, &held, 20, 501 * MS, &mut out);
+        assert_eq!(
+            ops(&out),
+            [
+                (ftp_op::RESET_SESSIONS, 0, 0),
+                (ftp_op::OPEN_FILE_RO, 0, 12)
+            ]
+        );
+        assert_eq!(d.ending(), None);
+        // Refused again: a refusal.
+        d.on_message(VEHICLE, &held, 20, 502 * MS, &mut out);
+        assert_eq!(d.ending(), Some(Ending::Refused));
+        assert_eq!(d.reason().unwrap(), "NAK Fail for /mavping.bin");
     }
 
     #[test]
