@@ -27,6 +27,11 @@
 #   bash scripts/bench.sh --passive --pair --pair-against OLD_BINARY  # and
 #                                  # a build without the pair tracker on the
 #                                  # same two links: the tracker's own cost
+#   bash scripts/bench.sh --transfers  # a 1,000-parameter download against
+#                                  # mavping respond on loopback (issue 42,
+#                                  # about 1 minute): --probe params beside
+#                                  # MAVProxy's param fetch of the same set,
+#                                  # same responder, time and CPU each
 # Not run by CI (it needs a quiet machine and minutes).
 # Micro-benchmarks of the parser, matcher and statistics: cargo bench --bench core
 set -euo pipefail
@@ -36,6 +41,10 @@ cargo build --release --quiet
 cargo build --release --quiet --example stream_floor
 if [ ! -x /usr/bin/time ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
   apt-get install -y -qq time >/dev/null  # GNU time: per-process peak RSS and CPU
+fi
+if [ "${1:-}" = --transfers ]; then
+  shift
+  exec .venv/bin/python bench/transfers.py target/release/mavping .venv/bin/mavproxy.py "$@"
 fi
 # The passive rows need neither the portable build, the wake floor nor irtt.
 if [ "${1:-}" != --passive ]; then
