@@ -14,6 +14,7 @@ PYSERIAL_VERSION=3.5
 MAVPROXY_VERSION=1.8.75
 MAVSDK_GRPC_VERSION=4.0.5
 MAVSDK_VERSION=4.1.0
+WSPROTO_VERSION=1.3.2
 if [ ! -x .venv/bin/python ] || ! .venv/bin/python -c "import pymavlink, serial" 2>/dev/null; then
   python3 -m venv .venv
   .venv/bin/python -m pip install --quiet --disable-pip-version-check \
@@ -35,6 +36,11 @@ if [ ! -x "$site/mavsdk_grpc/bin/mavsdk_server" ]; then
 fi
 if [ ! -f "$site/mavsdk/lib/libcmavsdk.so" ]; then
   .venv/bin/python -m pip install --quiet --disable-pip-version-check --no-deps "mavsdk==${MAVSDK_VERSION}"
+fi
+# wsproto: pymavlink's own WebSocket server and client (wsserver:, ws:)
+# need it, and so does tests/peers/ws_peer.py.
+if ! .venv/bin/python -c "import wsproto" 2>/dev/null; then
+  .venv/bin/python -m pip install --quiet --disable-pip-version-check "wsproto==${WSPROTO_VERSION}"
 fi
 # Debian's prometheus package: the server scrapes `mavping serve` in an
 # integration test, and promtool checks expositions and unit-tests the
@@ -58,6 +64,9 @@ command -v systemd-analyze >/dev/null || missing+=(systemd)
 # and Apple targets (.cargo/config.toml).
 command -v curl >/dev/null || missing+=(curl)
 command -v openssl >/dev/null || missing+=(openssl)
+# socat's OPENSSL-LISTEN is the TLS terminator in front of pymavlink's
+# WebSocket server for the wss:// tests.
+command -v socat >/dev/null || missing+=(socat)
 { command -v clang && command -v llvm-ar; } >/dev/null || missing+=(clang llvm)
 # qemu-aarch64 runs the aarch64 build (below).
 command -v qemu-aarch64 >/dev/null || missing+=(qemu-user)

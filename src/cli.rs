@@ -766,6 +766,15 @@ pub(crate) struct PingArgs {
     /// (pings sent while down count as lost)
     #[arg(help_heading = "Links", long, env = "MAVPING_RECONNECT", value_parser = boolish())]
     pub(crate) reconnect: bool,
+
+    /// wss:// links trust the CA certificates in FILE (PEM) instead of the system's
+    #[arg(
+        help_heading = "Links",
+        long,
+        value_name = "FILE",
+        env = "MAVPING_CACERT"
+    )]
+    pub(crate) cacert: Option<std::path::PathBuf>,
     /// Baud rate of a serial device whose connection string names none
     #[arg(help_heading = "Serial", allow_negative_numbers = true, long, value_name = "BAUD", default_value_t = crate::transport::serial::DEFAULT_BAUD,
           env = "MAVPING_BAUD")]

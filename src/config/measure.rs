@@ -676,6 +676,7 @@ impl TryFrom<&PingArgs> for Config {
                 reconnect: cli.reconnect,
                 wait_for_peer: false,
                 route,
+                trust: super::link::trust(cli.cacert.as_deref())?,
             },
             probe,
             output: output(cli)?,
@@ -743,6 +744,7 @@ mod tests {
                 reconnect: true,
                 wait_for_peer: false,
                 route: Route::default(),
+                trust: crate::transport::ws::Trust::default(),
             }
         );
         assert_eq!(config("sim:").unwrap().probe, Probe::Auto);

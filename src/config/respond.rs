@@ -68,6 +68,7 @@ impl TryFrom<&RespondArgs> for RespondConfig {
                 // Nor one whose tcp listener is not up yet.
                 wait_for_peer: true,
                 route: Route::default(),
+                trust: crate::transport::ws::Trust::default(),
             },
             settings: ResponderSettings {
                 id: validate_ids(cli.sysid, cli.compid)?,

@@ -6,6 +6,7 @@ use thiserror::Error;
 
 use super::sim::SimParams;
 use super::tlog::TlogPath;
+pub(crate) use super::ws_url::WsUrl;
 
 /// Where to connect, before anything is opened.
 #[derive(Debug, Clone, PartialEq)]
@@ -20,6 +21,11 @@ pub enum LinkSpec {
     TcpOut(HostPort),
     /// Listen for TCP clients; each is a path to responders.
     TcpIn(HostPort),
+    /// Connect to a WebSocket server (`ws://`, `wss://`; boxed: a URL is
+    /// large beside the other forms).
+    Ws(Box<WsUrl>),
+    /// Listen for WebSocket clients; each is a path to responders.
+    WsIn(HostPort),
     /// A serial device; `baud` None means "use --baud".
     Serial { path: String, baud: Option<u32> },
     /// The built-in simulated link (boxed: its parameters are many).
@@ -90,6 +96,8 @@ impl fmt::Display for LinkSpec {
             LinkSpec::UdpBcast(a) => write!(f, "udpbcast:{a}"),
             LinkSpec::TcpOut(a) => write!(f, "tcp:{a}"),
             LinkSpec::TcpIn(a) => write!(f, "tcpin:{a}"),
+            LinkSpec::Ws(url) => write!(f, "{url}"),
+            LinkSpec::WsIn(a) => write!(f, "wsin:{a}"),
             LinkSpec::Serial { path, baud } => match baud {
                 Some(b) => write!(f, "serial:{path}:{b}"),
                 None => write!(f, "serial:{path}"),
@@ -102,7 +110,8 @@ impl fmt::Display for LinkSpec {
 
 /// Accepted forms, listed in every parse error.
 pub(crate) const ACCEPTED_FORMS: &str = "udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, \
-udpbcast:ADDR:PORT, tcp:HOST:PORT, tcpout:HOST:PORT, tcpin:HOST:PORT, serial:DEVICE[:BAUD], \
+udpbcast:ADDR:PORT, tcp:HOST:PORT, tcpout:HOST:PORT, tcpin:HOST:PORT, ws://[USER:PASSWORD@]HOST[:PORT][/PATH], \
+wss://..., wsin:HOST:PORT, serial:DEVICE[:BAUD], \
 /dev/DEVICE, COMn[:BAUD], sim:[?key=value&...], tlog:FILE or FILE.tlog (a telemetry log; tlog:- reads standard \
 input) (IPv6 hosts in brackets: udpout:[::1]:14550)";
 
@@ -270,6 +279,11 @@ impl std::str::FromStr for LinkSpec {
                 "udpbcast" => Some(LinkSpec::UdpBcast(reachable(input, rest)?)),
                 "tcp" | "tcpout" => Some(LinkSpec::TcpOut(reachable(input, rest)?)),
                 "tcpin" => Some(LinkSpec::TcpIn(listening(rest)?)),
+                "ws" | "wss" if mavsdk => Some(LinkSpec::Ws(Box::new(
+                    WsUrl::parse(scheme.eq_ignore_ascii_case("wss"), rest)
+                        .map_err(|reason| error(input, reason))?,
+                ))),
+                "wsin" => Some(LinkSpec::WsIn(listening(rest)?)),
                 "serial" => Some(serial(input, rest)?),
                 _ => None,
             };

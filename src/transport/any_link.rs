@@ -11,7 +11,7 @@ use super::address::LinkSpec;
 use super::link::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use super::options::LinkOptions;
 use super::outbox::Outbox;
-use super::{serial, sim, stream, tcp, tlog, udp};
+use super::{serial, sim, stream, tcp, tlog, udp, ws};
 use crate::frame::ScanStats;
 
 /// Any of mavping's links, so the engine is written once.
@@ -22,6 +22,8 @@ pub(crate) enum Link {
     Serial(stream::StreamLink<serial::SerialConnector>),
     Sim(sim::SimLink),
     Tlog(tlog::TlogLink),
+    Ws(ws::WsClient),
+    WsIn(ws::WsServer),
 }
 
 impl Link {
@@ -56,6 +58,10 @@ impl Link {
             ),
             LinkSpec::Sim(params) => Link::Sim(sim::SimLink::new((**params).clone())),
             LinkSpec::Tlog(path) => Link::Tlog(tlog::TlogLink::open(path).await?),
+            LinkSpec::Ws(url) => {
+                Link::Ws(ws::WsClient::connect(url, &options.route, &options.trust).await?)
+            }
+            LinkSpec::WsIn(a) => Link::WsIn(ws::WsServer::listen(a, &options.route).await?),
         })
     }
 }
@@ -70,6 +76,8 @@ macro_rules! each_link {
             Link::Serial($l) => $body,
             Link::Sim($l) => $body,
             Link::Tlog($l) => $body,
+            Link::Ws($l) => $body,
+            Link::WsIn($l) => $body,
         }
     };
 }

@@ -26,6 +26,8 @@ pub(crate) mod stream;
 pub(crate) mod tcp;
 pub(crate) mod tlog;
 pub mod udp;
+pub(crate) mod ws;
+mod ws_url;
 
 pub use address::LinkSpec;
 pub(crate) use any_link::Link;

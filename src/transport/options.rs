@@ -26,6 +26,8 @@ pub(crate) struct LinkOptions {
     pub(crate) wait_for_peer: bool,
     /// Address family, local address and interface of IP links.
     pub(crate) route: route::Route,
+    /// Whom `wss://` trusts (`--cacert`, else the system's roots).
+    pub(crate) trust: super::ws::Trust,
 }
 
 impl Default for LinkOptions {
@@ -35,6 +37,7 @@ impl Default for LinkOptions {
             reconnect: false,
             wait_for_peer: false,
             route: route::Route::default(),
+            trust: super::ws::Trust::default(),
         }
     }
 }

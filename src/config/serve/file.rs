@@ -403,6 +403,7 @@ pub(super) fn continuous_link(
             reconnect: false,
             wait_for_peer: false,
             route: Route::default(),
+            trust: crate::transport::ws::Trust::default(),
         },
     })
 }

@@ -159,6 +159,7 @@ impl ServeSettings {
                 reconnect: false,
                 wait_for_peer: false,
                 route: Route::default(),
+                trust: crate::transport::ws::Trust::default(),
             },
         })
     }
