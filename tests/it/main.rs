@@ -58,3 +58,4 @@ mod transfers_mavsdk;
 mod udp_bcast_ipv6;
 mod udp_pymavlink;
 mod views;
+mod websocket;

@@ -14,12 +14,12 @@ use crate::prometheus_server::{Prometheus, PATIENCE};
 /// A CA, a server certificate for localhost and 127.0.0.1, a client
 /// certificate from the same CA and one from a CA the server does not
 /// know, made with the openssl command in a directory of their own.
-struct Pki {
+pub(crate) struct Pki {
     dir: PathBuf,
 }
 
 impl Pki {
-    fn make(name: &str) -> Pki {
+    pub(crate) fn make(name: &str) -> Pki {
         let dir = std::env::temp_dir().join(format!("mavping-pki-{}-{name}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).unwrap();
@@ -107,7 +107,7 @@ impl Pki {
         ]);
     }
 
-    fn path(&self, file: &str) -> String {
+    pub(crate) fn path(&self, file: &str) -> String {
         self.dir.join(file).display().to_string()
     }
 
