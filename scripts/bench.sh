@@ -32,6 +32,9 @@
 #                                  # about 1 minute): --probe params beside
 #                                  # MAVProxy's param fetch of the same set,
 #                                  # same responder, time and CPU each
+#   bash scripts/bench.sh --ws      # PINGs over ws:// beside UDP and TCP to
+#                                  # one mavping respond (issue 43, about 1
+#                                  # minute): RTT p50/p99 and CPU per PING
 # Not run by CI (it needs a quiet machine and minutes).
 # Micro-benchmarks of the parser, matcher and statistics: cargo bench --bench core
 set -euo pipefail
@@ -41,6 +44,10 @@ cargo build --release --quiet
 cargo build --release --quiet --example stream_floor
 if [ ! -x /usr/bin/time ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
   apt-get install -y -qq time >/dev/null  # GNU time: per-process peak RSS and CPU
+fi
+if [ "${1:-}" = --ws ]; then
+  shift
+  exec .venv/bin/python bench/ws.py target/release/mavping "$@"
 fi
 if [ "${1:-}" = --transfers ]; then
   shift

@@ -230,3 +230,37 @@ fn bad_websocket_strings_are_one_line_and_exit_2() {
     assert_eq!(code, 2, "{err}");
     assert_eq!(err.lines().count(), 1, "{err}");
 }
+
+#[test]
+fn hop_by_hop_the_same_vehicle_direct_and_over_websocket_in_one_run() {
+    let (udp, ws) = (free_udp_port(), free_tcp_port());
+    let links = [
+        format!("udpin:127.0.0.1:{udp}"),
+        format!("wsin:127.0.0.1:{ws}"),
+    ];
+    let respond = Respond::start(&["--stream", "ATTITUDE@20", &links[0], &links[1]]);
+    let direct = format!("udpout:127.0.0.1:{udp}");
+    let over_ws = format!("ws://127.0.0.1:{ws}/");
+    let (code, out, err) = run_mavping(&[
+        "-c", "20", "-i", "50ms", "-W", "500ms", "--json", &direct, &over_ws,
+    ]);
+    respond.finish();
+    assert_eq!(code, 0, "{out}{err}");
+    let lines = json_lines(&out);
+    assert_schema(&lines);
+    // Each link its round trips...
+    for link in [&direct, &over_ws] {
+        let summary = lines
+            .iter()
+            .find(|l| l["type"] == "summary" && l["link"] == link.as_str())
+            .unwrap_or_else(|| panic!("no summary of {link}: {out}"));
+        assert_eq!(n(responder(summary, "1/1"), "received"), 20, "{link}");
+    }
+    // ...and the same frames heard on both, paired: the WebSocket's lag.
+    let pair = lines
+        .iter()
+        .find(|l| l["type"] == "pair_summary")
+        .unwrap_or_else(|| panic!("no pair report: {out}"));
+    let text = pair.to_string();
+    assert!(text.contains(&over_ws) && text.contains(&direct), "{text}");
+}
