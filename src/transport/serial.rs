@@ -41,6 +41,13 @@ impl Connect for SerialConnector {
         "device hung up (unplugged, or the pty closed)"
     }
 
+    // Linux answers a read of a pty whose other side closed, or of a USB
+    // adapter pulled out, with EIO as often as with end of file.
+    #[cfg(unix)]
+    fn is_hangup(&self, e: &io::Error) -> bool {
+        e.raw_os_error() == Some(nix::errno::Errno::EIO as i32)
+    }
+
     async fn connect(&self) -> io::Result<SerialStream> {
         // The port is opened exclusively (TIOCEXCL), so a device another
         // program holds fails here as "busy" instead of sharing its bytes.

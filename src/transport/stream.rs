@@ -44,6 +44,11 @@ pub(crate) trait Connect {
     fn eof_reason(&self) -> &'static str {
         "closed by the peer"
     }
+    /// Whether a read error is this kind of link's end all the same (a
+    /// serial device that went away may say EIO rather than end of file).
+    fn is_hangup(&self, _e: &io::Error) -> bool {
+        false
+    }
     async fn connect(&self) -> io::Result<Self::Stream>;
 }
 
@@ -142,11 +147,11 @@ impl<C: Connect> StreamLink<C> {
     fn lost(&mut self, e: io::Error) -> Result<(), LinkError> {
         if !self.reconnect {
             let name = self.connector.name();
-            return Err(match e.kind() {
-                io::ErrorKind::UnexpectedEof => {
-                    LinkError::Closed(format!("{name}: {}", self.connector.eof_reason()))
-                }
-                _ => LinkError::io(format!("{name}: link failed"), e),
+            let hangup = e.kind() == io::ErrorKind::UnexpectedEof || self.connector.is_hangup(&e);
+            return Err(if hangup {
+                LinkError::Closed(format!("{name}: {}", self.connector.eof_reason()))
+            } else {
+                LinkError::io(format!("{name}: link failed"), e)
             });
         }
         // A frame cut by the break can never be finished, and what waited
