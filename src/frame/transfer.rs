@@ -65,8 +65,8 @@ impl Transfer {
             | Transfer::MissionRequestList { target, .. }
             | Transfer::MissionCount { target, .. }
             | Transfer::MissionRequest { target, .. }
-            | Transfer::MissionAck { target, .. } => Some(target),
-            Transfer::MissionItem(MissionItem { target, .. })
+            | Transfer::MissionAck { target, .. }
+            | Transfer::MissionItem(MissionItem { target, .. })
             | Transfer::Ftp(Ftp { target, .. }) => Some(target),
             Transfer::ParamValue(_) => None,
         }

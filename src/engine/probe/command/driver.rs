@@ -93,7 +93,7 @@ impl CommandDriver {
         if observed.no_peer_within.is_some() || observed.link_failed {
             return hints;
         }
-        let name = codec::command_name(self.spec.command);
+        let name = codec::command_name(self.spec.command).to_uppercase();
         for t in targets.iter().filter(|t| unacknowledged.contains(&t.id)) {
             let asked = Asked {
                 ours: self.ours,
