@@ -139,6 +139,79 @@ fn a_vehicle_whose_signing_clock_is_3_minutes_ahead_refuses_ours_and_the_hint_sa
 }
 
 #[test]
+fn a_vehicle_behind_us_answers_and_a_download_from_one_ahead_names_the_clock() {
+    let port = free_udp_port();
+    let peer = Peer::start(
+        "signed_peer.py",
+        &[
+            &format!("udpin:127.0.0.1:{port}"),
+            "--key",
+            HEX_KEY,
+            "--heartbeat-hz",
+            "10",
+            "--clock-offset",
+            "-240",
+        ],
+    );
+    // Behind us by 4 minutes: it takes our newer stamps, and answers.
+    let link = format!("udpout:127.0.0.1:{port}");
+    let (code, s) = command(&link, &["--signing-key", HEX_KEY]);
+    assert_eq!((code, acked(&s)), (0, (1, 1)), "{s}");
+    assert!(codes(&s).is_empty(), "{s}");
+    peer.finish();
+
+    let port = free_udp_port();
+    let peer = Peer::start(
+        "signed_peer.py",
+        &[
+            &format!("udpin:127.0.0.1:{port}"),
+            "--key",
+            HEX_KEY,
+            "--heartbeat-hz",
+            "10",
+            "--clock-offset",
+            "180",
+        ],
+    );
+    let link = format!("udpout:127.0.0.1:{port}");
+    let args = [
+        "--json",
+        "-q",
+        "--probe",
+        "params",
+        "-W",
+        "300ms",
+        "-i",
+        "100ms",
+        "--retries",
+        "1",
+        "--signing-key",
+        HEX_KEY,
+        &link,
+    ];
+    let (code, out, err) = run_mavping(&args);
+    let truth = peer.finish();
+    let lines = json_lines(&out);
+    assert_schema(&lines);
+    let s = lines
+        .into_iter()
+        .find(|l| l["type"] == "transfer_summary")
+        .unwrap_or_else(|| panic!("no transfer_summary: {out}\n{err}"));
+    assert_eq!(code, 1, "{s}");
+    assert_eq!(s["last"]["ending"], "no_answer", "{s}");
+    // Every PING beside the download refused too, none answered.
+    assert_eq!(truth["replies"], 0, "{truth}");
+    assert!(truth["rejected_pings"].as_u64().unwrap() > 0, "{truth}");
+    assert_eq!(
+        codes(&s),
+        ["transfer_no_answer", "signing_clock_behind"],
+        "{s}"
+    );
+    let behind = number_after(hint(&s, "signing_clock_behind"), "our signing clock is ");
+    assert!((179.0..=180.0).contains(&behind), "{s}");
+}
+
+#[test]
 fn a_vehicle_that_obeys_gcs_255_only_is_named_by_the_frames_it_addressed_to_255() {
     let port = free_udp_port();
     let link = format!("udpout:127.0.0.1:{port}");
