@@ -39,6 +39,32 @@ fn command(link: &str, extra: &[&str]) -> (i32, Value) {
     (code, summary)
 }
 
+/// A `--probe params` run's JSON summary that gives up soon.
+fn params(link: &str, extra: &[&str]) -> (i32, Value) {
+    let mut args = vec![
+        "--json",
+        "-q",
+        "--probe",
+        "params",
+        "-W",
+        "300ms",
+        "-i",
+        "100ms",
+        "--retries",
+        "1",
+        link,
+    ];
+    args.extend_from_slice(extra);
+    let (code, out, err) = run_mavping(&args);
+    let lines = json_lines(&out);
+    assert_schema(&lines);
+    let summary = lines
+        .into_iter()
+        .find(|l| l["type"] == "transfer_summary")
+        .unwrap_or_else(|| panic!("no transfer_summary: {out}\n{err}"));
+    (code, summary)
+}
+
 fn codes(summary: &Value) -> Vec<&str> {
     summary["hints"]
         .as_array()
@@ -174,29 +200,8 @@ fn a_vehicle_behind_us_answers_and_a_download_from_one_ahead_names_the_clock() {
         ],
     );
     let link = format!("udpout:127.0.0.1:{port}");
-    let args = [
-        "--json",
-        "-q",
-        "--probe",
-        "params",
-        "-W",
-        "300ms",
-        "-i",
-        "100ms",
-        "--retries",
-        "1",
-        "--signing-key",
-        HEX_KEY,
-        &link,
-    ];
-    let (code, out, err) = run_mavping(&args);
+    let (code, s) = params(&link, &["--signing-key", HEX_KEY]);
     let truth = peer.finish();
-    let lines = json_lines(&out);
-    assert_schema(&lines);
-    let s = lines
-        .into_iter()
-        .find(|l| l["type"] == "transfer_summary")
-        .unwrap_or_else(|| panic!("no transfer_summary: {out}\n{err}"));
     assert_eq!(code, 1, "{s}");
     assert_eq!(s["last"]["ending"], "no_answer", "{s}");
     // Every PING beside the download refused too, none answered.
@@ -221,7 +226,18 @@ fn a_vehicle_that_obeys_gcs_255_only_is_named_by_the_frames_it_addressed_to_255(
     );
     let (code, ignored) = command(&link, &[]);
     let (code_255, obeyed) = command(&link, &["--sysid", "255"]);
+    // It serves no parameters: a download from it is named the same way.
+    let (_, download) = params(&link, &[]);
     let truth = peer.finish();
+    assert_eq!(
+        codes(&download),
+        ["transfer_no_answer", "sysid_enforced"],
+        "{download}"
+    );
+    assert!(
+        hint(&download, "sysid_enforced").ends_with("try --sysid 255"),
+        "{download}"
+    );
     assert_eq!(code, 1, "{ignored}");
     assert_eq!(acked(&ignored), (1, 0), "{ignored}");
     // Every command of 250's was ignored: the 3 attempts of the first run.
@@ -253,7 +269,13 @@ fn a_mavlink1_only_vehicle_reads_none_of_our_mavlink2_and_answers_mavlink1() {
     );
     let (code, v2) = command(&link, &[]);
     let (code_v1, v1) = command(&link, &["--mavlink", "1"]);
+    let (_, download) = params(&link, &[]);
     let truth = peer.finish();
+    assert_eq!(
+        codes(&download),
+        ["transfer_no_answer", "mavlink1_only"],
+        "{download}"
+    );
     assert_eq!(code, 1, "{v2}");
     assert_eq!(acked(&v2), (1, 0), "{v2}");
     assert_eq!(codes(&v2), ["mavlink1_only"], "{v2}");
@@ -268,7 +290,8 @@ fn a_mavlink1_only_vehicle_reads_none_of_our_mavlink2_and_answers_mavlink1() {
     assert_eq!(code_v1, 0, "{v1}");
     assert_eq!(acked(&v1), (1, 1), "{v1}");
     assert!(codes(&v1).is_empty(), "{v1}");
-    // What it could not read: the first run's 3 attempts; read: the second's.
+    // What it could not read: the first run's 3 attempts; read: the
+    // second's (the download asks no command).
     assert_eq!(
         (&truth["unread_commands"], &truth["acks"]),
         (&3.into(), &1.into()),
