@@ -22,15 +22,20 @@ pub(crate) enum HintCode {
     SignedOtherKey,
     /// Unsigned frames were refused (`--require-signed`) and none came signed.
     UnsignedRefused,
+    /// Our signing clock is more than a minute behind the target's newest
+    /// signature timestamp: it refuses our signed frames as too old.
+    SigningClockBehind,
     /// A system speaks MAVLink 1 only; our requests are MAVLink 2.
     Mavlink1Only,
     /// An ArduPilot vehicle never answered PING: it answers only TIMESYNC.
     TimesyncOnly,
-    /// An ArduPilot vehicle never answered: it may accept only its GCS's
-    /// system id (SYSID_ENFORCE).
+    /// A vehicle accepts only its ground station's system id: an ArduPilot
+    /// that never answered (SYSID_ENFORCE), or a target whose frames were
+    /// addressed to another system and never to us.
     SysidEnforced,
     /// A system sends but never answered: a router may not forward our
-    /// requests, or it ignores our ids.
+    /// requests, or it ignores our ids. For a command or a download: it
+    /// answered nothing of ours at all, and none of its frames showed why.
     NeverAnswered,
     /// Only a ground station or router was heard (MAVProxy,
     /// mavlink-router): it forwards, but answers nothing itself, and no

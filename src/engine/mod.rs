@@ -9,6 +9,7 @@ pub(crate) mod capacity;
 pub(crate) mod clock_offset;
 pub(crate) mod diagnosis;
 pub(crate) mod hint;
+pub(crate) mod ignored;
 pub mod kind;
 pub(crate) mod link_io;
 pub(crate) mod link_node;

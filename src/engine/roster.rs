@@ -54,7 +54,33 @@ pub(crate) struct Source {
     pub(crate) frames: u64,
     pub(crate) signed: u64,
     pub(crate) v1: u64,
+    /// Its newest signature timestamp, with ours when it came.
+    pub(crate) signature: Option<SignedClock>,
+    /// The systems its targeted messages (COMMAND_ACK, PING and TIMESYNC
+    /// answers, MISSION_*, FTP...) were addressed to, by sysid.
+    pub(crate) addressed: BTreeMap<u8, Addressed>,
 }
+
+/// A source's newest signature timestamp and what we would have stamped
+/// at the moment it came (10 µs units since 2015-01-01): a vehicle far
+/// ahead refuses our frames as too old (MAVLink 2 signing).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct SignedClock {
+    pub(crate) theirs: u64,
+    pub(crate) ours: u64,
+}
+
+/// A source's frames addressed to one system: how many, and the first
+/// few message ids among them.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct Addressed {
+    pub(crate) frames: u64,
+    pub(crate) msgids: Vec<u32>,
+}
+
+/// Systems a source's addressees are kept for, and message ids each.
+const MAX_ADDRESSEES: usize = 16;
+const MAX_MSGIDS: usize = 4;
 
 /// Systems heard, bounded so a spoofing flood cannot grow memory.
 #[derive(Default)]
@@ -78,6 +104,32 @@ impl Roster {
             s.frames += 1;
             s.signed += u64::from(signed);
             s.v1 += u64::from(version == Version::V1);
+        }
+    }
+
+    /// Records a signature timestamp `theirs` from `source`, heard when
+    /// our signing clock read `ours`.
+    pub(crate) fn signature(&mut self, source: SysComp, theirs: u64, ours: u64) {
+        if let Some(s) = self.source(source) {
+            if s.signature.is_none_or(|c| theirs >= c.theirs) {
+                s.signature = Some(SignedClock { theirs, ours });
+            }
+        }
+    }
+
+    /// Records a frame of message `msgid` from `source` addressed to
+    /// system `to`.
+    pub(crate) fn addressed(&mut self, source: SysComp, to: u8, msgid: u32) {
+        let Some(s) = self.source(source) else {
+            return;
+        };
+        if !s.addressed.contains_key(&to) && s.addressed.len() >= MAX_ADDRESSEES {
+            return;
+        }
+        let a = s.addressed.entry(to).or_default();
+        a.frames += 1;
+        if a.msgids.len() < MAX_MSGIDS && !a.msgids.contains(&msgid) {
+            a.msgids.push(msgid);
         }
     }
 
@@ -146,5 +198,32 @@ mod tests {
             );
         }
         assert_eq!(r.sources().count(), MAX_SYSTEMS);
+    }
+
+    #[test]
+    fn newest_signature_and_addressees_kept_bounded() {
+        let mut r = Roster::default();
+        let id = SysComp::new(1, 1);
+        r.signature(id, 500, 100);
+        r.signature(id, 400, 130);
+        r.signature(id, 600, 140);
+        let s = &r.sources[&id];
+        assert_eq!(
+            s.signature,
+            Some(SignedClock {
+                theirs: 600,
+                ours: 140
+            })
+        );
+        for msgid in [77, 77, 111, 4, 44, 47] {
+            r.addressed(id, 255, msgid);
+        }
+        for to in 1..=40 {
+            r.addressed(id, to, 77);
+        }
+        let s = &r.sources[&id];
+        assert_eq!(s.addressed[&255].frames, 6);
+        assert_eq!(s.addressed[&255].msgids, [77, 111, 4, 44]);
+        assert_eq!(s.addressed.len(), MAX_ADDRESSEES);
     }
 }

@@ -26,7 +26,7 @@ use super::stats::RttStats;
 use super::summary::{Interim, LinkSummary};
 use super::wait::{self, Waiter};
 use super::{Nanos, SessionConfig};
-use crate::frame::signing::{Gate, SigningConfig};
+use crate::frame::signing::{self, Gate, SigningConfig};
 use crate::frame::{Frame, Msg, ScanStats, SysComp};
 use crate::transport::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 
@@ -190,6 +190,14 @@ impl Heard {
                 continue;
             }
             self.roster.frame(frame.source, frame.version, frame.signed);
+            if let Some(stamp) = frame.stamps.signature {
+                // Ours as the signer would stamp now: the wall clock.
+                let ours = signing::timestamp_now();
+                self.roster.signature(frame.source, stamp.value, ours);
+            }
+            if let Some(to) = frame.msg.addressed_to() {
+                self.roster.addressed(frame.source, to, frame.msgid);
+            }
             self.answers.take(&frame, path, at);
             driver.on_received(&frame, path, at);
             match frame.msg {

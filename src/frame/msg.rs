@@ -71,6 +71,22 @@ pub enum Msg {
     Damaged,
 }
 
+impl Msg {
+    /// The system a targeted message is addressed to; none for a message
+    /// without a target or addressed to all (0).
+    pub(crate) fn addressed_to(&self) -> Option<u8> {
+        let to = match self {
+            Msg::Ping { target_system, .. }
+            | Msg::Timesync { target_system, .. }
+            | Msg::CommandLong { target_system, .. }
+            | Msg::CommandAck { target_system, .. } => *target_system,
+            Msg::Transfer(t) => t.target()?.system,
+            _ => return None,
+        };
+        (to != 0).then_some(to)
+    }
+}
+
 /// A radio's RADIO_STATUS (message 109, or its forerunner RADIO, 166: the
 /// frame's `msgid` tells which): its link figures, as received and
 /// as the engine and the reports keep them (`engine::radio::RadioReport`).

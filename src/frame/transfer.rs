@@ -56,6 +56,23 @@ pub enum Transfer {
     Ftp(Ftp),
 }
 
+impl Transfer {
+    /// Whom it is for; PARAM_VALUE names no one.
+    pub fn target(&self) -> Option<Target> {
+        match *self {
+            Transfer::ParamRequestList { target }
+            | Transfer::ParamRequestRead { target, .. }
+            | Transfer::MissionRequestList { target, .. }
+            | Transfer::MissionCount { target, .. }
+            | Transfer::MissionRequest { target, .. }
+            | Transfer::MissionAck { target, .. }
+            | Transfer::MissionItem(MissionItem { target, .. })
+            | Transfer::Ftp(Ftp { target, .. }) => Some(target),
+            Transfer::ParamValue(_) => None,
+        }
+    }
+}
+
 /// Whom a request is for (or a reply to).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Target {

@@ -21,6 +21,7 @@ mod field_logs;
 mod habits;
 mod high_rate;
 mod hostile;
+mod ignored;
 mod late_heard;
 mod link_node;
 mod live;

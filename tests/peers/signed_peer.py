@@ -10,6 +10,17 @@ ways a signing peer must refuse:
   --unsigned SEQS reply not signed at all
   --replay SEQS   reply sent, then its exact bytes sent again (a replay)
 Sends no HEARTBEAT unless --heartbeat-hz, so a pinger's counts are exact.
+It acknowledges COMMAND_LONG addressed to it (MAV_RESULT_ACCEPTED), once
+pymavlink's check has accepted the frame.
+
+--clock-offset SECONDS shifts its signing clock: every frame it signs is
+stamped at least the wall clock plus SECONDS (a vehicle whose clock is
+ahead, or behind when negative), so its clock runs at the wall clock's
+rate. pymavlink's own check then refuses a new stream of ours more than a
+minute behind that clock, as MAVLink 2 signing says; its truth has the
+last signature timestamp it sent ("last_timestamp", 10 µs units since
+2015; with --stamps every one, "stamps") and the refused COMMAND_LONGs
+("rejected_commands").
 Prints one JSON line of ground truth on exit (SIGTERM/SIGINT).
 """
 import argparse
@@ -19,6 +30,9 @@ import os
 import signal
 import sys
 import time
+
+
+EPOCH_2015 = 1420070400
 
 
 def secret(text):
@@ -49,6 +63,10 @@ def main():
     ap.add_argument("--unsigned", default="", help="PING seqs answered unsigned")
     ap.add_argument("--replay", default="", help="PING seqs whose signed reply is sent twice")
     ap.add_argument("--heartbeat-hz", type=float, default=0.0)
+    ap.add_argument("--stamps", action="store_true",
+                    help="list every signature timestamp sent in the truth")
+    ap.add_argument("--clock-offset", type=float, default=0.0,
+                    help="seconds added to the wall clock its signatures are stamped by")
     args = ap.parse_args()
 
     os.environ["MAVLINK20"] = "1"
@@ -62,16 +80,22 @@ def main():
     )
     key = secret(args.key)
     wrong_key = hashlib.sha256(b"not the key").digest()
+    def clock_now():
+        """The shifted wall clock, as a signing timestamp."""
+        return int((time.time() + args.clock_offset - EPOCH_2015) * 100_000)
+
     conn.setup_signing(
         key,
         sign_outgoing=True,
         allow_unsigned_callback=lambda _mav, _msgid: args.allow_unsigned,
+        initial_timestamp=clock_now(),
         link_id=args.link_id,
     )
     mav = conn.mav
     forge, unsigned, replay = parse_set(args.forge), parse_set(args.unsigned), parse_set(args.replay)
     truth = {"ping_requests": 0, "replies": 0, "forged": 0, "unsigned": 0, "replayed": 0,
-             "rejected_frames": 0, "rejected_pings": 0}
+             "rejected_frames": 0, "rejected_pings": 0, "rejected_commands": 0, "commands": 0,
+             "acks": 0, "last_timestamp": None}
     running = True
 
     def stop(*_):
@@ -82,7 +106,14 @@ def main():
     signal.signal(signal.SIGINT, stop)
 
     def write(reply):
+        # pymavlink adds one unit a frame and otherwise stands still: a
+        # vehicle's clock runs on.
+        mav.signing.timestamp = max(mav.signing.timestamp, clock_now())
         data = reply.pack(mav)
+        if mav.signing.sign_outgoing:
+            truth["last_timestamp"] = mav.signing.timestamp - 1
+            if args.stamps:
+                truth.setdefault("stamps", []).append(truth["last_timestamp"])
         conn.write(data)
         mav.seq = (mav.seq + 1) % 256
         return data
@@ -92,7 +123,7 @@ def main():
     while running:
         now = time.monotonic()
         if args.heartbeat_hz > 0 and now >= next_hb:
-            mav.heartbeat_send(mavutil.mavlink.MAV_TYPE_QUADROTOR, 12, 0, 0, 0)
+            write(mav.heartbeat_encode(mavutil.mavlink.MAV_TYPE_QUADROTOR, 12, 0, 0, 0))
             next_hb = now + 1.0 / args.heartbeat_hz
         msg = conn.recv_match(blocking=True, timeout=0.02)
         if msg is None:
@@ -104,6 +135,14 @@ def main():
                 data = bytes(msg.data)
                 if len(data) > 9 and data[0] == 0xFD and data[7] == 4:
                     truth["rejected_pings"] += 1
+                if len(data) > 9 and data[0] == 0xFD and data[7] == 76:
+                    truth["rejected_commands"] += 1
+            continue
+        if msg.get_type() == "COMMAND_LONG" and msg.target_system == args.sysid:
+            truth["commands"] += 1
+            write(mav.command_ack_encode(msg.command, mavutil.mavlink.MAV_RESULT_ACCEPTED, 0, 0,
+                                         msg.get_srcSystem(), msg.get_srcComponent()))
+            truth["acks"] += 1
             continue
         if msg.get_type() != "PING" or msg.target_system != 0 or msg.target_component != 0:
             continue

@@ -234,6 +234,18 @@ impl<P: EchoProbe> EchoDriver<P> {
         responders
     }
 
+    /// Requests sent so far, and the replies `target`'s system gave
+    /// (late ones too: they came).
+    pub(crate) fn answered_by(&self, roster: &Roster, target: SysComp) -> (u64, u64) {
+        let answered = self
+            .summaries(roster)
+            .iter()
+            .filter(|r| r.id.sysid == target.sysid)
+            .map(|r| r.counts.received + r.counts.late)
+            .sum();
+        (self.matcher.issued(), answered)
+    }
+
     fn clock_may_be_due(&mut self, responder: SysComp, at: Nanos) {
         let due = match self.clocks_told.get(&responder) {
             Some(&told) => at >= told.saturating_add(CLOCK_TOLD_EVERY),

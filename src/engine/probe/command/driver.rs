@@ -14,6 +14,7 @@ use super::tracker::CommandTracker;
 use super::CommandEvent;
 use crate::engine::diagnosis::{command_hints, Observed};
 use crate::engine::hint::Hint;
+use crate::engine::ignored::{ignored_by, Asked};
 use crate::engine::link_io::{Clock, Sender};
 use crate::engine::observe::{tell_kind, Observer, StartInfo};
 use crate::engine::radio::Radios;
@@ -88,7 +89,25 @@ impl CommandDriver {
             no_peer_within: ended.no_peer_within,
             link_failed: ended.link_error.is_some(),
         };
-        command_hints(&observed, &unacknowledged)
+        let mut hints = command_hints(&observed, &unacknowledged);
+        if observed.no_peer_within.is_some() || observed.link_failed {
+            return hints;
+        }
+        let name = codec::command_name(self.spec.command).to_uppercase();
+        for t in targets.iter().filter(|t| unacknowledged.contains(&t.id)) {
+            let asked = Asked {
+                ours: self.ours,
+                version: ended.cfg.version,
+                key: signing.key,
+                what: match t.commands {
+                    1 => format!("the {name} command"),
+                    n => format!("any of the {n} {name} commands"),
+                },
+                echoes: None,
+            };
+            hints.extend(ignored_by(&ended.roster, t.id, &asked));
+        }
+        hints
     }
 }
 

@@ -21,12 +21,12 @@ use super::spec::{TransferKind, TransferSpec};
 use super::summary::{LatencyBeside, Tally, TransferSummary};
 use crate::engine::capacity;
 use crate::engine::hint::{Hint, HintCode};
+use crate::engine::ignored::{ignored_by, Asked};
 use crate::engine::link_io::{Clock, Sender, WallAtZero};
 use crate::engine::observe::{tell_kind, Observer, StartInfo};
 use crate::engine::probe::auto::AutoProbe;
 use crate::engine::probe::echo::EchoDriver;
 use crate::engine::radio::Radios;
-use crate::engine::roster::Roster;
 use crate::engine::schedule::Schedule;
 use crate::engine::session::{self, Controls, Driver, Measurement, SessionEnd};
 use crate::engine::stats::RttStats;
@@ -230,7 +230,8 @@ fn latency(tally: &Tally, echo: &EchoSummary) -> Option<LatencyBeside> {
 impl TransferDriver {
     /// What the downloads showed, in words: why one failed, a list that
     /// stopped by itself, loss that the transfer's own load makes.
-    fn hints(&self, roster: &Roster) -> Vec<Hint> {
+    fn hints(&self, ended: &SessionEnd<'_>) -> Vec<Hint> {
+        let roster = &ended.roster;
         let what = match self.spec.kind {
             TransferKind::Params => "the parameter list",
             TransferKind::Mission => "the mission",
@@ -243,6 +244,16 @@ impl TransferDriver {
             // Any frame of the system: a HEARTBEAT, a TIMESYNC answer.
             let heard = roster.sources().any(|(id, _)| id.sysid == target.sysid);
             hints.extend(failure_hint(failed, what, target, heard));
+            if failed.ending == Ending::NoAnswer {
+                let asked = Asked {
+                    ours: ended.cfg.ours,
+                    version: ended.cfg.version,
+                    key: ended.gate.summary().key,
+                    what: format!("the request for {what}"),
+                    echoes: Some(self.beside.answered_by(roster, target)),
+                };
+                hints.extend(ignored_by(roster, target, &asked));
+            }
         }
         if let Some(a) = &tally.first_stopped {
             hints.push(stopped_hint(a));
@@ -428,7 +439,7 @@ impl Driver for TransferDriver {
     fn finish(mut self, ended: SessionEnd<'_>) -> (LinkSummary, Vec<(SysComp, RttStats)>) {
         let now = (ended.duration_s * 1e9) as Nanos;
         self.end_download(now);
-        let hints = self.hints(&ended.roster);
+        let hints = self.hints(&ended);
         let ours = ended.cfg.ours;
         let (echo, histograms) = self.beside.finish(ended);
         let Some(echo) = echo.get::<EchoSummary>() else {
