@@ -6,6 +6,7 @@
 
 pub(crate) mod codec;
 mod dialect;
+pub(crate) mod json;
 mod msg;
 mod received;
 pub mod scanner;
