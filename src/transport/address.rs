@@ -4,6 +4,7 @@ use std::fmt;
 
 use thiserror::Error;
 
+pub(crate) use super::m2r_url::M2rUrl;
 use super::sim::SimParams;
 use super::tlog::TlogPath;
 pub(crate) use super::ws_url::WsUrl;
@@ -26,6 +27,9 @@ pub enum LinkSpec {
     Ws(Box<WsUrl>),
     /// Listen for WebSocket clients; each is a path to responders.
     WsIn(HostPort),
+    /// Connect to a mavlink2rest WebSocket, messages as JSON (`m2r://`,
+    /// `m2rs://`).
+    M2r(Box<M2rUrl>),
     /// A serial device; `baud` None means "use --baud".
     Serial { path: String, baud: Option<u32> },
     /// The built-in simulated link (boxed: its parameters are many).
@@ -98,6 +102,7 @@ impl fmt::Display for LinkSpec {
             LinkSpec::TcpIn(a) => write!(f, "tcpin:{a}"),
             LinkSpec::Ws(url) => write!(f, "{url}"),
             LinkSpec::WsIn(a) => write!(f, "wsin:{a}"),
+            LinkSpec::M2r(url) => write!(f, "{url}"),
             LinkSpec::Serial { path, baud } => match baud {
                 Some(b) => write!(f, "serial:{path}:{b}"),
                 None => write!(f, "serial:{path}"),
@@ -111,7 +116,8 @@ impl fmt::Display for LinkSpec {
 /// Accepted forms, listed in every parse error.
 pub(crate) const ACCEPTED_FORMS: &str = "udpin:HOST:PORT, udp:HOST:PORT, HOST:PORT, udpout:HOST:PORT, \
 udpbcast:ADDR:PORT, tcp:HOST:PORT, tcpout:HOST:PORT, tcpin:HOST:PORT, ws://[USER:PASSWORD@]HOST[:PORT][/PATH], \
-wss://..., wsin:HOST:PORT, serial:DEVICE[:BAUD], \
+wss://..., wsin:HOST:PORT, m2r://HOST[:PORT][/PATH] (mavlink2rest's JSON; m2rs:// with TLS), \
+serial:DEVICE[:BAUD], \
 /dev/DEVICE, COMn[:BAUD], sim:[?key=value&...], tlog:FILE or FILE.tlog (a telemetry log; tlog:- reads standard \
 input) (IPv6 hosts in brackets: udpout:[::1]:14550)";
 
@@ -284,6 +290,10 @@ impl std::str::FromStr for LinkSpec {
                         .map_err(|reason| error(input, reason))?,
                 ))),
                 "wsin" => Some(LinkSpec::WsIn(listening(rest)?)),
+                "m2r" | "m2rs" if mavsdk => Some(LinkSpec::M2r(Box::new(
+                    M2rUrl::parse(scheme.eq_ignore_ascii_case("m2rs"), rest)
+                        .map_err(|reason| error(input, reason))?,
+                ))),
                 "serial" => Some(serial(input, rest)?),
                 _ => None,
             };
@@ -510,8 +520,21 @@ mod tests {
             "serial:/dev/ttyUSB0:57600",
             "serial:COM3:57600",
             "tlog:-",
+            "m2r://127.0.0.1:8088/v1/ws/mavlink",
+            "m2rs://blueos.example.com:443/mavlink2rest/v1/ws/mavlink",
         ] {
             assert_eq!(input.parse::<LinkSpec>().unwrap().to_string(), input);
         }
+    }
+
+    #[test]
+    fn mavlink2rest_urls_are_m2r_and_need_their_slashes() {
+        let spec = "M2R://blueos.local".parse::<LinkSpec>().unwrap();
+        assert!(matches!(spec, LinkSpec::M2r(_)), "{spec:?}");
+        assert_eq!(spec.to_string(), "m2r://blueos.local:8088/v1/ws/mavlink");
+        let err = "m2r:127.0.0.1:8088".parse::<LinkSpec>().unwrap_err();
+        assert_eq!(err.reason, "unknown form");
+        let err = "m2r://127.0.0.1:99999/".parse::<LinkSpec>().unwrap_err();
+        assert!(err.reason.contains("not a port"), "{err}");
     }
 }

@@ -11,7 +11,7 @@ use super::address::LinkSpec;
 use super::link::{Inbound, LinkError, LinkKind, PathId, RxClock, Transport};
 use super::options::LinkOptions;
 use super::outbox::Outbox;
-use super::{serial, sim, stream, tcp, tlog, udp, ws};
+use super::{m2r, serial, sim, stream, tcp, tlog, udp, ws};
 use crate::frame::ScanStats;
 
 /// Any of mavping's links, so the engine is written once.
@@ -24,6 +24,7 @@ pub(crate) enum Link {
     Tlog(tlog::TlogLink),
     Ws(ws::WsClient),
     WsIn(ws::WsServer),
+    M2r(m2r::M2rClient),
 }
 
 impl Link {
@@ -62,6 +63,9 @@ impl Link {
                 Link::Ws(ws::WsClient::connect(url, &options.route, &options.trust).await?)
             }
             LinkSpec::WsIn(a) => Link::WsIn(ws::WsServer::listen(a, &options.route).await?),
+            LinkSpec::M2r(url) => {
+                Link::M2r(m2r::M2rClient::connect(url, &options.route, &options.trust).await?)
+            }
         })
     }
 }
@@ -78,6 +82,7 @@ macro_rules! each_link {
             Link::Tlog($l) => $body,
             Link::Ws($l) => $body,
             Link::WsIn($l) => $body,
+            Link::M2r($l) => $body,
         }
     };
 }

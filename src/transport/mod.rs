@@ -9,6 +9,8 @@ pub(crate) mod address;
 mod advice;
 mod any_link;
 mod link;
+mod m2r;
+mod m2r_url;
 #[cfg(not(mavping_portable))]
 mod mmsg;
 mod options;

@@ -23,6 +23,7 @@ use tokio::net::{TcpListener, TcpStream};
 use tokio::time::Instant;
 use tokio_tungstenite::tungstenite::client::IntoClientRequest;
 use tokio_tungstenite::tungstenite::http::HeaderValue;
+use tokio_tungstenite::tungstenite::protocol::{CloseFrame, WebSocketConfig};
 use tokio_tungstenite::tungstenite::{Error as WsError, Message};
 use tokio_tungstenite::WebSocketStream;
 
@@ -36,7 +37,7 @@ use crate::frame::ScanStats;
 
 /// A client that does not take our message for this long is given up: a
 /// WebSocket's TCP would otherwise hold the run.
-const WRITE_STALL: Duration = Duration::from_secs(1);
+pub(crate) const WRITE_STALL: Duration = Duration::from_secs(1);
 /// Clients beyond this are refused (`wsin:`): memory stays bounded.
 const MAX_CLIENTS: usize = 64;
 /// A client's handshake must be done within this.
@@ -46,7 +47,7 @@ const HANDSHAKE_LIMIT: Duration = Duration::from_secs(5);
 pub(crate) trait Io: AsyncRead + AsyncWrite + Unpin + Send {}
 impl<T: AsyncRead + AsyncWrite + Unpin + Send> Io for T {}
 
-type Socket = WebSocketStream<Box<dyn Io>>;
+pub(crate) type Socket = WebSocketStream<Box<dyn Io>>;
 
 /// Trust for `wss://`: the certificates `--cacert` named, or the system's.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -71,25 +72,7 @@ impl WsClient {
         trust: &Trust,
     ) -> Result<Self, LinkError> {
         let name = url.to_string();
-        let refused = |why: String| LinkError::Closed(format!("cannot open {name}: {why}"));
-        let peer = resolve(&url.addr, route.family).await?;
-        let socket = route.tcp(peer)?;
-        let tcp = socket
-            .connect(peer)
-            .await
-            .map_err(|e| LinkError::io(format!("cannot connect to {name}"), e))?;
-        // A PING is a few dozen bytes: Nagle would hold it back.
-        let _ = tcp.set_nodelay(true);
-        let stream: Box<dyn Io> = if url.tls {
-            Box::new(tls(url, trust, tcp).await.map_err(refused)?)
-        } else {
-            Box::new(tcp)
-        };
-        let request = request(url).map_err(refused)?;
-        let (ws, _) = tokio_tungstenite::client_async(request, stream)
-            .await
-            .map_err(|e| refused(handshake_refused(e)))?;
-        tracing::info!(link = %name, "WebSocket open");
+        let ws = open(url, &name, route, trust, None).await?;
         Ok(WsClient {
             name,
             ws,
@@ -98,6 +81,38 @@ impl WsClient {
             keep_raw: false,
         })
     }
+}
+
+/// A WebSocket to the server `url` names, open (TCP, TLS for `wss`, the
+/// handshake), errors told as the link `name`; `config` None for
+/// tungstenite's limits. Shared with `m2r://`, which speaks JSON over it.
+pub(crate) async fn open(
+    url: &WsUrl,
+    name: &str,
+    route: &Route,
+    trust: &Trust,
+    config: Option<WebSocketConfig>,
+) -> Result<Socket, LinkError> {
+    let refused = |why: String| LinkError::Closed(format!("cannot open {name}: {why}"));
+    let peer = resolve(&url.addr, route.family).await?;
+    let socket = route.tcp(peer)?;
+    let tcp = socket
+        .connect(peer)
+        .await
+        .map_err(|e| LinkError::io(format!("cannot connect to {name}"), e))?;
+    // A PING is a few dozen bytes: Nagle would hold it back.
+    let _ = tcp.set_nodelay(true);
+    let stream: Box<dyn Io> = if url.tls {
+        Box::new(tls(url, trust, tcp).await.map_err(refused)?)
+    } else {
+        Box::new(tcp)
+    };
+    let request = request(url).map_err(refused)?;
+    let (ws, _) = tokio_tungstenite::client_async_with_config(request, stream, config)
+        .await
+        .map_err(|e| refused(handshake_refused(e)))?;
+    tracing::info!(link = %name, "WebSocket open");
+    Ok(ws)
 }
 
 /// The handshake's request, with basic authentication from the URL.
@@ -206,7 +221,7 @@ fn handshake_refused(e: WsError) -> String {
 }
 
 /// Why a WebSocket that was open broke, in words.
-fn broken(e: &WsError) -> String {
+pub(crate) fn broken(e: &WsError) -> String {
     use tokio_tungstenite::tungstenite::error::ProtocolError;
     match e {
         WsError::Protocol(ProtocolError::ResetWithoutClosingHandshake) => {
@@ -214,6 +229,15 @@ fn broken(e: &WsError) -> String {
         }
         WsError::ConnectionClosed | WsError::AlreadyClosed => "the WebSocket is closed".into(),
         other => other.to_string(),
+    }
+}
+
+/// A close from the peer, in words.
+pub(crate) fn closed(frame: Option<CloseFrame>) -> String {
+    match frame {
+        Some(f) if !f.reason.is_empty() => format!("closed by the peer ({}: {})", f.code, f.reason),
+        Some(f) => format!("closed by the peer ({})", f.code),
+        None => "closed by the peer".into(),
     }
 }
 
@@ -243,13 +267,7 @@ fn take(
             text.len(),
             text.chars().take(40).collect::<String>()
         )),
-        Ok(Message::Close(frame)) => Read::Gone(match frame {
-            Some(f) if !f.reason.is_empty() => {
-                format!("closed by the peer ({}: {})", f.code, f.reason)
-            }
-            Some(f) => format!("closed by the peer ({})", f.code),
-            None => "closed by the peer".into(),
-        }),
+        Ok(Message::Close(frame)) => Read::Gone(closed(frame)),
         // Pings are answered by the protocol itself.
         Ok(Message::Ping(_) | Message::Pong(_) | Message::Frame(_)) => Read::Nothing,
         Err(e) => Read::Gone(broken(&e)),
