@@ -168,10 +168,11 @@ impl M2rClient {
     }
 }
 
-/// The start of a text, for a log line.
+/// The start of a text, on one line, for a log line.
 fn excerpt(text: &str) -> String {
-    let short: String = text.chars().take(60).collect();
-    if short.len() < text.len() {
+    let line = text.split_whitespace().collect::<Vec<_>>().join(" ");
+    let short: String = line.chars().take(60).collect();
+    if short.len() < line.len() {
         format!("{short}...")
     } else {
         short

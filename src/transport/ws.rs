@@ -265,7 +265,13 @@ fn take(
             "it sent a text message where MAVLink's binary frames were expected ({} bytes: {}); \
              a mavlink2rest JSON endpoint is m2r://",
             text.len(),
-            text.chars().take(40).collect::<String>()
+            // One line, whatever the text's own (mavlink2rest's are pretty).
+            text.split_whitespace()
+                .collect::<Vec<_>>()
+                .join(" ")
+                .chars()
+                .take(40)
+                .collect::<String>()
         )),
         Ok(Message::Close(frame)) => Read::Gone(closed(frame)),
         // Pings are answered by the protocol itself.

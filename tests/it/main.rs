@@ -25,6 +25,7 @@ mod ignored;
 mod late_heard;
 mod link_node;
 mod live;
+mod m2r;
 mod multilink;
 mod mutants;
 mod options;
