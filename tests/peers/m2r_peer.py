@@ -177,6 +177,8 @@ def main():
             sock, _ = listener.accept()
         except socket.timeout:
             continue
+        # A reply is a few hundred bytes: Nagle would hold it back.
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         ws = WSConnection(ConnectionType.SERVER)
         pattern = None
         closed = False
