@@ -767,7 +767,7 @@ pub(crate) struct PingArgs {
     #[arg(help_heading = "Links", long, env = "MAVPING_RECONNECT", value_parser = boolish())]
     pub(crate) reconnect: bool,
 
-    /// wss:// links trust the CA certificates in FILE (PEM) instead of the system's
+    /// wss:// and m2rs:// links trust the CA certificates in FILE (PEM) instead of the system's
     #[arg(
         help_heading = "Links",
         long,

@@ -108,7 +108,7 @@ impl M2rClient {
                 self.counts.unknown += 1;
                 self.stats.unknown_id += 1;
                 if self.counts.unknown == 1 {
-                    tracing::warn!(link = %self.name, message = %name,
+                    tracing::warn!(link = %self.name, message_type = %name,
                         "a message of a type this build does not know: skipped (counted as unknown ids)");
                 }
                 return None;
