@@ -11,6 +11,7 @@
 
 use mavlink::dialects::ardupilotmega::MavMessage;
 use mavlink::{MAVLinkV2MessageRaw, MavHeader, MavlinkVersion, Message};
+use serde::Deserialize;
 use serde_json::{Map, Value};
 
 use super::scanner::{header_len, STX_V1};
@@ -84,8 +85,13 @@ fn read(text: &str) -> Result<FromJson, String> {
         sequence: id_field(&header, "sequence")?,
     };
     flags_from_bits(&mut message);
-    let message: MavMessage = serde_json::from_value(Value::Object(message))
-        .map_err(|e| format!("a {name} this dialect cannot read ({e})"))?;
+    let message = Value::Object(message);
+    let message = match MavMessage::deserialize(&message) {
+        Ok(message) => message,
+        // Older crates wrote char arrays as numbers: read them as text.
+        Err(e) => serde_json::from_value(strings_from_numbers(message))
+            .map_err(|_| format!("a {name} this dialect cannot read ({e})"))?,
+    };
     let mut raw = MAVLinkV2MessageRaw::new();
     raw.serialize_message(header, &message);
     Ok(FromJson::Frame(raw.raw_bytes().to_vec()))
@@ -115,6 +121,29 @@ fn flags_from_bits(message: &mut Map<String, Value>) {
             *value = Value::String(format!("{bits:#x}"));
         }
     }
+}
+
+/// Arrays of bytes made text up to the first NUL: `char[N]` fields as
+/// the crate wrote them before it had a string type for them (0.15 and
+/// older, which older mavlink2rest builds use).
+fn strings_from_numbers(mut message: Value) -> Value {
+    let Value::Object(fields) = &mut message else {
+        return message;
+    };
+    for value in fields.values_mut() {
+        let Value::Array(items) = value else {
+            continue;
+        };
+        let bytes: Option<Vec<u8>> = items
+            .iter()
+            .map(|v| v.as_u64().and_then(|b| u8::try_from(b).ok()))
+            .collect();
+        if let Some(bytes) = bytes {
+            let end = bytes.iter().position(|&b| b == 0).unwrap_or(bytes.len());
+            *value = Value::String(String::from_utf8_lossy(&bytes[..end]).into_owned());
+        }
+    }
+    message
 }
 
 #[cfg(test)]
@@ -215,6 +244,33 @@ mod tests {
         };
         // base_mode is the payload's byte 6.
         assert_eq!(raw[10 + 6], 129);
+    }
+
+    #[test]
+    fn char_arrays_as_numbers_are_read_as_text() {
+        let mut text = [0u8; 50];
+        text[..5].copy_from_slice(b"Armed");
+        let numbers: Vec<String> = text.iter().map(u8::to_string).collect();
+        let json = format!(
+            r#"{{"header":{{"system_id":1,"component_id":1,"sequence":3}},
+              "message":{{"type":"STATUSTEXT","severity":{{"type":"MAV_SEVERITY_INFO"}},
+              "text":[{}],"id":0,"chunk_seq":0}}}}"#,
+            numbers.join(",")
+        );
+        let FromJson::Frame(raw) = from_json(&json) else {
+            panic!("{:?}", from_json(&json))
+        };
+        // severity, then the text; MAVLink 2 trims the zeros after it.
+        assert_eq!(&raw[10..raw.len() - 2], b"\x06Armed");
+        // A byte array stays one: a TUNNEL's payload is numbers today too.
+        let tunnel = r#"{"header":{"system_id":1,"component_id":1,"sequence":0},
+          "message":{"type":"TUNNEL","target_system":0,"target_component":0,"payload_type":{"type":"MAV_TUNNEL_PAYLOAD_TYPE_UNKNOWN"},"payload_length":1,
+          "payload":[7,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0]}}"#;
+        assert!(
+            matches!(from_json(tunnel), FromJson::Frame(_)),
+            "{:?}",
+            from_json(tunnel)
+        );
     }
 
     #[test]
