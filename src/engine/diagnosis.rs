@@ -7,6 +7,7 @@
 use std::time::Duration;
 
 use super::hint::{Hint, HintCode};
+use super::ignored::{echo_silence, Asked};
 use super::radio;
 use super::roster::{Roster, Source};
 use super::summary::ProbeName;
@@ -162,6 +163,18 @@ fn silent_system(o: &Observed<'_>, id: SysComp, source: &Source) -> Option<Hint>
     }
     if !identity.is_vehicle_like() {
         return None;
+    }
+    // What its frames show first: a signing clock ahead of ours, frames
+    // addressed to another ground station's id.
+    let asked = Asked {
+        ours: o.ours,
+        version: o.version,
+        key: o.key,
+        what: format!("our {probe} requests"),
+        echoes: None,
+    };
+    if let Some(hint) = echo_silence(o.roster, id, &asked) {
+        return Some(hint);
     }
     if source.v1 == source.frames && o.version == Version::V2 {
         return Some(Hint::new(

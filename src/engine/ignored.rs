@@ -214,6 +214,15 @@ pub(crate) fn ignored(heard: &Heard, asked: &Asked) -> Vec<Hint> {
     causes
 }
 
+/// What the frames of `target`, silent to an echo probe, show of why:
+/// its signing clock ahead of ours, or another ground station's id it
+/// answers; none when they show neither (the echo diagnosis has its own
+/// hints for the rest).
+pub(crate) fn echo_silence(roster: &Roster, target: SysComp, asked: &Asked) -> Option<Hint> {
+    let heard = Heard::of(roster, target, asked.ours)?;
+    signing_clock(&heard, asked).or_else(|| other_gcs(&heard, asked))
+}
+
 /// [`ignored`] for `target` by what `roster` heard of it; nothing when
 /// nothing of it was heard (other hints say that).
 pub(crate) fn ignored_by(roster: &Roster, target: SysComp, asked: &Asked) -> Vec<Hint> {

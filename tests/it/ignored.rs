@@ -395,3 +395,60 @@ fn a_filter_that_drops_what_we_send_leaves_a_command_and_a_download_answered_by_
         "{text}"
     );
 }
+
+/// An echo run's summary (PING or TIMESYNC), its lines held to the schema.
+fn echo(link: &str, extra: &[&str]) -> (i32, Value) {
+    let mut args = vec!["-c", "4", "-i", "100ms", "-W", "300ms", "--json", link];
+    args.extend_from_slice(extra);
+    let (code, out, err) = run_mavping(&args);
+    let lines = json_lines(&out);
+    assert_schema(&lines);
+    let summary = lines
+        .into_iter()
+        .find(|l| l["type"] == "summary")
+        .unwrap_or_else(|| panic!("no summary: {out}{err}"));
+    (code, summary)
+}
+
+#[test]
+fn an_echo_probe_left_unanswered_gets_the_same_evidence() {
+    // The vehicle whose signing clock is 3 minutes ahead refuses our PINGs.
+    let port = free_udp_port();
+    let link = format!("udpout:127.0.0.1:{port}");
+    let peer = Peer::start(
+        "signed_peer.py",
+        &[
+            &format!("udpin:127.0.0.1:{port}"),
+            "--key",
+            HEX_KEY,
+            "--heartbeat-hz",
+            "10",
+            "--clock-offset",
+            "180",
+        ],
+    );
+    let (code, s) = echo(&link, &["--probe", "ping", "--signing-key", HEX_KEY]);
+    peer.finish();
+    assert_eq!(code, 1, "{s}");
+    assert!(codes(&s).contains(&"signing_clock_behind"), "{s}");
+    let behind = number_after(hint(&s, "signing_clock_behind"), "our signing clock is ");
+    assert!((179.0..=180.5).contains(&behind), "{behind}");
+
+    // The vehicle that answers GCS 255 only leaves our TIMESYNCs unanswered:
+    // named by the frames it addressed to 255, not guessed.
+    let port = free_udp_port();
+    let link = format!("udpout:127.0.0.1:{port}");
+    let peer = Peer::start(
+        "picky_vehicle.py",
+        &[&format!("udpin:127.0.0.1:{port}"), "--gcs-sysid", "255"],
+    );
+    let (code, s) = echo(&link, &["--probe", "timesync"]);
+    peer.finish();
+    assert_eq!(code, 1, "{s}");
+    let text = hint(&s, "sysid_enforced");
+    assert!(
+        text.contains("addressed its frames to another ground station and none to us (250)")
+            && text.ends_with("try --sysid 255"),
+        "{text}"
+    );
+}
