@@ -43,6 +43,18 @@ const MAX_CLIENTS: usize = 64;
 /// A client's handshake must be done within this.
 const HANDSHAKE_LIMIT: Duration = Duration::from_secs(5);
 
+/// The largest message (and frame) taken: MAVLink frames are at most 280
+/// bytes and a message holds a few; the protocol's 64 MiB default would
+/// let one peer hold that much of our memory.
+const MAX_MESSAGE: usize = 64 * 1024;
+
+/// The WebSocket settings of every binary link: messages bounded.
+fn bounded() -> WebSocketConfig {
+    WebSocketConfig::default()
+        .max_message_size(Some(MAX_MESSAGE))
+        .max_frame_size(Some(MAX_MESSAGE))
+}
+
 /// What a WebSocket runs over: TCP, or TLS over TCP.
 pub(crate) trait Io: AsyncRead + AsyncWrite + Unpin + Send {}
 impl<T: AsyncRead + AsyncWrite + Unpin + Send> Io for T {}
@@ -72,7 +84,7 @@ impl WsClient {
         trust: &Trust,
     ) -> Result<Self, LinkError> {
         let name = url.to_string();
-        let ws = open(url, &name, route, trust, None).await?;
+        let ws = open(url, &name, route, trust, Some(bounded())).await?;
         Ok(WsClient {
             name,
             ws,
@@ -395,7 +407,10 @@ impl WsServer {
         self.handshakes.push((
             peer,
             Instant::now(),
-            Box::pin(tokio_tungstenite::accept_async(stream)),
+            Box::pin(tokio_tungstenite::accept_async_with_config(
+                stream,
+                Some(bounded()),
+            )),
         ));
     }
 
