@@ -12,11 +12,6 @@
 //! types this build does not know as `unknown_id`. A binary message of
 //! MAVLink frames before any JSON means the URL names a binary endpoint.
 
-use std::future::poll_fn;
-use std::pin::Pin;
-use std::task::Poll;
-
-use futures_util::{SinkExt, Stream};
 use tokio::time::Instant;
 use tokio_tungstenite::tungstenite::protocol::WebSocketConfig;
 use tokio_tungstenite::tungstenite::{Error as WsError, Message};
@@ -24,7 +19,7 @@ use tokio_tungstenite::tungstenite::{Error as WsError, Message};
 use super::link::push_datagram;
 use super::m2r_url::M2rUrl;
 use super::route::Route;
-use super::ws::{self, Socket, Trust, WRITE_STALL};
+use super::ws::{self, MessageLink, Socket, Trust};
 use super::{Inbound, LinkError, LinkKind, PathId, Transport};
 use crate::frame::json::{from_json, to_json, FromJson};
 use crate::frame::{scan_datagram, ScanStats};
@@ -84,7 +79,7 @@ impl M2rClient {
 
     /// One message read: its frame into `out`; Some(why) when the link
     /// must end.
-    fn take(&mut self, msg: Result<Message, WsError>, out: &mut Vec<Inbound>) -> Option<String> {
+    fn read(&mut self, msg: Result<Message, WsError>, out: &mut Vec<Inbound>) -> Option<String> {
         match msg {
             Ok(Message::Text(text)) => self.text(text.as_str(), out),
             Ok(Message::Binary(data)) => self.binary(&data),
@@ -185,6 +180,24 @@ impl Drop for M2rClient {
     }
 }
 
+impl MessageLink for M2rClient {
+    fn socket(&mut self) -> &mut Socket {
+        &mut self.ws
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn gone(&mut self) -> &mut Option<String> {
+        &mut self.gone
+    }
+
+    fn take(&mut self, msg: Result<Message, WsError>, out: &mut Vec<Inbound>) -> Option<String> {
+        self.read(msg, out)
+    }
+}
+
 impl Transport for M2rClient {
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
         let sent = Instant::now();
@@ -193,24 +206,7 @@ impl Transport for M2rClient {
             texts.extend(to_json(raw))
         });
         for text in texts {
-            let send = self.ws.send(Message::Text(text.into()));
-            match tokio::time::timeout(WRITE_STALL, send).await {
-                Ok(Ok(())) => {}
-                Ok(Err(e)) => {
-                    return Err(LinkError::Closed(format!(
-                        "{}: {}",
-                        self.name,
-                        ws::broken(&e)
-                    )))
-                }
-                Err(_) => {
-                    return Err(LinkError::Closed(format!(
-                        "{}: the server took nothing for {} s: it stopped reading",
-                        self.name,
-                        WRITE_STALL.as_secs()
-                    )))
-                }
-            }
+            self.send_message(Message::Text(text.into())).await?;
         }
         Ok(sent)
     }
@@ -219,35 +215,8 @@ impl Transport for M2rClient {
         self.send(frame).await
     }
 
-    // Cancel-safe: polling the stream keeps its state in `self`. The
-    // frames of the messages before an end are handed over first; the end
-    // is told by the next call.
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
-        if let Some(why) = self.gone.take() {
-            return Err(LinkError::Closed(format!("{}: {why}", self.name)));
-        }
-        let before = out.len();
-        let why = poll_fn(|cx| loop {
-            let why = match Pin::new(&mut self.ws).poll_next(cx) {
-                Poll::Ready(Some(msg)) => match self.take(msg, out) {
-                    None => continue,
-                    Some(why) => why,
-                },
-                Poll::Ready(None) => "the connection ended".into(),
-                Poll::Pending if out.len() > before => return Poll::Ready(None),
-                Poll::Pending => return Poll::Pending,
-            };
-            return Poll::Ready(Some(why));
-        })
-        .await;
-        match why {
-            Some(why) if out.len() > before => {
-                self.gone = Some(why);
-                Ok(())
-            }
-            Some(why) => Err(LinkError::Closed(format!("{}: {why}", self.name))),
-            None => Ok(()),
-        }
+        self.recv_messages(out).await
     }
 
     fn scan_stats(&self) -> ScanStats {

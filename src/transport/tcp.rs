@@ -72,6 +72,28 @@ impl Connect for TcpConnector {
     }
 }
 
+/// A listening TCP socket for `scheme` (`tcpin`, `wsin`) at `addr`,
+/// failures said in `what`'s words ("cannot listen on tcp ...").
+pub(crate) async fn listener(
+    scheme: &str,
+    what: &str,
+    addr: &HostPort,
+    route: &Route,
+) -> Result<TcpListener, LinkError> {
+    let local = resolve(addr, route.family).await?;
+    let socket = route.tcp(local)?;
+    // As std's TcpListener::bind: a restarted server must not wait for
+    // its old connections' TIME_WAIT.
+    socket
+        .set_reuseaddr(true)
+        .and_then(|()| socket.bind(local))
+        .and_then(|()| socket.listen(1024))
+        .map_err(|e| {
+            let e = advice::listening(scheme, addr, local, e);
+            LinkError::io(format!("cannot listen on {what} {addr}"), e)
+        })
+}
+
 struct Client {
     path: PathId,
     peer: SocketAddr,
@@ -93,18 +115,7 @@ pub(crate) struct TcpServer {
 
 impl TcpServer {
     pub(crate) async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
-        let local = resolve(addr, route.family).await?;
-        let socket = route.tcp(local)?;
-        // As std's TcpListener::bind: a restarted server must not wait for
-        // its old connections' TIME_WAIT.
-        let listener = socket
-            .set_reuseaddr(true)
-            .and_then(|()| socket.bind(local))
-            .and_then(|()| socket.listen(1024))
-            .map_err(|e| {
-                let e = advice::listening("tcpin", addr, local, e);
-                LinkError::io(format!("cannot listen on tcp {addr}"), e)
-            })?;
+        let listener = listener("tcpin", "tcp", addr, route).await?;
         Ok(TcpServer {
             listener,
             clients: Vec::new(),

@@ -28,7 +28,6 @@ use tokio_tungstenite::tungstenite::{Error as WsError, Message};
 use tokio_tungstenite::WebSocketStream;
 
 use super::address::HostPort;
-use super::advice;
 use super::link::push_datagram;
 use super::route::{resolve, Route};
 use super::ws_url::WsUrl;
@@ -60,6 +59,71 @@ pub(crate) trait Io: AsyncRead + AsyncWrite + Unpin + Send {}
 impl<T: AsyncRead + AsyncWrite + Unpin + Send> Io for T {}
 
 pub(crate) type Socket = WebSocketStream<Box<dyn Io>>;
+
+/// A client link that talks to one server in WebSocket messages: what
+/// `ws://` (binary frames) and `m2r://` (JSON texts) share. Each says how
+/// a message it sends is made and how one it reads becomes frames; the
+/// writing and the reading are done once, here.
+#[allow(async_fn_in_trait)] // used with concrete types only
+pub(crate) trait MessageLink {
+    fn socket(&mut self) -> &mut Socket;
+    /// The link as reports name it.
+    fn name(&self) -> &str;
+    /// Why the WebSocket ended, kept to be told after the frames that
+    /// came before it.
+    fn gone(&mut self) -> &mut Option<String>;
+    /// A message's frames into `out`; why the peer is gone, if it is.
+    fn take(&mut self, msg: Result<Message, WsError>, out: &mut Vec<Inbound>) -> Option<String>;
+
+    /// Writes one message; a server that takes nothing for
+    /// [`WRITE_STALL`] ends the link.
+    async fn send_message(&mut self, msg: Message) -> Result<(), LinkError> {
+        match tokio::time::timeout(WRITE_STALL, self.socket().send(msg)).await {
+            Ok(Ok(())) => Ok(()),
+            Ok(Err(e)) => Err(LinkError::Closed(format!(
+                "{}: {}",
+                self.name(),
+                broken(&e)
+            ))),
+            Err(_) => Err(LinkError::Closed(format!(
+                "{}: the server took nothing for {} s: it stopped reading",
+                self.name(),
+                WRITE_STALL.as_secs()
+            ))),
+        }
+    }
+
+    /// Reads what has come. Cancel-safe: polling the stream keeps its
+    /// state in the link. The frames of the messages before an end are
+    /// handed over first; the end is told by the next call.
+    async fn recv_messages(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
+        if let Some(why) = self.gone().take() {
+            return Err(LinkError::Closed(format!("{}: {why}", self.name())));
+        }
+        let before = out.len();
+        let why = poll_fn(|cx| loop {
+            let why = match Pin::new(self.socket()).poll_next(cx) {
+                Poll::Ready(Some(msg)) => match self.take(msg, out) {
+                    None => continue,
+                    Some(why) => why,
+                },
+                Poll::Ready(None) => "the connection ended".into(),
+                Poll::Pending if out.len() > before => return Poll::Ready(None),
+                Poll::Pending => return Poll::Pending,
+            };
+            return Poll::Ready(Some(why));
+        })
+        .await;
+        match why {
+            Some(why) if out.len() > before => {
+                *self.gone() = Some(why);
+                Ok(())
+            }
+            Some(why) => Err(LinkError::Closed(format!("{}: {why}", self.name()))),
+            None => Ok(()),
+        }
+    }
+}
 
 /// Trust for `wss://`: the certificates `--cacert` named, or the system's.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
@@ -292,54 +356,41 @@ fn take(
     }
 }
 
+impl MessageLink for WsClient {
+    fn socket(&mut self) -> &mut Socket {
+        &mut self.ws
+    }
+
+    fn name(&self) -> &str {
+        &self.name
+    }
+
+    fn gone(&mut self) -> &mut Option<String> {
+        &mut self.gone
+    }
+
+    fn take(&mut self, msg: Result<Message, WsError>, out: &mut Vec<Inbound>) -> Option<String> {
+        match take(msg, 0, self.keep_raw, &mut self.stats, out) {
+            Read::Frames | Read::Nothing => None,
+            Read::Gone(why) => Some(why),
+        }
+    }
+}
+
 impl Transport for WsClient {
     async fn send(&mut self, frame: &[u8]) -> Result<Instant, LinkError> {
         let sent = Instant::now();
-        let msg = Message::Binary(frame.to_vec().into());
-        match tokio::time::timeout(WRITE_STALL, self.ws.send(msg)).await {
-            Ok(Ok(())) => Ok(sent),
-            Ok(Err(e)) => Err(LinkError::Closed(format!("{}: {}", self.name, broken(&e)))),
-            Err(_) => Err(LinkError::Closed(format!(
-                "{}: the server took nothing for {} s: it stopped reading",
-                self.name,
-                WRITE_STALL.as_secs()
-            ))),
-        }
+        self.send_message(Message::Binary(frame.to_vec().into()))
+            .await
+            .map(|()| sent)
     }
 
     async fn send_to(&mut self, _path: PathId, frame: &[u8]) -> Result<Instant, LinkError> {
         self.send(frame).await
     }
 
-    // Cancel-safe: polling the stream keeps its state in `self`. The
-    // frames of the messages before a close are handed over first; the
-    // close is told by the next call.
     async fn recv(&mut self, out: &mut Vec<Inbound>) -> Result<(), LinkError> {
-        if let Some(why) = self.gone.take() {
-            return Err(LinkError::Closed(format!("{}: {why}", self.name)));
-        }
-        let before = out.len();
-        let why = poll_fn(|cx| loop {
-            let why = match Pin::new(&mut self.ws).poll_next(cx) {
-                Poll::Ready(Some(msg)) => match take(msg, 0, self.keep_raw, &mut self.stats, out) {
-                    Read::Frames | Read::Nothing => continue,
-                    Read::Gone(why) => why,
-                },
-                Poll::Ready(None) => "the connection ended".into(),
-                Poll::Pending if out.len() > before => return Poll::Ready(None),
-                Poll::Pending => return Poll::Pending,
-            };
-            return Poll::Ready(Some(why));
-        })
-        .await;
-        match why {
-            Some(why) if out.len() > before => {
-                self.gone = Some(why);
-                Ok(())
-            }
-            Some(why) => Err(LinkError::Closed(format!("{}: {why}", self.name))),
-            None => Ok(()),
-        }
+        self.recv_messages(out).await
     }
 
     fn scan_stats(&self) -> ScanStats {
@@ -377,16 +428,7 @@ pub(crate) struct WsServer {
 
 impl WsServer {
     pub(crate) async fn listen(addr: &HostPort, route: &Route) -> Result<Self, LinkError> {
-        let local = resolve(addr, route.family).await?;
-        let socket = route.tcp(local)?;
-        let listener = socket
-            .set_reuseaddr(true)
-            .and_then(|()| socket.bind(local))
-            .and_then(|()| socket.listen(1024))
-            .map_err(|e| {
-                let e = advice::listening("wsin", addr, local, e);
-                LinkError::io(format!("cannot listen on ws {addr}"), e)
-            })?;
+        let listener = super::tcp::listener("wsin", "ws", addr, route).await?;
         Ok(WsServer {
             listener,
             handshakes: Vec::new(),
