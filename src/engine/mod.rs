@@ -4,6 +4,7 @@
 //! not on the command line, the configuration, the reports or the verdict.
 
 pub(crate) mod age;
+pub(crate) mod c2;
 pub(crate) mod answers;
 pub(crate) mod capacity;
 pub(crate) mod clock_offset;

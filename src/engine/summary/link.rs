@@ -6,6 +6,7 @@
 use std::any::Any;
 use std::fmt::Debug;
 
+use crate::engine::c2::C2Report;
 use crate::engine::capacity::WireBudget;
 
 /// What every kind of run's summary answers alike.
@@ -31,13 +32,23 @@ pub trait KindSummary: Any + Debug + Send + Sync {
     }
 }
 
-/// The end of one link's run, of whichever kind.
+/// The end of one link's run, of whichever kind, and the C2 link report
+/// over it when one was asked for (`--report c2`): any kind's run has one.
 #[derive(Debug)]
-pub struct LinkSummary(Box<dyn KindSummary>);
+pub struct LinkSummary(Box<dyn KindSummary>, Option<Box<C2Report>>);
 
 impl LinkSummary {
     pub(crate) fn new(summary: impl KindSummary) -> Self {
-        LinkSummary(Box::new(summary))
+        LinkSummary(Box::new(summary), None)
+    }
+
+    /// The C2 link report, if the run made one.
+    pub(crate) fn c2(&self) -> Option<&C2Report> {
+        self.1.as_deref()
+    }
+
+    pub(crate) fn set_c2(&mut self, report: C2Report) {
+        self.1 = Some(Box::new(report));
     }
 
     /// The summary, if its kind's is a `T`.
