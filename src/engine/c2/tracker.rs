@@ -10,6 +10,7 @@ use super::report::{C2Report, C2Rule, Continuity, Percentiles};
 use super::summary_figures;
 use super::uplink::{Paced, ProbedUplink};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::driver::GroundIds;
 use crate::engine::probe::passive::round_trips::RoundTrips;
 use crate::engine::radio::is_radio_ids;
@@ -88,6 +89,8 @@ pub(crate) struct C2Tracker {
     played: Vec<Played>,
     /// The vehicle's MAV_TYPE and autopilot, for the presets.
     vehicle: Option<(u8, u8)>,
+    /// Commands decided: continuity is theirs.
+    commands: bool,
 }
 
 /// The models a run plays: those asked for, else every preset (the one
@@ -130,6 +133,7 @@ impl C2Tracker {
                 })
                 .collect(),
             vehicle: None,
+            commands: false,
             cfg: cfg.clone(),
         }
     }
@@ -209,6 +213,22 @@ impl C2Tracker {
         }
     }
 
+    /// A command of ours acknowledged (from its first transmission: the
+    /// transaction's time) or given up.
+    pub(crate) fn command(&mut self, event: &CommandEvent) {
+        match *event {
+            CommandEvent::Acked { time_to_ack, .. } => {
+                self.commands = true;
+                self.tally.answered(time_to_ack);
+            }
+            CommandEvent::Failed { .. } => {
+                self.commands = true;
+                self.tally.unanswered += 1;
+            }
+            _ => {}
+        }
+    }
+
     /// The report at `end`, with the figures the run's summary has.
     pub(crate) fn finish(mut self, end: Nanos, summary: &LinkSummary) -> C2Report {
         let probed = self.probed.outcomes() > 0;
@@ -221,7 +241,7 @@ impl C2Tracker {
                 .map(|p| p.counts.unanswered)
                 .sum::<u64>()
         });
-        if let Some(unanswered) = logged_from.filter(|_| !probed) {
+        if let Some(unanswered) = logged_from.filter(|_| !probed && !self.commands) {
             self.tally.unanswered += unanswered;
         }
         let availability = &self.availability;
@@ -249,7 +269,11 @@ impl C2Tracker {
             availability_pct: (frames > 0 && end > 0)
                 .then(|| 100.0 * (1.0 - down as f64 / end as f64)),
             frames,
-            continuity: self.tally.continuity(if probed { "probes" } else { "log" }),
+            continuity: self.tally.continuity(match (probed, self.commands) {
+                (true, _) => "probes",
+                (_, true) => "commands",
+                _ => "log",
+            }),
             latency: super::report::Latency {
                 round_trip: self.tally.percentiles(),
                 ..latency_split
@@ -525,5 +549,33 @@ mod tests {
         let r = c2.finish(10 * S, &summary());
         let c = r.continuity.unwrap();
         assert_eq!((c.within, c.transactions, c.from), (1, 3, "log"));
+    }
+
+    /// A command run: acknowledged within the time, after it, never.
+    #[test]
+    fn a_command_runs_continuity_is_its_acknowledgements() {
+        let mut c2 = C2Tracker::new(&config(&[]), US, S, false);
+        for (time_to_ack, acked) in [(100 * MS, true), (900 * MS, true), (0, false)] {
+            c2.command(&if acked {
+                CommandEvent::Acked {
+                    n: 1,
+                    target: VEHICLE,
+                    from: VEHICLE,
+                    command: 512,
+                    result: 0,
+                    attempts: 1,
+                    time_to_ack,
+                }
+            } else {
+                CommandEvent::Failed {
+                    n: 3,
+                    target: VEHICLE,
+                    command: 512,
+                    attempts: 4,
+                }
+            });
+        }
+        let c = c2.finish(5 * S, &summary()).continuity.unwrap();
+        assert_eq!((c.within, c.transactions, c.from), (1, 3, "commands"));
     }
 }
