@@ -249,6 +249,9 @@ fn the_plot_draws_every_run() {
         tell_run(&mut plot.link(), run, &borrowed);
         let svg = plot.svg().unwrap_or_else(|e| panic!("{run:?}: {e}"));
         assert!(svg.starts_with("<svg"), "{run:?}");
+        // A run with a C2 link report gets its page, whatever its kind.
+        let c2 = svg.contains("mavping C2 link report: sim:?seed=1, 600.0 s");
+        assert_eq!(c2, matches!(run, Run::C2), "{run:?}");
     }
 }
 

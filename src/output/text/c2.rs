@@ -219,7 +219,7 @@ fn write_failsafe(out: &mut impl Write, f: &FailsafeReplay) -> io::Result<()> {
         writeln!(
             out,
             "  expected if each message were lost independently: {} trips",
-            small(e)
+            two_significant(e)
         )?;
     }
     Ok(())
@@ -255,7 +255,7 @@ fn wrapped(head: &str, items: &[String]) -> Vec<String> {
 
 /// An expectation to two significant digits, in scientific notation
 /// below 0.01 (`1.5e-7`).
-fn small(v: f64) -> String {
+pub(crate) fn two_significant(v: f64) -> String {
     if v == 0.0 {
         "0".into()
     } else if v >= 0.01 {
@@ -342,12 +342,12 @@ mod tests {
     }
 
     #[test]
-    fn small_expectations_keep_a_significant_digit() {
-        assert_eq!(small(0.0), "0");
-        assert_eq!(small(1.475e-7), "1.5e-7");
-        assert_eq!(small(0.0103), "0.010");
-        assert_eq!(small(0.012), "0.012");
-        assert_eq!(small(2.5), "2.5");
-        assert_eq!(small(14.3), "14");
+    fn expectations_keep_two_significant_digits() {
+        assert_eq!(two_significant(0.0), "0");
+        assert_eq!(two_significant(1.475e-7), "1.5e-7");
+        assert_eq!(two_significant(0.0103), "0.010");
+        assert_eq!(two_significant(0.012), "0.012");
+        assert_eq!(two_significant(2.5), "2.5");
+        assert_eq!(two_significant(14.3), "14");
     }
 }

@@ -45,6 +45,7 @@ use crate::engine::sweep_report::{StepFigures, SweepConfig};
 use crate::engine::CommandSpec;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
+pub(crate) use c2::two_significant;
 pub(crate) use reporter::TextReporter;
 
 impl<W: Write> Reporter for TextReporter<W> {
