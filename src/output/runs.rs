@@ -1122,6 +1122,7 @@ pub(crate) fn c2_report() -> C2Report {
         loss: DirectionLoss {
             downlink_pct: Some(0.5),
             uplink_pct: Some(1.2),
+            uplink_from: Some("direction_split"),
             round_trip_pct: Some(1.7),
         },
         outages: Outages {

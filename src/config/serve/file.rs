@@ -245,16 +245,15 @@ impl Table {
                 .transpose()?,
             distance_band_m: self.distance_band.unwrap_or(500.0),
             failsafes: &self.failsafe,
-            min_availability: self.percent("min_availability", &self.min_availability)?,
-            min_continuity: self.percent("min_continuity", &self.min_continuity)?,
+            min_availability: Self::percent("min_availability", self.min_availability.as_deref())?,
+            min_continuity: Self::percent("min_continuity", self.min_continuity.as_deref())?,
             timeout,
         })
     }
 
     /// A percentage key, as a percentage.
-    fn percent(&self, key: &str, value: &Option<String>) -> Result<Option<f64>, ConfigError> {
+    fn percent(key: &str, value: Option<&str>) -> Result<Option<f64>, ConfigError> {
         value
-            .as_deref()
             .map(|p| {
                 parse_percent(p)
                     .map(|r| r * 100.0)
@@ -301,8 +300,8 @@ impl Table {
             // Ages are a listening run's; /probe runs are short probes.
             max_age: None,
             max_transfer_time: None,
-            min_availability: self.percent("min_availability", &self.min_availability)?,
-            min_continuity: self.percent("min_continuity", &self.min_continuity)?,
+            min_availability: Self::percent("min_availability", self.min_availability.as_deref())?,
+            min_continuity: Self::percent("min_continuity", self.min_continuity.as_deref())?,
             expect: self
                 .expect
                 .iter()

@@ -47,9 +47,14 @@ pub(super) fn write_report(out: &mut impl Write, link: &str, r: &C2Report) -> io
     }
     write_latency(out, &r.latency)?;
     let l = &r.loss;
+    let from = match l.uplink_from.filter(|_| l.uplink_pct.is_some()) {
+        Some("link_node_status") => " (the vehicle's LINK_NODE_STATUS)",
+        Some(_) => " (split from the round trip)",
+        None => "",
+    };
     writeln!(
         out,
-        "loss downlink {}, uplink {}, round trip {}",
+        "loss downlink {}, uplink {}{from}, round trip {}",
         percent_or_dash(l.downlink_pct),
         percent_or_dash(l.uplink_pct),
         percent_or_dash(l.round_trip_pct)
