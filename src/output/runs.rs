@@ -1037,12 +1037,13 @@ pub(crate) fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
 /// other: the outages add up to the down time, each outage is its
 /// silence less the 2 s rule.
 pub(crate) fn c2_report() -> C2Report {
-    let outage = |start_s, duration_s, distance_m, open| Outage {
+    let outage = |start_s: f64, duration_s, distance_m, open| Outage {
         start_s,
         duration_s,
         silence_s: duration_s + 2.0,
         distance_m,
         open,
+        at_utc: Some(format!("2026-12-05T10:{:02.0}:00Z", start_s / 60.0)),
     };
     let band = |band, count, total_s| Band {
         band,
@@ -1084,6 +1085,7 @@ pub(crate) fn c2_report() -> C2Report {
         expected_if_independent: None,
     };
     C2Report {
+        started_utc: Some("2026-12-05T10:00:00.000000Z".into()),
         rule: C2Rule {
             up_within_s: 2.0,
             continuity_within_s: 1.0,

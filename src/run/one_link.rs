@@ -123,6 +123,10 @@ pub(super) async fn measure_recorded(
     if let (Link::Tlog(log), Some(s)) = (link.inner(), outcome.summary.get_mut::<PassiveSummary>())
     {
         s.log = log.facts();
+        let first_us = s.log.as_ref().map(|f| f.stamps.first_us);
+        if let (Some(us), Some(c2)) = (first_us, outcome.summary.c2_mut()) {
+            c2.date(std::time::SystemTime::UNIX_EPOCH + std::time::Duration::from_micros(us));
+        }
     }
     // The simulated link's ground truth, for soak scripts (`-v`).
     if let Link::Sim(sim) = link.inner() {

@@ -119,6 +119,7 @@ impl Availability {
             silence_s: secs(silence),
             distance_m: distance,
             open,
+            at_utc: None,
         });
     }
 

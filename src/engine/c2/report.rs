@@ -81,7 +81,7 @@ pub(crate) struct Band {
 
 /// One outage: the link down by the rule, `start_s` (since the run or
 /// log began) for `duration_s`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize)]
 pub(crate) struct Outage {
     pub(crate) start_s: f64,
     pub(crate) duration_s: f64,
@@ -91,6 +91,9 @@ pub(crate) struct Outage {
     pub(crate) distance_m: Option<f64>,
     /// Still down when the run ended.
     pub(crate) open: bool,
+    /// When it began on the log's clock (a log) or the wall clock (a
+    /// live run), to the second.
+    pub(crate) at_utc: Option<String>,
 }
 
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -169,6 +172,8 @@ pub(crate) struct FailsafeReplay {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub(crate) struct C2Report {
     pub(crate) rule: C2Rule,
+    /// The start on the log's clock (a log) or the wall clock (a live run).
+    pub(crate) started_utc: Option<String>,
     /// From the run's (or log's) start to its end, s.
     pub(crate) duration_s: f64,
     /// Of it, the link down by the rule.
@@ -186,6 +191,18 @@ pub(crate) struct C2Report {
     /// The nearest band whose availability fell under the floor.
     pub(crate) availability_under_floor_from_m: Option<f64>,
     pub(crate) failsafes: Vec<FailsafeReplay>,
+}
+
+impl C2Report {
+    /// Puts the run's time 0 at `origin` (a log's first record, a live
+    /// run's wall clock): when it started and each listed outage began.
+    pub(crate) fn date(&mut self, origin: std::time::SystemTime) {
+        let at = |s: f64| origin + std::time::Duration::from_secs_f64(s.max(0.0));
+        self.started_utc = Some(humantime::format_rfc3339_micros(origin).to_string());
+        for o in &mut self.outages.longest {
+            o.at_utc = Some(humantime::format_rfc3339_seconds(at(o.start_s)).to_string());
+        }
+    }
 }
 
 impl crate::engine::kind::KindValue for C2Report {

@@ -229,7 +229,8 @@ impl C2Tracker {
         }
     }
 
-    /// The report at `end`, with the figures the run's summary has.
+    /// The report at `end`, with the figures the run's summary has (dated
+    /// apart: [`C2Report::date`]).
     pub(crate) fn finish(mut self, end: Nanos, summary: &LinkSummary) -> C2Report {
         let probed = self.probed.outcomes() > 0;
         let logged_from = self.logged.as_mut().map(|rt| {
@@ -258,6 +259,7 @@ impl C2Tracker {
         let floor = self.cfg.availability_floor_pct;
         let duration_s = end as f64 / 1e9;
         C2Report {
+            started_utc: None,
             rule: C2Rule {
                 up_within_s: self.cfg.up_within as f64 / 1e9,
                 continuity_within_s: self.cfg.continuity_within as f64 / 1e9,

@@ -47,6 +47,10 @@ impl LinkSummary {
         self.1.as_deref()
     }
 
+    pub(crate) fn c2_mut(&mut self) -> Option<&mut C2Report> {
+        self.1.as_deref_mut()
+    }
+
     pub(crate) fn set_c2(&mut self, report: C2Report) {
         self.1 = Some(Box::new(report));
     }

@@ -111,8 +111,8 @@ fn write_outages(out: &mut impl Write, o: &Outages) -> io::Result<()> {
     writeln!(out, "longest outages:")?;
     writeln!(
         out,
-        "  {:>9} {:>9} {:>9} {:>9}",
-        "start", "duration", "silence", "distance"
+        "  {:>9} {:>9} {:>9} {:>9}  {}",
+        "start", "duration", "silence", "distance", "at"
     )?;
     for x in &o.longest {
         writeln!(out, "{}", outage_row(x))?;
@@ -125,8 +125,9 @@ fn outage_row(x: &Outage) -> String {
         .distance_m
         .map_or_else(|| "-".into(), |m| format!("{m:.0} m"));
     let open = if x.open { "  (open at end)" } else { "" };
+    let at = x.at_utc.as_deref().unwrap_or("-");
     format!(
-        "  {:>7.1} s {:>7.1} s {:>7.1} s {distance:>9}{open}",
+        "  {:>7.1} s {:>7.1} s {:>7.1} s {distance:>9}  {at}{open}",
         x.start_s, x.duration_s, x.silence_s
     )
 }
