@@ -3,7 +3,8 @@
 mavping: the truth `mavping --report c2 tlog:LOG` is held against.
 
     c2_truth.py LOG.tlog [--up-within 2] [--distance-band 500]
-                [--failsafe DIRECTION:MESSAGE:TIMEOUT[:LONG_TIMEOUT]] ...
+                [--failsafe direction=up|down,message=heartbeat|timesync|any,
+                            timeout=S[,long-timeout=S][,rate=HZ]] ...
 
 Prints one JSON object. The log is walked record by record (8-byte
 big-endian stamp in microseconds, then one MAVLink frame) as
@@ -35,11 +36,14 @@ The rule (issue 44):
 - A failsafe: deliveries d1 < d2 < ...; it trips when the time since the
   last delivery (or time 0) exceeds TIMEOUT, at last + TIMEOUT, and
   clears at the next delivery; a trip is long when the wait also exceeds
-  LONG_TIMEOUT. The closest call is the longest wait (from time 0 or the
-  last delivery to the next delivery) that did not trip.
-  DIRECTION down: the vehicle frames of MESSAGE (heartbeat, timesync, any)
-  as received. DIRECTION up: the ground station's own recorded frames of
-  MESSAGE, each delivered when the link was up (by the rule) at its record.
+  the long timeout. The closest call is the longest wait (from time 0 or
+  the last delivery to the next delivery) that did not trip, at the
+  delivery that ended it.
+  direction=down: the vehicle frames of the message (heartbeat, timesync,
+  any) as received. direction=up: the ground station's own recorded frames
+  of the message, each delivered when the link was up (by the rule) at its
+  record; a log with none of them: messages at the rate from time 0 (0,
+  1/rate, ... up to the end), each delivered when the link was up then.
 
 Times are computed in integer microseconds and printed in seconds.
 """
@@ -133,7 +137,10 @@ class Walk:
         self.gcs_sysids = set()
         self.sources = {}
         self.origin = None
-        self.position = None
+        # The last distance known (computed at each position), and the
+        # source whose positions are read: the first to give one.
+        self.distance = None
+        self.positioned_by = None
         self.global_seen = False
         self.unknown = 0
         self.bad_crc = 0
@@ -169,31 +176,35 @@ class Walk:
             key = f"{sysid}/{compid}"
             self.sources[key] = self.sources.get(key, 0) + 1
             if known:
-                self.position_from(parser, msgid, frame)
-            d = None
-            if self.origin is not None and self.position is not None:
-                d = slant(self.origin, self.position)
-            self.vehicle.append((t, msgid, d))
+                self.position_from(parser, key, msgid, frame)
+            self.vehicle.append((t, msgid, self.distance))
         return self
 
-    def position_from(self, parser, msgid, frame):
+    def position_from(self, parser, key, msgid, frame):
+        if msgid not in (GLOBAL_POSITION_INT, GPS_RAW_INT, HOME_POSITION):
+            return
+        if self.positioned_by not in (None, key):
+            return
         if msgid == GLOBAL_POSITION_INT:
             m = decode(parser, frame)
             if (m.lat, m.lon) != (0, 0):
+                self.positioned_by = key
                 self.global_seen = True
                 self.place((m.lat / 1e7, m.lon / 1e7, m.alt / 1e3))
         elif msgid == GPS_RAW_INT and not self.global_seen:
             m = decode(parser, frame)
             if m.fix_type >= 2:
+                self.positioned_by = key
                 self.place((m.lat / 1e7, m.lon / 1e7, m.alt / 1e3))
         elif msgid == HOME_POSITION:
             m = decode(parser, frame)
+            self.positioned_by = key
             self.origin = (m.latitude / 1e7, m.longitude / 1e7, m.altitude / 1e3)
 
     def place(self, pos):
-        self.position = pos
         if self.origin is None:
             self.origin = pos
+        self.distance = slant(self.origin, pos)
 
 
 def outages(walk, up_us):
@@ -226,10 +237,12 @@ def band_of(us):
 
 def distance_bands(walk, up_us, width):
     """{band index: [observed_us, down_us, outages]}: each gap between two
-    vehicle frames goes to the band of the distance known at the earlier."""
+    vehicle frames (and from the last to the end) goes to the band of the
+    distance known at the earlier."""
     bands = {}
-    for (t0, _, d), (t1, _, _) in zip(walk.vehicle, walk.vehicle[1:]):
-        if d is None:
+    ends = [t for t, _, _ in walk.vehicle[1:]] + [walk.end - walk.start]
+    for (t0, _, d), t1 in zip(walk.vehicle, ends):
+        if d is None or t1 <= t0:
             continue
         b = bands.setdefault(int(d // width), [0, 0, 0])
         b[0] += t1 - t0
@@ -250,7 +263,7 @@ def replay(deliveries, end, timeout, long_timeout):
                           "open": False,
                           "long": long_timeout is not None and wait > long_timeout})
         elif closest is None or wait > closest[0]:
-            closest = (wait, last)
+            closest = (wait, d)
         last = d
     if end - last > timeout:
         trips.append({"at_s": s(last + timeout), "lasted_s": s(end - last - timeout),
@@ -264,16 +277,31 @@ def replay(deliveries, end, timeout, long_timeout):
 
 
 def failsafe(walk, up_us, spec):
-    direction, message, timeout, long_timeout = spec
+    direction, message = spec["direction"], spec["message"]
+    timeout, long_timeout = spec["timeout"], spec.get("long-timeout")
     want = MESSAGES[message]
     end = walk.end - walk.start
+    basis = "received"
     if direction == "down":
         played = [(t, True) for t, m, _ in walk.vehicle if want is None or m == want]
     else:
+        basis = "recorded"
         played = [(t, up_at(walk, up_us, t, k)) for t, m, k in walk.gcs_frames
                   if want is None or m == want]
+    if direction == "up" and not played:
+        # No message of the ground station's in the log: sent at the
+        # rate from time 0, delivered while the link was up.
+        basis = "downlink"
+        period = round(1e6 / spec["rate"])
+        times = [t for t, _, _ in walk.vehicle]
+        played, k = [], 0
+        for t in range(0, end + 1, period):
+            while k < len(times) and times[k] < t:
+                k += 1
+            played.append((t, up_at(walk, up_us, t, k)))
     deliveries = [t for t, ok in played if ok]
-    out = {"direction": direction, "message": message, "timeout_s": s(timeout),
+    out = {"direction": direction, "message": message, "basis": basis,
+           "timeout_s": s(timeout),
            "long_timeout_s": s(long_timeout) if long_timeout is not None else None,
            "messages": len(played), "delivered": len(deliveries)}
     out.update(replay(deliveries, end, timeout, long_timeout))
@@ -324,12 +352,26 @@ def micros(text):
 
 
 def failsafe_spec(text):
-    parts = text.split(":")
-    if len(parts) not in (3, 4) or parts[0] not in ("up", "down") or parts[1] not in MESSAGES:
-        raise argparse.ArgumentTypeError(
-            f"{text!r}: expected up|down:heartbeat|timesync|any:TIMEOUT[:LONG_TIMEOUT]")
-    long_timeout = micros(parts[3]) if len(parts) == 4 else None
-    return parts[0], parts[1], micros(parts[2]), long_timeout
+    """direction=up|down,message=heartbeat|timesync|any,timeout=S
+    [,long-timeout=S][,rate=HZ]"""
+    spec = {"direction": "up", "message": "heartbeat", "rate": 1.0}
+    try:
+        for pair in text.split(","):
+            key, value = pair.split("=")
+            if key in ("timeout", "long-timeout"):
+                spec[key] = micros(value)
+            elif key == "rate":
+                spec[key] = float(value)
+            elif key in ("direction", "message"):
+                spec[key] = value
+            else:
+                raise ValueError(key)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: {failsafe_spec.__doc__}") from None
+    if spec["direction"] not in ("up", "down") or spec["message"] not in MESSAGES \
+            or "timeout" not in spec:
+        raise argparse.ArgumentTypeError(f"{text!r}: {failsafe_spec.__doc__}")
+    return spec
 
 
 def main():
@@ -338,7 +380,7 @@ def main():
     ap.add_argument("--up-within", type=micros, default=2_000_000, metavar="SECONDS")
     ap.add_argument("--distance-band", type=float, default=500.0, metavar="METRES")
     ap.add_argument("--failsafe", type=failsafe_spec, action="append", default=[],
-                    metavar="up|down:MESSAGE:TIMEOUT[:LONG]")
+                    metavar="direction=D,message=M,timeout=S[,long-timeout=S][,rate=HZ]")
     args = ap.parse_args()
     with open(args.log, "rb") as f:
         walk = Walk().read(f.read())
