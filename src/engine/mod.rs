@@ -4,8 +4,8 @@
 //! not on the command line, the configuration, the reports or the verdict.
 
 pub(crate) mod age;
-pub(crate) mod c2;
 pub(crate) mod answers;
+pub(crate) mod c2;
 pub(crate) mod capacity;
 pub(crate) mod clock_offset;
 pub(crate) mod diagnosis;

@@ -296,7 +296,8 @@ def failsafe(walk, up_us, spec):
         times = [t for t, _, _ in walk.vehicle]
         played, k = [], 0
         for t in range(0, end + 1, period):
-            while k < len(times) and times[k] < t:
+            # The frames up to t, one at t included.
+            while k < len(times) and times[k] <= t:
                 k += 1
             played.append((t, up_at(walk, up_us, t, k)))
     deliveries = [t for t, ok in played if ok]
