@@ -7,11 +7,14 @@
 //! replays are held against a direct simulation of the rule written here
 //! (or in c2_truth.py), not mavping's.
 
-use serde_json::Value;
+use std::path::Path;
+
+use serde_json::{json, Value};
 
 use crate::common::*;
 use crate::field_logs::shared_tlog;
 use crate::passive_peers::{relay, vehicle};
+use crate::tlog::{write_log, Scratch};
 
 /// The duration bands and their lower bounds, s.
 const BANDS: [(&str, f64); 5] = [
@@ -147,10 +150,11 @@ fn assert_trips(replay: &Value, expected: &[Trip], tol: f64) {
 // The shared real logs, against c2_truth.py.
 
 /// `c2_truth.py LOG ARGS`.
-fn log_truth(name: &str, args: &[&str]) -> Value {
+fn log_truth(path: &Path, args: &[&str]) -> Value {
+    let name = path.display();
     let out = std::process::Command::new(python())
         .arg(peer_script("c2_truth.py"))
-        .arg(shared_tlog(name))
+        .arg(path)
         .args(args)
         .output()
         .unwrap();
@@ -199,7 +203,12 @@ const UP_HEARTBEAT: [Model; 2] = [
 /// mavping's report of `name` with `--up-within up_within` and `models`,
 /// and c2_truth.py's.
 fn log_reports(name: &str, up_within: &str, models: &[&Model]) -> (Value, Value) {
-    let log = format!("tlog:{}", shared_tlog(name).display());
+    path_reports(&shared_tlog(name), up_within, models)
+}
+
+fn path_reports(path: &Path, up_within: &str, models: &[&Model]) -> (Value, Value) {
+    let name = path.display();
+    let log = format!("tlog:{name}");
     let mut args = vec!["-q", "--up-within", up_within];
     let mut truth_args = vec!["--up-within", up_within];
     for m in models {
@@ -209,7 +218,7 @@ fn log_reports(name: &str, up_within: &str, models: &[&Model]) -> (Value, Value)
     args.push(&log);
     let (code, report, err) = c2_run(&args);
     assert_eq!(code, 0, "{name}: {err}");
-    (report, log_truth(name, &truth_args))
+    (report, log_truth(path, &truth_args))
 }
 
 /// Seconds equal to the millisecond (MAVProxy's stamps lose their two low
@@ -376,6 +385,63 @@ fn qgc_logs_outages_are_where_the_vehicle_was_not_heard() {
     let up = &list(&t, "failsafes")[DOWN_HEARTBEAT.len()];
     assert!(u(up, "delivered") < u(up, "messages"), "{up}");
     assert_log_report("qgc_px4_bench", &r, &t);
+}
+
+/// A flight written by pymavlink (tlog_writer.py): ATTITUDE at 50 Hz and
+/// a HEARTBEAT each second, the vehicle flying north at 20 m/s (a
+/// position every tenth frame), silent for 150 frames after frame 500
+/// (10 s, 200 m out), 250 after frame 1500 (30 s, 600 m) and 60 after frame
+/// 2600 (1.22 s: under the rule); its SiK radio reporting each second all
+/// along (not the vehicle: it must not fill the silences).
+#[test]
+fn a_written_flight_has_its_silences_as_outages_in_their_distance_bands() {
+    let dir = Scratch::new("c2-flight");
+    let path = dir.path("flight.tlog");
+    let (rate, silences) = (50.0, [(500.0, 150.0), (1500.0, 250.0)]);
+    write_log(
+        &path,
+        &json!({
+            "start_us": 1_764_500_000_000_000u64,
+            "sources": [
+                {"sysid": 1, "compid": 1, "rate": 50, "frames": 3500,
+                 "silence": [[500, 150], [1500, 250], [2600, 60]],
+                 "position": {"every": 10, "lat0": 47.0, "lon0": 8.0, "alt0_m": 500.0,
+                              "north_mps": 20.0, "climb_mps": 0.0, "message": "global"}},
+                {"sysid": 51, "compid": 68, "rate": 1, "frames": 70, "phase_us": 500_000,
+                 "radio": {"rxerrors0": 0, "rxerrors_step": 1}}
+            ]
+        }),
+    );
+    let models: Vec<&Model> = DOWN_HEARTBEAT.iter().chain(&UP_HEARTBEAT).collect();
+    let (r, t) = path_reports(&path, "2s", &models);
+    assert_log_report("flight", &r, &t);
+    // By hand: frame n at n/50 s; a silence of k frames after frame n is a
+    // gap of (k + 1)/50 s, an outage of that less 2 s from n/50 + 2 s, at
+    // 20 m/s x n/50 s (the last position written, a little before).
+    let longest = list(&r["outages"], "longest");
+    assert_eq!(longest.len(), 2, "{longest:?}");
+    let mut down = 0.0;
+    for (n, k) in silences {
+        let duration = (k + 1.0) / rate - 2.0;
+        down += duration;
+        let o = longest
+            .iter()
+            .find(|o| (f(o, "start_s") - (n / rate + 2.0)).abs() < 1e-6)
+            .unwrap_or_else(|| panic!("no outage after frame {n}: {longest:?}"));
+        assert!((f(o, "duration_s") - duration).abs() < 1e-6, "{o}");
+        let d = f(o, "distance_m");
+        assert!(d <= 20.0 * n / rate && d > 20.0 * (n / rate - 0.5), "{o}");
+    }
+    assert!((f(&r, "down_s") - down).abs() < 1e-6, "{r}");
+    // 0-500 m holds the first outage, 500-1000 m the second, 1000-1500 m
+    // none; the floor (99 %) is first missed from 0 m.
+    let bands = list(&r, "distance");
+    let downs: Vec<f64> = bands.iter().map(|b| f(b, "down_s")).collect();
+    assert_eq!(bands.len(), 3, "{bands:?}");
+    assert!((downs[0] - 151.0 / rate + 2.0).abs() < 1e-6, "{bands:?}");
+    assert!((downs[1] - 251.0 / rate + 2.0).abs() < 1e-6, "{bands:?}");
+    assert_eq!(downs[2], 0.0);
+    assert_eq!(f(&r, "availability_under_floor_from_m"), 0.0);
 }
 
 // ---------------------------------------------------------------------
