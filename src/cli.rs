@@ -258,6 +258,13 @@ pub(crate) fn parse_expected(s: &str) -> Result<Expected, ExpectedError> {
     })
 }
 
+/// `--report`: the reports a run can add to its own.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub(crate) enum ReportKind {
+    /// The command-and-control link report.
+    C2,
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub(crate) enum Format {
     /// Ping-like lines and a summary
@@ -681,6 +688,47 @@ pub(crate) struct PingArgs {
     )]
     pub(crate) tlog: Option<PathBuf>,
 
+    /// Add a report: c2, the command-and-control link report (availability, continuity,
+    /// latency and loss each way, outages by duration and distance, failsafe replay)
+    #[arg(
+        help_heading = "C2 link report",
+        allow_negative_numbers = true,
+        long,
+        value_name = "KIND",
+        value_enum
+    )]
+    pub(crate) report: Option<ReportKind>,
+
+    /// C2 report: the link is up while a frame from the vehicle came within DURATION
+    #[arg(help_heading = "C2 link report", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration, default_value = "2s")]
+    pub(crate) up_within: Duration,
+
+    /// C2 report: continuity counts round trips completed within DURATION (default: -W)
+    #[arg(help_heading = "C2 link report", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
+    pub(crate) continuity_within: Option<Duration>,
+
+    /// C2 report: the width of the distance bands, metres
+    #[arg(
+        help_heading = "C2 link report",
+        allow_negative_numbers = true,
+        long,
+        value_name = "METRES",
+        default_value_t = 500.0
+    )]
+    pub(crate) distance_band: f64,
+
+    /// C2 report: replay a failsafe: ardupilot-copter, ardupilot-plane, ardupilot-rover, px4
+    /// (settings changed as px4:timeout=5s), or custom:message=heartbeat|timesync|any,rate=HZ,
+    /// timeout=DURATION[,long-timeout=DURATION][,direction=up|down]; repeatable
+    /// (default: the vehicle's autopilot's preset)
+    #[arg(
+        help_heading = "C2 link report",
+        allow_negative_numbers = true,
+        long,
+        value_name = "MODEL"
+    )]
+    pub(crate) failsafe: Vec<String>,
+
     /// Fail (exit 1) when a responder loses more than PCT, e.g. 5% or 0.5
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent, env = "MAVPING_MAX_LOSS")]
     pub(crate) max_loss: Option<f64>,
@@ -702,6 +750,14 @@ pub(crate) struct PingArgs {
     /// --probe params, mission, ftp: fail when a download takes longer than DURATION to complete
     #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "DURATION", value_parser = parse_duration)]
     pub(crate) max_transfer_time: Option<Duration>,
+
+    /// Fail when the C2 link's availability is under PCT (implies --report c2)
+    #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent)]
+    pub(crate) min_availability: Option<f64>,
+
+    /// Fail when the C2 link's continuity is under PCT (implies --report c2)
+    #[arg(help_heading = "Thresholds", allow_negative_numbers = true, long, value_name = "PCT", value_parser = parse_percent)]
+    pub(crate) min_continuity: Option<f64>,
 
     /// A responder that must answer: SYSID or SYSID/COMPID (on every link), or
     /// LINK=SYSID[/COMPID] (on that one of several links); repeatable

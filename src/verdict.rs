@@ -8,6 +8,7 @@ use serde::Serialize;
 use thiserror::Error;
 
 use crate::engine::age::SourceAge;
+use crate::engine::c2::C2Report;
 use crate::engine::probe::transfer::TransferSummary;
 use crate::engine::stats::RttSummary;
 use crate::engine::summary::passive::PassiveSummary;
@@ -115,6 +116,10 @@ pub(crate) struct Thresholds {
     /// Longest allowed time for a download to complete
     /// (`--max-transfer-time`).
     pub(crate) max_transfer_time: Option<Duration>,
+    /// Least allowed C2 availability and continuity, % (`--min-availability`,
+    /// `--min-continuity`).
+    pub(crate) min_availability: Option<f64>,
+    pub(crate) min_continuity: Option<f64>,
     pub(crate) expect: Vec<Expected>,
     pub(crate) min_responders: Option<usize>,
 }
@@ -140,6 +145,8 @@ pub(crate) enum Check {
     /// Every download completed.
     Transfer,
     MaxTransferTime,
+    MinAvailability,
+    MinContinuity,
 }
 
 impl Check {
@@ -156,6 +163,8 @@ impl Check {
             Check::MinResponders => "min-responders",
             Check::Transfer => "transfer",
             Check::MaxTransferTime => "max-transfer-time",
+            Check::MinAvailability => "min-availability",
+            Check::MinContinuity => "min-continuity",
         }
     }
 }
@@ -441,6 +450,52 @@ fn judge_ages(ages: &[SourceAge], t: &Thresholds, failures: &mut Vec<Failure>) {
 
 /// Judges any link's run; thresholds apply to echo probes and passive runs.
 pub(crate) fn judge_link(summary: &LinkSummary, t: &Thresholds) -> Verdict {
+    let mut verdict = judge_kind(summary, t);
+    if let Some(report) = summary.c2() {
+        verdict.failures.extend(judge_c2(report, t));
+        verdict.end.checks_held = verdict.failures.is_empty();
+    }
+    verdict
+}
+
+/// `--min-availability` and `--min-continuity` against the C2 report: a
+/// figure the run could not measure fails its check.
+fn judge_c2(report: &C2Report, t: &Thresholds) -> Vec<Failure> {
+    let mut failures = Vec::new();
+    if let Some(min) = t.min_availability {
+        let message = match report.availability_pct {
+            None => Some("no availability: the vehicle was never heard".to_string()),
+            Some(a) if a < min => Some(format!(
+                "availability {a:.3}% is under --min-availability {min}% ({:.1} s down of {:.1} s)",
+                report.down_s, report.duration_s
+            )),
+            Some(_) => None,
+        };
+        failures.extend(message.map(|message| Failure {
+            responder: None,
+            check: Check::MinAvailability,
+            message,
+        }));
+    }
+    if let Some(min) = t.min_continuity {
+        let message = match &report.continuity {
+            None => Some("no continuity: no round trip was decided".to_string()),
+            Some(c) if c.pct < min => Some(format!(
+                "continuity {:.3}% ({} of {} round trips within {} s) is under --min-continuity {min}%",
+                c.pct, c.within, c.transactions, report.rule.continuity_within_s
+            )),
+            Some(_) => None,
+        };
+        failures.extend(message.map(|message| Failure {
+            responder: None,
+            check: Check::MinContinuity,
+            message,
+        }));
+    }
+    failures
+}
+
+fn judge_kind(summary: &LinkSummary, t: &Thresholds) -> Verdict {
     if let Some(s) = summary.get::<EchoSummary>() {
         judge(s, t)
     } else if let Some(s) = summary.get::<CommandSummary>() {
@@ -581,6 +636,8 @@ mod tests {
             max_jitter: Some(Duration::from_millis(3)),
             max_age: None,
             max_transfer_time: None,
+            min_availability: None,
+            min_continuity: None,
             expect: vec![Expected {
                 sysid: 1,
                 compid: Some(1),

@@ -11,7 +11,7 @@ use super::link::LinkConfig;
 use super::probe::{probe_of, wire_budget, Probe, ProbeChoice, ECHO_PROBES};
 use super::signing::signing;
 use super::values::{validate_baud, validate_ids, validate_listen, MAX_RATE, MAX_TIMEOUT};
-use crate::cli::{Format, PingArgs, ProbeKind};
+use crate::cli::{Format, PingArgs, ProbeKind, ReportKind};
 use crate::engine::matcher::Window;
 use crate::engine::SessionConfig;
 use crate::frame::signing::SigningConfig;
@@ -540,6 +540,16 @@ fn session(
         // Each link has its own.
         wire: None,
         radio_type: cli.radio_type.into(),
+        c2: super::c2::validate(&super::c2::C2Flags {
+            asked: cli.report == Some(ReportKind::C2),
+            up_within: cli.up_within,
+            continuity_within: cli.continuity_within,
+            distance_band_m: cli.distance_band,
+            failsafes: &cli.failsafe,
+            min_availability: cli.min_availability.map(|r| r * 100.0),
+            min_continuity: cli.min_continuity.map(|r| r * 100.0),
+            timeout: cli.timeout,
+        })?,
     })
 }
 
@@ -616,6 +626,8 @@ impl TryFrom<&PingArgs> for Config {
             max_jitter: cli.max_jitter,
             max_age: cli.max_age,
             max_transfer_time: cli.max_transfer_time,
+            min_availability: cli.min_availability.map(|r| r * 100.0),
+            min_continuity: cli.min_continuity.map(|r| r * 100.0),
             expect: cli
                 .expect
                 .iter()

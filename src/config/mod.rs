@@ -16,6 +16,7 @@
 //! [`LinkSpec`]: crate::transport::address::LinkSpec
 //! [`ResponderSettings`]: crate::responder::ResponderSettings
 
+mod c2;
 mod compare;
 mod error;
 mod keys;

@@ -264,6 +264,7 @@ mod tests {
                 sweep: None,
                 wire: None,
                 radio_type: crate::engine::radio::RadioType::Auto,
+                c2: None,
             };
             for_baud(57_600, 1, &session, Exchange::Ping)
         };

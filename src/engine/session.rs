@@ -16,6 +16,7 @@ use std::sync::Arc;
 use tokio::sync::Notify;
 
 use super::answers::{AnswerSummary, Answers};
+use super::c2::{C2Tracker, Watching};
 use super::link_io::{admitted, Clock, Heartbeat, Sender, WallAtZero};
 use super::link_node::LinkNodes;
 use super::observe::{Event, Observer, OutputFate, RadioHeard, StartInfo};
@@ -155,6 +156,8 @@ struct Heard {
     link_nodes: LinkNodes,
     gate: Gate,
     answers: Answers,
+    /// `--report c2`: the C2 link report's figures.
+    c2: Option<C2Tracker>,
 }
 
 impl Heard {
@@ -199,6 +202,9 @@ impl Heard {
                 self.roster.addressed(frame.source, to, frame.msgid);
             }
             self.answers.take(&frame, path, at);
+            if let Some(c2) = &mut self.c2 {
+                c2.frame(&frame, at);
+            }
             driver.on_received(&frame, path, at);
             match frame.msg {
                 Msg::Heartbeat {
@@ -248,7 +254,11 @@ impl Heard {
                 _ => driver.on_frame(&frame, path, at),
             }
         }
-        output.and(driver.report(&mut self.radios, observer))
+        let mut watching = Watching {
+            c2: self.c2.as_mut(),
+            observer,
+        };
+        output.and(driver.report(&mut self.radios, &mut watching))
     }
 
     /// A radio's latest report, with what it is and why: at its first
@@ -415,6 +425,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         let mut output = OutputFate::default();
         output.note(&observer.start(&driver.start_info(cfg)));
         let kernel_stamped = link.rx_clock() == RxClock::Kernel;
+        let log = link.kind() == LinkKind::Log;
         Session {
             cfg,
             link,
@@ -433,6 +444,10 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
                 link_nodes: LinkNodes::default(),
                 gate: Gate::new(cfg.signing),
                 answers: Answers::new(cfg.ours, cfg.answer),
+                c2: cfg.c2.as_ref().map(|c2| {
+                    let timeout = Nanos::try_from(cfg.timeout.as_nanos()).unwrap_or(Nanos::MAX);
+                    C2Tracker::new(c2, cfg.ours, timeout, log)
+                }),
             },
             schedule: None,
             timers: Timers::new(cfg),
@@ -551,7 +566,11 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
     /// one is due.
     fn decide(&mut self) {
         self.driver.expire(self.clock.now());
-        let reported = self.driver.report(&mut self.heard.radios, self.observer);
+        let mut watching = Watching {
+            c2: self.heard.c2.as_mut(),
+            observer: self.observer,
+        };
+        let reported = self.driver.report(&mut self.heard.radios, &mut watching);
         self.told(reported);
         if self.timers.interim_due(self.clock.now()) {
             self.interim();
@@ -690,6 +709,8 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
             let told = self.observer.event(&failed);
             self.told(told);
         }
+        let end = self.clock.now();
+        let c2 = self.heard.c2.take();
         let (mut summary, histograms) = self.driver.finish(SessionEnd {
             cfg: self.cfg,
             duration_s: self.clock.now() as f64 / 1e9,
@@ -710,6 +731,10 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
         // Last, as it judges the finished figures (a sweep's included).
         if let Some(wire) = self.cfg.wire {
             summary.apply_wire(wire);
+        }
+        if let Some(c2) = c2 {
+            let report = c2.finish(end, &summary);
+            summary.set_c2(report);
         }
         Measurement {
             summary,

@@ -53,6 +53,8 @@ pub struct SessionConfig {
     pub wire: Option<capacity::WireBudget>,
     /// `--radio-type`: how radios' RADIO_STATUS figures are read.
     pub radio_type: radio::RadioType,
+    /// `--report c2`: the C2 link report's settings.
+    pub c2: Option<super::c2::C2Config>,
 }
 
 /// The command probe's request and retry policy.

@@ -241,6 +241,8 @@ impl Table {
             // Ages are a listening run's; /probe runs are short probes.
             max_age: None,
             max_transfer_time: None,
+            min_availability: None,
+            min_continuity: None,
             expect: self
                 .expect
                 .iter()

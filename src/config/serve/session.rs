@@ -84,6 +84,7 @@ pub(super) fn session(
         sweep: None,
         wire: None,
         radio_type: c.radio_type,
+        c2: None,
     };
     session.wire = wire_budget(spec, c.baud, &c.probe, &session);
     Ok(session)

@@ -4,7 +4,21 @@
 //! Pure and synchronous, time passed in, constant memory over a run or
 //! a log of any length.
 
+mod config;
+mod failsafe;
+mod outages;
+mod position;
 mod report;
+mod summary_figures;
+mod tracker;
+mod uplink;
+mod watching;
+
+pub(crate) use config::C2Config;
+pub(crate) use config::DEFAULT_FLOOR_PCT;
+pub(crate) use failsafe::FailsafeModel;
+pub(crate) use tracker::C2Tracker;
+pub(crate) use watching::Watching;
 
 pub(crate) use report::{
     Band, C2Report, C2Rule, Continuity, DirectionLoss, DistanceBand, FailsafeReplay, Latency,

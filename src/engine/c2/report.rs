@@ -62,8 +62,11 @@ pub(crate) struct Latency {
 pub(crate) struct DirectionLoss {
     /// Of the vehicle's frames, by their sequence numbers.
     pub(crate) downlink_pct: Option<f64>,
-    /// From the round trip's loss and the downlink's (the direction split).
+    /// The vehicle's own LINK_NODE_STATUS count where it sends one, else
+    /// from the round trip's loss and the downlink's (the direction split).
     pub(crate) uplink_pct: Option<f64>,
+    /// `link_node_status` or `direction_split`.
+    pub(crate) uplink_from: Option<&'static str>,
     pub(crate) round_trip_pct: Option<f64>,
 }
 

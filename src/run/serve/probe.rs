@@ -255,6 +255,8 @@ fn judged(started: Instant, summary: &LinkSummary, verdict: &verdict::Verdict) -
             Check::MinResponders => "min_responders",
             Check::Transfer => "transfer_incomplete",
             Check::MaxTransferTime => "max_transfer_time",
+            Check::MinAvailability => "min_availability",
+            Check::MinContinuity => "min_continuity",
         };
         if !reasons.contains(&reason) {
             reasons.push(reason);

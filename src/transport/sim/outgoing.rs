@@ -123,9 +123,14 @@ impl SimLink {
     }
 
     /// A HEARTBEAT sent at `sent`: one leg later at mavping (no jitter, no
-    /// wire time), but for the per-direction faults.
+    /// wire time), but for the per-direction faults and the outage (which
+    /// silences the whole link: what a C2 report's availability sees).
     fn send_heartbeat(&mut self, i: usize, sent: Instant) {
         let (header, index) = self.responders[i].header();
+        if self.in_outage(sent) {
+            self.responders[i].truth.down.dropped += 1;
+            return;
+        }
         let mut bytes = Vec::new();
         frame::encode(
             &mut bytes,

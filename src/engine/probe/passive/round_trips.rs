@@ -312,18 +312,20 @@ impl RoundTrips {
         }
     }
 
-    /// Takes one logged frame at its time.
-    pub(crate) fn on_frame(&mut self, frame: &Frame, at: Nanos) {
-        let Some((kind, role)) = role(&frame.msg) else {
-            return;
-        };
+    /// Takes one logged frame at its time; a reply that completes a
+    /// round trip within the timeout gives its requester and RTT.
+    pub(crate) fn on_frame(&mut self, frame: &Frame, at: Nanos) -> Option<(SysComp, Nanos)> {
+        let (kind, role) = role(&frame.msg)?;
         self.expire(at);
         match role {
             Role::Request {
                 key,
                 target,
                 retransmission,
-            } => self.request(kind, frame.source, key, target, retransmission, at),
+            } => {
+                self.request(kind, frame.source, key, target, retransmission, at);
+                None
+            }
             Role::Reply {
                 key,
                 requester,
@@ -390,7 +392,7 @@ impl RoundTrips {
         requester: SysComp,
         in_progress: bool,
         at: Nanos,
-    ) {
+    ) -> Option<(SysComp, Nanos)> {
         let timeout = self.timeout;
         // The request: in flight, else timed out (a late reply).
         let mut found = None;
@@ -432,12 +434,10 @@ impl RoundTrips {
             if let Some(p) = self.pair(kind, requester, responder) {
                 p.counts.no_request += 1;
             }
-            return;
+            return None;
         };
         let requester = self.queues[q].requester;
-        let Some(p) = self.pair(kind, requester, responder) else {
-            return;
-        };
+        let p = self.pair(kind, requester, responder)?;
         match how {
             None => p.counts.late += 1,
             Some((_, _, Answer::Again)) => p.counts.duplicate += 1,
@@ -447,15 +447,17 @@ impl RoundTrips {
                     // Still in the table (it expires lazily): late all the same.
                     p.counts.late += 1;
                     p.counts.unanswered += 1;
-                    return;
+                    return None;
                 }
                 p.counts.matched += 1;
                 if attempts > 1 {
                     p.counts.after_retransmission += 1;
                 }
                 p.rtt.record(rtt);
+                return Some((requester, rtt));
             }
         }
+        None
     }
 
     /// Requests whose timeout has passed by `now` leave the table; the

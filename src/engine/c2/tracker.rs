@@ -1,0 +1,334 @@
+//! The C2 report's running figures over one session: fed every frame
+//! the session admits and every decided request, finished into a
+//! [`C2Report`] against the run's summary.
+
+use super::config::C2Config;
+use super::failsafe::{Direction, FailsafeModel, Replay, Watched, PRESETS};
+use super::outages::Availability;
+use super::position::Whereabouts;
+use super::report::{C2Report, C2Rule, Continuity, Percentiles};
+use super::summary_figures;
+use super::uplink::{Paced, ProbedUplink};
+use crate::engine::matcher::MatchEvent;
+use crate::engine::probe::passive::driver::GroundIds;
+use crate::engine::probe::passive::round_trips::RoundTrips;
+use crate::engine::radio::is_radio_ids;
+use crate::engine::stats::RttStats;
+use crate::engine::summary::LinkSummary;
+use crate::engine::Nanos;
+use crate::frame::{Frame, Msg, SysComp, AUTOPILOT_ARDUPILOT};
+
+/// MAV_AUTOPILOT_PX4.
+const AUTOPILOT_PX4: u8 = 12;
+
+/// Round trips completed within the continuity time.
+#[derive(Clone)]
+struct Tally {
+    within_t: Nanos,
+    within: u64,
+    answered: u64,
+    unanswered: u64,
+    rtt: RttStats,
+}
+
+impl Tally {
+    fn answered(&mut self, rtt: Nanos) {
+        self.answered += 1;
+        self.within += u64::from(rtt <= self.within_t);
+        self.rtt.record(rtt);
+    }
+
+    fn continuity(&self, from: &'static str) -> Option<Continuity> {
+        let transactions = self.answered + self.unanswered;
+        (transactions > 0).then(|| Continuity {
+            within: self.within,
+            transactions,
+            pct: 100.0 * self.within as f64 / transactions as f64,
+            from,
+        })
+    }
+
+    fn percentiles(&self) -> Option<Percentiles> {
+        let s = self.rtt.summary()?;
+        Some(Percentiles {
+            count: self.rtt.count(),
+            p50_ms: self.rtt.quantile_us(0.5) / 1e3,
+            p99_ms: self.rtt.quantile_us(0.99) / 1e3,
+            p999_ms: self.rtt.quantile_us(0.999) / 1e3,
+            max_ms: s.max_us / 1e3,
+        })
+    }
+}
+
+/// One failsafe model, played every way its deliveries could be known;
+/// the report keeps the best known at the end.
+#[derive(Debug, Clone)]
+struct Played {
+    /// Down: the vehicle's messages as received. Up: the ground
+    /// station's recorded messages (a log's), delivered while the
+    /// downlink was up.
+    recorded: Replay,
+    /// Up: messages at the model's rate, delivered while the downlink
+    /// was up.
+    paced: Paced,
+}
+
+/// The C2 report's figures so far.
+#[derive(Clone)]
+pub(crate) struct C2Tracker {
+    cfg: C2Config,
+    ours: SysComp,
+    ground: GroundIds,
+    whereabouts: Whereabouts,
+    availability: Availability,
+    tally: Tally,
+    /// A log's requests and replies, for continuity.
+    logged: Option<RoundTrips>,
+    probed: ProbedUplink,
+    played: Vec<Played>,
+    /// The vehicle's MAV_TYPE and autopilot, for the presets.
+    vehicle: Option<(u8, u8)>,
+}
+
+/// The models a run plays: those asked for, else every preset (the one
+/// matching the vehicle is kept at the end).
+fn models(cfg: &C2Config) -> Vec<FailsafeModel> {
+    if cfg.failsafes.is_empty() {
+        PRESETS
+            .iter()
+            .filter_map(|p| FailsafeModel::preset(p.0))
+            .collect()
+    } else {
+        cfg.failsafes.clone()
+    }
+}
+
+impl C2Tracker {
+    /// `log`: the session reads a telemetry log.
+    pub(crate) fn new(cfg: &C2Config, ours: SysComp, timeout: Nanos, log: bool) -> Self {
+        let models = models(cfg);
+        let paced_up = |m: &FailsafeModel| Paced::new(Replay::new(m.clone()));
+        C2Tracker {
+            ours,
+            ground: GroundIds::default(),
+            whereabouts: Whereabouts::default(),
+            availability: Availability::new(cfg.up_within, cfg.distance_band_m),
+            tally: Tally {
+                within_t: cfg.continuity_within,
+                within: 0,
+                answered: 0,
+                unanswered: 0,
+                rtt: RttStats::new(),
+            },
+            logged: log.then(|| RoundTrips::new(timeout)),
+            probed: ProbedUplink::new(timeout, models.iter().map(paced_up).collect()),
+            played: models
+                .iter()
+                .map(|m| Played {
+                    recorded: Replay::new(m.clone()),
+                    paced: paced_up(m),
+                })
+                .collect(),
+            vehicle: None,
+            cfg: cfg.clone(),
+        }
+    }
+
+    /// A frame the session admitted, at `at`.
+    pub(crate) fn frame(&mut self, frame: &Frame, at: Nanos) {
+        if matches!(frame.msg, Msg::Damaged) || frame.source == self.ours {
+            return;
+        }
+        let ground = self.ground.sees(frame);
+        if let Some(rt) = &mut self.logged {
+            if let Some((requester, rtt)) = rt.on_frame(frame, at) {
+                if self.ground.sees_id(requester) {
+                    self.tally.answered(rtt);
+                }
+            }
+        }
+        if ground {
+            self.ground_frame(frame, at);
+        } else if !is_radio_ids(frame.source) {
+            self.vehicle_frame(frame, at);
+        }
+    }
+
+    /// The ground station's own frame in a log: a message its vehicle's
+    /// failsafe watches, delivered if the downlink was up then.
+    fn ground_frame(&mut self, frame: &Frame, at: Nanos) {
+        let up = self.availability.up_at(at);
+        for p in &mut self.played {
+            let m = &p.recorded.model;
+            if m.direction == Direction::Up && watches(m.message, &frame.msg) {
+                p.recorded.message(at, up);
+            }
+        }
+    }
+
+    fn vehicle_frame(&mut self, frame: &Frame, at: Nanos) {
+        // The failsafe's paced messages up to now, by the downlink as it
+        // was before this frame.
+        let availability = &self.availability;
+        for p in &mut self.played {
+            p.paced.send_until(at, |t| availability.up_at(t));
+            let m = &p.recorded.model;
+            if m.direction == Direction::Down && watches(m.message, &frame.msg) {
+                p.recorded.message(at, true);
+            }
+        }
+        self.availability.frame(at, self.whereabouts.distance_m());
+        match &frame.msg {
+            Msg::Fix(f) => self.whereabouts.fix(frame.source, f),
+            Msg::Heartbeat {
+                mav_type,
+                autopilot,
+            } if self.vehicle.is_none() && *autopilot != crate::frame::AUTOPILOT_INVALID => {
+                self.vehicle = Some((*mav_type, *autopilot));
+            }
+            _ => {}
+        }
+    }
+
+    /// A request of ours decided.
+    pub(crate) fn matched(&mut self, event: &MatchEvent) {
+        match *event {
+            MatchEvent::Reply {
+                rtt, sent_at, at, ..
+            } => {
+                self.tally.answered(rtt);
+                self.probed.decided(sent_at, true, at);
+            }
+            MatchEvent::Lost { sent_at, at, .. } => {
+                self.tally.unanswered += 1;
+                self.probed.decided(sent_at, false, at);
+            }
+            // Counted lost already, but the request got through.
+            MatchEvent::Late { sent_at, at, .. } => self.probed.decided(sent_at, true, at),
+            MatchEvent::Duplicate { .. } | MatchEvent::Stale { .. } => {}
+        }
+    }
+
+    /// The report at `end`, with the figures the run's summary has.
+    pub(crate) fn finish(mut self, end: Nanos, summary: &LinkSummary) -> C2Report {
+        let probed = self.probed.outcomes() > 0;
+        let logged_from = self.logged.as_mut().map(|rt| {
+            let s = rt.summary(end);
+            let ground = self.ground;
+            s.pairs
+                .iter()
+                .filter(|p| ground.sees_id(p.requester))
+                .map(|p| p.counts.unanswered)
+                .sum::<u64>()
+        });
+        if let Some(unanswered) = logged_from.filter(|_| !probed) {
+            self.tally.unanswered += unanswered;
+        }
+        let availability = &self.availability;
+        let mut played = std::mem::take(&mut self.played);
+        for p in &mut played {
+            p.paced
+                .send_until(end.saturating_add(1), |t| availability.up_at(t));
+        }
+        let (latency_split, loss) = summary_figures::of(summary);
+        let failsafes = self.replays(played, end, probed, &loss);
+        let frames = self.availability.frames();
+        let distance = self.whereabouts.distance_m();
+        let (down, outages, bands) = self.availability.finish(end, distance);
+        let floor = self.cfg.availability_floor_pct;
+        let duration_s = end as f64 / 1e9;
+        C2Report {
+            rule: C2Rule {
+                up_within_s: self.cfg.up_within as f64 / 1e9,
+                continuity_within_s: self.cfg.continuity_within as f64 / 1e9,
+                distance_band_m: self.cfg.distance_band_m,
+                availability_floor_pct: floor,
+            },
+            duration_s,
+            down_s: down as f64 / 1e9,
+            availability_pct: (frames > 0 && end > 0)
+                .then(|| 100.0 * (1.0 - down as f64 / end as f64)),
+            frames,
+            continuity: self.tally.continuity(if probed { "probes" } else { "log" }),
+            latency: super::report::Latency {
+                round_trip: self.tally.percentiles(),
+                ..latency_split
+            },
+            loss,
+            outages,
+            availability_under_floor_from_m: bands
+                .iter()
+                .find(|b| b.availability_pct < floor)
+                .map(|b| b.from_m),
+            distance: bands,
+            failsafes,
+        }
+    }
+
+    /// Each model's replay by the best evidence the run had.
+    fn replays(
+        &self,
+        played: Vec<Played>,
+        end: Nanos,
+        probed: bool,
+        loss: &super::report::DirectionLoss,
+    ) -> Vec<super::report::FailsafeReplay> {
+        let by_probes = self.probed.clone().finish(end);
+        let vehicle = self.vehicle;
+        played
+            .into_iter()
+            .zip(by_probes)
+            .filter(|(p, _)| !self.cfg.failsafes.is_empty() || matches(&p.recorded.model, vehicle))
+            .map(|(p, probes)| {
+                let m = &p.recorded.model;
+                match m.direction {
+                    Direction::Down => p.recorded.finish(
+                        end,
+                        "received",
+                        false,
+                        loss.downlink_pct.map(|l| l / 100.0),
+                    ),
+                    Direction::Up => {
+                        let up_loss = loss.uplink_pct.map(|l| l / 100.0);
+                        if probed {
+                            probes.finish(end, "probes", true, up_loss)
+                        } else if p.recorded.messages() > 0 {
+                            p.recorded.finish(end, "recorded", true, up_loss)
+                        } else {
+                            p.paced.replay.finish(end, "downlink", true, up_loss)
+                        }
+                    }
+                }
+            })
+            .collect()
+    }
+}
+
+/// Whether a preset is the vehicle's autopilot's.
+fn matches(model: &FailsafeModel, vehicle: Option<(u8, u8)>) -> bool {
+    let Some((mav_type, autopilot)) = vehicle else {
+        return false;
+    };
+    let preset = match autopilot {
+        AUTOPILOT_PX4 => "px4",
+        AUTOPILOT_ARDUPILOT => match mav_type {
+            // Fixed wing and the VTOL types ArduPlane sends.
+            1 | 19..=25 => "ardupilot-plane",
+            // Ground rover, surface boat.
+            10 | 11 => "ardupilot-rover",
+            2 | 3 | 4 | 13 | 14 | 15 | 29 | 35 => "ardupilot-copter",
+            _ => return false,
+        },
+        _ => return false,
+    };
+    model.name == preset
+}
+
+/// Whether `msg` is the message a failsafe watches.
+fn watches(watched: Watched, msg: &Msg) -> bool {
+    match watched {
+        Watched::Any => true,
+        Watched::Heartbeat => matches!(msg, Msg::Heartbeat { .. }),
+        Watched::Timesync => matches!(msg, Msg::Timesync { .. }),
+    }
+}
