@@ -697,7 +697,7 @@ fn min_availability_gates_the_exit_code() {
 #[test]
 fn min_continuity_gates_the_exit_code() {
     // Round trips in the outages are lost: continuity is the share
-    // answered, within the reply timeout.
+    // answered within --continuity-within (the reply timeout unless given).
     let sim = SimOutages {
         start: 5.0,
         length: 4.5,
@@ -711,12 +711,25 @@ fn min_continuity_gates_the_exit_code() {
     let c = &report["continuity"];
     let pct = f(c, "pct");
     assert_eq!(c["from"], "probes");
-    // Of 600 probes, those sent in the three 4.5 s windows (45 each) are
-    // lost; the replies come in 2 ms, well within the timeout.
-    let windows = sim.windows().len() as f64;
-    let lost = windows * sim.length / 0.1;
-    let expected = 100.0 * (1.0 - lost / (sim.run / 0.1));
-    assert!((pct - expected).abs() < 0.5, "{c} vs {expected}");
+    // Of 600 probes (every 100 ms from 0), the 45 sent in each of the
+    // three 4.5 s windows are lost; the others are answered in 2 ms.
+    let windows = sim.windows().len() as u64;
+    assert_eq!(
+        (u(c, "within"), u(c, "transactions")),
+        (600 - 45 * windows, 600),
+        "{c}"
+    );
+    assert_eq!(pct, 100.0 * (600 - 45 * windows) as f64 / 600.0);
+    // Within 1 ms none is; within 3 ms every answered one.
+    for (within, n) in [("1ms", 0), ("3ms", 600 - 45 * windows)] {
+        let (_, r) = sim.run(&["--continuity-within", within]);
+        let c = &r["continuity"];
+        assert_eq!(
+            (u(c, "within"), u(c, "transactions")),
+            (n, 600),
+            "{within}: {c}"
+        );
+    }
     let (code, _) = sim.run(&["--min-continuity", &format!("{}", pct - 1.0)]);
     assert_eq!(code, 0);
     let (code, _) = sim.run(&["--min-continuity", &format!("{}", pct + 1.0)]);
