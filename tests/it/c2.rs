@@ -605,13 +605,15 @@ fn sim_loss_bursts_and_random_loss_leave_only_the_outages() {
     // Outages of 35 s (past 30 s by a 2 s rule: 33 s) and 20% of the
     // vehicle's frames lost at random besides: a gap of 2 s would take
     // 100 losses in a row, so only the outages count, a few frames wider.
+    // The near radio's RADIO_STATUS (51/68) goes on through them, once a
+    // second: not the vehicle.
     let sim = SimOutages {
         start: 10.0,
         length: 35.0,
         every: 60.0,
         rate: 50.0,
         run: 120.0,
-        extra: "&loss_down=20%",
+        extra: "&loss_down=20%&radio=on",
     };
     let (code, report) = sim.run(&["--up-within", "2s"]);
     assert_eq!(code, 0);
@@ -665,6 +667,71 @@ fn sim_up_failsafe_replays_the_probes_outcomes() {
         let trips = failsafe_trips(&delivered, end, timeout);
         assert_trips(r, &trips, 1e-6);
     }
+}
+
+/// A run of 10 s at a vehicle never heard (the sim's outage from its
+/// start to past the run's end), with a down HEARTBEAT failsafe at 1.5 s
+/// and an up one at 5 s: its report (the run exits 1: no reply at all).
+fn never_heard() -> Value {
+    let (code, r, err) = c2_run(&[
+        "-i",
+        "100ms",
+        "-w",
+        "10",
+        "-q",
+        "--up-within",
+        "2s",
+        "--failsafe",
+        "custom:message=heartbeat,timeout=1.5s,direction=down",
+        "--failsafe",
+        "custom:message=heartbeat,rate=1,timeout=5s,direction=up",
+        "sim:?clock=virtual&outage=0s+1h",
+    ]);
+    // No reply at all.
+    assert_eq!(code, 1, "{err}");
+    let end = f(&r, "duration_s");
+    assert!((end - 10.0).abs() < 0.01, "{r}");
+    r
+}
+
+/// Down from the rule's grace on, one open outage; no availability to
+/// state; the vehicle's HEARTBEAT failsafe tripped at its timeout for good.
+#[test]
+fn a_vehicle_never_heard_is_down_from_the_grace_on() {
+    let r = never_heard();
+    let end = f(&r, "duration_s");
+    assert_eq!(u(&r, "frames"), 0);
+    assert!(r["availability_pct"].is_null(), "{r}");
+    assert!((f(&r, "down_s") - (end - 2.0)).abs() < 1e-9, "{r}");
+    let o = &r["outages"];
+    assert_eq!(u(o, "count"), 1);
+    let only = &list(o, "longest")[0];
+    assert_eq!(
+        (f(only, "start_s"), only["open"].clone()),
+        (2.0, true.into())
+    );
+    let down = &replays(&r)[0];
+    assert_eq!(u(down, "delivered"), 0);
+    assert_trips(down, &failsafe_trips(&[], end, 1.5), 1e-9);
+}
+
+/// Every one of the 100 round trips failed: continuity is 0 of 100 (the
+/// rule: answered within T over answered and unanswered), and the up
+/// failsafe's messages, each delivered if the last probe sent at or
+/// before it was answered, are none delivered: it trips at 5 s, the
+/// probe at time 0 being lost with the first message.
+#[test]
+fn a_vehicle_never_heard_fails_every_round_trip_and_uplink_message() {
+    let r = never_heard();
+    let end = f(&r, "duration_s");
+    let c = &r["continuity"];
+    assert!(c.is_object(), "100 requests unanswered: {r}");
+    assert_eq!((u(c, "within"), u(c, "transactions")), (0, 100), "{c}");
+    let up = &replays(&r)[1];
+    assert_eq!(up["basis"], "probes", "{up}");
+    assert_eq!(u(up, "delivered"), 0, "{up}");
+    assert_eq!(u(up, "messages"), end.floor() as u64 + 1, "{up}");
+    assert_trips(up, &failsafe_trips(&[], end, 5.0), 1e-9);
 }
 
 #[test]
