@@ -819,9 +819,10 @@ fn forwarded(truth: &Value) -> Vec<(f64, u64)> {
 fn a_vehicle_behind_a_cutting_relay_has_its_cuts_as_outages_and_trips() {
     // The vehicle streams ATTITUDE at 50 Hz and HEARTBEAT at 1 Hz for
     // longer than the run, and answers our PINGs; the relay cuts both ways
-    // for 3.4 s at 3 s, 1.6 s at 10 s and 6.5 s at 15 s.
+    // for 3.4 s at 3.05 s, 1.6 s at 10.05 s and 6.5 s at 15.05 s (between
+    // our probes, sent every 100 ms from 0).
     let (mut vehicle, vport) = vehicle(1, &["--rate", "50", "--frames", "1500"]);
-    let (relay, rport) = relay(&[vport], &["--cut", "3+3.4,10+1.6,15+6.5"]);
+    let (relay, rport) = relay(&[vport], &["--cut", "3.05+3.4,10.05+1.6,15.05+6.5"]);
     let target = format!("udpout:127.0.0.1:{rport}");
     let (code, report, err) = c2_run(&[
         "-i",
@@ -835,6 +836,8 @@ fn a_vehicle_behind_a_cutting_relay_has_its_cuts_as_outages_and_trips() {
         "custom:message=heartbeat,timeout=1.5s,direction=down",
         "--failsafe",
         "custom:message=any,timeout=500ms,direction=down",
+        "--failsafe",
+        "custom:message=heartbeat,rate=1,timeout=1.5s,direction=up",
         &target,
     ]);
     assert_eq!(code, 0, "{err}");
@@ -887,4 +890,42 @@ fn a_vehicle_behind_a_cutting_relay_has_its_cuts_as_outages_and_trips() {
         u(cut, "dropped_down") > 0 && u(cut, "dropped_up") > 0,
         "{cut}"
     );
+    assert_probed_uplink(&report, &truth, end);
+}
+
+/// Continuity and the up failsafe of the cutting relay's run, by what the
+/// relay did to each of our probes: those it cut, and those it forwarded
+/// with (or without) a reply forwarded back.
+fn assert_probed_uplink(report: &Value, truth: &Value, end: f64) {
+    let uplink = &list(truth, "up")[0];
+    let answered: std::collections::BTreeSet<u64> = list(uplink, "requests")
+        .iter()
+        .filter(|r| r[2].as_u64().unwrap() > 0)
+        .map(|r| r[0].as_u64().unwrap())
+        .collect();
+    let cut = list(&truth["cut"], "requests_cut").len() as u64;
+    let sent = list(uplink, "requests").len() as u64 + cut;
+    let c = &report["continuity"];
+    assert_eq!(
+        (u(c, "within"), u(c, "transactions")),
+        (answered.len() as u64, sent),
+        "{c}"
+    );
+    // Probe k (sequence k) is sent at k/10 s; the message at j s is
+    // delivered if probe 10j was answered (no cut begins or ends within
+    // a probe of a whole second, so probe 10j - 1 would say the same).
+    let last = sent - 1;
+    let messages: Vec<f64> = (0..=end.floor() as u64).map(|j| j as f64).collect();
+    let delivered: Vec<f64> = messages
+        .iter()
+        .copied()
+        .filter(|j| answered.contains(&(10 * *j as u64).min(last)))
+        .collect();
+    let up = &replays(report)[2];
+    assert_eq!(up["basis"], "probes", "{up}");
+    assert_eq!(u(up, "messages"), messages.len() as u64, "{up}");
+    assert_eq!(u(up, "delivered"), delivered.len() as u64, "{up}");
+    let trips = failsafe_trips(&delivered, end, 1.5);
+    assert_eq!(trips.len(), 3, "{trips:?}");
+    assert_trips(up, &trips, 1e-6);
 }

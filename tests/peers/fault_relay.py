@@ -45,7 +45,9 @@ either direction is dropped on arrival (before the plan, which it takes
 no draw of). The truth then has "cut": the windows, how many frames each
 direction lost to them, and the time (s after that first frame) and
 message id of every frame forwarded down, in order, copies included:
-the deliveries a C2 report's outages and failsafe replay are held to.
+the deliveries a C2 report's outages and failsafe replay are held to;
+and the sequence number of every PING request it cut ("requests_cut";
+those forwarded are in the uplink's "requests" with their fates).
 
 On SIGTERM, one JSON line: per downlink source, frames from the vehicle,
 forwarded (copies included), dropped, dropped after the last forwarded
@@ -237,6 +239,7 @@ class Cuts:
         self.windows = windows
         self.origin = None
         self.up = self.down = 0
+        self.requests = []  # the seq of every PING request cut
         self.forwarded_down = []  # [seconds, msgid]
 
     def now(self):
@@ -262,7 +265,7 @@ class Cuts:
 
     def truth(self):
         return {"windows": self.windows, "dropped_up": self.up, "dropped_down": self.down,
-                "forwarded_down": self.forwarded_down}
+                "requests_cut": self.requests, "forwarded_down": self.forwarded_down}
 
 
 class Relay:
@@ -297,6 +300,10 @@ class Relay:
         for frame, header in frames_of(data):
             if self.cuts is not None:
                 if self.cuts.drops(up=True):
+                    if header is not None and header[3] == PING:
+                        seq, ts, tc = ping_fields(header[4])
+                        if (ts, tc) == (0, 0):
+                            self.cuts.requests.append(seq)
                     continue
                 self.cuts.now()
             request = None
