@@ -3,12 +3,15 @@
 use std::time::Duration;
 
 use super::error::ConfigError;
+use super::keys::Keys;
 use crate::engine::c2::{C2Config, FailsafeModel, DEFAULT_FLOOR_PCT};
 use crate::engine::Nanos;
 use crate::units::parse_duration;
 
 /// What the command line says of the C2 report.
 pub(crate) struct C2Flags<'a> {
+    /// How errors name the settings.
+    pub(crate) keys: Keys,
     pub(crate) asked: bool,
     pub(crate) up_within: Duration,
     pub(crate) continuity_within: Option<Duration>,
@@ -30,24 +33,26 @@ fn nanos(d: Duration) -> Nanos {
 /// threshold on one of its figures).
 pub(crate) fn validate(f: &C2Flags<'_>) -> Result<Option<C2Config>, ConfigError> {
     let wanted = f.asked || f.min_availability.is_some() || f.min_continuity.is_some();
+    let name = |key: &str| f.keys.name(key);
     if !wanted {
         if let Some(setting) = [
-            (!f.failsafes.is_empty(), "--failsafe"),
-            (f.continuity_within.is_some(), "--continuity-within"),
+            (!f.failsafes.is_empty(), "failsafe"),
+            (f.continuity_within.is_some(), "continuity_within"),
         ]
         .iter()
-        .find_map(|(given, name)| given.then_some(*name))
+        .find_map(|(given, key)| given.then_some(*key))
         {
-            return Err(ConfigError::Needs {
-                setting,
-                needs: "--report c2",
-            });
+            return Err(ConfigError::value(
+                name(setting),
+                "",
+                format!("needs {} c2", name("report")),
+            ));
         }
         return Ok(None);
     }
     if f.up_within.is_zero() || f.up_within > Duration::from_secs(3600) {
         return Err(ConfigError::value(
-            "--up-within",
+            name("up_within"),
             humantime::format_duration(f.up_within),
             "expected more than 0 and at most 1h",
         ));
@@ -55,14 +60,14 @@ pub(crate) fn validate(f: &C2Flags<'_>) -> Result<Option<C2Config>, ConfigError>
     let continuity = f.continuity_within.unwrap_or(f.timeout);
     if continuity.is_zero() || continuity > f.timeout {
         return Err(ConfigError::value(
-            "--continuity-within",
+            name("continuity_within"),
             humantime::format_duration(continuity),
             "expected more than 0 and at most the reply timeout -W (a later reply is a loss)",
         ));
     }
     if !(f.distance_band_m.is_finite() && f.distance_band_m >= 1.0) {
         return Err(ConfigError::value(
-            "--distance-band",
+            name("distance_band"),
             f.distance_band_m,
             "expected at least 1 (metres)",
         ));
@@ -76,7 +81,7 @@ pub(crate) fn validate(f: &C2Flags<'_>) -> Result<Option<C2Config>, ConfigError>
                     .map(|d| d.as_secs_f64())
                     .map_err(|e| e.to_string())
             })
-            .map_err(|e| ConfigError::value("--failsafe", text, e.0))
+            .map_err(|e| ConfigError::value(name("failsafe"), text, e.0))
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(Some(C2Config {

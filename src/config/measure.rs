@@ -541,6 +541,7 @@ fn session(
         wire: None,
         radio_type: cli.radio_type.into(),
         c2: super::c2::validate(&super::c2::C2Flags {
+            keys: super::keys::Keys::Flags,
             asked: cli.report == Some(ReportKind::C2),
             up_within: cli.up_within,
             continuity_within: cli.continuity_within,

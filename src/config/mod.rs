@@ -16,7 +16,7 @@
 //! [`LinkSpec`]: crate::transport::address::LinkSpec
 //! [`ResponderSettings`]: crate::responder::ResponderSettings
 
-mod c2;
+pub(crate) mod c2;
 mod compare;
 mod error;
 mod keys;

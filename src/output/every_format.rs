@@ -12,6 +12,7 @@ use super::runs::{kind, Borrowed, Run, Told, RUNS};
 use super::samples::SampleLog;
 use super::text::TextReporter;
 use super::{Reporter, StartInfo, WallClock};
+use crate::engine::c2::C2Report;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::kind::KindValue;
 use crate::engine::link_node::LinkNodeReport;
@@ -127,6 +128,9 @@ impl Reporter for Reached {
     fn passive_summary(&mut self, _: &PassiveSummary, _: &Verdict) -> io::Result<()> {
         self.note("passive_summary")
     }
+    fn c2_report(&mut self, _: &str, _: &C2Report) -> io::Result<()> {
+        self.note("c2_report")
+    }
 }
 
 /// The runs tell every kind of event, figures so far and summary, and
@@ -158,6 +162,7 @@ fn the_runs_tell_every_kind_and_each_reaches_its_method() {
         "echo_summary",
         "command_summary",
         "passive_summary",
+        "c2_report",
     ];
     let missing: Vec<_> = all.iter().filter(|k| !reached.0.contains(*k)).collect();
     assert!(missing.is_empty(), "no run reaches {missing:?}");
@@ -173,6 +178,8 @@ fn text_shows_every_run_and_its_events() {
             tell_run(&mut out, run, &borrowed);
             let text = String::from_utf8(out.into_inner()).unwrap();
             assert_eq!(text.matches("mavping statistics ---").count(), 1, "{text}");
+            let c2 = matches!(run, Run::C2);
+            assert_eq!(text.matches("C2 link report ---").count(), usize::from(c2));
             // Quiet: the summary and the interim lines only.
             assert_eq!(quiet, !text.starts_with("MAVPING "), "{run:?}: {text}");
         }
@@ -186,9 +193,17 @@ fn json_ends_every_run_with_its_summary() {
         let mut out = JsonReporter::new(Vec::new(), false, WallClock::starting(true));
         tell_run(&mut out, run, &borrowed);
         let text = String::from_utf8(out.into_inner()).unwrap();
-        let last: serde_json::Value = serde_json::from_str(text.lines().last().unwrap()).unwrap();
-        let kind = last["type"].as_str().unwrap();
+        let lines: Vec<serde_json::Value> = text
+            .lines()
+            .map(|l| serde_json::from_str(l).unwrap())
+            .collect();
+        let kind = lines.last().unwrap()["type"].as_str().unwrap();
         assert!(kind.ends_with("summary"), "{run:?}: {kind}");
+        // The C2 link report, where there is one, just before it.
+        let c2: Vec<_> = lines.iter().map(|l| l["type"] == "c2_report").collect();
+        let before_last = c2.len() >= 2 && c2[c2.len() - 2];
+        assert_eq!(c2.iter().filter(|&&c| c).count(), usize::from(before_last));
+        assert_eq!(before_last, matches!(run, Run::C2), "{run:?}");
     }
 }
 
@@ -204,6 +219,7 @@ fn prometheus_has_figures_of_every_run() {
             Run::Command => "mavping_requests_total",
             Run::Transfer => "mavping_transfer_downloads_total",
             Run::Echo(_) | Run::Sweep(_) => "mavping_received_total",
+            Run::C2 => "mavping_c2_availability_ratio",
         };
         assert!(text.contains(family), "{run:?}: {text}");
     }
@@ -233,6 +249,9 @@ fn the_plot_draws_every_run() {
         tell_run(&mut plot.link(), run, &borrowed);
         let svg = plot.svg().unwrap_or_else(|e| panic!("{run:?}: {e}"));
         assert!(svg.starts_with("<svg"), "{run:?}");
+        // A run with a C2 link report gets its page, whatever its kind.
+        let c2 = svg.contains("mavping C2 link report: sim:?seed=1, 600.0 s");
+        assert_eq!(c2, matches!(run, Run::C2), "{run:?}");
     }
 }
 

@@ -10,6 +10,7 @@
 
 use std::io;
 
+use crate::engine::c2::C2Report;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::kind::KindValue;
 use crate::engine::link_node::LinkNodeReport;
@@ -142,6 +143,14 @@ pub(crate) trait Reporter {
         self.other_summary(summary, verdict)
     }
 
+    /// The C2 link report over `link`'s run (`--report c2`), told just
+    /// before that run's summary: JSON writes it as the line before the
+    /// summary's, which stays the run's last; text holds it for after
+    /// its statistics block.
+    fn c2_report(&mut self, link: &str, report: &C2Report) -> io::Result<()> {
+        Ok(())
+    }
+
     /// A kind's summary that this format has no method for: as
     /// [`Reporter::other_event`], written whole where the summary is
     /// [`KindSummary::serialized`].
@@ -198,8 +207,12 @@ pub(crate) trait Reporter {
         }
     }
 
-    /// The judged summary at the end, by the kind of run.
+    /// The judged summary at the end, by the kind of run, after the C2
+    /// link report over it when the run made one.
     fn summary(&mut self, summary: &LinkSummary, verdict: &Verdict) -> io::Result<()> {
+        if let Some(c2) = summary.c2() {
+            self.c2_report(summary.link(), c2)?;
+        }
         if let Some(echo) = summary.get::<EchoSummary>() {
             self.echo_summary(echo, verdict)
         } else if let Some(command) = summary.get::<CommandSummary>() {

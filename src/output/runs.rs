@@ -9,6 +9,10 @@ use std::time::Duration;
 
 use crate::engine::age::{AgeCounts, AgeNow, ClockAgeSummary, SourceAge, SplitSummary};
 use crate::engine::answers::AnswerSummary;
+use crate::engine::c2::{
+    Band, C2Report, C2Rule, Continuity, DirectionLoss, DistanceBand, FailsafeReplay, Latency,
+    OneWay, Outage, Outages, Percentiles, Trip,
+};
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
 use crate::engine::kind::KindValue;
@@ -1025,6 +1029,188 @@ pub(crate) fn log_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
     .collect()
 }
 
+/// A C2 link report over a 600 s run, every part filled: outages in
+/// three bands (one still open at the end, its distance unknown), four
+/// distance bands (the farthest under the 99 % floor), and three
+/// failsafes (ArduCopter's, ArduPlane's two stages, a ground station's
+/// own check of the vehicle's TIMESYNC). Its figures agree with each
+/// other: the outages add up to the down time, each outage is its
+/// silence less the 2 s rule.
+pub(crate) fn c2_report() -> C2Report {
+    let outage = |start_s, duration_s, distance_m, open| Outage {
+        start_s,
+        duration_s,
+        silence_s: duration_s + 2.0,
+        distance_m,
+        open,
+    };
+    let band = |band, count, total_s| Band {
+        band,
+        count,
+        total_s,
+    };
+    let distance = |from_m: f64, observed_s: f64, down_s: f64, outages| DistanceBand {
+        from_m,
+        to_m: from_m + 250.0,
+        observed_s,
+        down_s,
+        availability_pct: 100.0 * (observed_s - down_s) / observed_s,
+        outages,
+    };
+    let trip = |at_s, lasted_s, open, long| Trip {
+        at_s,
+        lasted_s,
+        open,
+        long,
+    };
+    let up = |model: &str, setting: &str, timeout_s, long_timeout_s| FailsafeReplay {
+        model: model.into(),
+        setting: setting.into(),
+        direction: "up",
+        message: "HEARTBEAT",
+        rate_hz: 1.0,
+        timeout_s,
+        long_timeout_s,
+        basis: "downlink",
+        inferred: true,
+        messages: 600,
+        delivered: 591,
+        trips: 0,
+        long_trips: 0,
+        trip_list: vec![],
+        closest_wait_s: None,
+        closest_margin_s: None,
+        closest_at_s: None,
+        expected_if_independent: None,
+    };
+    C2Report {
+        rule: C2Rule {
+            up_within_s: 2.0,
+            continuity_within_s: 1.0,
+            distance_band_m: 250.0,
+            availability_floor_pct: 99.0,
+        },
+        duration_s: 600.0,
+        down_s: 9.5,
+        availability_pct: Some(100.0 * 590.5 / 600.0),
+        frames: 5990,
+        continuity: Some(Continuity {
+            within: 1170,
+            transactions: 1200,
+            pct: 97.5,
+            from: "probes",
+        }),
+        latency: Latency {
+            round_trip: Some(Percentiles {
+                count: 1180,
+                p50_ms: 45.2,
+                p99_ms: 180.5,
+                p999_ms: 950.0,
+                max_ms: 1900.0,
+            }),
+            uplink: Some(OneWay {
+                p50_ms: 3.1,
+                p99_ms: 60.2,
+                max_ms: 400.0,
+            }),
+            downlink: Some(OneWay {
+                p50_ms: 1.2,
+                p99_ms: 20.4,
+                max_ms: 150.0,
+            }),
+        },
+        loss: DirectionLoss {
+            downlink_pct: Some(0.5),
+            uplink_pct: Some(1.2),
+            uplink_from: Some("direction_split"),
+            round_trip_pct: Some(1.7),
+        },
+        outages: Outages {
+            count: 4,
+            total_s: 9.5,
+            bands: vec![
+                band("<1s", 1, 0.5),
+                band("1-3s", 2, 3.5),
+                band("3-10s", 1, 5.5),
+                band("10-30s", 0, 0.0),
+                band(">30s", 0, 0.0),
+            ],
+            longest: vec![
+                outage(420.0, 5.5, Some(912.0), false),
+                outage(120.5, 2.0, Some(240.0), false),
+                outage(598.5, 1.5, None, true),
+                outage(300.0, 0.5, Some(600.0), false),
+            ],
+        },
+        distance: vec![
+            distance(0.0, 300.0, 2.0, 1),
+            distance(250.0, 150.0, 0.0, 0),
+            distance(500.0, 100.0, 0.5, 1),
+            distance(750.0, 40.0, 5.5, 1),
+        ],
+        availability_under_floor_from_m: Some(750.0),
+        failsafes: vec![
+            FailsafeReplay {
+                trips: 1,
+                trip_list: vec![trip(424.0, 2.0, false, false)],
+                closest_wait_s: Some(4.0),
+                closest_margin_s: Some(1.0),
+                closest_at_s: Some(124.0),
+                expected_if_independent: Some(1.475e-7),
+                ..up("ardupilot-copter", "FS_GCS_TIMEOUT=5s", 5.0, None)
+            },
+            FailsafeReplay {
+                trips: 3,
+                long_trips: 1,
+                trip_list: vec![
+                    trip(121.5, 0.5, false, false),
+                    trip(420.5, 5.5, false, true),
+                    trip(599.5, 0.5, true, false),
+                ],
+                expected_if_independent: Some(0.0103),
+                ..up(
+                    "ardupilot-plane",
+                    "FS_SHORT_TIMEOUT=1.5s FS_LONG_TIMEOUT=5s",
+                    1.5,
+                    Some(5.0),
+                )
+            },
+            FailsafeReplay {
+                model: "custom".into(),
+                setting: "TIMESYNC@2Hz timeout 3s".into(),
+                direction: "down",
+                message: "TIMESYNC",
+                rate_hz: 2.0,
+                timeout_s: 3.0,
+                long_timeout_s: None,
+                basis: "received",
+                inferred: false,
+                messages: 1200,
+                delivered: 1188,
+                trips: 2,
+                long_trips: 0,
+                trip_list: vec![
+                    trip(421.0, 4.5, false, false),
+                    trip(599.5, 0.5, true, false),
+                ],
+                closest_wait_s: Some(2.5),
+                closest_margin_s: Some(0.5),
+                closest_at_s: Some(122.0),
+                expected_if_independent: Some(0.012),
+            },
+        ],
+    }
+}
+
+/// A TIMESYNC run with a C2 link report over it (`--report c2`).
+pub(crate) fn c2_run(borrowed: &Borrowed) -> Vec<Told<'_>> {
+    let mut told = echo_run("timesync", borrowed);
+    if let Some(Told::Summary(summary, _)) = told.last_mut() {
+        summary.set_c2(c2_report());
+    }
+    told
+}
+
 /// The kinds of run, each with what it writes.
 #[derive(Debug, Clone, Copy)]
 pub(crate) enum Run {
@@ -1034,9 +1220,11 @@ pub(crate) enum Run {
     Passive,
     Log,
     Transfer,
+    /// A run whose summary carries a C2 link report.
+    C2,
 }
 
-pub(crate) const RUNS: [Run; 10] = [
+pub(crate) const RUNS: [Run; 11] = [
     Run::Echo("ping"),
     Run::Echo("timesync"),
     Run::Sweep(PlanKind::Sweep {
@@ -1065,6 +1253,7 @@ pub(crate) const RUNS: [Run; 10] = [
     Run::Passive,
     Run::Log,
     Run::Transfer,
+    Run::C2,
 ];
 
 impl Run {
@@ -1076,6 +1265,7 @@ impl Run {
             Run::Passive => passive_run(borrowed),
             Run::Log => log_run(borrowed),
             Run::Transfer => transfer_run(),
+            Run::C2 => c2_run(borrowed),
         }
     }
 }

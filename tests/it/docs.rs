@@ -117,6 +117,7 @@ fn the_readme_is_short_and_lists_every_page() {
         "## Everyday use",
         "## Habits from ping, fping and irtt",
         "## For scripts and CI",
+        "## For a safety case",
         "## Watching and monitoring",
         "## Figures measured here",
         "## Completions and man pages",

@@ -43,6 +43,7 @@ fn hundred_thousand_pings_through_the_simulated_link_match_its_ground_truth() {
         sweep: None,
         wire: None,
         radio_type: mavping::engine::radio::RadioType::Auto,
+        c2: None,
     };
     let runtime = tokio::runtime::Builder::new_current_thread()
         .enable_all()

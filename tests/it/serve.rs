@@ -695,3 +695,62 @@ fn a_continuous_link_nobody_answers_shows_its_requests_and_no_responder() {
     drop(responder);
     assert_eq!(server.stop(), Some(0));
 }
+
+/// A module with `report = "c2"`: each `/probe` run gauges its C2 link
+/// report, and its `min_availability` is one of the probe's checks. The
+/// simulated link is silent from 1 s to 2.5 s of a 3 s probe (30 PINGs
+/// at 100 ms): one outage of that silence less the 500 ms rule, in the
+/// 1-3 s band; continuity is the PINGs answered within the timeout, as
+/// the probe's own counts say; the HEARTBEATs at 1 Hz against a 1.2 s
+/// down timeout trip once, in the silence.
+#[test]
+fn a_c2_module_gauges_the_report_and_checks_its_availability() {
+    let config = TempFile::new(
+        "c2.toml",
+        "allow = [\"sim:*\"]\n\
+         [module.c2]\nprobe = \"ping\"\ncount = 30\ninterval = \"100ms\"\ntimeout = \"500ms\"\n\
+         report = \"c2\"\nup_within = \"500ms\"\nmin_availability = \"99%\"\n\
+         failsafe = [\"custom:message=heartbeat,timeout=1.2s,direction=down\"]\n",
+    );
+    let server = Server::start(&["--config", config.path()]);
+    let target = "sim:?outage=1s+1500ms&seed=4";
+    let r = server.get(&format!("/probe?module=c2&target={}", enc(target)));
+    assert_eq!(r.status, 200, "{}", r.body);
+    let b = &r.body;
+    let link = [("link", target)];
+    let c2 = |name| sample(b, name, &link).unwrap_or_else(|| panic!("no {name} in\n{b}"));
+    let one = [("link", target), ("sysid", "1"), ("compid", "1")];
+    let (sent, received) = (
+        sample(b, "mavping_probe_sent", &one).unwrap(),
+        sample(b, "mavping_probe_received", &one).unwrap(),
+    );
+    assert!(received < sent, "{b}");
+    assert_eq!(c2("mavping_c2_continuity_ratio"), received / sent, "{b}");
+    let down = c2("mavping_c2_down_seconds");
+    // The silence is the outage's 1.5 s and up to a frame interval
+    // (100 ms) either side; the rule takes 0.5 s of it.
+    assert!((0.95..=1.25).contains(&down), "{down}\n{b}");
+    assert_eq!(c2("mavping_c2_longest_outage_seconds"), down);
+    let bands = |band| sample(b, "mavping_c2_outages", &[("link", target), ("band", band)]);
+    assert_eq!(bands("1-3s"), Some(1.0), "{b}");
+    assert_eq!(bands("<1s"), Some(0.0), "{b}");
+    let availability = c2("mavping_c2_availability_ratio");
+    assert!(availability < 0.99 && availability > 0.5, "{availability}");
+    let trips = sample(
+        b,
+        "mavping_c2_failsafe_trips",
+        &[("link", target), ("model", "custom")],
+    );
+    assert_eq!(trips, Some(1.0), "{b}");
+    assert_eq!(sample(b, "mavping_probe_success", &[]), Some(0.0), "{b}");
+    assert_eq!(
+        sample(
+            b,
+            "mavping_probe_failure",
+            &[("reason", "min_availability")]
+        ),
+        Some(1.0),
+        "{b}"
+    );
+    assert_promtool_clean(b);
+}

@@ -2,6 +2,7 @@
 //! and continuous links. One table type serves both, so each key is parsed
 //! once; keys that belong to the other kind are refused by name.
 
+use crate::engine::c2::C2Config;
 use crate::engine::radio::RadioType;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -17,6 +18,7 @@ use super::limits::{
 use super::session::{refuse_virtual, session, Common};
 use super::settings::{ContinuousLink, Module};
 use crate::cli::{parse_expected, parse_rtt_limit, ProbeKind, SigningArgs};
+use crate::config::c2::C2Flags;
 use crate::config::error::ConfigError;
 use crate::config::keys::Keys;
 use crate::config::link::LinkConfig;
@@ -105,6 +107,15 @@ pub(super) struct Table {
     require_signed: Option<bool>,
     baud: Option<u32>,
     radio_type: Option<String>,
+    // The C2 link report (both; its thresholds module only)
+    report: Option<String>,
+    up_within: Option<FileDuration>,
+    continuity_within: Option<FileDuration>,
+    distance_band: Option<f64>,
+    #[serde(default)]
+    failsafe: Vec<String>,
+    min_availability: Option<String>,
+    min_continuity: Option<String>,
 }
 
 impl Table {
@@ -124,6 +135,8 @@ impl Table {
             ("max_jitter", self.max_jitter.is_some()),
             ("expect", !self.expect.is_empty()),
             ("min_responders", self.min_responders.is_some()),
+            ("min_availability", self.min_availability.is_some()),
+            ("min_continuity", self.min_continuity.is_some()),
         ];
         let wrong: &[(&str, bool)] = if module { &link_only } else { &module_only };
         wrong.iter().find(|(_, set)| *set).map(|(k, _)| *k)
@@ -198,9 +211,55 @@ impl Table {
             signing,
             baud: validate_baud(self.baud.unwrap_or(serial::DEFAULT_BAUD))?,
             radio_type: radio_type(self.radio_type.as_deref())?,
+            c2: self.c2(timeout)?,
             timeout,
             retry_interval,
         })
+    }
+
+    /// A module's or link's C2 report (`report = "c2"`), its thresholds
+    /// a module's.
+    fn c2(&self, timeout: Duration) -> Result<Option<C2Config>, ConfigError> {
+        let asked = match self.report.as_deref() {
+            None => false,
+            Some("c2") => true,
+            Some(other) => {
+                return Err(ConfigError::Unknown {
+                    setting: "report",
+                    value: other.to_string(),
+                    expected: "c2",
+                })
+            }
+        };
+        crate::config::c2::validate(&C2Flags {
+            keys: Keys::File,
+            asked,
+            up_within: match &self.up_within {
+                Some(d) => d.get("up_within")?,
+                None => Duration::from_secs(2),
+            },
+            continuity_within: self
+                .continuity_within
+                .as_ref()
+                .map(|d| d.get("continuity_within"))
+                .transpose()?,
+            distance_band_m: self.distance_band.unwrap_or(500.0),
+            failsafes: &self.failsafe,
+            min_availability: Self::percent("min_availability", self.min_availability.as_deref())?,
+            min_continuity: Self::percent("min_continuity", self.min_continuity.as_deref())?,
+            timeout,
+        })
+    }
+
+    /// A percentage key, as a percentage.
+    fn percent(key: &str, value: Option<&str>) -> Result<Option<f64>, ConfigError> {
+        value
+            .map(|p| {
+                parse_percent(p)
+                    .map(|r| r * 100.0)
+                    .map_err(|e| ConfigError::rejected(key, e))
+            })
+            .transpose()
     }
 
     pub(super) fn module(&self) -> Result<Module, ConfigError> {
@@ -241,8 +300,8 @@ impl Table {
             // Ages are a listening run's; /probe runs are short probes.
             max_age: None,
             max_transfer_time: None,
-            min_availability: None,
-            min_continuity: None,
+            min_availability: Self::percent("min_availability", self.min_availability.as_deref())?,
+            min_continuity: Self::percent("min_continuity", self.min_continuity.as_deref())?,
             expect: self
                 .expect
                 .iter()
@@ -279,6 +338,7 @@ impl Table {
             signing: c.signing,
             baud: c.baud,
             radio_type: c.radio_type,
+            c2: c.c2,
         })
     }
 

@@ -142,6 +142,7 @@ impl ServeSettings {
             signing: module.signing,
             baud: module.baud,
             radio_type: module.radio_type,
+            c2: module.c2.clone(),
             timeout,
             retry_interval: module.retry_interval,
         };

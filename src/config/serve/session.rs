@@ -7,6 +7,7 @@ use crate::cli::ProbeKind;
 use crate::config::error::ConfigError;
 use crate::config::measure::{count_wait, listens, pending_capacity};
 use crate::config::probe::{wire_budget, Probe};
+use crate::engine::c2::C2Config;
 use crate::engine::matcher::Window;
 use crate::engine::radio::RadioType;
 use crate::engine::SessionConfig;
@@ -24,6 +25,8 @@ pub(super) struct Common {
     pub(super) signing: Option<SigningConfig>,
     pub(super) baud: u32,
     pub(super) radio_type: RadioType,
+    /// The C2 link report, when asked for.
+    pub(super) c2: Option<C2Config>,
     pub(super) timeout: Duration,
     pub(super) retry_interval: Duration,
 }
@@ -84,7 +87,7 @@ pub(super) fn session(
         sweep: None,
         wire: None,
         radio_type: c.radio_type,
-        c2: None,
+        c2: c.c2.clone(),
     };
     session.wire = wire_budget(spec, c.baud, &c.probe, &session);
     Ok(session)

@@ -97,6 +97,8 @@ pub(crate) struct Module {
     pub(crate) baud: u32,
     /// How radios are read (`radio_type`, as `--radio-type`).
     pub(crate) radio_type: RadioType,
+    /// `report = "c2"`: each /probe run's C2 link report.
+    pub(crate) c2: Option<crate::engine::c2::C2Config>,
 }
 
 /// A link probed all the time, shown at `/metrics` as `link="NAME"`.

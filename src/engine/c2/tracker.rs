@@ -10,6 +10,7 @@ use super::report::{C2Report, C2Rule, Continuity, Percentiles};
 use super::summary_figures;
 use super::uplink::{Paced, ProbedUplink};
 use crate::engine::matcher::MatchEvent;
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::probe::passive::driver::GroundIds;
 use crate::engine::probe::passive::round_trips::RoundTrips;
 use crate::engine::radio::is_radio_ids;
@@ -88,6 +89,8 @@ pub(crate) struct C2Tracker {
     played: Vec<Played>,
     /// The vehicle's MAV_TYPE and autopilot, for the presets.
     vehicle: Option<(u8, u8)>,
+    /// Commands decided: continuity is theirs.
+    commands: bool,
 }
 
 /// The models a run plays: those asked for, else every preset (the one
@@ -130,6 +133,7 @@ impl C2Tracker {
                 })
                 .collect(),
             vehicle: None,
+            commands: false,
             cfg: cfg.clone(),
         }
     }
@@ -209,6 +213,22 @@ impl C2Tracker {
         }
     }
 
+    /// A command of ours acknowledged (from its first transmission: the
+    /// transaction's time) or given up.
+    pub(crate) fn command(&mut self, event: &CommandEvent) {
+        match *event {
+            CommandEvent::Acked { time_to_ack, .. } => {
+                self.commands = true;
+                self.tally.answered(time_to_ack);
+            }
+            CommandEvent::Failed { .. } => {
+                self.commands = true;
+                self.tally.unanswered += 1;
+            }
+            _ => {}
+        }
+    }
+
     /// The report at `end`, with the figures the run's summary has.
     pub(crate) fn finish(mut self, end: Nanos, summary: &LinkSummary) -> C2Report {
         let probed = self.probed.outcomes() > 0;
@@ -221,7 +241,7 @@ impl C2Tracker {
                 .map(|p| p.counts.unanswered)
                 .sum::<u64>()
         });
-        if let Some(unanswered) = logged_from.filter(|_| !probed) {
+        if let Some(unanswered) = logged_from.filter(|_| !probed && !self.commands) {
             self.tally.unanswered += unanswered;
         }
         let availability = &self.availability;
@@ -249,7 +269,11 @@ impl C2Tracker {
             availability_pct: (frames > 0 && end > 0)
                 .then(|| 100.0 * (1.0 - down as f64 / end as f64)),
             frames,
-            continuity: self.tally.continuity(if probed { "probes" } else { "log" }),
+            continuity: self.tally.continuity(match (probed, self.commands) {
+                (true, _) => "probes",
+                (_, true) => "commands",
+                _ => "log",
+            }),
             latency: super::report::Latency {
                 round_trip: self.tally.percentiles(),
                 ..latency_split
@@ -330,5 +354,228 @@ fn watches(watched: Watched, msg: &Msg) -> bool {
         Watched::Any => true,
         Watched::Heartbeat => matches!(msg, Msg::Heartbeat { .. }),
         Watched::Timesync => matches!(msg, Msg::Timesync { .. }),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::engine::summary::EchoSummary;
+    use crate::frame::test_frame;
+
+    const S: Nanos = 1_000_000_000;
+    const MS: Nanos = 1_000_000;
+    const VEHICLE: SysComp = SysComp::new(1, 1);
+    const GCS: SysComp = SysComp::new(255, 190);
+    const US: SysComp = SysComp::new(250, 190);
+
+    fn config(failsafes: &[&str]) -> C2Config {
+        C2Config {
+            up_within: 2 * S,
+            continuity_within: 500 * MS,
+            distance_band_m: 500.0,
+            availability_floor_pct: 99.0,
+            failsafes: failsafes
+                .iter()
+                .map(|t| {
+                    FailsafeModel::parse(t, |v| {
+                        humantime::parse_duration(v)
+                            .map(|d| d.as_secs_f64())
+                            .map_err(|e| e.to_string())
+                    })
+                    .unwrap()
+                })
+                .collect(),
+        }
+    }
+
+    fn heartbeat(mav_type: u8, autopilot: u8) -> Msg {
+        Msg::Heartbeat {
+            mav_type,
+            autopilot,
+        }
+    }
+
+    fn summary() -> LinkSummary {
+        LinkSummary::new(EchoSummary::empty("test", 0))
+    }
+
+    /// A log: the vehicle's HEARTBEATs every 100 ms but for a 6 s hole
+    /// from 10 s; the ground station's at 1 Hz, recorded. Against a 2 s
+    /// rule, its HEARTBEATs at 13, 14 and 15 s fell while the downlink was
+    /// down (up to 12 s, up again at 16 s): ArduCopter's 5 s check waits
+    /// 4 s, no trip, 1 s of margin; with a 3 s timeout, one trip at 15 s
+    /// lasting 1 s.
+    #[test]
+    fn a_logs_ground_heartbeats_are_delivered_while_the_downlink_is_up() {
+        let mut c2 = C2Tracker::new(
+            &config(&["ardupilot-copter", "ardupilot-copter:timeout=3s"]),
+            US,
+            S,
+            true,
+        );
+        let mut t = 0;
+        while t <= 30 * S {
+            if !(t > 10 * S && t < 16 * S) {
+                c2.frame(&test_frame(VEHICLE, heartbeat(2, 3)), t);
+            }
+            if t % S == 0 {
+                c2.frame(&test_frame(GCS, heartbeat(6, 8)), t);
+            }
+            t += 100 * MS;
+        }
+        let r = c2.finish(30 * S, &summary());
+        assert_eq!(r.outages.count, 1);
+        assert_eq!(r.down_s, 4.0);
+        let (five, three) = (&r.failsafes[0], &r.failsafes[1]);
+        assert_eq!((five.basis, five.inferred), ("recorded", true));
+        assert_eq!((five.messages, five.delivered), (31, 28));
+        assert_eq!((five.trips, five.closest_wait_s), (0, Some(4.0)));
+        assert_eq!(three.trips, 1);
+        assert_eq!(three.trip_list[0].at_s, 15.0);
+        assert_eq!(three.trip_list[0].lasted_s, 1.0);
+    }
+
+    /// Our probes every second, those sent at 5-9 s lost: the vehicle's
+    /// 5 s check, fed at 1 Hz while the uplink was as the last probe
+    /// found it, last hears 4 s and next 10 s: 6 s, a trip at 9 s.
+    #[test]
+    fn probes_the_vehicle_did_not_answer_leave_the_uplink_down_until_one_it_did() {
+        let mut c2 = C2Tracker::new(&config(&["ardupilot-copter"]), US, S, false);
+        for k in 0..=20 {
+            let sent_at = k * S;
+            c2.frame(&test_frame(VEHICLE, heartbeat(2, 3)), sent_at);
+            let event = if (5..=9).contains(&k) {
+                MatchEvent::Lost {
+                    responder: VEHICLE,
+                    seq: k as u32,
+                    sent_at,
+                    at: sent_at + S,
+                }
+            } else {
+                MatchEvent::Reply {
+                    responder: VEHICLE,
+                    seq: k as u32,
+                    rtt: 20 * MS + k * 50 * MS,
+                    sent_at,
+                    at: sent_at + 20 * MS,
+                    out_of_order: false,
+                    first_from_responder: k == 0,
+                }
+            };
+            c2.matched(&event);
+        }
+        let r = c2.finish(20 * S + 500 * MS, &summary());
+        let f = &r.failsafes[0];
+        assert_eq!((f.basis, f.messages, f.delivered), ("probes", 21, 16));
+        assert_eq!(f.trips, 1);
+        assert_eq!(f.trip_list[0].at_s, 9.0);
+        assert_eq!(f.trip_list[0].lasted_s, 1.0);
+        // Continuity within 500 ms: replies of 20 + 50k ms for k ≤ 9.
+        let c = r.continuity.unwrap();
+        assert_eq!((c.within, c.transactions), (5, 21));
+    }
+
+    /// Without --failsafe, the vehicle's autopilot's preset: ArduPlane
+    /// (fixed wing), PX4, none for a vehicle that says neither.
+    #[test]
+    fn the_vehicles_heartbeat_picks_its_preset() {
+        for (mav_type, autopilot, want) in [
+            (1, 3, Some("ardupilot-plane")),
+            (2, 3, Some("ardupilot-copter")),
+            (10, 3, Some("ardupilot-rover")),
+            (2, 12, Some("px4")),
+            (12, 3, None),
+            (2, 0, None),
+        ] {
+            let mut c2 = C2Tracker::new(&config(&[]), US, S, false);
+            c2.frame(&test_frame(VEHICLE, heartbeat(mav_type, autopilot)), S);
+            let r = c2.finish(2 * S, &summary());
+            let got: Vec<_> = r.failsafes.iter().map(|f| f.model.as_str()).collect();
+            assert_eq!(
+                got,
+                want.into_iter().collect::<Vec<_>>(),
+                "{mav_type}/{autopilot}"
+            );
+        }
+    }
+
+    /// A down model watches the vehicle's own messages as they came.
+    #[test]
+    fn a_down_model_replays_the_vehicles_messages_as_received() {
+        let mut c2 = C2Tracker::new(
+            &config(&["custom:message=heartbeat,timeout=1.5s,direction=down"]),
+            US,
+            S,
+            false,
+        );
+        for t in [1, 2, 4, 5, 9] {
+            c2.frame(&test_frame(VEHICLE, heartbeat(2, 3)), t * S);
+        }
+        let r = c2.finish(9 * S, &summary());
+        let f = &r.failsafes[0];
+        assert_eq!(
+            (f.basis, f.inferred, f.delivered, f.trips),
+            ("received", false, 5, 2)
+        );
+        let at: Vec<_> = f.trip_list.iter().map(|t| t.at_s).collect();
+        assert_eq!(at, [3.5, 6.5]);
+    }
+
+    /// A log's continuity counts the ground station's requests only: the
+    /// vehicle's TIMESYNCs nobody answered are no C2 transaction.
+    #[test]
+    fn a_logs_continuity_counts_the_ground_stations_round_trips() {
+        let mut c2 = C2Tracker::new(&config(&[]), US, S, true);
+        c2.frame(&test_frame(GCS, heartbeat(6, 8)), 0);
+        let ping = |seq, to: SysComp| Msg::Ping {
+            time_usec: 7,
+            seq,
+            target_system: to.sysid,
+            target_component: to.compid,
+        };
+        let timesync = Msg::Timesync {
+            tc1: 0,
+            ts1: 99,
+            target_system: 0,
+            target_component: 0,
+        };
+        c2.frame(&test_frame(GCS, ping(1, SysComp::new(0, 0))), S);
+        c2.frame(&test_frame(VEHICLE, ping(1, GCS)), S + 100 * MS);
+        c2.frame(&test_frame(GCS, ping(2, SysComp::new(0, 0))), 2 * S);
+        c2.frame(&test_frame(VEHICLE, ping(2, GCS)), 2 * S + 700 * MS);
+        c2.frame(&test_frame(GCS, ping(3, SysComp::new(0, 0))), 3 * S);
+        c2.frame(&test_frame(VEHICLE, timesync), 3 * S);
+        let r = c2.finish(10 * S, &summary());
+        let c = r.continuity.unwrap();
+        assert_eq!((c.within, c.transactions, c.from), (1, 3, "log"));
+    }
+
+    /// A command run: acknowledged within the time, after it, never.
+    #[test]
+    fn a_command_runs_continuity_is_its_acknowledgements() {
+        let mut c2 = C2Tracker::new(&config(&[]), US, S, false);
+        for (time_to_ack, acked) in [(100 * MS, true), (900 * MS, true), (0, false)] {
+            c2.command(&if acked {
+                CommandEvent::Acked {
+                    n: 1,
+                    target: VEHICLE,
+                    from: VEHICLE,
+                    command: 512,
+                    result: 0,
+                    attempts: 1,
+                    time_to_ack,
+                }
+            } else {
+                CommandEvent::Failed {
+                    n: 3,
+                    target: VEHICLE,
+                    command: 512,
+                    attempts: 4,
+                }
+            });
+        }
+        let c = c2.finish(5 * S, &summary()).continuity.unwrap();
+        assert_eq!((c.within, c.transactions, c.from), (1, 3, "commands"));
     }
 }

@@ -6,6 +6,7 @@ use std::io;
 use super::C2Tracker;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::{Event, Observer, StartInfo};
+use crate::engine::probe::command::CommandEvent;
 use crate::engine::summary::Interim;
 
 /// `observer`, with the tracker (if the run has one) seeing each event first.
@@ -23,6 +24,8 @@ impl Observer for Watching<'_> {
         if let (Some(c2), Event::Kind(value)) = (self.c2.as_deref_mut(), event) {
             if let Some(matched) = value.get::<MatchEvent>() {
                 c2.matched(matched);
+            } else if let Some(command) = value.get::<CommandEvent>() {
+                c2.command(command);
             }
         }
         self.observer.event(event)

@@ -10,13 +10,15 @@
 //! probe's events are their lines); a line's struct adds only what the
 //! line says itself (`type`, times, the link, the verdict) and borrows or
 //! flattens the rest. The echo probes' lines are in [`echo`], the command
-//! probe's summary in [`command`], a sweep's in [`sweep`]; `tests` holds
+//! probe's summary in [`command`], a sweep's in [`sweep`], the C2 link
+//! report's line in [`c2`]; `tests` holds
 //! every line the runs write to the schema.
 //!
 //! This file declares and re-exports, and hands each [`Reporter`] call to
 //! the file that makes its line; every line is written through [`Lines`]
 //! (`lines.rs`).
 
+mod c2;
 mod command;
 mod echo;
 mod flight;
@@ -34,6 +36,7 @@ use std::io::{self, Write};
 
 use self::lines::{Lines, Whole};
 use super::Reporter;
+use crate::engine::c2::C2Report;
 use crate::engine::kind::KindValue;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
@@ -114,6 +117,13 @@ impl<W: Write> Reporter for JsonReporter<W> {
         }
         let line = passive::Summary::of(s, verdict, self.lines.link_or(&s.link), &self.lines);
         Self::summary_line(&mut self.out, &line)
+    }
+
+    /// A summary, in quiet mode too: written as the summary line is, and
+    /// before it (the summary stays the run's last line).
+    fn c2_report(&mut self, link: &str, report: &C2Report) -> io::Result<()> {
+        let line = c2::Report::of(self.lines.link_or(link), report);
+        Lines::write_named(&mut self.out, &line)
     }
 
     /// A kind's summary written whole, as the command probe's is.

@@ -8,8 +8,9 @@ use super::flight::{self, FlightTrack};
 use super::frame::{self, PlotError};
 use super::passive::{self, SourceTrack};
 use super::spans::Bins;
-use super::{draw, sweep, transfer};
+use super::{c2, draw, sweep, transfer};
 use crate::engine::age::SourceAge;
+use crate::engine::c2::C2Report;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::pair::PairSummary;
 use crate::engine::summary::passive::TableSummary;
@@ -71,6 +72,8 @@ pub(crate) struct PlotData {
     pub(super) flights: BTreeMap<usize, FlightTrack>,
     /// A download run's downloads, per link.
     pub(super) downloads: BTreeMap<usize, transfer::Downloads>,
+    /// The C2 link report of each link whose run made one.
+    pub(super) c2: BTreeMap<usize, C2Report>,
 }
 
 impl PlotData {
@@ -155,9 +158,15 @@ impl PlotData {
         }
     }
 
-    /// Draws the SVG document: RTT and loss against the offered rate for
-    /// a sweep, else RTT over time and its distribution.
+    /// Draws the SVG document: the C2 link report's page when the run
+    /// made one (the first link's that did), else RTT and loss against
+    /// the offered rate for a sweep, else RTT over time and its
+    /// distribution.
     pub(crate) fn svg(&self) -> Result<String, PlotError> {
+        if let Some((&link, report)) = self.c2.iter().next() {
+            let name = self.links.get(link).map_or("?", String::as_str);
+            return c2::svg(name, report);
+        }
         // A log's flight report (the first log's, if there are several).
         if let Some((&link, track)) = self.flights.iter().find(|(_, t)| !t.is_empty()) {
             let name = self.links.get(link).map_or("?", String::as_str);

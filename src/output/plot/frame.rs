@@ -15,7 +15,7 @@ use super::style::Look;
 /// The SVG could not be drawn: the drawing library's message.
 #[derive(Debug, Clone, PartialEq, Eq, Error)]
 #[error("{0}")]
-pub(crate) struct PlotError(String);
+pub(crate) struct PlotError(pub(super) String);
 
 pub(super) type DrawResult = Result<(), Box<dyn std::error::Error>>;
 

@@ -3,7 +3,8 @@
 //! sweep's in `sweep.rs`, a passive run's (each source's rate, frame age
 //! and loss over time) in `passive.rs`, a log's flight in `flight.rs`,
 //! the age axis they share in `age.rs`, a download run's progress in
-//! `transfer.rs`.
+//! `transfer.rs`; a run with a C2 link report gets that report's page
+//! instead (`c2.rs`).
 //!
 //! Memory is constant: each responder keeps [`SPANS`](data::SPANS) time
 //! spans. When a sample falls past the last span, every span doubles in
@@ -17,6 +18,7 @@
 //! (`link.rs`).
 
 mod age;
+mod c2;
 mod data;
 mod draw;
 mod flight;
@@ -32,6 +34,7 @@ use std::io;
 
 use super::windows::Windows;
 use super::{Reporter, StartInfo};
+use crate::engine::c2::C2Report;
 use crate::engine::kind::KindValue;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::probe::passive::flight::FlightEvent;
@@ -78,6 +81,12 @@ impl Reporter for PlotLink {
         } else if let Some(a) = value.get::<AttemptFigures>() {
             transfer::ended(data.downloads.entry(self.index).or_default(), a);
         }
+        Ok(())
+    }
+
+    fn c2_report(&mut self, _: &str, report: &C2Report) -> io::Result<()> {
+        let mut data = self.data.borrow_mut();
+        data.c2.insert(self.index, report.clone());
         Ok(())
     }
 

@@ -7,6 +7,7 @@ use std::io;
 use super::radio_series::RadioSeries;
 use super::series::{Outcome, Series, Split};
 use super::sources::{self, SourceSeries};
+use crate::engine::c2::C2Report;
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::kind::KindValue;
 use crate::engine::link_node::{LinkNodeReport, LinkNodes};
@@ -47,6 +48,8 @@ pub(crate) struct Metrics {
     pub(super) session_requests: u64,
     /// A download run's downloads.
     pub(super) transfer: Option<super::transfer::TransferSeries>,
+    /// The C2 link report of the latest run that made one.
+    pub(super) c2: Option<Box<C2Report>>,
 }
 
 #[derive(Debug, Default, Clone, Copy)]
@@ -235,6 +238,11 @@ impl Reporter for Metrics {
 
     fn command_summary(&mut self, summary: &CommandSummary, _: &Verdict) -> io::Result<()> {
         self.session_requests = summary.commands();
+        Ok(())
+    }
+
+    fn c2_report(&mut self, _: &str, report: &C2Report) -> io::Result<()> {
+        self.c2 = Some(Box::new(report.clone()));
         Ok(())
     }
 

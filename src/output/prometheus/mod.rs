@@ -14,8 +14,10 @@
 //! This file declares and re-exports; the link's `Metrics` takes its
 //! session's events in `metrics.rs`; a responder's series are in
 //! `series.rs`, a radio's in `radio_series.rs`, a download run's in
-//! `transfer.rs`, the exposition text in `render.rs`.
+//! `transfer.rs`, the C2 link report's in `c2.rs`, the exposition text in
+//! `render.rs`.
 
+mod c2;
 mod exporter;
 mod exposition;
 mod link_node;

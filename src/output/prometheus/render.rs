@@ -5,6 +5,7 @@
 
 use std::fmt::Write as _;
 
+use super::c2::write_c2;
 use super::exposition::{Exposition, Family, Figure, SeriesFigure};
 use super::link_node::write_link_nodes;
 use super::passive::{write_directions, write_sources};
@@ -269,6 +270,7 @@ fn write_links(out: &mut Exposition, links: &[&Metrics], scope: Scope) {
     write_directions(out, links);
     write_sources(out, links);
     write_transfers(out, links, scope == Scope::Probe);
+    write_c2(out, links);
 }
 
 /// A link's state, as a run has it...

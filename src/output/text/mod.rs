@@ -1,12 +1,14 @@
 //! Human output, modelled on ping: a line per reply as it happens, then a
 //! summary per responder. Echo probes' lines and summary are in
-//! [`echo`], the command probe's in [`command`].
+//! [`echo`], the command probe's in [`command`]; the C2 link report
+//! after the summary in [`c2`].
 //!
 //! This file declares and re-exports, and hands each [`Reporter`] call to
 //! the file that writes its lines; the reporter itself is in
 //! `reporter.rs`, and what the kinds of run share in `format.rs` (numbers,
 //! who a system is) and `summary.rs` (summary lines).
 
+mod c2;
 mod command;
 mod echo;
 mod flight;
@@ -25,6 +27,7 @@ use std::any::Any;
 use std::io::{self, Write};
 
 use super::{Reporter, StartInfo};
+use crate::engine::c2::C2Report;
 use crate::engine::kind::KindValue;
 use crate::engine::matcher::MatchEvent;
 use crate::engine::observe::RadioHeard;
@@ -42,6 +45,7 @@ use crate::engine::sweep_report::{StepFigures, SweepConfig};
 use crate::engine::CommandSpec;
 use crate::frame::SysComp;
 use crate::verdict::Verdict;
+pub(crate) use c2::two_significant;
 pub(crate) use reporter::TextReporter;
 
 impl<W: Write> Reporter for TextReporter<W> {
@@ -127,6 +131,14 @@ impl<W: Write> Reporter for TextReporter<W> {
         self.summary_block(&s.link, |out| passive::write_summary(out, s, verdict))
     }
 
+    /// Held for after the summary's statistics block, `-q` or not.
+    fn c2_report(&mut self, link: &str, report: &C2Report) -> io::Result<()> {
+        let mut text = Vec::new();
+        c2::write_report(&mut text, link, report)?;
+        self.c2 = Some(String::from_utf8_lossy(&text).into_owned());
+        Ok(())
+    }
+
     /// A kind with no lines of its own: its event's figures on a line.
     fn other_event(&mut self, value: &dyn KindValue) -> io::Result<()> {
         // A download's progress is for the plot and JSON; its end is a line.
@@ -151,7 +163,7 @@ impl<W: Write> Reporter for TextReporter<W> {
             });
         }
         let Some((_, figures)) = s.serialized() else {
-            return Ok(());
+            return self.c2_block();
         };
         self.summary_block(s.link(), |out| {
             whole::write_figures(out, figures)?;

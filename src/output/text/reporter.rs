@@ -37,6 +37,9 @@ pub(crate) struct TextReporter<W: Write> {
     pub(super) timestamps: Option<WallClock>,
     /// Step rows printed as the steps ended; the summary shows the rest.
     pub(super) steps_shown: usize,
+    /// The C2 link report, told before the summary and written after its
+    /// statistics block.
+    pub(super) c2: Option<String>,
 }
 
 impl<W: Write> TextReporter<W> {
@@ -53,6 +56,7 @@ impl<W: Write> TextReporter<W> {
             radio_shown: None,
             timestamps: None,
             steps_shown: 0,
+            c2: None,
         }
     }
 
@@ -104,7 +108,8 @@ impl<W: Write> TextReporter<W> {
         self.out.into_inner()
     }
 
-    /// The summary, under its header as ping's; written unprefixed.
+    /// The summary, under its header as ping's; written unprefixed. The
+    /// C2 link report, if one came, follows under its own.
     pub(super) fn summary_block(
         &mut self,
         link: &str,
@@ -117,6 +122,19 @@ impl<W: Write> TextReporter<W> {
         }
         writeln!(out, "--- {link} mavping statistics ---")?;
         write(out)?;
+        self.c2_block()
+    }
+
+    /// The C2 link report held for after the statistics, if any.
+    pub(super) fn c2_block(&mut self) -> io::Result<()> {
+        let c2 = self.c2.take();
+        let out = self.out.inner();
+        if let Some(c2) = c2 {
+            if !self.quiet {
+                writeln!(out)?;
+            }
+            out.write_all(c2.as_bytes())?;
+        }
         out.flush()
     }
 
