@@ -208,17 +208,19 @@ fn log_reports(name: &str, up_within: &str, models: &[&Model]) -> (Value, Value)
 
 fn path_reports(path: &Path, up_within: &str, models: &[&Model]) -> (Value, Value) {
     let truths: Vec<&str> = models.iter().map(|m| m.truth).collect();
-    reports_as(path, up_within, models, &truths)
+    reports_as(path, &["--up-within", up_within], models, &truths)
 }
 
 /// mavping's report with `models` asked for, and c2_truth.py's with
 /// `truths` (none asked for: mavping plays the preset of the vehicle's
 /// autopilot).
-fn reports_as(path: &Path, up_within: &str, models: &[&Model], truths: &[&str]) -> (Value, Value) {
+fn reports_as(path: &Path, rule: &[&str], models: &[&Model], truths: &[&str]) -> (Value, Value) {
     let name = path.display();
     let log = format!("tlog:{name}");
-    let mut args = vec!["-q", "--up-within", up_within];
-    let mut truth_args = vec!["--up-within", up_within];
+    // The rule's options (--up-within, --distance-band) are both's.
+    let mut args = vec!["-q"];
+    args.extend_from_slice(rule);
+    let mut truth_args = rule.to_vec();
     for m in models {
         args.extend(["--failsafe", m.mavping]);
     }
@@ -348,21 +350,30 @@ fn vtol_outages_at_2s_and_1s_are_the_logs_silences_exactly() {
     // A rule of 1 s finds the batch pauses a little over it too. No
     // failsafe asked for: the ArduPlane's own (its HEARTBEAT says so).
     let plane = UP_HEARTBEAT[0].truth;
-    let (r, t) = reports_as(&shared_tlog("vtol.tlog"), "1s", &[], &[plane]);
+    let (r, t) = reports_as(
+        &shared_tlog("vtol.tlog"),
+        &["--up-within", "1s"],
+        &[],
+        &[plane],
+    );
     assert_eq!(replays(&r)[0]["model"], "ardupilot-plane");
     assert!(u(&t["outages"], "count") > 100, "{}", t["outages"]);
     assert_log_report("vtol 1s", &r, &t);
 }
 
 #[test]
-fn vtol_up_failsafes_play_the_link_at_1_hz_from_the_start() {
+fn vtol_up_failsafes_play_the_link_at_1_hz_and_its_distance_bands_of_100_m() {
     // No ground station's frame in the log: the up models are played at
     // their rate against the downlink (inferred).
     let up: Vec<&Model> = UP_HEARTBEAT.iter().collect();
-    let (r, t) = log_reports("vtol.tlog", "2s", &up);
+    let truths: Vec<&str> = up.iter().map(|m| m.truth).collect();
+    // In bands of 100 m: the flight reaches about 250 m from home.
+    let rule = ["--up-within", "2s", "--distance-band", "100"];
+    let (r, t) = reports_as(&shared_tlog("vtol.tlog"), &rule, &up, &truths);
     assert!(list(&t, "failsafes")
         .iter()
         .all(|f| f["basis"] == "downlink"));
+    assert!(list(&t, "distance").len() >= 3, "{t}");
     assert_log_report("vtol up", &r, &t);
 }
 
