@@ -94,7 +94,13 @@ fn the_vehicles_count_is_shown_as_it_sent_it_and_agrees_with_the_uplink_estimate
     let prom = dir.join("run.prom");
     let (out, relay, vehicle) = probe_through_relay(
         "honest",
-        &["--json", "--prometheus-textfile", prom.to_str().unwrap()],
+        &[
+            "--json",
+            "--prometheus-textfile",
+            prom.to_str().unwrap(),
+            "--report",
+            "c2",
+        ],
     );
     assert_schema(&json_lines(&out));
     let s = json_line(&out, "summary");
@@ -119,6 +125,14 @@ fn the_vehicles_count_is_shown_as_it_sent_it_and_agrees_with_the_uplink_estimate
     let apart = (loss - d["uplink_loss"].as_f64().unwrap()).abs() / combined;
     assert!((c["sigmas"].as_f64().unwrap() - apart).abs() < 1e-9, "{c}");
     assert_eq!(c["agrees"], true, "{c}");
+    // The C2 report's uplink loss is the vehicle's own count, said so;
+    // its continuity is the round trips the summary counted.
+    let c2 = json_line(&out, "c2_report");
+    assert_eq!(c2["loss"]["uplink_from"], "link_node_status", "{c2}");
+    assert_eq!(c2["loss"]["uplink_pct"].as_f64(), Some(100.0 * loss), "{c2}");
+    let r = &s["responders"][0];
+    assert_eq!(c2["continuity"]["transactions"], s["requests"], "{c2}\n{r}");
+    assert_eq!(c2["continuity"]["within"], r["received"], "{c2}\n{r}");
     let codes: Vec<&Value> = s["hints"]
         .as_array()
         .unwrap()
