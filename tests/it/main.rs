@@ -7,6 +7,7 @@ mod common;
 mod advice;
 mod age;
 mod answers;
+mod c2;
 mod cli;
 mod compare;
 mod completions;

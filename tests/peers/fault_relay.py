@@ -39,6 +39,16 @@ the downlink closes (nothing more forwarded or counted), so the counts
 are exactly what the prober can have seen: it received everything the
 relay forwarded before that, and nothing after.
 
+--cut START+LENGTH[,START+LENGTH...] (seconds, after the relay's first
+forwarded frame, e.g. 3+2.5,9+1): during each window every frame in
+either direction is dropped on arrival (before the plan, which it takes
+no draw of). The truth then has "cut": the windows, how many frames each
+direction lost to them, and the time (s after that first frame) and
+message id of every frame forwarded down, in order, copies included:
+the deliveries a C2 report's outages and failsafe replay are held to;
+and the sequence number of every PING request it cut ("requests_cut";
+those forwarded are in the uplink's "requests" with their fates).
+
 On SIGTERM, one JSON line: per downlink source, frames from the vehicle,
 forwarded (copies included), dropped, dropped after the last forwarded
 frame (no later frame shows those gaps), duplicated, reordered, PING
@@ -222,6 +232,42 @@ class Uplink:
                 "kernel_dropped": self.kernel_dropped}
 
 
+class Cuts:
+    """The --cut windows, timed from the first frame forwarded."""
+
+    def __init__(self, windows):
+        self.windows = windows
+        self.origin = None
+        self.up = self.down = 0
+        self.requests = []  # the seq of every PING request cut
+        self.forwarded_down = []  # [seconds, msgid]
+
+    def now(self):
+        """Seconds since the first frame forwarded (the first call starts
+        the clock: the caller is about to forward one)."""
+        now = time.monotonic()
+        if self.origin is None:
+            self.origin = now
+        return now - self.origin
+
+    def drops(self, up):
+        """Whether a frame arriving now falls in a window (counted)."""
+        if self.origin is None:
+            return False
+        t = time.monotonic() - self.origin
+        if any(start <= t < start + length for start, length in self.windows):
+            if up:
+                self.up += 1
+            else:
+                self.down += 1
+            return True
+        return False
+
+    def truth(self):
+        return {"windows": self.windows, "dropped_up": self.up, "dropped_down": self.down,
+                "requests_cut": self.requests, "forwarded_down": self.forwarded_down}
+
+
 class Relay:
     def __init__(self, args):
         self.args = args
@@ -242,9 +288,24 @@ class Relay:
         self.after_close = 0
         self.no_peer = 0
         self.unparsed = 0
+        self.cuts = Cuts(args.cut) if args.cut else None
+
+    def send_down(self, frame, msgid):
+        """One copy of a frame to the ground side (timed, with --cut)."""
+        self.ground.sendto(frame, self.peer)
+        if self.cuts is not None:
+            self.cuts.forwarded_down.append([round(self.cuts.now(), 6), msgid])
 
     def from_ground(self, data):
         for frame, header in frames_of(data):
+            if self.cuts is not None:
+                if self.cuts.drops(up=True):
+                    if header is not None and header[3] == PING:
+                        seq, ts, tc = ping_fields(header[4])
+                        if (ts, tc) == (0, 0):
+                            self.cuts.requests.append(seq)
+                    continue
+                self.cuts.now()
             request = None
             if header is None:
                 self.unparsed += 1
@@ -295,6 +356,8 @@ class Relay:
             if self.peer is None:
                 self.no_peer += 1
                 continue
+            if self.cuts is not None and self.cuts.drops(up=False):
+                continue
             src = self.down.get(key)
             if src is None:
                 a = self.args
@@ -310,7 +373,7 @@ class Relay:
             src.frames += 1
             src.untouched += 1
             src.replies += reply is not None
-            self.ground.sendto(frame, self.peer)
+            self.send_down(frame, msgid)
             src.forwarded += 1
             if reply is not None:
                 link.answered(reply)
@@ -326,14 +389,14 @@ class Relay:
                 link.fate[reply][2] += 1
             return
         if fate == "hold" and src.held is None:
-            src.held = (k, frame, doubled, time.monotonic() + HOLD_S, link, reply)
+            src.held = (k, frame, doubled, time.monotonic() + HOLD_S, link, reply, msgid)
             return
-        self.forward(src, k, frame, doubled, link, reply)
+        self.forward(src, k, frame, doubled, link, reply, msgid)
         self.release(src)
 
-    def forward(self, src, k, frame, doubled, link, reply):
+    def forward(self, src, k, frame, doubled, link, reply, msgid):
         for _ in range(2 if doubled else 1):
-            self.ground.sendto(frame, self.peer)
+            self.send_down(frame, msgid)
             src.forwarded += 1
             if k in src.seen:
                 src.duplicated += 1
@@ -346,9 +409,9 @@ class Relay:
 
     def release(self, src, now=None):
         if src.held is not None and (now is None or now >= src.held[3]):
-            k, frame, doubled, _, link, reply = src.held
+            k, frame, doubled, _, link, reply, msgid = src.held
             src.held = None
-            self.forward(src, k, frame, doubled, link, reply)
+            self.forward(src, k, frame, doubled, link, reply, msgid)
 
     def maybe_close(self, force=False):
         n = self.args.requests
@@ -393,7 +456,8 @@ class Relay:
                     self.maybe_close(force=True)
 
     def truth(self):
-        return {"down": {k: s.truth() for k, s in sorted(self.down.items())},
+        extra = {"cut": self.cuts.truth()} if self.cuts is not None else {}
+        return {**extra, "down": {k: s.truth() for k, s in sorted(self.down.items())},
                 "up": [link.truth() for link in self.up],
                 "requests_seen": self.requests_seen,
                 "closed": self.closed_at is not None, "close_forced": self.close_forced,
@@ -421,6 +485,20 @@ def msgids(text):
     return ids or None
 
 
+def windows(text):
+    """START+LENGTH[,...] in seconds."""
+    out = []
+    for part in text.split(","):
+        try:
+            start, length = (float(x) for x in part.split("+"))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"not START+LENGTH: {part!r}") from None
+        if start < 0 or length <= 0:
+            raise argparse.ArgumentTypeError(f"not START+LENGTH: {part!r}")
+        out.append([start, length])
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--vehicle", action="append", required=True, help="HOST:PORT, repeatable")
@@ -435,6 +513,8 @@ def main():
     ap.add_argument("--ours", default="250/190", help="the prober's sysid/compid")
     ap.add_argument("--down-ids", type=msgids, default=None, metavar="ID,ID",
                     help="message ids the downlink plan applies to (others pass untouched)")
+    ap.add_argument("--cut", type=windows, default=None, metavar="START+LENGTH,...",
+                    help="drop both directions in these windows (s after the first frame)")
     args = ap.parse_args()
     relay = Relay(args)
     until = UntilSignalled()
