@@ -446,7 +446,7 @@ impl<'a, T: Transport, D: Driver> Session<'a, T, D> {
                 answers: Answers::new(cfg.ours, cfg.answer),
                 c2: cfg.c2.as_ref().map(|c2| {
                     let timeout = Nanos::try_from(cfg.timeout.as_nanos()).unwrap_or(Nanos::MAX);
-                    C2Tracker::new(c2, cfg.ours, timeout, log)
+                    C2Tracker::new(c2, cfg.ours, timeout, cfg.first_seq, log)
                 }),
             },
             schedule: None,

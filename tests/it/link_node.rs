@@ -129,7 +129,11 @@ fn the_vehicles_count_is_shown_as_it_sent_it_and_agrees_with_the_uplink_estimate
     // its continuity is the round trips the summary counted.
     let c2 = json_line(&out, "c2_report");
     assert_eq!(c2["loss"]["uplink_from"], "link_node_status", "{c2}");
-    assert_eq!(c2["loss"]["uplink_pct"].as_f64(), Some(100.0 * loss), "{c2}");
+    assert_eq!(
+        c2["loss"]["uplink_pct"].as_f64(),
+        Some(100.0 * loss),
+        "{c2}"
+    );
     let r = &s["responders"][0];
     assert_eq!(c2["continuity"]["transactions"], s["requests"], "{c2}\n{r}");
     assert_eq!(c2["continuity"]["within"], r["received"], "{c2}\n{r}");

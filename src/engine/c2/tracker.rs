@@ -11,11 +11,11 @@ use super::summary_figures;
 use super::uplink::{Paced, ProbedUplink};
 use crate::engine::matcher::MatchEvent;
 use crate::engine::probe::command::CommandEvent;
-use crate::engine::probe::passive::driver::GroundIds;
+use crate::engine::probe::passive::ground::GroundIds;
 use crate::engine::probe::passive::round_trips::RoundTrips;
 use crate::engine::radio::is_radio_ids;
 use crate::engine::stats::RttStats;
-use crate::engine::summary::LinkSummary;
+use crate::engine::summary::{EchoSummary, LinkSummary};
 use crate::engine::Nanos;
 use crate::frame::{Frame, Msg, SysComp, AUTOPILOT_ARDUPILOT};
 
@@ -91,6 +91,8 @@ pub(crate) struct C2Tracker {
     vehicle: Option<(u8, u8)>,
     /// Commands decided: continuity is theirs.
     commands: bool,
+    /// The sequence number of our first request.
+    first_seq: u32,
 }
 
 /// The models a run plays: those asked for, else every preset (the one
@@ -108,7 +110,13 @@ fn models(cfg: &C2Config) -> Vec<FailsafeModel> {
 
 impl C2Tracker {
     /// `log`: the session reads a telemetry log.
-    pub(crate) fn new(cfg: &C2Config, ours: SysComp, timeout: Nanos, log: bool) -> Self {
+    pub(crate) fn new(
+        cfg: &C2Config,
+        ours: SysComp,
+        timeout: Nanos,
+        first_seq: u32,
+        log: bool,
+    ) -> Self {
         let models = models(cfg);
         let paced_up = |m: &FailsafeModel| Paced::new(Replay::new(m.clone()));
         C2Tracker {
@@ -134,6 +142,7 @@ impl C2Tracker {
                 .collect(),
             vehicle: None,
             commands: false,
+            first_seq,
             cfg: cfg.clone(),
         }
     }
@@ -198,8 +207,18 @@ impl C2Tracker {
     pub(crate) fn matched(&mut self, event: &MatchEvent) {
         match *event {
             MatchEvent::Reply {
-                rtt, sent_at, at, ..
+                rtt,
+                sent_at,
+                at,
+                seq,
+                first_from_responder,
+                ..
             } => {
+                // A first answer to a later request than the first: those
+                // before it were answered by nobody.
+                if first_from_responder && seq > self.first_seq && self.probed.outcomes() == 0 {
+                    self.probed.unanswered_from_start();
+                }
                 self.tally.answered(rtt);
                 self.probed.decided(sent_at, true, at);
             }
@@ -232,7 +251,20 @@ impl C2Tracker {
     /// The report at `end`, with the figures the run's summary has (dated
     /// apart: [`C2Report::date`]).
     pub(crate) fn finish(mut self, end: Nanos, summary: &LinkSummary) -> C2Report {
-        let probed = self.probed.outcomes() > 0;
+        // Requests nobody answered that no responder's count holds (it
+        // counts from its first answer; none for one never heard) are
+        // failed transactions all the same.
+        let decided = summary
+            .get::<EchoSummary>()
+            .map_or(0, |e| e.requests.saturating_sub(e.in_flight));
+        let counted = self.tally.answered + self.tally.unanswered;
+        if !self.commands && decided > counted {
+            self.tally.unanswered += decided - counted;
+            if self.probed.outcomes() == 0 {
+                self.probed.unanswered_from_start();
+            }
+        }
+        let probed = self.probed.outcomes() > 0 || (decided > 0 && !self.commands);
         let logged_from = self.logged.as_mut().map(|rt| {
             let s = rt.summary(end);
             let ground = self.ground;
@@ -414,6 +446,7 @@ mod tests {
             &config(&["ardupilot-copter", "ardupilot-copter:timeout=3s"]),
             US,
             S,
+            0,
             true,
         );
         let mut t = 0;
@@ -443,7 +476,7 @@ mod tests {
     /// found it, last hears 4 s and next 10 s: 6 s, a trip at 9 s.
     #[test]
     fn probes_the_vehicle_did_not_answer_leave_the_uplink_down_until_one_it_did() {
-        let mut c2 = C2Tracker::new(&config(&["ardupilot-copter"]), US, S, false);
+        let mut c2 = C2Tracker::new(&config(&["ardupilot-copter"]), US, S, 0, false);
         for k in 0..=20 {
             let sent_at = k * S;
             c2.frame(&test_frame(VEHICLE, heartbeat(2, 3)), sent_at);
@@ -490,7 +523,7 @@ mod tests {
             (12, 3, None),
             (2, 0, None),
         ] {
-            let mut c2 = C2Tracker::new(&config(&[]), US, S, false);
+            let mut c2 = C2Tracker::new(&config(&[]), US, S, 0, false);
             c2.frame(&test_frame(VEHICLE, heartbeat(mav_type, autopilot)), S);
             let r = c2.finish(2 * S, &summary());
             let got: Vec<_> = r.failsafes.iter().map(|f| f.model.as_str()).collect();
@@ -509,6 +542,7 @@ mod tests {
             &config(&["custom:message=heartbeat,timeout=1.5s,direction=down"]),
             US,
             S,
+            0,
             false,
         );
         for t in [1, 2, 4, 5, 9] {
@@ -528,7 +562,7 @@ mod tests {
     /// vehicle's TIMESYNCs nobody answered are no C2 transaction.
     #[test]
     fn a_logs_continuity_counts_the_ground_stations_round_trips() {
-        let mut c2 = C2Tracker::new(&config(&[]), US, S, true);
+        let mut c2 = C2Tracker::new(&config(&[]), US, S, 0, true);
         c2.frame(&test_frame(GCS, heartbeat(6, 8)), 0);
         let ping = |seq, to: SysComp| Msg::Ping {
             time_usec: 7,
@@ -556,7 +590,7 @@ mod tests {
     /// A command run: acknowledged within the time, after it, never.
     #[test]
     fn a_command_runs_continuity_is_its_acknowledgements() {
-        let mut c2 = C2Tracker::new(&config(&[]), US, S, false);
+        let mut c2 = C2Tracker::new(&config(&[]), US, S, 0, false);
         for (time_to_ack, acked) in [(100 * MS, true), (900 * MS, true), (0, false)] {
             c2.command(&if acked {
                 CommandEvent::Acked {
@@ -579,5 +613,33 @@ mod tests {
         }
         let c = c2.finish(5 * S, &summary()).continuity.unwrap();
         assert_eq!((c.within, c.transactions, c.from), (1, 3, "commands"));
+    }
+
+    /// The vehicle's first answer is to our fourth request: the three
+    /// before it, which the matcher counts for no one, went unanswered,
+    /// so the uplink was down from the start; and the summary's requests
+    /// make them failed transactions.
+    #[test]
+    fn requests_before_the_first_answer_are_unanswered() {
+        let mut c2 = C2Tracker::new(&config(&["ardupilot-copter:timeout=2s"]), US, S, 0, false);
+        for k in 3..=9 {
+            c2.matched(&MatchEvent::Reply {
+                responder: VEHICLE,
+                seq: k as u32,
+                rtt: 10 * MS,
+                sent_at: k * S,
+                at: k * S + 10 * MS,
+                out_of_order: false,
+                first_from_responder: k == 3,
+            });
+        }
+        let mut echo = EchoSummary::empty("test", 10);
+        echo.in_flight = 0;
+        let r = c2.finish(10 * S, &LinkSummary::new(echo));
+        let f = &r.failsafes[0];
+        assert_eq!((f.messages, f.delivered, f.trips), (11, 8, 1));
+        assert_eq!(f.trip_list[0].at_s, 2.0);
+        let c = r.continuity.unwrap();
+        assert_eq!((c.within, c.transactions), (7, 10));
     }
 }

@@ -73,6 +73,15 @@ impl ProbedUplink {
         self.outcomes
     }
 
+    /// The requests before the first decided one went unanswered (the
+    /// matcher counts a responder's losses from its first answer on, and
+    /// none for one never heard): the uplink was down from the start.
+    pub(crate) fn unanswered_from_start(&mut self) {
+        if self.since == 0 && self.waiting.keys().next().is_none_or(|&s| s > 0) {
+            self.up = false;
+        }
+    }
+
     /// The request sent at `sent_at` reached the vehicle or not, decided
     /// at `at`. A late reply after a loss turns it to reached.
     pub(crate) fn decided(&mut self, sent_at: Nanos, reached: bool, at: Nanos) {

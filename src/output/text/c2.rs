@@ -111,8 +111,8 @@ fn write_outages(out: &mut impl Write, o: &Outages) -> io::Result<()> {
     writeln!(out, "longest outages:")?;
     writeln!(
         out,
-        "  {:>9} {:>9} {:>9} {:>9}  {}",
-        "start", "duration", "silence", "distance", "at"
+        "  {:>9} {:>9} {:>9} {:>9}  at",
+        "start", "duration", "silence", "distance"
     )?;
     for x in &o.longest {
         writeln!(out, "{}", outage_row(x))?;

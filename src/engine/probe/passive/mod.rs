@@ -3,6 +3,7 @@
 
 pub(crate) mod driver;
 pub(crate) mod flight;
+pub(crate) mod ground;
 pub(crate) mod links;
 mod rate;
 pub(crate) mod round_trips;
