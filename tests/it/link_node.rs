@@ -134,9 +134,15 @@ fn the_vehicles_count_is_shown_as_it_sent_it_and_agrees_with_the_uplink_estimate
         Some(100.0 * loss),
         "{c2}"
     );
-    let r = &s["responders"][0];
-    assert_eq!(c2["continuity"]["transactions"], s["requests"], "{c2}\n{r}");
-    assert_eq!(c2["continuity"]["within"], r["received"], "{c2}\n{r}");
+    let responder = &s["responders"][0];
+    assert_eq!(
+        c2["continuity"]["transactions"], s["requests"],
+        "{c2}\n{responder}"
+    );
+    assert_eq!(
+        c2["continuity"]["within"], responder["received"],
+        "{c2}\n{responder}"
+    );
     let codes: Vec<&Value> = s["hints"]
         .as_array()
         .unwrap()
