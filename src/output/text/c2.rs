@@ -61,6 +61,13 @@ pub(super) fn write_report(out: &mut impl Write, link: &str, r: &C2Report) -> io
     )?;
     write_outages(out, &r.outages)?;
     write_distance(out, r)?;
+    if r.failsafes.is_empty() {
+        // Only without --failsafe: the vehicle named no preset's autopilot.
+        writeln!(
+            out,
+            "failsafe: none replayed: no ArduPilot or PX4 vehicle heard (--failsafe MODEL names one)"
+        )?;
+    }
     for f in &r.failsafes {
         write_failsafe(out, f)?;
     }
@@ -343,7 +350,8 @@ mod tests {
              latency round trip unknown: no round trip completed\n\
              loss downlink 0.50%, uplink -, round trip 1.70%\n\
              outages: 0, 0.0 s in all\n\
-             distance bands: no position of the vehicle known\n"
+             distance bands: no position of the vehicle known\n\
+             failsafe: none replayed: no ArduPilot or PX4 vehicle heard (--failsafe MODEL names one)\n"
         );
     }
 
