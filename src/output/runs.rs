@@ -1120,6 +1120,7 @@ pub(crate) fn c2_report() -> C2Report {
                 p99_ms: 20.4,
                 max_ms: 150.0,
             }),
+            downlink_from: Some("round_trip_split"),
         },
         loss: DirectionLoss {
             downlink_pct: Some(0.5),

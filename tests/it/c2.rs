@@ -940,3 +940,38 @@ fn assert_probed_uplink(report: &Value, truth: &Value, end: f64) {
     assert_eq!(trips.len(), 3, "{trips:?}");
     assert_trips(up, &trips, 1e-6);
 }
+
+/// How old the telemetry is, where no round trip was split: the report's
+/// downlink delay is the run's own age of the vehicle's frames above their
+/// quickest (vtol: QGroundControl's batches a second apart), written in the
+/// summary beside it; none from a clock that runs at another rate than the
+/// logger's (flight_logs, a sped-up SITL: its drift at the 500 ppm limit).
+#[test]
+fn a_logs_downlink_delay_is_its_vehicles_frame_age_unless_its_clock_runs_apart() {
+    for (log, aged) in [("vtol.tlog", true), ("flight_logs.tlog", false)] {
+        let path = crate::field_logs::shared_tlog(log);
+        let (code, out, err) =
+            run_mavping(&["--json", "-q", "--report", "c2", path.to_str().unwrap()]);
+        assert_eq!(code, 0, "{err}");
+        let lines = json_lines(&out);
+        let report = lines.iter().find(|l| l["type"] == "c2_report").unwrap();
+        let summary = lines.last().unwrap();
+        let age = summary["age"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|a| a["source"] == serde_json::json!({"sysid": 1, "compid": 1}))
+            .unwrap_or_else(|| panic!("{log}: no age of 1/1 in {summary}"));
+        let latency = &report["latency"];
+        if aged {
+            assert_eq!(latency["downlink_from"], "frame_age", "{latency}");
+            for k in ["p50_ms", "p99_ms", "max_ms"] {
+                assert_eq!(latency["downlink"][k], age["headline"][k], "{log} {k}");
+            }
+        } else {
+            let drift = age["headline"]["drift_ppm"].as_f64().unwrap();
+            assert!(drift.abs() >= 499.5, "{log}: {drift}");
+            assert!(latency["downlink"].is_null(), "{log}: {latency}");
+        }
+    }
+}

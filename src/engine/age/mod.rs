@@ -25,6 +25,7 @@ use std::collections::HashMap;
 
 use serde::Serialize;
 
+pub(crate) use envelope::MAX_DRIFT_PPM;
 use split::absolute_age;
 pub(crate) use split::{AgedSplit, RoundTripSplit, SplitBy, SplitSummary};
 

@@ -56,6 +56,10 @@ pub(crate) struct Latency {
     /// split by the responder's own stamps (TIMESYNC, PING).
     pub(crate) uplink: Option<OneWay>,
     pub(crate) downlink: Option<OneWay>,
+    /// `round_trip_split`, or `frame_age`: the vehicle's frames' age above
+    /// their quickest by its own clock stamps (how old the telemetry is),
+    /// where no round trip was split.
+    pub(crate) downlink_from: Option<&'static str>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]

@@ -4,6 +4,7 @@
 //! LINK_NODE_STATUS counts where it sends them, else the direction split).
 
 use super::report::{DirectionLoss, Latency, OneWay};
+use crate::engine::age::{SourceAge, MAX_DRIFT_PPM};
 use crate::engine::link_node::LinkNodeSummary;
 use crate::engine::radio::is_radio_ids;
 use crate::engine::summary::passive::PassiveSummary;
@@ -15,6 +16,7 @@ pub(crate) fn of(summary: &LinkSummary) -> (Latency, DirectionLoss) {
         round_trip: None,
         uplink: None,
         downlink: None,
+        downlink_from: None,
     };
     let mut loss = DirectionLoss {
         downlink_pct: None,
@@ -35,7 +37,9 @@ pub(crate) fn of(summary: &LinkSummary) -> (Latency, DirectionLoss) {
                 p99_ms: split.downlink_p99_ms,
                 max_ms: split.downlink_max_ms,
             });
+            latency.downlink_from = Some("round_trip_split");
         }
+        frame_age(&echo.age, &mut latency);
         if let Some(d) = first.and_then(|r| r.direction.as_ref()) {
             loss.round_trip_pct = Some(100.0 * d.round_trip_loss);
             loss.downlink_pct = Some(100.0 * d.downlink_loss);
@@ -57,9 +61,38 @@ pub(crate) fn of(summary: &LinkSummary) -> (Latency, DirectionLoss) {
                 (l + s.counts.lost, n + s.counts.numbered())
             });
         loss.downlink_pct = (numbered > 0).then(|| 100.0 * lost as f64 / numbered as f64);
+        frame_age(&passive.age, &mut latency);
         node_uplink(&passive.link_node, &mut loss);
     }
     (latency, loss)
+}
+
+/// Where no round trip was split, the downlink's delay above its least
+/// from the vehicle's own clock stamps: the source with the most aged
+/// frames (the ground station's are not among a run's ages). A baseline
+/// whose drift sits at the limit is a clock that runs at another rate
+/// (a sped-up simulation): its ages mean nothing, and none is given.
+fn frame_age(ages: &[SourceAge], latency: &mut Latency) {
+    if latency.downlink.is_some() {
+        return;
+    }
+    let vehicle = ages
+        .iter()
+        .filter(|a| !is_radio_ids(a.source))
+        .max_by_key(|a| a.headline.samples)
+        .filter(|a| {
+            !a.headline
+                .drift_ppm
+                .is_some_and(|d| d.abs() >= MAX_DRIFT_PPM * 0.999)
+        });
+    if let Some(a) = vehicle {
+        latency.downlink = Some(OneWay {
+            p50_ms: a.headline.p50_ms,
+            p99_ms: a.headline.p99_ms,
+            max_ms: a.headline.max_ms,
+        });
+        latency.downlink_from = Some("frame_age");
+    }
 }
 
 /// The vehicle's own count of what reached it, over the guess.

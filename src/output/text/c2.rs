@@ -97,8 +97,15 @@ fn write_latency(out: &mut impl Write, l: &Latency) -> io::Result<()> {
     if let Some(w) = &l.uplink {
         one_way(out, "uplink", w)?;
     }
-    if let Some(w) = &l.downlink {
-        one_way(out, "downlink", w)?;
+    match (&l.downlink, l.downlink_from) {
+        (Some(w), Some("frame_age")) => writeln!(
+            out,
+            "  downlink: the vehicle's frames' age above their quickest p50/p99 = {:.1}/{:.1} ms, \
+             max {:.1} ms",
+            w.p50_ms, w.p99_ms, w.max_ms
+        )?,
+        (Some(w), _) => one_way(out, "downlink", w)?,
+        (None, _) => {}
     }
     Ok(())
 }
@@ -330,6 +337,7 @@ mod tests {
             round_trip: None,
             uplink: None,
             downlink: None,
+            downlink_from: None,
         };
         r.loss.uplink_pct = None;
         r.outages = Outages {
