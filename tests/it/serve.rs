@@ -753,4 +753,18 @@ fn a_c2_module_gauges_the_report_and_checks_its_availability() {
         "{b}"
     );
     assert_promtool_clean(b);
+    // A probe of the default module asks for the report in its query
+    // (the defaults: a 2 s rule): the 1.5 s silence is no outage by it.
+    let r = server.get(&format!("/probe?target={}&count=20&report=c2", enc(target)));
+    assert_eq!(r.status, 200, "{}", r.body);
+    let b = &r.body;
+    assert_eq!(
+        sample(b, "mavping_c2_down_seconds", &link),
+        Some(0.0),
+        "{b}"
+    );
+    assert_eq!(sample(b, "mavping_probe_success", &[]), Some(1.0), "{b}");
+    let r = server.get(&format!("/probe?target={}&report=pdf", enc(target)));
+    assert_eq!(r.status, 400, "{}", r.body);
+    assert_eq!(r.body.trim(), "report 'pdf': expected c2", "{}", r.body);
 }

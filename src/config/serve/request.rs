@@ -13,12 +13,14 @@ use super::limits::{
     validate_count, validate_probe_interval, validate_timeout, DEFAULT_MODULE, MAX_PROBE_TIMEOUT,
 };
 use super::session::{refuse_virtual, session, Common};
-use super::settings::ServeSettings;
+use super::settings::{Module, ServeSettings};
 use crate::cli::ProbeKind;
+use crate::config::c2::C2Flags;
 use crate::config::error::ConfigError;
 use crate::config::keys::Keys;
 use crate::config::link::LinkConfig;
 use crate::config::probe::{probe_of, Probe, ProbeChoice};
+use crate::engine::c2::C2Config;
 use crate::transport::address::{AddressError, LinkSpec};
 use crate::transport::route::Route;
 use crate::transport::LinkOptions;
@@ -71,7 +73,10 @@ impl ServeSettings {
     pub(crate) fn plan(&self, query: &str) -> Result<ProbePlan, BadProbeRequest> {
         let mut params: BTreeMap<String, String> = BTreeMap::new();
         for (key, value) in form_urlencoded::parse(query.as_bytes()) {
-            if !["target", "module", "count", "interval", "timeout", "probe"].contains(&&*key) {
+            let known = [
+                "target", "module", "count", "interval", "timeout", "probe", "report",
+            ];
+            if !known.contains(&&*key) {
                 return Err(BadProbeRequest::UnknownParameter(key.to_string()));
             }
             if params.insert(key.to_string(), value.to_string()).is_some() {
@@ -142,7 +147,7 @@ impl ServeSettings {
             signing: module.signing,
             baud: module.baud,
             radio_type: module.radio_type,
-            c2: module.c2.clone(),
+            c2: report(params.get("report").map(String::as_str), module, timeout)?,
             timeout,
             retry_interval: module.retry_interval,
         };
@@ -178,6 +183,35 @@ impl ServeSettings {
             });
         }
         Ok(())
+    }
+}
+
+/// `report=c2` in the query: the module's C2 report settings, else the
+/// defaults (as `--report c2` alone).
+fn report(
+    asked: Option<&str>,
+    module: &Module,
+    timeout: Duration,
+) -> Result<Option<C2Config>, ConfigError> {
+    match asked {
+        None => Ok(module.c2.clone()),
+        Some("c2") if module.c2.is_some() => Ok(module.c2.clone()),
+        Some("c2") => crate::config::c2::validate(&C2Flags {
+            keys: Keys::File,
+            asked: true,
+            up_within: Duration::from_secs(2),
+            continuity_within: None,
+            distance_band_m: 500.0,
+            failsafes: &[],
+            min_availability: None,
+            min_continuity: None,
+            timeout,
+        }),
+        Some(other) => Err(ConfigError::Unknown {
+            setting: "report",
+            value: other.to_string(),
+            expected: "c2",
+        }),
     }
 }
 
