@@ -35,18 +35,25 @@ pub(crate) fn validate(f: &C2Flags<'_>) -> Result<Option<C2Config>, ConfigError>
     let wanted = f.asked || f.min_availability.is_some() || f.min_continuity.is_some();
     let name = |key: &str| f.keys.name(key);
     if !wanted {
+        let flags = f.keys == Keys::Flags;
         if let Some(setting) = [
-            (!f.failsafes.is_empty(), "failsafe"),
-            (f.continuity_within.is_some(), "continuity_within"),
+            (!f.failsafes.is_empty(), ["--failsafe", "failsafe"]),
+            (
+                f.continuity_within.is_some(),
+                ["--continuity-within", "continuity_within"],
+            ),
         ]
         .iter()
-        .find_map(|(given, key)| given.then_some(*key))
+        .find_map(|(given, names)| given.then_some(names[usize::from(!flags)]))
         {
-            return Err(ConfigError::value(
-                name(setting),
-                "",
-                format!("needs {} c2", name("report")),
-            ));
+            return Err(ConfigError::Needs {
+                setting,
+                needs: if flags {
+                    "--report c2"
+                } else {
+                    "report = \"c2\""
+                },
+            });
         }
         return Ok(None);
     }
@@ -91,4 +98,60 @@ pub(crate) fn validate(f: &C2Flags<'_>) -> Result<Option<C2Config>, ConfigError>
         availability_floor_pct: f.min_availability.unwrap_or(DEFAULT_FLOOR_PCT),
         failsafes,
     }))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn flags(keys: Keys, asked: bool, failsafes: &[String]) -> C2Flags<'_> {
+        C2Flags {
+            keys,
+            asked,
+            up_within: Duration::from_secs(2),
+            continuity_within: None,
+            distance_band_m: 500.0,
+            failsafes,
+            min_availability: None,
+            min_continuity: None,
+            timeout: Duration::from_secs(2),
+        }
+    }
+
+    #[test]
+    fn the_reports_settings_without_it_say_what_they_need_in_each_front_ends_words() {
+        let px4 = ["px4".to_string()];
+        let e = validate(&flags(Keys::Flags, false, &px4)).unwrap_err();
+        assert_eq!(e.to_string(), "--failsafe needs --report c2");
+        let e = validate(&flags(Keys::File, false, &px4)).unwrap_err();
+        assert_eq!(e.to_string(), "failsafe needs report = \"c2\"");
+        assert_eq!(validate(&flags(Keys::Flags, false, &[])).unwrap(), None);
+    }
+
+    /// A threshold on a figure asks for the report; its floor holds the
+    /// distance bands; continuity defaults to the reply timeout.
+    #[test]
+    fn a_threshold_implies_the_report_and_sets_the_floor() {
+        let mut f = flags(Keys::Flags, false, &[]);
+        f.min_availability = Some(99.5);
+        let c = validate(&f).unwrap().unwrap();
+        assert_eq!(c.availability_floor_pct, 99.5);
+        assert_eq!(c.continuity_within, 2_000_000_000);
+        assert!(c.failsafes.is_empty());
+        f.continuity_within = Some(Duration::from_secs(3));
+        let e = validate(&f).unwrap_err().to_string();
+        assert!(e.starts_with("--continuity-within 3s: "), "{e}");
+    }
+
+    #[test]
+    fn a_bad_model_is_named_with_its_setting() {
+        let bad = ["custom:rate=1".to_string()];
+        let e = validate(&flags(Keys::File, true, &bad))
+            .unwrap_err()
+            .to_string();
+        assert_eq!(
+            e,
+            "failsafe custom:rate=1: failsafe custom: give its timeout (timeout=DURATION)"
+        );
+    }
 }
