@@ -11,7 +11,7 @@ use crate::engine::age::{AgeCounts, AgeNow, ClockAgeSummary, SourceAge, SplitSum
 use crate::engine::answers::AnswerSummary;
 use crate::engine::c2::{
     Band, C2Report, C2Rule, Continuity, DirectionLoss, DistanceBand, FailsafeReplay, Latency,
-    OneWay, Outage, Outages, Percentiles, Trip,
+    OneWay, Outage, Outages, Percentiles, Timeline, Trip,
 };
 use crate::engine::clock_offset::ClockSummary;
 use crate::engine::hint::{Hint, HintCode};
@@ -1144,6 +1144,19 @@ pub(crate) fn c2_report() -> C2Report {
                 outage(598.5, 1.5, None, true),
                 outage(300.0, 0.5, Some(600.0), false),
             ],
+        },
+        // 8 s bins over 600 s: each outage's time in the bins it spans.
+        timeline: Timeline {
+            bin_s: 8.0,
+            down_s: (0..75)
+                .map(|bin| match bin {
+                    15 => 2.0,
+                    37 => 0.5,
+                    52 => 4.0,
+                    53 | 74 => 1.5,
+                    _ => 0.0,
+                })
+                .collect(),
         },
         distance: vec![
             distance(0.0, 300.0, 2.0, 1),

@@ -285,9 +285,38 @@ fn assert_log_report(name: &str, r: &Value, t: &Value) {
         }
     }
     assert_distance_bands(name, r, t);
+    assert_timeline(name, r, list(to, "list"), duration);
     assert_eq!(replays(r).len(), list(t, "failsafes").len(), "{name}");
     for (rf, tf) in replays(r).iter().zip(list(t, "failsafes")) {
         assert_replay(name, rf, tf);
+    }
+}
+
+/// The report's timeline is the truth's outages cut into its bins: the
+/// narrowest power of two seconds that 120 of cover the run.
+fn assert_timeline(name: &str, r: &Value, outages: &[Value], duration: f64) {
+    let mut width = 1.0;
+    while width * 120.0 < duration {
+        width *= 2.0;
+    }
+    let bins = (duration / width).ceil() as usize;
+    let mut want = vec![0.0; bins];
+    for o in outages {
+        let (start, end) = (f(o, "start_s"), f(o, "start_s") + f(o, "duration_s"));
+        for (k, bin) in want.iter_mut().enumerate() {
+            let (from, to) = (k as f64 * width, (k + 1) as f64 * width);
+            *bin += (end.min(to) - start.max(from)).max(0.0);
+        }
+    }
+    let t = &r["timeline"];
+    assert_eq!(f(t, "bin_s"), width, "{name}: {t}");
+    let got = list(t, "down_s");
+    assert_eq!(got.len(), bins, "{name}: {t}");
+    for (k, (g, w)) in got.iter().zip(&want).enumerate() {
+        assert!(
+            (g.as_f64().unwrap() - w).abs() < 1e-3,
+            "{name} bin {k}: {g} vs {w}"
+        );
     }
 }
 

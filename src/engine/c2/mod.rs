@@ -10,6 +10,7 @@ mod outages;
 mod position;
 mod report;
 mod summary_figures;
+mod timeline;
 mod tracker;
 mod uplink;
 mod watching;
@@ -25,4 +26,4 @@ pub(crate) use report::{
 };
 // The report's other parts, which only the formats' fixtures build.
 #[cfg(test)]
-pub(crate) use report::{C2Rule, Continuity, DirectionLoss, Percentiles};
+pub(crate) use report::{C2Rule, Continuity, DirectionLoss, Percentiles, Timeline};

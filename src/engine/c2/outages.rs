@@ -8,7 +8,8 @@
 //! Constant memory: sums per duration band and per distance band, and
 //! the [`KEPT`] longest outages.
 
-use super::report::{Band, DistanceBand, Outage, Outages};
+use super::report::{self, Band, DistanceBand, Outage, Outages};
+use super::timeline::Timeline;
 use crate::engine::Nanos;
 
 /// Outages listed in the report, the longest.
@@ -52,6 +53,7 @@ pub(crate) struct Availability {
     bands: [(u64, Nanos); 5],
     longest: Vec<Outage>,
     by_distance: Vec<InBand>,
+    timeline: Timeline,
 }
 
 impl Availability {
@@ -65,6 +67,7 @@ impl Availability {
             bands: [(0, 0); 5],
             longest: Vec::new(),
             by_distance: Vec::new(),
+            timeline: Timeline::default(),
         }
     }
 
@@ -104,6 +107,7 @@ impl Availability {
             return;
         }
         self.down += down;
+        self.timeline.down(self.last + self.up_within, until);
         let i = BANDS
             .iter()
             .position(|(_, upper)| down < *upper)
@@ -144,12 +148,12 @@ impl Availability {
     }
 
     /// The figures at `end`: an outage still going is open. Returns the
-    /// time down, the outages and the distance bands.
+    /// time down, the outages, when they were, and the distance bands.
     pub(crate) fn finish(
         mut self,
         end: Nanos,
         distance: Option<f64>,
-    ) -> (Nanos, Outages, Vec<DistanceBand>) {
+    ) -> (Nanos, Outages, report::Timeline, Vec<DistanceBand>) {
         if end > self.last {
             self.gap(end, distance, true);
         }
@@ -183,7 +187,7 @@ impl Availability {
                 outages: b.outages,
             })
             .collect();
-        (self.down, outages, bands)
+        (self.down, outages, self.timeline.finish(end), bands)
     }
 }
 
@@ -208,7 +212,7 @@ mod tests {
             t += silence;
             a.frame(t, None);
         }
-        let (down, o, _) = a.finish(t, None);
+        let (down, o, _, _) = a.finish(t, None);
         assert_eq!(down, 500 * MS + 2 * S + 10_200 * MS + 38 * S);
         assert_eq!(o.count, 4);
         let counts: Vec<_> = o.bands.iter().map(|b| (b.band, b.count)).collect();
@@ -233,7 +237,7 @@ mod tests {
         let mut a = Availability::new(2 * S, 500.0);
         a.frame(2 * S, None);
         a.frame(5 * S, None);
-        let (down, o, _) = a.finish(5 * S, None);
+        let (down, o, _, _) = a.finish(5 * S, None);
         assert_eq!(down, S);
         assert_eq!(o.bands[1].count, 1);
     }
@@ -241,7 +245,7 @@ mod tests {
     #[test]
     fn a_vehicle_never_heard_is_down_from_the_grace_on_and_the_outage_is_open() {
         let a = Availability::new(2 * S, 500.0);
-        let (down, o, _) = a.finish(10 * S, None);
+        let (down, o, _, _) = a.finish(10 * S, None);
         assert_eq!(down, 8 * S);
         assert!(o.longest[0].open);
         assert_eq!(o.longest[0].start_s, 2.0);
@@ -255,7 +259,7 @@ mod tests {
         a.frame(2 * S, Some(100.0));
         a.frame(5 * S, Some(700.0)); // 3 s silence at 700 m: 2 s down
         a.frame(6 * S, Some(700.0));
-        let (_, _, bands) = a.finish(6 * S, Some(700.0));
+        let (_, _, _, bands) = a.finish(6 * S, Some(700.0));
         assert_eq!(bands.len(), 2);
         assert_eq!(
             (bands[0].from_m, bands[0].observed_s, bands[0].down_s),
@@ -276,7 +280,7 @@ mod tests {
         a.frame(4 * S, None);
         a.frame(5_500 * MS, None);
         assert_eq!(a.frames(), 3);
-        let (down, o, _) = a.finish(5_500 * MS, None);
+        let (down, o, _, _) = a.finish(5_500 * MS, None);
         assert_eq!((down, o.count), (4 * S, 1));
     }
 }

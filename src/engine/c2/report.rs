@@ -109,6 +109,13 @@ pub(crate) struct Outages {
     pub(crate) longest: Vec<Outage>,
 }
 
+/// The link's down time over the run, in equal bins from its start.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub(crate) struct Timeline {
+    pub(crate) bin_s: f64,
+    pub(crate) down_s: Vec<f64>,
+}
+
 /// The time spent in one distance band and how much of it the link was down.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub(crate) struct DistanceBand {
@@ -190,6 +197,8 @@ pub(crate) struct C2Report {
     pub(crate) latency: Latency,
     pub(crate) loss: DirectionLoss,
     pub(crate) outages: Outages,
+    /// When it was down.
+    pub(crate) timeline: Timeline,
     /// Where the vehicle's positions were known.
     pub(crate) distance: Vec<DistanceBand>,
     /// The nearest band whose availability fell under the floor.

@@ -287,7 +287,7 @@ impl C2Tracker {
         let failsafes = self.replays(played, end, probed, &loss);
         let frames = self.availability.frames();
         let distance = self.whereabouts.distance_m();
-        let (down, outages, bands) = self.availability.finish(end, distance);
+        let (down, outages, timeline, bands) = self.availability.finish(end, distance);
         let floor = self.cfg.availability_floor_pct;
         let duration_s = end as f64 / 1e9;
         C2Report {
@@ -314,6 +314,7 @@ impl C2Tracker {
             },
             loss,
             outages,
+            timeline,
             availability_under_floor_from_m: bands
                 .iter()
                 .find(|b| b.availability_pct < floor)

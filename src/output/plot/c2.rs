@@ -3,8 +3,9 @@
 //! link was measured by and the headline figures (availability,
 //! continuity, latency, loss each way) as lines of text; the outages per
 //! duration band and the availability per distance band (against the
-//! floor it is held to) as bars side by side; the longest outages and
-//! the failsafe replays as tables. Every figure is the report's own, as
+//! floor it is held to) as bars side by side; when over the run the link
+//! was down, a strip across the page; the longest outages and the
+//! failsafe replays as tables. Every figure is the report's own, as
 //! the text and JSON give it.
 
 use plotters::coord::Shift;
@@ -24,6 +25,7 @@ const TITLE_SIZE: f64 = 24.0;
 /// A line of the headline figures, and a table's row.
 const LINE_H: u32 = 24;
 const BARS_H: u32 = 320;
+const TIMELINE_H: u32 = 200;
 /// Room between a table's columns.
 const GAP: u32 = 22;
 /// The longest outages listed.
@@ -119,6 +121,7 @@ fn outages_table(r: &C2Report) -> Table {
             format!("{:.1}", o.silence_s),
             o.distance_m
                 .map_or_else(|| "-".into(), |m| format!("{m:.0}")),
+            o.at_utc.clone().unwrap_or_else(|| "-".into()),
             if o.open { "open at end" } else { "" }.to_string(),
         ]
     };
@@ -129,6 +132,7 @@ fn outages_table(r: &C2Report) -> Table {
             "duration (s)",
             "silence (s)",
             "distance (m)",
+            "at (UTC)",
             "",
         ],
         rows: r
@@ -279,7 +283,7 @@ pub(super) fn svg(link: &str, r: &C2Report) -> Result<String, PlotError> {
     let width = width.max(text_width(&title, title_font(title_size)) + 2 * MARGIN);
     let lines_h = LINE_H * lines.len() as u32 + 12;
     let tables_h: u32 = tables.iter().map(Table::height).sum();
-    let height = TITLE_H + lines_h + BARS_H + tables_h + 12;
+    let height = TITLE_H + lines_h + BARS_H + TIMELINE_H + tables_h + 12;
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (width, height)).into_drawing_area();
@@ -299,10 +303,12 @@ pub(super) fn svg(link: &str, r: &C2Report) -> Result<String, PlotError> {
                 let y = LINE_H as i32 * k as i32 + LINE_H as i32 / 2 + 4;
                 text.draw(&Text::new(line.as_str(), (MARGIN as i32, y), style.clone()))?;
             }
-            let (bars, mut rest) = rest.split_vertically(BARS_H);
+            let (bars, rest) = rest.split_vertically(BARS_H);
             let (left, right) = bars.split_horizontally(width / 2);
             outage_bars(r, &left)?;
             distance_bars(r, &right)?;
+            let (strip, mut rest) = rest.split_vertically(TIMELINE_H);
+            timeline(r, &strip)?;
             for table in &tables {
                 let (area, below) = rest.split_vertically(table.height());
                 table.draw(&area)?;
@@ -457,6 +463,39 @@ fn distance_bars(r: &C2Report, area: &Area<'_>) -> DrawResult {
     .draw(area, Some((floor, format!("floor {floor:.2}%"))))
 }
 
+/// The share of each bin of the run the link was down, across the page.
+fn timeline(r: &C2Report, area: &Area<'_>) -> DrawResult {
+    let t = &r.timeline;
+    let end = (t.bin_s * t.down_s.len() as f64)
+        .max(r.duration_s)
+        .max(1e-9);
+    let mut chart = ChartBuilder::on(area)
+        .caption("the link down over the run", caption_font())
+        .margin(MARGIN)
+        .x_label_area_size(40)
+        .y_label_area_size(Y_LABELS_W)
+        .build_cartesian_2d(0f64..end, 0f64..100f64)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .label_style(axis_font())
+        .axis_desc_style(axis_font())
+        .light_line_style(RGBColor(0xEE, 0xEE, 0xEE))
+        .max_light_lines(1)
+        .y_labels(3)
+        .x_desc(format!("s since the start (bins of {} s)", t.bin_s))
+        .y_desc("down (%)")
+        .draw()?;
+    let colour = Look::nth(1).color;
+    for (i, down) in t.down_s.iter().enumerate().filter(|(_, d)| **d > 0.0) {
+        let from = i as f64 * t.bin_s;
+        let share = 100.0 * (down / t.bin_s).min(1.0);
+        let bar = Rectangle::new([(from, 0.0), (from + t.bin_s, share)], colour.filled());
+        chart.plotting_area().draw(&bar)?;
+    }
+    Ok(())
+}
+
 /// In place of the distance chart when no position was known.
 fn no_positions(area: &DrawingArea<SVGBackend<'_>, Shift>) -> DrawResult {
     let (w, h) = area.dim_in_pixel();
@@ -511,9 +550,13 @@ mod tests {
             "750-1000",
             "86.2%",
             "floor 99.00%",
+            // When it was down: the strip, its bins.
+            "the link down over the run",
+            "bins of 8 s",
             // The tables.
             "the longest outages",
             "912",
+            "2026-12-05T10:07:00Z",
             "open at end",
             "FS_SHORT_TIMEOUT=1.5s FS_LONG_TIMEOUT=5s",
             "up HEARTBEAT@1Hz",
