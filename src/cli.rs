@@ -713,7 +713,7 @@ pub(crate) struct PingArgs {
         allow_negative_numbers = true,
         long,
         value_name = "METRES",
-        default_value_t = 500.0
+        default_value_t = crate::engine::c2::DEFAULT_DISTANCE_BAND_M
     )]
     pub(crate) distance_band: f64,
 

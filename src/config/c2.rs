@@ -4,7 +4,9 @@ use std::time::Duration;
 
 use super::error::ConfigError;
 use super::keys::Keys;
-use crate::engine::c2::{C2Config, FailsafeModel, DEFAULT_FLOOR_PCT};
+use crate::engine::c2::{
+    C2Config, FailsafeModel, DEFAULT_DISTANCE_BAND_M, DEFAULT_FLOOR_PCT, DEFAULT_UP_WITHIN,
+};
 use crate::engine::Nanos;
 use crate::units::parse_duration;
 
@@ -27,6 +29,24 @@ pub(crate) struct C2Flags<'a> {
 
 fn nanos(d: Duration) -> Nanos {
     Nanos::try_from(d.as_nanos()).unwrap_or(Nanos::MAX)
+}
+
+impl C2Flags<'_> {
+    /// The report asked for and nothing else said (a `/probe` query's
+    /// `report=c2`): every setting at its default.
+    pub(crate) fn defaults(keys: Keys, timeout: Duration) -> Self {
+        C2Flags {
+            keys,
+            asked: true,
+            up_within: DEFAULT_UP_WITHIN,
+            continuity_within: None,
+            distance_band_m: DEFAULT_DISTANCE_BAND_M,
+            failsafes: &[],
+            min_availability: None,
+            min_continuity: None,
+            timeout,
+        }
+    }
 }
 
 /// The report's settings, when it is asked for (`--report c2`, or a
@@ -106,15 +126,9 @@ mod tests {
 
     fn flags(keys: Keys, asked: bool, failsafes: &[String]) -> C2Flags<'_> {
         C2Flags {
-            keys,
             asked,
-            up_within: Duration::from_secs(2),
-            continuity_within: None,
-            distance_band_m: 500.0,
             failsafes,
-            min_availability: None,
-            min_continuity: None,
-            timeout: Duration::from_secs(2),
+            ..C2Flags::defaults(keys, Duration::from_secs(2))
         }
     }
 

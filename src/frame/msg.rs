@@ -139,6 +139,28 @@ pub struct Fix {
     pub(crate) alt_mm: i32,
 }
 
+impl Fix {
+    /// Whether it places the vehicle: a home always, an estimate once it
+    /// is not 0/0, a GPS fix of 2D or better unless the vehicle's
+    /// estimates are being read (`estimates`), which are better.
+    pub(crate) fn usable(&self, estimates: bool) -> bool {
+        match self.kind {
+            FixKind::Home => true,
+            FixKind::Estimate => !(self.lat == 0 && self.lon == 0),
+            FixKind::Gps { fix_type } => fix_type >= 2 && !estimates,
+        }
+    }
+
+    /// Latitude and longitude in degrees, altitude in metres.
+    pub(crate) fn degrees(&self) -> (f64, f64, f64) {
+        (
+            f64::from(self.lat) / 1e7,
+            f64::from(self.lon) / 1e7,
+            f64::from(self.alt_mm) / 1e3,
+        )
+    }
+}
+
 /// Which message a [`Fix`] came from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum FixKind {

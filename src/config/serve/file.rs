@@ -2,7 +2,7 @@
 //! and continuous links. One table type serves both, so each key is parsed
 //! once; keys that belong to the other kind are refused by name.
 
-use crate::engine::c2::C2Config;
+use crate::engine::c2::{C2Config, DEFAULT_DISTANCE_BAND_M, DEFAULT_UP_WITHIN};
 use crate::engine::radio::RadioType;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -236,14 +236,14 @@ impl Table {
             asked,
             up_within: match &self.up_within {
                 Some(d) => d.get("up_within")?,
-                None => Duration::from_secs(2),
+                None => DEFAULT_UP_WITHIN,
             },
             continuity_within: self
                 .continuity_within
                 .as_ref()
                 .map(|d| d.get("continuity_within"))
                 .transpose()?,
-            distance_band_m: self.distance_band.unwrap_or(500.0),
+            distance_band_m: self.distance_band.unwrap_or(DEFAULT_DISTANCE_BAND_M),
             failsafes: &self.failsafe,
             min_availability: Self::percent("min_availability", self.min_availability.as_deref())?,
             min_continuity: Self::percent("min_continuity", self.min_continuity.as_deref())?,

@@ -196,17 +196,7 @@ fn report(
     match asked {
         None => Ok(module.c2.clone()),
         Some("c2") if module.c2.is_some() => Ok(module.c2.clone()),
-        Some("c2") => crate::config::c2::validate(&C2Flags {
-            keys: Keys::File,
-            asked: true,
-            up_within: Duration::from_secs(2),
-            continuity_within: None,
-            distance_band_m: 500.0,
-            failsafes: &[],
-            min_availability: None,
-            min_continuity: None,
-            timeout,
-        }),
+        Some("c2") => crate::config::c2::validate(&C2Flags::defaults(Keys::File, timeout)),
         Some(other) => Err(ConfigError::Unknown {
             setting: "report",
             value: other.to_string(),

@@ -16,7 +16,7 @@ mod uplink;
 mod watching;
 
 pub(crate) use config::C2Config;
-pub(crate) use config::DEFAULT_FLOOR_PCT;
+pub(crate) use config::{DEFAULT_DISTANCE_BAND_M, DEFAULT_FLOOR_PCT, DEFAULT_UP_WITHIN};
 pub(crate) use failsafe::FailsafeModel;
 pub(crate) use tracker::C2Tracker;
 pub(crate) use watching::Watching;

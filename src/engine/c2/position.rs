@@ -30,19 +30,11 @@ impl Whereabouts {
     }
 
     pub(crate) fn fix(&mut self, source: SysComp, f: &Fix) {
-        let usable = match f.kind {
-            FixKind::Home => true,
-            FixKind::Estimate => !(f.lat == 0 && f.lon == 0),
-            FixKind::Gps { fix_type } => fix_type >= 2 && !self.estimates,
-        };
-        if !usable || *self.vehicle.get_or_insert(source) != source {
+        if !f.usable(self.estimates) || *self.vehicle.get_or_insert(source) != source {
             return;
         }
-        let p = Point {
-            lat: f64::from(f.lat) / 1e7,
-            lon: f64::from(f.lon) / 1e7,
-            alt: f64::from(f.alt_mm) / 1e3,
-        };
+        let (lat, lon, alt) = f.degrees();
+        let p = Point { lat, lon, alt };
         if f.kind == FixKind::Home {
             self.origin = Some(p);
             return;

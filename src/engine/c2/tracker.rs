@@ -184,10 +184,13 @@ impl C2Tracker {
         // was before this frame.
         let availability = &self.availability;
         for p in &mut self.played {
-            p.paced.send_until(at, |t| availability.up_at(t));
             let m = &p.recorded.model;
-            if m.direction == Direction::Down && watches(m.message, &frame.msg) {
-                p.recorded.message(at, true);
+            match m.direction {
+                Direction::Up => p.paced.send_until(at, |t| availability.up_at(t)),
+                Direction::Down if watches(m.message, &frame.msg) => {
+                    p.recorded.message(at, true);
+                }
+                Direction::Down => {}
             }
         }
         self.availability.frame(at, self.whereabouts.distance_m());
@@ -284,7 +287,9 @@ impl C2Tracker {
                 .send_until(end.saturating_add(1), |t| availability.up_at(t));
         }
         let (latency_split, loss) = summary_figures::of(summary);
-        let failsafes = self.replays(played, end, probed, &loss);
+        let by_probes =
+            std::mem::replace(&mut self.probed, ProbedUplink::new(0, Vec::new())).finish(end);
+        let failsafes = self.replays(played, by_probes, end, probed, &loss);
         let frames = self.availability.frames();
         let distance = self.whereabouts.distance_m();
         let (down, outages, timeline, bands) = self.availability.finish(end, distance);
@@ -328,11 +333,11 @@ impl C2Tracker {
     fn replays(
         &self,
         played: Vec<Played>,
+        by_probes: Vec<Replay>,
         end: Nanos,
         probed: bool,
         loss: &super::report::DirectionLoss,
     ) -> Vec<super::report::FailsafeReplay> {
-        let by_probes = self.probed.clone().finish(end);
         let vehicle = self.vehicle;
         played
             .into_iter()
